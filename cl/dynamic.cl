@@ -1,0 +1,36 @@
+/* dynamic: persistent work-groups fetch chunks of the work-group's shape from a
+ * global counter, in row-major chunk order, until the image is done. Work-item
+ * (0,0) takes the next chunk with atomic_inc and shares it through __local
+ * memory; the loop exit depends only on that shared value, so it is uniform
+ * across the group and every work-item reaches every barrier. The host resets
+ * the counter before every launch. */
+__kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
+		     __global float *image, __global uint *chunk_counter,
+		     __global ulong *item_counts, __global uint *write_counts)
+{
+	__local uint next_chunk;
+	struct tracer tr;
+	int chunk_w = get_local_size(0);
+	int chunk_h = get_local_size(1);
+	bool first_item = get_local_id(0) == 0 && get_local_id(1) == 0;
+
+	tracer_init(&tr, load_scene(scene_global, scene_local));
+	uint chunks_x = (tr.scene->width + chunk_w - 1) / chunk_w;
+	uint chunks = chunks_x * ((tr.scene->height + chunk_h - 1) / chunk_h);
+
+	for (;;) {
+		if (first_item)
+			next_chunk = atomic_inc(chunk_counter);
+		barrier(CLK_LOCAL_MEM_FENCE);
+		uint chunk = next_chunk;
+		/* No one may overwrite next_chunk before everyone has read it. */
+		barrier(CLK_LOCAL_MEM_FENCE);
+		if (chunk >= chunks)
+			break;
+		int x = (chunk % chunks_x) * chunk_w + get_local_id(0);
+		int y = (chunk / chunks_x) * chunk_h + get_local_id(1);
+		if (x < tr.scene->width && y < tr.scene->height)
+			render_pixel(&tr, image, write_counts, x, y);
+	}
+	store_counts(&tr, item_counts, get_global_id(1) * get_global_size(0) + get_global_id(0));
+}

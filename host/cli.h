@@ -1,0 +1,36 @@
+/* The command line: options, their checks, and --help. */
+#ifndef RTCL_CLI_H
+#define RTCL_CLI_H
+
+#include <stddef.h>
+#include <stdio.h>
+
+#define RTCL_VERSION "0.1.0"
+
+/* Exit statuses. */
+#define EXIT_USAGE 2   /* a bad option */
+#define EXIT_FAILED 1  /* a bad scene, a device, build or file error */
+
+struct options {
+	const char *kernel;  /* serial, naive, cyclic, dynamic or reference */
+	int workgroup[2];    /* -w WxH */
+	int groups[2];       /* --groups GXxGY; 0x0 when not given */
+	const char *scene_path; /* NULL: the built-in paper60 scene */
+	const char *output;
+	int size[2];         /* --size WxH; 0x0 when not given */
+	int depth;           /* --depth N; -1 when not given */
+	int platform, device; /* -p, -d; -1 when not given */
+	int list_devices;
+	int repeat;
+	const char *stats_path;
+	int quiet, verbose;
+	int help, version;
+};
+
+/* Parses argv into o. Returns 0, or -1 with one message in err (the caller
+ * exits with EXIT_USAGE). */
+int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_size);
+
+void cli_print_help(FILE *out);
+
+#endif

@@ -1,0 +1,223 @@
+#include "device.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#define MAX_PLATFORMS 16
+#define MAX_DEVICES 64
+
+static int get_platforms(cl_platform_id *platforms, cl_uint *count, char *err, size_t err_size)
+{
+	cl_int status = clGetPlatformIDs(MAX_PLATFORMS, platforms, count);
+
+	if (status == CL_PLATFORM_NOT_FOUND_KHR || (status == CL_SUCCESS && *count == 0)) {
+		snprintf(err, err_size,
+			 "no OpenCL platform found: install an OpenCL driver "
+			 "(e.g. `apt-get install pocl-opencl-icd`) and check /etc/OpenCL/vendors");
+		return -1;
+	}
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clGetPlatformIDs failed: %s", cl_error_name(status));
+		return -1;
+	}
+	if (*count > MAX_PLATFORMS)
+		*count = MAX_PLATFORMS;
+	return 0;
+}
+
+/* Returns the number of devices of the platform (0 when it has none). */
+static cl_uint get_devices(cl_platform_id platform, cl_device_type type, cl_device_id *devices)
+{
+	cl_uint count = 0;
+
+	if (clGetDeviceIDs(platform, type, MAX_DEVICES, devices, &count) != CL_SUCCESS)
+		return 0;
+	return count > MAX_DEVICES ? MAX_DEVICES : count;
+}
+
+/* Returns the index of `device` among all devices of its platform. */
+static int index_in_platform(cl_platform_id platform, cl_device_id device)
+{
+	cl_device_id all[MAX_DEVICES];
+	cl_uint count = get_devices(platform, CL_DEVICE_TYPE_ALL, all);
+
+	for (cl_uint i = 0; i < count; i++)
+		if (all[i] == device)
+			return (int)i;
+	return 0;
+}
+
+/* Picks the platform and device per device_open's rules. */
+static int choose_device(struct device *dev, int platform_index, int device_index, char *err,
+			 size_t err_size)
+{
+	cl_platform_id platforms[MAX_PLATFORMS];
+	cl_device_id devices[MAX_DEVICES];
+	cl_uint platform_count = 0;
+
+	if (get_platforms(platforms, &platform_count, err, err_size))
+		return -1;
+	if (platform_index >= (int)platform_count) {
+		snprintf(err, err_size,
+			 "platform %d does not exist: there %s %u (see --list-devices)",
+			 platform_index, platform_count == 1 ? "is" : "are", platform_count);
+		return -1;
+	}
+	if (device_index >= 0) {
+		int p = platform_index < 0 ? 0 : platform_index;
+		cl_uint count = get_devices(platforms[p], CL_DEVICE_TYPE_ALL, devices);
+		if (device_index >= (int)count) {
+			snprintf(err, err_size,
+				 "device %d does not exist on platform %d: it has %u "
+				 "(see --list-devices)",
+				 device_index, p, count);
+			return -1;
+		}
+		dev->platform = platforms[p];
+		dev->id = devices[device_index];
+		dev->platform_index = p;
+		dev->device_index = device_index;
+		return 0;
+	}
+
+	/* First GPU, else first device, of the given platform or of any. */
+	cl_device_type types[2] = {CL_DEVICE_TYPE_GPU, CL_DEVICE_TYPE_ALL};
+	for (int t = 0; t < 2; t++) {
+		for (cl_uint p = 0; p < platform_count; p++) {
+			if (platform_index >= 0 && (int)p != platform_index)
+				continue;
+			if (get_devices(platforms[p], types[t], devices) > 0) {
+				dev->platform = platforms[p];
+				dev->id = devices[0];
+				dev->platform_index = (int)p;
+				dev->device_index = index_in_platform(platforms[p], devices[0]);
+				return 0;
+			}
+		}
+	}
+	if (platform_index >= 0)
+		snprintf(err, err_size, "platform %d has no devices", platform_index);
+	else
+		snprintf(err, err_size, "no OpenCL device found on any platform");
+	return -1;
+}
+
+static void query_info(struct device *dev)
+{
+	cl_device_type type = 0;
+	cl_uint align_bits = 0;
+
+	clGetPlatformInfo(dev->platform, CL_PLATFORM_NAME, sizeof(dev->platform_name),
+			  dev->platform_name, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_NAME, sizeof(dev->name), dev->name, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_VERSION, sizeof(dev->version), dev->version, NULL);
+	clGetDeviceInfo(dev->id, CL_DRIVER_VERSION, sizeof(dev->driver), dev->driver, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_TYPE, sizeof(type), &type, NULL);
+	dev->is_gpu = (type & CL_DEVICE_TYPE_GPU) != 0;
+	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof(dev->compute_units),
+			&dev->compute_units, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_WORK_GROUP_SIZE, sizeof(dev->max_work_group_size),
+			&dev->max_work_group_size, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_WORK_ITEM_SIZES, sizeof(dev->max_work_item_sizes),
+			dev->max_work_item_sizes, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_LOCAL_MEM_SIZE, sizeof(dev->local_mem_size),
+			&dev->local_mem_size, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_GLOBAL_MEM_SIZE, sizeof(dev->global_mem_size),
+			&dev->global_mem_size, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_MEM_ALLOC_SIZE, sizeof(dev->max_alloc_size),
+			&dev->max_alloc_size, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_MEM_BASE_ADDR_ALIGN, sizeof(align_bits), &align_bits,
+			NULL);
+	dev->mem_base_addr_align = align_bits / 8 ? align_bits / 8 : 128;
+}
+
+int device_open(struct device *dev, int platform_index, int device_index, char *err,
+		size_t err_size)
+{
+	cl_int status;
+
+	memset(dev, 0, sizeof(*dev));
+	if (choose_device(dev, platform_index, device_index, err, err_size))
+		return -1;
+	query_info(dev);
+
+	dev->context = clCreateContext(NULL, 1, &dev->id, NULL, NULL, &status);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateContext failed on %s: %s", dev->name,
+			 cl_error_name(status));
+		return -1;
+	}
+	dev->queue = clCreateCommandQueue(dev->context, dev->id, CL_QUEUE_PROFILING_ENABLE,
+					  &status);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateCommandQueue failed on %s: %s", dev->name,
+			 cl_error_name(status));
+		goto out_release_context;
+	}
+	return 0;
+
+out_release_context:
+	clReleaseContext(dev->context);
+	dev->context = NULL;
+	return -1;
+}
+
+void device_close(struct device *dev)
+{
+	if (dev->queue)
+		clReleaseCommandQueue(dev->queue);
+	if (dev->context)
+		clReleaseContext(dev->context);
+	dev->queue = NULL;
+	dev->context = NULL;
+}
+
+static const char *type_name(cl_device_type type)
+{
+	if (type & CL_DEVICE_TYPE_GPU)
+		return "GPU";
+	if (type & CL_DEVICE_TYPE_CPU)
+		return "CPU";
+	if (type & CL_DEVICE_TYPE_ACCELERATOR)
+		return "accelerator";
+	return "other";
+}
+
+int device_list(FILE *out, char *err, size_t err_size)
+{
+	cl_platform_id platforms[MAX_PLATFORMS];
+	cl_uint platform_count = 0;
+
+	if (get_platforms(platforms, &platform_count, err, err_size))
+		return -1;
+	for (cl_uint p = 0; p < platform_count; p++) {
+		cl_device_id devices[MAX_DEVICES];
+		char name[256] = "";
+		cl_uint count = get_devices(platforms[p], CL_DEVICE_TYPE_ALL, devices);
+
+		clGetPlatformInfo(platforms[p], CL_PLATFORM_NAME, sizeof(name), name, NULL);
+		fprintf(out, "Platform #%u: %s\n", p, name);
+		for (cl_uint d = 0; d < count; d++) {
+			cl_device_type type = 0;
+			cl_uint units = 0;
+			cl_ulong local = 0, global = 0;
+
+			clGetDeviceInfo(devices[d], CL_DEVICE_NAME, sizeof(name), name, NULL);
+			clGetDeviceInfo(devices[d], CL_DEVICE_TYPE, sizeof(type), &type, NULL);
+			clGetDeviceInfo(devices[d], CL_DEVICE_MAX_COMPUTE_UNITS, sizeof(units),
+					&units, NULL);
+			clGetDeviceInfo(devices[d], CL_DEVICE_LOCAL_MEM_SIZE, sizeof(local), &local,
+					NULL);
+			clGetDeviceInfo(devices[d], CL_DEVICE_GLOBAL_MEM_SIZE, sizeof(global),
+					&global, NULL);
+			fprintf(out,
+				" %s-- Device #%u: %s (%s, %u compute units, %llu KiB local, "
+				"%llu MiB global)\n",
+				d + 1 == count ? "`" : "|", d, name, type_name(type), units,
+				(unsigned long long)(local / 1024),
+				(unsigned long long)(global / (1024 * 1024)));
+		}
+	}
+	return 0;
+}

@@ -1,0 +1,43 @@
+/* OpenCL device selection: platforms, devices, their limits, and the context
+ * and profiling queue rtcl renders with. */
+#ifndef RTCL_DEVICE_H
+#define RTCL_DEVICE_H
+
+#include <stddef.h>
+#include <stdio.h>
+#include "clerror.h"
+
+struct device {
+	cl_platform_id platform;
+	cl_device_id id;
+	cl_context context;
+	cl_command_queue queue; /* in order, with profiling */
+	int platform_index, device_index;
+
+	char name[256];
+	char platform_name[256];
+	char version[256];  /* CL_DEVICE_VERSION */
+	char driver[256];   /* CL_DRIVER_VERSION */
+	int is_gpu;
+	cl_uint compute_units;
+	size_t max_work_group_size;
+	size_t max_work_item_sizes[3];
+	cl_ulong local_mem_size;
+	cl_ulong global_mem_size;
+	cl_ulong max_alloc_size;
+	cl_uint mem_base_addr_align; /* bytes */
+};
+
+/* Opens a device. platform_index < 0 and device_index < 0 mean "the first
+ * GPU of any platform, else the first device"; a platform alone means its
+ * first GPU, else its first device. Returns 0, or -1 with a message in err. */
+int device_open(struct device *dev, int platform_index, int device_index, char *err,
+		size_t err_size);
+
+void device_close(struct device *dev);
+
+/* Prints every platform and device in the style of `clinfo -l`, with the
+ * indices -p and -d take. Returns 0, or -1 with a message in err. */
+int device_list(FILE *out, char *err, size_t err_size);
+
+#endif

@@ -1,0 +1,144 @@
+#include "devscene.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../cl/rtcl_shared.h"
+
+static double dot(const double a[3], const double b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void normalize(double v[3])
+{
+	double length = sqrt(dot(v, v));
+
+	for (int i = 0; i < 3; i++)
+		v[i] /= length;
+}
+
+static void cross(const double a[3], const double b[3], double out[3])
+{
+	out[0] = a[1] * b[2] - a[2] * b[1];
+	out[1] = a[2] * b[0] - a[0] * b[2];
+	out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static rt_vec4 vec4(const double v[3], double w)
+{
+	rt_vec4 out = {{(float)v[0], (float)v[1], (float)v[2], (float)w}};
+	return out;
+}
+
+static size_t round16(size_t bytes)
+{
+	return (bytes + 15) / 16 * 16;
+}
+
+static void pack_camera(struct rt_scene *out, const struct scene *scene, int width, int height)
+{
+	const struct scene_camera *cam = &scene->camera;
+	double forward[3], right[3], up[3];
+	double h = tan(cam->fov * M_PI / 360.0);
+	double aspect = (double)width / height;
+
+	for (int i = 0; i < 3; i++)
+		forward[i] = cam->look_at[i] - cam->eye[i];
+	normalize(forward);
+	cross(forward, cam->up, right);
+	normalize(right);
+	cross(right, forward, up);
+
+	out->eye = vec4(cam->eye, aspect * h);
+	out->forward = vec4(forward, h);
+	out->right = vec4(right, scene->epsilon);
+	out->up = vec4(up, 0.0);
+}
+
+static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
+{
+	const double *n = in->normal;
+	int drop = 0;
+
+	/* The checker drops the axis of the normal's largest |component|,
+	 * ties going to x, then y. */
+	if (fabs(n[1]) > fabs(n[drop]))
+		drop = 1;
+	if (fabs(n[2]) > fabs(n[drop]))
+		drop = 2;
+	out->normal = vec4(n, dot(n, in->point));
+	out->checker_color = vec4(in->checker_color, in->checker_size);
+	out->material = in->material;
+	out->has_checker = in->has_checker;
+	out->checker_s_axis = drop == 0 ? 1 : 0;
+	out->checker_t_axis = drop == 2 ? 1 : 2;
+}
+
+void *devscene_pack(const struct scene *scene, int width, int height, int max_depth,
+		    size_t *bytes)
+{
+	size_t material_offset = round16(sizeof(struct rt_scene));
+	size_t sphere_offset =
+		material_offset + (size_t)scene->material_count * sizeof(struct rt_material);
+	size_t plane_offset = sphere_offset + (size_t)scene->sphere_count * sizeof(struct rt_sphere);
+	size_t light_offset = plane_offset + (size_t)scene->plane_count * sizeof(struct rt_plane);
+	size_t total = light_offset + (size_t)scene->light_count * sizeof(struct rt_light);
+	unsigned char *block = calloc(1, total);
+
+	if (!block)
+		return NULL;
+
+	struct rt_scene *header = (struct rt_scene *)block;
+	pack_camera(header, scene, width, height);
+	header->background = vec4(scene->background, 0.0);
+	header->ambient = vec4(scene->ambient, 0.0);
+	header->width = width;
+	header->height = height;
+	header->max_depth = max_depth;
+	header->material_count = scene->material_count;
+	header->sphere_count = scene->sphere_count;
+	header->plane_count = scene->plane_count;
+	header->light_count = scene->light_count;
+	header->material_offset = (rt_uint)material_offset;
+	header->sphere_offset = (rt_uint)sphere_offset;
+	header->plane_offset = (rt_uint)plane_offset;
+	header->light_offset = (rt_uint)light_offset;
+	header->total_bytes = (rt_uint)total;
+
+	struct rt_material *materials = (struct rt_material *)(block + material_offset);
+	for (int i = 0; i < scene->material_count; i++) {
+		const struct scene_material *m = &scene->materials[i];
+		materials[i].color = vec4(m->color, m->ambient);
+		materials[i].diffuse = (float)m->diffuse;
+		materials[i].specular = (float)m->specular;
+		materials[i].shininess = (float)m->shininess;
+		materials[i].reflect = (float)m->reflect;
+		materials[i].transmit = (float)m->transmit;
+		materials[i].ior = (float)m->ior;
+		materials[i].inv_ior = (float)(1.0 / m->ior);
+	}
+
+	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
+	for (int i = 0; i < scene->sphere_count; i++) {
+		const struct scene_sphere *s = &scene->spheres[i];
+		spheres[i].center = vec4(s->center, s->radius);
+		spheres[i].radius2 = (float)(s->radius * s->radius);
+		spheres[i].inv_radius = (float)(1.0 / s->radius);
+		spheres[i].material = s->material;
+	}
+
+	struct rt_plane *planes = (struct rt_plane *)(block + plane_offset);
+	for (int i = 0; i < scene->plane_count; i++)
+		pack_plane(&planes[i], &scene->planes[i]);
+
+	struct rt_light *lights = (struct rt_light *)(block + light_offset);
+	for (int i = 0; i < scene->light_count; i++) {
+		lights[i].position = vec4(scene->lights[i].position, 0.0);
+		lights[i].color = vec4(scene->lights[i].color, 0.0);
+	}
+
+	*bytes = total;
+	return block;
+}

@@ -1,0 +1,192 @@
+// Image output through OpenImageIO: the format follows the extension.
+// image_common.c does the checks, the temporary file and .ppm/.pfm (which
+// OIIO 2.4 cannot write as PFM); this file encodes everything else.
+#include <cerrno>
+#include <cstring>
+#include <algorithm>
+#include <exception>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <OpenImageIO/filesystem.h>
+#include <OpenImageIO/imageio.h>
+#include <unistd.h>
+
+#include "image.h"
+#include "image_backend.h"
+
+namespace
+{
+
+const char *const format_hint = "use .png, .exr, .tif, .jpg, .hdr, .ppm, .pfm, ...";
+
+// OIIO's messages may span lines and name the temporary file; make them one
+// line about the file the user asked for.
+std::string one_line(std::string message, const char *tmp_path, const char *path)
+{
+	const std::string tmp = tmp_path;
+	size_t at;
+
+	while ((at = message.find(tmp)) != std::string::npos)
+		message.replace(at, tmp.size(), path);
+	while (!message.empty() && message.back() == '\n')
+		message.pop_back();
+	while ((at = message.find('\n')) != std::string::npos)
+		message.replace(at, 1, "; ");
+	return message.empty() ? "unknown error" : message;
+}
+
+// Writes go straight to the temporary file's descriptor and the first
+// failure is kept: some OIIO 2.4 writers (PNG among them) ignore a short
+// write, which on a full disk would produce a truncated image and success.
+class FdOutput : public OIIO::Filesystem::IOProxy
+{
+      public:
+	FdOutput(int fd, const char *name) : IOProxy(name, Write), fd(fd)
+	{
+	}
+	const char *proxytype() const override
+	{
+		return "rtcl-fd";
+	}
+	size_t write(const void *buf, size_t size) override
+	{
+		const size_t written = pwrite(buf, size, m_pos);
+
+		m_pos += int64_t(written);
+		return written;
+	}
+	size_t pwrite(const void *buf, size_t size, int64_t offset) override
+	{
+		const char *bytes = static_cast<const char *>(buf);
+		size_t done = 0;
+
+		while (done < size && !failure) {
+			const ssize_t n = ::pwrite(fd, bytes + done, size - done,
+						   off_t(offset) + off_t(done));
+			if (n > 0)
+				done += size_t(n);
+			else if (n == 0)
+				failure = EIO;
+			else if (errno != EINTR)
+				failure = errno;
+		}
+		end = std::max(end, offset + int64_t(done));
+		return done;
+	}
+	size_t size() const override
+	{
+		return size_t(end);
+	}
+	// errno of the first failed write, or 0.
+	int error_number() const
+	{
+		return failure;
+	}
+
+      private:
+	int fd;
+	int failure = 0;
+	int64_t end = 0;
+};
+
+// Linear floats where the format stores them; 8 bits everywhere else.
+bool is_float_format(const char *format_name)
+{
+	return std::strcmp(format_name, "openexr") == 0 || std::strcmp(format_name, "hdr") == 0;
+}
+
+int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb, int width,
+	   int height, const struct image_meta *meta, char *err, size_t err_size)
+{
+	std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(tmp_path);
+	FdOutput proxy(tmp_fd, tmp_path);
+
+	if (!out) {
+		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
+				one_line(OIIO::geterror(), tmp_path, path).c_str());
+		return -1;
+	}
+	// The few writers without proxy support (SGI, ICO, FITS, RLA, HEIF in
+	// 2.4) open tmp_path by name; their write errors are theirs to report.
+	if (out->supports("ioproxy"))
+		out->set_ioproxy(&proxy);
+
+	const bool is_float = is_float_format(out->format_name());
+	OIIO::ImageSpec spec(width, height, 3,
+			     is_float ? OIIO::TypeDesc::FLOAT : OIIO::TypeDesc::UINT8);
+	if (meta && meta->software)
+		spec.attribute("Software", meta->software);
+	if (meta && meta->description)
+		spec.attribute("ImageDescription", meta->description);
+
+	if (!out->open(tmp_path, spec)) {
+		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
+				one_line(out->geterror(), tmp_path, path).c_str());
+		return -1;
+	}
+
+	bool written;
+	if (is_float) {
+		written = out->write_image(OIIO::TypeDesc::FLOAT, rgb);
+	} else {
+		std::vector<unsigned char> bytes(3 * size_t(width) * size_t(height));
+		for (size_t i = 0; i < bytes.size(); i++)
+			bytes[i] = image_to_8bit(rgb[i]);
+		written = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
+	}
+	// close() even after a failed write, so that the file is released
+	// before the caller removes it.
+	const bool closed = out->close();
+	if (proxy.error_number()) {
+		image_set_error(err, err_size, "%s: cannot write: %s", path,
+				std::strerror(proxy.error_number()));
+		return -1;
+	}
+	if (!written || !closed) {
+		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
+				one_line(out->geterror(), tmp_path, path).c_str());
+		return -1;
+	}
+	return 0;
+}
+
+} // namespace
+
+extern "C" int image_backend_check_format(const char *path, const char *ext, char *err,
+					  size_t err_size)
+{
+	// OIIO takes a name without a dot for a format name ("png"), so a
+	// file called "png" would silently become a PNG: refuse it here.
+	if (!*ext) {
+		image_set_error(err, err_size,
+				"%s: no file extension to choose an image format by (%s)", path,
+				format_hint);
+		return -1;
+	}
+	try {
+		if (OIIO::ImageOutput::create(path))
+			return 0;
+		OIIO::geterror(); // consumed: our message says it better
+	} catch (const std::exception &e) {
+		image_set_error(err, err_size, "%s: OpenImageIO: %s", path, e.what());
+		return -1;
+	}
+	image_set_error(err, err_size, "%s: unknown image format \"%s\" (%s)", path, ext,
+			format_hint);
+	return -1;
+}
+
+extern "C" int image_backend_encode(const char *path, const char *tmp_path, int tmp_fd,
+				    const float *rgb, int width, int height,
+				    const struct image_meta *meta, char *err, size_t err_size)
+{
+	// No exception may cross into C.
+	try {
+		return encode(path, tmp_path, tmp_fd, rgb, width, height, meta, err, err_size);
+	} catch (const std::exception &e) {
+		image_set_error(err, err_size, "%s: %s", path, e.what());
+	}
+	return -1;
+}

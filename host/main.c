@@ -1,0 +1,278 @@
+/* rtcl: ray-trace a scene with OpenCL and study how the work is balanced.
+ *
+ * main() reads the options and the scene, checks the outputs can be written,
+ * renders on the device (or with the CPU reference), then writes the image,
+ * the summary and the --stats document. Every failure ends here with one
+ * message on stderr and no output file written.
+ */
+#include <jansson.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "cli.h"
+#include "device.h"
+#include "embedded.h"
+#include "image.h"
+#include "reference.h"
+#include "render.h"
+#include "scene.h"
+#include "stats.h"
+
+#define DEFAULT_SCENE "paper60.json"
+#define ERR_SIZE 65536 /* room for a kernel build log */
+
+/* What one run produced, for the summary and --stats. */
+struct run {
+	const struct options *opt;
+	const struct scene *scene;
+	struct render_settings settings;
+	struct render_result result;
+	char device_name[640];
+	char device_version[256];
+	char driver[256];
+};
+
+static int load_scene(const struct options *opt, struct scene *scene, char *err, size_t err_size)
+{
+	if (opt->scene_path)
+		return scene_load_file(scene, opt->scene_path, err, err_size);
+	return scene_load_string(scene, embedded_file(DEFAULT_SCENE), DEFAULT_SCENE " (built-in)",
+				 err, err_size);
+}
+
+static double seconds_now(void)
+{
+	struct timespec ts;
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
+}
+
+/* The CPU reference, timed by the host clock like a single launch. */
+static int render_reference(struct run *run, char *err, size_t err_size)
+{
+	const struct render_settings *s = &run->settings;
+	struct render_result *res = &run->result;
+	size_t values = (size_t)s->width * s->height * 3;
+
+	memset(res, 0, sizeof(*res));
+	res->rgb = malloc(values * sizeof(float));
+	res->kernel_ms = calloc((size_t)s->repeat, sizeof(double));
+	if (!res->rgb || !res->kernel_ms) {
+		render_result_free(res);
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width, s->height);
+		return -1;
+	}
+	for (int i = 0; i < s->repeat; i++) {
+		double start = seconds_now();
+		if (reference_render(run->scene, s->width, s->height, s->max_depth, res->rgb)) {
+			render_result_free(res);
+			snprintf(err, err_size, "the CPU reference renderer failed (out of memory)");
+			return -1;
+		}
+		res->kernel_ms[i] = (seconds_now() - start) * 1e3;
+	}
+	res->repeat = s->repeat;
+	res->kernel_ms_min = res->kernel_ms_max = res->kernel_ms[0];
+	for (int i = 1; i < s->repeat; i++) {
+		if (res->kernel_ms[i] < res->kernel_ms_min)
+			res->kernel_ms_min = res->kernel_ms[i];
+		if (res->kernel_ms[i] > res->kernel_ms_max)
+			res->kernel_ms_max = res->kernel_ms[i];
+	}
+	/* Sorting a copy for the median would be the same code as render.c's;
+	 * the reference is rarely repeated, so take the middle of the range's
+	 * sorted values with a simple insertion sort. */
+	double *sorted = malloc((size_t)s->repeat * sizeof(double));
+	if (!sorted) {
+		render_result_free(res);
+		snprintf(err, err_size, "out of host memory");
+		return -1;
+	}
+	for (int i = 0; i < s->repeat; i++) {
+		int j = i;
+		for (; j > 0 && sorted[j - 1] > res->kernel_ms[i]; j--)
+			sorted[j] = sorted[j - 1];
+		sorted[j] = res->kernel_ms[i];
+	}
+	int n = s->repeat;
+	res->kernel_ms_median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
+	free(sorted);
+	res->groups[0] = res->groups[1] = 1;
+	snprintf(run->device_name, sizeof(run->device_name),
+		 "CPU reference (C++, GLM, double precision, one core)");
+	return 0;
+}
+
+static void print_summary(const struct run *run)
+{
+	const struct render_settings *s = &run->settings;
+	const struct render_result *r = &run->result;
+
+	printf("device:  %s\n", run->device_name);
+	if (!s->kernel)
+		printf("kernel:  reference\n");
+	else if (s->kernel->single_item)
+		printf("kernel:  %s (one work-item)\n", s->kernel->name);
+	else
+		printf("kernel:  %s, work-group %dx%d, %dx%d groups (global %zux%zu)\n",
+		       s->kernel->name, s->workgroup[0], s->workgroup[1], r->groups[0],
+		       r->groups[1], r->global_size[0], r->global_size[1]);
+	printf("image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
+	       run->scene->source);
+	if (r->repeat > 1)
+		printf("time:    %.3f ms median of %d launches (min %.3f, max %.3f)\n",
+		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
+	else
+		printf("time:    %.3f ms\n", r->kernel_ms_median);
+	printf("output:  %s\n", run->opt->output);
+}
+
+static json_t *stats_document(const struct run *run)
+{
+	const struct render_settings *s = &run->settings;
+	const struct render_result *r = &run->result;
+	char workgroup[32], groups[32];
+	json_t *times = json_array();
+
+	snprintf(workgroup, sizeof(workgroup), "%dx%d", s->workgroup[0], s->workgroup[1]);
+	snprintf(groups, sizeof(groups), "%dx%d", r->groups[0], r->groups[1]);
+	for (int i = 0; i < r->repeat; i++)
+		json_array_append_new(times, json_real(r->kernel_ms[i]));
+	return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:[I,I], s:i, s:i, s:i, s:s, s:b,"
+			 " s:f, s:f, s:f, s:i, s:o, s:s}",
+			 "rtcl_version", RTCL_VERSION, "device", run->device_name,
+			 "device_version", run->device_version, "driver", run->driver, "kernel",
+			 s->kernel ? s->kernel->name : "reference", "workgroup", workgroup,
+			 "groups", groups, "global_size", (json_int_t)r->global_size[0],
+			 (json_int_t)r->global_size[1], "width", s->width, "height", s->height,
+			 "max_depth", s->max_depth, "scene", run->scene->source,
+			 "scene_in_local_memory", r->scene_in_local, "kernel_ms",
+			 r->kernel_ms_median, "kernel_ms_min", r->kernel_ms_min, "kernel_ms_max",
+			 r->kernel_ms_max, "repeat", r->repeat, "kernel_ms_all", times,
+			 "build_options", r->build_options);
+}
+
+/* Writes the image and the --stats document, or neither. */
+static int write_outputs(const struct run *run, char *err, size_t err_size)
+{
+	const struct options *opt = run->opt;
+	char description[1024];
+	struct image_meta meta = {"rtcl " RTCL_VERSION, description};
+
+	snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
+		 run->scene->source, opt->kernel, run->settings.width, run->settings.height,
+		 run->settings.max_depth);
+	if (image_write(opt->output, run->result.rgb, run->settings.width, run->settings.height,
+			&meta, err, err_size))
+		return -1;
+	if (opt->stats_path) {
+		json_t *doc = stats_document(run);
+		int failed = !doc || stats_write(opt->stats_path, doc, err, err_size);
+		if (!doc)
+			snprintf(err, err_size, "%s: cannot build the JSON document",
+				 opt->stats_path);
+		json_decref(doc);
+		if (failed) {
+			unlink(opt->output);
+			return -1;
+		}
+	}
+	return 0;
+}
+
+static int render_on_device(struct run *run, char *err, size_t err_size)
+{
+	const struct options *opt = run->opt;
+	struct device dev;
+
+	if (device_open(&dev, opt->platform, opt->device, err, err_size))
+		return -1;
+	snprintf(run->device_name, sizeof(run->device_name), "%s (%s)", dev.name,
+		 dev.platform_name);
+	snprintf(run->device_version, sizeof(run->device_version), "%s", dev.version);
+	snprintf(run->driver, sizeof(run->driver), "%s", dev.driver);
+	if (opt->verbose)
+		fprintf(stderr, "rtcl: platform %d, device %d: %s\n", dev.platform_index,
+			dev.device_index, run->device_name);
+	int failed = render(&dev, run->scene, &run->settings, &run->result, err, err_size);
+	if (!failed && opt->verbose)
+		fprintf(stderr, "rtcl: build options: %s\n", run->result.build_options);
+	device_close(&dev);
+	return failed ? -1 : 0;
+}
+
+int main(int argc, char **argv)
+{
+	static char err[ERR_SIZE];
+	struct options opt;
+	struct scene scene;
+	struct run run;
+	int status = EXIT_FAILED;
+
+	if (cli_parse(argc, argv, &opt, err, sizeof(err))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		return EXIT_USAGE;
+	}
+	if (opt.help) {
+		cli_print_help(stdout);
+		return 0;
+	}
+	if (opt.version) {
+		printf("rtcl %s\n", RTCL_VERSION);
+		return 0;
+	}
+	if (opt.list_devices) {
+		if (device_list(stdout, err, sizeof(err))) {
+			fprintf(stderr, "rtcl: %s\n", err);
+			return EXIT_FAILED;
+		}
+		return 0;
+	}
+
+	if (load_scene(&opt, &scene, err, sizeof(err))) {
+		fprintf(stderr, "%s\n", err);
+		return EXIT_FAILED;
+	}
+	memset(&run, 0, sizeof(run));
+	run.opt = &opt;
+	run.scene = &scene;
+	run.settings.kernel = render_find_kernel(opt.kernel); /* NULL: the reference */
+	run.settings.workgroup[0] = opt.workgroup[0];
+	run.settings.workgroup[1] = opt.workgroup[1];
+	run.settings.groups[0] = opt.groups[0];
+	run.settings.groups[1] = opt.groups[1];
+	run.settings.width = opt.size[0] ? opt.size[0] : scene.width;
+	run.settings.height = opt.size[1] ? opt.size[1] : scene.height;
+	run.settings.max_depth = opt.depth >= 0 ? opt.depth : scene.max_depth;
+	run.settings.repeat = opt.repeat;
+	run.settings.source_dir = getenv("RTCL_CL_DIR");
+	run.settings.progress = !opt.quiet && isatty(STDERR_FILENO);
+	run.settings.verbose = opt.verbose;
+
+	if (image_check_writable(opt.output, err, sizeof(err)) ||
+	    (opt.stats_path && stats_check_writable(opt.stats_path, err, sizeof(err)))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		goto out_free_scene;
+	}
+	if (run.settings.kernel ? render_on_device(&run, err, sizeof(err))
+				: render_reference(&run, err, sizeof(err))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		goto out_free_scene;
+	}
+	if (write_outputs(&run, err, sizeof(err))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		goto out_free_result;
+	}
+	if (!opt.quiet)
+		print_summary(&run);
+	status = 0;
+
+out_free_result:
+	render_result_free(&run.result);
+out_free_scene:
+	scene_free(&scene);
+	return status;
+}

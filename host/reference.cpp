@@ -1,0 +1,320 @@
+/* CPU reference renderer (see reference.h).
+ *
+ * Each numbered step of RENDERING.md's trace() is marked below with its
+ * number, so the two can be read side by side. Clarity comes before speed:
+ * the only optimisation is converting the scene once into GLM vectors.
+ */
+#include "reference.h"
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <new>
+#include <vector>
+
+namespace
+{
+
+using glm::dvec3;
+
+dvec3 to_dvec3(const double v[3])
+{
+	return dvec3(v[0], v[1], v[2]);
+}
+
+struct material {
+	dvec3 color;
+	double ka, kd, ks, shininess, kr, kt, ior;
+};
+
+struct sphere {
+	dvec3 center;
+	double radius;
+	double radius_sq;
+	int material;
+};
+
+struct plane {
+	dvec3 point;
+	dvec3 normal;
+	int material;
+	bool has_checker;
+	double checker_size;
+	dvec3 checker_color;
+	int dropped_axis; /* world axis left out of the checker coordinates */
+};
+
+struct light {
+	dvec3 position;
+	dvec3 color;
+};
+
+/* The nearest hit of a ray: exactly one of sphere and plane is set. */
+struct hit {
+	double t;
+	const struct sphere *sphere;
+	const struct plane *plane;
+};
+
+/* The axis along which `n` has its largest |component|; ties go to the
+ * earlier axis (x before y before z). */
+int largest_axis(const dvec3 &n)
+{
+	int axis = 0;
+	if (std::fabs(n.y) > std::fabs(n[axis]))
+		axis = 1;
+	if (std::fabs(n.z) > std::fabs(n[axis]))
+		axis = 2;
+	return axis;
+}
+
+/* Returns the smallest t > 0 where the ray meets the sphere (the far root
+ * when the origin is inside), or 0 if there is none. d is unit length. */
+double intersect_sphere(const sphere &s, const dvec3 &o, const dvec3 &d)
+{
+	dvec3 oc = o - s.center;
+	double b = glm::dot(oc, d);
+	double c = glm::dot(oc, oc) - s.radius_sq;
+	double disc = b * b - c;
+	if (disc < 0.0)
+		return 0.0;
+	double root = std::sqrt(disc);
+	double t_near = -b - root;
+	double t_far = -b + root;
+	if (t_near > 0.0)
+		return t_near;
+	if (t_far > 0.0)
+		return t_far;
+	return 0.0;
+}
+
+/* Returns t > 0 where the ray meets the plane, or 0 if it does not (a ray
+ * parallel to the plane misses it). */
+double intersect_plane(const plane &p, const dvec3 &o, const dvec3 &d)
+{
+	double denom = glm::dot(p.normal, d);
+	if (denom == 0.0)
+		return 0.0;
+	double t = glm::dot(p.point - o, p.normal) / denom;
+	return t > 0.0 ? t : 0.0;
+}
+
+class tracer
+{
+      public:
+	/* May throw std::bad_alloc. */
+	tracer(const struct scene &sc, int max_depth);
+
+	dvec3 trace(const dvec3 &o, const dvec3 &d, int depth) const;
+
+      private:
+	bool nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const;
+	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
+	dvec3 base_color(const hit &h, const dvec3 &p) const;
+
+	std::vector<material> materials;
+	std::vector<sphere> spheres;
+	std::vector<plane> planes;
+	std::vector<light> lights;
+	dvec3 background;
+	dvec3 ambient;
+	double epsilon;
+	int max_depth;
+};
+
+tracer::tracer(const struct scene &sc, int max_depth_)
+    : background(to_dvec3(sc.background)), ambient(to_dvec3(sc.ambient)), epsilon(sc.epsilon),
+      max_depth(max_depth_)
+{
+	for (int i = 0; i < sc.material_count; i++) {
+		const scene_material &m = sc.materials[i];
+		materials.push_back({to_dvec3(m.color), m.ambient, m.diffuse, m.specular,
+				     m.shininess, m.reflect, m.transmit, m.ior});
+	}
+	for (int i = 0; i < sc.sphere_count; i++) {
+		const scene_sphere &s = sc.spheres[i];
+		spheres.push_back({to_dvec3(s.center), s.radius, s.radius * s.radius, s.material});
+	}
+	for (int i = 0; i < sc.plane_count; i++) {
+		const scene_plane &p = sc.planes[i];
+		dvec3 normal = to_dvec3(p.normal);
+		planes.push_back({to_dvec3(p.point), normal, p.material, p.has_checker != 0,
+				  p.checker_size, to_dvec3(p.checker_color), largest_axis(normal)});
+	}
+	for (int i = 0; i < sc.light_count; i++) {
+		const scene_light &l = sc.lights[i];
+		lights.push_back({to_dvec3(l.position), to_dvec3(l.color)});
+	}
+}
+
+/* Step 1. Spheres are tested before planes, each in scene order, and only a
+ * strictly smaller t replaces a hit, so an exact tie goes to the object
+ * listed first. Returns false when nothing is hit. */
+bool tracer::nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const
+{
+	hit best = {0.0, nullptr, nullptr};
+	for (const sphere &s : spheres) {
+		double t = intersect_sphere(s, o, d);
+		if (t > 0.0 && (best.t == 0.0 || t < best.t))
+			best = {t, &s, nullptr};
+	}
+	for (const plane &p : planes) {
+		double t = intersect_plane(p, o, d);
+		if (t > 0.0 && (best.t == 0.0 || t < best.t))
+			best = {t, nullptr, &p};
+	}
+	*out = best;
+	return best.t > 0.0;
+}
+
+/* Whether any object (transparent ones too) lies on the ray at 0 < t < distance. */
+bool tracer::blocked(const dvec3 &o, const dvec3 &d, double distance) const
+{
+	for (const sphere &s : spheres) {
+		double t = intersect_sphere(s, o, d);
+		if (t > 0.0 && t < distance)
+			return true;
+	}
+	for (const plane &p : planes) {
+		double t = intersect_plane(p, o, d);
+		if (t > 0.0 && t < distance)
+			return true;
+	}
+	return false;
+}
+
+/* Step 3: the material colour, or the checker colour on the odd squares of a
+ * checkered plane. */
+dvec3 tracer::base_color(const hit &h, const dvec3 &p) const
+{
+	if (h.sphere)
+		return materials[h.sphere->material].color;
+
+	const plane &pl = *h.plane;
+	if (!pl.has_checker)
+		return materials[pl.material].color;
+
+	double s, t;
+	switch (pl.dropped_axis) {
+	case 0:
+		s = p.y, t = p.z;
+		break;
+	case 1:
+		s = p.x, t = p.z;
+		break;
+	default:
+		s = p.x, t = p.y;
+		break;
+	}
+	/* Both floors are whole numbers, so their sum is exact (below 2^53) and
+	 * fmod gives its parity without any integer overflow. */
+	double cells = std::floor(s / pl.checker_size) + std::floor(t / pl.checker_size);
+	bool odd = std::fmod(std::fabs(cells), 2.0) == 1.0;
+	return odd ? pl.checker_color : materials[pl.material].color;
+}
+
+dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
+{
+	/* 1. */
+	hit h;
+	if (!nearest_hit(o, d, &h))
+		return background;
+
+	/* 2. */
+	dvec3 p = o + h.t * d;
+	dvec3 n_g = h.sphere ? (p - h.sphere->center) / h.sphere->radius : h.plane->normal;
+	bool inside = glm::dot(n_g, d) > 0.0;
+	dvec3 n = inside ? -n_g : n_g;
+	const material &m = materials[h.sphere ? h.sphere->material : h.plane->material];
+
+	/* 3. */
+	dvec3 c = base_color(h, p);
+
+	/* 4. */
+	dvec3 color = m.ka * c * ambient;
+	dvec3 shadow_origin = p + epsilon * n;
+	for (const light &li : lights) {
+		/* The shadow ray runs from shadow_origin straight to the light, and
+		 * t is measured along it, so "distance" is from shadow_origin. */
+		dvec3 to_light = li.position - shadow_origin;
+		double distance = glm::length(to_light);
+		if (distance > 0.0 && blocked(shadow_origin, to_light / distance, distance))
+			continue;
+
+		dvec3 surface_to_light = li.position - p;
+		if (surface_to_light == dvec3(0.0))
+			continue; /* light exactly at p: L is undefined */
+		dvec3 L = glm::normalize(surface_to_light);
+		color += m.kd * std::max(0.0, glm::dot(n, L)) * c * li.color;
+
+		dvec3 half = L - d;
+		if (half != dvec3(0.0)) { /* L == d: no half vector, no specular term */
+			dvec3 H = glm::normalize(half);
+			color += m.ks * std::pow(std::max(0.0, glm::dot(n, H)), m.shininess) *
+				 li.color;
+		}
+	}
+
+	/* 5. */
+	if (depth < max_depth) {
+		double reflect_weight = m.kr;
+		dvec3 refracted(0.0);
+		if (m.kt > 0.0) {
+			double eta = inside ? m.ior : 1.0 / m.ior;
+			double cos_i = -glm::dot(d, n);
+			double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+			if (k < 0.0) {
+				reflect_weight += m.kt; /* total internal reflection */
+			} else {
+				dvec3 T = eta * d + (eta * cos_i - std::sqrt(k)) * n;
+				refracted = m.kt * trace(p - epsilon * n, T, depth + 1);
+			}
+		}
+		if (reflect_weight > 0.0) {
+			dvec3 R = d - 2.0 * glm::dot(d, n) * n;
+			color += reflect_weight * trace(p + epsilon * n, R, depth + 1);
+		}
+		color += refracted;
+	}
+
+	/* 6. */
+	return color;
+}
+
+} // namespace
+
+extern "C" int reference_render(const struct scene *scene, int width, int height, int max_depth,
+				float *rgb)
+{
+	if (!scene || !rgb || width < 1 || height < 1 || max_depth < 0)
+		return -1;
+
+	try {
+		const tracer tr(*scene, max_depth);
+
+		const scene_camera &cam = scene->camera;
+		dvec3 eye = to_dvec3(cam.eye);
+		dvec3 f = glm::normalize(to_dvec3(cam.look_at) - eye);
+		dvec3 r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
+		dvec3 u = glm::cross(r, f);
+		double h = std::tan(glm::radians(cam.fov) / 2.0);
+		double a = (double)width / (double)height;
+
+		for (int y = 0; y < height; y++) {
+			double sy = (1.0 - 2.0 * (y + 0.5) / height) * h;
+			for (int x = 0; x < width; x++) {
+				double sx = (2.0 * (x + 0.5) / width - 1.0) * a * h;
+				dvec3 dir = glm::normalize(f + sx * r + sy * u);
+				dvec3 c = tr.trace(eye, dir, 0);
+				float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);
+				out[0] = (float)c.r;
+				out[1] = (float)c.g;
+				out[2] = (float)c.b;
+			}
+		}
+	} catch (const std::bad_alloc &) {
+		return -1;
+	}
+	return 0;
+}

@@ -1,0 +1,96 @@
+/* Scene files (docs: ../shared/docs/SCENE.md, format version 1).
+ *
+ * The loader validates everything SCENE.md asks for and fills a plain C
+ * struct in double precision; the OpenCL runtime packs it into the device
+ * layout of cl/rtcl_shared.h and the CPU reference renders it directly.
+ */
+#ifndef RTCL_SCENE_H
+#define RTCL_SCENE_H
+
+#include <stddef.h>
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define SCENE_MAX_IMAGE_SIDE 32768
+#define SCENE_MAX_DEPTH 64
+
+struct scene_material {
+	double color[3];
+	double ambient;   /* ka */
+	double diffuse;   /* kd */
+	double specular;  /* ks */
+	double shininess; /* Blinn-Phong exponent */
+	double reflect;   /* kr */
+	double transmit;  /* kt */
+	double ior;
+};
+
+struct scene_sphere {
+	double center[3];
+	double radius;
+	int material; /* index into scene.materials */
+};
+
+struct scene_plane {
+	double point[3];
+	double normal[3]; /* unit length (normalised on load) */
+	int material;
+	int has_checker;
+	double checker_size;
+	double checker_color[3];
+};
+
+struct scene_light {
+	double position[3];
+	double color[3];
+};
+
+struct scene_camera {
+	double eye[3];
+	double look_at[3];
+	double up[3];
+	double fov; /* vertical, degrees */
+};
+
+struct scene {
+	char *source; /* file name (or "name (built-in)") used in messages */
+	int width, height;
+	struct scene_camera camera;
+	double background[3];
+	double ambient[3];
+	int max_depth;
+	double epsilon;
+
+	/* Named materials first, then one per inline material, then the
+	 * default material if anything uses it. */
+	struct scene_material *materials;
+	int material_count;
+	struct scene_sphere *spheres;
+	int sphere_count;
+	struct scene_plane *planes;
+	int plane_count;
+	struct scene_light *lights;
+	int light_count;
+};
+
+/* Loads and validates a scene file. Returns 0 on success; otherwise writes
+ * one message (formatted as in SCENE.md, "FILE: PATH: what is wrong" or
+ * "FILE:LINE:COLUMN: what is wrong", without a trailing newline) into
+ * err[err_size] and returns -1. The scene must be released with
+ * scene_free() on success; on failure nothing needs releasing. */
+int scene_load_file(struct scene *scene, const char *path, char *err, size_t err_size);
+
+/* The same for a document held in memory; `name` stands for FILE in
+ * messages. */
+int scene_load_string(struct scene *scene, const char *json, const char *name, char *err,
+		      size_t err_size);
+
+void scene_free(struct scene *scene);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
