@@ -1,9 +1,9 @@
 // Image output through OpenImageIO: the format follows the extension.
 // image_common.c does the checks, the temporary file and .ppm/.pfm (which
 // OIIO 2.4 cannot write as PFM); this file encodes everything else.
+#include <algorithm>
 #include <cerrno>
 #include <cstring>
-#include <algorithm>
 #include <exception>
 #include <memory>
 #include <string>

@@ -1,0 +1,290 @@
+/* Kernel tests on tiny images, on the first OpenCL device (PoCL in CI).
+ *
+ * Every scheduling kernel must give the same 8-bit image as every other, write
+ * every pixel exactly once and nothing outside the image (guard zones around
+ * the output buffer: under PoCL an out-of-bounds write would silently corrupt
+ * the host heap), and come close to the CPU reference.
+ */
+#include <criterion/criterion.h>
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "device.h"
+#include "image.h"
+#include "reference.h"
+#include "render.h"
+#include "scene.h"
+
+static char err[65536];
+
+static void open_device(struct device *dev)
+{
+	cr_assert_eq(device_open(dev, -1, -1, err, sizeof(err)), 0, "%s", err);
+}
+
+static void load(struct scene *scene, const char *path)
+{
+	cr_assert_eq(scene_load_file(scene, path, err, sizeof(err)), 0, "%s", err);
+}
+
+static struct render_settings settings_for(const char *kernel, int width, int height, int wx,
+					   int wy, int max_depth)
+{
+	struct render_settings s;
+
+	memset(&s, 0, sizeof(s));
+	s.kernel = render_find_kernel(kernel);
+	cr_assert_not_null(s.kernel, "no kernel %s", kernel);
+	s.workgroup[0] = wx;
+	s.workgroup[1] = wy;
+	s.width = width;
+	s.height = height;
+	s.max_depth = max_depth;
+	s.repeat = 1;
+	s.check_writes = 1;
+	return s;
+}
+
+/* Renders and checks that every pixel was written exactly once and nothing
+ * around the image was touched. Returns the image in 8 bits. */
+static unsigned char *render_checked(struct device *dev, const struct scene *scene,
+				     const struct render_settings *s, const char *what)
+{
+	struct render_result res;
+	size_t pixels = (size_t)s->width * s->height;
+
+	cr_assert_eq(render(dev, scene, s, &res, err, sizeof(err)), 0, "%s: %s", what, err);
+	cr_assert(res.guards_intact, "%s: wrote outside the image", what);
+	for (size_t i = 0; i < pixels; i++)
+		cr_assert_eq(res.write_counts[i], 1, "%s: pixel (%zu, %zu) written %u times", what,
+			     i % s->width, i / s->width, res.write_counts[i]);
+
+	unsigned char *bytes = malloc(pixels * 3);
+	cr_assert_not_null(bytes);
+	for (size_t i = 0; i < pixels * 3; i++)
+		bytes[i] = image_to_8bit(res.rgb[i]);
+	render_result_free(&res);
+	return bytes;
+}
+
+static void expect_same_image(const unsigned char *want, const unsigned char *got, int width,
+			      int height, const char *what)
+{
+	for (size_t i = 0; i < (size_t)width * height * 3; i++)
+		cr_assert_eq(got[i], want[i], "%s: pixel (%zu, %zu) channel %zu is %u, serial gave %u",
+			     what, i / 3 % width, i / 3 / width, i % 3, got[i], want[i]);
+}
+
+/* Every kernel, every work-group shape, several sizes (two not divisible by
+ * the shapes, and 160x96 beside 161x97, where a prototype once corrupted
+ * PoCL's heap): the same image as the serial kernel. */
+static void check_kernels_identical(const char *path)
+{
+	static const int sizes[][2] = {{61, 47}, {161, 97}, {160, 96}};
+	static const int shapes[][2] = {{1, 1}, {8, 8}, {16, 4}, {32, 1}};
+	static const char *const parallel[] = {"naive", "cyclic", "dynamic"};
+	struct device dev;
+	struct scene scene;
+
+	open_device(&dev);
+	load(&scene, path);
+	for (size_t z = 0; z < sizeof(sizes) / sizeof(sizes[0]); z++) {
+		int w = sizes[z][0], h = sizes[z][1];
+		char what[256];
+		struct render_settings s = settings_for("serial", w, h, 1, 1, scene.max_depth);
+
+		snprintf(what, sizeof(what), "%s serial %dx%d", path, w, h);
+		unsigned char *want = render_checked(&dev, &scene, &s, what);
+		for (size_t k = 0; k < 3; k++) {
+			for (size_t p = 0; p < sizeof(shapes) / sizeof(shapes[0]); p++) {
+				s = settings_for(parallel[k], w, h, shapes[p][0], shapes[p][1],
+						 scene.max_depth);
+				snprintf(what, sizeof(what), "%s %s %dx%d -w %dx%d", path,
+					 parallel[k], w, h, shapes[p][0], shapes[p][1]);
+				unsigned char *got = render_checked(&dev, &scene, &s, what);
+				expect_same_image(want, got, w, h, what);
+				free(got);
+			}
+		}
+		/* Persistent groups: fewer than the chunks, and more. */
+		for (int g = 0; g < 2; g++) {
+			for (size_t k = 1; k < 3; k++) {
+				s = settings_for(parallel[k], w, h, 8, 8, scene.max_depth);
+				s.groups[0] = g ? 40 : 3;
+				s.groups[1] = g ? 30 : 2;
+				snprintf(what, sizeof(what), "%s %s %dx%d --groups %dx%d", path,
+					 parallel[k], w, h, s.groups[0], s.groups[1]);
+				unsigned char *got = render_checked(&dev, &scene, &s, what);
+				expect_same_image(want, got, w, h, what);
+				free(got);
+			}
+		}
+		free(want);
+	}
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+Test(kernels, identical_paper60, .timeout = 600)
+{
+	check_kernels_identical("scenes/paper60.json");
+}
+
+Test(kernels, identical_two_balls, .timeout = 600)
+{
+	check_kernels_identical("scenes/two_balls.json");
+}
+
+Test(kernels, identical_tir, .timeout = 600)
+{
+	check_kernels_identical("scenes/tir.json");
+}
+
+Test(kernels, identical_empty, .timeout = 600)
+{
+	check_kernels_identical("scenes/empty.json");
+}
+
+/* The OpenCL image against the double-precision reference: PSNR >= 40 dB and
+ * at most 0.1% of the pixels off by more than 2/255. */
+static void check_against_reference(const char *path, int width, int height)
+{
+	struct device dev;
+	struct scene scene;
+	size_t pixels = (size_t)width * height;
+
+	open_device(&dev);
+	load(&scene, path);
+	float *want = malloc(pixels * 3 * sizeof(float));
+	cr_assert_not_null(want);
+	cr_assert_eq(reference_render(&scene, width, height, scene.max_depth, want), 0);
+	struct render_settings s = settings_for("dynamic", width, height, 8, 8, scene.max_depth);
+	unsigned char *got = render_checked(&dev, &scene, &s, path);
+
+	double squared = 0;
+	size_t off = 0;
+	for (size_t i = 0; i < pixels; i++) {
+		int worst = 0;
+		for (int c = 0; c < 3; c++) {
+			int d = abs((int)got[3 * i + c] - (int)image_to_8bit(want[3 * i + c]));
+			squared += (d / 255.0) * (d / 255.0);
+			worst = d > worst ? d : worst;
+		}
+		off += worst > 2;
+	}
+	double mse = squared / (pixels * 3);
+	double psnr = mse > 0 ? 10 * log10(1 / mse) : INFINITY;
+	double off_percent = 100.0 * off / pixels;
+	fprintf(stderr, "reference check: %s at %dx%d: PSNR %.1f dB, %.4f%% of pixels off by > 2/255\n",
+		path, width, height, psnr, off_percent);
+	cr_expect_geq(psnr, 40.0, "%s: PSNR %.2f dB", path, psnr);
+	cr_expect_leq(off_percent, 0.1, "%s: %.4f%% of pixels off by more than 2/255", path,
+		      off_percent);
+	free(got);
+	free(want);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+Test(kernels, matches_reference_paper60, .timeout = 600)
+{
+	check_against_reference("scenes/paper60.json", 300, 300);
+}
+
+Test(kernels, matches_reference_two_balls, .timeout = 600)
+{
+	check_against_reference("scenes/two_balls.json", 320, 240);
+}
+
+Test(kernels, matches_reference_tir, .timeout = 600)
+{
+	check_against_reference("scenes/tir.json", 320, 240);
+}
+
+Test(kernels, matches_reference_empty, .timeout = 600)
+{
+	check_against_reference("scenes/empty.json", 64, 48);
+}
+
+Test(kernels, dynamic_is_stable_over_50_launches, .timeout = 600)
+{
+	struct device dev;
+	struct scene scene;
+	struct render_settings s = settings_for("dynamic", 161, 97, 8, 8, 5);
+
+	open_device(&dev);
+	load(&scene, "scenes/paper60.json");
+	s.max_depth = scene.max_depth;
+	unsigned char *first = render_checked(&dev, &scene, &s, "dynamic launch 1");
+	for (int i = 2; i <= 50; i++) {
+		char what[64];
+		snprintf(what, sizeof(what), "dynamic launch %d", i);
+		unsigned char *again = render_checked(&dev, &scene, &s, what);
+		expect_same_image(first, again, s.width, s.height, what);
+		free(again);
+	}
+	free(first);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+/* The scene read from __global memory gives the image the __local copy gives. */
+Test(kernels, global_scene_matches_local, .timeout = 600)
+{
+	struct device dev;
+	struct scene scene;
+
+	open_device(&dev);
+	load(&scene, "scenes/paper60.json");
+	struct render_settings s = settings_for("dynamic", 61, 47, 8, 8, scene.max_depth);
+	unsigned char *local = render_checked(&dev, &scene, &s, "__local scene");
+	s.force_global_scene = 1;
+	unsigned char *global = render_checked(&dev, &scene, &s, "__global scene");
+	expect_same_image(local, global, s.width, s.height, "__global scene");
+	free(local);
+	free(global);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+/* One diffuse sphere of radius 1 at the origin, C = (0.8, 0.6, 0.4), ka 0.5,
+ * kd 0.7, ks 0.3, shininess 2, ambient (0.1, 0.2, 0.3); one light at (3,0,5)
+ * of colour (1, 0.5, 0.25); camera at (0,0,5) looking at the origin. The
+ * centre pixel of a 3x3 image looks straight down the axis: it hits
+ * p = (0,0,1), n = (0,0,1); L = (0.6,0,0.8), n.L = 0.8; L - d = (0.6,0,1.8),
+ * (n.H)^2 = 1.8^2/3.6 = 0.9. Colour = ka C ambient + kd (n.L) C Lc +
+ * ks (n.H)^2 Lc = (0.758, 0.363, 0.1835) (see test_reference.c for the sums). */
+Test(kernels, analytic_centre_pixel)
+{
+	static const char json[] =
+		"{\"format\": \"rtcl-scene\", \"version\": 1,"
+		" \"image\": {\"width\": 3, \"height\": 3},"
+		" \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0], \"fov\": 45},"
+		" \"background\": [0.9, 0.9, 0.9], \"ambient\": [0.1, 0.2, 0.3],"
+		" \"lights\": [{\"position\": [3, 0, 5], \"color\": [1, 0.5, 0.25]}],"
+		" \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1, \"material\":"
+		"   {\"color\": [0.8, 0.6, 0.4], \"ambient\": 0.5, \"diffuse\": 0.7,"
+		"    \"specular\": 0.3, \"shininess\": 2}}]}";
+	static const char *const kernels[] = {"serial", "naive", "cyclic", "dynamic"};
+	const double want[3] = {0.758, 0.363, 0.1835};
+	struct device dev;
+	struct scene scene;
+
+	open_device(&dev);
+	cr_assert_eq(scene_load_string(&scene, json, "analytic", err, sizeof(err)), 0, "%s", err);
+	for (int k = 0; k < 4; k++) {
+		struct render_settings s = settings_for(kernels[k], 3, 3, 2, 2, 5);
+		struct render_result res;
+		cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
+		for (int c = 0; c < 3; c++)
+			cr_expect_float_eq(res.rgb[3 * 4 + c], want[c], 2e-6,
+					   "%s: centre pixel channel %d is %.7f, by hand %.7f",
+					   kernels[k], c, res.rgb[3 * 4 + c], want[c]);
+		render_result_free(&res);
+	}
+	scene_free(&scene);
+	device_close(&dev);
+}
