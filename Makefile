@@ -6,7 +6,7 @@
 #   make test         unit, kernel (PoCL), command-line and tools tests
 #   make clean
 #
-# Variables: OIIO=0|1, CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
+# Variables: OIIO=0|1, BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
 # has numpy, matplotlib and pytest from `make deps`).
 
 OIIO ?= 1
@@ -14,6 +14,7 @@ CC ?= gcc
 CXX ?= g++
 PYTHON ?= /usr/bin/python3
 BUILD ?= build
+BIN ?= rtcl
 
 WARNINGS := -Wall -Wextra
 CPPFLAGS += -I$(BUILD) -Ihost -Icl -DCL_TARGET_OPENCL_VERSION=120 -D_DEFAULT_SOURCE
@@ -42,9 +43,9 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 UNIT_TESTS := $(wildcard test/test_*.c)
 
 .PHONY: all deps render test test-unit test-py clean
-all: rtcl
+all: $(BIN)
 
-rtcl: $(BUILD)/main.o $(HOST_OBJS)
+$(BIN): $(BUILD)/main.o $(HOST_OBJS)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
 $(BUILD)/embedded.c: tools/embed.py $(EMBEDDED) | $(BUILD)

@@ -199,8 +199,8 @@ def place_balls(rng, n, framing, scale):
             raise SystemExit("genscene: could place only %d of %d balls after %d tries"
                              % (len(balls), n, limit))
         radius = rng.uniform(R_MIN, R_MAX)
-        # Uniform on screen, not on the table: near balls, which look large,
-        # are fewer per screen area, which keeps the far ones from crowding.
+        # Uniform on screen rather than on the table, so that the near part of
+        # the table, small but large on screen, gets its share of the balls.
         x, z = framing.on_table(rng.uniform(-NDC_X_LIMIT, NDC_X_LIMIT),
                                 rng.uniform(NDC_BOTTOM, NDC_TOP))
         x, z, radius = rnd(x), rnd(z), rnd(radius)
@@ -241,7 +241,8 @@ def build_scene(n_balls=REFERENCE_BALLS, seed=DEFAULT_SEED, size=(2000, 2000), d
         "ambient": [0.1, 0.1, 0.1],
         "max_depth": depth,
         "epsilon": 1e-4,
-        # Key light high on the left behind the camera, fill light lower on the right.
+        # Key light high and behind the camera on its right (-x is screen right
+        # when looking along +z), fill light lower on its left.
         "lights": [{"position": rvec((-12 * scale, 20 * scale, -18 * scale)),
                     "color": [0.7, 0.7, 0.7]},
                    {"position": rvec((16 * scale, 12 * scale, -8 * scale)),

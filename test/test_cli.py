@@ -1,0 +1,279 @@
+"""End-to-end tests of the rtcl command line: every option, every error message.
+
+Each test runs the built ./rtcl (or $RTCL) on the first OpenCL device (PoCL in
+CI) at tiny sizes. A failing run must print exactly one line on stderr, exit
+non-zero and leave no file behind.
+"""
+import json
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+BAD_SCENES = ROOT / "test" / "bad_scenes"
+SMALL = ["--size", "24x16"]
+
+
+def rtcl(*args, cwd=None):
+    return subprocess.run([RTCL, *args], capture_output=True, text=True, cwd=cwd or ROOT,
+                          timeout=300)
+
+
+def netpbm_header(path):
+    """Returns (magic, width, height) of a PPM/PFM file, skipping comments."""
+    fields = []
+    with open(path, "rb") as f:
+        data = f.read(4096)
+    for line in data.split(b"\n"):
+        if line.startswith(b"#"):
+            continue
+        fields += line.split()
+        if len(fields) >= 3:
+            return fields[0].decode(), int(fields[1]), int(fields[2])
+    raise AssertionError(f"{path}: no header")
+
+
+def expect_failure(result, status, message, directory):
+    assert result.returncode == status, (result.returncode, result.stderr)
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert message in lines[0], lines[0]
+    assert result.stdout == ""
+    assert sorted(os.listdir(directory)) == [], "a failed run left files behind"
+
+
+# ---- what works -----------------------------------------------------------
+
+def test_help_teaches_every_option():
+    result = rtcl("--help")
+    assert result.returncode == 0
+    for option in ["-k, --kernel", "-w, --workgroup", "--groups", "-s, --scene", "-o, --output",
+                   "--size", "--depth", "-p, --platform", "-d, --device", "--list-devices",
+                   "-r, --repeat", "--stats", "-q, --quiet", "-v, --verbose", "-h, --help",
+                   "--version", "serial", "naive", "cyclic", "dynamic", "reference",
+                   "Examples:"]:
+        assert option in result.stdout, option
+    assert rtcl("-h").stdout == result.stdout
+
+
+def test_version():
+    result = rtcl("--version")
+    assert result.returncode == 0
+    assert result.stdout.startswith("rtcl ")
+
+
+def test_list_devices_in_clinfo_style():
+    result = rtcl("--list-devices")
+    assert result.returncode == 0
+    assert result.stdout.startswith("Platform #0: ")
+    assert "-- Device #0: " in result.stdout
+
+
+@pytest.mark.parametrize("kernel", ["serial", "naive", "cyclic", "dynamic", "reference"])
+def test_each_kernel_renders(kernel, tmp_path):
+    out = tmp_path / "img.ppm"
+    result = rtcl("-k", kernel, *SMALL, "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert netpbm_header(out) == ("P6", 24, 16)
+    assert os.path.getsize(out) > 24 * 16 * 3
+    assert f"kernel:  {kernel}" in result.stdout
+    assert "device:  " in result.stdout and "time:    " in result.stdout
+
+
+def test_default_is_dynamic_8x8_render_png(tmp_path):
+    result = rtcl(*SMALL, cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "kernel:  dynamic, work-group 8x8," in result.stdout
+    with open(tmp_path / "render.png", "rb") as f:
+        assert f.read(8) == b"\x89PNG\r\n\x1a\n"
+    assert sorted(os.listdir(tmp_path)) == ["render.png"]
+
+
+def stats_of(tmp_path, *args):
+    out, stats = tmp_path / "img.ppm", tmp_path / "stats.json"
+    result = rtcl(*args, "-o", str(out), "--stats", str(stats))
+    assert result.returncode == 0, result.stderr
+    with open(stats) as f:
+        return result, json.load(f)
+
+
+def test_stats_has_every_figure(tmp_path):
+    result, stats = stats_of(tmp_path, *SMALL, "-k", "cyclic", "-w", "4x2", "--groups", "3x2",
+                             "-r", "3")
+    assert stats["kernel"] == "cyclic"
+    assert stats["workgroup"] == "4x2"
+    assert stats["groups"] == "3x2"
+    assert stats["global_size"] == [12, 4]
+    assert (stats["width"], stats["height"]) == (24, 16)
+    assert stats["repeat"] == 3 and len(stats["kernel_ms_all"]) == 3
+    assert stats["kernel_ms_min"] <= stats["kernel_ms"] <= stats["kernel_ms_max"]
+    assert sorted(stats["kernel_ms_all"])[1] == stats["kernel_ms"]
+    assert stats["device"] in result.stdout
+    assert "median of 3 launches" in result.stdout
+
+
+def test_size_depth_and_scene_options(tmp_path):
+    _, stats = stats_of(tmp_path, "-s", "scenes/two_balls.json", "--size", "30x20", "--depth",
+                        "2")
+    assert (stats["width"], stats["height"], stats["max_depth"]) == (30, 20, 2)
+    assert stats["scene"] == "scenes/two_balls.json"
+    assert netpbm_header(tmp_path / "img.ppm") == ("P6", 30, 20)
+
+
+def test_scene_size_used_without_size_option(tmp_path):
+    _, stats = stats_of(tmp_path, "-s", "scenes/empty.json")
+    with open(ROOT / "scenes" / "empty.json") as f:
+        image = json.load(f)["image"]
+    assert (stats["width"], stats["height"]) == (image["width"], image["height"])
+
+
+def test_platform_and_device_options(tmp_path):
+    _, stats = stats_of(tmp_path, *SMALL, "-p", "0", "-d", "0")
+    assert stats["device"]
+
+
+def test_depth_changes_the_image(tmp_path):
+    images = []
+    for depth in ["0", "5"]:
+        out = tmp_path / f"d{depth}.ppm"
+        assert rtcl("-s", "scenes/two_balls.json", *SMALL, "--depth", depth, "-o",
+                    str(out)).returncode == 0
+        images.append(out.read_bytes().split(b"\n255\n", 1)[1])
+    assert images[0] != images[1]
+
+
+def test_quiet_prints_nothing(tmp_path):
+    result = rtcl(*SMALL, "-q", "-o", str(tmp_path / "x.ppm"))
+    assert result.returncode == 0
+    assert result.stdout == "" and result.stderr == ""
+
+
+def test_verbose_says_where_the_scene_lives(tmp_path):
+    result = rtcl(*SMALL, "-v", "-o", str(tmp_path / "x.ppm"))
+    assert result.returncode == 0
+    assert "build options: -cl-std=CL1.2" in result.stderr
+    assert "__local memory" in result.stderr
+
+
+@pytest.mark.parametrize("ext,magic", [
+    ("png", b"\x89PNG"), ("exr", b"\x76\x2f\x31\x01"), ("tif", b"II*\x00"),
+    ("jpg", b"\xff\xd8\xff"), ("ppm", b"P6"), ("pfm", b"PF"),
+])
+def test_output_formats_from_extension(tmp_path, ext, magic):
+    out = tmp_path / f"img.{ext}"
+    result = rtcl(*SMALL, "-o", str(out))
+    if result.returncode != 0 and "no OpenImageIO" in result.stderr:
+        pytest.skip("built with OIIO=0")
+    assert result.returncode == 0, result.stderr
+    assert out.read_bytes()[:len(magic)] == magic
+    assert sorted(os.listdir(tmp_path)) == [f"img.{ext}"], "temporary files left behind"
+
+
+# ---- bad options ------------------------------------------------------------
+
+@pytest.mark.parametrize("args,status,message", [
+    (["-k", "bogus"], 2, '-k/--kernel: unknown kernel "bogus" (choose from serial, naive, cyclic,'
+                         ' dynamic, reference)'),
+    (["-w", "0x8"], 2, "-w/--workgroup: each size must be between 1 and 65536, got 0x8"),
+    (["-w", "8"], 2, '-w/--workgroup: expected WxH (e.g. 8x8), got "8"'),
+    (["-w", "8x8x"], 2, '-w/--workgroup: expected WxH (e.g. 8x8), got "8x8x"'),
+    (["--groups", "0x0"], 2, "--groups: each size must be between 1 and 65536, got 0x0"),
+    (["--size", "0x0"], 2, "--size: each size must be between 1 and 32768, got 0x0"),
+    (["--size", "40000x10"], 2, "--size: each size must be between 1 and 32768, got 40000x10"),
+    (["--depth", "-1"], 2, '--depth: expected an integer between 0 and 64, got "-1"'),
+    (["--depth", "65"], 2, '--depth: expected an integer between 0 and 64, got "65"'),
+    (["-r", "0"], 2, '-r/--repeat: expected an integer between 1 and 100000, got "0"'),
+    (["-r", "two"], 2, '-r/--repeat: expected an integer between 1 and 100000, got "two"'),
+    (["-p", "-1"], 2, '-p/--platform: expected an integer between 0 and 1000, got "-1"'),
+    (["--bogus"], 2, "unknown option --bogus (see --help)"),
+    (["-x"], 2, "unknown option -x (see --help)"),
+    (["-k"], 2, "-k needs a value (see --help)"),
+    (["extra"], 2, 'unexpected argument "extra"'),
+    (["-q", "-v"], 2, "-q/--quiet and -v/--verbose contradict each other"),
+    (["-p", "99"], 1, "platform 99 does not exist"),
+    (["-d", "99"], 1, "device 99 does not exist on platform 0"),
+    (["-w", "128x128"], 1, "work-group 128x128 (16384 work-items) is larger than"),
+    (["--size", "32768x32768"], 1, "the image needs 12884901888 bytes of device memory"),
+])
+def test_bad_option(tmp_path, args, status, message):
+    result = rtcl("-o", str(tmp_path / "out.png"), *args)
+    expect_failure(result, status, message, tmp_path)
+    assert result.stderr.startswith("rtcl: ")
+
+
+def test_unwritable_output_directory(tmp_path):
+    result = rtcl(*SMALL, "-o", str(tmp_path / "missing" / "out.png"))
+    expect_failure(result, 1, "does not exist", tmp_path)
+
+
+def test_output_in_unwritable_place(tmp_path):
+    result = rtcl(*SMALL, "-o", "/proc/rtcl-test.png")
+    assert result.returncode == 1
+    assert len(result.stderr.splitlines()) == 1
+    assert not os.path.exists("/proc/rtcl-test.png")
+
+
+@pytest.mark.parametrize("name,message", [
+    ("out.xyz", 'unknown image format ".xyz"'),
+    ("out", "no file extension"),
+])
+def test_unknown_output_format(tmp_path, name, message):
+    result = rtcl(*SMALL, "-o", str(tmp_path / name))
+    expect_failure(result, 1, message, tmp_path)
+
+
+def test_output_that_is_a_directory(tmp_path):
+    (tmp_path / "d.png").mkdir()
+    result = rtcl(*SMALL, "-o", str(tmp_path / "d.png"))
+    assert result.returncode == 1
+    assert "not a regular file" in result.stderr
+    assert os.listdir(tmp_path / "d.png") == []
+
+
+def test_stats_in_missing_directory_writes_no_image(tmp_path):
+    out = tmp_path / "out.png"
+    result = rtcl(*SMALL, "-o", str(out), "--stats", str(tmp_path / "missing" / "s.json"))
+    expect_failure(result, 1, "does not exist", tmp_path)
+
+
+# ---- bad scenes ---------------------------------------------------------------
+
+BAD = sorted(p.stem for p in BAD_SCENES.glob("*.json"))
+
+
+@pytest.mark.parametrize("name", BAD)
+def test_bad_scene_message(tmp_path, name):
+    scene = BAD_SCENES / f"{name}.json"
+    want = (BAD_SCENES / f"{name}.expect").read_text().rstrip("\n")
+    out = tmp_path / "out.png"
+    result = rtcl("-s", str(scene), "-o", str(out))
+    assert result.returncode == 1
+    assert result.stderr == want.replace("{FILE}", str(scene)) + "\n"
+    assert result.stdout == ""
+    assert os.listdir(tmp_path) == []
+
+
+def test_bad_scene_leaves_existing_output_untouched(tmp_path):
+    out = tmp_path / "out.png"
+    out.write_bytes(b"precious")
+    result = rtcl("-s", str(BAD_SCENES / "sphere_negative_radius.json"), "-o", str(out))
+    assert result.returncode == 1
+    assert out.read_bytes() == b"precious"
+
+
+def test_missing_scene_file(tmp_path):
+    missing = tmp_path / "missing.json"
+    result = rtcl("-s", str(missing), "-o", str(tmp_path / "out.png"))
+    expect_failure(result, 1, f"{missing}: cannot open: No such file or directory", tmp_path)
+
+
+def test_directory_as_scene(tmp_path):
+    scene_dir = tmp_path / "scene.json"
+    scene_dir.mkdir()
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    result = rtcl("-s", str(scene_dir), "-o", str(out_dir / "out.png"))
+    expect_failure(result, 1, f"{scene_dir}: not a regular file", out_dir)
