@@ -22,12 +22,13 @@ CFLAGS ?= -O2 -g
 CFLAGS += -std=c11 $(WARNINGS)
 CXXFLAGS ?= -O2 -g
 CXXFLAGS += -std=c++17 $(WARNINGS)
-LDLIBS := -lOpenCL -ljansson -lm
+LDLIBS = -lOpenCL -ljansson -lm
 
 ifeq ($(OIIO),1)
 IMAGE_BACKEND := $(BUILD)/image_oiio.o
-OIIO_CFLAGS := $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
-OIIO_LIBS := $(shell pkg-config --libs OpenImageIO 2>/dev/null)
+# Expanded when used, so that `make deps render` finds what deps installed.
+OIIO_CFLAGS = $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
+OIIO_LIBS = $(shell pkg-config --libs OpenImageIO 2>/dev/null)
 LDLIBS += $(OIIO_LIBS)
 else
 IMAGE_BACKEND := $(BUILD)/image_ppm.o
