@@ -5,14 +5,14 @@
  * paper's geometry. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *chunk_counter,
-		     __global ulong *item_counts, __global uint *write_counts)
+		     __global ulong *counts, __global uint *write_counts)
 {
 	struct tracer tr;
 	int chunk_w = get_local_size(0);
 	int chunk_h = get_local_size(1);
 
 	(void)chunk_counter;
-	tracer_init(&tr, load_scene(scene_global, scene_local));
+	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
 	int chunks_x = (tr.scene->width + chunk_w - 1) / chunk_w;
 	int chunks_y = (tr.scene->height + chunk_h - 1) / chunk_h;
 
@@ -24,5 +24,5 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 				render_pixel(&tr, image, write_counts, x, y);
 		}
 	}
-	store_counts(&tr, item_counts, get_global_id(1) * get_global_size(0) + get_global_id(0));
+	store_counts(&tr, counts, get_global_id(1) * get_global_size(0) + get_global_id(0));
 }

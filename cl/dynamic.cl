@@ -6,7 +6,7 @@
  * the counter before every launch. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *chunk_counter,
-		     __global ulong *item_counts, __global uint *write_counts)
+		     __global ulong *counts, __global uint *write_counts)
 {
 	__local uint next_chunk;
 	struct tracer tr;
@@ -14,7 +14,7 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	int chunk_h = get_local_size(1);
 	bool first_item = get_local_id(0) == 0 && get_local_id(1) == 0;
 
-	tracer_init(&tr, load_scene(scene_global, scene_local));
+	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
 	uint chunks_x = (tr.scene->width + chunk_w - 1) / chunk_w;
 	uint chunks = chunks_x * ((tr.scene->height + chunk_h - 1) / chunk_h);
 
@@ -32,5 +32,5 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 		if (x < tr.scene->width && y < tr.scene->height)
 			render_pixel(&tr, image, write_counts, x, y);
 	}
-	store_counts(&tr, item_counts, get_global_id(1) * get_global_size(0) + get_global_id(0));
+	store_counts(&tr, counts, get_global_id(1) * get_global_size(0) + get_global_id(0));
 }

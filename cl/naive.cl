@@ -3,15 +3,15 @@
  * help copy the scene. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *chunk_counter,
-		     __global ulong *item_counts, __global uint *write_counts)
+		     __global ulong *counts, __global uint *write_counts)
 {
 	struct tracer tr;
 	int x = get_global_id(0);
 	int y = get_global_id(1);
 
 	(void)chunk_counter;
-	tracer_init(&tr, load_scene(scene_global, scene_local));
+	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
 	if (x < tr.scene->width && y < tr.scene->height)
 		render_pixel(&tr, image, write_counts, x, y);
-	store_counts(&tr, item_counts, y * get_global_size(0) + x);
+	store_counts(&tr, counts, y * get_global_size(0) + x);
 }

@@ -289,8 +289,8 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 		return -1;
 	res->item_count = items;
 	st->item_counts = create_buffer(dev, CL_MEM_READ_WRITE,
-					s->count_flops ? items * 2 * sizeof(cl_ulong) : 16, NULL,
-					"per-work-item counts", err, err_size);
+					s->count_flops ? (items * 2 + pixels) * sizeof(cl_ulong) : 16,
+					NULL, "flop counts", err, err_size);
 	if (!st->item_counts)
 		return -1;
 	st->write_counts = create_buffer(dev, CL_MEM_READ_WRITE,
@@ -452,16 +452,21 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 					    res->rgb, 0, NULL, NULL);
 
 	if (status == CL_SUCCESS && s->count_flops) {
-		cl_ulong *counts = malloc(res->item_count * 2 * sizeof(cl_ulong));
+		size_t item_bytes = res->item_count * 2 * sizeof(cl_ulong);
+		cl_ulong *counts = malloc(item_bytes);
 		res->item_flops = malloc(res->item_count * sizeof(uint64_t));
-		if (!counts || !res->item_flops) {
+		res->pixel_flops = malloc(pixels * sizeof(uint64_t));
+		if (!counts || !res->item_flops || !res->pixel_flops) {
 			free(counts);
 			snprintf(err, err_size, "out of host memory for the flop counts");
 			return -1;
 		}
-		status = clEnqueueReadBuffer(dev->queue, st->item_counts, CL_TRUE, 0,
-					     res->item_count * 2 * sizeof(cl_ulong), counts, 0,
-					     NULL, NULL);
+		status = clEnqueueReadBuffer(dev->queue, st->item_counts, CL_TRUE, 0, item_bytes,
+					     counts, 0, NULL, NULL);
+		if (status == CL_SUCCESS)
+			status = clEnqueueReadBuffer(dev->queue, st->item_counts, CL_TRUE,
+						     item_bytes, pixels * sizeof(cl_ulong),
+						     res->pixel_flops, 0, NULL, NULL);
 		for (size_t i = 0; status == CL_SUCCESS && i < res->item_count; i++) {
 			res->item_flops[i] = counts[2 * i];
 			res->total_flops += counts[2 * i];
@@ -540,8 +545,9 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	if (check_fits(dev, "the image", (double)pixels * 3 * sizeof(float), err, err_size))
 		return -1;
 	if (s->count_flops &&
-	    check_fits(dev, "the per-work-item counts",
-		       (double)res->global_size[0] * res->global_size[1] * 16, err, err_size))
+	    check_fits(dev, "the flop counts",
+		       ((double)res->global_size[0] * res->global_size[1] * 2 + pixels) * 8, err,
+		       err_size))
 		return -1;
 
 	scene_block = devscene_pack(scene, s->width, s->height, s->max_depth, &res->scene_bytes);
@@ -587,7 +593,9 @@ void render_result_free(struct render_result *res)
 	free(res->rgb);
 	free(res->kernel_ms);
 	free(res->item_flops);
+	free(res->pixel_flops);
 	free(res->write_counts);
+	res->pixel_flops = NULL;
 	res->rgb = NULL;
 	res->kernel_ms = NULL;
 	res->item_flops = NULL;

@@ -56,6 +56,7 @@ struct render_result {
 	 * NDRange. */
 	uint64_t *item_flops;
 	size_t item_count;
+	uint64_t *pixel_flops; /* per pixel, row-major */
 	uint64_t total_flops, total_rays;
 
 	/* With check_writes. */

@@ -362,7 +362,23 @@ def test_special_scenes():
     assert any(empty["background"]) and empty["image"] == {"width": 320, "height": 240}
     two = read("two_balls.json")
     assert len(two["spheres"]) == 2 and two["image"] == {"width": 800, "height": 600}
+    for s in two["spheres"]:
+        m = two["materials"][s["material"]]
+        assert m["reflect"] > 0 and m["transmit"] > 0
+    a, b = two["spheres"]
+    assert math.dist(a["center"], b["center"]) - a["radius"] - b["radius"] < 0.5
+
     tir = read("tir.json")
     assert tir["image"] == {"width": 640, "height": 480}
-    assert any(m.get("ior", 1.5) > 2 and m.get("transmit", 0) > 0
-               for m in tir["materials"].values())
+    # A ray entering a lone sphere meets its far side at the angle it was refracted
+    # to, below the critical one: total internal reflection needs a surface inside
+    # the glass, here air bubbles (ior 1/2.4) within a diamond ball (ior 2.4).
+    mats = tir["materials"]
+    for outer, inner in itertools.permutations(tir["spheres"], 2):
+        mo, mi = mats[outer["material"]], mats[inner["material"]]
+        if (mo["transmit"] > 0 and mi["transmit"] > 0 and mo["ior"] * mi["ior"] < 1.01
+                and math.dist(outer["center"], inner["center"]) + inner["radius"]
+                < outer["radius"]):
+            break
+    else:
+        pytest.fail("tir.json has no bubble inside a glass ball")
