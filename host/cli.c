@@ -15,6 +15,8 @@ enum long_only_option {
 	OPT_DEPTH,
 	OPT_LIST_DEVICES,
 	OPT_STATS,
+	OPT_FLOPS,
+	OPT_WORK_MAP,
 	OPT_VERSION,
 };
 
@@ -31,6 +33,8 @@ static const struct option long_options[] = {
 	{"list-devices", no_argument, NULL, OPT_LIST_DEVICES},
 	{"repeat", required_argument, NULL, 'r'},
 	{"stats", required_argument, NULL, OPT_STATS},
+	{"flops", required_argument, NULL, OPT_FLOPS},
+	{"work-map", required_argument, NULL, OPT_WORK_MAP},
 	{"quiet", no_argument, NULL, 'q'},
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
@@ -78,6 +82,13 @@ void cli_print_help(FILE *out)
 		"  -r, --repeat N         timed launches after one warm-up launch (default 1);\n"
 		"                         prints the median, min and max kernel time\n"
 		"      --stats FILE       write every printed figure to FILE as JSON\n"
+		"      --flops FILE.npy   count floating-point operations (RENDERING.md) in a\n"
+		"                         separate, untimed run; write one count per launched\n"
+		"                         work-item as a .npy array shaped like the NDRange, with\n"
+		"                         the launch geometry in FILE.npy.json; print GFLOP/s\n"
+		"                         (over the uncounted run's time) and parallel efficiency\n"
+		"      --work-map IMAGE   write the flops spent on each pixel as an image, with\n"
+		"                         a colour scale bar (implies a counting run)\n"
 		"\n"
 		"Other:\n"
 		"  -q, --quiet            print nothing but errors\n"
@@ -221,6 +232,12 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 		case OPT_STATS:
 			o->stats_path = optarg;
 			break;
+		case OPT_FLOPS:
+			o->flops_path = optarg;
+			break;
+		case OPT_WORK_MAP:
+			o->work_map_path = optarg;
+			break;
 		case 'q':
 			o->quiet = 1;
 			break;
@@ -252,6 +269,12 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	if (optind < argc) {
 		snprintf(err, err_size, "unexpected argument \"%s\" (options only; see --help)",
 			 argv[optind]);
+		return -1;
+	}
+	if (strcmp(o->kernel, "reference") == 0 && (o->flops_path || o->work_map_path)) {
+		snprintf(err, err_size,
+			 "--flops and --work-map count the OpenCL kernels' work; the reference "
+			 "renderer does not count (choose -k serial, naive, cyclic or dynamic)");
 		return -1;
 	}
 	if (o->quiet && o->verbose) {

@@ -23,6 +23,8 @@ struct options {
 	int list_devices;
 	int repeat;
 	const char *stats_path;
+	const char *flops_path;    /* --flops FILE.npy */
+	const char *work_map_path; /* --work-map IMAGE */
 	int quiet, verbose;
 	int help, version;
 };

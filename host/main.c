@@ -19,7 +19,9 @@
 #include "reference.h"
 #include "render.h"
 #include "scene.h"
+#include "outfile.h"
 #include "stats.h"
+#include "workmap.h"
 
 #define DEFAULT_SCENE "paper60.json"
 #define ERR_SIZE 65536 /* room for a kernel build log */
@@ -29,7 +31,10 @@ struct run {
 	const struct options *opt;
 	const struct scene *scene;
 	struct render_settings settings;
-	struct render_result result;
+	struct render_result result;  /* the timed, uncounted run */
+	struct render_result counted; /* the counting run, with --flops/--work-map */
+	int counting;
+	struct flop_summary flops;
 	char device_name[640];
 	char device_version[256];
 	char driver[256];
@@ -127,7 +132,38 @@ static void print_summary(const struct run *run)
 		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
 	else
 		printf("time:    %.3f ms\n", r->kernel_ms_median);
-	printf("output:  %s\n", run->opt->output);
+	if (run->counting) {
+		const struct flop_summary *f = &run->flops;
+		printf("work:    %.3f GFLOP, %.1f GFLOP/s; per work-item mean %.0f, max %.0f, min "
+		       "%.0f flops: parallel efficiency %.1f%%\n",
+		       f->total * 1e-9, f->total * 1e-6 / r->kernel_ms_median, f->mean, f->max,
+		       f->min, 100 * f->parallel_efficiency);
+		printf("rays:    %llu (primary, secondary and shadow), %.1f Mrays/s\n",
+		       (unsigned long long)f->rays, f->rays * 1e-3 / r->kernel_ms_median);
+	}
+	printf("output:  %s", run->opt->output);
+	if (run->opt->work_map_path)
+		printf(", work map %s", run->opt->work_map_path);
+	if (run->opt->flops_path)
+		printf(", flops %s", run->opt->flops_path);
+	printf("\n");
+}
+
+/* The figures of the counting run, for --stats and the --flops sidecar. */
+static void add_flop_figures(json_t *doc, const struct run *run)
+{
+	const struct flop_summary *f = &run->flops;
+	double ms = run->result.kernel_ms_median;
+
+	json_object_set_new(doc, "gflop", json_real(f->total * 1e-9));
+	json_object_set_new(doc, "total_flops", json_integer((json_int_t)f->total));
+	json_object_set_new(doc, "flops_per_item",
+			    json_pack("{s:f, s:f, s:f}", "mean", f->mean, "max", f->max, "min",
+				      f->min));
+	json_object_set_new(doc, "parallel_efficiency", json_real(f->parallel_efficiency));
+	json_object_set_new(doc, "gflops", json_real(f->total * 1e-6 / ms));
+	json_object_set_new(doc, "rays", json_integer((json_int_t)f->rays));
+	json_object_set_new(doc, "mrays_per_s", json_real(f->rays * 1e-3 / ms));
 }
 
 static json_t *stats_document(const struct run *run)
@@ -155,30 +191,100 @@ static json_t *stats_document(const struct run *run)
 			 "build_options", r->build_options);
 }
 
-/* Writes the image and the --stats document, or neither. */
+/* The --flops sidecar: how the counts were launched. */
+static json_t *flops_sidecar(const struct run *run)
+{
+	const struct render_settings *s = &run->settings;
+	const struct render_result *c = &run->counted;
+	json_t *doc = json_pack(
+		"{s:s, s:i, s:s, s:[i,i], s:[i,i], s:[I,I], s:i, s:i, s:i, s:s, s:s, s:s}", "format",
+		"rtcl-flops", "version", 1, "kernel", s->kernel->name, "workgroup",
+		(int)c->local_size[0], (int)c->local_size[1], "groups", c->groups[0], c->groups[1],
+		"global_size", (json_int_t)c->global_size[0], (json_int_t)c->global_size[1],
+		"width", s->width, "height", s->height, "max_depth", s->max_depth, "device",
+		run->device_name, "scene", run->scene->source, "layout",
+		"counts[y][x] for the work-item at global id (x, y); 0 for those given no pixel");
+
+	if (doc)
+		add_flop_figures(doc, run);
+	return doc;
+}
+
+/* Writes one JSON document; returns 0 or -1 with a message. */
+static int write_json(const char *path, json_t *doc, char *err, size_t err_size)
+{
+	int failed = !doc || stats_write_json(path, doc, err, err_size);
+
+	if (!doc)
+		snprintf(err, err_size, "%s: cannot build the JSON document", path);
+	json_decref(doc);
+	return failed ? -1 : 0;
+}
+
+/* Writes the image and every other output asked for, or none of them: a
+ * failure removes what this run already wrote. */
 static int write_outputs(const struct run *run, char *err, size_t err_size)
 {
 	const struct options *opt = run->opt;
-	char description[1024];
+	const struct render_settings *s = &run->settings;
+	char description[1024], sidecar[4200];
 	struct image_meta meta = {"rtcl " RTCL_VERSION, description};
+	const char *written[4];
+	int count = 0;
 
 	snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
-		 run->scene->source, opt->kernel, run->settings.width, run->settings.height,
-		 run->settings.max_depth);
-	if (image_write(opt->output, run->result.rgb, run->settings.width, run->settings.height,
-			&meta, err, err_size))
+		 run->scene->source, opt->kernel, s->width, s->height, s->max_depth);
+	if (image_write(opt->output, run->result.rgb, s->width, s->height, &meta, err, err_size))
 		return -1;
+	written[count++] = opt->output;
+	if (opt->work_map_path) {
+		if (workmap_write(opt->work_map_path, run->counted.pixel_flops, s->width, s->height,
+				  err, err_size))
+			goto out_remove;
+		written[count++] = opt->work_map_path;
+	}
+	if (opt->flops_path) {
+		const struct render_result *c = &run->counted;
+		if (stats_write_npy(opt->flops_path, c->item_flops, c->global_size[1],
+				    c->global_size[0], err, err_size))
+			goto out_remove;
+		written[count++] = opt->flops_path;
+		snprintf(sidecar, sizeof(sidecar), "%s.json", opt->flops_path);
+		if (write_json(sidecar, flops_sidecar(run), err, err_size))
+			goto out_remove;
+		written[count++] = sidecar;
+	}
 	if (opt->stats_path) {
 		json_t *doc = stats_document(run);
-		int failed = !doc || stats_write(opt->stats_path, doc, err, err_size);
-		if (!doc)
-			snprintf(err, err_size, "%s: cannot build the JSON document",
-				 opt->stats_path);
-		json_decref(doc);
-		if (failed) {
-			unlink(opt->output);
+		if (doc && run->counting)
+			add_flop_figures(doc, run);
+		if (write_json(opt->stats_path, doc, err, err_size))
+			goto out_remove;
+	}
+	return 0;
+
+out_remove:
+	while (count > 0)
+		outfile_remove(written[--count]);
+	return -1;
+}
+
+/* Checks every output can be written before any work starts. */
+static int check_outputs(const struct options *opt, char *err, size_t err_size)
+{
+	char sidecar[4200];
+
+	if (image_check_writable(opt->output, err, err_size))
+		return -1;
+	if (opt->work_map_path && image_check_writable(opt->work_map_path, err, err_size))
+		return -1;
+	if (opt->stats_path && outfile_check_writable(opt->stats_path, err, err_size))
+		return -1;
+	if (opt->flops_path) {
+		snprintf(sidecar, sizeof(sidecar), "%s.json", opt->flops_path);
+		if (outfile_check_writable(opt->flops_path, err, err_size) ||
+		    outfile_check_writable(sidecar, err, err_size))
 			return -1;
-		}
 	}
 	return 0;
 }
@@ -197,7 +303,17 @@ static int render_on_device(struct run *run, char *err, size_t err_size)
 	if (opt->verbose)
 		fprintf(stderr, "rtcl: platform %d, device %d: %s\n", dev.platform_index,
 			dev.device_index, run->device_name);
-	int failed = render(&dev, run->scene, &run->settings, &run->result, err, err_size);
+	int failed = 0;
+	if (run->counting) {
+		struct render_settings counting = run->settings;
+		counting.count_flops = 1;
+		failed = render(&dev, run->scene, &counting, &run->counted, err, err_size);
+		if (!failed)
+			flop_summary_compute(&run->flops, run->counted.item_flops,
+					     run->counted.item_count, run->counted.total_rays);
+	}
+	if (!failed)
+		failed = render(&dev, run->scene, &run->settings, &run->result, err, err_size);
 	if (!failed && opt->verbose)
 		fprintf(stderr, "rtcl: build options: %s\n", run->result.build_options);
 	device_close(&dev);
@@ -252,8 +368,8 @@ int main(int argc, char **argv)
 	run.settings.progress = !opt.quiet && isatty(STDERR_FILENO);
 	run.settings.verbose = opt.verbose;
 
-	if (image_check_writable(opt.output, err, sizeof(err)) ||
-	    (opt.stats_path && stats_check_writable(opt.stats_path, err, sizeof(err)))) {
+	run.counting = opt.flops_path || opt.work_map_path;
+	if (check_outputs(&opt, err, sizeof(err))) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		goto out_free_scene;
 	}
@@ -272,6 +388,7 @@ int main(int argc, char **argv)
 
 out_free_result:
 	render_result_free(&run.result);
+	render_result_free(&run.counted);
 out_free_scene:
 	scene_free(&scene);
 	return status;

@@ -1,76 +1,71 @@
 #include "stats.h"
 
-#include <errno.h>
 #include <stdio.h>
-#include <stdlib.h>
 #include <string.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
-/* Writes dirname(path) into dir. */
-static void directory_of(const char *path, char *dir, size_t dir_size)
+#include "outfile.h"
+
+void flop_summary_compute(struct flop_summary *s, const uint64_t *item_flops, size_t items,
+			  uint64_t rays)
 {
-	const char *slash = strrchr(path, '/');
+	uint64_t max = 0, min = items ? UINT64_MAX : 0, total = 0;
 
-	if (!slash)
-		snprintf(dir, dir_size, ".");
-	else if (slash == path)
-		snprintf(dir, dir_size, "/");
-	else
-		snprintf(dir, dir_size, "%.*s", (int)(slash - path), path);
+	for (size_t i = 0; i < items; i++) {
+		total += item_flops[i];
+		max = item_flops[i] > max ? item_flops[i] : max;
+		min = item_flops[i] < min ? item_flops[i] : min;
+	}
+	s->total = total;
+	s->mean = items ? (double)total / items : 0;
+	s->max = (double)max;
+	s->min = (double)min;
+	s->parallel_efficiency = max ? s->mean / s->max : 1.0;
+	s->rays = rays;
 }
 
-int stats_check_writable(const char *path, char *err, size_t err_size)
+static int fill_json(FILE *file, const void *document)
 {
-	char dir[4096];
-	struct stat st;
-
-	directory_of(path, dir, sizeof(dir));
-	if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
-		snprintf(err, err_size, "%s: directory %s does not exist", path, dir);
+	if (json_dumpf(document, file, JSON_INDENT(2) | JSON_REAL_PRECISION(9)) != 0)
 		return -1;
-	}
-	if (access(dir, W_OK) != 0) {
-		snprintf(err, err_size, "%s: cannot write in %s: %s", path, dir, strerror(errno));
-		return -1;
-	}
-	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-		snprintf(err, err_size, "%s: exists and is not a regular file", path);
-		return -1;
-	}
-	return 0;
+	return fputc('\n', file) == EOF ? -1 : 0;
 }
 
-int stats_write(const char *path, const json_t *document, char *err, size_t err_size)
+int stats_write_json(const char *path, const json_t *document, char *err, size_t err_size)
 {
-	char dir[4096], tmp[4200];
-	int fd;
+	return outfile_write(path, fill_json, document, err, err_size);
+}
 
-	directory_of(path, dir, sizeof(dir));
-	snprintf(tmp, sizeof(tmp), "%s/.rtcl-stats-XXXXXX", dir);
-	fd = mkstemp(tmp);
-	if (fd < 0) {
-		snprintf(err, err_size, "%s: cannot create a temporary file in %s: %s", path, dir,
-			 strerror(errno));
+struct npy_array {
+	const uint64_t *counts;
+	size_t rows, cols;
+};
+
+/* NPY format 1.0: magic, version, header length, a Python dict literal padded
+ * with spaces to a multiple of 64 bytes and ended by a newline, then the data
+ * (little-endian, as on every platform rtcl runs on). */
+static int fill_npy(FILE *file, const void *context)
+{
+	const struct npy_array *a = context;
+	char header[256];
+	int length = snprintf(header, sizeof(header),
+			      "{'descr': '<u8', 'fortran_order': False, 'shape': (%zu, %zu), }",
+			      a->rows, a->cols);
+	int padded = (10 + length + 1 + 63) / 64 * 64 - 10;
+
+	memset(header + length, ' ', (size_t)(padded - length - 1));
+	header[padded - 1] = '\n';
+	unsigned char preamble[10] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0,
+				      (unsigned char)(padded & 0xff), (unsigned char)(padded >> 8)};
+	if (fwrite(preamble, 1, sizeof(preamble), file) != sizeof(preamble) ||
+	    fwrite(header, 1, (size_t)padded, file) != (size_t)padded)
 		return -1;
-	}
-	FILE *f = fdopen(fd, "w");
-	if (!f) {
-		close(fd);
-		goto out_remove;
-	}
-	int failed = json_dumpf(document, f, JSON_INDENT(2) | JSON_REAL_PRECISION(9)) != 0;
-	failed |= fputc('\n', f) == EOF;
-	failed |= fflush(f) != 0 || fsync(fileno(f)) != 0;
-	failed |= fclose(f) != 0;
-	if (failed)
-		goto out_remove;
-	if (chmod(tmp, 0644) != 0 || rename(tmp, path) != 0)
-		goto out_remove;
-	return 0;
+	size_t n = a->rows * a->cols;
+	return fwrite(a->counts, sizeof(uint64_t), n, file) == n ? 0 : -1;
+}
 
-out_remove:
-	snprintf(err, err_size, "%s: cannot write: %s", path, strerror(errno));
-	unlink(tmp);
-	return -1;
+int stats_write_npy(const char *path, const uint64_t *counts, size_t rows, size_t cols, char *err,
+		    size_t err_size)
+{
+	struct npy_array array = {counts, rows, cols};
+	return outfile_write(path, fill_npy, &array, err, err_size);
 }

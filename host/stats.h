@@ -1,17 +1,29 @@
-/* The --stats JSON document: every figure rtcl prints, for scripts. */
+/* The --stats document and the --flops file: every figure rtcl prints, for
+ * scripts, and the per-work-item flop counts. */
 #ifndef RTCL_STATS_H
 #define RTCL_STATS_H
 
 #include <jansson.h>
 #include <stddef.h>
+#include <stdint.h>
 
-/* Writes the JSON document to path through a temporary file in the same
- * directory that is renamed over it, so a failure leaves no partial file.
- * Returns 0, or -1 with one message in err. */
-int stats_write(const char *path, const json_t *document, char *err, size_t err_size);
+/* Figures of a counting run (RENDERING.md). */
+struct flop_summary {
+	uint64_t total;
+	double mean, max, min;      /* per launched work-item */
+	double parallel_efficiency; /* mean / max */
+	uint64_t rays;
+};
 
-/* Checks before rendering that path's directory exists and is writable.
- * Returns 0, or -1 with one message in err. */
-int stats_check_writable(const char *path, char *err, size_t err_size);
+void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flops,
+			  size_t items, uint64_t rays);
+
+/* Writes a JSON document (atomically, see outfile.h). */
+int stats_write_json(const char *path, const json_t *document, char *err, size_t err_size);
+
+/* Writes counts as a .npy file of little-endian uint64 with shape (rows,
+ * cols), which numpy.load reads directly. */
+int stats_write_npy(const char *path, const uint64_t *counts, size_t rows, size_t cols, char *err,
+		    size_t err_size);
 
 #endif

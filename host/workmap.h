@@ -1,0 +1,26 @@
+/* The work map: an image of the flops spent on each pixel (the paper's
+ * Figure 2, made from the measured counts), with a labelled scale bar. */
+#ifndef RTCL_WORKMAP_H
+#define RTCL_WORKMAP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+/* Height in pixels of the scale bar that workmap_write() puts below a map
+ * `width` pixels wide; it grows with the width, as the font does. */
+int workmap_bar_height(int width);
+
+/* Writes an image of the flops spent on each pixel, pixel_flops[y * width +
+ * x], row 0 at the top: each pixel coloured by viridis of its count on a
+ * linear scale from 0 to the largest count (all dark if that is 0). Below
+ * the map, a scale bar: a horizontal viridis strip with ticks and the
+ * labels "0" (left end), the midpoint (middle) and the largest count (right
+ * end), in a built-in bitmap font scaled with the width; labels that do not
+ * fit without overlapping are left out. The image is width × (height +
+ * workmap_bar_height(width)) pixels, written by image_write() (format from
+ * the extension), with the description "flops per pixel, 0 (dark) to MAX
+ * (bright), viridis". Returns 0, or -1 with one message in err[err_size]. */
+int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int height, char *err,
+		  size_t err_size);
+
+#endif

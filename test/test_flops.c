@@ -1,0 +1,268 @@
+/* Flop counting (RENDERING.md): the shared tracer's pieces count exactly their
+ * hand-counted operations, and every kernel counts the same work per pixel.
+ *
+ * The unit tests build cl/tracer.cl with RTCL_COUNT_FLOPS and a small test
+ * kernel that calls one tracer function on the analytic scene: a sphere of
+ * radius 1 at the origin, a plane y = -1, a light at (3,0,5), eye (0,0,5).
+ */
+#include <criterion/criterion.h>
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../cl/rtcl_shared.h"
+#include "devscene.h"
+#include "device.h"
+#include "embedded.h"
+#include "render.h"
+#include "scene.h"
+
+static char err[65536];
+
+static const char analytic_json[] =
+	"{\"format\": \"rtcl-scene\", \"version\": 1,"
+	" \"image\": {\"width\": 3, \"height\": 3},"
+	" \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+	" \"lights\": [{\"position\": [3, 0, 5]}],"
+	" \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1}],"
+	" \"planes\": [{\"point\": [0, -1, 0], \"normal\": [0, 1, 0]}]}";
+
+/* Each test kernel writes the flops counted into out[0] and a result into
+ * out[1] (as float bits) so the test can check it took the intended path. */
+static const char test_kernels[] =
+	"__kernel void count_sphere(__global const uint4 *scene, __global ulong *out,"
+	"                           float4 o, float4 d)\n"
+	"{\n"
+	"	struct tracer tr;\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	float t = intersect_sphere(&tr, &tr.spheres[0], o.xyz, d.xyz);\n"
+	"	out[0] = tr.flops;\n"
+	"	out[1] = as_uint(t);\n"
+	"}\n"
+	"__kernel void count_plane(__global const uint4 *scene, __global ulong *out,"
+	"                          float4 o, float4 d)\n"
+	"{\n"
+	"	struct tracer tr;\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	float t = intersect_plane(&tr, &tr.planes[0], o.xyz, d.xyz);\n"
+	"	out[0] = tr.flops;\n"
+	"	out[1] = as_uint(t);\n"
+	"}\n"
+	"__kernel void count_shading(__global const uint4 *scene, __global ulong *out,"
+	"                            float4 p, float4 d)\n"
+	"{\n"
+	"	struct tracer tr;\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	float3 n = (float3)(0.0f, 0.0f, 1.0f);\n"
+	"	float3 c = shade_local(&tr, &tr.materials[0], tr.materials[0].color.xyz, p.xyz,\n"
+	"			       n, d.xyz);\n"
+	"	out[0] = tr.flops;\n"
+	"	out[1] = as_uint(c.x);\n"
+	"}\n";
+
+struct fixture {
+	struct device dev;
+	struct scene scene;
+	cl_program program;
+	cl_mem scene_buffer, out;
+};
+
+static void setup(struct fixture *f)
+{
+	const char *sources[3] = {embedded_file("rtcl_shared.h"), embedded_file("tracer.cl"),
+				  test_kernels};
+	size_t bytes;
+	cl_int status;
+
+	cr_assert_eq(device_open(&f->dev, -1, -1, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(scene_load_string(&f->scene, analytic_json, "analytic", err, sizeof(err)), 0,
+		     "%s", err);
+	void *block = devscene_pack(&f->scene, 3, 3, 1, &bytes);
+	f->program = clCreateProgramWithSource(f->dev.context, 3, sources, NULL, &status);
+	cr_assert_eq(status, CL_SUCCESS);
+	status = clBuildProgram(f->program, 1, &f->dev.id,
+				"-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS", NULL, NULL);
+	if (status != CL_SUCCESS) {
+		clGetProgramBuildInfo(f->program, f->dev.id, CL_PROGRAM_BUILD_LOG, sizeof(err), err,
+				      NULL);
+		cr_assert_fail("build failed: %s\n%s", cl_error_name(status), err);
+	}
+	f->scene_buffer = clCreateBuffer(f->dev.context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+					 bytes, block, &status);
+	cr_assert_eq(status, CL_SUCCESS);
+	f->out = clCreateBuffer(f->dev.context, CL_MEM_READ_WRITE, 64, NULL, &status);
+	cr_assert_eq(status, CL_SUCCESS);
+	free(block);
+}
+
+static void teardown(struct fixture *f)
+{
+	clReleaseMemObject(f->out);
+	clReleaseMemObject(f->scene_buffer);
+	clReleaseProgram(f->program);
+	scene_free(&f->scene);
+	device_close(&f->dev);
+}
+
+/* Runs one test kernel on one work-item; returns the flops it counted and
+ * stores its float result in *result. */
+static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4],
+			   const float b[4], float *result)
+{
+	cl_int status;
+	cl_kernel kernel = clCreateKernel(f->program, name, &status);
+	size_t one = 1;
+	cl_ulong out[2];
+	cl_float4 va = {{a[0], a[1], a[2], a[3]}}, vb = {{b[0], b[1], b[2], b[3]}};
+
+	cr_assert_eq(status, CL_SUCCESS, "clCreateKernel(%s): %s", name, cl_error_name(status));
+	clSetKernelArg(kernel, 0, sizeof(cl_mem), &f->scene_buffer);
+	clSetKernelArg(kernel, 1, sizeof(cl_mem), &f->out);
+	clSetKernelArg(kernel, 2, sizeof(va), &va);
+	clSetKernelArg(kernel, 3, sizeof(vb), &vb);
+	status = clEnqueueNDRangeKernel(f->dev.queue, kernel, 1, NULL, &one, &one, 0, NULL, NULL);
+	cr_assert_eq(status, CL_SUCCESS, "%s", cl_error_name(status));
+	status = clEnqueueReadBuffer(f->dev.queue, f->out, CL_TRUE, 0, sizeof(out), out, 0, NULL,
+				     NULL);
+	cr_assert_eq(status, CL_SUCCESS);
+	clReleaseKernel(kernel);
+	uint32_t bits = (uint32_t)out[1];
+	memcpy(result, &bits, sizeof(*result));
+	return out[0];
+}
+
+Test(flops, ray_sphere_test)
+{
+	struct fixture f;
+	const float eye[4] = {0, 0, 5, 0};
+	const float down_axis[4] = {0, 0, -1, 0}, up[4] = {0, 1, 0, 0};
+	float t;
+
+	setup(&f);
+	/* A hit with the centre ahead: oc = o - c (3), b = oc.d (5),
+	 * closest = oc - b d (3 mul + 3 sub = 6), disc = r2 - closest.closest
+	 * (5 + 1 = 6): 20 so far; far = sqrt(disc) - b (2); near =
+	 * (oc.oc - r2) / far (5 + 1 + 1 = 7): 29 in all, and t = 4. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, down_axis, &t), 29);
+	cr_expect_float_eq(t, 4.0f, 1e-6f);
+	/* A miss: only the first 20. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, up, &t), 20);
+	cr_expect_eq(t, 0.0f);
+	/* From inside, centre behind (b > 0): 20 + far (2) = 22, t = far. */
+	const float inside[4] = {0, 0, 0.5f, 0}, outward[4] = {0, 0, 1, 0};
+	cr_expect_eq(run_kernel(&f, "count_sphere", inside, outward, &t), 22);
+	cr_expect_float_eq(t, 0.5f, 1e-6f);
+	teardown(&f);
+}
+
+Test(flops, plane_test)
+{
+	struct fixture f;
+	const float eye[4] = {0, 0, 5, 0};
+	const float down[4] = {0, -1, 0, 0}, sideways[4] = {1, 0, 0, 0};
+	float t;
+
+	setup(&f);
+	/* denom = n.d (5); t = (offset - n.o) / denom (5 + 1 + 1): 12, t = 1. */
+	cr_expect_eq(run_kernel(&f, "count_plane", eye, down, &t), 12);
+	cr_expect_float_eq(t, 1.0f, 1e-6f);
+	/* Parallel to the plane: only the denominator, 5. */
+	cr_expect_eq(run_kernel(&f, "count_plane", eye, sideways, &t), 5);
+	cr_expect_eq(t, 0.0f);
+	teardown(&f);
+}
+
+Test(flops, shading_evaluation)
+{
+	struct fixture f;
+	const float p[4] = {0, 0, 1, 0}, d[4] = {0, 0, -1, 0};
+	float red;
+
+	setup(&f);
+	/* At p = (0,0,1), n = (0,0,1), seen along d = (0,0,-1), default material
+	 * (white, ka 1, kd 0.7, ks 0.3, shininess 32), ambient 0.1, white light
+	 * at (3,0,5):
+	 *   ka C (x) ambient                      3 + 3 = 6
+	 *   shadow origin p + eps n               3 + 3 = 6
+	 *   the light: light - p 3, distance 5 + 1, L = /distance 3,
+	 *     kd max(0, n.L) 5 + 1 + 1            19
+	 *   L - d 3, its squared length 5         8
+	 *   H 1 + 3, ks max(0, n.H)^s 5 + 3       12
+	 *   the shadow ray against the sphere it leaves, centre behind: 22;
+	 *     the plane y = -1: n.d = 0, parallel: 5  27
+	 *   (kd max + ks spec) C (x) Lc, added    3 + 3 + 3 + 3 = 12
+	 * 6 + 6 + 19 + 8 + 12 + 27 + 12 = 90.
+	 * Red: 0.1 + 0.7 * 0.8 + 0.3 * ((1.8 / sqrt(3.6))^2)^16 = 0.1 + 0.56 + 0.3 * 0.9^16. */
+	cr_expect_eq(run_kernel(&f, "count_shading", p, d, &red), 90);
+	cr_expect_float_eq(red, 0.1 + 0.56 + 0.3 * 0.18530202, 1e-5);
+	teardown(&f);
+}
+
+static struct render_settings counting(const char *kernel, int wx, int wy, int max_depth)
+{
+	struct render_settings s;
+
+	memset(&s, 0, sizeof(s));
+	s.kernel = render_find_kernel(kernel);
+	s.workgroup[0] = wx;
+	s.workgroup[1] = wy;
+	s.width = 61;
+	s.height = 47;
+	s.max_depth = max_depth;
+	s.repeat = 1;
+	s.count_flops = 1;
+	s.check_writes = 1; /* guard zones: counting must not write out of bounds either */
+	return s;
+}
+
+/* Every kernel counts the same total and the same work for each pixel; the
+ * per-pixel counts add up to the per-work-item ones. */
+Test(flops, kernels_count_the_same_work, .timeout = 300)
+{
+	static const char *const kernels[] = {"serial", "naive", "cyclic", "dynamic"};
+	struct device dev;
+	struct scene scene;
+	struct render_result want;
+	size_t pixels = 61 * 47;
+
+	cr_assert_eq(device_open(&dev, -1, -1, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(scene_load_file(&scene, "scenes/two_balls.json", err, sizeof(err)), 0, "%s",
+		     err);
+	struct render_settings s = counting("serial", 1, 1, scene.max_depth);
+	cr_assert_eq(render(&dev, &scene, &s, &want, err, sizeof(err)), 0, "%s", err);
+	cr_assert_gt(want.total_flops, 0);
+	cr_assert_gt(want.total_rays, pixels);
+	cr_assert_eq(want.item_count, 1);
+	cr_assert_eq(want.item_flops[0], want.total_flops);
+
+	for (int k = 0; k < 4; k++) {
+		for (int shape = 0; shape < 2; shape++) {
+			struct render_result got;
+			uint64_t pixel_sum = 0;
+			s = counting(kernels[k], shape ? 16 : 8, shape ? 4 : 8, scene.max_depth);
+			cr_assert_eq(render(&dev, &scene, &s, &got, err, sizeof(err)), 0, "%s",
+				     err);
+			cr_expect_eq(got.total_flops, want.total_flops, "%s: %llu flops, serial %llu",
+				     kernels[k], (unsigned long long)got.total_flops,
+				     (unsigned long long)want.total_flops);
+			cr_expect_eq(got.total_rays, want.total_rays, "%s rays", kernels[k]);
+			cr_assert(got.guards_intact, "%s: wrote outside the image", kernels[k]);
+			for (size_t i = 0; i < pixels; i++) {
+				cr_assert_eq(got.pixel_flops[i], want.pixel_flops[i],
+					     "%s: pixel %zu counts %llu, serial %llu", kernels[k], i,
+					     (unsigned long long)got.pixel_flops[i],
+					     (unsigned long long)want.pixel_flops[i]);
+				pixel_sum += got.pixel_flops[i];
+				cr_assert_eq(got.write_counts[i], 1, "%s: pixel %zu written %u times",
+					     kernels[k], i, got.write_counts[i]);
+			}
+			cr_expect_eq(pixel_sum, got.total_flops, "%s: pixels add up", kernels[k]);
+			cr_expect_eq(got.item_count, got.global_size[0] * got.global_size[1]);
+			render_result_free(&got);
+		}
+	}
+	render_result_free(&want);
+	scene_free(&scene);
+	device_close(&dev);
+}

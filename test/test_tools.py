@@ -1,0 +1,413 @@
+"""Tests of tools/flops_hist.py and tools/experiments.py.
+
+flops_hist is tested on small synthetic .npy files (with and without sidecars),
+through its functions and its command line.  experiments is tested on its pure
+parts (table, slug, speedups, choice of the best geometry) with fake statistics,
+plus one end-to-end run against the real ./rtcl (or $RTCL) when it supports --flops.
+"""
+import json
+import math
+import os
+import pathlib
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+TOOLS = ROOT / "tools"
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+sys.path.insert(0, str(TOOLS))
+
+import experiments  # noqa: E402
+import flops_hist  # noqa: E402
+
+PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
+
+
+def run_tool(name, *args, cwd=None):
+    return subprocess.run([sys.executable, str(TOOLS / name), *map(str, args)],
+                          capture_output=True, text=True, cwd=cwd or ROOT, timeout=600)
+
+
+def write_flops(path, counts, kernel="cyclic", workgroup=(8, 8), groups=(2, 2),
+                sidecar=True, **overrides):
+    """Writes counts as an rtcl --flops file, with a consistent sidecar unless told."""
+    counts = np.asarray(counts, dtype="<u8")
+    np.save(path, counts)
+    if sidecar:
+        meta = {"format": "rtcl-flops", "version": 1, "kernel": kernel,
+                "workgroup": list(workgroup), "groups": list(groups),
+                "global_size": [counts.shape[1], counts.shape[0]],
+                "total_flops": int(counts.sum()),
+                "parallel_efficiency": float(counts.mean() / counts.max())}
+        meta.update(overrides)
+        flops_hist.sidecar_path(path).write_text(json.dumps(meta))
+    return path
+
+
+def random_counts(seed, shape=(16, 16), high=1_000_000):
+    return np.random.default_rng(seed).integers(1, high, shape).astype("<u8")
+
+
+def assert_one_line_error(result, *fragments):
+    assert result.returncode == 1, (result.returncode, result.stderr)
+    lines = result.stderr.strip().splitlines()
+    assert len(lines) == 1, result.stderr
+    for fragment in fragments:
+        assert fragment in lines[0]
+
+
+# ---- flops_hist: parallel efficiency ----------------------------------------
+
+def test_efficiency_of_uniform_work_is_one():
+    assert flops_hist.parallel_efficiency(np.full((4, 5), 77, dtype="<u8")) == 1.0
+
+
+def test_efficiency_counts_idle_work_items():
+    assert flops_hist.parallel_efficiency(np.array([0, 0, 0, 4], dtype="<u8")) == 0.25
+
+
+def test_efficiency_is_mean_over_max_for_random_counts():
+    for seed in range(5):
+        counts = random_counts(seed, (7, 9))
+        expected = counts.astype(float).mean() / counts.max()
+        assert flops_hist.parallel_efficiency(counts) == pytest.approx(expected, rel=1e-12)
+
+
+def test_efficiency_does_not_overflow_large_counts():
+    counts = np.full((2, 2), 2**62, dtype="<u8")  # the uint64 sum would wrap
+    assert flops_hist.parallel_efficiency(counts) == 1.0
+
+
+def test_efficiency_without_work_is_undefined():
+    assert math.isnan(flops_hist.parallel_efficiency(np.zeros((3, 3), dtype="<u8")))
+    with pytest.raises(ValueError):
+        flops_hist.parallel_efficiency(np.zeros((0, 3), dtype="<u8"))
+
+
+def test_format_efficiency():
+    assert flops_hist.format_efficiency(0.7744) == "77.44%"
+    assert flops_hist.format_efficiency(math.nan) == "n/a"
+
+
+# ---- flops_hist: loading ----------------------------------------------------
+
+def test_load_reads_counts_and_sidecar(tmp_path):
+    counts = random_counts(1)
+    flops_file = flops_hist.load_flops(write_flops(tmp_path / "c.npy", counts,
+                                                   groups=(25, 25)))
+    assert np.array_equal(flops_file.counts, counts)
+    assert flops_file.kernel == "cyclic"
+    assert "work-group 8x8, groups 25x25, 16x16 work-items" in flops_file.label()
+    assert flops_hist.sidecar_mismatches(flops_file) == []
+
+
+def test_load_without_sidecar_names_the_file(tmp_path):
+    flops_file = flops_hist.load_flops(write_flops(tmp_path / "mine.npy", random_counts(2),
+                                                   sidecar=False))
+    assert flops_file.sidecar is None
+    assert flops_file.label().startswith("mine: 16x16 work-items")
+
+
+def test_sidecar_that_disagrees_is_reported(tmp_path):
+    path = write_flops(tmp_path / "c.npy", [[1, 2], [3, 4]], parallel_efficiency=0.9,
+                       total_flops=11, global_size=[4, 1])
+    problems = flops_hist.sidecar_mismatches(flops_hist.load_flops(path))
+    assert len(problems) == 3
+    assert any("parallel_efficiency 0.9" in problem and "0.625" in problem
+               for problem in problems)
+
+
+def test_flop_unit_keeps_numbers_readable():
+    assert flops_hist.flop_unit(5) == (1.0, "FLOP")
+    assert flops_hist.flop_unit(3_000_000) == (1e6, "MFLOP")
+    assert flops_hist.flop_unit(2e10) == (1e9, "GFLOP")
+
+
+# ---- flops_hist: command line ------------------------------------------------
+
+def test_cli_writes_png_with_subplots(tmp_path):
+    files = [write_flops(tmp_path / f"{kernel}.npy", random_counts(seed), kernel=kernel)
+             for seed, kernel in enumerate(("naive", "cyclic", "dynamic"))]
+    out = tmp_path / "fig7.png"
+    result = run_tool("flops_hist.py", *files, "-o", out, "--log", "--bins", 20)
+    assert result.returncode == 0, result.stderr
+    assert result.stderr == ""
+    assert out.read_bytes().startswith(PNG_SIGNATURE)
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_cli_writes_svg_overlay_naming_kernels_and_efficiency(tmp_path):
+    counts = np.array([[0, 0], [0, 4]], dtype="<u8")
+    files = [write_flops(tmp_path / "naive.npy", counts, kernel="naive"),
+             write_flops(tmp_path / "dynamic.npy", random_counts(3), kernel="dynamic")]
+    out = tmp_path / "fig7.svg"
+    result = run_tool("flops_hist.py", *files, "--overlay", "-o", out, "--title", "Fig 7")
+    assert result.returncode == 0, result.stderr
+    svg = out.read_text()
+    assert svg.lstrip().startswith("<?xml") and "<svg" in svg
+    # matplotlib writes text as paths but keeps it in comments: look for the labels.
+    for text in ("naive", "dynamic", "25.00%", "Fig 7"):
+        assert text in svg
+
+
+def test_cli_warns_when_sidecar_disagrees(tmp_path):
+    path = write_flops(tmp_path / "c.npy", [[1, 2], [3, 4]], parallel_efficiency=0.5)
+    result = run_tool("flops_hist.py", path, "-o", tmp_path / "h.png")
+    assert result.returncode == 0
+    assert "warning" in result.stderr and "parallel_efficiency 0.5" in result.stderr
+
+
+@pytest.mark.parametrize("dtype", ["<f4", "<i8", ">u8", "<u4"])
+def test_cli_refuses_wrong_dtype(tmp_path, dtype):
+    bad = tmp_path / "bad.npy"
+    np.save(bad, np.ones((4, 4), dtype=dtype))
+    out = tmp_path / "h.png"
+    result = run_tool("flops_hist.py", bad, "-o", out)
+    assert_one_line_error(result, str(bad), "dtype")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["bad.npy"]
+
+
+def test_cli_refuses_missing_file_and_writes_nothing(tmp_path):
+    good = write_flops(tmp_path / "good.npy", random_counts(4), sidecar=False)
+    out = tmp_path / "h.png"
+    result = run_tool("flops_hist.py", good, tmp_path / "missing.npy", "-o", out)
+    assert_one_line_error(result, "missing.npy", "no such file")
+    assert not out.exists()
+
+
+@pytest.mark.parametrize("content", [b"not numpy at all\n", b"\x93NUMPY\x01\x00garbage"])
+def test_cli_refuses_unreadable_file(tmp_path, content):
+    junk = tmp_path / "junk.npy"
+    junk.write_bytes(content)
+    result = run_tool("flops_hist.py", junk, "-o", tmp_path / "h.png")
+    assert_one_line_error(result, "junk.npy")
+    assert not (tmp_path / "h.png").exists()
+
+
+def test_cli_refuses_unreadable_sidecar(tmp_path):
+    path = write_flops(tmp_path / "c.npy", random_counts(5), sidecar=False)
+    flops_hist.sidecar_path(path).write_text("{ not json")
+    result = run_tool("flops_hist.py", path, "-o", tmp_path / "h.png")
+    assert_one_line_error(result, "c.npy.json", "sidecar")
+    assert not (tmp_path / "h.png").exists()
+
+
+def test_cli_refuses_unknown_output_format(tmp_path):
+    path = write_flops(tmp_path / "c.npy", random_counts(6))
+    result = run_tool("flops_hist.py", path, "-o", tmp_path / "h.bmp")
+    assert_one_line_error(result, "h.bmp")
+    assert not (tmp_path / "h.bmp").exists()
+
+
+def test_failed_save_keeps_previous_output(tmp_path, monkeypatch):
+    out = tmp_path / "h.png"
+    out.write_bytes(b"previous")
+    flops_file = flops_hist.load_flops(write_flops(tmp_path / "c.npy", random_counts(7)))
+
+    def broken_savefig(*args, **kwargs):
+        raise OSError("disk full")
+    monkeypatch.setattr("matplotlib.figure.Figure.savefig", broken_savefig)
+    with pytest.raises(OSError):
+        flops_hist.plot_flops_histograms([flops_file], out)
+    assert out.read_bytes() == b"previous"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["c.npy", "c.npy.json", "h.png"]
+
+
+# ---- experiments: pure parts --------------------------------------------------
+
+def fake_stats(kernel, kernel_ms, workgroup="8x8", groups="25x25", global_size=(200, 200),
+               efficiency=0.8, gflop=2.0, device="NVIDIA H100 80GB HBM3 (NVIDIA CUDA)"):
+    return {"rtcl_version": "0.1.0", "device": device, "device_version": "OpenCL 3.0 CUDA",
+            "driver": "550.54", "kernel": kernel, "workgroup": workgroup, "groups": groups,
+            "global_size": list(global_size), "width": 2000, "height": 2000, "max_depth": 5,
+            "scene": "paper60.json (built-in)", "kernel_ms": kernel_ms, "repeat": 5,
+            "gflop": gflop, "gflops": gflop / kernel_ms * 1e3,
+            "parallel_efficiency": efficiency}
+
+
+def fake_run(role, kernel, kernel_ms, **stats):
+    workgroup = stats.get("workgroup", "8x8")
+    return experiments.Run(role, kernel, workgroup, stats.get("groups"),
+                           f"./rtcl -k {kernel} -w {workgroup}",
+                           fake_stats(kernel, kernel_ms, **stats))
+
+
+def fake_experiment():
+    return [fake_run("serial", "serial", 50_000.0, efficiency=1.0, global_size=(1, 1)),
+            fake_run("reference", "reference", 10_000.0,
+                     device="CPU reference (C++, GLM, double precision, one core)"),
+            fake_run("paper", "naive", 500.0, workgroup="16x10", groups="125x200",
+                     global_size=(2000, 2000), efficiency=0.112),
+            fake_run("paper", "cyclic", 100.0, efficiency=0.7744),
+            fake_run("paper", "dynamic", 125.0, groups="10x10", global_size=(80, 80),
+                     efficiency=0.8536),
+            fake_run("sweep", "cyclic", 90.0, workgroup="16x8", groups="20x20"),
+            fake_run("best", "cyclic", 80.0, workgroup="16x8", groups="20x20")]
+
+
+def table_rows(markdown):
+    """Returns {first cell: cells} of the first markdown table in markdown."""
+    rows = {}
+    for line in markdown.splitlines():
+        if line.startswith("| ") and not line.startswith("| Implementation"):
+            cells = [cell.strip() for cell in line.strip("|").split("|")]
+            rows.setdefault(cells[0], cells)
+        elif rows and not line.startswith("|"):
+            break
+    return rows
+
+
+def test_speedup():
+    assert experiments.speedup(1000.0, 4.0) == 250.0
+    assert experiments.speedup(None, 4.0) is None
+    assert experiments.speedup(1000.0, 0.0) is None
+
+
+@pytest.mark.parametrize("device, slug", [
+    ("NVIDIA H100 80GB HBM3 (NVIDIA CUDA)", "nvidia-h100-80gb-hbm3"),
+    ("NVIDIA H100 80GB HBM3", "nvidia-h100-80gb-hbm3"),
+    ("pthread-skylake-avx512-AMD EPYC (Portable Computing Language)", "pocl-amd-epyc"),
+    ("cpu-x86-64-v3-Intel(R) Xeon(R) Gold 6338 (Portable Computing Language)",
+     "pocl-intel-r-xeon-r-gold-6338"),
+    ("gfx90a:sramecc+:xnack- (AMD Accelerated Parallel Processing)", "gfx90a-sramecc-xnack"),
+])
+def test_device_slug(device, slug):
+    assert experiments.device_slug(device) == slug
+
+
+def test_select_best_is_fastest_and_breaks_ties_by_efficiency():
+    slow = fake_run("sweep", "dynamic", 12.0, efficiency=0.99)
+    fast_low = fake_run("sweep", "dynamic", 10.0, efficiency=0.5)
+    fast_high = fake_run("sweep", "dynamic", 10.0, efficiency=0.9)
+    assert experiments.select_best([slow, fast_low, fast_high]) is fast_high
+    with pytest.raises(ValueError):
+        experiments.select_best([])
+
+
+def test_scaled_groups():
+    assert experiments.scaled_groups("10x10", 1.5) == "15x15"
+    assert experiments.scaled_groups("3x2", 2.0) == "6x4"
+    assert experiments.scaled_groups("1x1", 0.1) == "1x1"
+
+
+def test_planned_run_count_matches_the_sweep_size():
+    # serial, reference, 3 paper runs; naive 5 shapes + best; cyclic and dynamic
+    # 5 shapes + 2 scaled counts + the paper's count + best.
+    sweep = experiments.SWEEP_WORKGROUPS, experiments.SWEEP_GROUP_SCALES
+    assert experiments.planned_run_count(False, False, False, *sweep) == 5 + 6 + 9 + 9
+    assert experiments.planned_run_count(False, True, True, *sweep) == 4
+    assert experiments.planned_run_count(True, True, True, *sweep) == 3
+
+
+def test_table1_has_our_figures_beside_the_papers():
+    table = experiments.render_table1(fake_experiment(), {"commit": "abc1234", "repeat": 5,
+                                                          "date": "2024-01-01 00:00 UTC"})
+    rows = table_rows(table)
+    assert list(rows) == ["serial", "CPU reference (1 core)", "naive", "cyclic", "dynamic",
+                          "cyclic (best of sweep)"]
+    header = [c.strip() for c in table.split("| Implementation")[1].split("\n")[0].split("|")]
+    column = {name: i + 1 for i, name in enumerate(header[1:-1])}
+
+    def cell(row, name):
+        return rows[row][column[name]]
+    assert cell("cyclic", "time ms (median)") == "100.00"
+    assert cell("cyclic", "paper time") == "0.43 s"
+    assert cell("cyclic", "speedup over serial") == "500.0"
+    assert cell("cyclic", "paper speedup") == "211"
+    assert cell("cyclic", "speedup over CPU reference") == "100.00"
+    assert cell("cyclic", "parallel efficiency") == "77.44%"
+    assert cell("cyclic", "GFLOP/s") == "20.00"
+    assert cell("naive", "paper efficiency") == "11.20%"
+    assert cell("naive", "groups / threads") == "125x200 / 2000x2000"
+    assert cell("dynamic", "paper GFLOP/s") == "43.37"
+    assert cell("serial", "paper time") == "90.56 s"
+    assert cell("cyclic (best of sweep)", "paper time") == "–"
+    assert cell("cyclic (best of sweep)", "speedup over serial") == "625.0"
+    for text in ("NVIDIA H100 80GB HBM3", "driver: 550.54", "2000x2000", "max depth 5",
+                 "rtcl 0.1.0", "abc1234", "2024-01-01", "## Sweep", "## Commands",
+                 "./rtcl -k dynamic -w 8x8", "2.000 GFLOP, the same for every run"):
+        assert text in table
+
+
+def test_table1_flags_kernels_that_count_different_work():
+    runs = fake_experiment()
+    runs[3].stats["gflop"] = 2.5
+    table = experiments.render_table1(runs, {"commit": None, "repeat": 5, "date": "today"})
+    assert "Total work differs" in table and "commit unknown" in table
+
+
+def test_table1_without_serial_has_no_speedup_over_serial():
+    runs = fake_experiment()[1:]
+    table = experiments.render_table1(runs, {"commit": "x", "repeat": 5, "date": "today"})
+    rows = table_rows(table)
+    assert "serial" not in rows
+    assert rows["cyclic"][-3] == "–"        # speedup over serial
+    assert rows["cyclic"][-1] == "100.00"   # speedup over the CPU reference
+    bars = experiments.speedup_bars(runs)
+    assert bars[1] == ("cyclic", None, 100.0, 211.0)
+
+
+def test_speedup_bars_compare_with_the_paper():
+    bars = experiments.speedup_bars(fake_experiment())
+    assert [bar[0] for bar in bars] == ["naive", "cyclic", "dynamic", "cyclic\n(best)"]
+    assert bars[0] == ("naive", 100.0, 20.0, 52.0)
+    assert bars[3][3] is None
+
+
+def test_plot_speedup_writes_png(tmp_path):
+    out = tmp_path / "speedup.png"
+    experiments.plot_speedup(fake_experiment(), out, "test device")
+    assert out.read_bytes().startswith(PNG_SIGNATURE)
+
+
+def test_failing_rtcl_is_reported_with_its_command_and_stderr(tmp_path):
+    fake = tmp_path / "rtcl"
+    fake.write_text("#!/bin/sh\necho 'rtcl: no OpenCL platform' >&2\nexit 3\n")
+    fake.chmod(0o755)
+    result = run_tool("experiments.py", "--rtcl", fake, "--quick", "--out", tmp_path / "out")
+    assert result.returncode == 1
+    assert "rtcl: no OpenCL platform" in result.stderr
+    assert f"{fake} -k serial" in result.stderr
+    assert not (tmp_path / "out").exists()
+
+
+# ---- experiments: end to end against the real rtcl --------------------------
+
+def rtcl_supports_flops():
+    """Returns None when ./rtcl can run the experiment, else why not."""
+    if not os.access(RTCL, os.X_OK):
+        return f"{RTCL} is not built"
+    try:
+        help_text = subprocess.run([RTCL, "--help"], capture_output=True, text=True,
+                                   timeout=60).stdout
+    except (OSError, subprocess.TimeoutExpired) as error:
+        return f"{RTCL} --help failed: {error}"
+    if "--flops" not in help_text:
+        return f"{RTCL} does not support --flops yet"
+    return None
+
+
+def test_experiments_quick_run_against_rtcl(tmp_path):
+    reason = rtcl_supports_flops()
+    if reason:
+        pytest.skip(reason)
+    result = run_tool("experiments.py", "--rtcl", RTCL, "--quick", "--no-sweep",
+                      "--size", "64x64", "--repeat", "1", "--out", tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "[1/5] serial" in result.stderr and "[5/5] dynamic" in result.stderr
+    (device_dir,) = tmp_path.iterdir()
+    assert (device_dir / "speedup.png").read_bytes().startswith(PNG_SIGNATURE)
+    assert (device_dir / "histograms.png").read_bytes().startswith(PNG_SIGNATURE)
+    assert not list(device_dir.glob("*.npy"))
+    rows = table_rows((device_dir / "table1.md").read_text())
+    assert {"serial", "CPU reference (1 core)", "naive", "cyclic", "dynamic"} <= set(rows)
+    results = json.loads((device_dir / "results.json").read_text())
+    runs = {run["kernel"]: run["stats"] for run in results["runs"]}
+    assert runs["cyclic"]["groups"] == "25x25" and runs["naive"]["workgroup"] == "16x10"
+    totals = {runs[kernel]["gflop"] for kernel in ("serial", "naive", "cyclic", "dynamic")}
+    assert len(totals) == 1, "every kernel must count the same total work"
+    for kernel in ("naive", "cyclic", "dynamic"):
+        assert 0.0 < runs[kernel]["parallel_efficiency"] <= 1.0
