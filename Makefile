@@ -4,6 +4,7 @@
 #   make deps         install the dependencies (Debian/Ubuntu, uses apt-get)
 #   make render       build and render the default scene to render.png
 #   make test         unit, kernel (PoCL), command-line and tools tests
+#   make experiments  the paper's Table 1 and Figures 6-7 (DEVICE="-p N -d M")
 #   make clean
 #
 # Variables: OIIO=0|1, BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
@@ -44,7 +45,7 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test test-unit test-py clean
+.PHONY: all deps render test experiments clean
 all: $(BIN)
 
 $(BIN): $(BUILD)/main.o $(HOST_OBJS)
@@ -82,6 +83,11 @@ render: rtcl
 test: rtcl $(BUILD)/unit_tests
 	$(BUILD)/unit_tests --jobs 2
 	$(PYTHON) -m pytest -q test
+
+# The paper's experiment (Table 1, Figures 6-7) on one device, e.g.
+# make experiments DEVICE="-p 1 -d 0"; results under docs/results/<device>/.
+experiments: $(BIN)
+	$(PYTHON) tools/experiments.py --rtcl ./$(BIN) $(DEVICE)
 
 clean:
 	rm -rf $(BUILD) rtcl

@@ -80,31 +80,10 @@ static int render_reference(struct run *run, char *err, size_t err_size)
 		res->kernel_ms[i] = (seconds_now() - start) * 1e3;
 	}
 	res->repeat = s->repeat;
-	res->kernel_ms_min = res->kernel_ms_max = res->kernel_ms[0];
-	for (int i = 1; i < s->repeat; i++) {
-		if (res->kernel_ms[i] < res->kernel_ms_min)
-			res->kernel_ms_min = res->kernel_ms[i];
-		if (res->kernel_ms[i] > res->kernel_ms_max)
-			res->kernel_ms_max = res->kernel_ms[i];
-	}
-	/* Sorting a copy for the median would be the same code as render.c's;
-	 * the reference is rarely repeated, so take the middle of the range's
-	 * sorted values with a simple insertion sort. */
-	double *sorted = malloc((size_t)s->repeat * sizeof(double));
-	if (!sorted) {
+	if (render_summarize_times(res, err, err_size)) {
 		render_result_free(res);
-		snprintf(err, err_size, "out of host memory");
 		return -1;
 	}
-	for (int i = 0; i < s->repeat; i++) {
-		int j = i;
-		for (; j > 0 && sorted[j - 1] > res->kernel_ms[i]; j--)
-			sorted[j] = sorted[j - 1];
-		sorted[j] = res->kernel_ms[i];
-	}
-	int n = s->repeat;
-	res->kernel_ms_median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
-	free(sorted);
 	res->groups[0] = res->groups[1] = 1;
 	snprintf(run->device_name, sizeof(run->device_name),
 		 "CPU reference (C++, GLM, double precision, one core)");

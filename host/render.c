@@ -428,17 +428,23 @@ static int launch_all(struct device *dev, const struct render_settings *s, struc
 		}
 	}
 
-	double *sorted = malloc((size_t)timed * sizeof(double));
+	return render_summarize_times(res, err, err_size);
+}
+
+int render_summarize_times(struct render_result *res, char *err, size_t err_size)
+{
+	int n = res->repeat;
+	double *sorted = malloc((size_t)n * sizeof(double));
+
 	if (!sorted) {
 		snprintf(err, err_size, "out of host memory");
 		return -1;
 	}
-	memcpy(sorted, res->kernel_ms, (size_t)timed * sizeof(double));
-	qsort(sorted, (size_t)timed, sizeof(double), compare_ms);
+	memcpy(sorted, res->kernel_ms, (size_t)n * sizeof(double));
+	qsort(sorted, (size_t)n, sizeof(double), compare_ms);
 	res->kernel_ms_min = sorted[0];
-	res->kernel_ms_max = sorted[timed - 1];
-	res->kernel_ms_median = timed % 2 ? sorted[timed / 2]
-					  : 0.5 * (sorted[timed / 2 - 1] + sorted[timed / 2]);
+	res->kernel_ms_max = sorted[n - 1];
+	res->kernel_ms_median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
 	free(sorted);
 	return 0;
 }

@@ -71,6 +71,10 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 
 void render_result_free(struct render_result *result);
 
+/* Sets the median, min and max of result->kernel_ms[0 .. repeat). Returns 0,
+ * or -1 with a message when out of memory. */
+int render_summarize_times(struct render_result *result, char *err, size_t err_size);
+
 /* The groups used when --groups is not given: enough work-groups of the given
  * size to fill the device, shaped to cover the image's chunks. */
 void render_default_groups(const struct device *dev, const struct render_settings *settings,
