@@ -4,8 +4,8 @@
  * image, each group traces an 8×8 chunk in every cell of a 10×10 grid: the
  * paper's geometry. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *chunk_counter,
-		     __global ulong *counts, __global uint *write_counts)
+		     __global float *image, __global uint *chunk_counter, __global ulong *counts,
+		     __global uint *write_counts)
 {
 	struct tracer tr;
 	int chunk_w = get_local_size(0);

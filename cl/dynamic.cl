@@ -9,8 +9,8 @@
  * POCL_WORK_GROUP_METHOD=loops). The host resets
  * the counter before every launch. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *chunk_counter,
-		     __global ulong *counts, __global uint *write_counts)
+		     __global float *image, __global uint *chunk_counter, __global ulong *counts,
+		     __global uint *write_counts)
 {
 	__local uint next_chunk;
 	struct tracer tr;

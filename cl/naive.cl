@@ -2,8 +2,8 @@
  * image rounded up to whole work-groups; work-items outside the image only
  * help copy the scene. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *chunk_counter,
-		     __global ulong *counts, __global uint *write_counts)
+		     __global float *image, __global uint *chunk_counter, __global ulong *counts,
+		     __global uint *write_counts)
 {
 	struct tracer tr;
 	int x = get_global_id(0);

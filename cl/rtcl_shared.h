@@ -27,7 +27,7 @@ typedef cl_uint rt_uint;
 #endif
 
 struct rt_material {
-	rt_vec4 color;      /* C; w: ka */
+	rt_vec4 color;	    /* C; w: ka */
 	rt_float diffuse;   /* kd */
 	rt_float specular;  /* ks */
 	rt_float shininess; /* Blinn-Phong exponent */
@@ -39,7 +39,7 @@ struct rt_material {
 };
 
 struct rt_sphere {
-	rt_vec4 center;  /* w: radius */
+	rt_vec4 center;	     /* w: radius */
 	rt_float radius2;    /* radius² */
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
@@ -47,7 +47,7 @@ struct rt_sphere {
 };
 
 struct rt_plane {
-	rt_vec4 normal;        /* unit; w: dot(normal, point), the plane's offset */
+	rt_vec4 normal;	       /* unit; w: dot(normal, point), the plane's offset */
 	rt_vec4 checker_color; /* w: checker square size */
 	rt_int material;
 	rt_int has_checker;
@@ -62,9 +62,9 @@ struct rt_light {
 
 struct rt_scene {
 	/* Camera, per RENDERING.md: forward f, right r, up u; w fields: */
-	rt_vec4 eye;     /* w: a·h, the horizontal half-extent */
+	rt_vec4 eye;	 /* w: a·h, the horizontal half-extent */
 	rt_vec4 forward; /* w: h = tan(fov/2), the vertical half-extent */
-	rt_vec4 right;   /* w: epsilon */
+	rt_vec4 right;	 /* w: epsilon */
 	rt_vec4 up;
 	rt_vec4 background;
 	rt_vec4 ambient;

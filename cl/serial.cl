@@ -1,8 +1,8 @@
 /* serial: one work-item renders every pixel in row-major order, the paper's
  * serial code run on the device. Launched as a single work-item. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *chunk_counter,
-		     __global ulong *counts, __global uint *write_counts)
+		     __global float *image, __global uint *chunk_counter, __global ulong *counts,
+		     __global uint *write_counts)
 {
 	struct tracer tr;
 

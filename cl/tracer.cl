@@ -47,7 +47,7 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_light *lights;
 #ifdef RTCL_COUNT_FLOPS
 	ulong flops;
-	ulong rays; /* primary, secondary and shadow rays traced */
+	ulong rays;		     /* primary, secondary and shadow rays traced */
 	__global ulong *pixel_flops; /* flops spent on each pixel */
 #endif
 };
@@ -88,7 +88,8 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *coun
 	RTCL_SCENE_SPACE const uchar *base = (RTCL_SCENE_SPACE const uchar *)scene;
 
 	tr->scene = scene;
-	tr->materials = (RTCL_SCENE_SPACE const struct rt_material *)(base + scene->material_offset);
+	tr->materials =
+		(RTCL_SCENE_SPACE const struct rt_material *)(base + scene->material_offset);
 	tr->spheres = (RTCL_SCENE_SPACE const struct rt_sphere *)(base + scene->sphere_offset);
 	tr->planes = (RTCL_SCENE_SPACE const struct rt_plane *)(base + scene->plane_offset);
 	tr->lights = (RTCL_SCENE_SPACE const struct rt_light *)(base + scene->light_offset);
@@ -304,9 +305,9 @@ static float3 trace(struct tracer *tr, float3 origin, float3 dir)
 				COUNT_FLOPS(tr, 1);
 			} else {
 				float3 t_dir = normalize3(eta * ray.dir + (eta * c - sqrt(k)) * n);
-				stack[top++] = (struct ray_job){p - epsilon * n, t_dir,
-								ray.weight * m->transmit,
-								ray.depth + 1};
+				stack[top++] =
+					(struct ray_job){p - epsilon * n, t_dir,
+							 ray.weight * m->transmit, ray.depth + 1};
 				COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
 			}
 		}

@@ -8,22 +8,22 @@
 #define RTCL_VERSION "0.1.0"
 
 /* Exit statuses. */
-#define EXIT_USAGE 2   /* a bad option */
-#define EXIT_FAILED 1  /* a bad scene, a device, build or file error */
+#define EXIT_USAGE 2  /* a bad option */
+#define EXIT_FAILED 1 /* a bad scene, a device, build or file error */
 
 struct options {
-	const char *kernel;  /* serial, naive, cyclic, dynamic or reference */
-	int workgroup[2];    /* -w WxH */
-	int groups[2];       /* --groups GXxGY; 0x0 when not given */
+	const char *kernel;	/* serial, naive, cyclic, dynamic or reference */
+	int workgroup[2];	/* -w WxH */
+	int groups[2];		/* --groups GXxGY; 0x0 when not given */
 	const char *scene_path; /* NULL: the built-in paper60 scene */
 	const char *output;
-	int size[2];         /* --size WxH; 0x0 when not given */
-	int depth;           /* --depth N; -1 when not given */
+	int size[2];	      /* --size WxH; 0x0 when not given */
+	int depth;	      /* --depth N; -1 when not given */
 	int platform, device; /* -p, -d; -1 when not given */
 	int list_devices;
 	int repeat;
 	const char *stats_path;
-	const char *flops_path;    /* --flops FILE.npy */
+	const char *flops_path;	   /* --flops FILE.npy */
 	const char *work_map_path; /* --work-map IMAGE */
 	int quiet, verbose;
 	int help, version;

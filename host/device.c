@@ -148,8 +148,8 @@ int device_open(struct device *dev, int platform_index, int device_index, char *
 			 cl_error_name(status));
 		return -1;
 	}
-	dev->queue = clCreateCommandQueue(dev->context, dev->id, CL_QUEUE_PROFILING_ENABLE,
-					  &status);
+	dev->queue =
+		clCreateCommandQueue(dev->context, dev->id, CL_QUEUE_PROFILING_ENABLE, &status);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "clCreateCommandQueue failed on %s: %s", dev->name,
 			 cl_error_name(status));

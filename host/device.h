@@ -16,8 +16,8 @@ struct device {
 
 	char name[256];
 	char platform_name[256];
-	char version[256];  /* CL_DEVICE_VERSION */
-	char driver[256];   /* CL_DRIVER_VERSION */
+	char version[256]; /* CL_DEVICE_VERSION */
+	char driver[256];  /* CL_DRIVER_VERSION */
 	int is_gpu;
 	cl_uint compute_units;
 	size_t max_work_group_size;

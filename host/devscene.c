@@ -76,13 +76,13 @@ static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
 	out->checker_t_axis = drop == 2 ? 1 : 2;
 }
 
-void *devscene_pack(const struct scene *scene, int width, int height, int max_depth,
-		    size_t *bytes)
+void *devscene_pack(const struct scene *scene, int width, int height, int max_depth, size_t *bytes)
 {
 	size_t material_offset = round16(sizeof(struct rt_scene));
 	size_t sphere_offset =
 		material_offset + (size_t)scene->material_count * sizeof(struct rt_material);
-	size_t plane_offset = sphere_offset + (size_t)scene->sphere_count * sizeof(struct rt_sphere);
+	size_t plane_offset =
+		sphere_offset + (size_t)scene->sphere_count * sizeof(struct rt_sphere);
 	size_t light_offset = plane_offset + (size_t)scene->plane_count * sizeof(struct rt_plane);
 	size_t total = light_offset + (size_t)scene->light_count * sizeof(struct rt_light);
 	unsigned char *block = calloc(1, total);

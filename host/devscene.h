@@ -9,7 +9,6 @@
  * the scene at width×height with the given max_depth, and its size in *bytes;
  * NULL when out of memory. The camera basis is computed in double precision
  * and rounded once to float. */
-void *devscene_pack(const struct scene *scene, int width, int height, int max_depth,
-		    size_t *bytes);
+void *devscene_pack(const struct scene *scene, int width, int height, int max_depth, size_t *bytes);
 
 #endif

@@ -67,14 +67,16 @@ static int render_reference(struct run *run, char *err, size_t err_size)
 	res->kernel_ms = calloc((size_t)s->repeat, sizeof(double));
 	if (!res->rgb || !res->kernel_ms) {
 		render_result_free(res);
-		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width, s->height);
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
+			 s->height);
 		return -1;
 	}
 	for (int i = 0; i < s->repeat; i++) {
 		double start = seconds_now();
 		if (reference_render(run->scene, s->width, s->height, s->max_depth, res->rgb)) {
 			render_result_free(res);
-			snprintf(err, err_size, "the CPU reference renderer failed (out of memory)");
+			snprintf(err, err_size,
+				 "the CPU reference renderer failed (out of memory)");
 			return -1;
 		}
 		res->kernel_ms[i] = (seconds_now() - start) * 1e3;
@@ -136,9 +138,9 @@ static void add_flop_figures(json_t *doc, const struct run *run)
 
 	json_object_set_new(doc, "gflop", json_real(f->total * 1e-9));
 	json_object_set_new(doc, "total_flops", json_integer((json_int_t)f->total));
-	json_object_set_new(doc, "flops_per_item",
-			    json_pack("{s:f, s:f, s:f}", "mean", f->mean, "max", f->max, "min",
-				      f->min));
+	json_object_set_new(
+		doc, "flops_per_item",
+		json_pack("{s:f, s:f, s:f}", "mean", f->mean, "max", f->max, "min", f->min));
 	json_object_set_new(doc, "parallel_efficiency", json_real(f->parallel_efficiency));
 	json_object_set_new(doc, "gflops", json_real(f->total * 1e-6 / ms));
 	json_object_set_new(doc, "rays", json_integer((json_int_t)f->rays));
@@ -158,8 +160,8 @@ static json_t *stats_document(const struct run *run)
 		json_array_append_new(times, json_real(r->kernel_ms[i]));
 	return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:[I,I], s:i, s:i, s:i, s:s, s:b,"
 			 " s:f, s:f, s:f, s:i, s:o, s:s}",
-			 "rtcl_version", RTCL_VERSION, "device", run->device_name,
-			 "device_version", run->device_version, "driver", run->driver, "kernel",
+			 "rtcl_version", RTCL_VERSION, "device", run->device_name, "device_version",
+			 run->device_version, "driver", run->driver, "kernel",
 			 s->kernel ? s->kernel->name : "reference", "workgroup", workgroup,
 			 "groups", groups, "global_size", (json_int_t)r->global_size[0],
 			 (json_int_t)r->global_size[1], "width", s->width, "height", s->height,
@@ -176,8 +178,8 @@ static json_t *flops_sidecar(const struct run *run)
 	const struct render_settings *s = &run->settings;
 	const struct render_result *c = &run->counted;
 	json_t *doc = json_pack(
-		"{s:s, s:i, s:s, s:[i,i], s:[i,i], s:[I,I], s:i, s:i, s:i, s:s, s:s, s:s}", "format",
-		"rtcl-flops", "version", 1, "kernel", s->kernel->name, "workgroup",
+		"{s:s, s:i, s:s, s:[i,i], s:[i,i], s:[I,I], s:i, s:i, s:i, s:s, s:s, s:s}",
+		"format", "rtcl-flops", "version", 1, "kernel", s->kernel->name, "workgroup",
 		(int)c->local_size[0], (int)c->local_size[1], "groups", c->groups[0], c->groups[1],
 		"global_size", (json_int_t)c->global_size[0], (json_int_t)c->global_size[1],
 		"width", s->width, "height", s->height, "max_depth", s->max_depth, "device",

@@ -160,8 +160,7 @@ out_free_sources:
 	return ret;
 }
 
-void render_default_groups(const struct device *dev, const struct render_settings *s,
-			   int groups[2])
+void render_default_groups(const struct device *dev, const struct render_settings *s, int groups[2])
 {
 	int items = s->workgroup[0] * s->workgroup[1];
 	int chunks_x = (s->width + s->workgroup[0] - 1) / s->workgroup[0];
@@ -266,10 +265,10 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 
 	/* Tests surround the image with guard zones, to catch writes outside it
 	 * (under PoCL they would silently corrupt the host heap). */
-	st->guard_bytes = s->check_writes ? (dev->mem_base_addr_align > 4096
-						     ? dev->mem_base_addr_align
-						     : 4096)
-					  : 0;
+	st->guard_bytes =
+		s->check_writes
+			? (dev->mem_base_addr_align > 4096 ? dev->mem_base_addr_align : 4096)
+			: 0;
 	st->image_parent = create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * st->guard_bytes,
 					 NULL, "image", err, err_size);
 	if (!st->image_parent)
@@ -288,9 +287,10 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 	if (!st->chunk_counter)
 		return -1;
 	res->item_count = items;
-	st->item_counts = create_buffer(dev, CL_MEM_READ_WRITE,
-					s->count_flops ? (items * 2 + pixels) * sizeof(cl_ulong) : 16,
-					NULL, "flop counts", err, err_size);
+	st->item_counts =
+		create_buffer(dev, CL_MEM_READ_WRITE,
+			      s->count_flops ? (items * 2 + pixels) * sizeof(cl_ulong) : 16, NULL,
+			      "flop counts", err, err_size);
 	if (!st->item_counts)
 		return -1;
 	st->write_counts = create_buffer(dev, CL_MEM_READ_WRITE,
@@ -360,8 +360,8 @@ static cl_int prepare_launch(struct device *dev, const struct render_settings *s
 					     pixels * sizeof(cl_uint), 0, NULL, NULL);
 	if (status == CL_SUCCESS && s->check_writes)
 		status = clEnqueueFillBuffer(dev->queue, st->image_parent, &poison, sizeof(poison),
-					     0, pixels * 3 * sizeof(float) + 2 * st->guard_bytes,
-					     0, NULL, NULL);
+					     0, pixels * 3 * sizeof(float) + 2 * st->guard_bytes, 0,
+					     NULL, NULL);
 	return status;
 }
 
@@ -412,9 +412,9 @@ static int launch_all(struct device *dev, const struct render_settings *s, struc
 				status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START,
 								 sizeof(start), &start, NULL);
 				if (status == CL_SUCCESS)
-					status = clGetEventProfilingInfo(
-						event, CL_PROFILING_COMMAND_END, sizeof(end), &end,
-						NULL);
+					status = clGetEventProfilingInfo(event,
+									 CL_PROFILING_COMMAND_END,
+									 sizeof(end), &end, NULL);
 				int slot = i - (launches - timed);
 				if (status == CL_SUCCESS && slot >= 0)
 					res->kernel_ms[slot] = (double)(end - start) * 1e-6;
@@ -529,8 +529,7 @@ static int check_kernel_limits(struct device *dev, struct launch_state *st,
 		snprintf(err, err_size,
 			 "work-group %zux%zu (%zu work-items) is larger than kernel '%s' allows on "
 			 "%s: at most %zu work-items (choose a smaller -w)",
-			 res->local_size[0], res->local_size[1], items, name, dev->name,
-			 max_items);
+			 res->local_size[0], res->local_size[1], items, name, dev->name, max_items);
 		return -1;
 	}
 	return 0;

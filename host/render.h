@@ -26,18 +26,18 @@ const struct kernel_info *render_find_kernel(const char *name);
 struct render_settings {
 	const struct kernel_info *kernel;
 	int workgroup[2];  /* local size, e.g. 8x8 */
-	int groups[2];     /* persistent work-groups; 0x0: enough to fill the device */
+	int groups[2];	   /* persistent work-groups; 0x0: enough to fill the device */
 	int width, height; /* image size */
 	int max_depth;
-	int repeat;        /* timed launches after one warm-up launch */
-	int count_flops;   /* build with RTCL_COUNT_FLOPS and return the counts */
-	int check_writes;  /* tests: count writes per pixel, poison the image and
-			      surround it with guard zones */
+	int repeat;		/* timed launches after one warm-up launch */
+	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
+	int check_writes;	/* tests: count writes per pixel, poison the image and
+				   surround it with guard zones */
 	int force_global_scene; /* read the scene from __global memory even if it
 				   would fit in __local memory */
 	const char *source_dir; /* load cl/ sources from here instead of the
 				   embedded copies (development) */
-	int progress;      /* show progress on stderr */
+	int progress;		/* show progress on stderr */
 	int verbose;
 };
 
@@ -46,7 +46,7 @@ struct render_result {
 	double kernel_ms_median, kernel_ms_min, kernel_ms_max;
 	double *kernel_ms; /* each timed launch, in order */
 	int repeat;
-	int groups[2];   /* as launched (1x1 for serial; the NDRange's for naive) */
+	int groups[2]; /* as launched (1x1 for serial; the NDRange's for naive) */
 	size_t global_size[2], local_size[2];
 	int scene_in_local;
 	size_t scene_bytes;
@@ -61,7 +61,7 @@ struct render_result {
 
 	/* With check_writes. */
 	uint32_t *write_counts; /* per pixel */
-	int guards_intact;      /* no byte outside the image was written */
+	int guards_intact;	/* no byte outside the image was written */
 };
 
 /* Renders `scene` with `settings` on `dev`. Returns 0, or -1 with one message

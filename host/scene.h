@@ -18,11 +18,11 @@ extern "C" {
 
 struct scene_material {
 	double color[3];
-	double ambient;   /* ka */
-	double diffuse;   /* kd */
+	double ambient;	  /* ka */
+	double diffuse;	  /* kd */
 	double specular;  /* ks */
 	double shininess; /* Blinn-Phong exponent */
-	double reflect;   /* kr */
+	double reflect;	  /* kr */
 	double transmit;  /* kt */
 	double ior;
 };

@@ -54,8 +54,16 @@ static int fill_npy(FILE *file, const void *context)
 
 	memset(header + length, ' ', (size_t)(padded - length - 1));
 	header[padded - 1] = '\n';
-	unsigned char preamble[10] = {0x93, 'N', 'U', 'M', 'P', 'Y', 1, 0,
-				      (unsigned char)(padded & 0xff), (unsigned char)(padded >> 8)};
+	unsigned char preamble[10] = {0x93,
+				      'N',
+				      'U',
+				      'M',
+				      'P',
+				      'Y',
+				      1,
+				      0,
+				      (unsigned char)(padded & 0xff),
+				      (unsigned char)(padded >> 8)};
 	if (fwrite(preamble, 1, sizeof(preamble), file) != sizeof(preamble) ||
 	    fwrite(header, 1, (size_t)padded, file) != (size_t)padded)
 		return -1;

@@ -10,13 +10,13 @@
 /* Figures of a counting run (RENDERING.md). */
 struct flop_summary {
 	uint64_t total;
-	double mean, max, min;      /* per launched work-item */
+	double mean, max, min;	    /* per launched work-item */
 	double parallel_efficiency; /* mean / max */
 	uint64_t rays;
 };
 
-void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flops,
-			  size_t items, uint64_t rays);
+void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flops, size_t items,
+			  uint64_t rays);
 
 /* Writes a JSON document (atomically, see outfile.h). */
 int stats_write_json(const char *path, const json_t *document, char *err, size_t err_size);

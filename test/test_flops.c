@@ -107,8 +107,8 @@ static void teardown(struct fixture *f)
 
 /* Runs one test kernel on one work-item; returns the flops it counted and
  * stores its float result in *result. */
-static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4],
-			   const float b[4], float *result)
+static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4], const float b[4],
+			   float *result)
 {
 	cl_int status;
 	cl_kernel kernel = clCreateKernel(f->program, name, &status);
@@ -243,19 +243,21 @@ Test(flops, kernels_count_the_same_work, .timeout = 300)
 			s = counting(kernels[k], shape ? 16 : 8, shape ? 4 : 8, scene.max_depth);
 			cr_assert_eq(render(&dev, &scene, &s, &got, err, sizeof(err)), 0, "%s",
 				     err);
-			cr_expect_eq(got.total_flops, want.total_flops, "%s: %llu flops, serial %llu",
-				     kernels[k], (unsigned long long)got.total_flops,
+			cr_expect_eq(got.total_flops, want.total_flops,
+				     "%s: %llu flops, serial %llu", kernels[k],
+				     (unsigned long long)got.total_flops,
 				     (unsigned long long)want.total_flops);
 			cr_expect_eq(got.total_rays, want.total_rays, "%s rays", kernels[k]);
 			cr_assert(got.guards_intact, "%s: wrote outside the image", kernels[k]);
 			for (size_t i = 0; i < pixels; i++) {
 				cr_assert_eq(got.pixel_flops[i], want.pixel_flops[i],
-					     "%s: pixel %zu counts %llu, serial %llu", kernels[k], i,
-					     (unsigned long long)got.pixel_flops[i],
+					     "%s: pixel %zu counts %llu, serial %llu", kernels[k],
+					     i, (unsigned long long)got.pixel_flops[i],
 					     (unsigned long long)want.pixel_flops[i]);
 				pixel_sum += got.pixel_flops[i];
-				cr_assert_eq(got.write_counts[i], 1, "%s: pixel %zu written %u times",
-					     kernels[k], i, got.write_counts[i]);
+				cr_assert_eq(got.write_counts[i], 1,
+					     "%s: pixel %zu written %u times", kernels[k], i,
+					     got.write_counts[i]);
 			}
 			cr_expect_eq(pixel_sum, got.total_flops, "%s: pixels add up", kernels[k]);
 			cr_expect_eq(got.item_count, got.global_size[0] * got.global_size[1]);

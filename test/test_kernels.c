@@ -74,8 +74,9 @@ static void expect_same_image(const unsigned char *want, const unsigned char *go
 			      int height, const char *what)
 {
 	for (size_t i = 0; i < (size_t)width * height * 3; i++)
-		cr_assert_eq(got[i], want[i], "%s: pixel (%zu, %zu) channel %zu is %u, serial gave %u",
-			     what, i / 3 % width, i / 3 / width, i % 3, got[i], want[i]);
+		cr_assert_eq(got[i], want[i],
+			     "%s: pixel (%zu, %zu) channel %zu is %u, serial gave %u", what,
+			     i / 3 % width, i / 3 / width, i % 3, got[i], want[i]);
 }
 
 /* Every kernel, every work-group shape, several sizes (two not divisible by
@@ -178,7 +179,8 @@ static void check_against_reference(const char *path, int width, int height)
 	double mse = squared / (pixels * 3);
 	double psnr = mse > 0 ? 10 * log10(1 / mse) : INFINITY;
 	double off_percent = 100.0 * off / pixels;
-	fprintf(stderr, "reference check: %s at %dx%d: PSNR %.1f dB, %.4f%% of pixels off by > 2/255\n",
+	fprintf(stderr,
+		"reference check: %s at %dx%d: PSNR %.1f dB, %.4f%% of pixels off by > 2/255\n",
 		path, width, height, psnr, off_percent);
 	cr_expect_geq(psnr, 40.0, "%s: PSNR %.2f dB", path, psnr);
 	cr_expect_leq(off_percent, 0.1, "%s: %.4f%% of pixels off by more than 2/255", path,
