@@ -11,6 +11,7 @@
 
 enum long_only_option {
 	OPT_GROUPS = 256,
+	OPT_BATCH,
 	OPT_SIZE,
 	OPT_DEPTH,
 	OPT_LIST_DEVICES,
@@ -24,6 +25,7 @@ static const struct option long_options[] = {
 	{"kernel", required_argument, NULL, 'k'},
 	{"workgroup", required_argument, NULL, 'w'},
 	{"groups", required_argument, NULL, OPT_GROUPS},
+	{"batch", required_argument, NULL, OPT_BATCH},
 	{"scene", required_argument, NULL, 's'},
 	{"output", required_argument, NULL, 'o'},
 	{"size", required_argument, NULL, OPT_SIZE},
@@ -65,8 +67,11 @@ void cli_print_help(FILE *out)
 		"                           %-9s the CPU reference renderer (C++, double "
 		"precision)\n"
 		"  -w, --workgroup WxH    work-group shape, also the chunk shape (default 8x8)\n"
-		"      --groups GXxGY     persistent work-groups for cyclic and dynamic\n"
+		"      --groups GXxGY     persistent work-groups for cyclic, dynamic and "
+		"persistent\n"
 		"                         (default: enough to fill the device)\n"
+		"      --batch N          pixels a work-item of the persistent kernel fetches\n"
+		"                         at a time (default 1)\n"
 		"\n"
 		"Scene and image:\n"
 		"  -s, --scene FILE       scene file (SCENE.md); default: the built-in paper60\n"
@@ -183,6 +188,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	o->depth = -1;
 	o->platform = o->device = -1;
 	o->repeat = 1;
+	o->batch = 1;
 
 	opterr = 0;
 	optind = 1;
@@ -197,6 +203,10 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 		case 'w':
 			failed = parse_shape("-w/--workgroup", optarg, 65536, o->workgroup, err,
 					     err_size);
+			break;
+		case OPT_BATCH:
+			failed =
+				parse_bounded("--batch", optarg, 1, 4096, &o->batch, err, err_size);
 			break;
 		case OPT_GROUPS:
 			failed = parse_shape("--groups", optarg, 65536, o->groups, err, err_size);
@@ -279,7 +289,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	if (strcmp(o->kernel, "reference") == 0 && (o->flops_path || o->work_map_path)) {
 		snprintf(err, err_size,
 			 "--flops and --work-map count the OpenCL kernels' work; the reference "
-			 "renderer does not count (choose -k serial, naive, cyclic or dynamic)");
+			 "renderer does not count (choose an OpenCL kernel)");
 		return -1;
 	}
 	if (o->quiet && o->verbose) {

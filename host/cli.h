@@ -15,6 +15,7 @@ struct options {
 	const char *kernel;	/* serial, naive, cyclic, dynamic or reference */
 	int workgroup[2];	/* -w WxH */
 	int groups[2];		/* --groups GXxGY; 0x0 when not given */
+	int batch;		/* --batch N for the persistent kernel */
 	const char *scene_path; /* NULL: the built-in paper60 scene */
 	const char *output;
 	int size[2];	      /* --size WxH; 0x0 when not given */

@@ -159,7 +159,7 @@ static json_t *stats_document(const struct run *run)
 	for (int i = 0; i < r->repeat; i++)
 		json_array_append_new(times, json_real(r->kernel_ms[i]));
 	return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:[I,I], s:i, s:i, s:i, s:s, s:b,"
-			 " s:f, s:f, s:f, s:i, s:o, s:s}",
+			 " s:f, s:f, s:f, s:i, s:o, s:s, s:i}",
 			 "rtcl_version", RTCL_VERSION, "device", run->device_name, "device_version",
 			 run->device_version, "driver", run->driver, "kernel",
 			 s->kernel ? s->kernel->name : "reference", "workgroup", workgroup,
@@ -169,7 +169,7 @@ static json_t *stats_document(const struct run *run)
 			 "scene_in_local_memory", r->scene_in_local, "kernel_ms",
 			 r->kernel_ms_median, "kernel_ms_min", r->kernel_ms_min, "kernel_ms_max",
 			 r->kernel_ms_max, "repeat", r->repeat, "kernel_ms_all", times,
-			 "build_options", r->build_options);
+			 "build_options", r->build_options, "batch", s->batch);
 }
 
 /* The --flops sidecar: how the counts were launched. */
@@ -345,6 +345,7 @@ int main(int argc, char **argv)
 	run.settings.height = opt.size[1] ? opt.size[1] : scene.height;
 	run.settings.max_depth = opt.depth >= 0 ? opt.depth : scene.max_depth;
 	run.settings.repeat = opt.repeat;
+	run.settings.batch = opt.batch;
 	run.settings.source_dir = getenv("RTCL_CL_DIR");
 	run.settings.progress = !opt.quiet && isatty(STDERR_FILENO);
 	run.settings.verbose = opt.verbose;

@@ -16,6 +16,8 @@ const struct kernel_info render_kernels[] = {
 	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0},
 	{"cyclic", "persistent work-groups, chunk (cx,cy) to group (cx mod GX, cy mod GY)", 1, 0},
 	{"dynamic", "persistent work-groups fetch chunks from a global atomic counter", 1, 0},
+	{"persistent",
+	 "persistent work-groups whose work-items each fetch --batch pixels, no barrier", 1, 0},
 };
 const int render_kernel_count = sizeof(render_kernels) / sizeof(render_kernels[0]);
 
@@ -123,8 +125,8 @@ static int build_program(struct device *dev, const struct render_settings *s,
 			goto out_free_sources;
 	}
 	snprintf(res->build_options, sizeof(res->build_options),
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d%s%s%s", s->max_depth,
-		 res->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s", s->max_depth,
+		 s->batch > 0 ? s->batch : 1, res->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "");
 

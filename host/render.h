@@ -30,6 +30,7 @@ struct render_settings {
 	int width, height; /* image size */
 	int max_depth;
 	int repeat;		/* timed launches after one warm-up launch */
+	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
 	int check_writes;	/* tests: count writes per pixel, poison the image and
 				   surround it with guard zones */

@@ -53,7 +53,8 @@ def test_help_teaches_every_option():
     for option in ["-k, --kernel", "-w, --workgroup", "--groups", "-s, --scene", "-o, --output",
                    "--size", "--depth", "-p, --platform", "-d, --device", "--list-devices",
                    "-r, --repeat", "--stats", "-q, --quiet", "-v, --verbose", "-h, --help",
-                   "--version", "serial", "naive", "cyclic", "dynamic", "reference",
+                   "--version", "serial", "naive", "cyclic", "dynamic", "persistent",
+                   "reference", "--batch", "--flops", "--work-map",
                    "Examples:"]:
         assert option in result.stdout, option
     assert rtcl("-h").stdout == result.stdout
@@ -72,7 +73,8 @@ def test_list_devices_in_clinfo_style():
     assert "-- Device #0: " in result.stdout
 
 
-@pytest.mark.parametrize("kernel", ["serial", "naive", "cyclic", "dynamic", "reference"])
+@pytest.mark.parametrize("kernel", ["serial", "naive", "cyclic", "dynamic", "persistent",
+                                    "reference"])
 def test_each_kernel_renders(kernel, tmp_path):
     out = tmp_path / "img.ppm"
     result = rtcl("-k", kernel, *SMALL, "-o", str(out))
@@ -176,7 +178,9 @@ def test_output_formats_from_extension(tmp_path, ext, magic):
 
 @pytest.mark.parametrize("args,status,message", [
     (["-k", "bogus"], 2, '-k/--kernel: unknown kernel "bogus" (choose from serial, naive, cyclic,'
-                         ' dynamic, reference)'),
+                         ' dynamic, persistent, reference)'),
+    (["--batch", "0"], 2, '--batch: expected an integer between 1 and 4096, got "0"'),
+    (["-k", "reference", "--flops", "f.npy"], 2, "the reference renderer does not count"),
     (["-w", "0x8"], 2, "-w/--workgroup: each size must be between 1 and 65536, got 0x8"),
     (["-w", "8"], 2, '-w/--workgroup: expected WxH (e.g. 8x8), got "8"'),
     (["-w", "8x8x"], 2, '-w/--workgroup: expected WxH (e.g. 8x8), got "8x8x"'),
@@ -277,3 +281,44 @@ def test_directory_as_scene(tmp_path):
     out_dir.mkdir()
     result = rtcl("-s", str(scene_dir), "-o", str(out_dir / "out.png"))
     expect_failure(result, 1, f"{scene_dir}: not a regular file", out_dir)
+
+
+# ---- counting ------------------------------------------------------------------
+
+def test_flops_file_and_figures(tmp_path):
+    np = pytest.importorskip("numpy")
+    flops = tmp_path / "f.npy"
+    result, stats = stats_of(tmp_path, *SMALL, "-k", "cyclic", "-w", "4x4", "--groups", "2x3",
+                             "--flops", str(flops), "--work-map", str(tmp_path / "map.ppm"))
+    counts = np.load(flops)
+    assert counts.dtype == np.dtype("<u8")
+    assert counts.shape == (12, 8)  # global size: 3 groups of 4 high, 2 of 4 wide
+    with open(str(flops) + ".json") as f:
+        sidecar = json.load(f)
+    assert sidecar["format"] == "rtcl-flops"
+    assert sidecar["global_size"] == [8, 12] and sidecar["groups"] == [2, 3]
+    assert sidecar["total_flops"] == int(counts.sum()) > 0
+    efficiency = counts.mean() / counts.max()
+    assert sidecar["parallel_efficiency"] == pytest.approx(efficiency)
+    assert stats["parallel_efficiency"] == pytest.approx(efficiency)
+    assert stats["gflop"] == pytest.approx(counts.sum() * 1e-9)
+    assert stats["flops_per_item"]["max"] == counts.max()
+    assert stats["gflops"] == pytest.approx(counts.sum() * 1e-6 / stats["kernel_ms"])
+    assert stats["rays"] >= 24 * 16
+    assert "parallel efficiency" in result.stdout
+    magic, width, height = netpbm_header(tmp_path / "map.ppm")
+    assert (magic, width) == ("P6", 24) and height > 16  # the scale bar below
+
+
+def test_same_flops_whatever_the_kernel(tmp_path):
+    totals = set()
+    for kernel in ["serial", "naive", "dynamic", "persistent"]:
+        _, stats = stats_of(tmp_path, *SMALL, "-k", kernel, "--flops", str(tmp_path / "f.npy"))
+        totals.add(stats["total_flops"])
+    assert len(totals) == 1
+
+
+def test_flops_in_missing_directory_writes_nothing(tmp_path):
+    result = rtcl(*SMALL, "-o", str(tmp_path / "out.png"), "--flops",
+                  str(tmp_path / "missing" / "f.npy"))
+    expect_failure(result, 1, "does not exist", tmp_path)

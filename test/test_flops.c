@@ -220,7 +220,7 @@ static struct render_settings counting(const char *kernel, int wx, int wy, int m
  * per-pixel counts add up to the per-work-item ones. */
 Test(flops, kernels_count_the_same_work, .timeout = 300)
 {
-	static const char *const kernels[] = {"serial", "naive", "cyclic", "dynamic"};
+	static const char *const kernels[] = {"serial", "naive", "cyclic", "dynamic", "persistent"};
 	struct device dev;
 	struct scene scene;
 	struct render_result want;
@@ -236,7 +236,7 @@ Test(flops, kernels_count_the_same_work, .timeout = 300)
 	cr_assert_eq(want.item_count, 1);
 	cr_assert_eq(want.item_flops[0], want.total_flops);
 
-	for (int k = 0; k < 4; k++) {
+	for (int k = 0; k < 5; k++) {
 		for (int shape = 0; shape < 2; shape++) {
 			struct render_result got;
 			uint64_t pixel_sum = 0;

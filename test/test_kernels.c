@@ -86,7 +86,7 @@ static void check_kernels_identical(const char *path)
 {
 	static const int sizes[][2] = {{61, 47}, {161, 97}, {160, 96}};
 	static const int shapes[][2] = {{1, 1}, {8, 8}, {16, 4}, {32, 1}};
-	static const char *const parallel[] = {"naive", "cyclic", "dynamic"};
+	static const char *const parallel[] = {"naive", "cyclic", "dynamic", "persistent"};
 	struct device dev;
 	struct scene scene;
 
@@ -99,7 +99,7 @@ static void check_kernels_identical(const char *path)
 
 		snprintf(what, sizeof(what), "%s serial %dx%d", path, w, h);
 		unsigned char *want = render_checked(&dev, &scene, &s, what);
-		for (size_t k = 0; k < 3; k++) {
+		for (size_t k = 0; k < 4; k++) {
 			for (size_t p = 0; p < sizeof(shapes) / sizeof(shapes[0]); p++) {
 				s = settings_for(parallel[k], w, h, shapes[p][0], shapes[p][1],
 						 scene.max_depth);
@@ -112,7 +112,7 @@ static void check_kernels_identical(const char *path)
 		}
 		/* Persistent groups: fewer than the chunks, and more. */
 		for (int g = 0; g < 2; g++) {
-			for (size_t k = 1; k < 3; k++) {
+			for (size_t k = 1; k < 4; k++) {
 				s = settings_for(parallel[k], w, h, 8, 8, scene.max_depth);
 				s.groups[0] = g ? 40 : 3;
 				s.groups[1] = g ? 30 : 2;
@@ -123,6 +123,13 @@ static void check_kernels_identical(const char *path)
 				free(got);
 			}
 		}
+		/* The persistent kernel fetching several pixels at a time. */
+		s = settings_for("persistent", w, h, 16, 4, scene.max_depth);
+		s.batch = 7;
+		snprintf(what, sizeof(what), "%s persistent %dx%d --batch 7", path, w, h);
+		unsigned char *batched = render_checked(&dev, &scene, &s, what);
+		expect_same_image(want, batched, w, h, what);
+		free(batched);
 		free(want);
 	}
 	scene_free(&scene);
@@ -270,14 +277,14 @@ Test(kernels, analytic_centre_pixel)
 		" \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1, \"material\":"
 		"   {\"color\": [0.8, 0.6, 0.4], \"ambient\": 0.5, \"diffuse\": 0.7,"
 		"    \"specular\": 0.3, \"shininess\": 2}}]}";
-	static const char *const kernels[] = {"serial", "naive", "cyclic", "dynamic"};
+	static const char *const kernels[] = {"serial", "naive", "cyclic", "dynamic", "persistent"};
 	const double want[3] = {0.758, 0.363, 0.1835};
 	struct device dev;
 	struct scene scene;
 
 	open_device(&dev);
 	cr_assert_eq(scene_load_string(&scene, json, "analytic", err, sizeof(err)), 0, "%s", err);
-	for (int k = 0; k < 4; k++) {
+	for (int k = 0; k < 5; k++) {
 		struct render_settings s = settings_for(kernels[k], 3, 3, 2, 2, 5);
 		struct render_result res;
 		cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
