@@ -6,6 +6,7 @@
  * message on stderr and no output file written.
  */
 #include <jansson.h>
+#include <signal.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -39,6 +40,46 @@ struct run {
 	char device_version[256];
 	char driver[256];
 };
+
+/* Ctrl-C (or SIGTERM) before the outputs are written: nothing has been written
+ * yet and nothing needs undoing, so leave at once with the conventional
+ * status. While they are written the signals are held back (see main). */
+static volatile sig_atomic_t progress_on_terminal; /* a progress line may be open */
+
+static void on_interrupt(int signal_number)
+{
+	static const char message[] = "\nrtcl: interrupted; no output written\n";
+	int skip_newline = !progress_on_terminal;
+	ssize_t ignored =
+		write(STDERR_FILENO, message + skip_newline, sizeof(message) - 1 - skip_newline);
+
+	(void)ignored;
+	_exit(128 + signal_number);
+}
+
+static void catch_interrupts(void)
+{
+	struct sigaction action;
+
+	memset(&action, 0, sizeof(action));
+	action.sa_handler = on_interrupt;
+	sigemptyset(&action.sa_mask);
+	sigaction(SIGINT, &action, NULL);
+	sigaction(SIGTERM, &action, NULL);
+}
+
+/* Blocks (block = 1) or unblocks SIGINT and SIGTERM. */
+static void hold_interrupts(int block, sigset_t *pending)
+{
+	sigset_t set;
+
+	sigemptyset(&set);
+	sigaddset(&set, SIGINT);
+	sigaddset(&set, SIGTERM);
+	sigprocmask(block ? SIG_BLOCK : SIG_UNBLOCK, &set, NULL);
+	if (pending)
+		sigpending(pending);
+}
 
 static int load_scene(const struct options *opt, struct scene *scene, char *err, size_t err_size)
 {
@@ -250,6 +291,23 @@ out_remove:
 	return -1;
 }
 
+/* Removes every output of this run (after an interrupt while writing). */
+static void remove_outputs(const struct options *opt)
+{
+	char sidecar[4200];
+
+	outfile_remove(opt->output);
+	if (opt->work_map_path)
+		outfile_remove(opt->work_map_path);
+	if (opt->stats_path)
+		outfile_remove(opt->stats_path);
+	if (opt->flops_path) {
+		snprintf(sidecar, sizeof(sidecar), "%s.json", opt->flops_path);
+		outfile_remove(opt->flops_path);
+		outfile_remove(sidecar);
+	}
+}
+
 /* Checks every output can be written before any work starts. */
 static int check_outputs(const struct options *opt, char *err, size_t err_size)
 {
@@ -329,6 +387,7 @@ int main(int argc, char **argv)
 		return 0;
 	}
 
+	catch_interrupts();
 	if (load_scene(&opt, &scene, err, sizeof(err))) {
 		fprintf(stderr, "%s\n", err);
 		return EXIT_FAILED;
@@ -348,6 +407,7 @@ int main(int argc, char **argv)
 	run.settings.batch = opt.batch;
 	run.settings.source_dir = getenv("RTCL_CL_DIR");
 	run.settings.progress = !opt.quiet && isatty(STDERR_FILENO);
+	progress_on_terminal = run.settings.progress;
 	run.settings.verbose = opt.verbose;
 
 	run.counting = opt.flops_path || opt.work_map_path;
@@ -360,10 +420,19 @@ int main(int argc, char **argv)
 		fprintf(stderr, "rtcl: %s\n", err);
 		goto out_free_scene;
 	}
+	/* An interrupt while the outputs are written must not leave some of
+	 * them: hold it back, and if one came, remove what was written. */
+	sigset_t pending;
+	hold_interrupts(1, NULL);
 	if (write_outputs(&run, err, sizeof(err))) {
+		hold_interrupts(0, NULL);
 		fprintf(stderr, "rtcl: %s\n", err);
 		goto out_free_result;
 	}
+	sigpending(&pending);
+	if (sigismember(&pending, SIGINT) || sigismember(&pending, SIGTERM))
+		remove_outputs(&opt);
+	hold_interrupts(0, NULL);
 	if (!opt.quiet)
 		print_summary(&run);
 	status = 0;

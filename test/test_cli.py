@@ -322,3 +322,21 @@ def test_flops_in_missing_directory_writes_nothing(tmp_path):
     result = rtcl(*SMALL, "-o", str(tmp_path / "out.png"), "--flops",
                   str(tmp_path / "missing" / "f.npy"))
     expect_failure(result, 1, "does not exist", tmp_path)
+
+
+@pytest.mark.parametrize("signal_name", ["SIGINT", "SIGTERM"])
+def test_interrupted_render_leaves_no_file(tmp_path, signal_name):
+    import signal
+    import time
+    out = tmp_path / "out.png"
+    # The serial kernel on a CPU takes seconds at this size: long enough to interrupt.
+    process = subprocess.Popen([RTCL, "-k", "serial", "--size", "1500x1500", "-o", str(out),
+                                "--stats", str(tmp_path / "s.json")],
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    time.sleep(1.0)
+    process.send_signal(getattr(signal, signal_name))
+    stdout, stderr = process.communicate(timeout=60)
+    assert process.returncode == 128 + getattr(signal, signal_name)
+    assert stderr == "rtcl: interrupted; no output written\n"
+    assert stdout == ""
+    assert os.listdir(tmp_path) == []
