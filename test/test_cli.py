@@ -340,3 +340,53 @@ def test_interrupted_render_leaves_no_file(tmp_path, signal_name):
     assert stderr == "rtcl: interrupted; no output written\n"
     assert stdout == ""
     assert os.listdir(tmp_path) == []
+
+
+# ---- limits ----------------------------------------------------------------------
+
+def test_million_spheres_render_from_global_memory(tmp_path):
+    """A scene far larger than __local memory is read from __global memory."""
+    scene = tmp_path / "million.json"
+    with open(scene, "w") as f:
+        f.write('{"format": "rtcl-scene", "version": 1, "image": {"width": 4, "height": 3},'
+                ' "camera": {"eye": [0, 0, -5], "look_at": [0, 0, 0]},'
+                ' "lights": [{"position": [0, 5, -5]}], "spheres": [')
+        f.write(",".join('{"center": [%d, %d, %d], "radius": 0.01}'
+                         % (i % 100 - 50, i // 100 % 100 - 50, i // 10000 + 5)
+                         for i in range(1000000)))
+        f.write("]}")
+    out = tmp_path / "out.ppm"
+    result = rtcl("-s", str(scene), "-o", str(out), "-v", "-k", "dynamic", "-w", "4x3")
+    assert result.returncode == 0, result.stderr
+    assert "read from __global memory (it does not fit in __local memory)" in result.stderr
+    assert netpbm_header(out) == ("P6", 4, 3)
+
+
+def test_kernel_build_failure_shows_log_and_options(tmp_path):
+    cl_dir = tmp_path / "cl"
+    cl_dir.mkdir()
+    for source in (ROOT / "cl").iterdir():
+        (cl_dir / source.name).write_text(source.read_text())
+    with open(cl_dir / "tracer.cl", "a") as f:
+        f.write("\nthis is not OpenCL C;\n")
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    result = subprocess.run([RTCL, *SMALL, "-o", str(out_dir / "x.png")], capture_output=True,
+                            text=True, env={**os.environ, "RTCL_CL_DIR": str(cl_dir)},
+                            timeout=300)
+    assert result.returncode == 1
+    # PoCL's compiler prints its own "N errors generated." before rtcl's message.
+    assert "rtcl: building kernel 'dynamic' for " in result.stderr
+    assert "failed: CL_BUILD_PROGRAM_FAILURE" in result.stderr
+    assert "options: -cl-std=CL1.2 -DRTCL_MAX_DEPTH=5" in result.stderr
+    assert "build log:" in result.stderr and "error" in result.stderr
+    assert os.listdir(out_dir) == []
+
+
+def test_missing_kernel_source_directory(tmp_path):
+    result = subprocess.run([RTCL, *SMALL, "-o", str(tmp_path / "x.png")], capture_output=True,
+                            text=True, env={**os.environ, "RTCL_CL_DIR": str(tmp_path / "nope")},
+                            timeout=300)
+    assert result.returncode == 1
+    assert "cannot open kernel source" in result.stderr
+    assert os.listdir(tmp_path) == []

@@ -297,3 +297,33 @@ Test(kernels, analytic_centre_pixel)
 	scene_free(&scene);
 	device_close(&dev);
 }
+
+/* max_depth 64, the largest SCENE.md allows, between two mirrors facing each
+ * other: every ray bounces to the last level, so the ray stack (sized from the
+ * depth at build time) is used to its full depth. */
+Test(kernels, depth_64_between_mirrors, .timeout = 600)
+{
+	static const char *const kernels[] = {"naive", "cyclic", "dynamic", "persistent"};
+	struct device dev;
+	struct scene scene;
+
+	open_device(&dev);
+	load(&scene, "test/scenes/mirror_corridor.json");
+	cr_assert_eq(scene.max_depth, 64);
+	struct render_settings s = settings_for("serial", 24, 16, 1, 1, scene.max_depth);
+	unsigned char *want = render_checked(&dev, &scene, &s, "serial, depth 64");
+	for (int k = 0; k < 4; k++) {
+		s = settings_for(kernels[k], 24, 16, 8, 8, scene.max_depth);
+		unsigned char *got = render_checked(&dev, &scene, &s, kernels[k]);
+		expect_same_image(want, got, 24, 16, kernels[k]);
+		free(got);
+	}
+	free(want);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+Test(kernels, depth_64_matches_reference, .timeout = 600)
+{
+	check_against_reference("test/scenes/mirror_corridor.json", 48, 32);
+}
