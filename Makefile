@@ -4,18 +4,29 @@
 #   make deps         install the dependencies (Debian/Ubuntu, uses apt-get)
 #   make render       build and render the default scene to render.png
 #   make test         unit, kernel (PoCL), command-line and tools tests
+#   make test SAN=1   the same suite, host side built with ASan+UBSan in build-san/
+#   make fuzz         libFuzzer on the scene loader for FUZZ_SECONDS (needs clang)
+#   make valgrind     memcheck on full renders (test/valgrind.sh)
 #   make experiments  the paper's Table 1 and Figures 6-7 (DEVICE="-p N -d M")
 #   make clean
 #
 # Variables: OIIO=0|1, BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
-# has numpy, matplotlib and pytest from `make deps`).
+# has numpy, matplotlib and pytest from `make deps`), SAN=1 (sanitizers),
+# FUZZ_SECONDS (default 60), FUZZ_CC (default clang).
 
 OIIO ?= 1
 CC ?= gcc
 CXX ?= g++
 PYTHON ?= /usr/bin/python3
+SAN ?= 0
+ifeq ($(SAN),1)
+# A separate tree, so that sanitized and plain objects never mix.
+BUILD ?= build-san
+BIN ?= $(BUILD)/rtcl
+else
 BUILD ?= build
 BIN ?= rtcl
+endif
 
 WARNINGS := -Wall -Wextra
 CPPFLAGS += -I$(BUILD) -Ihost -Icl -DCL_TARGET_OPENCL_VERSION=120 -D_DEFAULT_SOURCE
@@ -24,6 +35,18 @@ CFLAGS += -std=c11 $(WARNINGS)
 CXXFLAGS ?= -O2 -g
 CXXFLAGS += -std=c++17 $(WARNINGS)
 LDLIBS = -lOpenCL -ljansson -lm
+
+ifeq ($(SAN),1)
+SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
+CFLAGS += $(SAN_FLAGS)
+CXXFLAGS += $(SAN_FLAGS)
+LDFLAGS += $(SAN_FLAGS)
+# Every report is fatal, also in Criterion's forked workers. LeakSanitizer
+# skips only the OpenCL runtime's own allocations (test/lsan.supp says which).
+export ASAN_OPTIONS := abort_on_error=1:halt_on_error=1:detect_leaks=1:strict_string_checks=1:check_initialization_order=1
+export UBSAN_OPTIONS := print_stacktrace=1:halt_on_error=1:abort_on_error=1
+export LSAN_OPTIONS := suppressions=$(CURDIR)/test/lsan.supp:print_suppressions=0
+endif
 
 ifeq ($(OIIO),1)
 IMAGE_BACKEND := $(BUILD)/image_oiio.o
@@ -45,7 +68,7 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test experiments clean
+.PHONY: all deps render test experiments clean fuzz valgrind
 all: $(BIN)
 
 $(BIN): $(BUILD)/main.o $(HOST_OBJS)
@@ -80,16 +103,42 @@ render: rtcl
 
 # Criterion first (unit and kernel tests), then pytest (command line and
 # tools); pytest's summary line closes the output.
-test: rtcl $(BUILD)/unit_tests
+test: $(BIN) $(BUILD)/unit_tests
 	$(BUILD)/unit_tests --jobs 2
-	$(PYTHON) -m pytest -q test
+	RTCL=$(abspath $(BIN)) $(PYTHON) -m pytest -q test
 
 # The paper's experiment (Table 1, Figures 6-7) on one device, e.g.
 # make experiments DEVICE="-p 1 -d 0"; results under docs/results/<device>/.
 experiments: $(BIN)
 	$(PYTHON) tools/experiments.py --rtcl ./$(BIN) $(DEVICE)
 
+# libFuzzer on the scene loader and devscene_pack (test/fuzz_scene.c), seeded
+# with the shipped and the bad scenes; the seeds are copied, the growing corpus
+# and any crash-*, leak-*, timeout-* files stay under build/fuzz/.
+FUZZ_SECONDS ?= 60
+FUZZ_CC ?= clang
+FUZZ_DIR := build/fuzz
+FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
+	-fno-omit-frame-pointer -std=c11 $(WARNINGS) -Ihost -Icl -D_DEFAULT_SOURCE
+
+$(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h host/scene.c host/devscene.c \
+		host/scene.h host/devscene.h cl/rtcl_shared.h
+	mkdir -p $(FUZZ_DIR)
+	$(FUZZ_CC) $(FUZZ_FLAGS) -o $@ test/fuzz_scene.c host/scene.c host/devscene.c -ljansson -lm
+
+fuzz: $(FUZZ_DIR)/fuzz_scene
+	mkdir -p $(FUZZ_DIR)/corpus $(FUZZ_DIR)/artifacts
+	cp $(wildcard scenes/*.json test/bad_scenes/*.json test/fuzz_corpus/* \
+		test/fuzz_regressions/*) $(FUZZ_DIR)/corpus/
+	$(FUZZ_DIR)/fuzz_scene -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=10 \
+		-rss_limit_mb=2048 -dict=test/fuzz_scene.dict -print_final_stats=1 \
+		-artifact_prefix=$(FUZZ_DIR)/artifacts/ $(FUZZ_DIR)/corpus
+
+# Memcheck on full renders; test/valgrind.supp covers the OpenCL runtime only.
+valgrind: $(BIN)
+	bash test/valgrind.sh $(BIN)
+
 clean:
-	rm -rf $(BUILD) rtcl
+	rm -rf $(BUILD) build-san build/fuzz rtcl
 
 -include $(wildcard $(BUILD)/*.d $(BUILD)/test/*.d)

@@ -26,6 +26,13 @@
  * text size in memory, and no sensible scene comes near this. */
 #define SCENE_MAX_BYTES ((size_t)256 << 20)
 
+/* The device computes in float, and squares and inverts what it is given (a
+ * radius, the epsilon, an ior; the camera is normalised in double on the way):
+ * a number outside these magnitudes would reach it as inf or 0 and render a
+ * silently wrong picture. 0 itself is exact. */
+#define SCENE_MIN_MAGNITUDE 1e-18
+#define SCENE_MAX_MAGNITUDE 1e18
+
 /* camera.up counts as parallel to the view direction when the sine of the
  * angle between them is below this. */
 #define SCENE_PARALLEL_SINE 1e-9
@@ -263,7 +270,8 @@ static int get_field(struct loader *ld, const struct path *p, json_t *obj, const
 }
 
 enum range {
-	ANY,	      /* any finite number */
+	DIRECTION,    /* any finite number: normalised in double on load */
+	ANY,	      /* 0 or a magnitude in SCENE_MIN/MAX_MAGNITUDE */
 	POSITIVE,     /* > 0 */
 	NON_NEGATIVE, /* >= 0 */
 	UNIT,	      /* 0 ... 1 */
@@ -283,6 +291,7 @@ static int check_number(struct loader *ld, const struct path *p, json_t *v, enum
 	if (!isfinite(x))
 		return fail(ld, p, "must be finite, got %s", fmt_num(x, num));
 	switch (range) {
+	case DIRECTION:
 	case ANY:
 		break;
 	case POSITIVE:
@@ -302,6 +311,12 @@ static int check_number(struct loader *ld, const struct path *p, json_t *v, enum
 			return fail(ld, p, "must be > 0 and < 180, got %s", fmt_num(x, num));
 		break;
 	}
+	if (range != DIRECTION && x != 0 &&
+	    !(fabs(x) >= SCENE_MIN_MAGNITUDE && fabs(x) <= SCENE_MAX_MAGNITUDE))
+		return fail(ld, p, "must be %sbetween %g and %g%s (rtcl computes in float), got %s",
+			    range == POSITIVE || range == FOV ? "" : "0 or ", SCENE_MIN_MAGNITUDE,
+			    SCENE_MAX_MAGNITUDE, range == ANY ? " in magnitude" : "",
+			    fmt_num(x, num));
 	*out = x;
 	return 0;
 }
@@ -360,7 +375,7 @@ static int read_int(struct loader *ld, const struct path *p, json_t *obj, const 
 	return 0;
 }
 
-/* A vec3 (range ANY) or a color (range NON_NEGATIVE). */
+/* A vec3 (range ANY or DIRECTION) or a color (range NON_NEGATIVE). */
 static int read_vec3(struct loader *ld, const struct path *p, json_t *obj, const char *key,
 		     enum presence presence, enum range range, double out[3])
 {
@@ -700,7 +715,7 @@ static int read_planes(struct loader *ld, json_t *array)
 
 		if (expect_object(ld, &item, obj, keys) ||
 		    read_vec3(ld, &item, obj, "point", REQUIRED, ANY, pl->point) ||
-		    read_vec3(ld, &item, obj, "normal", REQUIRED, ANY, pl->normal))
+		    read_vec3(ld, &item, obj, "normal", REQUIRED, DIRECTION, pl->normal))
 			return -1;
 		if (!scale_to_unit_max(pl->normal, n))
 			return fail(ld, &normal, "must be non-zero");

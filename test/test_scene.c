@@ -278,14 +278,15 @@ Test(scene, boundary_values_are_accepted)
 	load_ok(&s, "{" HEADER "\"camera\": {\"eye\": [0, 0, 0], \"look_at\": [0, 0, 1], "
 		    "\"up\": [0.001, 1, 0], \"fov\": 179.9},"
 		    "\"image\": {\"width\": 32768, \"height\": 1}, \"max_depth\": 0,"
-		    "\"background\": [0, -0.0, 0], \"epsilon\": 1e-300,"
+		    "\"background\": [0, -0.0, 0], \"epsilon\": 1e-18,"
 		    "\"materials\": {\"m\": {\"reflect\": 1, \"transmit\": 0, \"shininess\": 0,"
-		    "\"ambient\": 0, \"diffuse\": 0, \"specular\": 0, \"ior\": 1e-9}}}");
+		    "\"ambient\": 0, \"diffuse\": 0, \"specular\": 0, \"ior\": 1e18}}}");
 	cr_expect_eq(s.width, 32768);
 	cr_expect_eq(s.height, 1);
 	cr_expect_eq(s.max_depth, 0);
 	cr_expect_eq(s.camera.fov, 179.9);
-	cr_expect_eq(s.epsilon, 1e-300);
+	cr_expect_eq(s.epsilon, 1e-18);
+	cr_expect_eq(s.materials[0].ior, 1e18);
 	cr_expect_eq(s.materials[0].reflect, 1);
 	scene_free(&s);
 
@@ -294,9 +295,10 @@ Test(scene, boundary_values_are_accepted)
 	cr_expect_eq(s.max_depth, 64);
 	scene_free(&s);
 
-	/* Huge but finite coordinates must not overflow the eye/look_at checks. */
-	load_ok(&s, "{" HEADER "\"camera\": {\"eye\": [-1e308, 0, 0], \"look_at\": [1e308, 0, 0],"
-		    "\"up\": [0, 1, 0]}}");
+	/* The largest and smallest magnitudes, which float holds squared. */
+	load_ok(&s, "{" HEADER "\"camera\": {\"eye\": [-1e18, 0, 0], \"look_at\": [1e18, 0, 0],"
+		    "\"up\": [0, 1e-18, 0]}, \"spheres\": [{\"center\": [0, 0, -1e-18], "
+		    "\"radius\": 1e-18}, {\"center\": [0, 0, 0], \"radius\": 1e18}]}");
 	scene_free(&s);
 }
 
@@ -446,6 +448,39 @@ static const struct {
 	 "t.json: spheres[0].radius: must be > 0, got -1e-300"},
 	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0]}]"),
 	 "t.json: spheres[0].radius: required field is missing"},
+	/* Numbers that float cannot hold, or hold squared or inverted (found by
+	 * the fuzzer: test/fuzz_regressions/). */
+	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1e-19}]"),
+	 "t.json: spheres[0].radius: must be between 1e-18 and 1e+18 (rtcl computes in float), "
+	 "got 1e-19"},
+	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 2e19}]"),
+	 "t.json: spheres[0].radius: must be between 1e-18 and 1e+18 (rtcl computes in float), "
+	 "got 2e+19"},
+	{SCENE(", \"spheres\": [{\"center\": [0, -1e39, 0], \"radius\": 1}]"),
+	 "t.json: spheres[0].center[1]: must be 0 or between 1e-18 and 1e+18 in magnitude (rtcl "
+	 "computes in float), got -1e+39"},
+	{SCENE(", \"epsilon\": 1e-320"), "t.json: epsilon: must be between 1e-18 and 1e+18 (rtcl "
+					 "computes in float), got 9.99989e-321"},
+	{SCENE(", \"materials\": {\"glass\": {\"ior\": 1e308}}"),
+	 "t.json: materials.glass.ior: must be between 1e-18 and 1e+18 (rtcl computes in float), "
+	 "got 1e+308"},
+	{SCENE(", \"materials\": {\"m\": {\"reflect\": 1e-30}}"),
+	 "t.json: materials.m.reflect: must be 0 or between 1e-18 and 1e+18 (rtcl computes in "
+	 "float), got 1e-30"},
+	{SCENE(", \"background\": [1e20, 0, 0]"),
+	 "t.json: background[0]: must be 0 or between 1e-18 and 1e+18 (rtcl computes in float), "
+	 "got 1e+20"},
+	{"{" HEADER "\"camera\": {\"eye\": [-1e308, 0, 0], \"look_at\": [1e308, 0, 0]}}",
+	 "t.json: camera.eye[0]: must be 0 or between 1e-18 and 1e+18 in magnitude (rtcl computes "
+	 "in float), got -1e+308"},
+	{"{" HEADER "\"camera\": {\"eye\": [0, 0, 0], \"look_at\": [1e-320, 0, 1]}}",
+	 "t.json: camera.look_at[0]: must be 0 or between 1e-18 and 1e+18 in magnitude (rtcl "
+	 "computes in float), got 9.99989e-321"},
+	{"{" HEADER
+	 "\"camera\": {\"eye\": [0, 0, 0], \"look_at\": [0, 0, 1], \"up\": [0, 1e-300, 0]}}",
+	 "t.json: camera.up[1]: must be 0 or between 1e-18 and 1e+18 in magnitude (rtcl computes "
+	 "in "
+	 "float), got 1e-300"},
 	{SCENE(", \"spheres\": [{\"radius\": 1}]"),
 	 "t.json: spheres[0].center: required field is missing"},
 	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0], \"radius\": \"1\"}]"),

@@ -1,0 +1,69 @@
+/* The property the scene fuzzer checks on every accepted scene, shared by
+ * test/fuzz_scene.c and test/test_fuzz_regressions.c: the device layout
+ * from devscene_pack holds only numbers the tracer can use. inf or NaN there,
+ * or a radius, epsilon, ior or checker size that rounded to 0 in float,
+ * would render a silently wrong picture. */
+#ifndef RTCL_TEST_DEVSCENE_CHECK_H
+#define RTCL_TEST_DEVSCENE_CHECK_H
+
+#include <math.h>
+
+#include "../cl/rtcl_shared.h"
+
+static int vec4_finite(rt_vec4 v)
+{
+	return isfinite(v.s[0]) && isfinite(v.s[1]) && isfinite(v.s[2]) && isfinite(v.s[3]);
+}
+
+static int float_positive(float x)
+{
+	return isfinite(x) && x > 0;
+}
+
+/* Returns NULL when the packed scene is usable, else what is wrong. */
+static const char *devscene_problem(const void *packed)
+{
+	const unsigned char *block = packed;
+	const struct rt_scene *h = packed;
+	const struct rt_material *m = (const void *)(block + h->material_offset);
+	const struct rt_sphere *s = (const void *)(block + h->sphere_offset);
+	const struct rt_plane *p = (const void *)(block + h->plane_offset);
+	const struct rt_light *l = (const void *)(block + h->light_offset);
+
+	if (!vec4_finite(h->eye) || !vec4_finite(h->forward) || !vec4_finite(h->right) ||
+	    !vec4_finite(h->up))
+		return "camera not finite";
+	if (!float_positive(h->forward.s[3]) || !float_positive(h->eye.s[3]))
+		return "image half-extent not positive";
+	if (!float_positive(h->right.s[3]))
+		return "epsilon not positive in float";
+	if (!vec4_finite(h->background) || !vec4_finite(h->ambient))
+		return "background or ambient not finite";
+	for (int i = 0; i < h->material_count; i++) {
+		if (!vec4_finite(m[i].color) || !isfinite(m[i].diffuse) ||
+		    !isfinite(m[i].specular) || !isfinite(m[i].shininess) ||
+		    !isfinite(m[i].reflect) || !isfinite(m[i].transmit))
+			return "material not finite";
+		if (!float_positive(m[i].ior) || !float_positive(m[i].inv_ior))
+			return "ior or 1/ior not positive in float";
+	}
+	for (int i = 0; i < h->sphere_count; i++) {
+		if (!vec4_finite(s[i].center))
+			return "sphere not finite";
+		if (!float_positive(s[i].center.s[3]) || !float_positive(s[i].radius2) ||
+		    !float_positive(s[i].inv_radius))
+			return "radius, radius² or 1/radius not positive in float";
+	}
+	for (int i = 0; i < h->plane_count; i++) {
+		if (!vec4_finite(p[i].normal) || !vec4_finite(p[i].checker_color))
+			return "plane not finite";
+		if (p[i].has_checker && !float_positive(p[i].checker_color.s[3]))
+			return "checker size not positive in float";
+	}
+	for (int i = 0; i < h->light_count; i++)
+		if (!vec4_finite(l[i].position) || !vec4_finite(l[i].color))
+			return "light not finite";
+	return NULL;
+}
+
+#endif

@@ -1,0 +1,52 @@
+/* libFuzzer target for the scene loader, its validation and the packing into
+ * the device layout (host/scene.c, host/devscene.c).
+ *
+ * Each input is loaded as a NUL-terminated document: it must be accepted or
+ * refused with one message, never crash, leak, hang or hit undefined
+ * behaviour. An accepted scene is also packed, as render.c would pack it,
+ * and the device layout must hold only usable numbers (devscene_check.h).
+ *
+ *   make fuzz FUZZ_SECONDS=600    # build/fuzz/fuzz_scene, seeded from scenes/,
+ *                                 # test/bad_scenes/ and the committed corpus
+ * Findings go to test/fuzz_regressions/, small interesting inputs to
+ * test/fuzz_corpus/; test_fuzz_regressions.c replays both in `make test`.
+ */
+#include <stdint.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "devscene.h"
+#include "devscene_check.h"
+#include "scene.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	char *json = malloc(size + 1);
+	char err[512];
+	struct scene scene;
+
+	if (!json)
+		return 0;
+	memcpy(json, data, size);
+	json[size] = '\0';
+
+	if (scene_load_string(&scene, json, "fuzz.json", err, sizeof(err)) == 0) {
+		size_t bytes;
+		void *packed =
+			devscene_pack(&scene, scene.width, scene.height, scene.max_depth, &bytes);
+
+		if (!packed || devscene_problem(packed))
+			abort();
+		free(packed);
+		scene_free(&scene);
+	} else if (strlen(err) == 0 || strchr(err, '\n') || scene.source || scene.materials ||
+		   scene.spheres || scene.planes || scene.lights) {
+		/* The contract (scene.h): on failure one line of message, and
+		 * nothing left to release. */
+		abort();
+	}
+	free(json);
+	return 0;
+}

@@ -1,0 +1,110 @@
+/* Replays the scene fuzzer's findings and its minimized corpus
+ * (test/fuzz_scene.c, `make fuzz`).
+ *
+ * Every file in test/fuzz_regressions/ (inputs that once crashed, leaked,
+ * hung or hit undefined behaviour) and test/fuzz_corpus/ (small inputs that
+ * reach distinct code) is loaded as the fuzzer loads it: accepted and packed
+ * into usable numbers (devscene_check.h), or refused with one line and
+ * nothing left to free. Under `make test SAN=1`
+ * AddressSanitizer and UBSan watch every load.
+ */
+#define _POSIX_C_SOURCE 200809L
+
+#include "devscene.h"
+#include "devscene_check.h"
+#include "scene.h"
+
+#include <criterion/criterion.h>
+#include <dirent.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+/* Reads the whole file into a NUL-terminated buffer (NUL bytes inside stay:
+ * the loader sees the text up to the first one, as in the fuzzer). */
+static char *read_all(const char *path)
+{
+	FILE *f = fopen(path, "rb");
+	size_t len = 0, capacity = 4096;
+	char *buf = malloc(capacity + 1);
+
+	cr_assert_not_null(f, "cannot open %s", path);
+	cr_assert_not_null(buf);
+	for (;;) {
+		size_t n = fread(buf + len, 1, capacity - len, f);
+
+		len += n;
+		if (len < capacity)
+			break;
+		capacity *= 2;
+		buf = realloc(buf, capacity + 1);
+		cr_assert_not_null(buf);
+	}
+	cr_assert(!ferror(f), "cannot read %s", path);
+	fclose(f);
+	buf[len] = '\0';
+	return buf;
+}
+
+static void load_cleanly(const char *path)
+{
+	char *json = read_all(path);
+	char err[512] = "";
+	struct scene s;
+
+	if (scene_load_string(&s, json, path, err, sizeof(err)) == 0) {
+		size_t bytes = 0;
+		void *packed = devscene_pack(&s, s.width, s.height, s.max_depth, &bytes);
+
+		cr_assert_not_null(packed, "%s: devscene_pack failed", path);
+		cr_expect_gt(bytes, 0);
+		cr_expect_null(devscene_problem(packed), "%s: accepted, but packs with %s", path,
+			       devscene_problem(packed));
+		free(packed);
+		scene_free(&s);
+	} else {
+		cr_expect_neq(err[0], '\0', "%s: refused without a message", path);
+		cr_expect_null(strchr(err, '\n'), "%s: message of several lines: %s", path, err);
+		cr_expect_null(s.source, "%s: refused scene holds memory", path);
+		cr_expect_null(s.materials, "%s: refused scene holds memory", path);
+		cr_expect_null(s.spheres, "%s: refused scene holds memory", path);
+		cr_expect_null(s.planes, "%s: refused scene holds memory", path);
+		cr_expect_null(s.lights, "%s: refused scene holds memory", path);
+	}
+	free(json);
+}
+
+/* Loads every regular file in `dir_name`; returns how many. */
+static int load_folder(const char *dir_name)
+{
+	DIR *dir = opendir(dir_name);
+	struct dirent *entry;
+	int loaded = 0;
+
+	cr_assert_not_null(dir, "cannot open %s (run from the repository root)", dir_name);
+	while ((entry = readdir(dir))) {
+		char path[1024];
+
+		if (entry->d_name[0] == '.' || strcmp(entry->d_name, "README.md") == 0)
+			continue;
+		snprintf(path, sizeof(path), "%s/%s", dir_name, entry->d_name);
+		load_cleanly(path);
+		loaded++;
+	}
+	closedir(dir);
+	return loaded;
+}
+
+Test(fuzz, regressions_load_cleanly)
+{
+	int n = load_folder("test/fuzz_regressions");
+
+	cr_expect_geq(n, 1, "no inputs in test/fuzz_regressions");
+}
+
+Test(fuzz, corpus_loads_cleanly)
+{
+	int n = load_folder("test/fuzz_corpus");
+
+	cr_expect_geq(n, 20, "only %d inputs in test/fuzz_corpus", n);
+}
