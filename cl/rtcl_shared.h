@@ -76,8 +76,18 @@ struct rt_scene {
 	rt_uint pad1, pad2, pad3;
 };
 
+/* A ray waiting in the wavefront kernel's queue. */
+struct rt_ray {
+	rt_vec4 origin; /* w: weight, the product of kr/kt along the path */
+	rt_vec4 dir;	/* unit */
+	rt_int pixel;	/* y * width + x */
+	rt_int depth;
+	rt_int pad0, pad1;
+};
+
 #ifndef __OPENCL_VERSION__
 #include <stddef.h>
+_Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");
 _Static_assert(sizeof(struct rt_material) == 48, "rt_material layout");
 _Static_assert(sizeof(struct rt_sphere) == 32, "rt_sphere layout");
 _Static_assert(offsetof(struct rt_sphere, material) == 24, "rt_sphere layout");

@@ -241,12 +241,83 @@ static float3 shade_local(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_ma
 	return color;
 }
 
-/* Returns the colour seen along the primary ray (RENDERING.md trace), walking
- * the reflection and refraction tree with an explicit stack. */
-static float3 trace(struct tracer *tr, float3 origin, float3 dir)
+/* Traces one ray of the tree (RENDERING.md trace, steps 1-5): returns what it
+ * adds to its pixel, weight included, and writes the rays it spawns into
+ * children[0..*spawned): the refracted ray, then the reflected one. Used by the
+ * stack walk below and by the wavefront kernel. */
+static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray_job children[2],
+			int *spawned)
 {
 	scene_ptr scene = tr->scene;
 	float epsilon = scene->right.w;
+	struct hit hit = nearest_hit(tr, ray->origin, ray->dir);
+
+	*spawned = 0;
+	COUNT_RAY(tr);
+	if (hit.t == 0.0f) {
+		COUNT_FLOPS(tr, 3);
+		return ray->weight * scene->background.xyz;
+	}
+
+	float3 p = ray->origin + hit.t * ray->dir;
+	float3 normal;
+	float3 base;
+	RTCL_SCENE_SPACE const struct rt_material *m;
+	COUNT_FLOPS(tr, 6);
+	if (hit.sphere >= 0) {
+		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
+		normal = (p - s->center.xyz) * s->inv_radius;
+		m = &tr->materials[s->material];
+		base = m->color.xyz;
+		COUNT_FLOPS(tr, 6);
+	} else {
+		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
+		normal = pl->normal.xyz;
+		m = &tr->materials[pl->material];
+		base = plane_color(tr, pl, m->color.xyz, p);
+	}
+	bool inside = dot3(normal, ray->dir) > 0.0f;
+	float3 n = inside ? -normal : normal;
+	COUNT_FLOPS(tr, 5);
+
+	float3 contribution = ray->weight * shade_local(tr, m, base, p, n, ray->dir);
+	COUNT_FLOPS(tr, 3);
+	if (ray->depth >= RTCL_MAX_DEPTH || ray->depth >= scene->max_depth)
+		return contribution;
+
+	/* Secondary directions are renormalised: in float, |d| drifts from 1
+	 * over a chain of bounces, and the intersection tests assume a unit d
+	 * (without it, 0.16% of tir.json's pixels stray from the reference). */
+	float reflect_weight = m->reflect;
+	if (m->transmit > 0.0f) {
+		float eta = inside ? m->ior : m->inv_ior;
+		float c = -dot3(ray->dir, n);
+		float k = 1.0f - eta * eta * (1.0f - c * c);
+		COUNT_FLOPS(tr, 5 + 5);
+		if (k < 0.0f) {
+			/* Total internal reflection: the light goes the reflected way. */
+			reflect_weight += m->transmit;
+			COUNT_FLOPS(tr, 1);
+		} else {
+			float3 t_dir = normalize3(eta * ray->dir + (eta * c - sqrt(k)) * n);
+			children[(*spawned)++] = (struct ray_job){
+				p - epsilon * n, t_dir, ray->weight * m->transmit, ray->depth + 1};
+			COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
+		}
+	}
+	if (reflect_weight > 0.0f) {
+		float3 r_dir = normalize3(ray->dir - 2.0f * dot3(ray->dir, n) * n);
+		children[(*spawned)++] = (struct ray_job){
+			p + epsilon * n, r_dir, ray->weight * reflect_weight, ray->depth + 1};
+		COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
+	}
+	return contribution;
+}
+
+/* Returns the colour seen along the primary ray: the ray tree walked depth
+ * first with an explicit stack (OpenCL C has no recursion). */
+static float3 trace(struct tracer *tr, float3 origin, float3 dir)
+{
 	struct ray_job stack[RAY_STACK_SIZE];
 	int top = 0;
 	float3 color = (float3)(0.0f);
@@ -254,69 +325,13 @@ static float3 trace(struct tracer *tr, float3 origin, float3 dir)
 	stack[top++] = (struct ray_job){origin, dir, 1.0f, 0};
 	while (top > 0) {
 		struct ray_job ray = stack[--top];
-		struct hit hit = nearest_hit(tr, ray.origin, ray.dir);
+		struct ray_job children[2];
+		int spawned;
 
-		COUNT_RAY(tr);
-		if (hit.t == 0.0f) {
-			color += ray.weight * scene->background.xyz;
-			COUNT_FLOPS(tr, 6);
-			continue;
-		}
-
-		float3 p = ray.origin + hit.t * ray.dir;
-		float3 normal;
-		float3 base;
-		RTCL_SCENE_SPACE const struct rt_material *m;
-		COUNT_FLOPS(tr, 6);
-		if (hit.sphere >= 0) {
-			RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
-			normal = (p - s->center.xyz) * s->inv_radius;
-			m = &tr->materials[s->material];
-			base = m->color.xyz;
-			COUNT_FLOPS(tr, 6);
-		} else {
-			RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
-			normal = pl->normal.xyz;
-			m = &tr->materials[pl->material];
-			base = plane_color(tr, pl, m->color.xyz, p);
-		}
-		bool inside = dot3(normal, ray.dir) > 0.0f;
-		float3 n = inside ? -normal : normal;
-		COUNT_FLOPS(tr, 5);
-
-		color += ray.weight * shade_local(tr, m, base, p, n, ray.dir);
-		COUNT_FLOPS(tr, 6);
-		if (ray.depth >= RTCL_MAX_DEPTH || ray.depth >= scene->max_depth)
-			continue;
-
-		/* Secondary directions are renormalised: in float, |d| drifts from 1
-		 * over a chain of bounces, and the intersection tests assume a unit d
-		 * (without it, 0.16% of tir.json's pixels stray from the reference). */
-		float reflect_weight = m->reflect;
-		if (m->transmit > 0.0f) {
-			float eta = inside ? m->ior : m->inv_ior;
-			float c = -dot3(ray.dir, n);
-			float k = 1.0f - eta * eta * (1.0f - c * c);
-			COUNT_FLOPS(tr, 5 + 5);
-			if (k < 0.0f) {
-				/* Total internal reflection: the light goes the
-				 * reflected way. */
-				reflect_weight += m->transmit;
-				COUNT_FLOPS(tr, 1);
-			} else {
-				float3 t_dir = normalize3(eta * ray.dir + (eta * c - sqrt(k)) * n);
-				stack[top++] =
-					(struct ray_job){p - epsilon * n, t_dir,
-							 ray.weight * m->transmit, ray.depth + 1};
-				COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
-			}
-		}
-		if (reflect_weight > 0.0f) {
-			float3 r_dir = normalize3(ray.dir - 2.0f * dot3(ray.dir, n) * n);
-			stack[top++] = (struct ray_job){p + epsilon * n, r_dir,
-							ray.weight * reflect_weight, ray.depth + 1};
-			COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
-		}
+		color += trace_one(tr, &ray, children, &spawned);
+		COUNT_FLOPS(tr, 3);
+		for (int i = 0; i < spawned; i++)
+			stack[top++] = children[i];
 	}
 	return color;
 }

@@ -10,19 +10,21 @@
 #include "../cl/rtcl_shared.h"
 #include "devscene.h"
 #include "embedded.h"
+#include "render_internal.h"
 
 const struct kernel_info render_kernels[] = {
-	{"serial", "one work-item renders every pixel in row-major order", 0, 1},
-	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0},
-	{"cyclic", "persistent work-groups, chunk (cx,cy) to group (cx mod GX, cy mod GY)", 1, 0},
-	{"dynamic", "persistent work-groups fetch chunks from a global atomic counter", 1, 0},
+	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0},
+	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0, 0},
+	{"cyclic", "persistent work-groups, chunk (cx,cy) to group (cx mod GX, cy mod GY)", 1, 0,
+	 0},
+	{"dynamic", "persistent work-groups fetch chunks from a global atomic counter", 1, 0, 0},
 	{"persistent",
-	 "persistent work-groups whose work-items each fetch --batch pixels, no barrier", 1, 0},
+	 "persistent work-groups whose work-items each fetch --batch pixels, no barrier", 1, 0, 0},
+	{"wavefront", "one launch per bounce over a queue of live rays: paths split in pieces", 0,
+	 0, 1},
 };
 const int render_kernel_count = sizeof(render_kernels) / sizeof(render_kernels[0]);
 
-/* Bytes of __local memory the kernels need besides the scene. */
-#define LOCAL_MEM_RESERVE 256
 /* Poison written over the image before a checked launch: a NaN no kernel
  * computes. */
 #define POISON_WORD 0x7fc0deadu
@@ -107,9 +109,8 @@ static const char *load_source(const char *dir, const char *name, int *loaded, c
 	return text;
 }
 
-static int build_program(struct device *dev, const struct render_settings *s,
-			 struct launch_state *st, struct render_result *res, char *err,
-			 size_t err_size)
+int render_build_program(struct device *dev, const struct render_settings *s,
+			 struct render_result *res, cl_program *program, char *err, size_t err_size)
 {
 	char kernel_file[64];
 	const char *names[3] = {"rtcl_shared.h", "tracer.cl", kernel_file};
@@ -130,27 +131,21 @@ static int build_program(struct device *dev, const struct render_settings *s,
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "");
 
-	st->program = clCreateProgramWithSource(dev->context, 3, texts, NULL, &status);
+	*program = clCreateProgramWithSource(dev->context, 3, texts, NULL, &status);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "clCreateProgramWithSource failed: %s",
 			 cl_error_name(status));
 		goto out_free_sources;
 	}
-	status = clBuildProgram(st->program, 1, &dev->id, res->build_options, NULL, NULL);
+	status = clBuildProgram(*program, 1, &dev->id, res->build_options, NULL, NULL);
 	if (status != CL_SUCCESS) {
 		char log[32768] = "";
-		clGetProgramBuildInfo(st->program, dev->id, CL_PROGRAM_BUILD_LOG, sizeof(log) - 1,
-				      log, NULL);
+		clGetProgramBuildInfo(*program, dev->id, CL_PROGRAM_BUILD_LOG, sizeof(log) - 1, log,
+				      NULL);
 		snprintf(err, err_size,
 			 "building kernel '%s' for %s failed: %s\noptions: %s\nbuild log:\n%s",
 			 s->kernel->name, dev->name, cl_error_name(status), res->build_options,
 			 log);
-		goto out_free_sources;
-	}
-	st->kernel = clCreateKernel(st->program, "render", &status);
-	if (status != CL_SUCCESS) {
-		snprintf(err, err_size, "clCreateKernel(\"render\") failed: %s",
-			 cl_error_name(status));
 		goto out_free_sources;
 	}
 	ret = 0;
@@ -224,7 +219,7 @@ static int plan_geometry(const struct device *dev, const struct render_settings 
 }
 
 /* Checks that a buffer of `bytes` fits the device before asking for it. */
-static int check_fits(const struct device *dev, const char *what, double bytes, char *err,
+int render_check_fits(const struct device *dev, const char *what, double bytes, char *err,
 		      size_t err_size)
 {
 	if (bytes > (double)dev->max_alloc_size) {
@@ -237,7 +232,7 @@ static int check_fits(const struct device *dev, const char *what, double bytes, 
 	return 0;
 }
 
-static cl_mem create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
+cl_mem render_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
 			    const char *what, char *err, size_t err_size)
 {
 	cl_int status;
@@ -260,8 +255,9 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 	size_t items = res->global_size[0] * res->global_size[1];
 	cl_int status;
 
-	st->scene_buffer = create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-					 res->scene_bytes, scene_block, "scene", err, err_size);
+	st->scene_buffer =
+		render_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR, res->scene_bytes,
+				     scene_block, "scene", err, err_size);
 	if (!st->scene_buffer)
 		return -1;
 
@@ -271,8 +267,9 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 		s->check_writes
 			? (dev->mem_base_addr_align > 4096 ? dev->mem_base_addr_align : 4096)
 			: 0;
-	st->image_parent = create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * st->guard_bytes,
-					 NULL, "image", err, err_size);
+	st->image_parent =
+		render_create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * st->guard_bytes,
+				     NULL, "image", err, err_size);
 	if (!st->image_parent)
 		return -1;
 	cl_buffer_region region = {st->guard_bytes, image_bytes};
@@ -284,20 +281,20 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 		return -1;
 	}
 
-	st->chunk_counter = create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
-					  "chunk counter", err, err_size);
+	st->chunk_counter = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
+						 "chunk counter", err, err_size);
 	if (!st->chunk_counter)
 		return -1;
 	res->item_count = items;
 	st->item_counts =
-		create_buffer(dev, CL_MEM_READ_WRITE,
-			      s->count_flops ? (items * 2 + pixels) * sizeof(cl_ulong) : 16, NULL,
-			      "flop counts", err, err_size);
+		render_create_buffer(dev, CL_MEM_READ_WRITE,
+				     s->count_flops ? (items * 2 + pixels) * sizeof(cl_ulong) : 16,
+				     NULL, "flop counts", err, err_size);
 	if (!st->item_counts)
 		return -1;
-	st->write_counts = create_buffer(dev, CL_MEM_READ_WRITE,
-					 s->check_writes ? pixels * sizeof(cl_uint) : 16, NULL,
-					 "write counts", err, err_size);
+	st->write_counts = render_create_buffer(dev, CL_MEM_READ_WRITE,
+						s->check_writes ? pixels * sizeof(cl_uint) : 16,
+						NULL, "write counts", err, err_size);
 	if (!st->write_counts)
 		return -1;
 
@@ -326,7 +323,7 @@ static double now_seconds(void)
 }
 
 /* Waits for the launch, showing the elapsed time on stderr when asked. */
-static cl_int wait_for(cl_event event, const char *label, int progress)
+cl_int render_wait(cl_event event, const char *label, int progress)
 {
 	if (!progress)
 		return clWaitForEvents(1, &event);
@@ -367,7 +364,7 @@ static cl_int prepare_launch(struct device *dev, const struct render_settings *s
 	return status;
 }
 
-static int compare_ms(const void *a, const void *b)
+int render_compare_ms(const void *a, const void *b)
 {
 	double x = *(const double *)a, y = *(const double *)b;
 	return (x > y) - (x < y);
@@ -406,7 +403,7 @@ static int launch_all(struct device *dev, const struct render_settings *s, struc
 				snprintf(label, sizeof(label), "rendering (%s, launch %d of %d)",
 					 s->kernel->name, i + 1, launches);
 				call = "waiting for the kernel";
-				status = wait_for(event, label, s->progress);
+				status = render_wait(event, label, s->progress);
 			}
 			if (status == CL_SUCCESS) {
 				cl_ulong start = 0, end = 0;
@@ -443,7 +440,7 @@ int render_summarize_times(struct render_result *res, char *err, size_t err_size
 		return -1;
 	}
 	memcpy(sorted, res->kernel_ms, (size_t)n * sizeof(double));
-	qsort(sorted, (size_t)n, sizeof(double), compare_ms);
+	qsort(sorted, (size_t)n, sizeof(double), render_compare_ms);
 	res->kernel_ms_min = sorted[0];
 	res->kernel_ms_max = sorted[n - 1];
 	res->kernel_ms_median = n % 2 ? sorted[n / 2] : 0.5 * (sorted[n / 2 - 1] + sorted[n / 2]);
@@ -537,9 +534,50 @@ static int check_kernel_limits(struct device *dev, struct launch_state *st,
 	return 0;
 }
 
+int render_prepare_scene(struct device *dev, const struct scene *scene,
+			 const struct render_settings *s, struct render_result *res, void **block,
+			 char *err, size_t err_size)
+{
+	size_t pixels = (size_t)s->width * s->height;
+
+	*block = devscene_pack(scene, s->width, s->height, s->max_depth, &res->scene_bytes);
+	res->rgb = malloc(pixels * 3 * sizeof(float));
+	if (!*block || !res->rgb) {
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
+			 s->height);
+		return -1;
+	}
+	if (render_check_fits(dev, "the scene", (double)res->scene_bytes, err, err_size))
+		return -1;
+	res->scene_in_local = !s->force_global_scene &&
+			      res->scene_bytes + LOCAL_MEM_RESERVE <= dev->local_mem_size;
+	if (s->verbose)
+		fprintf(stderr, "rtcl: scene is %zu bytes; %s\n", res->scene_bytes,
+			res->scene_in_local
+				? "copied into __local memory by each work-group"
+				: "read from __global memory (it does not fit in __local memory)");
+	return 0;
+}
+
+cl_kernel render_create_kernel(cl_program program, const char *name, char *err, size_t err_size)
+{
+	cl_int status;
+	cl_kernel kernel = clCreateKernel(program, name, &status);
+
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateKernel(\"%s\") failed: %s", name,
+			 cl_error_name(status));
+		return NULL;
+	}
+	return kernel;
+}
+
 int render(struct device *dev, const struct scene *scene, const struct render_settings *s,
 	   struct render_result *res, char *err, size_t err_size)
 {
+	if (s->kernel->multi_pass)
+		return render_wavefront(dev, scene, s, res, err, err_size);
+
 	struct launch_state st;
 	size_t pixels = (size_t)s->width * s->height;
 	void *scene_block = NULL;
@@ -549,32 +587,20 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	memset(&st, 0, sizeof(st));
 	if (plan_geometry(dev, s, res, err, err_size))
 		return -1;
-	if (check_fits(dev, "the image", (double)pixels * 3 * sizeof(float), err, err_size))
+	if (render_check_fits(dev, "the image", (double)pixels * 3 * sizeof(float), err, err_size))
 		return -1;
 	if (s->count_flops &&
-	    check_fits(dev, "the flop counts",
-		       ((double)res->global_size[0] * res->global_size[1] * 2 + pixels) * 8, err,
-		       err_size))
+	    render_check_fits(dev, "the flop counts",
+			      ((double)res->global_size[0] * res->global_size[1] * 2 + pixels) * 8,
+			      err, err_size))
 		return -1;
 
-	scene_block = devscene_pack(scene, s->width, s->height, s->max_depth, &res->scene_bytes);
-	res->rgb = malloc(pixels * 3 * sizeof(float));
-	if (!scene_block || !res->rgb) {
-		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
-			 s->height);
+	if (render_prepare_scene(dev, scene, s, res, &scene_block, err, err_size))
 		goto out;
-	}
-	if (check_fits(dev, "the scene", (double)res->scene_bytes, err, err_size))
+	if (render_build_program(dev, s, res, &st.program, err, err_size))
 		goto out;
-	res->scene_in_local = !s->force_global_scene &&
-			      res->scene_bytes + LOCAL_MEM_RESERVE <= dev->local_mem_size;
-	if (s->verbose)
-		fprintf(stderr, "rtcl: scene is %zu bytes; %s\n", res->scene_bytes,
-			res->scene_in_local
-				? "copied into __local memory by each work-group"
-				: "read from __global memory (it does not fit in __local memory)");
-
-	if (build_program(dev, s, &st, res, err, err_size))
+	st.kernel = render_create_kernel(st.program, "render", err, err_size);
+	if (!st.kernel)
 		goto out;
 	if (!s->kernel->single_item &&
 	    check_kernel_limits(dev, &st, res, s->kernel->name, err, err_size))

@@ -15,6 +15,7 @@ struct kernel_info {
 	const char *summary;
 	int uses_groups; /* persistent work-groups: --groups applies */
 	int single_item; /* one work-item renders everything: -w does not apply */
+	int multi_pass;	 /* several launches per frame (wavefront) */
 };
 
 extern const struct kernel_info render_kernels[];

@@ -53,7 +53,7 @@ def test_help_teaches_every_option():
     for option in ["-k, --kernel", "-w, --workgroup", "--groups", "-s, --scene", "-o, --output",
                    "--size", "--depth", "-p, --platform", "-d, --device", "--list-devices",
                    "-r, --repeat", "--stats", "-q, --quiet", "-v, --verbose", "-h, --help",
-                   "--version", "serial", "naive", "cyclic", "dynamic", "persistent",
+                   "--version", "serial", "naive", "cyclic", "dynamic", "persistent", "wavefront",
                    "reference", "--batch", "--flops", "--work-map",
                    "Examples:"]:
         assert option in result.stdout, option
@@ -74,7 +74,7 @@ def test_list_devices_in_clinfo_style():
 
 
 @pytest.mark.parametrize("kernel", ["serial", "naive", "cyclic", "dynamic", "persistent",
-                                    "reference"])
+                                    "wavefront", "reference"])
 def test_each_kernel_renders(kernel, tmp_path):
     out = tmp_path / "img.ppm"
     result = rtcl("-k", kernel, *SMALL, "-o", str(out))
@@ -178,7 +178,7 @@ def test_output_formats_from_extension(tmp_path, ext, magic):
 
 @pytest.mark.parametrize("args,status,message", [
     (["-k", "bogus"], 2, '-k/--kernel: unknown kernel "bogus" (choose from serial, naive, cyclic,'
-                         ' dynamic, persistent, reference)'),
+                         ' dynamic, persistent, wavefront, reference)'),
     (["--batch", "0"], 2, '--batch: expected an integer between 1 and 4096, got "0"'),
     (["-k", "reference", "--flops", "f.npy"], 2, "the reference renderer does not count"),
     (["-w", "0x8"], 2, "-w/--workgroup: each size must be between 1 and 65536, got 0x8"),
@@ -312,7 +312,7 @@ def test_flops_file_and_figures(tmp_path):
 
 def test_same_flops_whatever_the_kernel(tmp_path):
     totals = set()
-    for kernel in ["serial", "naive", "dynamic", "persistent"]:
+    for kernel in ["serial", "naive", "dynamic", "persistent", "wavefront"]:
         _, stats = stats_of(tmp_path, *SMALL, "-k", kernel, "--flops", str(tmp_path / "f.npy"))
         totals.add(stats["total_flops"])
     assert len(totals) == 1

@@ -1,0 +1,115 @@
+/* wavefront: every path broken into pieces (the paper's Figure 4). Rays wait in
+ * a queue in global memory; each launch of wavefront_bounce traces one bounce
+ * of every live ray (intersection, local shading with its shadow rays) and
+ * appends the reflected and refracted rays it spawns to the next queue with an
+ * atomic counter. The host launches bounces until the queue is empty or
+ * max_depth is reached. Work-items take rays, not pixels, so a pixel's cost is
+ * spread over as many work-items as its tree has rays.
+ *
+ * Contributions are added to the pixel with a compare-and-swap loop (OpenCL C
+ * 1.2 has no float atomics). The order of the additions for one pixel is not
+ * fixed, unlike the stack walk's, so the float sum may differ in its last bits
+ * from the other kernels' (see docs/wavefront.md). */
+#ifdef RTCL_COUNT_FLOPS
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+#endif
+
+/* *p += value, atomically. */
+static void atomic_add_float(volatile __global float *p, float value)
+{
+	union {
+		uint bits;
+		float value;
+	} seen, sum;
+
+	do {
+		seen.value = *p;
+		sum.value = seen.value + value;
+	} while (atomic_cmpxchg((volatile __global uint *)p, seen.bits, sum.bits) != seen.bits);
+}
+
+static void add_to_pixel(__global float *image, int pixel, float3 color)
+{
+	atomic_add_float(&image[3 * pixel], color.x);
+	atomic_add_float(&image[3 * pixel + 1], color.y);
+	atomic_add_float(&image[3 * pixel + 2], color.z);
+}
+
+static void store_ray(__global struct rt_ray *queue, uint slot, const struct ray_job *ray,
+		      int pixel)
+{
+	queue[slot].origin = (float4)(ray->origin, ray->weight);
+	queue[slot].dir = (float4)(ray->dir, 0.0f);
+	queue[slot].pixel = pixel;
+	queue[slot].depth = ray->depth;
+}
+
+/* One work-item per pixel (2D NDRange, rounded up): the primary rays, in
+ * pixel order, queue[y * width + x]. */
+__kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 *scene_local,
+			      __global struct rt_ray *queue, __global ulong *item_counts,
+			      __global ulong *pixel_flops, __global uint *write_counts)
+{
+	struct tracer tr;
+	int x = get_global_id(0);
+	int y = get_global_id(1);
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts);
+	if (x < tr.scene->width && y < tr.scene->height) {
+		int pixel = y * tr.scene->width + x;
+		struct ray_job ray = {tr.scene->eye.xyz, primary_direction(&tr, x, y), 1.0f, 0};
+		store_ray(queue, pixel, &ray, pixel);
+#ifdef RTCL_COUNT_FLOPS
+		pixel_flops[pixel] = tr.flops; /* the bounces add theirs */
+#endif
+#ifdef RTCL_COUNT_WRITES
+		atomic_inc(&write_counts[pixel]);
+#endif
+	}
+#ifndef RTCL_COUNT_WRITES
+	(void)write_counts;
+#endif
+#ifndef RTCL_COUNT_FLOPS
+	(void)pixel_flops;
+#endif
+	store_counts(&tr, item_counts, y * get_global_size(0) + x);
+}
+
+/* One work-item per queued ray (1D NDRange, rounded up). Spawned rays go to
+ * next[atomic_inc(next_count)]; one that finds the queue full sets *overflow
+ * and is dropped, and the host renders the frame again with larger queues. */
+__kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4 *scene_local,
+			       __global const struct rt_ray *queue, uint queued,
+			       __global struct rt_ray *next, __global uint *next_count,
+			       uint capacity, __global uint *overflow, __global float *image,
+			       __global ulong *item_counts, __global ulong *pixel_flops)
+{
+	struct tracer tr;
+	uint i = get_global_id(0);
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts);
+	if (i < queued) {
+		struct ray_job ray = {queue[i].origin.xyz, queue[i].dir.xyz, queue[i].origin.w,
+				      queue[i].depth};
+		int pixel = queue[i].pixel;
+		struct ray_job children[2];
+		int spawned;
+
+		add_to_pixel(image, pixel, trace_one(&tr, &ray, children, &spawned));
+		COUNT_FLOPS(&tr, 3);
+		for (int c = 0; c < spawned; c++) {
+			uint slot = atomic_inc(next_count);
+			if (slot < capacity)
+				store_ray(next, slot, &children[c], pixel);
+			else
+				atomic_or(overflow, 1u);
+		}
+#ifdef RTCL_COUNT_FLOPS
+		atom_add(&pixel_flops[pixel], tr.flops);
+#endif
+	}
+#ifndef RTCL_COUNT_FLOPS
+	(void)pixel_flops;
+#endif
+	store_counts(&tr, item_counts, i);
+}

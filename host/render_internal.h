@@ -1,0 +1,42 @@
+/* Between render.c and the multi-pass wavefront renderer (wavefront.c): the
+ * shared pieces of building, allocating and timing. Not for the rest of the
+ * host. */
+#ifndef RTCL_RENDER_INTERNAL_H
+#define RTCL_RENDER_INTERNAL_H
+
+#include "render.h"
+
+/* Bytes of __local memory the kernels need besides the scene. */
+#define LOCAL_MEM_RESERVE 256
+
+/* Packs the scene, allocates result->rgb and decides whether the scene lives
+ * in __local memory. */
+int render_prepare_scene(struct device *dev, const struct scene *scene,
+			 const struct render_settings *s, struct render_result *result,
+			 void **block, char *err, size_t err_size);
+
+/* Builds cl/rtcl_shared.h + cl/tracer.cl + cl/KERNEL.cl with the settings'
+ * options (recorded in result->build_options); a failure puts the build log
+ * and the options in err. */
+int render_build_program(struct device *dev, const struct render_settings *s,
+			 struct render_result *result, cl_program *program, char *err,
+			 size_t err_size);
+
+cl_kernel render_create_kernel(cl_program program, const char *name, char *err, size_t err_size);
+
+/* Checks that a buffer of `bytes` fits the device before asking for it. */
+int render_check_fits(const struct device *dev, const char *what, double bytes, char *err,
+		      size_t err_size);
+
+cl_mem render_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
+			    const char *what, char *err, size_t err_size);
+
+/* Waits for a launch, showing the elapsed time on stderr when asked. */
+cl_int render_wait(cl_event event, const char *label, int progress);
+
+int render_compare_ms(const void *a, const void *b);
+
+int render_wavefront(struct device *dev, const struct scene *scene, const struct render_settings *s,
+		     struct render_result *result, char *err, size_t err_size);
+
+#endif

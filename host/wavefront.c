@@ -1,0 +1,407 @@
+/* The wavefront renderer (cl/wavefront.cl): one launch for the primary rays,
+ * then one launch per bounce over a queue of live rays, until the queue is
+ * empty or max_depth is reached. A frame's kernel time is the sum of its
+ * launches' profiled times.
+ *
+ * The queues hold at most `capacity` rays each. A bounce can at most double
+ * the number of rays, so no fixed capacity short of pixels·2^depth is safe;
+ * instead a bounce that overflows its queue says so, and the frame is rendered
+ * again with queues twice as large (up to what the device can allocate).
+ */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "../cl/rtcl_shared.h"
+#include "render_internal.h"
+
+#define POISON_WORD 0x7fc0deadu
+#define FRAME_OVERFLOWED 1
+
+struct wavefront {
+	cl_program program;
+	cl_kernel start, bounce;
+	cl_mem scene, image_parent, image, queues[2], next_count, overflow;
+	cl_mem item_counts, pixel_flops, write_counts;
+	size_t capacity;      /* rays per queue */
+	size_t item_capacity; /* work-items whose counts item_counts holds */
+	size_t guard_bytes;
+	size_t bounce_local;  /* 1D work-group size of the bounce launches */
+	uint64_t *item_flops; /* every launch's work-items, appended */
+	size_t item_count, item_alloc;
+	uint64_t rays;
+};
+
+static void release_queues(struct wavefront *w)
+{
+	for (int i = 0; i < 2; i++)
+		if (w->queues[i])
+			clReleaseMemObject(w->queues[i]);
+	if (w->item_counts)
+		clReleaseMemObject(w->item_counts);
+	w->queues[0] = w->queues[1] = w->item_counts = NULL;
+}
+
+static void release_all(struct wavefront *w)
+{
+	cl_mem buffers[] = {w->write_counts, w->pixel_flops,  w->overflow, w->next_count,
+			    w->image,	     w->image_parent, w->scene};
+
+	release_queues(w);
+	for (size_t i = 0; i < sizeof(buffers) / sizeof(buffers[0]); i++)
+		if (buffers[i])
+			clReleaseMemObject(buffers[i]);
+	if (w->bounce)
+		clReleaseKernel(w->bounce);
+	if (w->start)
+		clReleaseKernel(w->start);
+	if (w->program)
+		clReleaseProgram(w->program);
+	free(w->item_flops);
+}
+
+/* (Re)creates the two ray queues and the per-work-item counts for the
+ * current capacity. */
+static int create_queues(struct device *dev, const struct render_settings *s, struct wavefront *w,
+			 char *err, size_t err_size)
+{
+	size_t bytes = w->capacity * sizeof(struct rt_ray);
+	char what[96];
+
+	release_queues(w);
+	snprintf(what, sizeof(what), "the wavefront ray queue (%zu rays)", w->capacity);
+	if (render_check_fits(dev, what, (double)bytes, err, err_size))
+		return -1;
+	for (int i = 0; i < 2; i++) {
+		w->queues[i] = render_create_buffer(dev, CL_MEM_READ_WRITE, bytes, NULL, what, err,
+						    err_size);
+		if (!w->queues[i])
+			return -1;
+	}
+	size_t rounded = (w->capacity + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
+	w->item_capacity = rounded > w->item_capacity ? rounded : w->item_capacity;
+	w->item_counts = render_create_buffer(dev, CL_MEM_READ_WRITE,
+					      s->count_flops ? w->item_capacity * 16 : 16, NULL,
+					      "per-work-item counts", err, err_size);
+	return w->item_counts ? 0 : -1;
+}
+
+static int create_buffers(struct device *dev, const struct render_settings *s,
+			  struct render_result *res, struct wavefront *w, void *scene_block,
+			  char *err, size_t err_size)
+{
+	size_t pixels = (size_t)s->width * s->height;
+	size_t image_bytes = pixels * 3 * sizeof(float);
+	cl_int status;
+
+	w->scene = render_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+					res->scene_bytes, scene_block, "scene", err, err_size);
+	w->guard_bytes = s->check_writes ? 4096 : 0;
+	if (w->guard_bytes < dev->mem_base_addr_align && s->check_writes)
+		w->guard_bytes = dev->mem_base_addr_align;
+	w->image_parent =
+		render_create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * w->guard_bytes, NULL,
+				     "image", err, err_size);
+	if (!w->scene || !w->image_parent)
+		return -1;
+	cl_buffer_region region = {w->guard_bytes, image_bytes};
+	w->image = clCreateSubBuffer(w->image_parent, CL_MEM_READ_WRITE,
+				     CL_BUFFER_CREATE_TYPE_REGION, &region, &status);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateSubBuffer for the image failed: %s",
+			 cl_error_name(status));
+		return -1;
+	}
+	w->next_count = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
+					     "queue counter", err, err_size);
+	w->overflow = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
+					   "overflow flag", err, err_size);
+	w->pixel_flops = render_create_buffer(dev, CL_MEM_READ_WRITE,
+					      s->count_flops ? pixels * sizeof(cl_ulong) : 16, NULL,
+					      "per-pixel counts", err, err_size);
+	w->write_counts = render_create_buffer(dev, CL_MEM_READ_WRITE,
+					       s->check_writes ? pixels * sizeof(cl_uint) : 16,
+					       NULL, "write counts", err, err_size);
+	if (!w->next_count || !w->overflow || !w->pixel_flops || !w->write_counts)
+		return -1;
+	return create_queues(dev, s, w, err, err_size);
+}
+
+/* Appends the counts of a launch's `items` work-items. */
+static cl_int append_counts(struct device *dev, struct wavefront *w, size_t items)
+{
+	if (w->item_count + items > w->item_alloc) {
+		size_t alloc = (w->item_count + items) * 2;
+		uint64_t *grown = realloc(w->item_flops, alloc * sizeof(uint64_t));
+		if (!grown)
+			return CL_OUT_OF_HOST_MEMORY;
+		w->item_flops = grown;
+		w->item_alloc = alloc;
+	}
+	cl_ulong *counts = malloc(items * 2 * sizeof(cl_ulong));
+	if (!counts)
+		return CL_OUT_OF_HOST_MEMORY;
+	cl_int status = clEnqueueReadBuffer(dev->queue, w->item_counts, CL_TRUE, 0,
+					    items * 2 * sizeof(cl_ulong), counts, 0, NULL, NULL);
+	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
+		w->item_flops[w->item_count++] = counts[2 * i];
+		w->rays += counts[2 * i + 1];
+	}
+	free(counts);
+	return status;
+}
+
+/* Enqueues one launch, waits for it and adds its profiled time to *ms. */
+static cl_int launch(struct device *dev, const struct render_settings *s, cl_kernel kernel,
+		     cl_uint dims, const size_t *global, const size_t *local, const char *label,
+		     double *ms)
+{
+	cl_event event;
+	cl_ulong start = 0, end = 0;
+	cl_int status = clEnqueueNDRangeKernel(dev->queue, kernel, dims, NULL, global, local, 0,
+					       NULL, &event);
+
+	if (status != CL_SUCCESS)
+		return status;
+	status = clFlush(dev->queue);
+	if (status == CL_SUCCESS)
+		status = render_wait(event, label, s->progress);
+	if (status == CL_SUCCESS)
+		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start),
+						 &start, NULL);
+	if (status == CL_SUCCESS)
+		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end,
+						 NULL);
+	*ms += (double)(end - start) * 1e-6;
+	clReleaseEvent(event);
+	return status;
+}
+
+static cl_int set_args(cl_kernel kernel, const void *const *values, const size_t *sizes,
+		       cl_uint count)
+{
+	cl_int status = CL_SUCCESS;
+
+	for (cl_uint i = 0; status == CL_SUCCESS && i < count; i++)
+		status = clSetKernelArg(kernel, i, sizes[i], values[i]);
+	return status;
+}
+
+/* Renders one frame; returns CL_SUCCESS, FRAME_OVERFLOWED, or an OpenCL
+ * error. */
+static cl_int render_frame(struct device *dev, const struct render_settings *s,
+			   const struct render_result *res, struct wavefront *w, double *ms,
+			   const char *label)
+{
+	size_t pixels = (size_t)s->width * s->height;
+	size_t local_bytes = res->scene_in_local ? res->scene_bytes : 16;
+	cl_uint zero = 0, poison = POISON_WORD;
+	cl_float black = 0.0f;
+	cl_int status = CL_SUCCESS;
+
+	*ms = 0;
+	w->item_count = 0;
+	w->rays = 0;
+	if (s->check_writes) {
+		status = clEnqueueFillBuffer(dev->queue, w->image_parent, &poison, sizeof(poison),
+					     0, pixels * 12 + 2 * w->guard_bytes, 0, NULL, NULL);
+		if (status == CL_SUCCESS)
+			status = clEnqueueFillBuffer(dev->queue, w->write_counts, &zero,
+						     sizeof(zero), 0, pixels * 4, 0, NULL, NULL);
+	}
+	if (status == CL_SUCCESS)
+		status = clEnqueueFillBuffer(dev->queue, w->image, &black, sizeof(black), 0,
+					     pixels * 12, 0, NULL, NULL);
+	if (status == CL_SUCCESS)
+		status = clEnqueueFillBuffer(dev->queue, w->overflow, &zero, sizeof(zero), 0,
+					     sizeof(zero), 0, NULL, NULL);
+
+	const void *start_args[] = {
+		&w->scene, NULL, &w->queues[0], &w->item_counts, &w->pixel_flops, &w->write_counts};
+	const size_t start_sizes[] = {sizeof(cl_mem), local_bytes,    sizeof(cl_mem),
+				      sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem)};
+	if (status == CL_SUCCESS)
+		status = set_args(w->start, start_args, start_sizes, 6);
+	if (status == CL_SUCCESS)
+		status = launch(dev, s, w->start, 2, res->global_size, res->local_size, label, ms);
+	if (status == CL_SUCCESS && s->count_flops)
+		status = append_counts(dev, w, res->global_size[0] * res->global_size[1]);
+
+	cl_uint queued = (cl_uint)pixels;
+	cl_uint capacity = (cl_uint)w->capacity;
+	for (int bounce = 0; status == CL_SUCCESS && queued > 0; bounce++) {
+		cl_mem in = w->queues[bounce % 2], out = w->queues[(bounce + 1) % 2];
+		size_t global = (queued + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
+		const void *args[] = {&w->scene,       NULL,	       &in,
+				      &queued,	       &out,	       &w->next_count,
+				      &capacity,       &w->overflow,   &w->image,
+				      &w->item_counts, &w->pixel_flops};
+		const size_t sizes[] = {sizeof(cl_mem),	 local_bytes,	 sizeof(cl_mem),
+					sizeof(cl_uint), sizeof(cl_mem), sizeof(cl_mem),
+					sizeof(cl_uint), sizeof(cl_mem), sizeof(cl_mem),
+					sizeof(cl_mem),	 sizeof(cl_mem)};
+		cl_uint overflowed = 0;
+
+		status = clEnqueueFillBuffer(dev->queue, w->next_count, &zero, sizeof(zero), 0,
+					     sizeof(zero), 0, NULL, NULL);
+		if (status == CL_SUCCESS)
+			status = set_args(w->bounce, args, sizes, 11);
+		if (status == CL_SUCCESS)
+			status = launch(dev, s, w->bounce, 1, &global, &w->bounce_local, label, ms);
+		if (status == CL_SUCCESS && s->count_flops)
+			status = append_counts(dev, w, global);
+		if (status == CL_SUCCESS)
+			status = clEnqueueReadBuffer(dev->queue, w->next_count, CL_TRUE, 0,
+						     sizeof(queued), &queued, 0, NULL, NULL);
+		if (status == CL_SUCCESS)
+			status =
+				clEnqueueReadBuffer(dev->queue, w->overflow, CL_TRUE, 0,
+						    sizeof(overflowed), &overflowed, 0, NULL, NULL);
+		if (status == CL_SUCCESS && overflowed)
+			return FRAME_OVERFLOWED;
+	}
+	return status;
+}
+
+static int read_back(struct device *dev, const struct render_settings *s, struct render_result *res,
+		     struct wavefront *w, char *err, size_t err_size)
+{
+	size_t pixels = (size_t)s->width * s->height;
+	cl_int status = clEnqueueReadBuffer(dev->queue, w->image, CL_TRUE, 0, pixels * 12, res->rgb,
+					    0, NULL, NULL);
+
+	if (status == CL_SUCCESS && s->count_flops) {
+		res->pixel_flops = malloc(pixels * sizeof(uint64_t));
+		status = res->pixel_flops
+				 ? clEnqueueReadBuffer(dev->queue, w->pixel_flops, CL_TRUE, 0,
+						       pixels * 8, res->pixel_flops, 0, NULL, NULL)
+				 : CL_OUT_OF_HOST_MEMORY;
+		res->item_flops = w->item_flops;
+		res->item_count = w->item_count;
+		w->item_flops = NULL;
+		for (size_t i = 0; i < res->item_count; i++)
+			res->total_flops += res->item_flops[i];
+		res->total_rays = w->rays;
+	}
+	if (status == CL_SUCCESS && s->check_writes) {
+		cl_uint *guard = malloc(w->guard_bytes);
+		res->write_counts = malloc(pixels * sizeof(uint32_t));
+		if (!guard || !res->write_counts) {
+			free(guard);
+			snprintf(err, err_size, "out of host memory for the write counts");
+			return -1;
+		}
+		status = clEnqueueReadBuffer(dev->queue, w->write_counts, CL_TRUE, 0, pixels * 4,
+					     res->write_counts, 0, NULL, NULL);
+		res->guards_intact = 1;
+		for (int side = 0; status == CL_SUCCESS && side < 2; side++) {
+			size_t offset = side ? w->guard_bytes + pixels * 12 : 0;
+			status = clEnqueueReadBuffer(dev->queue, w->image_parent, CL_TRUE, offset,
+						     w->guard_bytes, guard, 0, NULL, NULL);
+			for (size_t i = 0; status == CL_SUCCESS && i < w->guard_bytes / 4; i++)
+				res->guards_intact &= guard[i] == POISON_WORD;
+		}
+		free(guard);
+	}
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "reading the wavefront results failed: %s",
+			 cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
+/* Renders warm-up and timed frames, growing the queues when one overflows. */
+static int render_frames(struct device *dev, const struct render_settings *s,
+			 struct render_result *res, struct wavefront *w, char *err, size_t err_size)
+{
+	int frames = s->count_flops ? 1 : s->repeat + 1;
+	int timed = s->count_flops ? 1 : s->repeat;
+
+	res->kernel_ms = calloc((size_t)timed, sizeof(double));
+	if (!res->kernel_ms) {
+		snprintf(err, err_size, "out of host memory");
+		return -1;
+	}
+	res->repeat = timed;
+	for (int frame = 0; frame < frames;) {
+		char label[96];
+		double ms;
+
+		snprintf(label, sizeof(label), "rendering (wavefront, frame %d of %d)", frame + 1,
+			 frames);
+		cl_int status = render_frame(dev, s, res, w, &ms, label);
+		if (status == FRAME_OVERFLOWED) {
+			if (s->verbose)
+				fprintf(stderr,
+					"rtcl: wavefront queue of %zu rays overflowed; "
+					"rendering again with %zu\n",
+					w->capacity, 2 * w->capacity);
+			w->capacity *= 2;
+			if (create_queues(dev, s, w, err, err_size))
+				return -1;
+			continue;
+		}
+		if (status != CL_SUCCESS) {
+			snprintf(err, err_size, "wavefront frame on %s failed: %s", dev->name,
+				 cl_error_name(status));
+			return -1;
+		}
+		int slot = frame - (frames - timed);
+		if (slot >= 0)
+			res->kernel_ms[slot] = ms;
+		frame++;
+	}
+	return render_summarize_times(res, err, err_size);
+}
+
+int render_wavefront(struct device *dev, const struct scene *scene, const struct render_settings *s,
+		     struct render_result *res, char *err, size_t err_size)
+{
+	struct wavefront w;
+	size_t pixels = (size_t)s->width * s->height;
+	size_t wx = (size_t)s->workgroup[0], wy = (size_t)s->workgroup[1];
+	void *scene_block = NULL;
+	int ret = -1;
+
+	memset(res, 0, sizeof(*res));
+	memset(&w, 0, sizeof(w));
+	if (wx > dev->max_work_item_sizes[0] || wy > dev->max_work_item_sizes[1] ||
+	    wx * wy > dev->max_work_group_size) {
+		snprintf(err, err_size,
+			 "work-group %zux%zu (%zu work-items) is larger than %s allows: at most "
+			 "%zu work-items (choose a smaller -w)",
+			 wx, wy, wx * wy, dev->name, dev->max_work_group_size);
+		return -1;
+	}
+	res->local_size[0] = wx;
+	res->local_size[1] = wy;
+	res->groups[0] = (int)((s->width + wx - 1) / wx);
+	res->groups[1] = (int)((s->height + wy - 1) / wy);
+	res->global_size[0] = res->groups[0] * wx;
+	res->global_size[1] = res->groups[1] * wy;
+	w.bounce_local = wx * wy;
+	/* Room for two rays a pixel; more is found on demand. */
+	w.capacity = pixels * 2 > 1024 ? pixels * 2 : 1024;
+	if (render_check_fits(dev, "the image", (double)pixels * 12, err, err_size))
+		return -1;
+
+	if (render_prepare_scene(dev, scene, s, res, &scene_block, err, err_size) ||
+	    render_build_program(dev, s, res, &w.program, err, err_size))
+		goto out;
+	w.start = render_create_kernel(w.program, "wavefront_start", err, err_size);
+	w.bounce =
+		w.start ? render_create_kernel(w.program, "wavefront_bounce", err, err_size) : NULL;
+	if (!w.bounce || create_buffers(dev, s, res, &w, scene_block, err, err_size) ||
+	    render_frames(dev, s, res, &w, err, err_size) ||
+	    read_back(dev, s, res, &w, err, err_size))
+		goto out;
+	ret = 0;
+
+out:
+	release_all(&w);
+	free(scene_block);
+	if (ret)
+		render_result_free(res);
+	return ret;
+}
