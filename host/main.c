@@ -225,7 +225,12 @@ static json_t *flops_sidecar(const struct run *run)
 		"global_size", (json_int_t)c->global_size[0], (json_int_t)c->global_size[1],
 		"width", s->width, "height", s->height, "max_depth", s->max_depth, "device",
 		run->device_name, "scene", run->scene->source, "layout",
-		"counts[y][x] for the work-item at global id (x, y); 0 for those given no pixel");
+		s->kernel->multi_pass
+			? "counts[0][i]: every launch's work-items one after the other (the "
+			  "primary-ray launch, then one launch per bounce)"
+			: "counts[y][x] for the work-item at global id (x, y); 0 for those given "
+			  "no "
+			  "pixel");
 
 	if (doc)
 		add_flop_figures(doc, run);
@@ -267,8 +272,11 @@ static int write_outputs(const struct run *run, char *err, size_t err_size)
 	}
 	if (opt->flops_path) {
 		const struct render_result *c = &run->counted;
-		if (stats_write_npy(opt->flops_path, c->item_flops, c->global_size[1],
-				    c->global_size[0], err, err_size))
+		/* One row per NDRange row; the wavefront's launches in one row. */
+		int one_row = s->kernel->multi_pass;
+		size_t rows = one_row ? 1 : c->global_size[1];
+		size_t cols = one_row ? c->item_count : c->global_size[0];
+		if (stats_write_npy(opt->flops_path, c->item_flops, rows, cols, err, err_size))
 			goto out_remove;
 		written[count++] = opt->flops_path;
 		snprintf(sidecar, sizeof(sidecar), "%s.json", opt->flops_path);

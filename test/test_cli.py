@@ -390,3 +390,13 @@ def test_missing_kernel_source_directory(tmp_path):
     assert result.returncode == 1
     assert "cannot open kernel source" in result.stderr
     assert os.listdir(tmp_path) == []
+
+
+def test_wavefront_flops_file_holds_every_launch(tmp_path):
+    np = pytest.importorskip("numpy")
+    flops = tmp_path / "w.npy"
+    _, stats = stats_of(tmp_path, *SMALL, "-k", "wavefront", "--flops", str(flops))
+    counts = np.load(flops)
+    assert counts.shape[0] == 1 and counts.shape[1] > 24 * 16  # primary launch + bounces
+    assert int(counts.sum()) == stats["total_flops"]
+    assert stats["parallel_efficiency"] == pytest.approx(counts.mean() / counts.max())
