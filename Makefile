@@ -128,8 +128,8 @@ $(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h host/scene.c hos
 
 fuzz: $(FUZZ_DIR)/fuzz_scene
 	mkdir -p $(FUZZ_DIR)/corpus $(FUZZ_DIR)/artifacts
-	cp $(wildcard scenes/*.json test/bad_scenes/*.json test/fuzz_corpus/* \
-		test/fuzz_regressions/*) $(FUZZ_DIR)/corpus/
+	cp $(filter-out %.md,$(wildcard scenes/*.json test/bad_scenes/*.json \
+		test/fuzz_corpus/* test/fuzz_regressions/*)) $(FUZZ_DIR)/corpus/
 	$(FUZZ_DIR)/fuzz_scene -max_total_time=$(FUZZ_SECONDS) -max_len=65536 -timeout=10 \
 		-rss_limit_mb=2048 -dict=test/fuzz_scene.dict -print_final_stats=1 \
 		-artifact_prefix=$(FUZZ_DIR)/artifacts/ $(FUZZ_DIR)/corpus
