@@ -66,11 +66,22 @@ static void sb_printf(struct sbuf *sb, const char *fmt, ...)
 
 /* Appends `s` with control bytes (and, if `quoted`, quotes and backslashes)
  * escaped, so that text from the file can never split the one-line message. */
+/* Names and keys longer than this are cut in messages ("abc..."), so that
+ * one message stays one readable line whatever the file holds. */
+#define MESSAGE_NAME_MAX 64
+
 static void sb_escaped(struct sbuf *sb, const char *s, int quoted)
 {
+	const char *start = s;
+
 	for (; *s; s++) {
 		unsigned char c = (unsigned char)*s;
 
+		/* Cut at a character boundary (not inside a UTF-8 sequence). */
+		if (s - start >= MESSAGE_NAME_MAX && (c & 0xc0) != 0x80) {
+			sb_printf(sb, "...");
+			return;
+		}
 		if (quoted && (c == '"' || c == '\\'))
 			sb_printf(sb, "\\%c", c);
 		else if (c == '\n')

@@ -400,3 +400,25 @@ def test_wavefront_flops_file_holds_every_launch(tmp_path):
     assert counts.shape[0] == 1 and counts.shape[1] > 24 * 16  # primary launch + bounces
     assert int(counts.sum()) == stats["total_flops"]
     assert stats["parallel_efficiency"] == pytest.approx(counts.mean() / counts.max())
+
+
+@pytest.mark.parametrize("option", ["-o", "--stats", "--flops", "--work-map"])
+def test_output_to_a_device_file_is_refused(tmp_path, option):
+    args = ["-o", str(tmp_path / "x.ppm")] if option != "-o" else []
+    result = rtcl(*SMALL, *args, option, "/dev/full")
+    assert result.returncode == 1
+    assert len(result.stderr.splitlines()) == 1 and "/dev/full" in result.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_very_long_name_gives_a_short_message(tmp_path):
+    scene = tmp_path / "long.json"
+    scene.write_text(json.dumps({
+        "format": "rtcl-scene", "version": 1,
+        "camera": {"eye": [0, 0, -5], "look_at": [0, 0, 0]},
+        "spheres": [{"center": [0, 0, 0], "radius": 1, "material": "m" * 100000}]}))
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    result = rtcl("-s", str(scene), "-o", str(out_dir / "x.png"))
+    expect_failure(result, 1, "spheres[0].material: unknown material", out_dir)
+    assert len(result.stderr) < 400
