@@ -370,6 +370,14 @@ int render_compare_ms(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
+/* Tests: RTCL_TEST_DEVICE_FAULT=1 makes the last launch fail as a device that
+ * failed mid-render does (there is no way to make a real one fail on demand). */
+static int device_fault_injected(void)
+{
+	const char *fault = getenv("RTCL_TEST_DEVICE_FAULT");
+	return fault && strcmp(fault, "1") == 0;
+}
+
 static int launch_all(struct device *dev, const struct render_settings *s, struct launch_state *st,
 		      struct render_result *res, char *err, size_t err_size)
 {
@@ -404,6 +412,9 @@ static int launch_all(struct device *dev, const struct render_settings *s, struc
 					 s->kernel->name, i + 1, launches);
 				call = "waiting for the kernel";
 				status = render_wait(event, label, s->progress);
+				if (status == CL_SUCCESS && i == launches - 1 &&
+				    device_fault_injected())
+					status = CL_OUT_OF_RESOURCES;
 			}
 			if (status == CL_SUCCESS) {
 				cl_ulong start = 0, end = 0;

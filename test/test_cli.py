@@ -422,3 +422,15 @@ def test_very_long_name_gives_a_short_message(tmp_path):
     result = rtcl("-s", str(scene), "-o", str(out_dir / "x.png"))
     expect_failure(result, 1, "spheres[0].material: unknown material", out_dir)
     assert len(result.stderr) < 400
+
+
+def test_device_failing_mid_render_writes_nothing(tmp_path):
+    """A device that fails during the render (simulated: RTCL_TEST_DEVICE_FAULT=1
+    fails the last launch with CL_OUT_OF_RESOURCES) is reported by name, and no
+    image or other output is written."""
+    result = subprocess.run([RTCL, *SMALL, "-r", "3", "-o", str(tmp_path / "x.png"),
+                             "--stats", str(tmp_path / "s.json")],
+                            capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "RTCL_TEST_DEVICE_FAULT": "1"})
+    expect_failure(result, 1, "waiting for the kernel failed (kernel 'dynamic' on ", tmp_path)
+    assert result.stderr.rstrip().endswith("CL_OUT_OF_RESOURCES")
