@@ -434,3 +434,12 @@ def test_device_failing_mid_render_writes_nothing(tmp_path):
                             env={**os.environ, "RTCL_TEST_DEVICE_FAULT": "1"})
     expect_failure(result, 1, "waiting for the kernel failed (kernel 'dynamic' on ", tmp_path)
     assert result.stderr.rstrip().endswith("CL_OUT_OF_RESOURCES")
+
+
+def test_depth_64_renders(tmp_path):
+    """SCENE.md's largest max_depth: the ray stack is sized from it at build time."""
+    _, stats = stats_of(tmp_path, "-s", "test/scenes/mirror_corridor.json", "--flops",
+                        str(tmp_path / "f.npy"))
+    assert stats["max_depth"] == 64
+    assert "-DRTCL_MAX_DEPTH=64" in stats["build_options"]
+    assert stats["rays"] > 24 * 16 * 60  # most paths bounce to the last level
