@@ -25,10 +25,6 @@ const struct kernel_info render_kernels[] = {
 };
 const int render_kernel_count = sizeof(render_kernels) / sizeof(render_kernels[0]);
 
-/* Poison written over the image before a checked launch: a NaN no kernel
- * computes. */
-#define POISON_WORD 0x7fc0deadu
-
 const struct kernel_info *render_find_kernel(const char *name)
 {
 	for (int i = 0; i < render_kernel_count; i++)
@@ -42,12 +38,10 @@ struct launch_state {
 	cl_program program;
 	cl_kernel kernel;
 	cl_mem scene_buffer;
-	cl_mem image_parent; /* the image with guard zones around it */
-	cl_mem image;
+	struct guarded_image image;
 	cl_mem chunk_counter;
 	cl_mem item_counts;
 	cl_mem write_counts;
-	size_t guard_bytes;
 };
 
 static void release_state(struct launch_state *st)
@@ -58,10 +52,7 @@ static void release_state(struct launch_state *st)
 		clReleaseMemObject(st->item_counts);
 	if (st->chunk_counter)
 		clReleaseMemObject(st->chunk_counter);
-	if (st->image)
-		clReleaseMemObject(st->image);
-	if (st->image_parent)
-		clReleaseMemObject(st->image_parent);
+	render_release_image(&st->image);
 	if (st->scene_buffer)
 		clReleaseMemObject(st->scene_buffer);
 	if (st->kernel)
@@ -251,7 +242,6 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 			  char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
-	size_t image_bytes = pixels * 3 * sizeof(float);
 	size_t items = res->global_size[0] * res->global_size[1];
 	cl_int status;
 
@@ -261,25 +251,8 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 	if (!st->scene_buffer)
 		return -1;
 
-	/* Tests surround the image with guard zones, to catch writes outside it
-	 * (under PoCL they would silently corrupt the host heap). */
-	st->guard_bytes =
-		s->check_writes
-			? (dev->mem_base_addr_align > 4096 ? dev->mem_base_addr_align : 4096)
-			: 0;
-	st->image_parent =
-		render_create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * st->guard_bytes,
-				     NULL, "image", err, err_size);
-	if (!st->image_parent)
+	if (render_create_image(dev, s, &st->image, err, err_size))
 		return -1;
-	cl_buffer_region region = {st->guard_bytes, image_bytes};
-	st->image = clCreateSubBuffer(st->image_parent, CL_MEM_READ_WRITE,
-				      CL_BUFFER_CREATE_TYPE_REGION, &region, &status);
-	if (status != CL_SUCCESS) {
-		snprintf(err, err_size, "clCreateSubBuffer for the image failed: %s",
-			 cl_error_name(status));
-		return -1;
-	}
 
 	st->chunk_counter = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 						 "chunk counter", err, err_size);
@@ -298,8 +271,9 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 	if (!st->write_counts)
 		return -1;
 
-	cl_mem args[6] = {st->scene_buffer, NULL, st->image, st->chunk_counter, st->item_counts,
-			  st->write_counts};
+	cl_mem args[6] = {st->scene_buffer, NULL,
+			  st->image.image,  st->chunk_counter,
+			  st->item_counts,  st->write_counts};
 	for (cl_uint i = 0; i < 6; i++) {
 		if (i == 1)
 			status = clSetKernelArg(st->kernel, i,
@@ -358,9 +332,9 @@ static cl_int prepare_launch(struct device *dev, const struct render_settings *s
 		status = clEnqueueFillBuffer(dev->queue, st->write_counts, &zero, sizeof(zero), 0,
 					     pixels * sizeof(cl_uint), 0, NULL, NULL);
 	if (status == CL_SUCCESS && s->check_writes)
-		status = clEnqueueFillBuffer(dev->queue, st->image_parent, &poison, sizeof(poison),
-					     0, pixels * 3 * sizeof(float) + 2 * st->guard_bytes, 0,
-					     NULL, NULL);
+		status = clEnqueueFillBuffer(
+			dev->queue, st->image.parent, &poison, sizeof(poison), 0,
+			pixels * 3 * sizeof(float) + 2 * st->image.guard_bytes, 0, NULL, NULL);
 	return status;
 }
 
@@ -464,7 +438,7 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 {
 	size_t pixels = (size_t)s->width * s->height;
 	size_t image_bytes = pixels * 3 * sizeof(float);
-	cl_int status = clEnqueueReadBuffer(dev->queue, st->image, CL_TRUE, 0, image_bytes,
+	cl_int status = clEnqueueReadBuffer(dev->queue, st->image.image, CL_TRUE, 0, image_bytes,
 					    res->rgb, 0, NULL, NULL);
 
 	if (status == CL_SUCCESS && s->count_flops) {
@@ -490,29 +464,8 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 		}
 		free(counts);
 	}
-	if (status == CL_SUCCESS && s->check_writes) {
-		size_t guard_words = st->guard_bytes / sizeof(cl_uint);
-		cl_uint *guard = malloc(st->guard_bytes);
-		res->write_counts = malloc(pixels * sizeof(uint32_t));
-		if (!guard || !res->write_counts) {
-			free(guard);
-			snprintf(err, err_size, "out of host memory for the write counts");
-			return -1;
-		}
-		status = clEnqueueReadBuffer(dev->queue, st->write_counts, CL_TRUE, 0,
-					     pixels * sizeof(cl_uint), res->write_counts, 0, NULL,
-					     NULL);
-		res->guards_intact = 1;
-		for (int side = 0; status == CL_SUCCESS && side < 2; side++) {
-			size_t offset = side ? st->guard_bytes + image_bytes : 0;
-			status = clEnqueueReadBuffer(dev->queue, st->image_parent, CL_TRUE, offset,
-						     st->guard_bytes, guard, 0, NULL, NULL);
-			for (size_t i = 0; status == CL_SUCCESS && i < guard_words; i++)
-				if (guard[i] != POISON_WORD)
-					res->guards_intact = 0;
-		}
-		free(guard);
-	}
+	if (status == CL_SUCCESS)
+		status = render_read_write_checks(dev, s, &st->image, st->write_counts, res);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "clEnqueueReadBuffer failed: %s", cl_error_name(status));
 		return -1;
@@ -543,6 +496,71 @@ static int check_kernel_limits(struct device *dev, struct launch_state *st,
 		return -1;
 	}
 	return 0;
+}
+
+int render_create_image(struct device *dev, const struct render_settings *s,
+			struct guarded_image *g, char *err, size_t err_size)
+{
+	size_t image_bytes = (size_t)s->width * s->height * 3 * sizeof(float);
+	cl_int status;
+
+	g->guard_bytes = 0;
+	if (s->check_writes)
+		g->guard_bytes = dev->mem_base_addr_align > 4096 ? dev->mem_base_addr_align : 4096;
+	g->parent = render_create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * g->guard_bytes,
+					 NULL, "image", err, err_size);
+	if (!g->parent)
+		return -1;
+	cl_buffer_region region = {g->guard_bytes, image_bytes};
+	g->image = clCreateSubBuffer(g->parent, CL_MEM_READ_WRITE, CL_BUFFER_CREATE_TYPE_REGION,
+				     &region, &status);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateSubBuffer for the image failed: %s",
+			 cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
+void render_release_image(struct guarded_image *g)
+{
+	if (g->image)
+		clReleaseMemObject(g->image);
+	if (g->parent)
+		clReleaseMemObject(g->parent);
+	g->image = g->parent = NULL;
+}
+
+cl_int render_read_write_checks(struct device *dev, const struct render_settings *s,
+				const struct guarded_image *g, cl_mem write_counts,
+				struct render_result *res)
+{
+	size_t pixels = (size_t)s->width * s->height;
+	cl_uint *guard = malloc(g->guard_bytes);
+	cl_int status;
+
+	if (!s->check_writes) {
+		free(guard);
+		return CL_SUCCESS;
+	}
+	res->write_counts = malloc(pixels * sizeof(uint32_t));
+	if (!guard || !res->write_counts) {
+		free(guard);
+		return CL_OUT_OF_HOST_MEMORY;
+	}
+	status = clEnqueueReadBuffer(dev->queue, write_counts, CL_TRUE, 0, pixels * sizeof(cl_uint),
+				     res->write_counts, 0, NULL, NULL);
+	res->guards_intact = 1;
+	for (int side = 0; status == CL_SUCCESS && side < 2; side++) {
+		size_t offset = side ? g->guard_bytes + pixels * 3 * sizeof(float) : 0;
+		status = clEnqueueReadBuffer(dev->queue, g->parent, CL_TRUE, offset, g->guard_bytes,
+					     guard, 0, NULL, NULL);
+		for (size_t i = 0; status == CL_SUCCESS && i < g->guard_bytes / sizeof(cl_uint);
+		     i++)
+			res->guards_intact &= guard[i] == POISON_WORD;
+	}
+	free(guard);
+	return status;
 }
 
 int render_prepare_scene(struct device *dev, const struct scene *scene,

@@ -9,6 +9,30 @@
 /* Bytes of __local memory the kernels need besides the scene. */
 #define LOCAL_MEM_RESERVE 256
 
+/* Poison written over the image and its guard zones before a checked launch:
+ * a NaN no kernel computes. */
+#define POISON_WORD 0x7fc0deadu
+
+/* The image buffer; with check_writes, a sub-buffer of a larger one whose
+ * guard zones on either side catch writes outside the image (under PoCL they
+ * would silently corrupt the host heap). */
+struct guarded_image {
+	cl_mem parent;
+	cl_mem image;
+	size_t guard_bytes;
+};
+
+int render_create_image(struct device *dev, const struct render_settings *s,
+			struct guarded_image *g, char *err, size_t err_size);
+
+void render_release_image(struct guarded_image *g);
+
+/* With check_writes: reads the per-pixel write counts into
+ * result->write_counts and checks the guard zones (result->guards_intact). */
+cl_int render_read_write_checks(struct device *dev, const struct render_settings *s,
+				const struct guarded_image *g, cl_mem write_counts,
+				struct render_result *result);
+
 /* Packs the scene, allocates result->rgb and decides whether the scene lives
  * in __local memory. */
 int render_prepare_scene(struct device *dev, const struct scene *scene,

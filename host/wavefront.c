@@ -15,17 +15,16 @@
 #include "../cl/rtcl_shared.h"
 #include "render_internal.h"
 
-#define POISON_WORD 0x7fc0deadu
 #define FRAME_OVERFLOWED 1
 
 struct wavefront {
 	cl_program program;
 	cl_kernel start, bounce;
-	cl_mem scene, image_parent, image, queues[2], next_count, overflow;
+	struct guarded_image image;
+	cl_mem scene, queues[2], next_count, overflow;
 	cl_mem item_counts, pixel_flops, write_counts;
 	size_t capacity;      /* rays per queue */
 	size_t item_capacity; /* work-items whose counts item_counts holds */
-	size_t guard_bytes;
 	size_t bounce_local;  /* 1D work-group size of the bounce launches */
 	uint64_t *item_flops; /* every launch's work-items, appended */
 	size_t item_count, item_alloc;
@@ -44,10 +43,10 @@ static void release_queues(struct wavefront *w)
 
 static void release_all(struct wavefront *w)
 {
-	cl_mem buffers[] = {w->write_counts, w->pixel_flops,  w->overflow, w->next_count,
-			    w->image,	     w->image_parent, w->scene};
+	cl_mem buffers[] = {w->write_counts, w->pixel_flops, w->overflow, w->next_count, w->scene};
 
 	release_queues(w);
+	render_release_image(&w->image);
 	for (size_t i = 0; i < sizeof(buffers) / sizeof(buffers[0]); i++)
 		if (buffers[i])
 			clReleaseMemObject(buffers[i]);
@@ -91,27 +90,11 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 			  char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
-	size_t image_bytes = pixels * 3 * sizeof(float);
-	cl_int status;
 
 	w->scene = render_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
 					res->scene_bytes, scene_block, "scene", err, err_size);
-	w->guard_bytes = s->check_writes ? 4096 : 0;
-	if (w->guard_bytes < dev->mem_base_addr_align && s->check_writes)
-		w->guard_bytes = dev->mem_base_addr_align;
-	w->image_parent =
-		render_create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * w->guard_bytes, NULL,
-				     "image", err, err_size);
-	if (!w->scene || !w->image_parent)
+	if (!w->scene || render_create_image(dev, s, &w->image, err, err_size))
 		return -1;
-	cl_buffer_region region = {w->guard_bytes, image_bytes};
-	w->image = clCreateSubBuffer(w->image_parent, CL_MEM_READ_WRITE,
-				     CL_BUFFER_CREATE_TYPE_REGION, &region, &status);
-	if (status != CL_SUCCESS) {
-		snprintf(err, err_size, "clCreateSubBuffer for the image failed: %s",
-			 cl_error_name(status));
-		return -1;
-	}
 	w->next_count = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 					     "queue counter", err, err_size);
 	w->overflow = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
@@ -203,14 +186,15 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 	w->item_count = 0;
 	w->rays = 0;
 	if (s->check_writes) {
-		status = clEnqueueFillBuffer(dev->queue, w->image_parent, &poison, sizeof(poison),
-					     0, pixels * 12 + 2 * w->guard_bytes, 0, NULL, NULL);
+		status =
+			clEnqueueFillBuffer(dev->queue, w->image.parent, &poison, sizeof(poison), 0,
+					    pixels * 12 + 2 * w->image.guard_bytes, 0, NULL, NULL);
 		if (status == CL_SUCCESS)
 			status = clEnqueueFillBuffer(dev->queue, w->write_counts, &zero,
 						     sizeof(zero), 0, pixels * 4, 0, NULL, NULL);
 	}
 	if (status == CL_SUCCESS)
-		status = clEnqueueFillBuffer(dev->queue, w->image, &black, sizeof(black), 0,
+		status = clEnqueueFillBuffer(dev->queue, w->image.image, &black, sizeof(black), 0,
 					     pixels * 12, 0, NULL, NULL);
 	if (status == CL_SUCCESS)
 		status = clEnqueueFillBuffer(dev->queue, w->overflow, &zero, sizeof(zero), 0,
@@ -234,7 +218,7 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 		size_t global = (queued + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
 		const void *args[] = {&w->scene,       NULL,	       &in,
 				      &queued,	       &out,	       &w->next_count,
-				      &capacity,       &w->overflow,   &w->image,
+				      &capacity,       &w->overflow,   &w->image.image,
 				      &w->item_counts, &w->pixel_flops};
 		const size_t sizes[] = {sizeof(cl_mem),	 local_bytes,	 sizeof(cl_mem),
 					sizeof(cl_uint), sizeof(cl_mem), sizeof(cl_mem),
@@ -267,8 +251,8 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 		     struct wavefront *w, char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
-	cl_int status = clEnqueueReadBuffer(dev->queue, w->image, CL_TRUE, 0, pixels * 12, res->rgb,
-					    0, NULL, NULL);
+	cl_int status = clEnqueueReadBuffer(dev->queue, w->image.image, CL_TRUE, 0, pixels * 12,
+					    res->rgb, 0, NULL, NULL);
 
 	if (status == CL_SUCCESS && s->count_flops) {
 		res->pixel_flops = malloc(pixels * sizeof(uint64_t));
@@ -283,26 +267,8 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 			res->total_flops += res->item_flops[i];
 		res->total_rays = w->rays;
 	}
-	if (status == CL_SUCCESS && s->check_writes) {
-		cl_uint *guard = malloc(w->guard_bytes);
-		res->write_counts = malloc(pixels * sizeof(uint32_t));
-		if (!guard || !res->write_counts) {
-			free(guard);
-			snprintf(err, err_size, "out of host memory for the write counts");
-			return -1;
-		}
-		status = clEnqueueReadBuffer(dev->queue, w->write_counts, CL_TRUE, 0, pixels * 4,
-					     res->write_counts, 0, NULL, NULL);
-		res->guards_intact = 1;
-		for (int side = 0; status == CL_SUCCESS && side < 2; side++) {
-			size_t offset = side ? w->guard_bytes + pixels * 12 : 0;
-			status = clEnqueueReadBuffer(dev->queue, w->image_parent, CL_TRUE, offset,
-						     w->guard_bytes, guard, 0, NULL, NULL);
-			for (size_t i = 0; status == CL_SUCCESS && i < w->guard_bytes / 4; i++)
-				res->guards_intact &= guard[i] == POISON_WORD;
-		}
-		free(guard);
-	}
+	if (status == CL_SUCCESS)
+		status = render_read_write_checks(dev, s, &w->image, w->write_counts, res);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "reading the wavefront results failed: %s",
 			 cl_error_name(status));
