@@ -352,12 +352,10 @@ static int device_fault_injected(void)
 	return fault && strcmp(fault, "1") == 0;
 }
 
-static int launch_all(struct device *dev, const struct render_settings *s, struct launch_state *st,
-		      struct render_result *res, char *err, size_t err_size)
+int render_begin_timing(const struct render_settings *s, struct render_result *res, char *err,
+			size_t err_size)
 {
-	size_t pixels = (size_t)s->width * s->height;
-	/* Counting runs are not timed: one launch is enough. */
-	int launches = s->count_flops ? 1 : s->repeat + 1;
+	/* Counting runs are not timed: one run is enough. */
 	int timed = s->count_flops ? 1 : s->repeat;
 
 	res->kernel_ms = calloc((size_t)timed, sizeof(double));
@@ -366,52 +364,73 @@ static int launch_all(struct device *dev, const struct render_settings *s, struc
 		return -1;
 	}
 	res->repeat = timed;
-	for (int i = 0; i < launches; i++) {
-		cl_event event;
-		char label[96];
-		cl_int status = prepare_launch(dev, s, st, pixels);
-		const char *call = "clEnqueueFillBuffer";
+	return s->count_flops ? 1 : timed + 1;
+}
 
-		if (status == CL_SUCCESS) {
-			call = "clEnqueueNDRangeKernel";
-			status = clEnqueueNDRangeKernel(dev->queue, st->kernel, 2, NULL,
-							res->global_size, res->local_size, 0, NULL,
-							&event);
-		}
-		if (status == CL_SUCCESS) {
-			call = "clFlush";
-			status = clFlush(dev->queue);
-			if (status == CL_SUCCESS) {
-				snprintf(label, sizeof(label), "rendering (%s, launch %d of %d)",
-					 s->kernel->name, i + 1, launches);
-				call = "waiting for the kernel";
-				status = render_wait(event, label, s->progress);
-				if (status == CL_SUCCESS && i == launches - 1 &&
-				    device_fault_injected())
-					status = CL_OUT_OF_RESOURCES;
-			}
-			if (status == CL_SUCCESS) {
-				cl_ulong start = 0, end = 0;
-				call = "clGetEventProfilingInfo";
-				status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START,
-								 sizeof(start), &start, NULL);
-				if (status == CL_SUCCESS)
-					status = clGetEventProfilingInfo(event,
-									 CL_PROFILING_COMMAND_END,
-									 sizeof(end), &end, NULL);
-				int slot = i - (launches - timed);
-				if (status == CL_SUCCESS && slot >= 0)
-					res->kernel_ms[slot] = (double)(end - start) * 1e-6;
-			}
-			clReleaseEvent(event);
+cl_int render_launch(struct device *dev, const struct render_settings *s, cl_kernel kernel,
+		     cl_uint dims, const size_t *global, const size_t *local, const char *label,
+		     double *ms, const char **call)
+{
+	cl_event event;
+	cl_ulong start = 0, end = 0;
+	cl_int status;
+
+	*call = "clEnqueueNDRangeKernel";
+	status = clEnqueueNDRangeKernel(dev->queue, kernel, dims, NULL, global, local, 0, NULL,
+					&event);
+	if (status != CL_SUCCESS)
+		return status;
+	*call = "clFlush";
+	status = clFlush(dev->queue);
+	if (status == CL_SUCCESS) {
+		*call = "waiting for the kernel";
+		status = render_wait(event, label, s->progress);
+	}
+	if (status == CL_SUCCESS) {
+		*call = "clGetEventProfilingInfo";
+		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start),
+						 &start, NULL);
+	}
+	if (status == CL_SUCCESS)
+		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end,
+						 NULL);
+	*ms += (double)(end - start) * 1e-6;
+	clReleaseEvent(event);
+	return status;
+}
+
+static int launch_all(struct device *dev, const struct render_settings *s, struct launch_state *st,
+		      struct render_result *res, char *err, size_t err_size)
+{
+	size_t pixels = (size_t)s->width * s->height;
+	int launches = render_begin_timing(s, res, err, err_size);
+
+	if (launches < 0)
+		return -1;
+	for (int i = 0; i < launches; i++) {
+		char label[96];
+		double ms = 0;
+		const char *call = "clEnqueueFillBuffer";
+		cl_int status = prepare_launch(dev, s, st, pixels);
+
+		snprintf(label, sizeof(label), "rendering (%s, launch %d of %d)", s->kernel->name,
+			 i + 1, launches);
+		if (status == CL_SUCCESS)
+			status = render_launch(dev, s, st->kernel, 2, res->global_size,
+					       res->local_size, label, &ms, &call);
+		if (status == CL_SUCCESS && i == launches - 1 && device_fault_injected()) {
+			call = "waiting for the kernel";
+			status = CL_OUT_OF_RESOURCES;
 		}
 		if (status != CL_SUCCESS) {
 			snprintf(err, err_size, "%s failed (kernel '%s' on %s): %s", call,
 				 s->kernel->name, dev->name, cl_error_name(status));
 			return -1;
 		}
+		int slot = i - (launches - res->repeat);
+		if (slot >= 0)
+			res->kernel_ms[slot] = ms;
 	}
-
 	return render_summarize_times(res, err, err_size);
 }
 

@@ -60,6 +60,18 @@ cl_int render_wait(cl_event event, const char *label, int progress);
 
 int render_compare_ms(const void *a, const void *b);
 
+/* Allocates result->kernel_ms for the timed runs and returns how many runs to
+ * make in all (a warm-up, then the timed ones; one for a counting run), or -1
+ * with a message. */
+int render_begin_timing(const struct render_settings *s, struct render_result *result, char *err,
+			size_t err_size);
+
+/* Enqueues one launch, waits for it (showing progress when asked) and adds its
+ * profiled time to *ms. On failure *call names what failed. */
+cl_int render_launch(struct device *dev, const struct render_settings *s, cl_kernel kernel,
+		     cl_uint dims, const size_t *global, const size_t *local, const char *label,
+		     double *ms, const char **call);
+
 int render_wavefront(struct device *dev, const struct scene *scene, const struct render_settings *s,
 		     struct render_result *result, char *err, size_t err_size);
 

@@ -134,32 +134,6 @@ static cl_int append_counts(struct device *dev, struct wavefront *w, size_t item
 	return status;
 }
 
-/* Enqueues one launch, waits for it and adds its profiled time to *ms. */
-static cl_int launch(struct device *dev, const struct render_settings *s, cl_kernel kernel,
-		     cl_uint dims, const size_t *global, const size_t *local, const char *label,
-		     double *ms)
-{
-	cl_event event;
-	cl_ulong start = 0, end = 0;
-	cl_int status = clEnqueueNDRangeKernel(dev->queue, kernel, dims, NULL, global, local, 0,
-					       NULL, &event);
-
-	if (status != CL_SUCCESS)
-		return status;
-	status = clFlush(dev->queue);
-	if (status == CL_SUCCESS)
-		status = render_wait(event, label, s->progress);
-	if (status == CL_SUCCESS)
-		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start),
-						 &start, NULL);
-	if (status == CL_SUCCESS)
-		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end,
-						 NULL);
-	*ms += (double)(end - start) * 1e-6;
-	clReleaseEvent(event);
-	return status;
-}
-
 static cl_int set_args(cl_kernel kernel, const void *const *values, const size_t *sizes,
 		       cl_uint count)
 {
@@ -181,6 +155,7 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 	cl_uint zero = 0, poison = POISON_WORD;
 	cl_float black = 0.0f;
 	cl_int status = CL_SUCCESS;
+	const char *call; /* the wavefront's errors name the frame, not the call */
 
 	*ms = 0;
 	w->item_count = 0;
@@ -207,7 +182,8 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 	if (status == CL_SUCCESS)
 		status = set_args(w->start, start_args, start_sizes, 6);
 	if (status == CL_SUCCESS)
-		status = launch(dev, s, w->start, 2, res->global_size, res->local_size, label, ms);
+		status = render_launch(dev, s, w->start, 2, res->global_size, res->local_size,
+				       label, ms, &call);
 	if (status == CL_SUCCESS && s->count_flops)
 		status = append_counts(dev, w, res->global_size[0] * res->global_size[1]);
 
@@ -231,7 +207,8 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 		if (status == CL_SUCCESS)
 			status = set_args(w->bounce, args, sizes, 11);
 		if (status == CL_SUCCESS)
-			status = launch(dev, s, w->bounce, 1, &global, &w->bounce_local, label, ms);
+			status = render_launch(dev, s, w->bounce, 1, &global, &w->bounce_local,
+					       label, ms, &call);
 		if (status == CL_SUCCESS && s->count_flops)
 			status = append_counts(dev, w, global);
 		if (status == CL_SUCCESS)
@@ -281,15 +258,11 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 static int render_frames(struct device *dev, const struct render_settings *s,
 			 struct render_result *res, struct wavefront *w, char *err, size_t err_size)
 {
-	int frames = s->count_flops ? 1 : s->repeat + 1;
-	int timed = s->count_flops ? 1 : s->repeat;
+	int frames = render_begin_timing(s, res, err, err_size);
+	int timed = res->repeat;
 
-	res->kernel_ms = calloc((size_t)timed, sizeof(double));
-	if (!res->kernel_ms) {
-		snprintf(err, err_size, "out of host memory");
+	if (frames < 0)
 		return -1;
-	}
-	res->repeat = timed;
 	for (int frame = 0; frame < frames;) {
 		char label[96];
 		double ms;
