@@ -35,39 +35,21 @@ for entry in "${runs[@]}"; do
 done
 "$python" "$tools/flops_hist.py" --log -o "$out/schedulers_hist.png" \
 	"$tmp/naive.npy" "$tmp/dynamic.npy" "$tmp/persistent_b1.npy" "$tmp/wavefront.npy"
-"$python" - "$out" "$tmp" "${runs[@]}" <<'PY'
+"$python" - "$out" "$tmp" "$tools" "${runs[@]}" <<'PY'
 import json, os, sys
-out, tmp, runs = sys.argv[1], sys.argv[2], sys.argv[3:]
+out, tmp, tools, runs = sys.argv[1], sys.argv[2], sys.argv[3], sys.argv[4:]
+sys.path.insert(0, tools)
+from ppmdiff import differences, pixels  # noqa: E402
 
-
-def pixels(path):
-    """The pixel bytes of a binary PPM (its header names the kernel, so skip it)."""
-    data = open(path, "rb").read()
-    fields, pos = [], 0
-    while len(fields) < 4:
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        if data[pos:pos + 1] == b"#":
-            pos = data.index(b"\n", pos) + 1
-            continue
-        end = pos
-        while not data[end:end + 1].isspace():
-            end += 1
-        fields.append(data[pos:end])
-        pos = end
-    return data[pos + 1:]
-
-
-reference = pixels(os.path.join(tmp, "naive.ppm"))
+reference = pixels(os.path.join(tmp, "naive.ppm"))[1]
 rows = ["| run | options | time ms (median) | GFLOP/s | parallel efficiency | first NDRange |"
         " channel values differing from naive (max) |",
         "|---|---|---|---|---|---|---|"]
 
 
 def differing(name):
-    image = pixels(os.path.join(tmp, name + ".ppm"))
-    diffs = [abs(a - b) for a, b in zip(image, reference) if a != b]
-    return f"{len(diffs)} ({max(diffs) if diffs else 0}/255)"
+    count, largest = differences(reference, pixels(os.path.join(tmp, name + ".ppm"))[1])
+    return f"{count} ({largest}/255)"
 
 
 for entry in runs:

@@ -41,32 +41,11 @@ if [ "$((predicted_s * 2))" -le "$serial_limit_s" ]; then
 fi
 
 echo "== identical images? (pixels only: the headers name the kernel)"
-python3 - "$out" <<'PY'
-import glob, os, sys
-
-def pixels(path):
-    data = open(path, "rb").read()
-    fields, pos = [], 0
-    while len(fields) < 4:  # P6, width, height, maxval; skipping comments
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        if data[pos:pos + 1] == b"#":
-            pos = data.index(b"\n", pos) + 1
-            continue
-        end = pos
-        while not data[end:end + 1].isspace():
-            end += 1
-        fields.append(data[pos:end])
-        pos = end
-    return fields[1:3], data[pos + 1:]
-
-out = sys.argv[1]
-want = pixels(os.path.join(out, "dynamic.ppm"))
-for path in sorted(glob.glob(os.path.join(out, "*.ppm"))):
-    if "trial" in path:
-        continue
-    print("same as dynamic:" if pixels(path) == want else "DIFFERS from dynamic:", path)
-PY
+images=()
+for f in "$out"/*.ppm; do
+	case $f in *serial_trial*) ;; *) images+=("$f") ;; esac
+done
+python3 "$(dirname "$0")/ppmdiff.py" "$out/dynamic.ppm" "${images[@]}" || true
 echo "== median kernel times"
 python3 - "$out" <<'PY'
 import glob, json, os, sys

@@ -1,0 +1,55 @@
+#!/usr/bin/env python3
+"""Compares the pixels of binary PPM files with a reference, ignoring headers
+(rtcl's name the kernel that rendered them).
+
+Usage: ppmdiff.py REFERENCE.ppm FILE.ppm...
+Prints, per file, how many channel values differ from the reference and by
+how much at most; exits 1 if any file's size differs from the reference's.
+"""
+import sys
+
+
+def pixels(path):
+    """Returns ((width, height), pixel bytes) of a binary PPM, skipping comments."""
+    with open(path, "rb") as f:
+        data = f.read()
+    fields, pos = [], 0
+    while len(fields) < 4:  # P6, width, height, maxval
+        while data[pos:pos + 1].isspace():
+            pos += 1
+        if data[pos:pos + 1] == b"#":
+            pos = data.index(b"\n", pos) + 1
+            continue
+        end = pos
+        while not data[end:end + 1].isspace():
+            end += 1
+        fields.append(data[pos:end])
+        pos = end
+    return (int(fields[1]), int(fields[2])), data[pos + 1:]
+
+
+def differences(reference, other):
+    """Returns (channel values that differ, largest difference)."""
+    diffs = [abs(a - b) for a, b in zip(reference, other) if a != b]
+    return len(diffs), max(diffs, default=0)
+
+
+def main(argv):
+    if len(argv) < 3:
+        sys.exit(__doc__.strip())
+    size, reference = pixels(argv[1])
+    status = 0
+    for path in argv[2:]:
+        other_size, other = pixels(path)
+        if other_size != size:
+            print(f"{path}: size {other_size} differs from {size}")
+            status = 1
+            continue
+        count, largest = differences(reference, other)
+        verdict = "same pixels as" if count == 0 else f"{count} values differ (max {largest}/255) from"
+        print(f"{path}: {verdict} {argv[1]}")
+    return status
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))
