@@ -117,6 +117,8 @@ static void query_info(struct device *dev)
 	dev->is_gpu = (type & CL_DEVICE_TYPE_GPU) != 0;
 	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_COMPUTE_UNITS, sizeof(dev->compute_units),
 			&dev->compute_units, NULL);
+	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_CLOCK_FREQUENCY, sizeof(dev->max_clock_mhz),
+			&dev->max_clock_mhz, NULL);
 	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_WORK_GROUP_SIZE, sizeof(dev->max_work_group_size),
 			&dev->max_work_group_size, NULL);
 	clGetDeviceInfo(dev->id, CL_DEVICE_MAX_WORK_ITEM_SIZES, sizeof(dev->max_work_item_sizes),

@@ -20,6 +20,7 @@ struct device {
 	char driver[256];  /* CL_DRIVER_VERSION */
 	int is_gpu;
 	cl_uint compute_units;
+	cl_uint max_clock_mhz; /* CL_DEVICE_MAX_CLOCK_FREQUENCY */
 	size_t max_work_group_size;
 	size_t max_work_item_sizes[3];
 	cl_ulong local_mem_size;

@@ -39,6 +39,9 @@ struct run {
 	char device_name[640];
 	char device_version[256];
 	char driver[256];
+	int on_device;		/* an OpenCL device (not the CPU reference) */
+	unsigned compute_units; /* CL_DEVICE_MAX_COMPUTE_UNITS */
+	unsigned max_clock_mhz; /* CL_DEVICE_MAX_CLOCK_FREQUENCY */
 };
 
 /* Ctrl-C (or SIGTERM) before the outputs are written: nothing has been written
@@ -213,6 +216,16 @@ static json_t *stats_document(const struct run *run)
 			 "build_options", r->build_options, "batch", s->batch);
 }
 
+/* The device's size and clock, for peak-throughput estimates (not for the
+ * CPU reference, which opens no device). */
+static void add_device_figures(json_t *doc, const struct run *run)
+{
+	if (!run->on_device)
+		return;
+	json_object_set_new(doc, "compute_units", json_integer(run->compute_units));
+	json_object_set_new(doc, "max_clock_mhz", json_integer(run->max_clock_mhz));
+}
+
 /* The --flops sidecar: how the counts were launched. */
 static json_t *flops_sidecar(const struct run *run)
 {
@@ -288,6 +301,8 @@ static int write_outputs(const struct run *run, char *err, size_t err_size)
 		json_t *doc = stats_document(run);
 		if (doc && run->counting)
 			add_flop_figures(doc, run);
+		if (doc)
+			add_device_figures(doc, run);
 		if (write_json(opt->stats_path, doc, err, err_size))
 			goto out_remove;
 	}
@@ -347,6 +362,9 @@ static int render_on_device(struct run *run, char *err, size_t err_size)
 		 dev.platform_name);
 	snprintf(run->device_version, sizeof(run->device_version), "%s", dev.version);
 	snprintf(run->driver, sizeof(run->driver), "%s", dev.driver);
+	run->on_device = 1;
+	run->compute_units = dev.compute_units;
+	run->max_clock_mhz = dev.max_clock_mhz;
 	if (opt->verbose)
 		fprintf(stderr, "rtcl: platform %d, device %d: %s\n", dev.platform_index,
 			dev.device_index, run->device_name);

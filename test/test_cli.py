@@ -7,6 +7,7 @@ non-zero and leave no file behind.
 import json
 import os
 import pathlib
+import re
 import subprocess
 
 import pytest
@@ -115,6 +116,18 @@ def test_stats_has_every_figure(tmp_path):
     assert sorted(stats["kernel_ms_all"])[1] == stats["kernel_ms"]
     assert stats["device"] in result.stdout
     assert "median of 3 launches" in result.stdout
+
+
+def test_stats_has_the_devices_compute_units_and_clock(tmp_path):
+    _, stats = stats_of(tmp_path, *SMALL, "-p", "0", "-d", "0")
+    listing = rtcl("--list-devices").stdout
+    device_line = next(line for line in listing.splitlines() if "Device #0" in line)
+    units = int(re.search(r"(\d+) compute units", device_line).group(1))
+    assert stats["compute_units"] == units >= 1
+    assert isinstance(stats["max_clock_mhz"], int) and stats["max_clock_mhz"] >= 0
+    # The CPU reference opens no OpenCL device: no device figures to report.
+    _, reference = stats_of(tmp_path, *SMALL, "-k", "reference")
+    assert "compute_units" not in reference and "max_clock_mhz" not in reference
 
 
 def test_size_depth_and_scene_options(tmp_path):
