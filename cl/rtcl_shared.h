@@ -39,8 +39,8 @@ struct rt_material {
 };
 
 struct rt_sphere {
-	rt_vec4 center;	     /* w: radius */
-	rt_float radius2;    /* radius² */
+	rt_vec4 center;	     /* w: radius², so that one 16-byte load feeds a test */
+	rt_float radius;
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
 	rt_int pad;

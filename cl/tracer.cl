@@ -10,7 +10,10 @@
  *
  * Contraction into fused multiply-adds is off so that the same source gives the
  * same bits whichever kernel it is inlined into, and so that the flop counts
- * written beside the arithmetic stay true (RENDERING.md: an fma counts 2).
+ * written beside the arithmetic stay true (RENDERING.md: an fma counts 2). The
+ * hot arithmetic (dot products, the sphere test) is written with fma() instead:
+ * an explicit fma rounds once, the same way on every device and in every
+ * kernel, and runs as one instruction where the hardware has one.
  */
 #pragma OPENCL FP_CONTRACT OFF
 
@@ -23,10 +26,10 @@
 #define RTCL_SCENE_SPACE __global
 #endif
 
-/* Depth-first walk of the ray tree: popping a ray at depth d pushes at most two
- * at depth d+1, one of which is popped next, so at most one ray waits per
- * level besides the one in hand. */
-#define RAY_STACK_SIZE (RTCL_MAX_DEPTH + 1)
+/* Depth-first walk of the ray tree: a ray at depth d spawns at most two at
+ * depth d+1, one of which is traced next, so at most one ray waits per level
+ * 1..max_depth. */
+#define RAY_STACK_SIZE (RTCL_MAX_DEPTH > 0 ? RTCL_MAX_DEPTH : 1)
 
 #ifdef RTCL_COUNT_FLOPS
 #define COUNT_FLOPS(tr, n) ((tr)->flops += (n))
@@ -68,7 +71,7 @@ struct hit {
 /* Vector helpers, written out so that each operation is what is counted. */
 static inline float dot3(float3 a, float3 b)
 {
-	return a.x * b.x + a.y * b.y + a.z * b.z;
+	return fma(a.z, b.z, fma(a.y, b.y, a.x * b.x));
 }
 
 static inline float3 normalize3(float3 v)
@@ -112,10 +115,11 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *coun
 static float intersect_sphere(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_sphere *s,
 			      float3 o, float3 d)
 {
-	float3 oc = o - s->center.xyz;
+	float4 sphere = s->center; /* one load: the centre and radius² */
+	float3 oc = o - sphere.xyz;
 	float b = dot3(oc, d);
-	float3 closest = oc - b * d; /* from the centre to the ray's closest point */
-	float disc = s->radius2 - dot3(closest, closest);
+	float3 closest = fma((float3)(-b), d, oc); /* from the centre to the ray's closest point */
+	float disc = sphere.w - dot3(closest, closest);
 
 	COUNT_FLOPS(tr, 3 + 5 + 6 + 6);
 	if (disc < 0.0f)
@@ -125,7 +129,7 @@ static float intersect_sphere(struct tracer *tr, RTCL_SCENE_SPACE const struct r
 	if (b > 0.0f) /* the centre is behind the origin: only the far root can be ahead */
 		return far > 0.0f ? far : 0.0f;
 	/* The near root as c/far, free of the cancellation in −b − sqrt(disc). */
-	float near = (dot3(oc, oc) - s->radius2) / far;
+	float near = (dot3(oc, oc) - sphere.w) / far;
 	COUNT_FLOPS(tr, 7);
 	return near > 0.0f ? near : far;
 }
@@ -244,7 +248,7 @@ static float3 shade_local(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_ma
 /* Traces one ray of the tree (RENDERING.md trace, steps 1-5): returns what it
  * adds to its pixel, weight included, and writes the rays it spawns into
  * children[0..*spawned): the refracted ray, then the reflected one. Used by the
- * stack walk below and by the wavefront kernel. */
+ * tree walk below and by the wavefront kernel. */
 static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray_job children[2],
 			int *spawned)
 {
@@ -315,23 +319,31 @@ static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray
 }
 
 /* Returns the colour seen along the primary ray: the ray tree walked depth
- * first with an explicit stack (OpenCL C has no recursion). */
+ * first (OpenCL C has no recursion). The walk goes on with the last ray a hit
+ * spawns, which stays in registers; a refracted ray that has a reflected
+ * sibling waits on a stack in private memory. This is the order of a stack
+ * onto which both children are pushed, so the sum is the same. */
 static float3 trace(struct tracer *tr, float3 origin, float3 dir)
 {
-	struct ray_job stack[RAY_STACK_SIZE];
+	struct ray_job waiting[RAY_STACK_SIZE];
 	int top = 0;
+	struct ray_job ray = {origin, dir, 1.0f, 0};
 	float3 color = (float3)(0.0f);
 
-	stack[top++] = (struct ray_job){origin, dir, 1.0f, 0};
-	while (top > 0) {
-		struct ray_job ray = stack[--top];
+	for (;;) {
 		struct ray_job children[2];
 		int spawned;
 
 		color += trace_one(tr, &ray, children, &spawned);
 		COUNT_FLOPS(tr, 3);
-		for (int i = 0; i < spawned; i++)
-			stack[top++] = children[i];
+		if (spawned == 2)
+			waiting[top++] = children[0];
+		if (spawned > 0)
+			ray = children[spawned - 1];
+		else if (top > 0)
+			ray = waiting[--top];
+		else
+			break;
 	}
 	return color;
 }

@@ -123,8 +123,8 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
 	for (int i = 0; i < scene->sphere_count; i++) {
 		const struct scene_sphere *s = &scene->spheres[i];
-		spheres[i].center = vec4(s->center, s->radius);
-		spheres[i].radius2 = (float)(s->radius * s->radius);
+		spheres[i].center = vec4(s->center, s->radius * s->radius);
+		spheres[i].radius = (float)s->radius;
 		spheres[i].inv_radius = (float)(1.0 / s->radius);
 		spheres[i].material = s->material;
 	}

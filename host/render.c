@@ -10,6 +10,7 @@
 #include "../cl/rtcl_shared.h"
 #include "devscene.h"
 #include "embedded.h"
+#include "outfile.h"
 #include "render_internal.h"
 
 const struct kernel_info render_kernels[] = {
@@ -100,6 +101,63 @@ static const char *load_source(const char *dir, const char *name, int *loaded, c
 	return text;
 }
 
+/* -v: the compiler's messages for a program that built, if it had any (with
+ * RTCL_BUILD_OPTIONS=-cl-nv-verbose, NVIDIA's register and spill report). */
+static void print_build_log(cl_program program, const struct device *dev)
+{
+	char log[32768] = "";
+
+	clGetProgramBuildInfo(program, dev->id, CL_PROGRAM_BUILD_LOG, sizeof(log) - 1, log,
+			      NULL);
+	if (log[strspn(log, " \t\r\n")] != '\0')
+		fprintf(stderr, "rtcl: build log:\n%s\n", log);
+}
+
+struct bytes {
+	const unsigned char *data;
+	size_t size;
+};
+
+static int write_bytes(FILE *file, const void *context)
+{
+	const struct bytes *b = context;
+
+	return fwrite(b->data, 1, b->size, file) == b->size ? 0 : -1;
+}
+
+/* RTCL_DUMP_BINARY=FILE: writes the built program's binary (PTX on NVIDIA's
+ * OpenCL) to FILE, for reading what the compiler made of the tracer. */
+static int dump_binary(cl_program program, char *err, size_t err_size)
+{
+	const char *path = getenv("RTCL_DUMP_BINARY");
+	size_t size = 0;
+
+	if (!path || !*path)
+		return 0;
+	if (clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, NULL) !=
+		    CL_SUCCESS ||
+	    size == 0) {
+		snprintf(err, err_size, "RTCL_DUMP_BINARY: the device gives no program binary");
+		return -1;
+	}
+	unsigned char *binary = malloc(size);
+	if (!binary) {
+		snprintf(err, err_size, "out of memory for a %zu-byte program binary", size);
+		return -1;
+	}
+	struct bytes contents = {binary, size};
+	int ret;
+	if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof(binary), &binary, NULL) !=
+	    CL_SUCCESS) {
+		snprintf(err, err_size, "RTCL_DUMP_BINARY: cannot read the program binary");
+		ret = -1;
+	} else {
+		ret = outfile_write(path, write_bytes, &contents, err, err_size);
+	}
+	free(binary);
+	return ret;
+}
+
 int render_build_program(struct device *dev, const struct render_settings *s,
 			 struct render_result *res, cl_program *program, char *err, size_t err_size)
 {
@@ -116,11 +174,19 @@ int render_build_program(struct device *dev, const struct render_settings *s,
 		if (!texts[i])
 			goto out_free_sources;
 	}
-	snprintf(res->build_options, sizeof(res->build_options),
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s", s->max_depth,
-		 s->batch > 0 ? s->batch : 1, res->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
-		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
-		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "");
+	const char *extra = getenv("RTCL_BUILD_OPTIONS");
+	int length = snprintf(res->build_options, sizeof(res->build_options),
+			      "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s",
+			      s->max_depth, s->batch > 0 ? s->batch : 1,
+			      res->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
+			      s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
+			      s->check_writes ? " -DRTCL_COUNT_WRITES" : "", extra ? " " : "",
+			      extra ? extra : "");
+	if (length >= (int)sizeof(res->build_options)) {
+		snprintf(err, err_size, "RTCL_BUILD_OPTIONS is too long (at most %zu characters)",
+			 sizeof(res->build_options) - 100);
+		goto out_free_sources;
+	}
 
 	*program = clCreateProgramWithSource(dev->context, 3, texts, NULL, &status);
 	if (status != CL_SUCCESS) {
@@ -139,7 +205,9 @@ int render_build_program(struct device *dev, const struct render_settings *s,
 			 log);
 		goto out_free_sources;
 	}
-	ret = 0;
+	if (s->verbose)
+		print_build_log(*program, dev);
+	ret = dump_binary(*program, err, err_size);
 
 out_free_sources:
 	for (int i = 0; i < 3; i++)

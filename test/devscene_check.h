@@ -50,7 +50,7 @@ static const char *devscene_problem(const void *packed)
 	for (int i = 0; i < h->sphere_count; i++) {
 		if (!vec4_finite(s[i].center))
 			return "sphere not finite";
-		if (!float_positive(s[i].center.s[3]) || !float_positive(s[i].radius2) ||
+		if (!float_positive(s[i].radius) || !float_positive(s[i].center.s[3]) ||
 		    !float_positive(s[i].inv_radius))
 			return "radius, radius² or 1/radius not positive in float";
 	}
