@@ -120,6 +120,46 @@ def test_sidecar_that_disagrees_is_reported(tmp_path):
                for problem in problems)
 
 
+WAVEFRONT_LAYOUT = ("counts[0][i]: every launch's work-items one after the other (the "
+                    "primary-ray launch, then one launch per bounce)")
+
+
+def test_multi_pass_counts_are_one_row_of_every_launch(tmp_path):
+    # The wavefront's sidecar gives the first launch's geometry (4x4 work-items),
+    # its array every launch's work-items (here 16 + 8 + 4).
+    counts = np.concatenate([np.full(16, 10), np.full(8, 20), [40, 0, 0, 0]])[None, :]
+    path = write_flops(tmp_path / "w.npy", counts, kernel="wavefront", workgroup=(2, 2),
+                       groups=(2, 2), global_size=[4, 4], layout=WAVEFRONT_LAYOUT)
+    flops_file = flops_hist.load_flops(path)
+    assert flops_file.multi_pass
+    assert flops_hist.sidecar_mismatches(flops_file) == []
+    assert flops_file.efficiency == pytest.approx(counts.mean() / 40)
+    label = flops_file.label()
+    assert "28 work-items of all launches" in label
+    assert "primary rays: work-group 2x2, groups 2x2" in label
+    assert "parallel efficiency over all launches" in label
+
+
+def test_multi_pass_counts_that_do_not_fit_the_layout_are_reported(tmp_path):
+    two_rows = write_flops(tmp_path / "a.npy", np.ones((2, 20)), kernel="wavefront",
+                           global_size=[4, 4], layout=WAVEFRONT_LAYOUT)
+    too_few = write_flops(tmp_path / "b.npy", np.ones((1, 10)), kernel="wavefront",
+                          global_size=[4, 4], layout=WAVEFRONT_LAYOUT)
+    (problem,) = flops_hist.sidecar_mismatches(flops_hist.load_flops(two_rows))
+    assert "2 rows" in problem
+    (problem,) = flops_hist.sidecar_mismatches(flops_hist.load_flops(too_few))
+    assert "only 10 work-items" in problem
+
+
+def test_single_pass_counts_keep_their_shape_check(tmp_path):
+    path = write_flops(tmp_path / "n.npy", np.ones((1, 16)), kernel="naive",
+                       global_size=[4, 4])
+    flops_file = flops_hist.load_flops(path)
+    assert not flops_file.multi_pass
+    (problem,) = flops_hist.sidecar_mismatches(flops_file)
+    assert "global_size [4, 4] but the array is 16x1" in problem
+
+
 def test_flop_unit_keeps_numbers_readable():
     assert flops_hist.flop_unit(5) == (1.0, "FLOP")
     assert flops_hist.flop_unit(3_000_000) == (1e6, "MFLOP")
@@ -228,11 +268,11 @@ def fake_stats(kernel, kernel_ms, workgroup="8x8", groups="25x25", global_size=(
             "parallel_efficiency": efficiency}
 
 
-def fake_run(role, kernel, kernel_ms, **stats):
+def fake_run(role, kernel, kernel_ms, batch=None, **stats):
     workgroup = stats.get("workgroup", "8x8")
     return experiments.Run(role, kernel, workgroup, stats.get("groups"),
                            f"./rtcl -k {kernel} -w {workgroup}",
-                           fake_stats(kernel, kernel_ms, **stats))
+                           fake_stats(kernel, kernel_ms, **stats), batch=batch)
 
 
 def fake_experiment():
@@ -244,6 +284,10 @@ def fake_experiment():
             fake_run("paper", "cyclic", 100.0, efficiency=0.7744),
             fake_run("paper", "dynamic", 125.0, groups="10x10", global_size=(80, 80),
                      efficiency=0.8536),
+            fake_run("paper", "persistent", 250.0, batch=1, groups="10x10",
+                     global_size=(80, 80), efficiency=0.9),
+            fake_run("paper", "wavefront", 400.0, groups="250x250",
+                     global_size=(2000, 2000), efficiency=0.45),
             fake_run("sweep", "cyclic", 90.0, workgroup="16x8", groups="20x20"),
             fake_run("best", "cyclic", 80.0, workgroup="16x8", groups="20x20")]
 
@@ -294,12 +338,12 @@ def test_scaled_groups():
 
 
 def test_planned_run_count_matches_the_sweep_size():
-    # serial, reference, 3 paper runs; naive 5 shapes + best; cyclic and dynamic
-    # 5 shapes + 2 scaled counts + the paper's count + best.
+    # serial, reference, 5 paper runs; naive and wavefront 5 shapes + best; cyclic,
+    # dynamic and persistent 5 shapes + 2 scaled counts + the paper's count + best.
     sweep = experiments.SWEEP_WORKGROUPS, experiments.SWEEP_GROUP_SCALES
-    assert experiments.planned_run_count(False, False, False, *sweep) == 5 + 6 + 9 + 9
-    assert experiments.planned_run_count(False, True, True, *sweep) == 4
-    assert experiments.planned_run_count(True, True, True, *sweep) == 3
+    assert experiments.planned_run_count(False, False, False, *sweep) == 7 + 2 * 6 + 3 * 9
+    assert experiments.planned_run_count(False, True, True, *sweep) == 6
+    assert experiments.planned_run_count(True, True, True, *sweep) == 5
 
 
 def test_table1_has_our_figures_beside_the_papers():
@@ -307,7 +351,7 @@ def test_table1_has_our_figures_beside_the_papers():
                                                           "date": "2024-01-01 00:00 UTC"})
     rows = table_rows(table)
     assert list(rows) == ["serial", "CPU reference (1 core)", "naive", "cyclic", "dynamic",
-                          "cyclic (best of sweep)"]
+                          "persistent", "wavefront", "cyclic (best of sweep)"]
     header = [c.strip() for c in table.split("| Implementation")[1].split("\n")[0].split("|")]
     column = {name: i + 1 for i, name in enumerate(header[1:-1])}
 
@@ -326,6 +370,15 @@ def test_table1_has_our_figures_beside_the_papers():
     assert cell("serial", "paper time") == "90.56 s"
     assert cell("cyclic (best of sweep)", "paper time") == "–"
     assert cell("cyclic (best of sweep)", "speedup over serial") == "625.0"
+    # Beyond the paper: our figures, no paper figures, the geometry said honestly.
+    assert cell("persistent", "groups / threads") == "10x10 / 80x80, batch 1"
+    assert cell("persistent", "speedup over serial") == "200.0"
+    assert cell("wavefront", "groups / threads").startswith("250x250 / 2000x2000 (primary")
+    assert cell("wavefront", "parallel efficiency") == "45.00%"
+    for row in ("persistent", "wavefront"):
+        for name in ("paper time", "paper GFLOP/s", "paper efficiency", "paper speedup"):
+            assert cell(row, name) == "–"
+    assert "of all launches" in table and "go beyond the paper" in table
     for text in ("NVIDIA H100 80GB HBM3", "driver: 550.54", "2000x2000", "max depth 5",
                  "rtcl 0.1.0", "abc1234", "2024-01-01", "## Sweep", "## Commands",
                  "./rtcl -k dynamic -w 8x8", "2.000 GFLOP, the same for every run"):
@@ -352,9 +405,12 @@ def test_table1_without_serial_has_no_speedup_over_serial():
 
 def test_speedup_bars_compare_with_the_paper():
     bars = experiments.speedup_bars(fake_experiment())
-    assert [bar[0] for bar in bars] == ["naive", "cyclic", "dynamic", "cyclic\n(best)"]
+    assert [bar[0] for bar in bars] == ["naive", "cyclic", "dynamic", "persistent",
+                                        "wavefront", "cyclic\n(best)"]
     assert bars[0] == ("naive", 100.0, 20.0, 52.0)
-    assert bars[3][3] is None
+    assert bars[3] == ("persistent", 200.0, 40.0, None)   # the paper has none
+    assert bars[4] == ("wavefront", 125.0, 25.0, None)
+    assert bars[5][3] is None
 
 
 def test_plot_speedup_writes_png(tmp_path):
@@ -397,17 +453,22 @@ def test_experiments_quick_run_against_rtcl(tmp_path):
     result = run_tool("experiments.py", "--rtcl", RTCL, "--quick", "--no-sweep",
                       "--size", "64x64", "--repeat", "1", "--out", tmp_path)
     assert result.returncode == 0, result.stderr
-    assert "[1/5] serial" in result.stderr and "[5/5] dynamic" in result.stderr
+    assert "[1/7] serial" in result.stderr and "[7/7] wavefront -w 8x8" in result.stderr
+    assert "[6/7] persistent -w 8x8 --groups 10x10 --batch 1" in result.stderr
     (device_dir,) = tmp_path.iterdir()
     assert (device_dir / "speedup.png").read_bytes().startswith(PNG_SIGNATURE)
     assert (device_dir / "histograms.png").read_bytes().startswith(PNG_SIGNATURE)
     assert not list(device_dir.glob("*.npy"))
     rows = table_rows((device_dir / "table1.md").read_text())
-    assert {"serial", "CPU reference (1 core)", "naive", "cyclic", "dynamic"} <= set(rows)
+    assert {"serial", "CPU reference (1 core)", "naive", "cyclic", "dynamic", "persistent",
+            "wavefront"} <= set(rows)
     results = json.loads((device_dir / "results.json").read_text())
     runs = {run["kernel"]: run["stats"] for run in results["runs"]}
     assert runs["cyclic"]["groups"] == "25x25" and runs["naive"]["workgroup"] == "16x10"
-    totals = {runs[kernel]["gflop"] for kernel in ("serial", "naive", "cyclic", "dynamic")}
+    assert runs["persistent"]["groups"] == "10x10" and runs["persistent"]["batch"] == 1
+    assert runs["wavefront"]["workgroup"] == "8x8"
+    kernels = ("serial", "naive", "cyclic", "dynamic", "persistent", "wavefront")
+    totals = {runs[kernel]["gflop"] for kernel in kernels}
     assert len(totals) == 1, "every kernel must count the same total work"
-    for kernel in ("naive", "cyclic", "dynamic"):
+    for kernel in kernels[1:]:
         assert 0.0 < runs[kernel]["parallel_efficiency"] <= 1.0

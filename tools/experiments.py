@@ -6,16 +6,28 @@ On one OpenCL device, runs
   - naive:   16x10 work-groups, one work-item per pixel;
   - cyclic:  8x8 work-groups, 25x25 groups (the paper's 10x10 grid of chunks);
   - dynamic: 8x8 work-groups, 10x10 groups fetching 8x8 chunks;
+  - persistent (beyond the paper, docs/wavefront.md): the dynamic kernel's
+    geometry, 8x8 work-groups and 10x10 groups, each work-item fetching one pixel
+    at a time (--batch 1);
+  - wavefront (beyond the paper): 8x8 work-groups for the primary-ray launch
+    (the bounce launches are 1D, 64 work-items a group); the wavefront honours
+    only -w, not --groups or --batch;
   - the CPU reference, once: a native single-core baseline (skip: --no-reference);
-  - unless --no-sweep, naive, cyclic and dynamic again at the fastest geometry of
-    a small sweep: every work-group shape of SWEEP_WORKGROUPS at rtcl's default
-    group count, then, for cyclic and dynamic, the fastest shape with the group
-    count scaled up to 4x and with the paper's group count (-r 3 per sweep run).
+  - unless --no-sweep, every parallel kernel again at the fastest geometry of a
+    small sweep: every work-group shape of SWEEP_WORKGROUPS at rtcl's default
+    group count, then, for cyclic, dynamic and persistent, the fastest shape with
+    the group count scaled up to 4x and with the paper-like group count (-r 3 per
+    sweep run).
+The paper measured neither persistent nor wavefront (its section 3.4 proposed
+such schemes and judged them impossible on a GPU), so their paper cells are empty.
 Every run is one `rtcl --flops --stats` call: rtcl counts flops in one launch and
-times others without counting.  Under OUT/<device-slug>/ it writes
+times others without counting.  For the wavefront, rtcl counts every launch of the
+frame (the primary-ray launch, then one per bounce) and writes their work-items
+one after the other; its parallel efficiency and its histogram cover the
+work-items of all its launches.  Under OUT/<device-slug>/ it writes
   table1.md          Table 1, ours beside the paper's, with the commands used;
   speedup.png        Figure 6: speedup per implementation, ours and the paper's;
-  histograms.png     Figure 7: flops per work-item, paper geometries;
+  histograms.png     Figure 7: flops per work-item, paper(-like) geometries;
   histograms_best.png  the same for the sweep's best geometries (with the sweep);
   results.json       every run's command and rtcl statistics.
 The per-work-item .npy files stay in a temporary folder, deleted at the end.
@@ -59,10 +71,17 @@ PAPER = {
     "dynamic": {"workgroup": "8x8", "threads": "80x80", "time_s": 0.44,
                 "gflops": 43.37, "efficiency": 0.8536, "speedup": 206.0},
 }
-PARALLEL_KERNELS = ("naive", "cyclic", "dynamic")
-# The paper's geometries: kernel -> (work-group, groups or None).
+PARALLEL_KERNELS = ("naive", "cyclic", "dynamic", "persistent", "wavefront")
+# The kernels that take --groups (persistent work-groups).
+GROUP_KERNELS = ("cyclic", "dynamic", "persistent")
+# The paper's geometries: kernel -> (work-group, groups or None); for persistent
+# and wavefront, which the paper did not run, the nearest: dynamic's geometry,
+# and the 8x8 work-group of the primary-ray launch.
 PAPER_GEOMETRY = {"naive": ("16x10", None), "cyclic": ("8x8", "25x25"),
-                  "dynamic": ("8x8", "10x10")}
+                  "dynamic": ("8x8", "10x10"), "persistent": ("8x8", "10x10"),
+                  "wavefront": ("8x8", None)}
+# --batch for the kernels that take it (pixels per fetch).
+PAPER_BATCH = {"persistent": 1}
 SWEEP_WORKGROUPS = ("8x8", "16x8", "16x16", "32x4", "32x8")
 SWEEP_GROUP_SCALES = (1.5, 2.0)         # per dimension: 2.25x and 4x the groups
 QUICK_WORKGROUPS = ("8x8", "16x8")
@@ -76,7 +95,25 @@ DEFAULT_REPEAT = 5
 
 
 class RtclFailed(Exception):
-    """rtcl exited non-zero; the message holds the command and rtcl's stderr."""
+    """rtcl exited non-zero; the message holds the command and rtcl's stderr.
+
+    reason is rtcl's own one-line message (its first 'rtcl: ' line, else the first
+    line of stderr), returncode its exit status (None when it did not run).
+    """
+
+    def __init__(self, message, reason=None, returncode=None):
+        super().__init__(message)
+        self.reason = reason or message.splitlines()[0]
+        self.returncode = returncode
+
+
+def rtcl_reason(stderr):
+    """Returns rtcl's one-line message from its stderr, without the 'rtcl: ' prefix."""
+    lines = [line.strip() for line in stderr.splitlines() if line.strip()]
+    for line in lines:
+        if line.startswith("rtcl: "):
+            return line[len("rtcl: "):]
+    return lines[0] if lines else "no message"
 
 
 @dataclasses.dataclass
@@ -90,10 +127,12 @@ class Run:
     command: str            # the shell line, the temporary folder shown as $TMP
     stats: dict
     flops_path: pathlib.Path | None = None
+    batch: int | None = None  # --batch, for the persistent kernel
 
     def to_json(self):
         return {"role": self.role, "kernel": self.kernel, "workgroup": self.workgroup,
-                "groups": self.groups, "command": self.command, "stats": self.stats}
+                "groups": self.groups, "batch": self.batch, "command": self.command,
+                "stats": self.stats}
 
 
 @dataclasses.dataclass
@@ -121,8 +160,8 @@ class Progress:
     def finish(self, kernel_ms):
         print(f" {kernel_ms:.1f} ms", file=sys.stderr, flush=True)
 
-    def fail(self):
-        print(" failed", file=sys.stderr, flush=True)
+    def fail(self, note="failed"):
+        print(f" {note}", file=sys.stderr, flush=True)
 
     def skip(self):
         """A planned run turned out to be a duplicate: count it off."""
@@ -132,9 +171,10 @@ class Progress:
 # ---- running rtcl -------------------------------------------------------------
 
 def run_rtcl(settings, progress, role, kernel, workgroup=None, groups=None,
-             repeat=None, flops=True):
+             repeat=None, flops=True, batch=None):
     """Runs rtcl once with --stats (and --flops) and returns the Run."""
-    name = "-".join(part for part in (role, kernel, workgroup, groups) if part)
+    name = "-".join(part for part in (role, kernel, workgroup, groups,
+                                      batch and f"b{batch}") if part)
     stats_path = settings.temp_dir / f"{name}.json"
     flops_path = settings.temp_dir / f"{name}.npy" if flops else None
     command = [settings.rtcl, "-k", kernel, *settings.common,
@@ -144,9 +184,11 @@ def run_rtcl(settings, progress, role, kernel, workgroup=None, groups=None,
         command += ["-w", workgroup]
     if groups:
         command += ["--groups", groups]
+    if batch:
+        command += ["--batch", str(batch)]
     if flops_path:
         command += ["--flops", str(flops_path)]
-    progress.start(describe(kernel, workgroup, groups)
+    progress.start(describe(kernel, workgroup, groups, batch)
                    + (f" ({role})" if role in ("sweep", "best") else ""))
     try:
         result = subprocess.run(command, capture_output=True, text=True)
@@ -156,7 +198,8 @@ def run_rtcl(settings, progress, role, kernel, workgroup=None, groups=None,
     if result.returncode != 0:
         progress.fail()
         raise RtclFailed(f"rtcl failed (exit {result.returncode}): {shlex.join(command)}\n"
-                         f"{result.stderr.rstrip()}")
+                         f"{result.stderr.rstrip()}", rtcl_reason(result.stderr),
+                         result.returncode)
     stats = json.loads(stats_path.read_text(encoding="utf-8"))
     missing = [key for key in REQUIRED_STATS if key not in stats]
     if flops_path and "gflop" not in stats:
@@ -167,16 +210,18 @@ def run_rtcl(settings, progress, role, kernel, workgroup=None, groups=None,
                          f"{shlex.join(command)}")
     progress.finish(stats["kernel_ms"])
     return Run(role, kernel, workgroup, groups, display_command(command, settings.temp_dir),
-               stats, flops_path)
+               stats, flops_path, batch)
 
 
-def describe(kernel, workgroup, groups):
-    """Returns e.g. 'cyclic -w 8x8 --groups 25x25'."""
+def describe(kernel, workgroup, groups, batch=None):
+    """Returns e.g. 'cyclic -w 8x8 --groups 25x25' or 'persistent ... --batch 2'."""
     text = kernel
     if workgroup:
         text += f" -w {workgroup}"
     if groups:
         text += f" --groups {groups}"
+    if batch:
+        text += f" --batch {batch}"
     return text
 
 
@@ -191,7 +236,7 @@ def planned_run_count(no_serial, no_reference, no_sweep, workgroups, group_scale
     if not no_sweep:
         for kernel in PARALLEL_KERNELS:
             count += len(workgroups) + 1  # the shapes, then the best one's rerun
-            if kernel != "naive":
+            if kernel in GROUP_KERNELS:
                 count += len(group_scales) + 1  # scaled counts and the paper's
     return count
 
@@ -220,9 +265,11 @@ def select_best(runs):
 
 def sweep_kernel(settings, progress, kernel, workgroups, group_scales):
     """Returns the sweep runs of one kernel, the best geometry's last."""
-    runs = [run_rtcl(settings, progress, "sweep", kernel, workgroup, repeat=SWEEP_REPEAT)
+    batch = PAPER_BATCH.get(kernel)
+    runs = [run_rtcl(settings, progress, "sweep", kernel, workgroup, repeat=SWEEP_REPEAT,
+                     batch=batch)
             for workgroup in workgroups]
-    if kernel != "naive":
+    if kernel in GROUP_KERNELS:
         fastest = select_best(runs)
         default_groups = fastest.stats["groups"]
         candidates = [scaled_groups(default_groups, scale) for scale in group_scales]
@@ -234,7 +281,7 @@ def sweep_kernel(settings, progress, kernel, workgroups, group_scales):
                 continue
             tried.add(groups)
             runs.append(run_rtcl(settings, progress, "sweep", kernel, fastest.workgroup,
-                                 groups, repeat=SWEEP_REPEAT))
+                                 groups, repeat=SWEEP_REPEAT, batch=batch))
     return runs
 
 
@@ -329,7 +376,12 @@ def geometry_cells(run):
     if run.kernel in ("serial", "reference"):
         return "–", "1 work-item" if run.kernel == "serial" else "1 CPU thread"
     width, height = stats.get("global_size", [0, 0])
-    return stats.get("workgroup", "?"), f"{stats.get('groups', '?')} / {width}x{height}"
+    threads = f"{stats.get('groups', '?')} / {width}x{height}"
+    if run.kernel == "wavefront":
+        threads += " (primary rays), then 1 launch per bounce"
+    if run.batch:
+        threads += f", batch {run.batch}"
+    return stats.get("workgroup", "?"), threads
 
 
 def table_row(run, serial_ms, reference_ms):
@@ -358,7 +410,8 @@ def markdown_table(header, rows):
 
 def table_runs(runs):
     """Returns the runs that Table 1 shows, in its order."""
-    order = {"serial": 0, "reference": 1, "naive": 2, "cyclic": 3, "dynamic": 4}
+    order = {"serial": 0, "reference": 1, "naive": 2, "cyclic": 3, "dynamic": 4,
+             "persistent": 5, "wavefront": 6}
     shown = [run for run in runs if run.role != "sweep"]
     return sorted(shown, key=lambda run: (run.role == "best", order.get(run.kernel, 9)))
 
@@ -395,7 +448,7 @@ def render_table1(runs, meta):
              "milliseconds",
              "- speedup over serial: our serial kernel is one work-item on the device; "
              "the paper's serial is a CPU program",
-             f"- {total_work_line(runs)}", "",
+             f"- {total_work_line(runs)}", *beyond_the_paper_lines(runs), "",
              markdown_table(TABLE_COLUMNS, [table_row(run, serial_ms, reference_ms)
                                             for run in table_runs(runs)])]
     sweep = [run for run in runs if run.role == "sweep"]
@@ -408,6 +461,26 @@ def render_table1(runs, meta):
     lines += [run.command for run in runs]
     lines += ["```", ""]
     return "\n".join(lines)
+
+
+def beyond_the_paper_lines(runs):
+    """Returns the header lines that explain the persistent and wavefront rows."""
+    kernels = {run.kernel for run in runs}
+    lines = []
+    if kernels & {"persistent", "wavefront"}:
+        lines.append("- persistent and wavefront go beyond the paper (docs/wavefront.md): "
+                     "it measured neither, so their paper cells are empty")
+    if "persistent" in kernels:
+        lines.append("- persistent: each work-item fetches `batch` pixels at a time from a "
+                     "global counter; paper-like row: dynamic's 8x8 work-groups and "
+                     "10x10 groups, batch 1")
+    if "wavefront" in kernels:
+        lines.append("- wavefront: time = sum of every launch of a frame (primary rays, "
+                     "then one launch per bounce); the work-group and groups are those of "
+                     "the primary-ray launch (bounce launches are 1D, as many work-items a "
+                     "group); parallel efficiency = mean / max flops over the work-items "
+                     "of all launches")
+    return lines
 
 
 def sweep_row(run):
@@ -426,7 +499,7 @@ def speedup_bars(runs):
     for run in table_runs(runs):
         if run.kernel not in PARALLEL_KERNELS:
             continue
-        paper = PAPER[run.kernel]["speedup"] if run.role == "paper" else None
+        paper = PAPER.get(run.kernel, {}).get("speedup") if run.role == "paper" else None
         label = run.kernel if run.role == "paper" else f"{run.kernel}\n(best)"
         kernel_ms = run.stats["kernel_ms"]
         bars.append((label, speedup(serial_ms, kernel_ms), speedup(reference_ms, kernel_ms),
@@ -441,7 +514,7 @@ def plot_speedup(runs, out_path, device_name):
               ("ours, over the CPU reference", 2, "tab:green"),
               ("paper, over serial C on the CPU", 3, "tab:gray"))
     width = 0.8 / len(series)
-    figure, axes = plt.subplots(figsize=(9, 5), layout="constrained")
+    figure, axes = plt.subplots(figsize=(max(9, 1.2 * len(bars)), 5), layout="constrained")
     try:
         for index, (label, column, color) in enumerate(series):
             positions = [i + (index - 1) * width for i in range(len(bars))]
@@ -491,16 +564,17 @@ def run_experiment(arguments, temp_dir):
                              flops=False))
     for kernel in PARALLEL_KERNELS:
         workgroup, groups = PAPER_GEOMETRY[kernel]
-        runs.append(run_rtcl(settings, progress, "paper", kernel, workgroup, groups))
+        runs.append(run_rtcl(settings, progress, "paper", kernel, workgroup, groups,
+                             batch=PAPER_BATCH.get(kernel)))
     if not arguments.no_sweep:
         for kernel in PARALLEL_KERNELS:
             sweep = sweep_kernel(settings, progress, kernel, workgroups, group_scales)
             remove_flops_files(sweep)
             best = select_best(sweep)
-            best_groups = None if kernel == "naive" else best.stats["groups"]
+            best_groups = best.stats["groups"] if kernel in GROUP_KERNELS else None
             runs += sweep
             runs.append(run_rtcl(settings, progress, "best", kernel, best.workgroup,
-                                 best_groups))
+                                 best_groups, batch=best.batch))
     return runs
 
 

@@ -39,6 +39,10 @@ OUTPUT_FORMATS = ("png", "svg", "pdf")
 DEFAULT_BINS = 50
 # Sidecar and data may disagree by float rounding of the mean, no more.
 EFFICIENCY_TOLERANCE = 1e-6
+# How a multi-launch kernel's sidecar (rtcl's wavefront) starts its "layout":
+# counts[0][i] over every launch's work-items, so global_size, which is the
+# primary-ray launch's, is not the array's shape.
+MULTI_PASS_LAYOUT = "counts[0][i]"
 # (divisor, name) for the x axis, largest first.
 FLOP_UNITS = ((1e9, "GFLOP"), (1e6, "MFLOP"), (1e3, "kFLOP"), (1.0, "FLOP"))
 
@@ -63,6 +67,13 @@ class FlopsFile:
     def kernel(self):
         return (self.sidecar or {}).get("kernel") or self.path.stem
 
+    @property
+    def multi_pass(self):
+        """True for a kernel of several launches (the wavefront): the counts are
+        one row, every launch's work-items one after the other."""
+        layout = (self.sidecar or {}).get("layout")
+        return isinstance(layout, str) and layout.startswith(MULTI_PASS_LAYOUT)
+
     def geometry(self):
         """Returns e.g. 'work-group 8x8, groups 25x25, 200x200 work-items'."""
         height, width = self.counts.shape
@@ -71,12 +82,16 @@ class FlopsFile:
             return items
         workgroup = _shape_text(self.sidecar.get("workgroup"))
         groups = _shape_text(self.sidecar.get("groups"))
+        if self.multi_pass:
+            return (f"{self.counts.size} work-items of all launches\n(primary rays: "
+                    f"work-group {workgroup}, groups {groups}; then one per bounce)")
         return f"work-group {workgroup}, groups {groups}, {items}"
 
     def label(self):
         """Two lines for a title or legend: kernel and geometry, then efficiency."""
+        scope = " over all launches" if self.multi_pass else ""
         return (f"{self.kernel}: {self.geometry()}\n"
-                f"parallel efficiency {format_efficiency(self.efficiency)}")
+                f"parallel efficiency{scope} {format_efficiency(self.efficiency)}")
 
 
 def _shape_text(value):
@@ -156,7 +171,15 @@ def sidecar_mismatches(flops_file):
     counts = flops_file.counts
     problems = []
     global_size = sidecar.get("global_size")
-    if global_size is not None and list(global_size) != [counts.shape[1], counts.shape[0]]:
+    if flops_file.multi_pass:
+        if counts.shape[0] != 1:
+            problems.append(f"layout says one row of launches but the array has "
+                            f"{counts.shape[0]} rows")
+        elif global_size is not None and len(global_size) == 2 \
+                and counts.shape[1] < global_size[0] * global_size[1]:
+            problems.append(f"global_size {global_size} (the first launch) but the array "
+                            f"has only {counts.shape[1]} work-items")
+    elif global_size is not None and list(global_size) != [counts.shape[1], counts.shape[0]]:
         problems.append(f"global_size {global_size} but the array is "
                         f"{counts.shape[1]}x{counts.shape[0]}")
     total = sidecar.get("total_flops")
