@@ -38,8 +38,12 @@ struct rt_material {
 	rt_float pad;
 };
 
+/* The tracer tests spheres this many at a time. */
+#define RT_SPHERE_GROUP 4
+
 struct rt_sphere {
-	rt_vec4 center;	     /* w: radius², so that one 16-byte load feeds a test */
+	rt_vec4 center;	     /* w: radius², so that one 16-byte load feeds a test;
+				-1 in the padding, which nothing hits */
 	rt_float radius;
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
@@ -68,7 +72,9 @@ struct rt_scene {
 	rt_vec4 up;
 	rt_vec4 background;
 	rt_vec4 ambient;
-	rt_int width, height, max_depth, pad0;
+	rt_int width, height, max_depth;
+	rt_int sphere_slots; /* sphere_count rounded up to RT_SPHERE_GROUP: the
+				array is padded with spheres nothing hits */
 	rt_int material_count, sphere_count, plane_count, light_count;
 	/* Byte offsets of the arrays from the start of this header. */
 	rt_uint material_offset, sphere_offset, plane_offset, light_offset;

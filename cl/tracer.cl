@@ -105,33 +105,51 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *coun
 #endif
 }
 
-/* Returns the smallest t > 0 at which the ray meets the sphere (the far root
- * when the origin is inside), or 0 if it does not. The discriminant comes from
- * the distance between the centre and the ray (Haines et al., "Precision
- * Improvements for Ray/Sphere Intersection", Ray Tracing Gems, 2019): the
- * textbook b² − c loses most of its bits to cancellation when the sphere is
- * far away, and the hit points it gives are off the surface by more than
- * epsilon, which shows as speckled self-shadowing. */
-static float intersect_sphere(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_sphere *s,
-			      float3 o, float3 d)
+/* The sphere test, in two parts so that a miss, the common case, costs only
+ * the first. sphere_gap returns the squared distance between the centre and
+ * the ray, which is more than radius² when the ray misses (Haines et al.,
+ * "Precision Improvements for Ray/Sphere Intersection", Ray Tracing Gems,
+ * 2019): the textbook b² − c loses most of its bits to cancellation when the
+ * sphere is far away, and the hit points it gives are off the surface by more
+ * than epsilon, which shows as speckled self-shadowing. d must be unit. The
+ * caller counts its 19 flops. */
+static float sphere_gap(float4 sphere, float3 o, float3 d, float3 *oc, float *b)
 {
-	float4 sphere = s->center; /* one load: the centre and radius² */
-	float3 oc = o - sphere.xyz;
-	float b = dot3(oc, d);
-	float3 closest = fma((float3)(-b), d, oc); /* from the centre to the ray's closest point */
-	float disc = sphere.w - dot3(closest, closest);
+	*oc = o - sphere.xyz;
+	*b = dot3(*oc, d);
+	float3 closest = fma((float3)(-*b), d, *oc); /* from the centre to the ray's closest point */
 
-	COUNT_FLOPS(tr, 3 + 5 + 6 + 6);
-	if (disc < 0.0f)
-		return 0.0f;
-	float far = sqrt(disc) - b;
-	COUNT_FLOPS(tr, 2);
+	return dot3(closest, closest);
+}
+
+/* Given gap <= radius², returns the smallest t > 0 at which the ray meets the
+ * sphere (the far root when the origin is inside), or 0 if it does not. */
+static float sphere_root(struct tracer *tr, float4 sphere, float3 oc, float b, float gap)
+{
+	float far = sqrt(sphere.w - gap) - b;
+
+	COUNT_FLOPS(tr, 3);
 	if (b > 0.0f) /* the centre is behind the origin: only the far root can be ahead */
 		return far > 0.0f ? far : 0.0f;
 	/* The near root as c/far, free of the cancellation in −b − sqrt(disc). */
 	float near = (dot3(oc, oc) - sphere.w) / far;
 	COUNT_FLOPS(tr, 7);
 	return near > 0.0f ? near : far;
+}
+
+/* Where the sphere test above found the ray within the sphere's radius:
+ * takes sphere i as the nearest hit if it is nearer than *nearest. With
+ * any_hit, once one hit is found, the rest are not looked at. */
+static void sphere_consider(struct tracer *tr, float4 sphere, float3 oc, float b, float gap, int i,
+			    bool any_hit, float *nearest, struct hit *best)
+{
+	if (!(gap <= sphere.w) || (any_hit && best->sphere >= 0))
+		return;
+	float t = sphere_root(tr, sphere, oc, b, gap);
+	if (t > 0.0f && t < *nearest) {
+		*nearest = t;
+		best->sphere = i;
+	}
 }
 
 /* Returns t > 0 where the ray meets the plane, or 0 if it does not (parallel
@@ -150,46 +168,57 @@ static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt
 	return t > 0.0f ? t : 0.0f;
 }
 
-/* Returns the nearest object the ray hits; hit.t is 0 when it hits nothing. */
-static struct hit nearest_hit(struct tracer *tr, float3 o, float3 d)
+#if RT_SPHERE_GROUP != 4
+#error "intersect_scene tests spheres four at a time"
+#endif
+
+/* Returns the nearest object on the ray with 0 < t < max_t; hit.t is 0 when
+ * there is none. With any_hit, returns the first such object found instead:
+ * enough for a shadow ray. The one loop serves both kinds of ray, so that
+ * work-items of a SIMD group tracing different kinds still run it together. */
+static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float max_t,
+				  bool any_hit)
 {
 	struct hit best = {0.0f, -1, -1};
-	float nearest = INFINITY;
+	float nearest = max_t;
 
-	for (int i = 0; i < tr->scene->sphere_count; i++) {
-		float t = intersect_sphere(tr, &tr->spheres[i], o, d);
-		if (t > 0.0f && t < nearest) {
-			nearest = t;
-			best.sphere = i;
+	/* RT_SPHERE_GROUP spheres at a time, so that when the ray misses them
+	 * all, as it mostly does, they cost one branch. */
+	for (int i = 0; i < tr->scene->sphere_slots; i += RT_SPHERE_GROUP) {
+		float4 s0 = tr->spheres[i].center; /* one load: the centre and radius² */
+		float4 s1 = tr->spheres[i + 1].center;
+		float4 s2 = tr->spheres[i + 2].center;
+		float4 s3 = tr->spheres[i + 3].center;
+		float3 oc0, oc1, oc2, oc3;
+		float b0, b1, b2, b3;
+		float g0 = sphere_gap(s0, o, d, &oc0, &b0);
+		float g1 = sphere_gap(s1, o, d, &oc1, &b1);
+		float g2 = sphere_gap(s2, o, d, &oc2, &b2);
+		float g3 = sphere_gap(s3, o, d, &oc3, &b3);
+
+		COUNT_FLOPS(tr, 19 * min(RT_SPHERE_GROUP, tr->scene->sphere_count - i));
+		if ((g0 <= s0.w) | (g1 <= s1.w) | (g2 <= s2.w) | (g3 <= s3.w)) {
+			sphere_consider(tr, s0, oc0, b0, g0, i, any_hit, &nearest, &best);
+			sphere_consider(tr, s1, oc1, b1, g1, i + 1, any_hit, &nearest, &best);
+			sphere_consider(tr, s2, oc2, b2, g2, i + 2, any_hit, &nearest, &best);
+			sphere_consider(tr, s3, oc3, b3, g3, i + 3, any_hit, &nearest, &best);
+			if (any_hit && best.sphere >= 0)
+				break;
 		}
 	}
-	for (int i = 0; i < tr->scene->plane_count; i++) {
+	for (int i = 0; i < tr->scene->plane_count && !(any_hit && best.sphere >= 0); i++) {
 		float t = intersect_plane(tr, &tr->planes[i], o, d);
 		if (t > 0.0f && t < nearest) {
 			nearest = t;
 			best.sphere = -1;
 			best.plane = i;
+			if (any_hit)
+				break;
 		}
 	}
 	if (best.sphere >= 0 || best.plane >= 0)
 		best.t = nearest;
 	return best;
-}
-
-/* Returns whether any object lies on the ray with 0 < t < max_t. */
-static bool occluded(struct tracer *tr, float3 o, float3 d, float max_t)
-{
-	for (int i = 0; i < tr->scene->sphere_count; i++) {
-		float t = intersect_sphere(tr, &tr->spheres[i], o, d);
-		if (t > 0.0f && t < max_t)
-			return true;
-	}
-	for (int i = 0; i < tr->scene->plane_count; i++) {
-		float t = intersect_plane(tr, &tr->planes[i], o, d);
-		if (t > 0.0f && t < max_t)
-			return true;
-	}
-	return false;
 }
 
 /* Returns the base colour C at p on the plane: its material colour, or the
@@ -206,22 +235,67 @@ static float3 plane_color(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_pl
 	return (square & 1) ? pl->checker_color.xyz : material_color;
 }
 
-/* Returns the local colour at p (RENDERING.md step 4): ambient plus, for each
- * light not in shadow, Blinn-Phong diffuse and specular terms. */
-static float3 shade_local(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_material *m,
-			  float3 base, float3 p, float3 n, float3 d)
+/* A hit being shaded (RENDERING.md steps 2-4), carried across the shadow rays
+ * it casts: the lights are taken one at a time, so that a shadow ray can go
+ * through the same intersect_scene call as every other ray. */
+struct shading {
+	float3 p, n, base;
+	bool inside;
+	RTCL_SCENE_SPACE const struct rt_material *m;
+	float3 color;	      /* the local colour so far, weight not applied */
+	float3 shadow_origin; /* p + epsilon·n */
+	int next_light;	      /* the light to consider next */
+	/* The light whose shadow ray is to be traced: */
+	float3 to_light_dir;
+	float light_distance;
+	float diffuse, specular;
+	int light;
+};
+
+/* Starts shading the hit of ray: the hit point, the normals, the base colour
+ * and the ambient term. */
+static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct hit hit,
+			  struct shading *sh)
 {
 	scene_ptr scene = tr->scene;
-	float3 color = m->color.w * base * scene->ambient.xyz;
-	float3 shadow_origin = p + scene->right.w * n;
+	float3 normal;
 
+	sh->p = ray->origin + hit.t * ray->dir;
+	COUNT_FLOPS(tr, 6);
+	if (hit.sphere >= 0) {
+		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
+		normal = (sh->p - s->center.xyz) * s->inv_radius;
+		sh->m = &tr->materials[s->material];
+		sh->base = sh->m->color.xyz;
+		COUNT_FLOPS(tr, 6);
+	} else {
+		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
+		normal = pl->normal.xyz;
+		sh->m = &tr->materials[pl->material];
+		sh->base = plane_color(tr, pl, sh->m->color.xyz, sh->p);
+	}
+	sh->inside = dot3(normal, ray->dir) > 0.0f;
+	sh->n = sh->inside ? -normal : normal;
+	COUNT_FLOPS(tr, 5);
+
+	sh->color = sh->m->color.w * sh->base * scene->ambient.xyz;
+	sh->shadow_origin = sh->p + scene->right.w * sh->n;
+	sh->next_light = 0;
 	COUNT_FLOPS(tr, 6 + 6);
-	for (int i = 0; i < scene->light_count; i++) {
-		RTCL_SCENE_SPACE const struct rt_light *light = &tr->lights[i];
-		float3 to_light = light->position.xyz - p;
+}
+
+/* Moves on to the next light that needs a shadow ray: computes its
+ * Blinn-Phong terms and returns true, or returns false when no light is left.
+ * A light whose terms add nothing needs no shadow ray. d: the ray's direction. */
+static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
+{
+	while (sh->next_light < tr->scene->light_count) {
+		int i = sh->next_light++;
+		RTCL_SCENE_SPACE const struct rt_material *m = sh->m;
+		float3 to_light = tr->lights[i].position.xyz - sh->p;
 		float distance = sqrt(dot3(to_light, to_light));
 		float3 l = to_light / distance;
-		float diffuse = m->diffuse * fmax(0.0f, dot3(n, l));
+		float diffuse = m->diffuse * fmax(0.0f, dot3(sh->n, l));
 		COUNT_FLOPS(tr, 3 + 6 + 3 + 7);
 
 		float specular = 0.0f;
@@ -230,71 +304,53 @@ static float3 shade_local(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_ma
 		COUNT_FLOPS(tr, 3 + 5);
 		if (half_length2 > 0.0f) {
 			float3 h = half_vector / sqrt(half_length2);
-			specular = m->specular * pow(fmax(0.0f, dot3(n, h)), m->shininess);
+			specular = m->specular * pow(fmax(0.0f, dot3(sh->n, h)), m->shininess);
 			COUNT_FLOPS(tr, 4 + 5 + 3);
 		}
-		/* A term that adds nothing needs no shadow ray. */
 		if (diffuse == 0.0f && specular == 0.0f)
 			continue;
+		sh->to_light_dir = l;
+		sh->light_distance = distance;
+		sh->diffuse = diffuse;
+		sh->specular = specular;
+		sh->light = i;
 		COUNT_RAY(tr);
-		if (occluded(tr, shadow_origin, l, distance))
-			continue;
-		color += (diffuse * base + specular) * light->color.xyz;
-		COUNT_FLOPS(tr, 3 + 3 + 3 + 3);
+		return true;
 	}
-	return color;
+	return false;
 }
 
-/* Traces one ray of the tree (RENDERING.md trace, steps 1-5): returns what it
- * adds to its pixel, weight included, and writes the rays it spawns into
- * children[0..*spawned): the refracted ray, then the reflected one. Used by the
- * tree walk below and by the wavefront kernel. */
-static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray_job children[2],
-			int *spawned)
+/* Adds the light of the last shading_next_light, whose shadow ray was clear. */
+static void shading_add_light(struct tracer *tr, struct shading *sh)
+{
+	sh->color += (sh->diffuse * sh->base + sh->specular) * tr->lights[sh->light].color.xyz;
+	COUNT_FLOPS(tr, 3 + 3 + 3 + 3);
+}
+
+/* What shading_spawn spawned: a bit per ray. */
+#define SPAWNED_REFRACTED 1
+#define SPAWNED_REFLECTED 2
+#define SPAWNED_BOTH (SPAWNED_REFRACTED | SPAWNED_REFLECTED)
+
+/* Makes the rays the shaded hit spawns (RENDERING.md step 5) and returns
+ * which: SPAWNED_* bits, with *refracted and *reflected set for those. */
+static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const struct shading *sh,
+			 struct ray_job *refracted, struct ray_job *reflected)
 {
 	scene_ptr scene = tr->scene;
+	RTCL_SCENE_SPACE const struct rt_material *m = sh->m;
 	float epsilon = scene->right.w;
-	struct hit hit = nearest_hit(tr, ray->origin, ray->dir);
+	float3 n = sh->n;
+	int spawned = 0;
 
-	*spawned = 0;
-	COUNT_RAY(tr);
-	if (hit.t == 0.0f) {
-		COUNT_FLOPS(tr, 3);
-		return ray->weight * scene->background.xyz;
-	}
-
-	float3 p = ray->origin + hit.t * ray->dir;
-	float3 normal;
-	float3 base;
-	RTCL_SCENE_SPACE const struct rt_material *m;
-	COUNT_FLOPS(tr, 6);
-	if (hit.sphere >= 0) {
-		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
-		normal = (p - s->center.xyz) * s->inv_radius;
-		m = &tr->materials[s->material];
-		base = m->color.xyz;
-		COUNT_FLOPS(tr, 6);
-	} else {
-		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
-		normal = pl->normal.xyz;
-		m = &tr->materials[pl->material];
-		base = plane_color(tr, pl, m->color.xyz, p);
-	}
-	bool inside = dot3(normal, ray->dir) > 0.0f;
-	float3 n = inside ? -normal : normal;
-	COUNT_FLOPS(tr, 5);
-
-	float3 contribution = ray->weight * shade_local(tr, m, base, p, n, ray->dir);
-	COUNT_FLOPS(tr, 3);
 	if (ray->depth >= RTCL_MAX_DEPTH || ray->depth >= scene->max_depth)
-		return contribution;
-
+		return 0;
 	/* Secondary directions are renormalised: in float, |d| drifts from 1
 	 * over a chain of bounces, and the intersection tests assume a unit d
 	 * (without it, 0.16% of tir.json's pixels stray from the reference). */
 	float reflect_weight = m->reflect;
 	if (m->transmit > 0.0f) {
-		float eta = inside ? m->ior : m->inv_ior;
+		float eta = sh->inside ? m->ior : m->inv_ior;
 		float c = -dot3(ray->dir, n);
 		float k = 1.0f - eta * eta * (1.0f - c * c);
 		COUNT_FLOPS(tr, 5 + 5);
@@ -304,49 +360,76 @@ static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray
 			COUNT_FLOPS(tr, 1);
 		} else {
 			float3 t_dir = normalize3(eta * ray->dir + (eta * c - sqrt(k)) * n);
-			children[(*spawned)++] = (struct ray_job){
-				p - epsilon * n, t_dir, ray->weight * m->transmit, ray->depth + 1};
+			*refracted = (struct ray_job){sh->p - epsilon * n, t_dir,
+						      ray->weight * m->transmit, ray->depth + 1};
+			spawned |= SPAWNED_REFRACTED;
 			COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
 		}
 	}
 	if (reflect_weight > 0.0f) {
 		float3 r_dir = normalize3(ray->dir - 2.0f * dot3(ray->dir, n) * n);
-		children[(*spawned)++] = (struct ray_job){
-			p + epsilon * n, r_dir, ray->weight * reflect_weight, ray->depth + 1};
+		*reflected = (struct ray_job){sh->p + epsilon * n, r_dir,
+					      ray->weight * reflect_weight, ray->depth + 1};
+		spawned |= SPAWNED_REFLECTED;
 		COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
 	}
-	return contribution;
+	return spawned;
 }
 
-/* Returns the colour seen along the primary ray: the ray tree walked depth
- * first (OpenCL C has no recursion). The walk goes on with the last ray a hit
- * spawns, which stays in registers; a refracted ray that has a reflected
- * sibling waits on a stack in private memory. This is the order of a stack
- * onto which both children are pushed, so the sum is the same. */
-static float3 trace(struct tracer *tr, float3 origin, float3 dir)
+/* Traces one ray of the tree (RENDERING.md trace, steps 1-5) with its shadow
+ * rays: returns what it adds to its pixel, weight included, and writes the
+ * rays it spawns into children[0..*spawned): the refracted ray, then the
+ * reflected one. The wavefront kernel's step; walk_step below interleaves
+ * the same steps. */
+static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray_job children[2],
+			int *spawned)
 {
-	struct ray_job waiting[RAY_STACK_SIZE];
-	int top = 0;
-	struct ray_job ray = {origin, dir, 1.0f, 0};
-	float3 color = (float3)(0.0f);
+	struct hit hit = intersect_scene(tr, ray->origin, ray->dir, INFINITY, false);
+	struct shading sh;
 
-	for (;;) {
-		struct ray_job children[2];
-		int spawned;
-
-		color += trace_one(tr, &ray, children, &spawned);
+	*spawned = 0;
+	COUNT_RAY(tr);
+	if (hit.t == 0.0f) {
 		COUNT_FLOPS(tr, 3);
-		if (spawned == 2)
-			waiting[top++] = children[0];
-		if (spawned > 0)
-			ray = children[spawned - 1];
-		else if (top > 0)
-			ray = waiting[--top];
-		else
-			break;
+		return ray->weight * tr->scene->background.xyz;
 	}
-	return color;
+	shading_begin(tr, ray, hit, &sh);
+	while (shading_next_light(tr, &sh, ray->dir))
+		if (intersect_scene(tr, sh.shadow_origin, sh.to_light_dir, sh.light_distance, true)
+			    .t == 0.0f)
+			shading_add_light(tr, &sh);
+	COUNT_FLOPS(tr, 3);
+	int which = shading_spawn(tr, ray, &sh, &children[0], &children[1]);
+	if (which == SPAWNED_REFLECTED)
+		children[0] = children[1];
+	*spawned = popcount(which);
+	return ray->weight * sh.color;
 }
+
+/* A pixel's ray tree being walked depth first (OpenCL C has no recursion),
+ * each ray's shadow rays right after it, one intersection at a time. Every
+ * ray, of either kind, goes through the one intersect_scene call of
+ * walk_step: work-items of a SIMD group at different points of their trees
+ * (one on a shadow ray, another on a reflection, or, in the persistent
+ * kernel, another on a new pixel) run the costly loop over the objects
+ * together instead of one after the other.
+ *
+ * The walk goes on with the last ray a hit spawns, which stays in registers;
+ * a refracted ray that has a reflected sibling waits on a stack in private
+ * memory. This is the order of a stack onto which both children are pushed,
+ * and the sums are those of trace_one. */
+struct walk {
+	struct ray_job waiting[RAY_STACK_SIZE];
+	int top;
+	struct ray_job ray;
+	struct shading sh;
+	bool shadow; /* the ray to intersect next: a shadow ray of sh, or ray */
+	float3 color;
+	int pixel; /* y * width + x */
+#ifdef RTCL_COUNT_FLOPS
+	ulong flops_before;
+#endif
+};
 
 /* Returns the unit direction of pixel (x, y)'s primary ray. */
 static float3 primary_direction(struct tracer *tr, int x, int y)
@@ -359,25 +442,86 @@ static float3 primary_direction(struct tracer *tr, int x, int y)
 	return normalize3(scene->forward.xyz + sx * scene->right.xyz + sy * scene->up.xyz);
 }
 
+/* Starts the walk of pixel (x, y), which must lie inside the image. */
+static void walk_start(struct tracer *tr, struct walk *w, int x, int y)
+{
+#ifdef RTCL_COUNT_FLOPS
+	w->flops_before = tr->flops;
+#endif
+	w->pixel = y * tr->scene->width + x;
+	w->ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y), 1.0f, 0};
+	w->top = 0;
+	w->shadow = false;
+	w->color = (float3)(0.0f);
+}
+
+/* Traces the walk's next ray and returns whether the walk is done; w->color is
+ * then the pixel's colour. */
+static bool walk_step(struct tracer *tr, struct walk *w)
+{
+	bool shadow = w->shadow;
+	struct hit hit = intersect_scene(tr, shadow ? w->sh.shadow_origin : w->ray.origin,
+					 shadow ? w->sh.to_light_dir : w->ray.dir,
+					 shadow ? w->sh.light_distance : INFINITY, shadow);
+	struct ray_job refracted, reflected;
+	int spawned = 0;
+
+	if (!shadow)
+		COUNT_RAY(tr);
+	if (!shadow && hit.t == 0.0f) {
+		w->color += w->ray.weight * tr->scene->background.xyz;
+		COUNT_FLOPS(tr, 3 + 3);
+	} else {
+		if (!shadow)
+			shading_begin(tr, &w->ray, hit, &w->sh);
+		else if (hit.t == 0.0f)
+			shading_add_light(tr, &w->sh);
+		w->shadow = shading_next_light(tr, &w->sh, w->ray.dir);
+		if (w->shadow)
+			return false;
+		w->color += w->ray.weight * w->sh.color;
+		COUNT_FLOPS(tr, 3 + 3);
+		spawned = shading_spawn(tr, &w->ray, &w->sh, &refracted, &reflected);
+	}
+	/* The tree below this ray is done or spawned: on to the next ray. */
+	if (spawned == SPAWNED_BOTH)
+		w->waiting[w->top++] = refracted;
+	if (spawned & SPAWNED_REFLECTED)
+		w->ray = reflected;
+	else if (spawned & SPAWNED_REFRACTED)
+		w->ray = refracted;
+	else if (w->top > 0)
+		w->ray = w->waiting[--w->top];
+	else
+		return true;
+	return false;
+}
+
+/* Stores the colour of a finished walk, and what it cost when counting. */
+static void walk_store(struct tracer *tr, const struct walk *w, __global float *image,
+		       __global uint *write_counts)
+{
+	vstore3(w->color, w->pixel, image);
+#ifdef RTCL_COUNT_FLOPS
+	tr->pixel_flops[w->pixel] = tr->flops - w->flops_before;
+#endif
+#ifdef RTCL_COUNT_WRITES
+	atomic_inc(&write_counts[w->pixel]);
+#else
+	(void)write_counts;
+#endif
+}
+
 /* Traces pixel (x, y), which must lie inside the image, and stores it. */
 static void render_pixel(struct tracer *tr, __global float *image, __global uint *write_counts,
 			 int x, int y)
 {
-	int index = y * tr->scene->width + x;
-#ifdef RTCL_COUNT_FLOPS
-	ulong flops_before = tr->flops;
-#endif
-	float3 color = trace(tr, tr->scene->eye.xyz, primary_direction(tr, x, y));
+	struct walk w;
 
-	vstore3(color, index, image);
-#ifdef RTCL_COUNT_FLOPS
-	tr->pixel_flops[index] = tr->flops - flops_before;
-#endif
-#ifdef RTCL_COUNT_WRITES
-	atomic_inc(&write_counts[index]);
-#else
-	(void)write_counts;
-#endif
+	walk_start(tr, &w, x, y);
+	while (!walk_step(tr, &w))
+		;
+	walk_store(tr, &w, image, write_counts);
 }
 
 /* Copies the scene block into the work-group's __local memory when the scene

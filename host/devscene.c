@@ -81,8 +81,9 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	size_t material_offset = round16(sizeof(struct rt_scene));
 	size_t sphere_offset =
 		material_offset + (size_t)scene->material_count * sizeof(struct rt_material);
-	size_t plane_offset =
-		sphere_offset + (size_t)scene->sphere_count * sizeof(struct rt_sphere);
+	int sphere_slots = (scene->sphere_count + RT_SPHERE_GROUP - 1) / RT_SPHERE_GROUP *
+			   RT_SPHERE_GROUP;
+	size_t plane_offset = sphere_offset + (size_t)sphere_slots * sizeof(struct rt_sphere);
 	size_t light_offset = plane_offset + (size_t)scene->plane_count * sizeof(struct rt_plane);
 	size_t total = light_offset + (size_t)scene->light_count * sizeof(struct rt_light);
 	unsigned char *block = calloc(1, total);
@@ -99,6 +100,7 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	header->max_depth = max_depth;
 	header->material_count = scene->material_count;
 	header->sphere_count = scene->sphere_count;
+	header->sphere_slots = sphere_slots;
 	header->plane_count = scene->plane_count;
 	header->light_count = scene->light_count;
 	header->material_offset = (rt_uint)material_offset;
@@ -128,6 +130,9 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 		spheres[i].inv_radius = (float)(1.0 / s->radius);
 		spheres[i].material = s->material;
 	}
+	/* The padding: radius² -1, which no squared distance is below. */
+	for (int i = scene->sphere_count; i < sphere_slots; i++)
+		spheres[i].center.s[3] = -1.0f;
 
 	struct rt_plane *planes = (struct rt_plane *)(block + plane_offset);
 	for (int i = 0; i < scene->plane_count; i++)

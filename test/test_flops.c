@@ -36,9 +36,9 @@ static const char test_kernels[] =
 	"{\n"
 	"	struct tracer tr;\n"
 	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
-	"	float t = intersect_sphere(&tr, &tr.spheres[0], o.xyz, d.xyz);\n"
+	"	struct hit hit = intersect_scene(&tr, o.xyz, d.xyz, INFINITY, false);\n"
 	"	out[0] = tr.flops;\n"
-	"	out[1] = as_uint(t);\n"
+	"	out[1] = as_uint(hit.t);\n"
 	"}\n"
 	"__kernel void count_plane(__global const uint4 *scene, __global ulong *out,"
 	"                          float4 o, float4 d)\n"
@@ -50,13 +50,14 @@ static const char test_kernels[] =
 	"	out[1] = as_uint(t);\n"
 	"}\n"
 	"__kernel void count_shading(__global const uint4 *scene, __global ulong *out,"
-	"                            float4 p, float4 d)\n"
+	"                            float4 o, float4 d)\n"
 	"{\n"
 	"	struct tracer tr;\n"
+	"	struct ray_job ray = {o.xyz, d.xyz, 1.0f, RTCL_MAX_DEPTH};\n"
+	"	struct ray_job children[2];\n"
+	"	int spawned;\n"
 	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
-	"	float3 n = (float3)(0.0f, 0.0f, 1.0f);\n"
-	"	float3 c = shade_local(&tr, &tr.materials[0], tr.materials[0].color.xyz, p.xyz,\n"
-	"			       n, d.xyz);\n"
+	"	float3 c = trace_one(&tr, &ray, children, &spawned);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(c.x);\n"
 	"}\n";
@@ -140,18 +141,22 @@ Test(flops, ray_sphere_test)
 	float t;
 
 	setup(&f);
-	/* A hit with the centre ahead: oc = o - c (3), b = oc.d (5),
-	 * closest = oc - b d (3 mul + 3 sub = 6), disc = r2 - closest.closest
-	 * (5 + 1 = 6): 20 so far; far = sqrt(disc) - b (2); near =
-	 * (oc.oc - r2) / far (5 + 1 + 1 = 7): 29 in all, and t = 4. */
-	cr_expect_eq(run_kernel(&f, "count_sphere", eye, down_axis, &t), 29);
+	/* intersect_scene over the sphere and the plane y = -1. The sphere, a
+	 * hit with the centre ahead: oc = o - c (3), b = oc.d (5), closest =
+	 * oc - b d (3 fma = 6), its squared length (5): 19 so far, which a miss
+	 * stops at; far = sqrt(r2 - gap) - b (3); near = (oc.oc - r2) / far
+	 * (5 + 1 + 1 = 7): 29. The plane, parallel to d: n.d (5). 34 in all, and
+	 * t = 4. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, down_axis, &t), 34);
 	cr_expect_float_eq(t, 4.0f, 1e-6f);
-	/* A miss: only the first 20. */
-	cr_expect_eq(run_kernel(&f, "count_sphere", eye, up, &t), 20);
+	/* Up the y axis: the sphere missed (19), the plane behind: n.d (5),
+	 * t = (offset - n.o) / denom (7), negative. 31, t = 0. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, up, &t), 31);
 	cr_expect_eq(t, 0.0f);
-	/* From inside, centre behind (b > 0): 20 + far (2) = 22, t = far. */
+	/* From inside, centre behind (b > 0): 19 + far (3) = 22, the plane
+	 * parallel (5): 27, t = far. */
 	const float inside[4] = {0, 0, 0.5f, 0}, outward[4] = {0, 0, 1, 0};
-	cr_expect_eq(run_kernel(&f, "count_sphere", inside, outward, &t), 22);
+	cr_expect_eq(run_kernel(&f, "count_sphere", inside, outward, &t), 27);
 	cr_expect_float_eq(t, 0.5f, 1e-6f);
 	teardown(&f);
 }
@@ -176,13 +181,16 @@ Test(flops, plane_test)
 Test(flops, shading_evaluation)
 {
 	struct fixture f;
-	const float p[4] = {0, 0, 1, 0}, d[4] = {0, 0, -1, 0};
+	const float o[4] = {0, 0, 5, 0}, d[4] = {0, 0, -1, 0};
 	float red;
 
 	setup(&f);
-	/* At p = (0,0,1), n = (0,0,1), seen along d = (0,0,-1), default material
-	 * (white, ka 1, kd 0.7, ks 0.3, shininess 32), ambient 0.1, white light
-	 * at (3,0,5):
+	/* trace_one of a ray at the last depth (nothing spawned) from (0,0,5)
+	 * along d = (0,0,-1): it hits the sphere at p = (0,0,1), n = (0,0,1);
+	 * default material (white, ka 1, kd 0.7, ks 0.3, shininess 32), ambient
+	 * 0.1, white light at (3,0,5):
+	 *   the hit, as in ray_sphere_test        34
+	 *   p = o + t d 6, n = (p - c) / r 6, inside: n.d 5   17
 	 *   ka C (x) ambient                      3 + 3 = 6
 	 *   shadow origin p + eps n               3 + 3 = 6
 	 *   the light: light - p 3, distance 5 + 1, L = /distance 3,
@@ -192,9 +200,10 @@ Test(flops, shading_evaluation)
 	 *   the shadow ray against the sphere it leaves, centre behind: 22;
 	 *     the plane y = -1: n.d = 0, parallel: 5  27
 	 *   (kd max + ks spec) C (x) Lc, added    3 + 3 + 3 + 3 = 12
-	 * 6 + 6 + 19 + 8 + 12 + 27 + 12 = 90.
+	 *   weight times the local colour         3
+	 * 34 + 17 + 6 + 6 + 19 + 8 + 12 + 27 + 12 + 3 = 144.
 	 * Red: 0.1 + 0.7 * 0.8 + 0.3 * ((1.8 / sqrt(3.6))^2)^16 = 0.1 + 0.56 + 0.3 * 0.9^16. */
-	cr_expect_eq(run_kernel(&f, "count_shading", p, d, &red), 90);
+	cr_expect_eq(run_kernel(&f, "count_shading", o, d, &red), 144);
 	cr_expect_float_eq(red, 0.1 + 0.56 + 0.3 * 0.18530202, 1e-5);
 	teardown(&f);
 }
