@@ -8,6 +8,8 @@
 #   make fuzz         libFuzzer on the scene loader for FUZZ_SECONDS (needs clang)
 #   make valgrind     memcheck on full renders (test/valgrind.sh)
 #   make experiments  the paper's Table 1 and Figures 6-7 (DEVICE="-p N -d M")
+#   make bench        every kernel over work-group shapes, group counts and batches
+#                     (DEVICE="-p N -d M", BENCH="more tools/bench.py options")
 #   make clean
 #
 # Variables: OIIO=0|1, BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
@@ -68,7 +70,7 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test experiments clean fuzz valgrind
+.PHONY: all deps render test experiments bench clean fuzz valgrind
 all: $(BIN)
 
 $(BIN): $(BUILD)/main.o $(HOST_OBJS)
@@ -111,6 +113,12 @@ test: $(BIN) $(BUILD)/unit_tests
 # make experiments DEVICE="-p 1 -d 0"; results under docs/results/<device>/.
 experiments: $(BIN)
 	$(PYTHON) tools/experiments.py --rtcl ./$(BIN) $(DEVICE)
+
+# The benchmark (issue 4): every kernel x work-group shapes x group counts x
+# batches, median of 10 launches each, e.g. make bench DEVICE="-p 1 -d 0"
+# BENCH="--scaling"; results in docs/results/<device>/bench.md and bench.csv.
+bench: $(BIN)
+	$(PYTHON) tools/bench.py --rtcl ./$(BIN) $(DEVICE) $(BENCH)
 
 # libFuzzer on the scene loader and devscene_pack (test/fuzz_scene.c), seeded
 # with the shipped and the bad scenes; the seeds are copied, the growing corpus

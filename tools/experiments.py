@@ -342,6 +342,16 @@ def git_commit():
     return commit + ("-dirty" if changes else "")
 
 
+def git_describe():
+    """Returns `git describe --always --dirty` of the rtcl checkout, or None."""
+    try:
+        return subprocess.run(["git", "describe", "--always", "--dirty"], cwd=ROOT,
+                              capture_output=True, text=True,
+                              check=True).stdout.strip() or None
+    except (OSError, subprocess.CalledProcessError):
+        return None
+
+
 # ---- Table 1 ------------------------------------------------------------------
 
 TABLE_COLUMNS = ("Implementation", "work-group", "groups / threads", "time ms (median)",
