@@ -416,11 +416,13 @@ static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray
  *
  * The walk goes on with the last ray a hit spawns, which stays in registers;
  * a refracted ray that has a reflected sibling waits on a stack in private
- * memory. This is the order of a stack onto which both children are pushed,
- * and the sums are those of trace_one. */
+ * memory, waiting[RAY_STACK_SIZE], kept apart from struct walk: a compiler
+ * puts a struct with a dynamically indexed array in it wholly in memory, and
+ * the walk's other fields are used at every step. This is the order of a
+ * stack onto which both children are pushed, and the sums are those of
+ * trace_one. */
 struct walk {
-	struct ray_job waiting[RAY_STACK_SIZE];
-	int top;
+	int top; /* rays waiting */
 	struct ray_job ray;
 	struct shading sh;
 	bool shadow; /* the ray to intersect next: a shadow ray of sh, or ray */
@@ -457,7 +459,7 @@ static void walk_start(struct tracer *tr, struct walk *w, int x, int y)
 
 /* Traces the walk's next ray and returns whether the walk is done; w->color is
  * then the pixel's colour. */
-static bool walk_step(struct tracer *tr, struct walk *w)
+static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting)
 {
 	bool shadow = w->shadow;
 	struct hit hit = intersect_scene(tr, shadow ? w->sh.shadow_origin : w->ray.origin,
@@ -485,13 +487,13 @@ static bool walk_step(struct tracer *tr, struct walk *w)
 	}
 	/* The tree below this ray is done or spawned: on to the next ray. */
 	if (spawned == SPAWNED_BOTH)
-		w->waiting[w->top++] = refracted;
+		waiting[w->top++] = refracted;
 	if (spawned & SPAWNED_REFLECTED)
 		w->ray = reflected;
 	else if (spawned & SPAWNED_REFRACTED)
 		w->ray = refracted;
 	else if (w->top > 0)
-		w->ray = w->waiting[--w->top];
+		w->ray = waiting[--w->top];
 	else
 		return true;
 	return false;
@@ -517,9 +519,10 @@ static void render_pixel(struct tracer *tr, __global float *image, __global uint
 			 int x, int y)
 {
 	struct walk w;
+	struct ray_job waiting[RAY_STACK_SIZE];
 
 	walk_start(tr, &w, x, y);
-	while (!walk_step(tr, &w))
+	while (!walk_step(tr, &w, waiting))
 		;
 	walk_store(tr, &w, image, write_counts);
 }
