@@ -106,8 +106,12 @@ void cli_print_help(FILE *out)
 		"  -h, --help             show this help and exit\n"
 		"      --version          show the version and exit\n"
 		"\n"
-		"Environment: RTCL_CL_DIR=DIR loads the OpenCL sources from DIR instead of the\n"
-		"copies built into the binary (for kernel development).\n"
+		"Environment, for kernel development:\n"
+		"  RTCL_CL_DIR=DIR          load the OpenCL sources from DIR instead of the\n"
+		"                           copies built into the binary\n"
+		"  RTCL_BUILD_OPTIONS=OPTS  add OPTS to the program build options, e.g.\n"
+		"                           -cl-nv-verbose (its report shows with -v)\n"
+		"  RTCL_DUMP_BINARY=FILE    write the built program binary (PTX on NVIDIA)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
 		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH);

@@ -456,3 +456,49 @@ def test_depth_64_renders(tmp_path):
     assert stats["max_depth"] == 64
     assert "-DRTCL_MAX_DEPTH=64" in stats["build_options"]
     assert stats["rays"] > 24 * 16 * 60  # most paths bounce to the last level
+
+
+def run_with_env(env, *args):
+    return subprocess.run([RTCL, *args], capture_output=True, text=True,
+                          env={**os.environ, **env}, timeout=300)
+
+
+def test_build_options_variable_is_added_and_reported(tmp_path):
+    out, stats = tmp_path / "x.ppm", tmp_path / "s.json"
+    plain = tmp_path / "plain.ppm"
+    assert rtcl(*SMALL, "-o", str(plain)).returncode == 0
+    result = run_with_env({"RTCL_BUILD_OPTIONS": "-DRTCL_UNUSED_MARKER=7"}, *SMALL, "-v",
+                          "-o", str(out), "--stats", str(stats))
+    assert result.returncode == 0, result.stderr
+    options = json.loads(stats.read_text())["build_options"]
+    assert options.startswith("-cl-std=CL1.2 ") and options.endswith(" -DRTCL_UNUSED_MARKER=7")
+    assert "rtcl: build options: " + options in result.stderr
+    # A define the sources do not use leaves the image alone.
+    assert out.read_bytes().split(b"\n", 3)[3] == plain.read_bytes().split(b"\n", 3)[3]
+
+
+def test_build_options_variable_too_long_is_refused(tmp_path):
+    out = tmp_path / "x.ppm"
+    result = run_with_env({"RTCL_BUILD_OPTIONS": "-DX" * 200}, *SMALL, "-o", str(out))
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == [
+        "rtcl: RTCL_BUILD_OPTIONS is too long (at most 412 characters)"]
+    assert not out.exists()
+
+
+def test_dump_binary_writes_the_program(tmp_path):
+    binary, out = tmp_path / "program.bin", tmp_path / "x.ppm"
+    result = run_with_env({"RTCL_DUMP_BINARY": str(binary)}, *SMALL, "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert binary.stat().st_size > 1000
+    assert [p.name for p in tmp_path.iterdir() if p.name.startswith(".")] == []
+
+
+def test_dump_binary_into_a_missing_folder_fails_before_any_output(tmp_path):
+    out = tmp_path / "x.ppm"
+    result = run_with_env({"RTCL_DUMP_BINARY": str(tmp_path / "nope" / "p.bin")}, *SMALL,
+                          "-o", str(out))
+    assert result.returncode == 1
+    assert len(result.stderr.strip().splitlines()) == 1
+    assert "nope/p.bin" in result.stderr
+    assert not out.exists()
