@@ -23,6 +23,8 @@ import numpy as np
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tools"))
+import ppmdiff  # noqa: E402
 TOOL = ROOT / "tools" / "povray.py"
 SCENES = ROOT / "scenes"
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
@@ -320,22 +322,8 @@ def test_missing_povray_executable(tmp_path):
 
 def read_ppm(path):
     """Pixels of a binary 8-bit PPM (comments allowed) as an (h, w, 3) int array."""
-    data = pathlib.Path(path).read_bytes()
-    fields, pos = [], 0
-    while len(fields) < 4:
-        while data[pos:pos + 1].isspace():
-            pos += 1
-        if data[pos:pos + 1] == b"#":
-            pos = data.index(b"\n", pos) + 1
-            continue
-        end = pos
-        while not data[end:end + 1].isspace():
-            end += 1
-        fields.append(data[pos:end])
-        pos = end
-    assert fields[0] == b"P6" and fields[3] == b"255", fields
-    w, h = int(fields[1]), int(fields[2])
-    return np.frombuffer(data[pos + 1:pos + 1 + w * h * 3], np.uint8).reshape(h, w, 3).astype(int)
+    (w, h), data = ppmdiff.pixels(path)
+    return np.frombuffer(data[:w * h * 3], np.uint8).reshape(h, w, 3).astype(int)
 
 
 def render_both(tmp_path, scene, size, *extra):

@@ -119,6 +119,9 @@ import sys
 import tempfile
 import time
 
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from genscene import cross, dot, parse_size, sub  # noqa: E402
+
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 DEFAULT_SCENE = os.path.join(ROOT, "scenes", "paper60.json")
 PROG = "povray.py"
@@ -140,29 +143,7 @@ class SceneError(Exception):
     """A scene that cannot be converted; the message names the place."""
 
 
-def parse_size(text):
-    """Return (width, height) from "WxH"; raise argparse's error otherwise."""
-    try:
-        w, h = (int(part) for part in text.lower().split("x"))
-    except ValueError:
-        raise argparse.ArgumentTypeError("expected WxH, e.g. 2000x2000, got %r" % text)
-    if not (1 <= w <= 32768 and 1 <= h <= 32768):
-        raise argparse.ArgumentTypeError("width and height must be 1 ... 32768, got %r" % text)
-    return w, h
-
-
-# ---- vectors ---------------------------------------------------------------------
-
-def sub(a, b):
-    return tuple(x - y for x, y in zip(a, b))
-
-
-def dot(a, b):
-    return sum(x * y for x, y in zip(a, b))
-
-
-def cross(a, b):
-    return (a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0])
+# parse_size and the vector helpers are genscene's (same folder).
 
 
 def scale(a, s):
