@@ -132,6 +132,16 @@ static void query_info(struct device *dev)
 	clGetDeviceInfo(dev->id, CL_DEVICE_MEM_BASE_ADDR_ALIGN, sizeof(align_bits), &align_bits,
 			NULL);
 	dev->mem_base_addr_align = align_bits / 8 ? align_bits / 8 : 128;
+
+	size_t size = 0;
+	clGetDeviceInfo(dev->id, CL_DEVICE_EXTENSIONS, 0, NULL, &size);
+	char *extensions = size ? malloc(size + 1) : NULL;
+	if (extensions &&
+	    clGetDeviceInfo(dev->id, CL_DEVICE_EXTENSIONS, size, extensions, NULL) == CL_SUCCESS) {
+		extensions[size] = '\0';
+		dev->nv_compiler_options = strstr(extensions, "cl_nv_compiler_options") != NULL;
+	}
+	free(extensions);
 }
 
 int device_open(struct device *dev, int platform_index, int device_index, char *err,

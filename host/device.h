@@ -27,6 +27,7 @@ struct device {
 	cl_ulong global_mem_size;
 	cl_ulong max_alloc_size;
 	cl_uint mem_base_addr_align; /* bytes */
+	int nv_compiler_options;     /* cl_nv_compiler_options: -cl-nv-* build options */
 };
 
 /* Opens a device. platform_index < 0 and device_index < 0 mean "the first

@@ -158,6 +158,12 @@ static int dump_binary(cl_program program, char *err, size_t err_size)
 	return ret;
 }
 
+/* NVIDIA's compiler gives the tracer about 100 registers, which leaves 4-5
+ * warps per scheduler; capped at 80 the same kernels run 4-8 % faster on an
+ * H100 with no spills (docs/performance.md). RTCL_BUILD_OPTIONS can override
+ * it: the last -cl-nv-maxrregcount given wins. */
+#define NV_REGISTER_CAP "-cl-nv-maxrregcount=80"
+
 int render_build_program(struct device *dev, const struct render_settings *s,
 			 struct render_result *res, cl_program *program, char *err, size_t err_size)
 {
@@ -176,11 +182,12 @@ int render_build_program(struct device *dev, const struct render_settings *s,
 	}
 	const char *extra = getenv("RTCL_BUILD_OPTIONS");
 	int length = snprintf(res->build_options, sizeof(res->build_options),
-			      "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s",
+			      "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s",
 			      s->max_depth, s->batch > 0 ? s->batch : 1,
 			      res->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
 			      s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
-			      s->check_writes ? " -DRTCL_COUNT_WRITES" : "", extra ? " " : "",
+			      s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
+			      dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra ? " " : "",
 			      extra ? extra : "");
 	if (length >= (int)sizeof(res->build_options)) {
 		snprintf(err, err_size, "RTCL_BUILD_OPTIONS is too long (at most %zu characters)",

@@ -141,22 +141,22 @@ Test(flops, ray_sphere_test)
 	float t;
 
 	setup(&f);
-	/* intersect_scene over the sphere and the plane y = -1. The sphere, a
-	 * hit with the centre ahead: oc = o - c (3), b = oc.d (5), closest =
-	 * oc - b d (3 fma = 6), its squared length (5): 19 so far, which a miss
-	 * stops at; far = sqrt(r2 - gap) - b (3); near = (oc.oc - r2) / far
-	 * (5 + 1 + 1 = 7): 29. The plane, parallel to d: n.d (5). 34 in all, and
-	 * t = 4. */
-	cr_expect_eq(run_kernel(&f, "count_sphere", eye, down_axis, &t), 34);
+	/* intersect_scene over the sphere and the plane y = -1. The ray's frame
+	 * (ray_frame): 23. The sphere: its offset across the ray, two fma chains
+	 * of 6, and the squared length, 3: 15, which a miss stops at. A hit with
+	 * the centre ahead: oc = o - c (3), b = oc.d (5), r2 - gap (1), far =
+	 * sqrt(.) - b (2), near = (oc.oc - r2) / far (5 + 1 + 1 = 7): 15 + 18 =
+	 * 33. The plane, parallel to d: n.d (5). 61 in all, and t = 4. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, down_axis, &t), 61);
 	cr_expect_float_eq(t, 4.0f, 1e-6f);
-	/* Up the y axis: the sphere missed (19), the plane behind: n.d (5),
-	 * t = (offset - n.o) / denom (7), negative. 31, t = 0. */
-	cr_expect_eq(run_kernel(&f, "count_sphere", eye, up, &t), 31);
+	/* Up the y axis: the frame (23), the sphere missed (15), the plane
+	 * behind: n.d (5), t = (offset - n.o) / denom (7), negative. 50, t = 0. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, up, &t), 50);
 	cr_expect_eq(t, 0.0f);
-	/* From inside, centre behind (b > 0): 19 + far (3) = 22, the plane
-	 * parallel (5): 27, t = far. */
+	/* From inside, centre behind (b > 0): 23 + 15 + 11 (t is far), the
+	 * plane parallel (5): 54, t = far. */
 	const float inside[4] = {0, 0, 0.5f, 0}, outward[4] = {0, 0, 1, 0};
-	cr_expect_eq(run_kernel(&f, "count_sphere", inside, outward, &t), 27);
+	cr_expect_eq(run_kernel(&f, "count_sphere", inside, outward, &t), 54);
 	cr_expect_float_eq(t, 0.5f, 1e-6f);
 	teardown(&f);
 }
@@ -189,21 +189,22 @@ Test(flops, shading_evaluation)
 	 * along d = (0,0,-1): it hits the sphere at p = (0,0,1), n = (0,0,1);
 	 * default material (white, ka 1, kd 0.7, ks 0.3, shininess 32), ambient
 	 * 0.1, white light at (3,0,5):
-	 *   the hit, as in ray_sphere_test        34
+	 *   the hit, as in ray_sphere_test        61
 	 *   p = o + t d 6, n = (p - c) / r 6, inside: n.d 5   17
 	 *   ka C (x) ambient                      3 + 3 = 6
 	 *   shadow origin p + eps n               3 + 3 = 6
-	 *   the light: light - p 3, distance 5 + 1, L = /distance 3,
-	 *     kd max(0, n.L) 5 + 1 + 1            19
+	 *   the light: light - p 3, its squared length 5, 1/distance
+	 *     (rsqrt) 1, distance 1, L 3, kd max(0, n.L) 5 + 1 + 1    20
 	 *   L - d 3, its squared length 5         8
 	 *   H 1 + 3, ks max(0, n.H)^s 5 + 3       12
-	 *   the shadow ray against the sphere it leaves, centre behind: 22;
-	 *     the plane y = -1: n.d = 0, parallel: 5  27
+	 *   the shadow ray: its frame 23, the sphere it leaves, within the
+	 *     radius, centre behind: 15 + 11; the plane y = -1: n.d = 0,
+	 *     parallel: 5                          54
 	 *   (kd max + ks spec) C (x) Lc, added    3 + 3 + 3 + 3 = 12
 	 *   weight times the local colour         3
-	 * 34 + 17 + 6 + 6 + 19 + 8 + 12 + 27 + 12 + 3 = 144.
+	 * 61 + 17 + 6 + 6 + 20 + 8 + 12 + 54 + 12 + 3 = 199.
 	 * Red: 0.1 + 0.7 * 0.8 + 0.3 * ((1.8 / sqrt(3.6))^2)^16 = 0.1 + 0.56 + 0.3 * 0.9^16. */
-	cr_expect_eq(run_kernel(&f, "count_shading", o, d, &red), 144);
+	cr_expect_eq(run_kernel(&f, "count_shading", o, d, &red), 199);
 	cr_expect_float_eq(red, 0.1 + 0.56 + 0.3 * 0.18530202, 1e-5);
 	teardown(&f);
 }
