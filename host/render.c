@@ -159,8 +159,8 @@ static int dump_binary(cl_program program, char *err, size_t err_size)
 }
 
 /* NVIDIA's compiler gives the tracer about 100 registers, which leaves 4-5
- * warps per scheduler; capped at 80 the same kernels run 4-8 % faster on an
- * H100 with no spills (docs/performance.md). RTCL_BUILD_OPTIONS can override
+ * warps per scheduler; capped at 80 (60 bytes spilled) the same kernels run
+ * 3-5 % faster on an H100 (docs/performance.md, step 9). RTCL_BUILD_OPTIONS can override
  * it: the last -cl-nv-maxrregcount given wins. */
 #define NV_REGISTER_CAP "-cl-nv-maxrregcount=80"
 
