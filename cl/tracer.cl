@@ -1,7 +1,7 @@
 /* The tracer: what a pixel is (../shared/docs/RENDERING.md), written once and
  * used by every scheduling kernel. OpenCL C 1.2.
  *
- * Build-time options, set by the host (host/runtime.c):
+ * Build-time options, set by the host (host/render.c):
  *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack
  *   RTCL_SCENE_IN_LOCAL copy the scene into __local memory per work-group;
  *                       without it the tracer reads it from __global memory

@@ -164,6 +164,10 @@ static int dump_binary(cl_program program, char *err, size_t err_size)
  * it: the last -cl-nv-maxrregcount given wins. */
 #define NV_REGISTER_CAP "-cl-nv-maxrregcount=80"
 
+/* RTCL_BUILD_OPTIONS may add this many characters: rtcl's own options take at
+ * most about 150 of the 512 in render_result.build_options. */
+#define BUILD_OPTIONS_EXTRA_MAX 256
+
 int render_build_program(struct device *dev, const struct render_settings *s,
 			 struct render_result *res, cl_program *program, char *err, size_t err_size)
 {
@@ -181,19 +185,18 @@ int render_build_program(struct device *dev, const struct render_settings *s,
 			goto out_free_sources;
 	}
 	const char *extra = getenv("RTCL_BUILD_OPTIONS");
-	int length = snprintf(res->build_options, sizeof(res->build_options),
-			      "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s",
-			      s->max_depth, s->batch > 0 ? s->batch : 1,
-			      res->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
-			      s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
-			      s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
-			      dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra ? " " : "",
-			      extra ? extra : "");
-	if (length >= (int)sizeof(res->build_options)) {
-		snprintf(err, err_size, "RTCL_BUILD_OPTIONS is too long (at most %zu characters)",
-			 sizeof(res->build_options) - 100);
+	if (extra && strlen(extra) > BUILD_OPTIONS_EXTRA_MAX) {
+		snprintf(err, err_size, "RTCL_BUILD_OPTIONS is too long (at most %d characters)",
+			 BUILD_OPTIONS_EXTRA_MAX);
 		goto out_free_sources;
 	}
+	snprintf(res->build_options, sizeof(res->build_options),
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s", s->max_depth,
+		 s->batch > 0 ? s->batch : 1, res->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
+		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
+		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
+		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
+		 extra ? extra : "");
 
 	*program = clCreateProgramWithSource(dev->context, 3, texts, NULL, &status);
 	if (status != CL_SUCCESS) {
