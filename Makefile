@@ -62,8 +62,9 @@ endif
 LDLIBS += -lstdc++
 
 # Every host module but main; tests link them too.
-HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o render.o scene.o \
-	stats.o outfile.o workmap.o wavefront.o image_common.o reference.o embedded.o) \
+HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o timing.o files.o \
+	checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o outputs.o \
+	workmap.o image_common.o reference.o embedded.o) \
 	$(IMAGE_BACKEND)
 CL_SOURCES := cl/rtcl_shared.h cl/tracer.cl $(filter-out cl/tracer.cl,$(wildcard cl/*.cl))
 EMBEDDED := $(CL_SOURCES) scenes/paper60.json

@@ -185,6 +185,33 @@ void device_close(struct device *dev)
 	dev->context = NULL;
 }
 
+int device_check_fits(const struct device *dev, const char *what, double bytes, char *err,
+		      size_t err_size)
+{
+	if (bytes > (double)dev->max_alloc_size) {
+		snprintf(err, err_size,
+			 "%s needs %.0f bytes of device memory, but %s allows at most %llu bytes "
+			 "in one buffer (CL_DEVICE_MAX_MEM_ALLOC_SIZE): choose a smaller --size",
+			 what, bytes, dev->name, (unsigned long long)dev->max_alloc_size);
+		return -1;
+	}
+	return 0;
+}
+
+cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
+			    const char *what, char *err, size_t err_size)
+{
+	cl_int status;
+	cl_mem buffer = clCreateBuffer(dev->context, flags, bytes, host, &status);
+
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateBuffer for the %s (%zu bytes) failed: %s", what,
+			 bytes, cl_error_name(status));
+		return NULL;
+	}
+	return buffer;
+}
+
 static const char *type_name(cl_device_type type)
 {
 	if (type & CL_DEVICE_TYPE_GPU)

@@ -38,6 +38,16 @@ int device_open(struct device *dev, int platform_index, int device_index, char *
 
 void device_close(struct device *dev);
 
+/* Checks that a buffer of `bytes` fits the device (one allocation of at most
+ * CL_DEVICE_MAX_MEM_ALLOC_SIZE) before asking for it; `what` names it in the
+ * message. Returns 0, or -1 with one message in err. */
+int device_check_fits(const struct device *dev, const char *what, double bytes, char *err,
+		      size_t err_size);
+
+/* clCreateBuffer with one message naming `what` on failure; NULL then. */
+cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
+			    const char *what, char *err, size_t err_size);
+
 /* Prints every platform and device in the style of `clinfo -l`, with the
  * indices -p and -d take. Returns 0, or -1 with a message in err. */
 int device_list(FILE *out, char *err, size_t err_size);

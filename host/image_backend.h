@@ -8,7 +8,9 @@
 #ifndef RTCL_IMAGE_BACKEND_H
 #define RTCL_IMAGE_BACKEND_H
 
+#include <stdarg.h>
 #include <stddef.h>
+#include <stdio.h>
 
 #include "image.h"
 
@@ -29,12 +31,21 @@ int image_backend_encode(const char *path, const char *tmp_path, int tmp_fd, con
 			 int width, int height, const struct image_meta *meta, char *err,
 			 size_t err_size);
 
-/* snprintf into err[err_size]; does nothing when err is NULL or err_size 0. */
-void image_set_error(char *err, size_t err_size, const char *format, ...)
+/* snprintf into err[err_size]; does nothing when err is NULL or err_size 0.
+ * Inline, so that the backends need nothing back from image_common.c. */
 #ifdef __GNUC__
-	__attribute__((format(printf, 3, 4)))
+__attribute__((format(printf, 3, 4)))
 #endif
-	;
+static inline void image_set_error(char *err, size_t err_size, const char *format, ...)
+{
+	va_list args;
+
+	if (!err || err_size == 0)
+		return;
+	va_start(args, format);
+	vsnprintf(err, err_size, format, args);
+	va_end(args);
+}
 
 #ifdef __cplusplus
 }

@@ -40,17 +40,6 @@ unsigned char image_to_8bit(float c)
 	return (unsigned char)floor(255.0 * (double)c + 0.5);
 }
 
-void image_set_error(char *err, size_t err_size, const char *format, ...)
-{
-	va_list args;
-
-	if (!err || err_size == 0)
-		return;
-	va_start(args, format);
-	vsnprintf(err, err_size, format, args);
-	va_end(args);
-}
-
 static const char *base_name(const char *path)
 {
 	const char *slash = strrchr(path, '/');

@@ -8,6 +8,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "scene.h"
+#include "files.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -831,84 +832,6 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 	return ret;
 }
 
-/* Reads a whole regular file into a malloc'd buffer. */
-static int read_file(const char *path, char **out, size_t *out_len, char *err, size_t err_size)
-{
-	struct loader ld = {.source = path, .err = err, .err_size = err_size};
-	size_t len = 0, capacity;
-	struct stat st;
-	char *buf = NULL;
-	int fd;
-
-	/* O_NONBLOCK: a FIFO must not hang the open; it is refused below. */
-	fd = open(path, O_RDONLY | O_NONBLOCK);
-	if (fd < 0) {
-		write_err(&ld, "%s: cannot open: %s", path, strerror(errno));
-		return -1;
-	}
-	if (fstat(fd, &st) != 0) {
-		write_err(&ld, "%s: cannot stat: %s", path, strerror(errno));
-		goto out_close;
-	}
-	if (!S_ISREG(st.st_mode)) {
-		write_err(&ld, "%s: not a regular file", path);
-		goto out_close;
-	}
-	if ((unsigned long long)st.st_size > SCENE_MAX_BYTES) {
-		write_err(&ld, "%s: scene is %lld bytes, more than the limit of %zu bytes", path,
-			  (long long)st.st_size, SCENE_MAX_BYTES);
-		goto out_close;
-	}
-
-	/* The size may change while we read; trust what read() returns. */
-	capacity = (size_t)st.st_size + 1;
-	buf = malloc(capacity);
-	if (!buf) {
-		write_err(&ld, "%s: out of memory", path);
-		goto out_close;
-	}
-	for (;;) {
-		ssize_t n;
-
-		if (len == capacity) {
-			char *grown;
-
-			if (capacity > SCENE_MAX_BYTES) {
-				write_err(&ld, "%s: scene is more than the limit of %zu bytes",
-					  path, SCENE_MAX_BYTES);
-				goto out_free;
-			}
-			grown = realloc(buf, capacity * 2);
-			if (!grown) {
-				write_err(&ld, "%s: out of memory", path);
-				goto out_free;
-			}
-			buf = grown;
-			capacity *= 2;
-		}
-		n = read(fd, buf + len, capacity - len);
-		if (n < 0 && errno == EINTR)
-			continue;
-		if (n < 0) {
-			write_err(&ld, "%s: cannot read: %s", path, strerror(errno));
-			goto out_free;
-		}
-		if (n == 0)
-			break;
-		len += (size_t)n;
-	}
-	close(fd);
-	*out = buf;
-	*out_len = len;
-	return 0;
-
-out_free:
-	free(buf);
-out_close:
-	close(fd);
-	return -1;
-}
-
 int scene_load_file(struct scene *scene, const char *path, char *err, size_t err_size)
 {
 	size_t len;
@@ -916,7 +839,7 @@ int scene_load_file(struct scene *scene, const char *path, char *err, size_t err
 	int ret;
 
 	memset(scene, 0, sizeof(*scene));
-	if (read_file(path, &buf, &len, err, err_size))
+	if (files_read(path, "scene", SCENE_MAX_BYTES, &buf, &len, err, err_size))
 		return -1;
 	ret = load_buffer(scene, buf, len, path, err, err_size);
 	free(buf);

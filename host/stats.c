@@ -1,9 +1,11 @@
 #include "stats.h"
 
+#include <jansson.h>
 #include <stdio.h>
 #include <string.h>
 
-#include "outfile.h"
+#include "cli.h"
+#include "files.h"
 
 void flop_summary_compute(struct flop_summary *s, const uint64_t *item_flops, size_t items,
 			  uint64_t rays)
@@ -30,9 +32,15 @@ static int fill_json(FILE *file, const void *document)
 	return fputc('\n', file) == EOF ? -1 : 0;
 }
 
-int stats_write_json(const char *path, const json_t *document, char *err, size_t err_size)
+/* Writes doc and releases it; returns 0, or -1 with a message. */
+static int write_document(const char *path, json_t *doc, char *err, size_t err_size)
 {
-	return outfile_write(path, fill_json, document, err, err_size);
+	int failed = !doc || files_write(path, fill_json, doc, err, err_size);
+
+	if (!doc)
+		snprintf(err, err_size, "%s: cannot build the JSON document", path);
+	json_decref(doc);
+	return failed ? -1 : 0;
 }
 
 struct npy_array {
@@ -71,9 +79,153 @@ static int fill_npy(FILE *file, const void *context)
 	return fwrite(a->counts, sizeof(uint64_t), n, file) == n ? 0 : -1;
 }
 
-int stats_write_npy(const char *path, const uint64_t *counts, size_t rows, size_t cols, char *err,
-		    size_t err_size)
+static int write_npy(const char *path, const uint64_t *counts, size_t rows, size_t cols, char *err,
+		     size_t err_size)
 {
 	struct npy_array array = {counts, rows, cols};
-	return outfile_write(path, fill_npy, &array, err, err_size);
+	return files_write(path, fill_npy, &array, err, err_size);
 }
+
+int stats_write_flops(const char *path, const struct run *run, char *err, size_t err_size)
+{
+	const struct render_result *c = &run->counted;
+	/* One row per NDRange row; the wavefront's launches in one row. */
+	int one_row = run->settings.kernel->multi_pass;
+	size_t rows = one_row ? 1 : c->global_size[1];
+	size_t cols = one_row ? c->item_count : c->global_size[0];
+
+	return write_npy(path, c->item_flops, rows, cols, err, err_size);
+}
+
+/* The figures of the counting run, for --stats and the --flops sidecar. */
+static void add_flop_figures(json_t *doc, const struct run *run)
+{
+	const struct flop_summary *f = &run->flops;
+	double ms = run->result.kernel_ms_median;
+
+	json_object_set_new(doc, "gflop", json_real(f->total * 1e-9));
+	json_object_set_new(doc, "total_flops", json_integer((json_int_t)f->total));
+	json_object_set_new(
+		doc, "flops_per_item",
+		json_pack("{s:f, s:f, s:f}", "mean", f->mean, "max", f->max, "min", f->min));
+	json_object_set_new(doc, "parallel_efficiency", json_real(f->parallel_efficiency));
+	json_object_set_new(doc, "gflops", json_real(f->total * 1e-6 / ms));
+	json_object_set_new(doc, "rays", json_integer((json_int_t)f->rays));
+	json_object_set_new(doc, "mrays_per_s", json_real(f->rays * 1e-3 / ms));
+}
+
+/* The --stats document, without the figures added below. */
+static json_t *run_document(const struct run *run)
+{
+	const struct render_settings *s = &run->settings;
+	const struct render_result *r = &run->result;
+	char workgroup[32], groups[32];
+	json_t *times = json_array();
+
+	snprintf(workgroup, sizeof(workgroup), "%dx%d", s->workgroup[0], s->workgroup[1]);
+	snprintf(groups, sizeof(groups), "%dx%d", r->groups[0], r->groups[1]);
+	for (int i = 0; i < r->repeat; i++)
+		json_array_append_new(times, json_real(r->kernel_ms[i]));
+	return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:[I,I], s:i, s:i, s:i, s:s, s:b,"
+			 " s:f, s:f, s:f, s:i, s:o, s:s, s:i}",
+			 "rtcl_version", RTCL_VERSION, "device", run->device_name, "device_version",
+			 run->device_version, "driver", run->driver, "kernel",
+			 s->kernel ? s->kernel->name : "reference", "workgroup", workgroup,
+			 "groups", groups, "global_size", (json_int_t)r->global_size[0],
+			 (json_int_t)r->global_size[1], "width", s->width, "height", s->height,
+			 "max_depth", s->max_depth, "scene", run->scene->source,
+			 "scene_in_local_memory", r->scene_in_local, "kernel_ms",
+			 r->kernel_ms_median, "kernel_ms_min", r->kernel_ms_min, "kernel_ms_max",
+			 r->kernel_ms_max, "repeat", r->repeat, "kernel_ms_all", times,
+			 "build_options", r->build_options, "batch", s->batch);
+}
+
+/* The device's size and clock, for peak-throughput estimates (not for the
+ * CPU reference, which opens no device). */
+static void add_device_figures(json_t *doc, const struct run *run)
+{
+	if (!run->on_device)
+		return;
+	json_object_set_new(doc, "compute_units", json_integer(run->compute_units));
+	json_object_set_new(doc, "max_clock_mhz", json_integer(run->max_clock_mhz));
+}
+
+/* The --flops sidecar: how the counts were launched. */
+static json_t *flops_sidecar(const struct run *run)
+{
+	const struct render_settings *s = &run->settings;
+	const struct render_result *c = &run->counted;
+	json_t *doc = json_pack(
+		"{s:s, s:i, s:s, s:[i,i], s:[i,i], s:[I,I], s:i, s:i, s:i, s:s, s:s, s:s}",
+		"format", "rtcl-flops", "version", 1, "kernel", s->kernel->name, "workgroup",
+		(int)c->local_size[0], (int)c->local_size[1], "groups", c->groups[0], c->groups[1],
+		"global_size", (json_int_t)c->global_size[0], (json_int_t)c->global_size[1],
+		"width", s->width, "height", s->height, "max_depth", s->max_depth, "device",
+		run->device_name, "scene", run->scene->source, "layout",
+		s->kernel->multi_pass
+			? "counts[0][i]: every launch's work-items one after the other (the "
+			  "primary-ray launch, then one launch per bounce)"
+			: "counts[y][x] for the work-item at global id (x, y); 0 for those given "
+			  "no "
+			  "pixel");
+
+	if (doc)
+		add_flop_figures(doc, run);
+	return doc;
+}
+
+int stats_write_run(const char *path, const struct run *run, char *err, size_t err_size)
+{
+	json_t *doc = run_document(run);
+
+	if (doc && run->counting)
+		add_flop_figures(doc, run);
+	if (doc)
+		add_device_figures(doc, run);
+	return write_document(path, doc, err, err_size);
+}
+
+int stats_write_flops_sidecar(const char *path, const struct run *run, char *err,
+			      size_t err_size)
+{
+	return write_document(path, flops_sidecar(run), err, err_size);
+}
+
+void stats_print_summary(const struct run *run)
+{
+	const struct render_settings *s = &run->settings;
+	const struct render_result *r = &run->result;
+
+	printf("device:  %s\n", run->device_name);
+	if (!s->kernel)
+		printf("kernel:  reference\n");
+	else if (s->kernel->single_item)
+		printf("kernel:  %s (one work-item)\n", s->kernel->name);
+	else
+		printf("kernel:  %s, work-group %dx%d, %dx%d groups (global %zux%zu)\n",
+		       s->kernel->name, s->workgroup[0], s->workgroup[1], r->groups[0],
+		       r->groups[1], r->global_size[0], r->global_size[1]);
+	printf("image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
+	       run->scene->source);
+	if (r->repeat > 1)
+		printf("time:    %.3f ms median of %d launches (min %.3f, max %.3f)\n",
+		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
+	else
+		printf("time:    %.3f ms\n", r->kernel_ms_median);
+	if (run->counting) {
+		const struct flop_summary *f = &run->flops;
+		printf("work:    %.3f GFLOP, %.1f GFLOP/s; per work-item mean %.0f, max %.0f, min "
+		       "%.0f flops: parallel efficiency %.1f%%\n",
+		       f->total * 1e-9, f->total * 1e-6 / r->kernel_ms_median, f->mean, f->max,
+		       f->min, 100 * f->parallel_efficiency);
+		printf("rays:    %llu (primary, secondary and shadow), %.1f Mrays/s\n",
+		       (unsigned long long)f->rays, f->rays * 1e-3 / r->kernel_ms_median);
+	}
+	printf("output:  %s", run->opt->output);
+	if (run->opt->work_map_path)
+		printf(", work map %s", run->opt->work_map_path);
+	if (run->opt->flops_path)
+		printf(", flops %s", run->opt->flops_path);
+	printf("\n");
+}
+

@@ -1,11 +1,14 @@
-/* The --stats document and the --flops file: every figure rtcl prints, for
- * scripts, and the per-work-item flop counts. */
+/* What a run reports: the summary on stdout, the --stats document, the
+ * --flops file and its sidecar, and the figures of a counting run. Every
+ * figure rtcl prints is computed here, for people and for scripts. */
 #ifndef RTCL_STATS_H
 #define RTCL_STATS_H
 
-#include <jansson.h>
 #include <stddef.h>
 #include <stdint.h>
+
+#include "cli.h"
+#include "settings.h"
 
 /* Figures of a counting run (RENDERING.md). */
 struct flop_summary {
@@ -15,15 +18,40 @@ struct flop_summary {
 	uint64_t rays;
 };
 
+/* What one run produced, for the summary, --stats and the outputs. */
+struct run {
+	const struct options *opt;
+	const struct scene *scene;
+	struct render_settings settings;
+	struct render_result result;  /* the timed, uncounted run */
+	struct render_result counted; /* the counting run, with --flops/--work-map */
+	int counting;
+	struct flop_summary flops;
+	char device_name[640];
+	char device_version[256];
+	char driver[256];
+	int on_device;		/* an OpenCL device (not the CPU reference) */
+	unsigned compute_units; /* CL_DEVICE_MAX_COMPUTE_UNITS */
+	unsigned max_clock_mhz; /* CL_DEVICE_MAX_CLOCK_FREQUENCY */
+};
+
 void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flops, size_t items,
 			  uint64_t rays);
 
-/* Writes a JSON document (atomically, see outfile.h). */
-int stats_write_json(const char *path, const json_t *document, char *err, size_t err_size);
+/* Prints the run's summary on stdout (unless -q). */
+void stats_print_summary(const struct run *run);
 
-/* Writes counts as a .npy file of little-endian uint64 with shape (rows,
- * cols), which numpy.load reads directly. */
-int stats_write_npy(const char *path, const uint64_t *counts, size_t rows, size_t cols, char *err,
-		    size_t err_size);
+/* Writes the --stats document (atomically, see files.h). Returns 0, or -1
+ * with one message in err. */
+int stats_write_run(const char *path, const struct run *run, char *err, size_t err_size);
+
+/* Writes the counting run's per-work-item flops as a .npy file of
+ * little-endian uint64 (numpy.load reads it directly): shape (global y,
+ * global x), or (1, every launch's work-items) for the wavefront. */
+int stats_write_flops(const char *path, const struct run *run, char *err, size_t err_size);
+
+/* Writes the --flops sidecar: how the counts were launched, and the figures. */
+int stats_write_flops_sidecar(const char *path, const struct run *run, char *err,
+			      size_t err_size);
 
 #endif

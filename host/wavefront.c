@@ -13,7 +13,10 @@
 #include <string.h>
 
 #include "../cl/rtcl_shared.h"
-#include "render_internal.h"
+#include "checks.h"
+#include "launch.h"
+#include "program.h"
+#include "wavefront.h"
 
 #define FRAME_OVERFLOWED 1
 
@@ -46,7 +49,7 @@ static void release_all(struct wavefront *w)
 	cl_mem buffers[] = {w->write_counts, w->pixel_flops, w->overflow, w->next_count, w->scene};
 
 	release_queues(w);
-	render_release_image(&w->image);
+	checks_release_image(&w->image);
 	for (size_t i = 0; i < sizeof(buffers) / sizeof(buffers[0]); i++)
 		if (buffers[i])
 			clReleaseMemObject(buffers[i]);
@@ -69,18 +72,18 @@ static int create_queues(struct device *dev, const struct render_settings *s, st
 
 	release_queues(w);
 	snprintf(what, sizeof(what), "the wavefront ray queue (%zu rays)", w->capacity);
-	if (render_check_fits(dev, what, (double)bytes, err, err_size))
+	if (device_check_fits(dev, what, (double)bytes, err, err_size))
 		return -1;
 	for (int i = 0; i < 2; i++) {
-		w->queues[i] = render_create_buffer(dev, CL_MEM_READ_WRITE, bytes, NULL, what, err,
+		w->queues[i] = device_create_buffer(dev, CL_MEM_READ_WRITE, bytes, NULL, what, err,
 						    err_size);
 		if (!w->queues[i])
 			return -1;
 	}
 	size_t rounded = (w->capacity + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
 	w->item_capacity = rounded > w->item_capacity ? rounded : w->item_capacity;
-	w->item_counts = render_create_buffer(dev, CL_MEM_READ_WRITE,
-					      s->count_flops ? w->item_capacity * 16 : 16, NULL,
+	w->item_counts = device_create_buffer(dev, CL_MEM_READ_WRITE,
+					      s->count_flops ? w->item_capacity * 2 * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES, NULL,
 					      "per-work-item counts", err, err_size);
 	return w->item_counts ? 0 : -1;
 }
@@ -91,20 +94,18 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 {
 	size_t pixels = (size_t)s->width * s->height;
 
-	w->scene = render_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+	w->scene = device_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
 					res->scene_bytes, scene_block, "scene", err, err_size);
-	if (!w->scene || render_create_image(dev, s, &w->image, err, err_size))
+	if (!w->scene || checks_create_image(dev, s, &w->image, err, err_size))
 		return -1;
-	w->next_count = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
+	w->next_count = device_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 					     "queue counter", err, err_size);
-	w->overflow = render_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
+	w->overflow = device_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 					   "overflow flag", err, err_size);
-	w->pixel_flops = render_create_buffer(dev, CL_MEM_READ_WRITE,
-					      s->count_flops ? pixels * sizeof(cl_ulong) : 16, NULL,
+	w->pixel_flops = device_create_buffer(dev, CL_MEM_READ_WRITE,
+					      s->count_flops ? pixels * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES, NULL,
 					      "per-pixel counts", err, err_size);
-	w->write_counts = render_create_buffer(dev, CL_MEM_READ_WRITE,
-					       s->check_writes ? pixels * sizeof(cl_uint) : 16,
-					       NULL, "write counts", err, err_size);
+	w->write_counts = checks_create_write_counts(dev, s, err, err_size);
 	if (!w->next_count || !w->overflow || !w->pixel_flops || !w->write_counts)
 		return -1;
 	return create_queues(dev, s, w, err, err_size);
@@ -151,26 +152,19 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 			   const char *label)
 {
 	size_t pixels = (size_t)s->width * s->height;
-	size_t local_bytes = res->scene_in_local ? res->scene_bytes : 16;
-	cl_uint zero = 0, poison = POISON_WORD;
+	size_t local_bytes = res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES;
+	cl_uint zero = 0;
 	cl_float black = 0.0f;
-	cl_int status = CL_SUCCESS;
+	cl_int status;
 	const char *call; /* the wavefront's errors name the frame, not the call */
 
 	*ms = 0;
 	w->item_count = 0;
 	w->rays = 0;
-	if (s->check_writes) {
-		status =
-			clEnqueueFillBuffer(dev->queue, w->image.parent, &poison, sizeof(poison), 0,
-					    pixels * 12 + 2 * w->image.guard_bytes, 0, NULL, NULL);
-		if (status == CL_SUCCESS)
-			status = clEnqueueFillBuffer(dev->queue, w->write_counts, &zero,
-						     sizeof(zero), 0, pixels * 4, 0, NULL, NULL);
-	}
+	status = checks_poison(dev, s, &w->image, w->write_counts);
 	if (status == CL_SUCCESS)
 		status = clEnqueueFillBuffer(dev->queue, w->image.image, &black, sizeof(black), 0,
-					     pixels * 12, 0, NULL, NULL);
+					     image_float_bytes(s->width, s->height), 0, NULL, NULL);
 	if (status == CL_SUCCESS)
 		status = clEnqueueFillBuffer(dev->queue, w->overflow, &zero, sizeof(zero), 0,
 					     sizeof(zero), 0, NULL, NULL);
@@ -182,7 +176,7 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 	if (status == CL_SUCCESS)
 		status = set_args(w->start, start_args, start_sizes, 6);
 	if (status == CL_SUCCESS)
-		status = render_launch(dev, s, w->start, 2, res->global_size, res->local_size,
+		status = launch_run(dev, s, w->start, 2, res->global_size, res->local_size,
 				       label, ms, &call);
 	if (status == CL_SUCCESS && s->count_flops)
 		status = append_counts(dev, w, res->global_size[0] * res->global_size[1]);
@@ -207,7 +201,7 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 		if (status == CL_SUCCESS)
 			status = set_args(w->bounce, args, sizes, 11);
 		if (status == CL_SUCCESS)
-			status = render_launch(dev, s, w->bounce, 1, &global, &w->bounce_local,
+			status = launch_run(dev, s, w->bounce, 1, &global, &w->bounce_local,
 					       label, ms, &call);
 		if (status == CL_SUCCESS && s->count_flops)
 			status = append_counts(dev, w, global);
@@ -228,14 +222,16 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 		     struct wavefront *w, char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
-	cl_int status = clEnqueueReadBuffer(dev->queue, w->image.image, CL_TRUE, 0, pixels * 12,
-					    res->rgb, 0, NULL, NULL);
+	cl_int status = clEnqueueReadBuffer(dev->queue, w->image.image, CL_TRUE, 0,
+					    image_float_bytes(s->width, s->height), res->rgb, 0,
+					    NULL, NULL);
 
 	if (status == CL_SUCCESS && s->count_flops) {
 		res->pixel_flops = malloc(pixels * sizeof(uint64_t));
 		status = res->pixel_flops
 				 ? clEnqueueReadBuffer(dev->queue, w->pixel_flops, CL_TRUE, 0,
-						       pixels * 8, res->pixel_flops, 0, NULL, NULL)
+						       pixels * sizeof(cl_ulong), res->pixel_flops,
+						       0, NULL, NULL)
 				 : CL_OUT_OF_HOST_MEMORY;
 		res->item_flops = w->item_flops;
 		res->item_count = w->item_count;
@@ -245,7 +241,7 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 		res->total_rays = w->rays;
 	}
 	if (status == CL_SUCCESS)
-		status = render_read_write_checks(dev, s, &w->image, w->write_counts, res);
+		status = checks_read(dev, s, &w->image, w->write_counts, res);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "reading the wavefront results failed: %s",
 			 cl_error_name(status));
@@ -258,8 +254,7 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 static int render_frames(struct device *dev, const struct render_settings *s,
 			 struct render_result *res, struct wavefront *w, char *err, size_t err_size)
 {
-	int frames = render_begin_timing(s, res, err, err_size);
-	int timed = res->repeat;
+	int frames = launch_begin_timing(s, res, err, err_size);
 
 	if (frames < 0)
 		return -1;
@@ -286,51 +281,39 @@ static int render_frames(struct device *dev, const struct render_settings *s,
 				 cl_error_name(status));
 			return -1;
 		}
-		int slot = frame - (frames - timed);
-		if (slot >= 0)
-			res->kernel_ms[slot] = ms;
+		launch_record_frame(res, frame, frames, ms);
 		frame++;
 	}
-	return render_summarize_times(res, err, err_size);
+	return launch_end_timing(res, err, err_size);
 }
 
-int render_wavefront(struct device *dev, const struct scene *scene, const struct render_settings *s,
-		     struct render_result *res, char *err, size_t err_size)
+int wavefront_render(struct device *dev, const struct scene *scene,
+		     const struct render_settings *s, struct render_result *res, char *err,
+		     size_t err_size)
 {
 	struct wavefront w;
 	size_t pixels = (size_t)s->width * s->height;
-	size_t wx = (size_t)s->workgroup[0], wy = (size_t)s->workgroup[1];
 	void *scene_block = NULL;
 	int ret = -1;
 
-	memset(res, 0, sizeof(*res));
 	memset(&w, 0, sizeof(w));
-	if (wx > dev->max_work_item_sizes[0] || wy > dev->max_work_item_sizes[1] ||
-	    wx * wy > dev->max_work_group_size) {
-		snprintf(err, err_size,
-			 "work-group %zux%zu (%zu work-items) is larger than %s allows: at most "
-			 "%zu work-items (choose a smaller -w)",
-			 wx, wy, wx * wy, dev->name, dev->max_work_group_size);
+	/* The primary-ray launch covers the image as the naive kernel does. */
+	if (launch_plan(dev, s, res, err, err_size))
 		return -1;
-	}
-	res->local_size[0] = wx;
-	res->local_size[1] = wy;
-	res->groups[0] = (int)((s->width + wx - 1) / wx);
-	res->groups[1] = (int)((s->height + wy - 1) / wy);
-	res->global_size[0] = res->groups[0] * wx;
-	res->global_size[1] = res->groups[1] * wy;
-	w.bounce_local = wx * wy;
+	w.bounce_local = res->local_size[0] * res->local_size[1];
 	/* Room for two rays a pixel; more is found on demand. */
 	w.capacity = pixels * 2 > 1024 ? pixels * 2 : 1024;
-	if (render_check_fits(dev, "the image", (double)pixels * 12, err, err_size))
+	if (device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height),
+			      err, err_size))
 		return -1;
 
-	if (render_prepare_scene(dev, scene, s, res, &scene_block, err, err_size) ||
-	    render_build_program(dev, s, res, &w.program, err, err_size))
+	if (launch_prepare_scene(dev, scene, s, res, &scene_block, err, err_size) ||
+	    program_build(dev, s, res->scene_in_local, &w.program, res->build_options, err,
+			  err_size))
 		goto out;
-	w.start = render_create_kernel(w.program, "wavefront_start", err, err_size);
+	w.start = program_create_kernel(w.program, "wavefront_start", err, err_size);
 	w.bounce =
-		w.start ? render_create_kernel(w.program, "wavefront_bounce", err, err_size) : NULL;
+		w.start ? program_create_kernel(w.program, "wavefront_bounce", err, err_size) : NULL;
 	if (!w.bounce || create_buffers(dev, s, res, &w, scene_block, err, err_size) ||
 	    render_frames(dev, s, res, &w, err, err_size) ||
 	    read_back(dev, s, res, &w, err, err_size))
@@ -340,7 +323,5 @@ int render_wavefront(struct device *dev, const struct scene *scene, const struct
 out:
 	release_all(&w);
 	free(scene_block);
-	if (ret)
-		render_result_free(res);
 	return ret;
 }

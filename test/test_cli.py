@@ -401,7 +401,8 @@ def test_missing_kernel_source_directory(tmp_path):
                             text=True, env={**os.environ, "RTCL_CL_DIR": str(tmp_path / "nope")},
                             timeout=300)
     assert result.returncode == 1
-    assert "cannot open kernel source" in result.stderr
+    assert f"rtcl: {tmp_path / 'nope' / 'rtcl_shared.h'}: cannot open: No such file or directory" \
+        in result.stderr
     assert os.listdir(tmp_path) == []
 
 

@@ -1,0 +1,105 @@
+#include "checks.h"
+
+#include <stdlib.h>
+#include <string.h>
+
+#include "launch.h"
+
+int checks_create_image(struct device *dev, const struct render_settings *s,
+			struct guarded_image *g, char *err, size_t err_size)
+{
+	size_t image_bytes = image_float_bytes(s->width, s->height);
+	cl_int status;
+
+	g->guard_bytes = 0;
+	if (s->check_writes)
+		g->guard_bytes = dev->mem_base_addr_align > 4096 ? dev->mem_base_addr_align : 4096;
+	g->parent = device_create_buffer(dev, CL_MEM_READ_WRITE, image_bytes + 2 * g->guard_bytes,
+					 NULL, "image", err, err_size);
+	if (!g->parent)
+		return -1;
+	cl_buffer_region region = {g->guard_bytes, image_bytes};
+	g->image = clCreateSubBuffer(g->parent, CL_MEM_READ_WRITE, CL_BUFFER_CREATE_TYPE_REGION,
+				     &region, &status);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateSubBuffer for the image failed: %s",
+			 cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
+void checks_release_image(struct guarded_image *g)
+{
+	if (g->image)
+		clReleaseMemObject(g->image);
+	if (g->parent)
+		clReleaseMemObject(g->parent);
+	g->image = g->parent = NULL;
+}
+
+cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s,
+				  char *err, size_t err_size)
+{
+	size_t bytes = s->check_writes ? (size_t)s->width * s->height * sizeof(cl_uint)
+				       : UNUSED_BUFFER_BYTES;
+
+	return device_create_buffer(dev, CL_MEM_READ_WRITE, bytes, NULL, "write counts", err,
+				    err_size);
+}
+
+cl_int checks_poison(struct device *dev, const struct render_settings *s,
+		     const struct guarded_image *g, cl_mem write_counts)
+{
+	size_t pixels = (size_t)s->width * s->height;
+	cl_uint zero = 0, poison = POISON_WORD;
+	cl_int status;
+
+	if (!s->check_writes)
+		return CL_SUCCESS;
+	status = clEnqueueFillBuffer(dev->queue, write_counts, &zero, sizeof(zero), 0,
+				     pixels * sizeof(cl_uint), 0, NULL, NULL);
+	if (status == CL_SUCCESS)
+		status = clEnqueueFillBuffer(dev->queue, g->parent, &poison, sizeof(poison), 0,
+					     image_float_bytes(s->width, s->height) +
+						     2 * g->guard_bytes,
+					     0, NULL, NULL);
+	return status;
+}
+
+cl_int checks_read(struct device *dev, const struct render_settings *s,
+		   const struct guarded_image *g, cl_mem write_counts, struct render_result *res)
+{
+	size_t pixels = (size_t)s->width * s->height;
+	cl_uint *guard;
+	cl_int status;
+
+	if (!s->check_writes)
+		return CL_SUCCESS;
+	guard = malloc(g->guard_bytes);
+	res->write_counts = malloc(pixels * sizeof(uint32_t));
+	if (!guard || !res->write_counts) {
+		free(guard);
+		return CL_OUT_OF_HOST_MEMORY;
+	}
+	status = clEnqueueReadBuffer(dev->queue, write_counts, CL_TRUE, 0, pixels * sizeof(cl_uint),
+				     res->write_counts, 0, NULL, NULL);
+	res->guards_intact = 1;
+	for (int side = 0; status == CL_SUCCESS && side < 2; side++) {
+		size_t offset = side ? g->guard_bytes + image_float_bytes(s->width, s->height) : 0;
+		status = clEnqueueReadBuffer(dev->queue, g->parent, CL_TRUE, offset, g->guard_bytes,
+					     guard, 0, NULL, NULL);
+		for (size_t i = 0; status == CL_SUCCESS && i < g->guard_bytes / sizeof(cl_uint);
+		     i++)
+			res->guards_intact &= guard[i] == POISON_WORD;
+	}
+	free(guard);
+	return status;
+}
+
+int checks_device_fault_injected(void)
+{
+	const char *fault = getenv("RTCL_TEST_DEVICE_FAULT");
+
+	return fault && strcmp(fault, "1") == 0;
+}

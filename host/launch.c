@@ -1,0 +1,214 @@
+#include "launch.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <time.h>
+
+#include "devscene.h"
+#include "timing.h"
+
+/* How often a waiting launch redraws its progress line. */
+#define PROGRESS_TICK_NS (100 * 1000 * 1000)
+
+void launch_default_groups(const struct device *dev, const struct render_settings *s, int groups[2])
+{
+	int items = s->workgroup[0] * s->workgroup[1];
+	int chunks_x = (s->width + s->workgroup[0] - 1) / s->workgroup[0];
+	int chunks_y = (s->height + s->workgroup[1] - 1) / s->workgroup[1];
+	/* A GPU runs many work-groups per compute unit at once (up to 2048
+	 * work-items on current NVIDIA parts); a CPU runs one per core. */
+	long total = dev->is_gpu ? (long)dev->compute_units * (items >= 1024 ? 1 : 1024 / items)
+				 : (long)dev->compute_units * 4;
+	int gx = (int)ceil(sqrt((double)total));
+
+	if (total < 1)
+		total = 1;
+	if (gx > chunks_x)
+		gx = chunks_x;
+	int gy = (int)((total + gx - 1) / gx);
+	if (gy > chunks_y)
+		gy = chunks_y;
+	groups[0] = gx;
+	groups[1] = gy;
+}
+
+int launch_check_workgroup(const struct device *dev, const struct render_settings *s,
+			   char *err, size_t err_size)
+{
+	const size_t *max_items = dev->max_work_item_sizes;
+	size_t wx = (size_t)s->workgroup[0], wy = (size_t)s->workgroup[1];
+
+	if (wx > max_items[0] || wy > max_items[1] || wx * wy > dev->max_work_group_size) {
+		snprintf(err, err_size,
+			 "work-group %zux%zu (%zu work-items) is larger than %s allows: at most "
+			 "%zu work-items, %zux%zu in x and y (choose a smaller -w)",
+			 wx, wy, wx * wy, dev->name, dev->max_work_group_size, max_items[0],
+			 max_items[1]);
+		return -1;
+	}
+	return 0;
+}
+
+int launch_plan(const struct device *dev, const struct render_settings *s,
+		struct render_result *res, char *err, size_t err_size)
+{
+	size_t wx = (size_t)s->workgroup[0], wy = (size_t)s->workgroup[1];
+
+	if (s->kernel->single_item) {
+		res->local_size[0] = res->local_size[1] = 1;
+		res->global_size[0] = res->global_size[1] = 1;
+		res->groups[0] = res->groups[1] = 1;
+		return 0;
+	}
+	if (launch_check_workgroup(dev, s, err, err_size))
+		return -1;
+	res->local_size[0] = wx;
+	res->local_size[1] = wy;
+	if (s->kernel->uses_groups) {
+		if (s->groups[0] > 0 && s->groups[1] > 0) {
+			res->groups[0] = s->groups[0];
+			res->groups[1] = s->groups[1];
+		} else {
+			launch_default_groups(dev, s, res->groups);
+		}
+	} else {
+		res->groups[0] = (int)((s->width + wx - 1) / wx);
+		res->groups[1] = (int)((s->height + wy - 1) / wy);
+	}
+	res->global_size[0] = (size_t)res->groups[0] * wx;
+	res->global_size[1] = (size_t)res->groups[1] * wy;
+	return 0;
+}
+
+int launch_check_kernel(const struct device *dev, cl_kernel kernel,
+			const struct render_result *res, const char *name, char *err,
+			size_t err_size)
+{
+	size_t max_items = 0;
+	cl_int status = clGetKernelWorkGroupInfo(kernel, dev->id, CL_KERNEL_WORK_GROUP_SIZE,
+						 sizeof(max_items), &max_items, NULL);
+
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clGetKernelWorkGroupInfo failed: %s",
+			 cl_error_name(status));
+		return -1;
+	}
+	size_t items = res->local_size[0] * res->local_size[1];
+	if (items > max_items) {
+		snprintf(err, err_size,
+			 "work-group %zux%zu (%zu work-items) is larger than kernel '%s' allows on "
+			 "%s: at most %zu work-items (choose a smaller -w)",
+			 res->local_size[0], res->local_size[1], items, name, dev->name, max_items);
+		return -1;
+	}
+	return 0;
+}
+
+int launch_prepare_scene(struct device *dev, const struct scene *scene,
+			 const struct render_settings *s, struct render_result *res, void **block,
+			 char *err, size_t err_size)
+{
+	*block = devscene_pack(scene, s->width, s->height, s->max_depth, &res->scene_bytes);
+	res->rgb = malloc(image_float_bytes(s->width, s->height));
+	if (!*block || !res->rgb) {
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
+			 s->height);
+		return -1;
+	}
+	if (device_check_fits(dev, "the scene", (double)res->scene_bytes, err, err_size))
+		return -1;
+	res->scene_in_local = !s->force_global_scene &&
+			      res->scene_bytes + LOCAL_MEM_RESERVE <= dev->local_mem_size;
+	if (s->verbose)
+		fprintf(stderr, "rtcl: scene is %zu bytes; %s\n", res->scene_bytes,
+			res->scene_in_local
+				? "copied into __local memory by each work-group"
+				: "read from __global memory (it does not fit in __local memory)");
+	return 0;
+}
+
+int launch_begin_timing(const struct render_settings *s, struct render_result *res, char *err,
+			size_t err_size)
+{
+	/* Counting runs are not timed: one run is enough. */
+	int timed = s->count_flops ? 1 : s->repeat;
+
+	res->kernel_ms = calloc((size_t)timed, sizeof(double));
+	if (!res->kernel_ms) {
+		snprintf(err, err_size, "out of host memory");
+		return -1;
+	}
+	res->repeat = timed;
+	return s->count_flops ? 1 : timed + 1;
+}
+
+void launch_record_frame(struct render_result *res, int frame, int frames, double ms)
+{
+	int slot = frame - (frames - res->repeat);
+
+	if (slot >= 0)
+		res->kernel_ms[slot] = ms;
+}
+
+int launch_end_timing(struct render_result *res, char *err, size_t err_size)
+{
+	return timing_summarize(res->kernel_ms, res->repeat, &res->kernel_ms_median,
+				&res->kernel_ms_min, &res->kernel_ms_max, err, err_size);
+}
+
+/* Waits for the launch, showing the elapsed time on stderr when asked. */
+static cl_int wait_for(cl_event event, const char *label, int progress)
+{
+	if (!progress)
+		return clWaitForEvents(1, &event);
+
+	double start = timing_now();
+	struct timespec tick = {0, PROGRESS_TICK_NS};
+	cl_int state = CL_QUEUED;
+	for (;;) {
+		cl_int status = clGetEventInfo(event, CL_EVENT_COMMAND_EXECUTION_STATUS,
+					       sizeof(state), &state, NULL);
+		if (status != CL_SUCCESS)
+			return status;
+		if (state == CL_COMPLETE || state < 0)
+			break;
+		fprintf(stderr, "\r%s: %.1f s", label, timing_now() - start);
+		nanosleep(&tick, NULL);
+	}
+	fprintf(stderr, "\r%*s\r", 60, "");
+	return state < 0 ? state : clWaitForEvents(1, &event);
+}
+
+cl_int launch_run(struct device *dev, const struct render_settings *s, cl_kernel kernel,
+		     cl_uint dims, const size_t *global, const size_t *local, const char *label,
+		     double *ms, const char **call)
+{
+	cl_event event;
+	cl_ulong start = 0, end = 0;
+	cl_int status;
+
+	*call = "clEnqueueNDRangeKernel";
+	status = clEnqueueNDRangeKernel(dev->queue, kernel, dims, NULL, global, local, 0, NULL,
+					&event);
+	if (status != CL_SUCCESS)
+		return status;
+	*call = "clFlush";
+	status = clFlush(dev->queue);
+	if (status == CL_SUCCESS) {
+		*call = "waiting for the kernel";
+		status = wait_for(event, label, s->progress);
+	}
+	if (status == CL_SUCCESS) {
+		*call = "clGetEventProfilingInfo";
+		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start),
+						 &start, NULL);
+	}
+	if (status == CL_SUCCESS)
+		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end,
+						 NULL);
+	*ms += (double)(end - start) * 1e-6;
+	clReleaseEvent(event);
+	return status;
+}
+

@@ -1,0 +1,59 @@
+/* What every renderer does around its kernels: the NDRange plan and its
+ * checks against the device, the scene block, launches with their profiled
+ * time and progress, and the frame timings. */
+#ifndef RTCL_LAUNCH_H
+#define RTCL_LAUNCH_H
+
+#include "settings.h"
+
+/* Bytes of a buffer or __local argument that a kernel takes but does not
+ * use in this build (OpenCL wants a non-empty one). */
+#define UNUSED_BUFFER_BYTES 16
+
+/* Bytes of __local memory the kernels need besides the scene. */
+#define LOCAL_MEM_RESERVE 256
+
+/* The groups used when --groups is not given: enough work-groups of the given
+ * size to fill the device, shaped to cover the image's chunks. */
+void launch_default_groups(const struct device *dev, const struct render_settings *settings,
+			   int groups[2]);
+
+/* Checks the work-group size against the device's limits. */
+int launch_check_workgroup(const struct device *dev, const struct render_settings *settings,
+			   char *err, size_t err_size);
+
+/* Chooses the 2D NDRange of a single-pass kernel (result->local_size,
+ * global_size and groups) and checks it against the device. */
+int launch_plan(const struct device *dev, const struct render_settings *settings,
+		struct render_result *result, char *err, size_t err_size);
+
+/* Checks the kernel's own work-group limit, known only once it is built. */
+int launch_check_kernel(const struct device *dev, cl_kernel kernel,
+			const struct render_result *result, const char *name, char *err,
+			size_t err_size);
+
+/* Packs the scene into *block (result->scene_bytes), allocates result->rgb
+ * and decides whether the scene lives in __local memory. */
+int launch_prepare_scene(struct device *dev, const struct scene *scene,
+			 const struct render_settings *settings, struct render_result *result,
+			 void **block, char *err, size_t err_size);
+
+/* Allocates result->kernel_ms for the timed frames and returns how many
+ * frames to render in all (a warm-up, then the timed ones; one for a counting
+ * run), or -1 with a message. */
+int launch_begin_timing(const struct render_settings *settings, struct render_result *result,
+			char *err, size_t err_size);
+
+/* Records frame `frame` of `frames` as taking ms; the warm-up is dropped. */
+void launch_record_frame(struct render_result *result, int frame, int frames, double ms);
+
+/* Sets the median, min and max of the recorded frames. */
+int launch_end_timing(struct render_result *result, char *err, size_t err_size);
+
+/* Enqueues one launch, waits for it (showing progress when asked) and adds its
+ * profiled time to *ms. On failure *call names what failed. */
+cl_int launch_run(struct device *dev, const struct render_settings *settings, cl_kernel kernel,
+		  cl_uint dims, const size_t *global, const size_t *local, const char *label,
+		  double *ms, const char **call);
+
+#endif

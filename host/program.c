@@ -1,0 +1,176 @@
+/* The OpenCL program of a render: the sources of cl/ (embedded at build time,
+ * or read from RTCL_CL_DIR), the build options, the build with its log, and
+ * RTCL_DUMP_BINARY. */
+#include "program.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "embedded.h"
+#include "files.h"
+
+/* A kernel source read from RTCL_CL_DIR is at most this large. */
+#define KERNEL_SOURCE_MAX_BYTES ((size_t)16 << 20)
+
+/* Returns the text of cl/NAME, from dir or from the copy embedded at build
+ * time; a loaded file is malloc'd and must be freed when *loaded is set. */
+static const char *load_source(const char *dir, const char *name, int *loaded, char *err,
+			       size_t err_size)
+{
+	char path[4096], *text;
+	size_t length;
+
+	*loaded = 0;
+	if (!dir) {
+		const char *embedded = embedded_file(name);
+		if (!embedded)
+			snprintf(err, err_size, "internal error: cl/%s is not embedded", name);
+		return embedded;
+	}
+	snprintf(path, sizeof(path), "%s/%s", dir, name);
+	if (files_read(path, "kernel source", KERNEL_SOURCE_MAX_BYTES, &text, &length, err,
+		       err_size))
+		return NULL;
+	*loaded = 1;
+	return text;
+}
+
+/* -v: the compiler's messages for a program that built, if it had any (with
+ * RTCL_BUILD_OPTIONS=-cl-nv-verbose, NVIDIA's register and spill report). */
+static void print_build_log(cl_program program, const struct device *dev)
+{
+	char log[32768] = "";
+
+	clGetProgramBuildInfo(program, dev->id, CL_PROGRAM_BUILD_LOG, sizeof(log) - 1, log,
+			      NULL);
+	if (log[strspn(log, " \t\r\n")] != '\0')
+		fprintf(stderr, "rtcl: build log:\n%s\n", log);
+}
+
+struct bytes {
+	const unsigned char *data;
+	size_t size;
+};
+
+static int write_bytes(FILE *file, const void *context)
+{
+	const struct bytes *b = context;
+
+	return fwrite(b->data, 1, b->size, file) == b->size ? 0 : -1;
+}
+
+/* RTCL_DUMP_BINARY=FILE: writes the built program's binary (PTX on NVIDIA's
+ * OpenCL) to FILE, for reading what the compiler made of the tracer. */
+static int dump_binary(cl_program program, char *err, size_t err_size)
+{
+	const char *path = getenv("RTCL_DUMP_BINARY");
+	size_t size = 0;
+
+	if (!path || !*path)
+		return 0;
+	if (clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, NULL) !=
+		    CL_SUCCESS ||
+	    size == 0) {
+		snprintf(err, err_size, "RTCL_DUMP_BINARY: the device gives no program binary");
+		return -1;
+	}
+	unsigned char *binary = malloc(size);
+	if (!binary) {
+		snprintf(err, err_size, "out of memory for a %zu-byte program binary", size);
+		return -1;
+	}
+	struct bytes contents = {binary, size};
+	int ret;
+	if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof(binary), &binary, NULL) !=
+	    CL_SUCCESS) {
+		snprintf(err, err_size, "RTCL_DUMP_BINARY: cannot read the program binary");
+		ret = -1;
+	} else {
+		ret = files_write(path, write_bytes, &contents, err, err_size);
+	}
+	free(binary);
+	return ret;
+}
+
+/* NVIDIA's compiler gives the tracer about 100 registers, which leaves 4-5
+ * warps per scheduler; capped at 80 (60 bytes spilled) the same kernels run
+ * 3-5 % faster on an H100 (docs/performance.md, step 9). RTCL_BUILD_OPTIONS can override
+ * it: the last -cl-nv-maxrregcount given wins. */
+#define NV_REGISTER_CAP "-cl-nv-maxrregcount=80"
+
+/* RTCL_BUILD_OPTIONS may add this many characters: rtcl's own options take at
+ * most about 150 of the BUILD_OPTIONS_SIZE (512) in render_result. */
+#define BUILD_OPTIONS_EXTRA_MAX 256
+
+int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
+		  cl_program *program, char *options, char *err, size_t err_size)
+{
+	char kernel_file[64];
+	const char *names[3] = {"rtcl_shared.h", "tracer.cl", kernel_file};
+	const char *texts[3] = {NULL, NULL, NULL};
+	int loaded[3] = {0, 0, 0};
+	int ret = -1;
+	cl_int status;
+
+	snprintf(kernel_file, sizeof(kernel_file), "%s.cl", s->kernel->name);
+	for (int i = 0; i < 3; i++) {
+		texts[i] = load_source(s->source_dir, names[i], &loaded[i], err, err_size);
+		if (!texts[i])
+			goto out_free_sources;
+	}
+	const char *extra = getenv("RTCL_BUILD_OPTIONS");
+	if (extra && strlen(extra) > BUILD_OPTIONS_EXTRA_MAX) {
+		snprintf(err, err_size, "RTCL_BUILD_OPTIONS is too long (at most %d characters)",
+			 BUILD_OPTIONS_EXTRA_MAX);
+		goto out_free_sources;
+	}
+	snprintf(options, BUILD_OPTIONS_SIZE,
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s", s->max_depth,
+		 s->batch > 0 ? s->batch : 1, scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
+		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
+		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
+		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
+		 extra ? extra : "");
+
+	*program = clCreateProgramWithSource(dev->context, 3, texts, NULL, &status);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateProgramWithSource failed: %s",
+			 cl_error_name(status));
+		goto out_free_sources;
+	}
+	status = clBuildProgram(*program, 1, &dev->id, options, NULL, NULL);
+	if (status != CL_SUCCESS) {
+		char log[32768] = "";
+		clGetProgramBuildInfo(*program, dev->id, CL_PROGRAM_BUILD_LOG, sizeof(log) - 1, log,
+				      NULL);
+		snprintf(err, err_size,
+			 "building kernel '%s' for %s failed: %s\noptions: %s\nbuild log:\n%s",
+			 s->kernel->name, dev->name, cl_error_name(status), options,
+			 log);
+		goto out_free_sources;
+	}
+	if (s->verbose)
+		print_build_log(*program, dev);
+	ret = dump_binary(*program, err, err_size);
+
+out_free_sources:
+	for (int i = 0; i < 3; i++)
+		if (loaded[i])
+			free((char *)texts[i]);
+	return ret;
+}
+
+cl_kernel program_create_kernel(cl_program program, const char *name, char *err, size_t err_size)
+{
+	cl_int status;
+	cl_kernel kernel = clCreateKernel(program, name, &status);
+
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clCreateKernel(\"%s\") failed: %s", name,
+			 cl_error_name(status));
+		return NULL;
+	}
+	return kernel;
+}
+

@@ -1,0 +1,19 @@
+/* Building the OpenCL program of a render. */
+#ifndef RTCL_PROGRAM_H
+#define RTCL_PROGRAM_H
+
+#include "settings.h"
+
+/* Builds cl/rtcl_shared.h + cl/tracer.cl + cl/KERNEL.cl for the settings,
+ * with the scene in __local memory when scene_in_local, and writes the
+ * options used to options[BUILD_OPTIONS_SIZE]. With settings->verbose the
+ * compiler's messages go to stderr; RTCL_BUILD_OPTIONS adds options and
+ * RTCL_DUMP_BINARY=FILE writes the built binary. Returns 0, or -1 with one
+ * message in err (for a failed build, the build log and the options). */
+int program_build(struct device *dev, const struct render_settings *settings, int scene_in_local,
+		  cl_program *program, char *options, char *err, size_t err_size);
+
+/* clCreateKernel with one message naming the kernel on failure; NULL then. */
+cl_kernel program_create_kernel(cl_program program, const char *name, char *err, size_t err_size);
+
+#endif

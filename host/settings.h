@@ -1,0 +1,83 @@
+/* What a render is asked for and what it gives back: the data that passes
+ * between main, render.c and the renderers below it (singlepass.c,
+ * wavefront.c). Types only, so that every layer can include it. */
+#ifndef RTCL_SETTINGS_H
+#define RTCL_SETTINGS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "device.h"
+#include "scene.h"
+
+struct render_settings;
+struct render_result;
+
+/* Renders a frame with one family of kernels. Returns 0, or -1 with one
+ * message in err; on failure the caller frees what result holds. */
+typedef int (*renderer_fn)(struct device *dev, const struct scene *scene,
+			   const struct render_settings *settings, struct render_result *result,
+			   char *err, size_t err_size);
+
+/* The scheduling kernels, one cl/NAME.cl each. */
+struct kernel_info {
+	const char *name;
+	const char *summary;
+	int uses_groups;      /* persistent work-groups: --groups applies */
+	int single_item;      /* one work-item renders everything: -w does not apply */
+	int multi_pass;	      /* several launches per frame (wavefront) */
+	renderer_fn renderer; /* singlepass_render or wavefront_render */
+};
+
+struct render_settings {
+	const struct kernel_info *kernel; /* NULL: the CPU reference */
+	int workgroup[2];		  /* local size, e.g. 8x8 */
+	int groups[2];	   /* persistent work-groups; 0x0: enough to fill the device */
+	int width, height; /* image size */
+	int max_depth;
+	int repeat;		/* timed launches after one warm-up launch */
+	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
+	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
+	int check_writes;	/* tests: count writes per pixel, poison the image and
+				   surround it with guard zones (checks.h) */
+	int force_global_scene; /* read the scene from __global memory even if it
+				   would fit in __local memory */
+	const char *source_dir; /* load cl/ sources from here instead of the
+				   embedded copies (development) */
+	int progress;		/* show progress on stderr */
+	int verbose;
+};
+
+/* Room for rtcl's own build options and RTCL_BUILD_OPTIONS (program.h). */
+#define BUILD_OPTIONS_SIZE 512
+
+struct render_result {
+	float *rgb; /* width*height*3 linear floats, row 0 at the top */
+	double kernel_ms_median, kernel_ms_min, kernel_ms_max;
+	double *kernel_ms; /* each timed launch, in order */
+	int repeat;
+	int groups[2]; /* as launched (1x1 for serial; the NDRange's for naive) */
+	size_t global_size[2], local_size[2];
+	int scene_in_local;
+	size_t scene_bytes;
+	char build_options[BUILD_OPTIONS_SIZE];
+
+	/* With count_flops: per launched work-item, row-major over the global
+	 * NDRange. */
+	uint64_t *item_flops;
+	size_t item_count;
+	uint64_t *pixel_flops; /* per pixel, row-major */
+	uint64_t total_flops, total_rays;
+
+	/* With check_writes. */
+	uint32_t *write_counts; /* per pixel */
+	int guards_intact;	/* no byte outside the image was written */
+};
+
+/* Bytes of the linear RGB float image of width × height pixels. */
+static inline size_t image_float_bytes(int width, int height)
+{
+	return (size_t)width * (size_t)height * 3 * sizeof(float);
+}
+
+#endif
