@@ -33,10 +33,10 @@ endif
 WARNINGS := -Wall -Wextra
 CPPFLAGS += -I$(BUILD) -Ihost -Icl -DCL_TARGET_OPENCL_VERSION=120 -D_DEFAULT_SOURCE
 CFLAGS ?= -O2 -g
-CFLAGS += -std=c11 $(WARNINGS)
+CFLAGS += -std=c11 $(WARNINGS) -pthread
 CXXFLAGS ?= -O2 -g
 CXXFLAGS += -std=c++17 $(WARNINGS)
-LDLIBS = -lOpenCL -ljansson -lm
+LDLIBS = -lOpenCL -ljansson -lm -pthread
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -63,7 +63,8 @@ LDLIBS += -lstdc++
 
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o timing.o files.o \
-	checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o outputs.o \
+	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
+	outputs.o \
 	workmap.o image_common.o reference.o embedded.o) \
 	$(IMAGE_BACKEND)
 CL_SOURCES := cl/rtcl_shared.h cl/tracer.cl $(filter-out cl/tracer.cl,$(wildcard cl/*.cl))

@@ -2,11 +2,20 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
+#include <time.h>
 #include <unistd.h>
+
+#include "interrupt.h"
+
+/* Longest part of the target's name kept in the temporary file's name, so
+ * that the latter stays under NAME_MAX (255) with its additions. */
+#define TEMP_NAME_KEEP 100
+#define TEMP_CREATE_TRIES 100
 
 int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 	       size_t *out_len, char *err, size_t err_size)
@@ -86,81 +95,275 @@ out_close:
 	return -1;
 }
 
-/* Writes dirname(path) into dir. */
-static void directory_of(const char *path, char *dir, size_t dir_size)
+static uint64_t splitmix64(uint64_t *state)
+{
+	uint64_t z = (*state += 0x9e3779b97f4a7c15u);
+
+	z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9u;
+	z = (z ^ (z >> 27)) * 0x94d049bb133111ebu;
+	return z ^ (z >> 31);
+}
+
+/* Creates DIR/.NAME.tmp-PID-XXXXXX.EXT next to target, exclusively, with
+ * mode 0666 less the umask like any new file. The extension is kept so that
+ * OpenImageIO picks the format from the temporary name as well. Returns the
+ * descriptor, open for writing, with the name in f->temp; or -1. */
+static int create_temp(struct staged_file *f, char *err, size_t err_size)
+{
+	static const char digits[] = "0123456789abcdefghijklmnopqrstuvwxyz";
+	static unsigned counter;
+	const char *base = files_base_name(f->target);
+	const char *ext = files_extension(f->target);
+	struct timespec now;
+	uint64_t state;
+	char suffix[7];
+
+	clock_gettime(CLOCK_REALTIME, &now);
+	state = (uint64_t)now.tv_nsec ^ ((uint64_t)now.tv_sec << 30) ^ ((uint64_t)getpid() << 42) ^
+		counter++;
+	for (int tries = 0; tries < TEMP_CREATE_TRIES; tries++) {
+		uint64_t bits = splitmix64(&state);
+
+		for (int i = 0; i < 6; i++, bits /= 36)
+			suffix[i] = digits[bits % 36];
+		suffix[6] = '\0';
+		int n = snprintf(f->temp, sizeof(f->temp), "%.*s.%.*s.tmp-%ld-%s%s",
+				 (int)(base - f->target), f->target, TEMP_NAME_KEEP, base,
+				 (long)getpid(), suffix, ext);
+		if (n < 0 || (size_t)n >= sizeof(f->temp)) {
+			snprintf(err, err_size, "%s: %s", f->target, strerror(ENAMETOOLONG));
+			return -1;
+		}
+		int fd = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
+		if (fd >= 0)
+			return fd;
+		if (errno != EEXIST)
+			break;
+	}
+	snprintf(err, err_size, "%s: cannot create a file in its directory: %s", f->target,
+		 strerror(errno));
+	return -1;
+}
+
+int files_stage(struct staged_file *f, const char *target, char *err, size_t err_size)
+{
+	int fd;
+
+	f->target = target;
+	f->temp[0] = '\0';
+	interrupt_hold();
+	fd = create_temp(f, err, err_size);
+	if (fd >= 0 && interrupt_track(f->temp)) {
+		snprintf(err, err_size, "%s: too many files open for writing at once", target);
+		close(fd);
+		unlink(f->temp);
+		fd = -1;
+	}
+	if (fd < 0)
+		f->temp[0] = '\0';
+	interrupt_release();
+	return fd;
+}
+
+void files_discard(struct staged_file *f)
+{
+	interrupt_hold();
+	if (f->temp[0]) {
+		unlink(f->temp);
+		interrupt_untrack(f->temp);
+		f->temp[0] = '\0';
+	}
+	interrupt_release();
+}
+
+int files_commit(struct staged_file *files, int count, char *err, size_t err_size)
+{
+	int ret = 0;
+
+	interrupt_hold();
+	for (int i = 0; i < count; i++) {
+		struct staged_file *f = &files[i];
+		if (ret == 0 && rename(f->temp, f->target) != 0) {
+			snprintf(err, err_size, "%s: cannot replace: %s", f->target,
+				 strerror(errno));
+			ret = -1;
+		}
+		if (ret != 0)
+			unlink(f->temp); /* the ones renamed before stay renamed */
+		interrupt_untrack(f->temp);
+		f->temp[0] = '\0';
+	}
+	interrupt_release();
+	return ret;
+}
+
+int files_sync_close(int fd)
+{
+	int failed = fsync(fd) != 0 && errno != EINVAL; /* as in files_stage_with */
+	int saved = errno;
+
+	if (close(fd) != 0)
+		return -1;
+	errno = saved;
+	return failed ? -1 : 0;
+}
+
+int files_stage_with(struct staged_file *f, const char *target, files_fill fill,
+		     const void *context, char *err, size_t err_size)
+{
+	int fd = files_stage(f, target, err, err_size);
+	FILE *file;
+
+	if (fd < 0)
+		return -1;
+	file = fdopen(fd, "wb");
+	if (!file) {
+		close(fd);
+		goto out_discard;
+	}
+	errno = 0;
+	/* fsync fails with EINVAL where the file system cannot sync: nothing to
+	 * report then. A deferred write error (ENOSPC, EIO) shows up here. */
+	int failed = fill(file, context) != 0 || fflush(file) != 0 ||
+		     (fsync(fileno(file)) != 0 && errno != EINVAL);
+	failed |= fclose(file) != 0;
+	if (failed)
+		goto out_discard;
+	return 0;
+
+out_discard:
+	snprintf(err, err_size, "%s: cannot write: %s", target,
+		 errno ? strerror(errno) : "write failed");
+	files_discard(f);
+	return -1;
+}
+
+int files_write(const char *path, files_fill fill, const void *context, char *err,
+		size_t err_size)
+{
+	struct staged_file f;
+
+	if (files_stage_with(&f, path, fill, context, err, err_size))
+		return -1;
+	return files_commit(&f, 1, err, err_size);
+}
+
+const char *files_base_name(const char *path)
 {
 	const char *slash = strrchr(path, '/');
 
-	if (!slash)
-		snprintf(dir, dir_size, ".");
-	else if (slash == path)
-		snprintf(dir, dir_size, "/");
-	else
-		snprintf(dir, dir_size, "%.*s", (int)(slash - path), path);
+	return slash ? slash + 1 : path;
+}
+
+const char *files_extension(const char *path)
+{
+	const char *base = files_base_name(path);
+	const char *dot = strrchr(base, '.');
+
+	/* ".png" is a hidden file's name, not an extension */
+	return dot && dot != base ? dot : "";
+}
+
+/* Copies the directory part of path ("." for none) into dir[PATH_MAX]. */
+static int directory_of(const char *path, char *dir, char *err, size_t err_size)
+{
+	size_t length = (size_t)(files_base_name(path) - path);
+
+	if (length == 0) {
+		snprintf(dir, PATH_MAX, ".");
+		return 0;
+	}
+	if (length > 1)
+		length--; /* drop the slash, except for "/" itself */
+	if (length >= PATH_MAX) {
+		snprintf(err, err_size, "%s: %s", path, strerror(ENAMETOOLONG));
+		return -1;
+	}
+	memcpy(dir, path, length);
+	dir[length] = '\0';
+	return 0;
+}
+
+/* The directory exists, is one, and takes a name this long. */
+static int check_directory(const char *path, const char *dir, char *err, size_t err_size)
+{
+	struct stat st;
+	long name_max;
+
+	if (stat(dir, &st) != 0) {
+		if (errno == ENOENT)
+			snprintf(err, err_size, "%s: directory \"%s\" does not exist", path, dir);
+		else
+			snprintf(err, err_size, "%s: directory \"%s\": %s", path, dir,
+				 strerror(errno));
+		return -1;
+	}
+	if (!S_ISDIR(st.st_mode)) {
+		snprintf(err, err_size, "%s: \"%s\" is not a directory", path, dir);
+		return -1;
+	}
+	name_max = pathconf(dir, _PC_NAME_MAX);
+	if (name_max > 0 && strlen(files_base_name(path)) > (size_t)name_max) {
+		snprintf(err, err_size,
+			 "%s: the file name is %zu characters long, more than the %ld this file "
+			 "system allows",
+			 path, strlen(files_base_name(path)), name_max);
+		return -1;
+	}
+	return 0;
+}
+
+/* An existing target is replaced only if the user could overwrite it, as cp
+ * would, and if the rename will be allowed (a sticky directory lets only the
+ * file's or the directory's owner replace it). */
+static int check_replaceable(const char *path, const char *dir, char *err, size_t err_size)
+{
+	struct stat st, dir_st;
+	uid_t me = geteuid();
+
+	if (lstat(path, &st) != 0)
+		return 0; /* nothing to replace */
+	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
+		snprintf(err, err_size,
+			 "%s: exists and is not a regular file; refusing to replace it", path);
+		return -1;
+	}
+	if (access(path, W_OK) != 0 && errno != ENOENT) {
+		snprintf(err, err_size,
+			 "%s: exists and you cannot write it (%s); rtcl replaces only a file you "
+			 "could overwrite: remove it or choose another name",
+			 path, strerror(errno));
+		return -1;
+	}
+	if (lstat(path, &st) == 0 && stat(dir, &dir_st) == 0 && (dir_st.st_mode & S_ISVTX) &&
+	    me != 0 && st.st_uid != me && dir_st.st_uid != me) {
+		snprintf(err, err_size,
+			 "%s: belongs to another user in the sticky directory \"%s\", so it "
+			 "cannot be replaced: choose another name",
+			 path, dir);
+		return -1;
+	}
+	return 0;
 }
 
 int files_check_writable(const char *path, char *err, size_t err_size)
 {
-	char dir[4096];
-	struct stat st;
+	char dir[PATH_MAX];
+	struct staged_file trial;
+	int fd;
 
-	directory_of(path, dir, sizeof(dir));
 	if (path[0] == '\0' || path[strlen(path) - 1] == '/') {
 		snprintf(err, err_size, "%s: not a file name", path);
 		return -1;
 	}
-	if (stat(dir, &st) != 0 || !S_ISDIR(st.st_mode)) {
-		snprintf(err, err_size, "%s: directory \"%s\" does not exist", path, dir);
+	if (directory_of(path, dir, err, err_size) || check_directory(path, dir, err, err_size) ||
+	    check_replaceable(path, dir, err, err_size))
 		return -1;
-	}
-	if (access(dir, W_OK) != 0) {
-		snprintf(err, err_size, "%s: cannot write in \"%s\": %s", path, dir,
-			 strerror(errno));
+	/* What the write will do: create a file beside the target. */
+	fd = files_stage(&trial, path, err, err_size);
+	if (fd < 0)
 		return -1;
-	}
-	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
-		snprintf(err, err_size, "%s: exists and is not a regular file", path);
-		return -1;
-	}
+	close(fd);
+	files_discard(&trial);
 	return 0;
-}
-
-int files_write(const char *path, files_fill fill, const void *context, char *err,
-		  size_t err_size)
-{
-	char dir[4096], tmp[4200];
-	mode_t mask = umask(0);
-
-	umask(mask);
-	directory_of(path, dir, sizeof(dir));
-	snprintf(tmp, sizeof(tmp), "%s/.rtcl-out-XXXXXX", dir);
-	int fd = mkstemp(tmp);
-	if (fd < 0) {
-		snprintf(err, err_size, "%s: cannot create a temporary file in \"%s\": %s", path,
-			 dir, strerror(errno));
-		return -1;
-	}
-	FILE *file = fdopen(fd, "wb");
-	if (!file) {
-		close(fd);
-		goto out_remove;
-	}
-	errno = 0;
-	int failed = fill(file, context) != 0;
-	failed |= fflush(file) != 0 || fsync(fileno(file)) != 0;
-	failed |= fclose(file) != 0;
-	if (failed || chmod(tmp, 0666 & ~mask) != 0 || rename(tmp, path) != 0)
-		goto out_remove;
-	return 0;
-
-out_remove:
-	snprintf(err, err_size, "%s: cannot write: %s", path,
-		 errno ? strerror(errno) : "write failed");
-	unlink(tmp);
-	return -1;
-}
-
-void files_remove(const char *path)
-{
-	unlink(path);
 }

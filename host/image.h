@@ -44,6 +44,13 @@ int image_check_writable(const char *path, char *err, size_t err_size);
 int image_write(const char *path, const float *rgb, int width, int height,
 		const struct image_meta *meta, char *err, size_t err_size);
 
+/* Like image_write, but leaves the image staged beside path for the caller
+ * to commit with the run's other outputs (files.h). The written file's header
+ * is read back (format, size) before this returns 0. */
+struct staged_file;
+int image_stage(struct staged_file *staged, const char *path, const float *rgb, int width,
+		int height, const struct image_meta *meta, char *err, size_t err_size);
+
 /* round(255 · clamp(c, 0, 1)), ties up; NaN gives 0. The one 8-bit
  * conversion used everywhere. */
 unsigned char image_to_8bit(float c);

@@ -31,6 +31,12 @@ int image_backend_encode(const char *path, const char *tmp_path, int tmp_fd, con
 			 int width, int height, const struct image_meta *meta, char *err,
 			 size_t err_size);
 
+/* Reads the header of tmp_path, just written for `path`, back: it must open
+ * as the format path's extension names, width × height pixels. Returns 0, or
+ * -1 with "PATH: ..." in err. */
+int image_backend_verify(const char *path, const char *tmp_path, int width, int height, char *err,
+			 size_t err_size);
+
 /* snprintf into err[err_size]; does nothing when err is NULL or err_size 0.
  * Inline, so that the backends need nothing back from image_common.c. */
 #ifdef __GNUC__

@@ -3,7 +3,9 @@
 // OIIO 2.4 cannot write as PFM); this file encodes everything else.
 #include <algorithm>
 #include <cerrno>
+#include <cstdlib>
 #include <cstring>
+#include <ctime>
 #include <exception>
 #include <memory>
 #include <string>
@@ -97,6 +99,36 @@ bool is_float_format(const char *format_name)
 	return std::strcmp(format_name, "openexr") == 0 || std::strcmp(format_name, "hdr") == 0;
 }
 
+// OIIO 2.4's writers that cannot give a file which reads back: "term" prints
+// the image on the terminal, "null" writes nothing, and "jpeg2000" writes an
+// empty (.j2k) or unreadable (.jp2) file through an I/O proxy.
+bool cannot_round_trip(const char *format_name)
+{
+	return std::strcmp(format_name, "term") == 0 || std::strcmp(format_name, "null") == 0 ||
+	       std::strcmp(format_name, "jpeg2000") == 0;
+}
+
+// The reproducible-builds convention: with SOURCE_DATE_EPOCH set, formats
+// that record a date (TIFF, EXR) record that one instead of now, so that
+// one render gives the same bytes every time.
+void set_date(OIIO::ImageSpec &spec)
+{
+	const char *epoch = std::getenv("SOURCE_DATE_EPOCH");
+	char *end = nullptr;
+	char date[32];
+
+	if (!epoch || !*epoch)
+		return;
+	errno = 0;
+	const long long seconds = std::strtoll(epoch, &end, 10);
+	const std::time_t when = std::time_t(seconds);
+	std::tm utc;
+	if (*end || errno || seconds < 0 || !gmtime_r(&when, &utc))
+		return;
+	std::strftime(date, sizeof(date), "%Y:%m:%d %H:%M:%S", &utc);
+	spec.attribute("DateTime", date);
+}
+
 int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb, int width,
 	   int height, const struct image_meta *meta, char *err, size_t err_size)
 {
@@ -120,6 +152,7 @@ int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb,
 		spec.attribute("Software", meta->software);
 	if (meta && meta->description)
 		spec.attribute("ImageDescription", meta->description);
+	set_date(spec);
 
 	if (!out->open(tmp_path, spec)) {
 		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
@@ -166,7 +199,15 @@ extern "C" int image_backend_check_format(const char *path, const char *ext, cha
 		return -1;
 	}
 	try {
-		if (OIIO::ImageOutput::create(path))
+		std::unique_ptr<OIIO::ImageOutput> out = OIIO::ImageOutput::create(path);
+		if (out && cannot_round_trip(out->format_name())) {
+			image_set_error(err, err_size,
+					"%s: OpenImageIO's %s writer does not give a file that "
+					"reads back (%s)",
+					path, out->format_name(), format_hint);
+			return -1;
+		}
+		if (out)
 			return 0;
 		OIIO::geterror(); // consumed: our message says it better
 	} catch (const std::exception &e) {
@@ -185,6 +226,28 @@ extern "C" int image_backend_encode(const char *path, const char *tmp_path, int 
 	// No exception may cross into C.
 	try {
 		return encode(path, tmp_path, tmp_fd, rgb, width, height, meta, err, err_size);
+	} catch (const std::exception &e) {
+		image_set_error(err, err_size, "%s: %s", path, e.what());
+	}
+	return -1;
+}
+
+extern "C" int image_backend_verify(const char *path, const char *tmp_path, int width, int height,
+				    char *err, size_t err_size)
+{
+	try {
+		std::unique_ptr<OIIO::ImageOutput> writer = OIIO::ImageOutput::create(path);
+		std::unique_ptr<OIIO::ImageInput> in = OIIO::ImageInput::open(tmp_path);
+		const bool ok = writer && in && std::strcmp(in->format_name(),
+							    writer->format_name()) == 0 &&
+				in->spec().width == width && in->spec().height == height;
+		if (!in)
+			OIIO::geterror(); // consumed: the message below says it
+		if (ok)
+			return 0;
+		image_set_error(err, err_size,
+				"%s: the written file does not read back as a %dx%d %s image", path,
+				width, height, writer ? writer->format_name() : "");
 	} catch (const std::exception &e) {
 		image_set_error(err, err_size, "%s: %s", path, e.what());
 	}

@@ -1,89 +1,158 @@
 #include "outputs.h"
 
+#include <errno.h>
+#include <limits.h>
 #include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
 
 #include "files.h"
 #include "image.h"
+#include "interrupt.h"
 #include "workmap.h"
 
 /* Room for a path and the ".json" of the --flops sidecar. */
-#define SIDECAR_PATH_SIZE 4200
+#define SIDECAR_PATH_SIZE (PATH_MAX + 8)
+/* A resolved directory, a slash and a file name. */
+#define CANONICAL_SIZE (2 * PATH_MAX)
+/* The image, the work map, the flops and their sidecar, the stats. */
+#define MAX_OUTPUTS 5
 
-static void sidecar_path(const char *flops_path, char *path)
+/* One output file of the run, and the option that named it. */
+struct output {
+	const char *option;
+	const char *path;
+};
+
+/* Lists the outputs the options ask for, the sidecar written into sidecar. */
+static int list_outputs(const struct options *opt, char *sidecar, struct output *out)
 {
-	snprintf(path, SIDECAR_PATH_SIZE, "%s.json", flops_path);
+	int n = 0;
+
+	out[n++] = (struct output){"-o/--output", opt->output};
+	if (opt->work_map_path)
+		out[n++] = (struct output){"--work-map", opt->work_map_path};
+	if (opt->flops_path) {
+		snprintf(sidecar, SIDECAR_PATH_SIZE, "%s.json", opt->flops_path);
+		out[n++] = (struct output){"--flops", opt->flops_path};
+		out[n++] = (struct output){"--flops (its sidecar)", sidecar};
+	}
+	if (opt->stats_path)
+		out[n++] = (struct output){"--stats", opt->stats_path};
+	return n;
+}
+
+/* The file path names, as an absolute path through its directory's real
+ * location (so "./x.png", "x.png" and a path through a symbolic link to the
+ * directory compare equal); path itself when the directory cannot be resolved. */
+static void canonical(const char *path, char *out)
+{
+	const char *base = files_base_name(path);
+	char dir[PATH_MAX], resolved[PATH_MAX];
+	size_t dir_length = (size_t)(base - path);
+
+	snprintf(dir, sizeof(dir), "%.*s", (int)(dir_length ? dir_length : 1),
+		 dir_length ? path : ".");
+	if (realpath(dir, resolved))
+		snprintf(out, CANONICAL_SIZE, "%s/%s", strcmp(resolved, "/") ? resolved : "", base);
+	else
+		snprintf(out, CANONICAL_SIZE, "%s", path);
+}
+
+static int same_file(const char *a, const char *b)
+{
+	char ca[CANONICAL_SIZE], cb[CANONICAL_SIZE];
+	struct stat sa, sb;
+
+	canonical(a, ca);
+	canonical(b, cb);
+	if (strcmp(ca, cb) == 0)
+		return 1;
+	/* Two names of one existing file: a symbolic or a hard link. */
+	return stat(a, &sa) == 0 && stat(b, &sb) == 0 && sa.st_dev == sb.st_dev &&
+	       sa.st_ino == sb.st_ino;
 }
 
 int outputs_check(const struct options *opt, char *err, size_t err_size)
 {
+	struct output out[MAX_OUTPUTS];
 	char sidecar[SIDECAR_PATH_SIZE];
+	int n = list_outputs(opt, sidecar, out);
 
+	for (int i = 0; i < n; i++) {
+		for (int j = 0; j < i; j++) {
+			if (same_file(out[i].path, out[j].path)) {
+				snprintf(err, err_size,
+					 "%s %s and %s %s name the same file: give each output "
+					 "a file of its own",
+					 out[j].option, out[j].path, out[i].option, out[i].path);
+				return OUTPUTS_CLASH;
+			}
+		}
+	}
 	if (image_check_writable(opt->output, err, err_size))
 		return -1;
 	if (opt->work_map_path && image_check_writable(opt->work_map_path, err, err_size))
 		return -1;
-	if (opt->stats_path && files_check_writable(opt->stats_path, err, err_size))
-		return -1;
-	if (opt->flops_path) {
-		sidecar_path(opt->flops_path, sidecar);
-		if (files_check_writable(opt->flops_path, err, err_size) ||
-		    files_check_writable(sidecar, err, err_size))
+	for (int i = 0; i < n; i++)
+		if (strcmp(out[i].option, "-o/--output") && strcmp(out[i].option, "--work-map") &&
+		    files_check_writable(out[i].path, err, err_size))
 			return -1;
-	}
 	return 0;
+}
+
+/* Stages every output (the sidecar's name in sidecar); on a failure
+ * discards what it staged. Returns how many were staged, or -1. */
+static int stage_all(const struct run *run, char *sidecar, struct staged_file *staged, char *err,
+		     size_t err_size)
+{
+	const struct options *opt = run->opt;
+	const struct render_settings *s = &run->settings;
+	char description[1024];
+	struct image_meta meta = {"rtcl " RTCL_VERSION, description};
+	int n = 0;
+
+	snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
+		 run->scene->source, opt->kernel, s->width, s->height, s->max_depth);
+	if (image_stage(&staged[n++], opt->output, run->result.rgb, s->width, s->height, &meta,
+			err, err_size))
+		goto out_discard;
+	if (opt->work_map_path &&
+	    workmap_stage(&staged[n++], opt->work_map_path, run->counted.pixel_flops, s->width,
+			  s->height, err, err_size))
+		goto out_discard;
+	if (opt->flops_path) {
+		snprintf(sidecar, SIDECAR_PATH_SIZE, "%s.json", opt->flops_path);
+		if (stats_stage_flops(&staged[n++], opt->flops_path, run, err, err_size) ||
+		    stats_stage_flops_sidecar(&staged[n++], sidecar, run, err, err_size))
+			goto out_discard;
+	}
+	if (opt->stats_path && stats_stage_run(&staged[n++], opt->stats_path, run, err, err_size))
+		goto out_discard;
+	return n;
+
+out_discard:
+	while (n > 0)
+		files_discard(&staged[--n]);
+	return -1;
 }
 
 int outputs_write(const struct run *run, char *err, size_t err_size)
 {
-	const struct options *opt = run->opt;
-	const struct render_settings *s = &run->settings;
-	char description[1024], sidecar[SIDECAR_PATH_SIZE];
-	struct image_meta meta = {"rtcl " RTCL_VERSION, description};
-	const char *written[4];
-	int count = 0;
-
-	snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
-		 run->scene->source, opt->kernel, s->width, s->height, s->max_depth);
-	if (image_write(opt->output, run->result.rgb, s->width, s->height, &meta, err, err_size))
-		return -1;
-	written[count++] = opt->output;
-	if (opt->work_map_path) {
-		if (workmap_write(opt->work_map_path, run->counted.pixel_flops, s->width, s->height,
-				  err, err_size))
-			goto out_remove;
-		written[count++] = opt->work_map_path;
-	}
-	if (opt->flops_path) {
-		if (stats_write_flops(opt->flops_path, run, err, err_size))
-			goto out_remove;
-		written[count++] = opt->flops_path;
-		sidecar_path(opt->flops_path, sidecar);
-		if (stats_write_flops_sidecar(sidecar, run, err, err_size))
-			goto out_remove;
-		written[count++] = sidecar;
-	}
-	if (opt->stats_path && stats_write_run(opt->stats_path, run, err, err_size))
-		goto out_remove;
-	return 0;
-
-out_remove:
-	while (count > 0)
-		files_remove(written[--count]);
-	return -1;
-}
-
-void outputs_remove(const struct options *opt)
-{
+	struct staged_file staged[MAX_OUTPUTS];
 	char sidecar[SIDECAR_PATH_SIZE];
+	int n;
 
-	files_remove(opt->output);
-	if (opt->work_map_path)
-		files_remove(opt->work_map_path);
-	if (opt->stats_path)
-		files_remove(opt->stats_path);
-	if (opt->flops_path) {
-		sidecar_path(opt->flops_path, sidecar);
-		files_remove(opt->flops_path);
-		files_remove(sidecar);
-	}
+	memset(staged, 0, sizeof(staged));
+	n = stage_all(run, sidecar, staged, err, err_size);
+	if (n < 0)
+		return -1;
+	/* One step for an interrupt: the renames and what the message says. */
+	interrupt_hold();
+	int ret = files_commit(staged, n, err, err_size);
+	if (ret == 0)
+		interrupt_set_outcome("the outputs were written");
+	interrupt_release();
+	return ret;
 }

@@ -1,7 +1,8 @@
 /* The files a run writes: the image, and with the options that ask for them
  * the work map, the --flops counts and their sidecar, and the --stats
- * document. All of them are checked before any work and written all or
- * none. */
+ * document. They are checked before any work, written beside their targets
+ * and then renamed over them together (files.h), so that a failure or an
+ * interrupt leaves the previous files untouched or every new one in place. */
 #ifndef RTCL_OUTPUTS_H
 #define RTCL_OUTPUTS_H
 
@@ -9,15 +10,17 @@
 
 #include "stats.h"
 
-/* Checks that every output can be written, before any work starts. Returns
- * 0, or -1 with one message in err. */
+/* outputs_check's result when two outputs name the same file (a usage
+ * error). */
+#define OUTPUTS_CLASH (-2)
+
+/* Checks, before any work, that the outputs name distinct files and that
+ * each can be written. Returns 0, OUTPUTS_CLASH, or -1 with one message in
+ * err. */
 int outputs_check(const struct options *opt, char *err, size_t err_size);
 
-/* Writes every output of the run, or none of them: a failure removes what
- * this run already wrote. Returns 0, or -1 with one message in err. */
+/* Writes every output of the run, or none of them. Returns 0, or -1 with one
+ * message in err. */
 int outputs_write(const struct run *run, char *err, size_t err_size);
-
-/* Removes every output of this run (after an interrupt while writing). */
-void outputs_remove(const struct options *opt);
 
 #endif

@@ -32,10 +32,11 @@ static int fill_json(FILE *file, const void *document)
 	return fputc('\n', file) == EOF ? -1 : 0;
 }
 
-/* Writes doc and releases it; returns 0, or -1 with a message. */
-static int write_document(const char *path, json_t *doc, char *err, size_t err_size)
+/* Stages doc and releases it; returns 0, or -1 with a message. */
+static int stage_document(struct staged_file *staged, const char *path, json_t *doc, char *err,
+			  size_t err_size)
 {
-	int failed = !doc || files_write(path, fill_json, doc, err, err_size);
+	int failed = !doc || files_stage_with(staged, path, fill_json, doc, err, err_size);
 
 	if (!doc)
 		snprintf(err, err_size, "%s: cannot build the JSON document", path);
@@ -79,14 +80,8 @@ static int fill_npy(FILE *file, const void *context)
 	return fwrite(a->counts, sizeof(uint64_t), n, file) == n ? 0 : -1;
 }
 
-static int write_npy(const char *path, const uint64_t *counts, size_t rows, size_t cols, char *err,
-		     size_t err_size)
-{
-	struct npy_array array = {counts, rows, cols};
-	return files_write(path, fill_npy, &array, err, err_size);
-}
-
-int stats_write_flops(const char *path, const struct run *run, char *err, size_t err_size)
+int stats_stage_flops(struct staged_file *staged, const char *path, const struct run *run,
+		      char *err, size_t err_size)
 {
 	const struct render_result *c = &run->counted;
 	/* One row per NDRange row; the wavefront's launches in one row. */
@@ -94,7 +89,9 @@ int stats_write_flops(const char *path, const struct run *run, char *err, size_t
 	size_t rows = one_row ? 1 : c->global_size[1];
 	size_t cols = one_row ? c->item_count : c->global_size[0];
 
-	return write_npy(path, c->item_flops, rows, cols, err, err_size);
+	struct npy_array array = {c->item_flops, rows, cols};
+
+	return files_stage_with(staged, path, fill_npy, &array, err, err_size);
 }
 
 /* The figures of the counting run, for --stats and the --flops sidecar. */
@@ -174,7 +171,8 @@ static json_t *flops_sidecar(const struct run *run)
 	return doc;
 }
 
-int stats_write_run(const char *path, const struct run *run, char *err, size_t err_size)
+int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run,
+		    char *err, size_t err_size)
 {
 	json_t *doc = run_document(run);
 
@@ -182,13 +180,13 @@ int stats_write_run(const char *path, const struct run *run, char *err, size_t e
 		add_flop_figures(doc, run);
 	if (doc)
 		add_device_figures(doc, run);
-	return write_document(path, doc, err, err_size);
+	return stage_document(staged, path, doc, err, err_size);
 }
 
-int stats_write_flops_sidecar(const char *path, const struct run *run, char *err,
-			      size_t err_size)
+int stats_stage_flops_sidecar(struct staged_file *staged, const char *path, const struct run *run,
+			      char *err, size_t err_size)
 {
-	return write_document(path, flops_sidecar(run), err, err_size);
+	return stage_document(staged, path, flops_sidecar(run), err, err_size);
 }
 
 void stats_print_summary(const struct run *run)

@@ -41,17 +41,22 @@ void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flo
 /* Prints the run's summary on stdout (unless -q). */
 void stats_print_summary(const struct run *run);
 
-/* Writes the --stats document (atomically, see files.h). Returns 0, or -1
- * with one message in err. */
-int stats_write_run(const char *path, const struct run *run, char *err, size_t err_size);
+/* The files below are staged for the caller to commit with the run's other
+ * outputs (files.h). Each returns 0, or -1 with one message in err. */
+struct staged_file;
 
-/* Writes the counting run's per-work-item flops as a .npy file of
- * little-endian uint64 (numpy.load reads it directly): shape (global y,
- * global x), or (1, every launch's work-items) for the wavefront. */
-int stats_write_flops(const char *path, const struct run *run, char *err, size_t err_size);
+/* The --stats document. */
+int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run,
+		    char *err, size_t err_size);
 
-/* Writes the --flops sidecar: how the counts were launched, and the figures. */
-int stats_write_flops_sidecar(const char *path, const struct run *run, char *err,
-			      size_t err_size);
+/* The counting run's per-work-item flops as a .npy file of little-endian
+ * uint64 (numpy.load reads it directly): shape (global y, global x), or (1,
+ * every launch's work-items) for the wavefront. */
+int stats_stage_flops(struct staged_file *staged, const char *path, const struct run *run,
+		      char *err, size_t err_size);
+
+/* The --flops sidecar: how the counts were launched, and the figures. */
+int stats_stage_flops_sidecar(struct staged_file *staged, const char *path, const struct run *run,
+			      char *err, size_t err_size);
 
 #endif

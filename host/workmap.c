@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "cli.h"
+#include "files.h"
 #include "image.h"
 #include "workmap.h"
 
@@ -278,8 +279,8 @@ static uint64_t max_count(const uint64_t *pixel_flops, size_t pixels)
 	return max;
 }
 
-int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int height, char *err,
-		  size_t err_size)
+int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
+		  int width, int height, char *err, size_t err_size)
 {
 	const char *name = path ? path : "work map";
 	int bar_height = workmap_bar_height(width);
@@ -315,7 +316,17 @@ int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int 
 		 "flops per pixel, 0 (dark) to %" PRIu64 " (bright), viridis", max);
 	meta.software = "rtcl " RTCL_VERSION;
 	meta.description = description;
-	status = image_write(path, rgb, width, total_height, &meta, err, err_size);
+	status = image_stage(staged, path, rgb, width, total_height, &meta, err, err_size);
 	free(rgb);
 	return status;
+}
+
+int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int height, char *err,
+		  size_t err_size)
+{
+	struct staged_file staged;
+
+	if (workmap_stage(&staged, path, pixel_flops, width, height, err, err_size))
+		return -1;
+	return files_commit(&staged, 1, err, err_size);
 }

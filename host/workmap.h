@@ -23,4 +23,10 @@ int workmap_bar_height(int width);
 int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int height, char *err,
 		  size_t err_size);
 
+/* Like workmap_write, but leaves the image staged for the caller to commit
+ * with the run's other outputs (files.h). */
+struct staged_file;
+int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
+		  int width, int height, char *err, size_t err_size);
+
 #endif

@@ -1,0 +1,38 @@
+/* Interrupts (SIGINT, SIGTERM, SIGHUP) in a multi-threaded process.
+ *
+ * The signals are blocked in every thread from the start of main, before the
+ * OpenCL runtime starts threads of its own (which inherit the mask), and are
+ * taken by one thread with sigwait(). That thread removes the temporary files
+ * of this run that are still open for writing (tracked below), says so on
+ * stderr and ends the process with 128 + the signal number. Renaming the
+ * finished files over their targets happens inside interrupt_hold() /
+ * interrupt_release(), so a signal then waits until every rename is done:
+ * after an interrupt the user finds either the previous outputs untouched or
+ * the complete new ones, never a mixture and never a temporary file, and
+ * nothing rtcl did not create in this run is ever removed. */
+#ifndef RTCL_INTERRUPT_H
+#define RTCL_INTERRUPT_H
+
+#include <stddef.h>
+
+/* Blocks the signals and starts the thread that takes them. progress_line:
+ * a progress line may be open on stderr (the message then starts on a line of
+ * its own). Returns 0, or -1 with one message in err. */
+int interrupt_setup(int progress_line, char *err, size_t err_size);
+
+/* A critical section: while it is held, a signal waits. It may be nested. */
+void interrupt_hold(void);
+void interrupt_release(void);
+
+/* Under interrupt_hold(): removes path if a signal comes before
+ * interrupt_untrack(path). At most INTERRUPT_MAX_TRACKED paths, each kept by
+ * reference (the caller keeps the string alive). Returns 0, or -1 when full. */
+#define INTERRUPT_MAX_TRACKED 16
+int interrupt_track(const char *path);
+void interrupt_untrack(const char *path);
+
+/* What the message says was left after an interrupt from now on (default "no
+ * output written"); a string literal. */
+void interrupt_set_outcome(const char *outcome);
+
+#endif
