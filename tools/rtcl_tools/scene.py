@@ -15,6 +15,8 @@ SceneError.
 import json
 import math
 
+from .vector import normalize
+
 MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-18, 1e18   # SCENE.md: the device computes in float
 PARALLEL_SINE = 1e-9                         # camera.up "parallel" below this sine
 MAX_IMAGE_SIDE = 32768
@@ -169,11 +171,6 @@ def scale_to_unit_max(v):
 
 def length(v):
     return math.sqrt(sum(x * x for x in v))
-
-
-def normalize(v):
-    n = math.sqrt(sum(x * x for x in v))
-    return tuple(x / n for x in v)
 
 
 # ---- the scene -------------------------------------------------------------------------
