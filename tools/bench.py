@@ -59,7 +59,7 @@ from rtcl_tools.bench_run import BenchProgress, SilentProgress, probe, run_sweep
 from rtcl_tools.peak import find_peak, read_cpuinfo
 from rtcl_tools.report import device_slug, git_describe, one_line, to_csv, utc_now
 from rtcl_tools.runner import RtclFailed, Settings, common_options, describe
-from rtcl_tools.usage import UsageError
+from rtcl_tools.usage import UsageError, report_error
 
 
 def run_benchmark(arguments, temp_dir, command_line):
@@ -104,14 +104,11 @@ def main(argv=None):
             outputs = run_benchmark(arguments, pathlib.Path(temp_name), command_line)
         files.write_all(outputs)
     except UsageError as error:
-        print(f"{program}: error: {error}", file=sys.stderr)
-        return 2
+        return report_error(program, error, 2)
     except RtclFailed as error:
-        print(f"{program}: error: {error}", file=sys.stderr)
-        return 1
+        return report_error(program, error)
     except (OSError, ValueError, KeyError) as error:
-        print(f"{program}: error: {one_line(error)}", file=sys.stderr)
-        return 1
+        return report_error(program, one_line(error))
     except KeyboardInterrupt:
         print(f"\n{program}: interrupted; nothing written", file=sys.stderr)
         return 130

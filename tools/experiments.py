@@ -47,6 +47,7 @@ from rtcl_tools.flops import FlopsFileError
 from rtcl_tools.paper import DEFAULT_REPEAT, QUICK_SIZE
 from rtcl_tools.report import one_line
 from rtcl_tools.runner import RtclFailed
+from rtcl_tools.usage import report_error
 
 
 def parse_arguments(argv):
@@ -89,11 +90,9 @@ def main(argv=None):
             runs = run_experiment(arguments, temp_dir)
             out_dir = write_outputs(runs, arguments)
         except RtclFailed as error:
-            print(f"{program}: error: {error}", file=sys.stderr)
-            return 1
+            return report_error(program, error)
         except (OSError, ValueError, FlopsFileError) as error:
-            print(f"{program}: error: {one_line(error)}", file=sys.stderr)
-            return 1
+            return report_error(program, one_line(error))
     print(f"{program}: results in {out_dir}", file=sys.stderr)
     return 0
 

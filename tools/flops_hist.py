@@ -26,6 +26,7 @@ from rtcl_tools.flops import FlopsFileError, load_flops, output_format, sidecar_
     sidecar_path
 from rtcl_tools.plots import DEFAULT_BINS, plot_flops_histograms
 from rtcl_tools.report import one_line
+from rtcl_tools.usage import report_error
 
 
 def parse_arguments(argv):
@@ -62,8 +63,7 @@ def main(argv=None):
                               log=arguments.log, bins=arguments.bins,
                               title=arguments.title)
     except (FlopsFileError, ValueError, OSError) as error:
-        print(f"{program}: error: {one_line(error)}", file=sys.stderr)
-        return 1
+        return report_error(program, one_line(error))
     return 0
 
 

@@ -8,7 +8,8 @@
     flops        rtcl --flops files and parallel efficiency (numpy)
     plots        every matplotlib figure (matplotlib is imported only there)
     experiment, table1                      tools/experiments.py
-    bench_plan, peak, bench_run, bench_report, scaling, usage   tools/bench.py
+    bench_plan, peak, bench_run, bench_report, bench_options, scaling   tools/bench.py
+    usage        option checks and "PROGRAM: error: MESSAGE" reports
     povray_sdl, povray_run                  tools/povray.py
     genscene, vector                        tools/genscene.py
     ppm                                     tools/ppmdiff.py

@@ -1,7 +1,9 @@
-"""Checking command-line options: a bad one is one line on stderr and exit status 2."""
+"""The tools' command lines: option checks (a bad option is one line on stderr and exit
+status 2) and error reports in the form 'PROGRAM: error: MESSAGE'."""
 
 import argparse
 import re
+import sys
 
 
 class UsageError(Exception):
@@ -43,3 +45,9 @@ def parse_size(text):
     if not (1 <= w <= 32768 and 1 <= h <= 32768):
         raise argparse.ArgumentTypeError("width and height must be 1 ... 32768, got %r" % text)
     return w, h
+
+
+def report_error(program, message, status=1):
+    """Prints 'PROGRAM: error: MESSAGE' on stderr; returns status (the exit status)."""
+    print(f"{program}: error: {message}", file=sys.stderr)
+    return status
