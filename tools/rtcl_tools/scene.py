@@ -3,7 +3,7 @@
 host/scene.c is the authority; this module mirrors it for the tools (povray.py
 reads scenes through it) and for the tests, rule for rule and in the same
 order, with the same "PATH: what is wrong" messages, so that every file rtcl
-refuses is refused here too (test/test_scene_validator.py checks that against
+refuses is refused here too (test/test_rtcl_tools.py checks that against
 test/bad_scenes/).  JSON syntax errors are "LINE:COLUMN: what" as in rtcl, in
 Python's wording.  One deliberate difference: a newer version says "must be 1".
 
