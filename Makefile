@@ -78,8 +78,8 @@ all: $(BIN)
 $(BIN): $(BUILD)/main.o $(HOST_OBJS)
 	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
 
-$(BUILD)/embedded.c: tools/embed.py $(EMBEDDED) | $(BUILD)
-	$(PYTHON) tools/embed.py $@ $(EMBEDDED)
+$(BUILD)/embedded.c: tools/build/embed.py $(EMBEDDED) | $(BUILD)
+	$(PYTHON) tools/build/embed.py $@ $(EMBEDDED)
 
 $(BUILD)/%.o: host/%.c | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -c -o $@ $<

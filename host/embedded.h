@@ -1,4 +1,4 @@
-/* Files embedded into the binary at build time (tools/embed.py writes
+/* Files embedded into the binary at build time (tools/build/embed.py writes
  * build/embedded.c): the OpenCL sources of cl/ and the default scene. */
 #ifndef RTCL_EMBEDDED_H
 #define RTCL_EMBEDDED_H

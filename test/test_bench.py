@@ -1,4 +1,4 @@
-"""Tests of tools/bench.py: its pure parts (plan, peaks, fits, table) with fake data,
+"""Tests of tools/bench.py and its rtcl_tools modules: the pure parts (plan, peaks, fits, table) with fake data,
 then end-to-end runs of `bench.py --quick` against the real ./rtcl (or $RTCL) on
 tiny images, and its refusals (one stderr line, exit 2, nothing written)."""
 import csv
@@ -16,7 +16,8 @@ TOOLS = ROOT / "tools"
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 sys.path.insert(0, str(TOOLS))
 
-import bench  # noqa: E402
+from rtcl_tools import bench_plan, bench_report, files, scaling, usage  # noqa: E402
+from rtcl_tools import peak as fp32_peak  # noqa: E402
 
 H100 = "NVIDIA H100 80GB HBM3 (NVIDIA CUDA)"
 
@@ -34,41 +35,41 @@ def needs_rtcl():
 # ---- the plan --------------------------------------------------------------------
 
 def test_full_plan_covers_every_kernel_shape_count_and_batch():
-    configs = bench.plan(bench.KERNELS, bench.WORKGROUPS, bench.GROUP_SCALES, bench.BATCHES)
-    shapes, counts = len(bench.WORKGROUPS), 1 + len(bench.GROUP_SCALES)
-    by_kernel = {kernel: [c for c in configs if c.kernel == kernel] for kernel in bench.KERNELS}
+    configs = bench_plan.plan(bench_plan.KERNELS, bench_plan.WORKGROUPS, bench_plan.GROUP_SCALES, bench_plan.BATCHES)
+    shapes, counts = len(bench_plan.WORKGROUPS), 1 + len(bench_plan.GROUP_SCALES)
+    by_kernel = {kernel: [c for c in configs if c.kernel == kernel] for kernel in bench_plan.KERNELS}
     # naive: every shape + the paper's 16x10; wavefront: every shape (8x8 is its
     # paper-like one); cyclic, dynamic: shapes x counts + the paper's geometry;
     # persistent: shapes x counts x batches + dynamic's paper geometry at batch 1.
     assert len(by_kernel["naive"]) == shapes + 1
     assert len(by_kernel["wavefront"]) == shapes
     assert len(by_kernel["cyclic"]) == len(by_kernel["dynamic"]) == shapes * counts + 1
-    assert len(by_kernel["persistent"]) == shapes * counts * len(bench.BATCHES) + 1
+    assert len(by_kernel["persistent"]) == shapes * counts * len(bench_plan.BATCHES) + 1
     assert len(configs) == sum(len(group) for group in by_kernel.values())
     papers = {c.kernel: (c.workgroup, c.groups, c.batch) for c in configs if c.paper}
     assert papers == {"naive": ("16x10", None, None), "cyclic": ("8x8", "25x25", None),
                       "dynamic": ("8x8", "10x10", None),
                       "persistent": ("8x8", "10x10", 1), "wavefront": ("8x8", None, None)}
-    assert {c.batch for c in by_kernel["persistent"]} == set(bench.BATCHES)
+    assert {c.batch for c in by_kernel["persistent"]} == set(bench_plan.BATCHES)
     assert {c.group_scale for c in by_kernel["cyclic"] if not c.paper} == \
-        {1.0, *bench.GROUP_SCALES}
+        {1.0, *bench_plan.GROUP_SCALES}
     assert all(c.group_scale is None and c.batch is None
                for c in by_kernel["naive"] + by_kernel["wavefront"])
 
 
 def test_paper_only_plan_and_serial():
-    configs = bench.plan(bench.KERNELS, bench.WORKGROUPS, bench.GROUP_SCALES, bench.BATCHES,
+    configs = bench_plan.plan(bench_plan.KERNELS, bench_plan.WORKGROUPS, bench_plan.GROUP_SCALES, bench_plan.BATCHES,
                          paper_only=True, serial=True)
-    assert [c.kernel for c in configs] == ["serial", *bench.KERNELS]
+    assert [c.kernel for c in configs] == ["serial", *bench_plan.KERNELS]
     assert all(c.paper for c in configs[1:])
 
 
 def test_group_counts_scale_the_total():
-    assert bench.scaled_groups("46x46", 4) == "92x92"
-    assert bench.scaled_groups("46x46", 2) == "65x65"      # 4225 ~ 2 x 2116
-    assert bench.scaled_groups("46x46", 0.5) == "33x33"    # 1089 ~ 0.5 x 2116
-    assert bench.scaled_groups("1x1", 0.5) == "1x1"
-    assert bench.groups_total("25x4") == 100
+    assert bench_plan.scaled_groups("46x46", 4) == "92x92"
+    assert bench_plan.scaled_groups("46x46", 2) == "65x65"      # 4225 ~ 2 x 2116
+    assert bench_plan.scaled_groups("46x46", 0.5) == "33x33"    # 1089 ~ 0.5 x 2116
+    assert bench_plan.scaled_groups("1x1", 0.5) == "1x1"
+    assert bench_plan.groups_total("25x4") == 100
 
 
 # ---- the FP32 peak -------------------------------------------------------------
@@ -80,7 +81,7 @@ def test_group_counts_scale_the_total():
     ("NVIDIA A100-SXM4-40GB", 108, 108 * 64 * 2 * 1.41),
 ])
 def test_gpu_peak_from_the_table(name, units, expected):
-    peak = bench.gpu_peak(name, units)
+    peak = fp32_peak.gpu_peak(name, units)
     assert peak.gflops == pytest.approx(expected)
     assert f"{units} SMs" in peak.formula and "FMA" in peak.formula
 
@@ -88,7 +89,7 @@ def test_gpu_peak_from_the_table(name, units, expected):
 @pytest.mark.parametrize("name", ["NVIDIA H200 NVL", "NVIDIA GeForce RTX 4090",
                                   "gfx90a:sramecc+:xnack-"])
 def test_gpu_peak_unknown(name):
-    assert bench.gpu_peak(name, 100) is None
+    assert fp32_peak.gpu_peak(name, 100) is None
 
 
 def cpuinfo(flags, cores=2, siblings=2):
@@ -98,13 +99,13 @@ def cpuinfo(flags, cores=2, siblings=2):
 def test_cpu_peak_from_flags_cores_and_clock():
     stats = {"compute_units": 4, "max_clock_mhz": 3000}
     # 4 hardware threads on 2 cores per 4 siblings: 2 cores.
-    peak = bench.cpu_peak(stats, cpuinfo("fpu avx2 fma avx512f", cores=2, siblings=4), 2)
+    peak = fp32_peak.cpu_peak(stats, cpuinfo("fpu avx2 fma avx512f", cores=2, siblings=4), 2)
     assert peak.gflops == pytest.approx(2 * 16 * 2 * 2 * 3.0)
     assert "avx512f" in peak.formula and "3000 MHz" in peak.formula
-    peak = bench.cpu_peak(stats, cpuinfo("fpu avx avx2 fma"), 1)
+    peak = fp32_peak.cpu_peak(stats, cpuinfo("fpu avx avx2 fma"), 1)
     assert peak.gflops == pytest.approx(4 * 8 * 1 * 2 * 3.0)
-    assert bench.cpu_peak(stats, cpuinfo("fpu sse4_2 avx"), 1) is None   # no FMA
-    assert bench.cpu_peak(stats, cpuinfo("avx2 fma"), None) is None       # units unknown
+    assert fp32_peak.cpu_peak(stats, cpuinfo("fpu sse4_2 avx"), 1) is None   # no FMA
+    assert fp32_peak.cpu_peak(stats, cpuinfo("avx2 fma"), None) is None       # units unknown
 
 
 def peak_arguments(peak_gflops=None, fma_units=None):
@@ -114,22 +115,22 @@ def peak_arguments(peak_gflops=None, fma_units=None):
 def test_find_peak_asks_for_what_it_cannot_tell():
     pocl = {"device": "pthread-znver4-AMD EPYC (Portable Computing Language)",
             "compute_units": 2, "max_clock_mhz": 2600}
-    with pytest.raises(bench.UsageError, match="--fma-units"):
-        bench.find_peak(pocl, peak_arguments(), cpuinfo("avx2 fma avx512f"))
-    assert bench.find_peak(pocl, peak_arguments(fma_units=1),
+    with pytest.raises(usage.UsageError, match="--fma-units"):
+        fp32_peak.find_peak(pocl, peak_arguments(), cpuinfo("avx2 fma avx512f"))
+    assert fp32_peak.find_peak(pocl, peak_arguments(fma_units=1),
                            cpuinfo("avx2 fma avx512f")).gflops == pytest.approx(166.4)
-    given = bench.find_peak(pocl, peak_arguments(peak_gflops=123.0), {})
+    given = fp32_peak.find_peak(pocl, peak_arguments(peak_gflops=123.0), {})
     assert given.gflops == 123.0 and "given" in given.formula
-    with pytest.raises(bench.UsageError, match="--peak-gflops"):
-        bench.find_peak({"device": "Mystery GPU", "compute_units": 8}, peak_arguments(), {})
-    h100 = bench.find_peak({"device": H100, "compute_units": 132}, peak_arguments(), {})
+    with pytest.raises(usage.UsageError, match="--peak-gflops"):
+        fp32_peak.find_peak({"device": "Mystery GPU", "compute_units": 8}, peak_arguments(), {})
+    h100 = fp32_peak.find_peak({"device": H100, "compute_units": 132}, peak_arguments(), {})
     assert h100.gflops == pytest.approx(66908.16)
 
 
 # ---- fits and tables --------------------------------------------------------------
 
 def test_linear_fit_of_a_line_is_exact():
-    fit = bench.linear_fit([1, 2, 3, 4], [5, 7, 9, 11])
+    fit = scaling.linear_fit([1, 2, 3, 4], [5, 7, 9, 11])
     assert (fit.slope, fit.intercept) == (pytest.approx(2), pytest.approx(3))
     assert fit.r_squared == pytest.approx(1) and fit.max_relative_deviation < 1e-12
     assert fit.points == 4
@@ -137,11 +138,11 @@ def test_linear_fit_of_a_line_is_exact():
 
 def test_linear_fit_of_a_curve_says_so():
     xs = [1, 2, 3, 4, 5]
-    fit = bench.linear_fit(xs, [x * x for x in xs])
+    fit = scaling.linear_fit(xs, [x * x for x in xs])
     assert 0.9 < fit.r_squared < 0.99
     assert fit.max_relative_deviation > 0.3   # x = 1: fit -1 against 1
-    assert bench.linear_fit([2, 2], [1, 3]) is None
-    assert bench.linear_fit([1], [1]) is None
+    assert scaling.linear_fit([2, 2], [1, 3]) is None
+    assert scaling.linear_fit([1], [1]) is None
 
 
 def fake_config(kernel, ms, workgroup="8x8", groups="4x4", **keys):
@@ -152,17 +153,17 @@ def fake_config(kernel, ms, workgroup="8x8", groups="4x4", **keys):
              "kernel_ms_max": ms * 1.2, "repeat": 10, "kernel_ms_all": [ms] * 10,
              "gflop": 2.0, "rays": 50_000, "mrays_per_s": 50 / ms,
              "parallel_efficiency": 0.5, "compute_units": 132, "max_clock_mhz": 1980}
-    return bench.Config(kernel, workgroup, stats=stats, **keys)
+    return bench_plan.Config(kernel, workgroup, stats=stats, **keys)
 
 
 def test_bench_md_sorts_by_kernel_then_time_and_bolds_each_best():
     configs = [fake_config("dynamic", 3.0, group_scale=1.0),
                fake_config("naive", 2.0),
                fake_config("dynamic", 1.0, groups="8x8", group_scale=4.0),
-               bench.Config("naive", "64x64", skipped="too big"),
+               bench_plan.Config("naive", "64x64", skipped="too big"),
                fake_config("naive", 1.5, workgroup="16x10", paper=True)]
-    peak = bench.Peak(100.0, "given")
-    text = bench.render_bench_md(configs, peak, {"commit": "v1-2-gabc", "repeat": 10,
+    peak = fp32_peak.Peak(100.0, "given")
+    text = bench_report.render_bench_md(configs, peak, {"commit": "v1-2-gabc", "repeat": 10,
                                                  "command": "tools/bench.py x",
                                                  "date": "2030-01-01 00:00 UTC"})
     table = text.split("## Every configuration")[1]
@@ -250,7 +251,7 @@ def test_quick_bench_and_scaling_against_rtcl(tmp_path):
     assert len(bold) == 5   # the best of each kernel
     order = [line.split("|")[1].strip(" *") for line in table.splitlines()
              if line.startswith("| ") and "kernel |" not in line]
-    assert order == sorted(order, key=bench.KERNEL_ORDER.index)
+    assert order == sorted(order, key=bench_plan.KERNEL_ORDER.index)
 
     points = read_csv(device_dir / "scaling.csv")
     assert [(p["spheres"], p["width"]) for p in points] == \
@@ -342,7 +343,7 @@ def test_failed_write_leaves_no_file(tmp_path, monkeypatch):
         replaced.append(target)
         real_replace(source, target)
     monkeypatch.setattr(os, "replace", flaky_replace)
-    files = {tmp_path / "a.csv": "a\n", tmp_path / "b.md": "b\n"}
+    outputs = {tmp_path / "a.csv": "a\n", tmp_path / "b.md": "b\n"}
     with pytest.raises(OSError):
-        bench.write_all_atomically(files)
+        files.write_all(outputs)
     assert list(tmp_path.iterdir()) == []

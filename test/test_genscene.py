@@ -1,7 +1,6 @@
 """Tests of tools/genscene.py and of every scene file in scenes/ (run with pytest)."""
 
 import itertools
-import json
 import math
 import os
 import subprocess
@@ -10,6 +9,8 @@ import sys
 import pytest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "tools"))
+from rtcl_tools import scene as scene_module  # noqa: E402
 GENSCENE = os.path.join(ROOT, "tools", "genscene.py")
 SCENES = os.path.join(ROOT, "scenes")
 
@@ -21,154 +22,11 @@ def genscene(*args):
     return done.stdout
 
 
-# --- a validator written from SCENE.md, independent of the generator -------------
+# --- the scene validator shared with the tools (rtcl_tools.scene, mirroring host/scene.c)
 
-TOP_KEYS = {"format", "version", "image", "camera", "background", "ambient",
-            "max_depth", "epsilon", "materials", "lights", "spheres", "planes"}
-MATERIAL_KEYS = {"color", "ambient", "diffuse", "specular", "shininess", "reflect",
-                 "transmit", "ior"}
-
-
-class Invalid(Exception):
-    pass
-
-
-def expect(ok, path, what):
-    if not ok:
-        raise Invalid("%s: %s" % (path, what))
-
-
-def no_duplicate_keys(pairs):
-    keys = [k for k, _ in pairs]
-    dup = {k for k in keys if keys.count(k) > 1}
-    if dup:
-        raise Invalid("duplicate key(s) %s" % sorted(dup))
-    return dict(pairs)
-
-
-def load(text):
-    return json.loads(text, object_pairs_hook=no_duplicate_keys)
-
-
-def is_number(v):
-    return isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v)
-
-
-def is_integer(v):
-    return isinstance(v, int) and not isinstance(v, bool)
-
-
-def check_keys(obj, allowed, path, required=()):
-    expect(isinstance(obj, dict), path, "must be an object")
-    for key in obj:
-        expect(key in allowed, path, "unknown key %r" % key)
-    for key in required:
-        expect(key in obj, path, "missing %r" % key)
-
-
-def check_vec3(v, path):
-    expect(isinstance(v, list) and len(v) == 3 and all(map(is_number, v)), path,
-           "must be an array of three finite numbers, got %r" % (v,))
-
-
-def check_color(v, path):
-    check_vec3(v, path)
-    expect(all(c >= 0 for c in v), path, "colour parts must be >= 0, got %r" % (v,))
-
-
-def check_material(m, path):
-    check_keys(m, MATERIAL_KEYS, path)
-    if "color" in m:
-        check_color(m["color"], path + ".color")
-    for key in ("ambient", "diffuse", "specular", "shininess", "reflect", "transmit", "ior"):
-        if key in m:
-            expect(is_number(m[key]), path + "." + key, "must be a number")
-            # SCENE.md states no range for ka, kd, ks; negative ones would be nonsense.
-            expect(m[key] >= 0, path + "." + key, "must be >= 0, got %r" % m[key])
-    for key in ("reflect", "transmit"):
-        if key in m:
-            expect(m[key] <= 1, path + "." + key, "must be <= 1, got %r" % m[key])
-    if "ior" in m:
-        expect(m["ior"] > 0, path + ".ior", "must be > 0")
-
-
-def check_material_ref(m, materials, path):
-    if isinstance(m, str):
-        expect(m in materials, path, "unknown material %r" % m)
-    else:
-        check_material(m, path)
-
-
-def validate(scene):
-    """Raise Invalid unless scene (a parsed document) follows SCENE.md."""
-    check_keys(scene, TOP_KEYS, "scene", required=("format", "version", "camera"))
-    expect(scene["format"] == "rtcl-scene", "format", "must be \"rtcl-scene\"")
-    expect(is_integer(scene["version"]) and scene["version"] == 1, "version", "must be 1")
-
-    image = scene.get("image", {})
-    check_keys(image, {"width", "height"}, "image")
-    for key in ("width", "height"):
-        if key in image:
-            expect(is_integer(image[key]) and 1 <= image[key] <= 32768, "image." + key,
-                   "must be an integer 1 ... 32768")
-
-    cam = scene["camera"]
-    check_keys(cam, {"eye", "look_at", "up", "fov"}, "camera", required=("eye", "look_at"))
-    check_vec3(cam["eye"], "camera.eye")
-    check_vec3(cam["look_at"], "camera.look_at")
-    forward = [a - b for a, b in zip(cam["look_at"], cam["eye"])]
-    expect(any(forward), "camera", "eye and look_at must differ")
-    up = cam.get("up", [0, 1, 0])
-    check_vec3(up, "camera.up")
-    cross = [forward[1] * up[2] - forward[2] * up[1], forward[2] * up[0] - forward[0] * up[2],
-             forward[0] * up[1] - forward[1] * up[0]]
-    expect(math.sqrt(sum(c * c for c in cross)) > 1e-9, "camera.up", "parallel to the view")
-    fov = cam.get("fov", 45)
-    expect(is_number(fov) and 0 < fov < 180, "camera.fov", "must be in (0, 180)")
-
-    for key in ("background", "ambient"):
-        if key in scene:
-            check_color(scene[key], key)
-    if "max_depth" in scene:
-        expect(is_integer(scene["max_depth"]) and 0 <= scene["max_depth"] <= 64,
-               "max_depth", "must be an integer 0 ... 64")
-    if "epsilon" in scene:
-        expect(is_number(scene["epsilon"]) and scene["epsilon"] > 0, "epsilon", "must be > 0")
-
-    materials = scene.get("materials", {})
-    expect(isinstance(materials, dict), "materials", "must be an object")
-    for name, m in materials.items():
-        check_material(m, "materials." + name)
-
-    for key in ("lights", "spheres", "planes"):
-        expect(isinstance(scene.get(key, []), list), key, "must be an array")
-    for i, light in enumerate(scene.get("lights", [])):
-        path = "lights[%d]" % i
-        check_keys(light, {"position", "color"}, path, required=("position",))
-        check_vec3(light["position"], path + ".position")
-        if "color" in light:
-            check_color(light["color"], path + ".color")
-    for i, s in enumerate(scene.get("spheres", [])):
-        path = "spheres[%d]" % i
-        check_keys(s, {"center", "radius", "material"}, path, required=("center", "radius"))
-        check_vec3(s["center"], path + ".center")
-        expect(is_number(s["radius"]) and s["radius"] > 0, path + ".radius", "must be > 0")
-        if "material" in s:
-            check_material_ref(s["material"], materials, path + ".material")
-    for i, p in enumerate(scene.get("planes", [])):
-        path = "planes[%d]" % i
-        check_keys(p, {"point", "normal", "material", "checker"}, path,
-                   required=("point", "normal"))
-        check_vec3(p["point"], path + ".point")
-        check_vec3(p["normal"], path + ".normal")
-        expect(any(p["normal"]), path + ".normal", "must be non-zero")
-        if "material" in p:
-            check_material_ref(p["material"], materials, path + ".material")
-        if "checker" in p:
-            c = p["checker"]
-            check_keys(c, {"size", "color"}, path + ".checker", required=("size", "color"))
-            expect(is_number(c["size"]) and c["size"] > 0, path + ".checker.size", "must be > 0")
-            check_color(c["color"], path + ".checker.color")
+Invalid = scene_module.SceneError
+load = scene_module.parse
+validate = scene_module.validate
 
 
 def test_validator_catches_mistakes():
@@ -332,6 +190,7 @@ def test_bad_options_are_refused(args):
 # --- the committed scenes -----------------------------------------------------------
 
 SCENE_FILES = sorted(f for f in os.listdir(SCENES) if f.endswith(".json"))
+TEST_SCENES = os.path.join(ROOT, "test", "scenes")
 
 
 def test_expected_scenes_exist():
@@ -339,9 +198,11 @@ def test_expected_scenes_exist():
         assert name in SCENE_FILES
 
 
-@pytest.mark.parametrize("name", SCENE_FILES)
-def test_scene_file_is_valid(name):
-    with open(os.path.join(SCENES, name), encoding="utf-8") as f:
+@pytest.mark.parametrize("path", [os.path.join(SCENES, name) for name in SCENE_FILES]
+                         + [os.path.join(TEST_SCENES, name)
+                            for name in sorted(os.listdir(TEST_SCENES))])
+def test_scene_file_is_valid(path):
+    with open(path, encoding="utf-8") as f:
         scene = load(f.read())
     validate(scene)
 

@@ -24,7 +24,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tools"))
-import ppmdiff  # noqa: E402
+from rtcl_tools import ppm  # noqa: E402
 TOOL = ROOT / "tools" / "povray.py"
 SCENES = ROOT / "scenes"
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
@@ -322,7 +322,7 @@ def test_missing_povray_executable(tmp_path):
 
 def read_ppm(path):
     """Pixels of a binary 8-bit PPM (comments allowed) as an (h, w, 3) int array."""
-    (w, h), data = ppmdiff.pixels(path)
+    (w, h), data = ppm.pixels(path)
     return np.frombuffer(data[:w * h * 3], np.uint8).reshape(h, w, 3).astype(int)
 
 

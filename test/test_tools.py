@@ -1,4 +1,4 @@
-"""Tests of tools/flops_hist.py and tools/experiments.py.
+"""Tests of tools/flops_hist.py and tools/experiments.py (and of their rtcl_tools modules).
 
 flops_hist is tested on small synthetic .npy files (with and without sidecars),
 through its functions and its command line.  experiments is tested on its pure
@@ -20,8 +20,7 @@ TOOLS = ROOT / "tools"
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 sys.path.insert(0, str(TOOLS))
 
-import experiments  # noqa: E402
-import flops_hist  # noqa: E402
+from rtcl_tools import experiment, flops, paper, plots, report, runner, table1  # noqa: E402
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 
@@ -43,7 +42,7 @@ def write_flops(path, counts, kernel="cyclic", workgroup=(8, 8), groups=(2, 2),
                 "total_flops": int(counts.sum()),
                 "parallel_efficiency": float(counts.mean() / counts.max())}
         meta.update(overrides)
-        flops_hist.sidecar_path(path).write_text(json.dumps(meta))
+        flops.sidecar_path(path).write_text(json.dumps(meta))
     return path
 
 
@@ -62,50 +61,50 @@ def assert_one_line_error(result, *fragments):
 # ---- flops_hist: parallel efficiency ----------------------------------------
 
 def test_efficiency_of_uniform_work_is_one():
-    assert flops_hist.parallel_efficiency(np.full((4, 5), 77, dtype="<u8")) == 1.0
+    assert flops.parallel_efficiency(np.full((4, 5), 77, dtype="<u8")) == 1.0
 
 
 def test_efficiency_counts_idle_work_items():
-    assert flops_hist.parallel_efficiency(np.array([0, 0, 0, 4], dtype="<u8")) == 0.25
+    assert flops.parallel_efficiency(np.array([0, 0, 0, 4], dtype="<u8")) == 0.25
 
 
 def test_efficiency_is_mean_over_max_for_random_counts():
     for seed in range(5):
         counts = random_counts(seed, (7, 9))
         expected = counts.astype(float).mean() / counts.max()
-        assert flops_hist.parallel_efficiency(counts) == pytest.approx(expected, rel=1e-12)
+        assert flops.parallel_efficiency(counts) == pytest.approx(expected, rel=1e-12)
 
 
 def test_efficiency_does_not_overflow_large_counts():
     counts = np.full((2, 2), 2**62, dtype="<u8")  # the uint64 sum would wrap
-    assert flops_hist.parallel_efficiency(counts) == 1.0
+    assert flops.parallel_efficiency(counts) == 1.0
 
 
 def test_efficiency_without_work_is_undefined():
-    assert math.isnan(flops_hist.parallel_efficiency(np.zeros((3, 3), dtype="<u8")))
+    assert math.isnan(flops.parallel_efficiency(np.zeros((3, 3), dtype="<u8")))
     with pytest.raises(ValueError):
-        flops_hist.parallel_efficiency(np.zeros((0, 3), dtype="<u8"))
+        flops.parallel_efficiency(np.zeros((0, 3), dtype="<u8"))
 
 
 def test_format_efficiency():
-    assert flops_hist.format_efficiency(0.7744) == "77.44%"
-    assert flops_hist.format_efficiency(math.nan) == "n/a"
+    assert flops.format_efficiency(0.7744) == "77.44%"
+    assert flops.format_efficiency(math.nan) == "n/a"
 
 
 # ---- flops_hist: loading ----------------------------------------------------
 
 def test_load_reads_counts_and_sidecar(tmp_path):
     counts = random_counts(1)
-    flops_file = flops_hist.load_flops(write_flops(tmp_path / "c.npy", counts,
+    flops_file = flops.load_flops(write_flops(tmp_path / "c.npy", counts,
                                                    groups=(25, 25)))
     assert np.array_equal(flops_file.counts, counts)
     assert flops_file.kernel == "cyclic"
     assert "work-group 8x8, groups 25x25, 16x16 work-items" in flops_file.label()
-    assert flops_hist.sidecar_mismatches(flops_file) == []
+    assert flops.sidecar_mismatches(flops_file) == []
 
 
 def test_load_without_sidecar_names_the_file(tmp_path):
-    flops_file = flops_hist.load_flops(write_flops(tmp_path / "mine.npy", random_counts(2),
+    flops_file = flops.load_flops(write_flops(tmp_path / "mine.npy", random_counts(2),
                                                    sidecar=False))
     assert flops_file.sidecar is None
     assert flops_file.label().startswith("mine: 16x16 work-items")
@@ -114,7 +113,7 @@ def test_load_without_sidecar_names_the_file(tmp_path):
 def test_sidecar_that_disagrees_is_reported(tmp_path):
     path = write_flops(tmp_path / "c.npy", [[1, 2], [3, 4]], parallel_efficiency=0.9,
                        total_flops=11, global_size=[4, 1])
-    problems = flops_hist.sidecar_mismatches(flops_hist.load_flops(path))
+    problems = flops.sidecar_mismatches(flops.load_flops(path))
     assert len(problems) == 3
     assert any("parallel_efficiency 0.9" in problem and "0.625" in problem
                for problem in problems)
@@ -130,9 +129,9 @@ def test_multi_pass_counts_are_one_row_of_every_launch(tmp_path):
     counts = np.concatenate([np.full(16, 10), np.full(8, 20), [40, 0, 0, 0]])[None, :]
     path = write_flops(tmp_path / "w.npy", counts, kernel="wavefront", workgroup=(2, 2),
                        groups=(2, 2), global_size=[4, 4], layout=WAVEFRONT_LAYOUT)
-    flops_file = flops_hist.load_flops(path)
+    flops_file = flops.load_flops(path)
     assert flops_file.multi_pass
-    assert flops_hist.sidecar_mismatches(flops_file) == []
+    assert flops.sidecar_mismatches(flops_file) == []
     assert flops_file.efficiency == pytest.approx(counts.mean() / 40)
     label = flops_file.label()
     assert "28 work-items of all launches" in label
@@ -145,25 +144,25 @@ def test_multi_pass_counts_that_do_not_fit_the_layout_are_reported(tmp_path):
                            global_size=[4, 4], layout=WAVEFRONT_LAYOUT)
     too_few = write_flops(tmp_path / "b.npy", np.ones((1, 10)), kernel="wavefront",
                           global_size=[4, 4], layout=WAVEFRONT_LAYOUT)
-    (problem,) = flops_hist.sidecar_mismatches(flops_hist.load_flops(two_rows))
+    (problem,) = flops.sidecar_mismatches(flops.load_flops(two_rows))
     assert "2 rows" in problem
-    (problem,) = flops_hist.sidecar_mismatches(flops_hist.load_flops(too_few))
+    (problem,) = flops.sidecar_mismatches(flops.load_flops(too_few))
     assert "only 10 work-items" in problem
 
 
 def test_single_pass_counts_keep_their_shape_check(tmp_path):
     path = write_flops(tmp_path / "n.npy", np.ones((1, 16)), kernel="naive",
                        global_size=[4, 4])
-    flops_file = flops_hist.load_flops(path)
+    flops_file = flops.load_flops(path)
     assert not flops_file.multi_pass
-    (problem,) = flops_hist.sidecar_mismatches(flops_file)
+    (problem,) = flops.sidecar_mismatches(flops_file)
     assert "global_size [4, 4] but the array is 16x1" in problem
 
 
 def test_flop_unit_keeps_numbers_readable():
-    assert flops_hist.flop_unit(5) == (1.0, "FLOP")
-    assert flops_hist.flop_unit(3_000_000) == (1e6, "MFLOP")
-    assert flops_hist.flop_unit(2e10) == (1e9, "GFLOP")
+    assert flops.flop_unit(5) == (1.0, "FLOP")
+    assert flops.flop_unit(3_000_000) == (1e6, "MFLOP")
+    assert flops.flop_unit(2e10) == (1e9, "GFLOP")
 
 
 # ---- flops_hist: command line ------------------------------------------------
@@ -229,7 +228,7 @@ def test_cli_refuses_unreadable_file(tmp_path, content):
 
 def test_cli_refuses_unreadable_sidecar(tmp_path):
     path = write_flops(tmp_path / "c.npy", random_counts(5), sidecar=False)
-    flops_hist.sidecar_path(path).write_text("{ not json")
+    flops.sidecar_path(path).write_text("{ not json")
     result = run_tool("flops_hist.py", path, "-o", tmp_path / "h.png")
     assert_one_line_error(result, "c.npy.json", "sidecar")
     assert not (tmp_path / "h.png").exists()
@@ -245,13 +244,13 @@ def test_cli_refuses_unknown_output_format(tmp_path):
 def test_failed_save_keeps_previous_output(tmp_path, monkeypatch):
     out = tmp_path / "h.png"
     out.write_bytes(b"previous")
-    flops_file = flops_hist.load_flops(write_flops(tmp_path / "c.npy", random_counts(7)))
+    flops_file = flops.load_flops(write_flops(tmp_path / "c.npy", random_counts(7)))
 
     def broken_savefig(*args, **kwargs):
         raise OSError("disk full")
     monkeypatch.setattr("matplotlib.figure.Figure.savefig", broken_savefig)
     with pytest.raises(OSError):
-        flops_hist.plot_flops_histograms([flops_file], out)
+        plots.plot_flops_histograms([flops_file], out)
     assert out.read_bytes() == b"previous"
     assert sorted(p.name for p in tmp_path.iterdir()) == ["c.npy", "c.npy.json", "h.png"]
 
@@ -270,7 +269,7 @@ def fake_stats(kernel, kernel_ms, workgroup="8x8", groups="25x25", global_size=(
 
 def fake_run(role, kernel, kernel_ms, batch=None, **stats):
     workgroup = stats.get("workgroup", "8x8")
-    return experiments.Run(role, kernel, workgroup, stats.get("groups"),
+    return runner.Run(role, kernel, workgroup, stats.get("groups"),
                            f"./rtcl -k {kernel} -w {workgroup}",
                            fake_stats(kernel, kernel_ms, **stats), batch=batch)
 
@@ -305,9 +304,9 @@ def table_rows(markdown):
 
 
 def test_speedup():
-    assert experiments.speedup(1000.0, 4.0) == 250.0
-    assert experiments.speedup(None, 4.0) is None
-    assert experiments.speedup(1000.0, 0.0) is None
+    assert table1.speedup(1000.0, 4.0) == 250.0
+    assert table1.speedup(None, 4.0) is None
+    assert table1.speedup(1000.0, 0.0) is None
 
 
 @pytest.mark.parametrize("device, slug", [
@@ -319,35 +318,35 @@ def test_speedup():
     ("gfx90a:sramecc+:xnack- (AMD Accelerated Parallel Processing)", "gfx90a-sramecc-xnack"),
 ])
 def test_device_slug(device, slug):
-    assert experiments.device_slug(device) == slug
+    assert report.device_slug(device) == slug
 
 
 def test_select_best_is_fastest_and_breaks_ties_by_efficiency():
     slow = fake_run("sweep", "dynamic", 12.0, efficiency=0.99)
     fast_low = fake_run("sweep", "dynamic", 10.0, efficiency=0.5)
     fast_high = fake_run("sweep", "dynamic", 10.0, efficiency=0.9)
-    assert experiments.select_best([slow, fast_low, fast_high]) is fast_high
+    assert experiment.select_best([slow, fast_low, fast_high]) is fast_high
     with pytest.raises(ValueError):
-        experiments.select_best([])
+        experiment.select_best([])
 
 
 def test_scaled_groups():
-    assert experiments.scaled_groups("10x10", 1.5) == "15x15"
-    assert experiments.scaled_groups("3x2", 2.0) == "6x4"
-    assert experiments.scaled_groups("1x1", 0.1) == "1x1"
+    assert runner.scaled_groups("10x10", 1.5) == "15x15"
+    assert runner.scaled_groups("3x2", 2.0) == "6x4"
+    assert runner.scaled_groups("1x1", 0.1) == "1x1"
 
 
 def test_planned_run_count_matches_the_sweep_size():
     # serial, reference, 5 paper runs; naive and wavefront 5 shapes + best; cyclic,
     # dynamic and persistent 5 shapes + 2 scaled counts + the paper's count + best.
-    sweep = experiments.SWEEP_WORKGROUPS, experiments.SWEEP_GROUP_SCALES
-    assert experiments.planned_run_count(False, False, False, *sweep) == 7 + 2 * 6 + 3 * 9
-    assert experiments.planned_run_count(False, True, True, *sweep) == 6
-    assert experiments.planned_run_count(True, True, True, *sweep) == 5
+    sweep = paper.SWEEP_WORKGROUPS, paper.SWEEP_GROUP_SCALES
+    assert experiment.planned_run_count(False, False, False, *sweep) == 7 + 2 * 6 + 3 * 9
+    assert experiment.planned_run_count(False, True, True, *sweep) == 6
+    assert experiment.planned_run_count(True, True, True, *sweep) == 5
 
 
 def test_table1_has_our_figures_beside_the_papers():
-    table = experiments.render_table1(fake_experiment(), {"commit": "abc1234", "repeat": 5,
+    table = table1.render_table1(fake_experiment(), {"commit": "abc1234", "repeat": 5,
                                                           "date": "2024-01-01 00:00 UTC"})
     rows = table_rows(table)
     assert list(rows) == ["serial", "CPU reference (1 core)", "naive", "cyclic", "dynamic",
@@ -388,23 +387,23 @@ def test_table1_has_our_figures_beside_the_papers():
 def test_table1_flags_kernels_that_count_different_work():
     runs = fake_experiment()
     runs[3].stats["gflop"] = 2.5
-    table = experiments.render_table1(runs, {"commit": None, "repeat": 5, "date": "today"})
+    table = table1.render_table1(runs, {"commit": None, "repeat": 5, "date": "today"})
     assert "Total work differs" in table and "commit unknown" in table
 
 
 def test_table1_without_serial_has_no_speedup_over_serial():
     runs = fake_experiment()[1:]
-    table = experiments.render_table1(runs, {"commit": "x", "repeat": 5, "date": "today"})
+    table = table1.render_table1(runs, {"commit": "x", "repeat": 5, "date": "today"})
     rows = table_rows(table)
     assert "serial" not in rows
     assert rows["cyclic"][-3] == "–"        # speedup over serial
     assert rows["cyclic"][-1] == "100.00"   # speedup over the CPU reference
-    bars = experiments.speedup_bars(runs)
+    bars = table1.speedup_bars(runs)
     assert bars[1] == ("cyclic", None, 100.0, 211.0)
 
 
 def test_speedup_bars_compare_with_the_paper():
-    bars = experiments.speedup_bars(fake_experiment())
+    bars = table1.speedup_bars(fake_experiment())
     assert [bar[0] for bar in bars] == ["naive", "cyclic", "dynamic", "persistent",
                                         "wavefront", "cyclic\n(best)"]
     assert bars[0] == ("naive", 100.0, 20.0, 52.0)
@@ -415,7 +414,7 @@ def test_speedup_bars_compare_with_the_paper():
 
 def test_plot_speedup_writes_png(tmp_path):
     out = tmp_path / "speedup.png"
-    experiments.plot_speedup(fake_experiment(), out, "test device")
+    plots.plot_speedup(table1.speedup_bars(fake_experiment()), out, "test device")
     assert out.read_bytes().startswith(PNG_SIGNATURE)
 
 

@@ -1,0 +1,178 @@
+"""Tests of the package tools/rtcl_tools itself: the atomic writer, RtclFailed, the
+scene validator against rtcl's own bad scenes, and that matplotlib stays out of
+every tool until a plot is drawn."""
+import os
+import pathlib
+import re
+import subprocess
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "tools"))
+from rtcl_tools import files, runner, scene  # noqa: E402
+
+BAD_SCENES = ROOT / "test" / "bad_scenes"
+GOOD_SCENES = sorted((ROOT / "scenes").glob("*.json")) \
+    + sorted((ROOT / "test" / "scenes").glob("*.json"))
+# Where the Python validator's message differs from rtcl's on purpose (see scene.py).
+OWN_WORDING = {"version_2"}
+
+
+# ---- files: the atomic writer -------------------------------------------------------
+
+def test_write_text_replaces_the_target(tmp_path):
+    target = tmp_path / "out.md"
+    target.write_text("old")
+    files.write_text(target, "new\n")
+    assert target.read_text() == "new\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.md"]
+
+
+def test_failed_write_leaves_the_target_and_no_temporary_file(tmp_path):
+    target = tmp_path / "out.md"
+    target.write_text("old")
+    with pytest.raises(RuntimeError):
+        with files.atomic_output(target) as stream:
+            stream.write("half")
+            raise RuntimeError("interrupted")
+    assert target.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["out.md"]
+
+
+def test_failed_rename_leaves_no_temporary_file(tmp_path, monkeypatch):
+    def broken_replace(source, target):
+        raise OSError("disk full")
+    monkeypatch.setattr(os, "replace", broken_replace)
+    with pytest.raises(OSError):
+        files.write_text(tmp_path / "out.md", "text")
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_missing_folder_names_the_target(tmp_path):
+    target = tmp_path / "no-such-dir" / "out.md"
+    with pytest.raises(OSError) as caught:
+        files.write_text(target, "text")
+    assert caught.value.filename == str(target)
+
+
+def test_written_files_follow_the_umask(tmp_path):
+    old = os.umask(0o027)
+    try:
+        files.write_text(tmp_path / "a", "x")
+        files.copy_file(tmp_path / "a", tmp_path / "b")
+    finally:
+        os.umask(old)
+    for name in ("a", "b"):
+        assert (tmp_path / name).stat().st_mode & 0o777 == 0o640
+
+
+# ---- runner: RtclFailed ---------------------------------------------------------------
+
+def fake_rtcl(tmp_path, script):
+    path = tmp_path / "rtcl"
+    path.write_text("#!/bin/sh\n" + script)
+    path.chmod(0o755)
+    return str(path)
+
+
+def settings(tmp_path, rtcl):
+    work = tmp_path / "work"
+    work.mkdir()
+    return runner.Settings(rtcl, ["--size", "8x8"], 1, work)
+
+
+class Quiet(runner.Progress):
+    def start(self, description):
+        pass
+
+    def fail(self, note="failed"):
+        pass
+
+
+def test_rtcl_failed_carries_command_status_and_stderr(tmp_path):
+    rtcl = fake_rtcl(tmp_path, "echo 'rtcl: -w 64x128: too large' >&2\nexit 3\n")
+    with pytest.raises(runner.RtclFailed) as caught:
+        runner.run_rtcl(settings(tmp_path, rtcl), Quiet(1), "run", "naive", "64x128")
+    error = caught.value
+    assert error.command[0] == rtcl and error.command[1:3] == ["-k", "naive"]
+    assert error.command[error.command.index("-w") + 1] == "64x128"
+    assert error.returncode == 3
+    assert error.stderr == "rtcl: -w 64x128: too large\n"
+    assert error.reason == "-w 64x128: too large"
+    assert "exit 3" in str(error) and "too large" in str(error)
+
+
+def test_rtcl_that_cannot_start_has_no_status(tmp_path):
+    missing = str(tmp_path / "no-such-rtcl")
+    with pytest.raises(runner.RtclFailed) as caught:
+        runner.run_rtcl(settings(tmp_path, missing), Quiet(1), "run", "naive")
+    assert caught.value.returncode is None and caught.value.command[0] == missing
+    assert caught.value.reason.startswith(f"cannot run {missing}")
+
+
+def test_rtcl_reason_prefers_rtcls_own_line():
+    assert runner.rtcl_reason("warning\nrtcl: no device\n") == "no device"
+    assert runner.rtcl_reason("plain failure\n") == "plain failure"
+    assert runner.rtcl_reason("") == "no message"
+
+
+# ---- scene: the validator against rtcl's bad and good scenes --------------------------
+
+def rtcl_message(bad):
+    """Returns rtcl's message for bad (its .expect file) without the file name."""
+    return bad.with_suffix(".expect").read_text(encoding="utf-8").strip().replace("{FILE}", "")
+
+
+@pytest.mark.parametrize("bad", sorted(BAD_SCENES.glob("*.json")), ids=lambda p: p.stem)
+def test_every_scene_rtcl_refuses_is_refused(bad):
+    with pytest.raises(scene.SceneError) as caught:
+        scene.load_scene(bad)
+    expected, message = rtcl_message(bad), str(caught.value)
+    if re.match(r":\d+:\d+: ", expected):
+        return      # a JSON syntax error: Python words it its own way
+    if bad.stem in OWN_WORDING:
+        assert message.split(": ")[0] == expected.split(": ")[1]
+        return
+    assert ": " + message == expected
+
+
+@pytest.mark.parametrize("good", GOOD_SCENES, ids=lambda p: p.name)
+def test_every_shipped_scene_is_accepted(good):
+    loaded = scene.load_scene(good)
+    assert loaded["camera"]["fov"] > 0
+
+
+def test_validator_fills_in_scene_md_defaults():
+    loaded = scene.read_scene({"format": "rtcl-scene", "version": 1,
+                               "camera": {"eye": [0, 0, -1], "look_at": [0, 0, 0]},
+                               "spheres": [{"center": [0, 0, 0], "radius": 1}],
+                               "planes": [{"point": [0, 0, 0], "normal": [0, 3, 0]}]})
+    assert loaded["size"] == (640, 480) and loaded["max_depth"] == 5
+    assert loaded["camera"]["up"] == (0.0, 1.0, 0.0) and loaded["camera"]["fov"] == 45
+    assert loaded["spheres"][0]["material"] == scene.MATERIAL_DEFAULTS
+    assert loaded["planes"][0]["normal"] == (0.0, 1.0, 0.0)
+
+
+def test_validator_refuses_numbers_the_device_cannot_hold():
+    doc = {"format": "rtcl-scene", "version": 1,
+           "camera": {"eye": [0, 0, -1], "look_at": [0, 0, 0]},
+           "spheres": [{"center": [0, 0, 0], "radius": 1e-20}]}
+    with pytest.raises(scene.SceneError, match=r"spheres\[0\]\.radius: must be between"):
+        scene.read_scene(doc)
+
+
+# ---- every tool starts without matplotlib -----------------------------------------------
+
+@pytest.mark.parametrize("tool", ["bench.py", "experiments.py", "flops_hist.py", "genscene.py",
+                                  "povray.py"])
+def test_help_needs_no_matplotlib(tmp_path, tool):
+    blocker = tmp_path / "matplotlib"
+    blocker.mkdir()
+    (blocker / "__init__.py").write_text("raise ImportError('matplotlib is blocked')\n")
+    env = dict(os.environ, PYTHONPATH=str(tmp_path))
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / tool), "--help"],
+                            capture_output=True, text=True, cwd=tmp_path, env=env, timeout=60)
+    assert result.returncode == 0, result.stderr
+    assert "usage:" in result.stdout

@@ -1,0 +1,19 @@
+"""rtcl_tools: what the scripts in tools/ share; each script is a thin front-end.
+
+    files        the one atomic writer (text, figures, copies, all-or-nothing sets)
+    scene        the scene validator (docs/SCENE.md, mirroring host/scene.c)
+    runner       running rtcl: RtclFailed, Run, Settings, progress lines
+    report       number formats, markdown tables, CSV, device folder names
+    paper        the 2009 paper's figures and geometries
+    flops        rtcl --flops files and parallel efficiency (numpy)
+    plots        every matplotlib figure (matplotlib is imported only there)
+    experiment, table1                      tools/experiments.py
+    bench_plan, peak, bench_run, bench_report, bench_options, scaling   tools/bench.py
+    usage        option checks and "PROGRAM: error: MESSAGE" reports
+    povray_sdl, povray_run                  tools/povray.py
+    genscene, vector                        tools/genscene.py
+    ppm                                     tools/ppmdiff.py
+
+The scripts import this package from their own folder, which Python puts first
+on sys.path when it runs `python3 tools/NAME.py` from any directory.
+"""

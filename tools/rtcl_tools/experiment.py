@@ -1,0 +1,123 @@
+"""The paper's experiment run with rtcl: every paper geometry, a sweep, the outputs.
+
+tools/experiments.py is its command line (and its docstring the description).
+"""
+
+import json
+import pathlib
+import sys
+
+from . import files, flops, plots, table1
+from .paper import (GROUP_KERNELS, PAPER, PAPER_BATCH, PAPER_GEOMETRY, PARALLEL_KERNELS,
+                    QUICK_GROUP_SCALES, QUICK_WORKGROUPS, SWEEP_GROUP_SCALES,
+                    SWEEP_REPEAT, SWEEP_WORKGROUPS)
+from .report import device_slug, git_commit, utc_now
+from .runner import Progress, Settings, common_options, run_rtcl, scaled_groups
+
+
+def planned_run_count(no_serial, no_reference, no_sweep, workgroups, group_scales):
+    """Returns how many rtcl calls the experiment makes at most."""
+    count = len(PARALLEL_KERNELS) + (0 if no_serial else 1) + (0 if no_reference else 1)
+    if not no_sweep:
+        for kernel in PARALLEL_KERNELS:
+            count += len(workgroups) + 1  # the shapes, then the best one's rerun
+            if kernel in GROUP_KERNELS:
+                count += len(group_scales) + 1  # scaled counts and the paper's
+    return count
+
+
+def select_best(runs):
+    """Returns the fastest run (median kernel time); ties go to higher efficiency."""
+    if not runs:
+        raise ValueError("no runs to choose from")
+    return min(runs, key=lambda run: (run.stats["kernel_ms"],
+                                      -(run.stats.get("parallel_efficiency") or 0.0)))
+
+
+def sweep_kernel(settings, progress, kernel, workgroups, group_scales):
+    """Returns the sweep runs of one kernel, the best geometry's last."""
+    batch = PAPER_BATCH.get(kernel)
+    runs = [run_rtcl(settings, progress, "sweep", kernel, workgroup, repeat=SWEEP_REPEAT,
+                     batch=batch)
+            for workgroup in workgroups]
+    if kernel in GROUP_KERNELS:
+        fastest = select_best(runs)
+        default_groups = fastest.stats["groups"]
+        candidates = [scaled_groups(default_groups, scale) for scale in group_scales]
+        candidates.append(PAPER_GEOMETRY[kernel][1])
+        tried = {default_groups}
+        for groups in candidates:
+            if groups in tried:
+                progress.skip()
+                continue
+            tried.add(groups)
+            runs.append(run_rtcl(settings, progress, "sweep", kernel, fastest.workgroup,
+                                 groups, repeat=SWEEP_REPEAT, batch=batch))
+    return runs
+
+
+def remove_flops_files(runs):
+    """Deletes the .npy files (and sidecars) of runs that no figure needs."""
+    for run in runs:
+        if run.flops_path:
+            for path in (run.flops_path, flops.sidecar_path(run.flops_path)):
+                path.unlink(missing_ok=True)
+            run.flops_path = None
+
+
+def run_experiment(arguments, temp_dir):
+    """Runs every configuration and returns the list of Runs."""
+    workgroups = QUICK_WORKGROUPS if arguments.quick else SWEEP_WORKGROUPS
+    group_scales = QUICK_GROUP_SCALES if arguments.quick else SWEEP_GROUP_SCALES
+    settings = Settings(arguments.rtcl, common_options(arguments), arguments.repeat, temp_dir)
+    progress = Progress(planned_run_count(arguments.no_serial, arguments.no_reference,
+                                          arguments.no_sweep, workgroups, group_scales))
+    runs = []
+    if not arguments.no_serial:
+        runs.append(run_rtcl(settings, progress, "serial", "serial", repeat=1))
+        remove_flops_files(runs)
+    if not arguments.no_reference:
+        runs.append(run_rtcl(settings, progress, "reference", "reference", repeat=1,
+                             flops=False))
+    for kernel in PARALLEL_KERNELS:
+        workgroup, groups = PAPER_GEOMETRY[kernel]
+        runs.append(run_rtcl(settings, progress, "paper", kernel, workgroup, groups,
+                             batch=PAPER_BATCH.get(kernel)))
+    if not arguments.no_sweep:
+        for kernel in PARALLEL_KERNELS:
+            sweep = sweep_kernel(settings, progress, kernel, workgroups, group_scales)
+            remove_flops_files(sweep)
+            best = select_best(sweep)
+            best_groups = best.stats["groups"] if kernel in GROUP_KERNELS else None
+            runs += sweep
+            runs.append(run_rtcl(settings, progress, "best", kernel, best.workgroup,
+                                 best_groups, batch=best.batch))
+    return runs
+
+
+def write_outputs(runs, arguments):
+    """Writes table1.md, speedup.png, histograms and results.json; returns the folder."""
+    stats = table1.device_run(runs).stats
+    out_dir = pathlib.Path(arguments.out) / device_slug(stats["device"])
+    out_dir.mkdir(parents=True, exist_ok=True)
+    meta = {"commit": git_commit(), "repeat": arguments.repeat,
+            "date": utc_now()}
+    files.write_text(out_dir / "table1.md", table1.render_table1(runs, meta))
+    plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", stats["device"])
+    for role, name in (("paper", "histograms.png"), ("best", "histograms_best.png")):
+        flops_files = [load_checked_flops(run.flops_path) for run in runs
+                       if run.role == role and run.flops_path]
+        if flops_files:
+            title = f"Flops per work-item (Figure 7), {role} geometries: {stats['device']}"
+            plots.plot_flops_histograms(flops_files, out_dir / name, log=True, title=title)
+    results = {"meta": meta, "paper": PAPER, "runs": [run.to_json() for run in runs]}
+    files.write_text(out_dir / "results.json", json.dumps(results, indent=2) + "\n")
+    return out_dir
+
+
+def load_checked_flops(path):
+    """Returns flops.FlopsFile for path, warning where its sidecar disagrees."""
+    flops_file = flops.load_flops(path)
+    for problem in flops.sidecar_mismatches(flops_file):
+        print(f"warning: {path.name}.json: {problem}", file=sys.stderr)
+    return flops_file

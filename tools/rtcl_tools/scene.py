@@ -1,0 +1,355 @@
+"""The tools' scene validator: docs/SCENE.md (format version 1) in Python.
+
+host/scene.c is the authority; this module mirrors it for the tools (povray.py
+reads scenes through it) and for the tests, rule for rule and in the same
+order, with the same "PATH: what is wrong" messages, so that every file rtcl
+refuses is refused here too (test/test_rtcl_tools.py checks that against
+test/bad_scenes/).  JSON syntax errors are "LINE:COLUMN: what" as in rtcl, in
+Python's wording.  One deliberate difference: a newer version says "must be 1".
+
+load_scene(path) and read_scene(document) return the scene with every default
+filled in (colours and vectors as tuples, plane normals normalised); both raise
+SceneError.
+"""
+
+import json
+import math
+
+from .vector import normalize
+
+MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-18, 1e18   # SCENE.md: the device computes in float
+PARALLEL_SINE = 1e-9                         # camera.up "parallel" below this sine
+MAX_IMAGE_SIDE = 32768
+MAX_DEPTH = 64
+NAME_MAX = 64                                # longer keys are cut in messages
+
+TOP_KEYS = ("format", "version", "image", "camera", "background", "ambient", "max_depth",
+            "epsilon", "materials", "lights", "spheres", "planes")
+MATERIAL_DEFAULTS = {"color": (1.0, 1.0, 1.0), "ambient": 1.0, "diffuse": 0.7,
+                     "specular": 0.3, "shininess": 32.0, "reflect": 0.0,
+                     "transmit": 0.0, "ior": 1.5}
+# Material fields in rtcl's order, each with its range.
+MATERIAL_RANGES = (("ambient", "non-negative"), ("diffuse", "non-negative"),
+                   ("specular", "non-negative"), ("shininess", "non-negative"),
+                   ("reflect", "unit"), ("transmit", "unit"), ("ior", "positive"))
+
+
+class SceneError(ValueError):
+    """A scene that breaks a rule of SCENE.md; the message names the place."""
+
+
+# ---- messages ----------------------------------------------------------------------
+
+def _escaped(text, quoted=True):
+    """Returns text with control characters (and quotes) escaped, cut after NAME_MAX."""
+    cut = len(text) > NAME_MAX
+    out = []
+    for char in text[:NAME_MAX]:
+        if quoted and char in '"\\':
+            out.append("\\" + char)
+        elif char == "\n":
+            out.append("\\n")
+        elif char == "\t":
+            out.append("\\t")
+        elif ord(char) < 0x20 or ord(char) == 0x7f:
+            out.append("\\x%02x" % ord(char))
+        else:
+            out.append(char)
+    return "".join(out) + ("..." if cut else "")
+
+
+def child(path, key):
+    """Returns the path of key (a str) or index (an int) below path ('' = the document)."""
+    if isinstance(key, int):
+        return f"{path}[{key}]"
+    if not path:
+        return key
+    if key.isidentifier() and key.isascii():
+        return f"{path}.{key}"
+    return f'{path}["{_escaped(key)}"]'
+
+
+def fail(path, what):
+    raise SceneError(f"{path or '(top level)'}: {what}")
+
+
+def format_number(value):
+    """Returns the shortest %g text that reads back as value (rtcl's fmt_num)."""
+    for precision in range(6, 18):
+        text = "%.*g" % (precision, value)
+        if float(text) == value:
+            break
+    return text
+
+
+def format_vector(values):
+    return "[" + ", ".join(format_number(v) for v in values) + "]"
+
+
+def type_name(value):
+    if isinstance(value, bool) or value is None:
+        return {True: "true", False: "false", None: "null"}[value]
+    for kind, name in ((dict, "an object"), (list, "an array"), (str, "a string"),
+                       (int, "an integer"), (float, "a real number")):
+        if isinstance(value, kind):
+            return name
+    return "an unknown JSON value"
+
+
+# ---- values --------------------------------------------------------------------------
+
+def check_keys(value, path, allowed):
+    if not isinstance(value, dict):
+        fail(path, f"must be an object, got {type_name(value)}")
+    for key in value:
+        if key not in allowed:
+            fail(path, f'unknown key "{_escaped(key)}"')
+    return value
+
+
+def required(obj, key, path):
+    if key not in obj:
+        fail(child(path, key), "required field is missing")
+    return obj[key]
+
+
+def number(value, path, kind="any"):
+    """Returns value as a float if it is a number in range kind (rtcl's check_number)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        fail(path, f"must be a number, got {type_name(value)}")
+    try:
+        x = float(value)
+    except OverflowError:
+        x = math.inf if value > 0 else -math.inf
+    if not math.isfinite(x):
+        fail(path, f"must be finite, got {format_number(x)}")
+    ranges = {"positive": (x > 0, "must be > 0"), "non-negative": (x >= 0, "must be >= 0"),
+              "unit": (0 <= x <= 1, "must be between 0 and 1"),
+              "fov": (0 < x < 180, "must be > 0 and < 180")}
+    if kind in ranges and not ranges[kind][0]:
+        fail(path, f"{ranges[kind][1]}, got {format_number(x)}")
+    if kind != "direction" and x != 0 and not MIN_MAGNITUDE <= abs(x) <= MAX_MAGNITUDE:
+        zero = "" if kind in ("positive", "fov") else "0 or "
+        scope = " in magnitude" if kind == "any" else ""
+        fail(path, f"must be {zero}between 1e-18 and 1e+18{scope} (rtcl computes in float), "
+                   f"got {format_number(x)}")
+    return x
+
+
+def integer(value, path, low, high):
+    """Returns value if it is a JSON integer (not 2.0) in low ... high."""
+    if isinstance(value, float):
+        text = format_number(value)
+        fail(path, f"must be an integer, got {text if set(text) & set('.eni') else text + '.0'}")
+    if isinstance(value, bool) or not isinstance(value, int):
+        fail(path, f"must be an integer, got {type_name(value)}")
+    if not low <= value <= high:
+        fail(path, f"must be between {low} and {high}, got {value}")
+    return value
+
+
+def vec3(value, path, kind="any"):
+    """Returns a vec3 (kind "any" or "direction") or a colour ("non-negative") as a tuple."""
+    if not isinstance(value, list):
+        fail(path, f"must be an array of 3 numbers, got {type_name(value)}")
+    if len(value) != 3:
+        fail(path, f"must be an array of 3 numbers, got {len(value)} "
+                   f"element{'' if len(value) == 1 else 's'}")
+    return tuple(number(part, child(path, i), kind) for i, part in enumerate(value))
+
+
+def optional(obj, key, path, read, default, *args):
+    """Returns read(obj[key], path.key, *args), or default when key is absent."""
+    return read(obj[key], child(path, key), *args) if key in obj else default
+
+
+def scale_to_unit_max(v):
+    """Returns v scaled so that its largest part has magnitude 1; None for zero."""
+    largest = max(abs(x) for x in v)
+    return None if largest == 0 else tuple(x / largest for x in v)
+
+
+def length(v):
+    return math.sqrt(sum(x * x for x in v))
+
+
+# ---- the scene -------------------------------------------------------------------------
+
+def read_header(doc):
+    if not isinstance(doc, dict):
+        fail("", f"must be an object, got {type_name(doc)}")
+    fmt = required(doc, "format", "")
+    if not isinstance(fmt, str):
+        fail("format", f'must be the string "rtcl-scene", got {type_name(fmt)}')
+    if fmt != "rtcl-scene":
+        fail("format", f'must be "rtcl-scene", got "{_escaped(fmt)}"')
+    version = integer(required(doc, "version", ""), "version", -2**63, 2**63 - 1)
+    if version != 1:
+        fail("version", f"must be 1, got {version}"
+                        + (" (this tool reads version 1)" if version > 1 else ""))
+    check_keys(doc, "", TOP_KEYS)
+
+
+def read_camera(doc):
+    cam = check_keys(required(doc, "camera", ""), "camera", ("eye", "look_at", "up", "fov"))
+    camera = {"eye": vec3(required(cam, "eye", "camera"), "camera.eye"),
+              "look_at": vec3(required(cam, "look_at", "camera"), "camera.look_at"),
+              "up": optional(cam, "up", "camera", vec3, (0.0, 1.0, 0.0)),
+              "fov": optional(cam, "fov", "camera", number, 45.0, "fov")}
+    # Halved first so that the difference cannot overflow.
+    d = scale_to_unit_max([b / 2 - a / 2 for a, b in zip(camera["eye"], camera["look_at"])])
+    if d is None:
+        fail("camera.look_at", f"must differ from camera.eye, both are "
+                               f"{format_vector(camera['eye'])}")
+    u = scale_to_unit_max(camera["up"])
+    if u is None:
+        fail("camera.up", "must be non-zero")
+    cross = (u[1] * d[2] - u[2] * d[1], u[2] * d[0] - u[0] * d[2], u[0] * d[1] - u[1] * d[0])
+    if length(cross) <= PARALLEL_SINE * length(u) * length(d):
+        fail("camera.up", f"must not be parallel to look_at - eye, got "
+                          f"{format_vector(camera['up'])}")
+    return camera
+
+
+def read_globals(doc):
+    """Returns the image size, camera and the global settings, in rtcl's order."""
+    size = (640, 480)
+    if "image" in doc:
+        image = check_keys(doc["image"], "image", ("width", "height"))
+        size = tuple(optional(image, key, "image", integer, default, 1, MAX_IMAGE_SIDE)
+                     for key, default in (("width", 640), ("height", 480)))
+    return {"size": size, "camera": read_camera(doc),
+            "background": optional(doc, "background", "", vec3, (0.0, 0.0, 0.0),
+                                   "non-negative"),
+            "ambient": optional(doc, "ambient", "", vec3, (0.1, 0.1, 0.1), "non-negative"),
+            "max_depth": optional(doc, "max_depth", "", integer, 5, 0, MAX_DEPTH),
+            "epsilon": optional(doc, "epsilon", "", number, 1e-4, "positive")}
+
+
+def read_material(value, path):
+    check_keys(value, path, tuple(MATERIAL_DEFAULTS))
+    material = dict(MATERIAL_DEFAULTS)
+    material["color"] = optional(value, "color", path, vec3, material["color"], "non-negative")
+    for key, kind in MATERIAL_RANGES:
+        material[key] = optional(value, key, path, number, material[key], kind)
+    return material
+
+
+def material_of(obj, path, materials):
+    """Returns the material of a sphere or plane: named, inline or the default."""
+    if "material" not in obj:
+        return dict(MATERIAL_DEFAULTS)
+    value, where = obj["material"], child(path, "material")
+    if isinstance(value, str):
+        if value not in materials:
+            fail(where, f'unknown material "{_escaped(value)}"')
+        return materials[value]
+    if not isinstance(value, dict):
+        fail(where, f"must be a material name or an object, got {type_name(value)}")
+    return read_material(value, where)
+
+
+def read_lights(items):
+    lights = []
+    for i, value in enumerate(items):
+        path = child("lights", i)
+        check_keys(value, path, ("position", "color"))
+        lights.append({"position": vec3(required(value, "position", path),
+                                        child(path, "position")),
+                       "color": optional(value, "color", path, vec3, (1.0, 1.0, 1.0),
+                                         "non-negative")})
+    return lights
+
+
+def read_spheres(items, materials):
+    spheres = []
+    for i, value in enumerate(items):
+        path = child("spheres", i)
+        check_keys(value, path, ("center", "radius", "material"))
+        spheres.append({"center": vec3(required(value, "center", path), child(path, "center")),
+                        "radius": number(required(value, "radius", path),
+                                         child(path, "radius"), "positive"),
+                        "material": material_of(value, path, materials)})
+    return spheres
+
+
+def read_planes(items, materials):
+    planes = []
+    for i, value in enumerate(items):
+        path = child("planes", i)
+        check_keys(value, path, ("point", "normal", "material", "checker"))
+        point = vec3(required(value, "point", path), child(path, "point"))
+        normal = vec3(required(value, "normal", path), child(path, "normal"), "direction")
+        if scale_to_unit_max(normal) is None:
+            fail(child(path, "normal"), "must be non-zero")
+        material = material_of(value, path, materials)
+        checker = None
+        if "checker" in value:
+            where = child(path, "checker")
+            raw = check_keys(value["checker"], where, ("size", "color"))
+            checker = {"size": number(required(raw, "size", where), child(where, "size"),
+                                      "positive"),
+                       "color": vec3(required(raw, "color", where), child(where, "color"),
+                                     "non-negative")}
+        planes.append({"point": point, "normal": normalize(normal), "material": material,
+                       "checker": checker})
+    return planes
+
+
+def read_scene(doc):
+    """Returns the parsed document doc as a scene with its defaults; SceneError if bad."""
+    read_header(doc)
+    scene = read_globals(doc)
+    arrays = {}
+    for key in ("lights", "spheres", "planes"):
+        arrays[key] = doc.get(key, [])
+        if not isinstance(arrays[key], list):
+            fail(key, f"must be an array, got {type_name(arrays[key])}")
+    named = doc.get("materials", {})
+    if not isinstance(named, dict):
+        fail("materials", f"must be an object, got {type_name(named)}")
+    materials = {name: read_material(value, child("materials", name))
+                 for name, value in named.items()}
+    scene.update(lights=read_lights(arrays["lights"]),
+                 spheres=read_spheres(arrays["spheres"], materials),
+                 planes=read_planes(arrays["planes"], materials))
+    return scene
+
+
+# ---- the file ----------------------------------------------------------------------------
+
+def _no_duplicates(pairs):
+    seen = set()
+    for key, _ in pairs:
+        if key in seen:
+            raise SceneError(f'duplicate object key "{_escaped(key)}"')
+        seen.add(key)
+    return dict(pairs)
+
+
+def parse(data):
+    """Returns the JSON document of data (bytes or str), strict about duplicate keys."""
+    if isinstance(data, bytes):
+        try:
+            data = data.decode("utf-8")
+        except UnicodeDecodeError as error:
+            line = data.count(b"\n", 0, error.start) + 1
+            column = error.start - (data.rfind(b"\n", 0, error.start) + 1)
+            raise SceneError(f"{line}:{column}: unable to decode byte "
+                             f"0x{data[error.start]:02x}") from None
+    try:
+        return json.loads(data, object_pairs_hook=_no_duplicates)
+    except json.JSONDecodeError as error:
+        raise SceneError(f"{error.lineno}:{error.colno}: {error.msg}") from None
+
+
+def load_scene(path):
+    """Returns the scene in the file at path; SceneError (or OSError) if it cannot."""
+    with open(path, "rb") as stream:
+        data = stream.read()
+    return read_scene(parse(data))
+
+
+def validate(doc):
+    """Raises SceneError unless the parsed document doc follows SCENE.md."""
+    read_scene(doc)

@@ -1,0 +1,161 @@
+"""Table 1 of the 2009 paper, ours beside the paper's, and Figure 6's speedups."""
+
+from .paper import PAPER, PARALLEL_KERNELS, SWEEP_REPEAT
+from .report import format_number, format_percent, markdown_table
+
+TABLE_COLUMNS = ("Implementation", "work-group", "groups / threads", "time ms (median)",
+                 "paper time", "GFLOP/s", "paper GFLOP/s", "parallel efficiency",
+                 "paper efficiency", "speedup over serial", "paper speedup",
+                 "speedup over CPU reference")
+
+
+def speedup(baseline_ms, kernel_ms):
+    """Returns baseline_ms / kernel_ms, or None when either is unknown or zero."""
+    if not baseline_ms or not kernel_ms:
+        return None
+    return baseline_ms / kernel_ms
+
+
+def baseline_ms(runs, kernel):
+    """Returns the median time of the first run of kernel, None if there is none."""
+    for run in runs:
+        if run.kernel == kernel:
+            return run.stats["kernel_ms"]
+    return None
+
+
+def implementation_name(run):
+    """Returns the table's first column for a run."""
+    if run.kernel == "reference":
+        return "CPU reference (1 core)"
+    if run.role == "best":
+        return f"{run.kernel} (best of sweep)"
+    return run.kernel
+
+
+def geometry_cells(run):
+    """Returns the (work-group, groups / threads) cells of a run."""
+    stats = run.stats
+    if run.kernel in ("serial", "reference"):
+        return "–", "1 work-item" if run.kernel == "serial" else "1 CPU thread"
+    width, height = stats.get("global_size", [0, 0])
+    threads = f"{stats.get('groups', '?')} / {width}x{height}"
+    if run.kernel == "wavefront":
+        threads += " (primary rays), then 1 launch per bounce"
+    if run.batch:
+        threads += f", batch {run.batch}"
+    return stats.get("workgroup", "?"), threads
+
+
+def table_row(run, serial_ms, reference_ms):
+    """Returns the cells of one Table 1 row."""
+    stats = run.stats
+    kernel_ms = stats["kernel_ms"]
+    paper = PAPER.get(run.kernel) if run.role in ("paper", "serial") else None
+    paper = paper or {}
+    workgroup, threads = geometry_cells(run)
+    return (implementation_name(run), workgroup, threads, format_number(kernel_ms, 2),
+            format_number(paper.get("time_s"), 2, " s"),
+            format_number(stats.get("gflops"), 2), format_number(paper.get("gflops"), 2),
+            format_percent(stats.get("parallel_efficiency")),
+            format_percent(paper.get("efficiency")),
+            format_number(speedup(serial_ms, kernel_ms), 1),
+            format_number(paper.get("speedup"), 0),
+            format_number(speedup(reference_ms, kernel_ms), 2))
+
+
+def table_runs(runs):
+    """Returns the runs that Table 1 shows, in its order."""
+    order = {"serial": 0, "reference": 1, "naive": 2, "cyclic": 3, "dynamic": 4,
+             "persistent": 5, "wavefront": 6}
+    shown = [run for run in runs if run.role != "sweep"]
+    return sorted(shown, key=lambda run: (run.role == "best", order.get(run.kernel, 9)))
+
+
+def device_run(runs):
+    """Returns a run on the OpenCL device (not the CPU reference)."""
+    return next(run for run in runs if run.kernel != "reference")
+
+
+def total_work_line(runs):
+    """Returns a sentence saying whether every kernel counted the same total flops."""
+    totals = {run.stats["gflop"] for run in runs if run.stats.get("gflop") is not None}
+    if not totals:
+        return "Total work: not counted."
+    if len(totals) == 1:
+        return f"Total work: {totals.pop():.3f} GFLOP, the same for every run."
+    return ("Total work differs between runs (it should not, RENDERING.md): "
+            + ", ".join(f"{total:.3f}" for total in sorted(totals)) + " GFLOP.")
+
+
+def render_table1(runs, meta):
+    """Returns table1.md: header, Table 1, the sweep and the commands used."""
+    stats = device_run(runs).stats
+    serial_ms, reference_ms = baseline_ms(runs, "serial"), baseline_ms(runs, "reference")
+    lines = ["# Table 1 reproduced: rtcl on " + stats["device"], "",
+             f"- device: {stats['device']} ({stats.get('device_version', '')})",
+             f"- driver: {stats.get('driver', '')}",
+             f"- scene: {stats['scene']}, {stats['width']}x{stats['height']}, "
+             f"max depth {stats['max_depth']}",
+             f"- rtcl {stats.get('rtcl_version', '?')}, commit {meta.get('commit') or 'unknown'}, "
+             f"{meta['date']}",
+             f"- times: median of {meta['repeat']} launches (sweep: {SWEEP_REPEAT}); the "
+             "paper's are in seconds for 2000x2000 on the server Lincoln, ours in "
+             "milliseconds",
+             "- speedup over serial: our serial kernel is one work-item on the device; "
+             "the paper's serial is a CPU program",
+             f"- {total_work_line(runs)}", *beyond_the_paper_lines(runs), "",
+             markdown_table(TABLE_COLUMNS, [table_row(run, serial_ms, reference_ms)
+                                            for run in table_runs(runs)])]
+    sweep = [run for run in runs if run.role == "sweep"]
+    if sweep:
+        lines += ["", "## Sweep", "",
+                  markdown_table(("kernel", "work-group", "groups / threads", "time ms",
+                                  "GFLOP/s", "parallel efficiency"),
+                                 [sweep_row(run) for run in sweep])]
+    lines += ["", "## Commands", "", "```"]
+    lines += [run.command for run in runs]
+    lines += ["```", ""]
+    return "\n".join(lines)
+
+
+def beyond_the_paper_lines(runs):
+    """Returns the header lines that explain the persistent and wavefront rows."""
+    kernels = {run.kernel for run in runs}
+    lines = []
+    if kernels & {"persistent", "wavefront"}:
+        lines.append("- persistent and wavefront go beyond the paper (docs/wavefront.md): "
+                     "it measured neither, so their paper cells are empty")
+    if "persistent" in kernels:
+        lines.append("- persistent: each work-item fetches `batch` pixels at a time from a "
+                     "global counter; paper-like row: dynamic's 8x8 work-groups and "
+                     "10x10 groups, batch 1")
+    if "wavefront" in kernels:
+        lines.append("- wavefront: time = sum of every launch of a frame (primary rays, "
+                     "then one launch per bounce); the work-group and groups are those of "
+                     "the primary-ray launch (bounce launches are 1D, as many work-items a "
+                     "group); parallel efficiency = mean / max flops over the work-items "
+                     "of all launches")
+    return lines
+
+
+def sweep_row(run):
+    workgroup, threads = geometry_cells(run)
+    return (run.kernel, workgroup, threads, format_number(run.stats["kernel_ms"], 2),
+            format_number(run.stats.get("gflops"), 2),
+            format_percent(run.stats.get("parallel_efficiency")))
+
+
+def speedup_bars(runs):
+    """Returns [(label, ours over serial, ours over reference, paper)] per parallel run."""
+    serial_ms, reference_ms = baseline_ms(runs, "serial"), baseline_ms(runs, "reference")
+    bars = []
+    for run in table_runs(runs):
+        if run.kernel not in PARALLEL_KERNELS:
+            continue
+        paper = PAPER.get(run.kernel, {}).get("speedup") if run.role == "paper" else None
+        label = run.kernel if run.role == "paper" else f"{run.kernel}\n(best)"
+        kernel_ms = run.stats["kernel_ms"]
+        bars.append((label, speedup(serial_ms, kernel_ms), speedup(reference_ms, kernel_ms),
+                     paper))
+    return bars

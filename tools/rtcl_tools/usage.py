@@ -1,0 +1,53 @@
+"""The tools' command lines: option checks (a bad option is one line on stderr and exit
+status 2) and error reports in the form 'PROGRAM: error: MESSAGE'."""
+
+import argparse
+import re
+import sys
+
+
+class UsageError(Exception):
+    """A bad option, or one that is missing (exit status 2)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse that reports a bad option in one line (no usage) with exit status 2."""
+
+    def error(self, message):
+        raise UsageError(message)
+
+
+def check_pair(option, text):
+    if not re.fullmatch(r"[1-9][0-9]{0,4}x[1-9][0-9]{0,4}", text):
+        raise UsageError(f"{option}: expected WxH with positive integers, got {text!r}")
+    return text
+
+
+def check_positive_int(option, text):
+    if not re.fullmatch(r"[1-9][0-9]{0,8}", text):
+        raise UsageError(f"{option}: expected a positive integer, got {text!r}")
+    return int(text)
+
+
+def split_list(option, text, convert):
+    items = [item.strip() for item in text.split(",")]
+    if not text.strip() or any(not item for item in items):
+        raise UsageError(f"{option}: expected a comma-separated list, got {text!r}")
+    return tuple(convert(option, item) for item in items)
+
+
+def parse_size(text):
+    """Returns (width, height) from "WxH"; an argparse type (its error otherwise)."""
+    try:
+        w, h = (int(part) for part in text.lower().split("x"))
+    except ValueError:
+        raise argparse.ArgumentTypeError("expected WxH, e.g. 2000x2000, got %r" % text)
+    if not (1 <= w <= 32768 and 1 <= h <= 32768):
+        raise argparse.ArgumentTypeError("width and height must be 1 ... 32768, got %r" % text)
+    return w, h
+
+
+def report_error(program, message, status=1):
+    """Prints 'PROGRAM: error: MESSAGE' on stderr; returns status (the exit status)."""
+    print(f"{program}: error: {message}", file=sys.stderr)
+    return status
