@@ -1,7 +1,7 @@
 /* CPU reference renderer: the test oracle for the OpenCL kernels.
  *
  * A plain recursive Whitted tracer in double precision (C++ with GLM),
- * written from ../shared/docs/RENDERING.md independently of the code in cl/.
+ * written from docs/RENDERING.md independently of the code in cl/.
  */
 #ifndef RTCL_REFERENCE_H
 #define RTCL_REFERENCE_H

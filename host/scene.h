@@ -1,4 +1,4 @@
-/* Scene files (docs: ../shared/docs/SCENE.md, format version 1).
+/* Scene files (docs/SCENE.md, format version 1).
  *
  * The loader validates everything SCENE.md asks for and fills a plain C
  * struct in double precision; the OpenCL runtime packs it into the device
