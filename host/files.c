@@ -17,61 +17,66 @@
 #define TEMP_NAME_KEEP 100
 #define TEMP_CREATE_TRIES 100
 
-int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
-	       size_t *out_len, char *err, size_t err_size)
+/* Opens path for reading if it is a regular file of at most max_bytes;
+ * returns the descriptor and its size in *size, or -1 with a message. */
+static int open_regular(const char *path, const char *noun, size_t max_bytes, size_t *size,
+			char *err, size_t err_size)
 {
-	size_t len = 0, capacity;
 	struct stat st;
-	char *buf = NULL;
-	int fd;
-
 	/* O_NONBLOCK: a FIFO must not hang the open; it is refused below. */
-	fd = open(path, O_RDONLY | O_NONBLOCK);
+	int fd = open(path, O_RDONLY | O_NONBLOCK);
+
 	if (fd < 0) {
 		snprintf(err, err_size, "%s: cannot open: %s", path, strerror(errno));
 		return -1;
 	}
-	if (fstat(fd, &st) != 0) {
+	if (fstat(fd, &st) != 0)
 		snprintf(err, err_size, "%s: cannot stat: %s", path, strerror(errno));
-		goto out_close;
-	}
-	if (!S_ISREG(st.st_mode)) {
+	else if (!S_ISREG(st.st_mode))
 		snprintf(err, err_size, "%s: not a regular file", path);
-		goto out_close;
+	else if ((unsigned long long)st.st_size > max_bytes)
+		snprintf(err, err_size, "%s: %s is %lld bytes, more than the limit of %zu bytes",
+			 path, noun, (long long)st.st_size, max_bytes);
+	else {
+		*size = (size_t)st.st_size;
+		return fd;
 	}
-	if ((unsigned long long)st.st_size > max_bytes) {
-		snprintf(err, err_size, "%s: %s is %lld bytes, more than the limit of %zu bytes", path,
-			 noun, (long long)st.st_size, max_bytes);
-		goto out_close;
-	}
+	close(fd);
+	return -1;
+}
 
+int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
+	       size_t *out_len, char *err, size_t err_size)
+{
+	size_t len = 0, capacity;
+	char *buf;
+	int fd = open_regular(path, noun, max_bytes, &capacity, err, err_size);
+
+	if (fd < 0)
+		return -1;
 	/* The size may change while we read; trust what read() returns. */
-	capacity = (size_t)st.st_size + 1;
+	capacity++;
 	buf = malloc(capacity);
 	if (!buf) {
 		snprintf(err, err_size, "%s: out of memory", path);
 		goto out_close;
 	}
 	for (;;) {
-		ssize_t n;
-
 		if (len == capacity) {
-			char *grown;
-
-			if (capacity > max_bytes) {
-				snprintf(err, err_size, "%s: %s is more than the limit of %zu bytes",
-					 path, noun, max_bytes);
-				goto out_free;
-			}
-			grown = realloc(buf, capacity * 2);
+			char *grown = capacity > max_bytes ? NULL : realloc(buf, capacity * 2);
 			if (!grown) {
-				snprintf(err, err_size, "%s: out of memory", path);
+				if (capacity > max_bytes)
+					snprintf(err, err_size,
+						 "%s: %s is more than the limit of %zu bytes", path,
+						 noun, max_bytes);
+				else
+					snprintf(err, err_size, "%s: out of memory", path);
 				goto out_free;
 			}
 			buf = grown;
 			capacity *= 2;
 		}
-		n = read(fd, buf + len, capacity - len);
+		ssize_t n = read(fd, buf + len, capacity - len);
 		if (n < 0 && errno == EINTR)
 			continue;
 		if (n < 0) {

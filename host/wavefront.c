@@ -145,76 +145,88 @@ static cl_int set_args(cl_kernel kernel, const void *const *values, const size_t
 	return status;
 }
 
-/* Renders one frame; returns CL_SUCCESS, FRAME_OVERFLOWED, or an OpenCL
- * error. */
-static cl_int render_frame(struct device *dev, const struct render_settings *s,
-			   const struct render_result *res, struct wavefront *w, double *ms,
-			   const char *label)
+/* Clears the image and launches the primary rays of every pixel. */
+static cl_int launch_primary(struct device *dev, const struct render_settings *s,
+			     const struct render_result *res, struct wavefront *w,
+			     size_t local_bytes, double *ms, const char *label)
 {
-	size_t pixels = (size_t)s->width * s->height;
-	size_t local_bytes = res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES;
 	cl_uint zero = 0;
 	cl_float black = 0.0f;
-	cl_int status;
 	const char *call; /* the wavefront's errors name the frame, not the call */
+	const void *args[] = {&w->scene,       NULL,		&w->queues[0],
+			      &w->item_counts, &w->pixel_flops, &w->write_counts};
+	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem),
+				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem)};
+	cl_int status = checks_poison(dev, s, &w->image, w->write_counts);
 
-	*ms = 0;
-	w->item_count = 0;
-	w->rays = 0;
-	status = checks_poison(dev, s, &w->image, w->write_counts);
 	if (status == CL_SUCCESS)
 		status = clEnqueueFillBuffer(dev->queue, w->image.image, &black, sizeof(black), 0,
 					     image_float_bytes(s->width, s->height), 0, NULL, NULL);
 	if (status == CL_SUCCESS)
 		status = clEnqueueFillBuffer(dev->queue, w->overflow, &zero, sizeof(zero), 0,
 					     sizeof(zero), 0, NULL, NULL);
-
-	const void *start_args[] = {
-		&w->scene, NULL, &w->queues[0], &w->item_counts, &w->pixel_flops, &w->write_counts};
-	const size_t start_sizes[] = {sizeof(cl_mem), local_bytes,    sizeof(cl_mem),
-				      sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem)};
 	if (status == CL_SUCCESS)
-		status = set_args(w->start, start_args, start_sizes, 6);
+		status = set_args(w->start, args, sizes, 6);
 	if (status == CL_SUCCESS)
-		status = launch_run(dev, s, w->start, 2, res->global_size, res->local_size,
-				       label, ms, &call);
+		status = launch_run(dev, s, w->start, 2, res->global_size, res->local_size, label,
+				    ms, &call);
 	if (status == CL_SUCCESS && s->count_flops)
 		status = append_counts(dev, w, res->global_size[0] * res->global_size[1]);
+	return status;
+}
 
-	cl_uint queued = (cl_uint)pixels;
-	cl_uint capacity = (cl_uint)w->capacity;
-	for (int bounce = 0; status == CL_SUCCESS && queued > 0; bounce++) {
-		cl_mem in = w->queues[bounce % 2], out = w->queues[(bounce + 1) % 2];
-		size_t global = (queued + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
-		const void *args[] = {&w->scene,       NULL,	       &in,
-				      &queued,	       &out,	       &w->next_count,
-				      &capacity,       &w->overflow,   &w->image.image,
-				      &w->item_counts, &w->pixel_flops};
-		const size_t sizes[] = {sizeof(cl_mem),	 local_bytes,	 sizeof(cl_mem),
-					sizeof(cl_uint), sizeof(cl_mem), sizeof(cl_mem),
-					sizeof(cl_uint), sizeof(cl_mem), sizeof(cl_mem),
-					sizeof(cl_mem),	 sizeof(cl_mem)};
-		cl_uint overflowed = 0;
+/* Traces the *queued rays of queue bounce % 2, appending the rays they spawn
+ * to the other queue, and sets *queued to their number. Returns CL_SUCCESS,
+ * FRAME_OVERFLOWED, or an OpenCL error. */
+static cl_int launch_bounce(struct device *dev, const struct render_settings *s,
+			    struct wavefront *w, size_t local_bytes, int bounce, cl_uint *queued,
+			    double *ms, const char *label)
+{
+	cl_mem in = w->queues[bounce % 2], out = w->queues[(bounce + 1) % 2];
+	size_t global = (*queued + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
+	cl_uint zero = 0, overflowed = 0, capacity = (cl_uint)w->capacity;
+	const char *call;
+	const void *args[] = {&w->scene,     NULL,	    &in,	     queued,
+			      &out,	     &w->next_count, &capacity,	     &w->overflow,
+			      &w->image.image, &w->item_counts, &w->pixel_flops};
+	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem), sizeof(cl_uint),
+				sizeof(cl_mem), sizeof(cl_mem),	sizeof(cl_uint), sizeof(cl_mem),
+				sizeof(cl_mem), sizeof(cl_mem),	sizeof(cl_mem)};
+	cl_int status = clEnqueueFillBuffer(dev->queue, w->next_count, &zero, sizeof(zero), 0,
+					    sizeof(zero), 0, NULL, NULL);
 
-		status = clEnqueueFillBuffer(dev->queue, w->next_count, &zero, sizeof(zero), 0,
-					     sizeof(zero), 0, NULL, NULL);
-		if (status == CL_SUCCESS)
-			status = set_args(w->bounce, args, sizes, 11);
-		if (status == CL_SUCCESS)
-			status = launch_run(dev, s, w->bounce, 1, &global, &w->bounce_local,
-					       label, ms, &call);
-		if (status == CL_SUCCESS && s->count_flops)
-			status = append_counts(dev, w, global);
-		if (status == CL_SUCCESS)
-			status = clEnqueueReadBuffer(dev->queue, w->next_count, CL_TRUE, 0,
-						     sizeof(queued), &queued, 0, NULL, NULL);
-		if (status == CL_SUCCESS)
-			status =
-				clEnqueueReadBuffer(dev->queue, w->overflow, CL_TRUE, 0,
-						    sizeof(overflowed), &overflowed, 0, NULL, NULL);
-		if (status == CL_SUCCESS && overflowed)
-			return FRAME_OVERFLOWED;
-	}
+	if (status == CL_SUCCESS)
+		status = set_args(w->bounce, args, sizes, 11);
+	if (status == CL_SUCCESS)
+		status = launch_run(dev, s, w->bounce, 1, &global, &w->bounce_local, label, ms,
+				    &call);
+	if (status == CL_SUCCESS && s->count_flops)
+		status = append_counts(dev, w, global);
+	if (status == CL_SUCCESS)
+		status = clEnqueueReadBuffer(dev->queue, w->next_count, CL_TRUE, 0, sizeof(*queued),
+					     queued, 0, NULL, NULL);
+	if (status == CL_SUCCESS)
+		status = clEnqueueReadBuffer(dev->queue, w->overflow, CL_TRUE, 0, sizeof(overflowed),
+					     &overflowed, 0, NULL, NULL);
+	return status == CL_SUCCESS && overflowed ? FRAME_OVERFLOWED : status;
+}
+
+/* Renders one frame; returns CL_SUCCESS, FRAME_OVERFLOWED, or an OpenCL
+ * error. */
+static cl_int render_frame(struct device *dev, const struct render_settings *s,
+			   const struct render_result *res, struct wavefront *w, double *ms,
+			   const char *label)
+{
+	size_t local_bytes = res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES;
+	cl_uint queued = (cl_uint)((size_t)s->width * s->height);
+	cl_int status;
+
+	*ms = 0;
+	w->item_count = 0;
+	w->rays = 0;
+	status = launch_primary(dev, s, res, w, local_bytes, ms, label);
+	for (int bounce = 0; status == CL_SUCCESS && queued > 0; bounce++)
+		status = launch_bounce(dev, s, w, local_bytes, bounce, &queued, ms, label);
 	return status;
 }
 
