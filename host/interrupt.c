@@ -34,16 +34,12 @@ static void lock_held(void)
 /* Runs with the lock held, so no rename or new temporary file can start. */
 static void leave(int signal_number)
 {
-	char message[160];
-	int length;
-
 	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
 		if (tracked[i])
 			unlink(tracked[i]);
-	length = snprintf(message, sizeof(message), "%srtcl: interrupted; %s\n",
-			  progress_on_stderr ? "\n" : "", outcome);
-	if (length > 0 && write(STDERR_FILENO, message, (size_t)length) < 0)
-		length = 0; /* nothing more to do about a closed stderr */
+	/* dprintf, not stdio: the main thread may hold stderr's lock. */
+	dprintf(STDERR_FILENO, "%srtcl: interrupted; %s\n", progress_on_stderr ? "\n" : "",
+		outcome);
 	_exit(128 + signal_number);
 }
 

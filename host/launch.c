@@ -6,6 +6,7 @@
 #include <time.h>
 
 #include "devscene.h"
+#include "program.h"
 #include "timing.h"
 
 /* How often a waiting launch redraws its progress line. */
@@ -212,3 +213,16 @@ cl_int launch_run(struct device *dev, const struct render_settings *s, cl_kernel
 	return status;
 }
 
+
+int launch_setup(struct device *dev, const struct scene *scene, const struct render_settings *s,
+		 struct render_result *res, void **scene_block, cl_program *program, char *err,
+		 size_t err_size)
+{
+	if (launch_plan(dev, s, res, err, err_size) ||
+	    device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height),
+			      err, err_size) ||
+	    launch_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
+		return -1;
+	return program_build(dev, s, res->scene_in_local, program, res->build_options, err,
+			     err_size);
+}

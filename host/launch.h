@@ -38,6 +38,13 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			 const struct render_settings *settings, struct render_result *result,
 			 void **block, char *err, size_t err_size);
 
+/* What every renderer does first: launch_plan, the image checked against the
+ * device, launch_prepare_scene, and the program built. Returns 0, or -1 with
+ * one message in err; the caller frees *scene_block and releases *program. */
+int launch_setup(struct device *dev, const struct scene *scene,
+		 const struct render_settings *settings, struct render_result *result,
+		 void **scene_block, cl_program *program, char *err, size_t err_size);
+
 /* Allocates result->kernel_ms for the timed frames and returns how many
  * frames to render in all (a warm-up, then the timed ones; one for a counting
  * run), or -1 with a message. */

@@ -213,18 +213,9 @@ int singlepass_render(struct device *dev, const struct scene *scene,
 	int ret = -1;
 
 	memset(&st, 0, sizeof(st));
-	if (launch_plan(dev, s, res, err, err_size))
-		return -1;
-	if (device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height),
-			      err, err_size))
-		return -1;
-	if (s->count_flops &&
-	    device_check_fits(dev, "the flop counts", counts_bytes(s, res), err, err_size))
-		return -1;
-
-	if (launch_prepare_scene(dev, scene, s, res, &scene_block, err, err_size) ||
-	    program_build(dev, s, res->scene_in_local, &st.program, res->build_options, err,
-			  err_size))
+	if (launch_setup(dev, scene, s, res, &scene_block, &st.program, err, err_size) ||
+	    (s->count_flops &&
+	     device_check_fits(dev, "the flop counts", counts_bytes(s, res), err, err_size)))
 		goto out;
 	st.kernel = program_create_kernel(st.program, "render", err, err_size);
 	if (!st.kernel)

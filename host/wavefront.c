@@ -310,19 +310,11 @@ int wavefront_render(struct device *dev, const struct scene *scene,
 
 	memset(&w, 0, sizeof(w));
 	/* The primary-ray launch covers the image as the naive kernel does. */
-	if (launch_plan(dev, s, res, err, err_size))
-		return -1;
+	if (launch_setup(dev, scene, s, res, &scene_block, &w.program, err, err_size))
+		goto out;
 	w.bounce_local = res->local_size[0] * res->local_size[1];
 	/* Room for two rays a pixel; more is found on demand. */
 	w.capacity = pixels * 2 > 1024 ? pixels * 2 : 1024;
-	if (device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height),
-			      err, err_size))
-		return -1;
-
-	if (launch_prepare_scene(dev, scene, s, res, &scene_block, err, err_size) ||
-	    program_build(dev, s, res->scene_in_local, &w.program, res->build_options, err,
-			  err_size))
-		goto out;
 	w.start = program_create_kernel(w.program, "wavefront_start", err, err_size);
 	w.bounce =
 		w.start ? program_create_kernel(w.program, "wavefront_bounce", err, err_size) : NULL;
