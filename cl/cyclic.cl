@@ -15,8 +15,8 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 
 	for (uint cy = get_group_id(1); cy < grid.down; cy += get_num_groups(1))
 		for (uint cx = get_group_id(0); cx < grid.across; cx += get_num_groups(0))
-			render_pixel_if_inside(&tr, image, write_counts,
-					       chunk_pixel(&grid, cx, cy, get_local_id(0),
-							   get_local_id(1)));
+			render_pixel_if_inside(
+				&tr, image, write_counts,
+				chunk_pixel(&grid, cx, cy, get_local_id(0), get_local_id(1)));
 	store_counts(&tr, counts, global_item());
 }

@@ -25,9 +25,9 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	barrier(CLK_LOCAL_MEM_FENCE);
 	uint chunk = group_chunk;
 	while (chunk < chunks) {
-		render_pixel_if_inside(&tr, image, write_counts,
-				       numbered_chunk_pixel(&grid, chunk, get_local_id(0),
-							    get_local_id(1)));
+		render_pixel_if_inside(
+			&tr, image, write_counts,
+			numbered_chunk_pixel(&grid, chunk, get_local_id(0), get_local_id(1)));
 		/* Everyone has read group_chunk before it is replaced. */
 		barrier(CLK_LOCAL_MEM_FENCE);
 		if (first_item)

@@ -48,9 +48,9 @@ struct rt_material {
 #define RT_SPHERE_GROUP 4
 
 struct rt_sphere {
-	rt_vec4 center;	     /* w: radius², so that one 16-byte load feeds a test
-				(sphere_radius2); -1 in the padding, which
-				nothing hits */
+	rt_vec4 center; /* w: radius², so that one 16-byte load feeds a test
+			   (sphere_radius2); -1 in the padding, which
+			   nothing hits */
 	rt_float radius;
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
@@ -87,7 +87,7 @@ struct rt_scene {
 	rt_int material_count, sphere_count, plane_count, light_count;
 	/* Byte offsets of the arrays from the start of this header. */
 	rt_uint material_offset, sphere_offset, plane_offset, light_offset;
-	rt_uint total_bytes; /* the whole block, a multiple of 16 */
+	rt_uint total_bytes;  /* the whole block, a multiple of 16 */
 	rt_float half_width;  /* a·h, the image's horizontal half-extent at distance 1 */
 	rt_float half_height; /* h = tan(fov/2), the vertical half-extent */
 	rt_float epsilon;     /* how far secondary rays start off the surface */

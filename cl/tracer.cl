@@ -56,11 +56,15 @@
  * replaces, and a sign flip (unary −) 0. Scalar arithmetic is counted by
  * hand where it is written, one per operator. */
 #define FLOPS_FMA 2
-#define FLOPS_ADD3 3 /* a 3-vector + or − a 3-vector, or a scalar added to one */
-#define FLOPS_MUL3 3 /* a 3-vector × a scalar, or × a 3-vector component-wise */
-#define FLOPS_DOT3 (1 + 2 * FLOPS_FMA) /* dot3: a product, two fmas: 5 */
-#define FLOPS_NORMALIZE3 (FLOPS_DOT3 + 1 + FLOPS_MUL3) /* normalize3, rsqrt: 9 */
-/* sphere_gap: two chains of three fmas, then an fma and a product: 15 */
+/* A 3-vector + or − a 3-vector, or a scalar added to one: 3. */
+#define FLOPS_ADD3 3
+/* A 3-vector × a scalar, or × a 3-vector component-wise: 3. */
+#define FLOPS_MUL3 3
+/* dot3: a product and two fmas, 5. */
+#define FLOPS_DOT3 (1 + 2 * FLOPS_FMA)
+/* normalize3: the squared length, its rsqrt and the scaling, 9. */
+#define FLOPS_NORMALIZE3 (FLOPS_DOT3 + 1 + FLOPS_MUL3)
+/* sphere_gap: two chains of three fmas, then an fma and a product, 15. */
 #define FLOPS_SPHERE_GAP (6 * FLOPS_FMA + FLOPS_FMA + 1)
 
 typedef RTCL_SCENE_SPACE const struct rt_scene *scene_ptr;
@@ -196,8 +200,8 @@ static float sphere_gap(float4 sphere, const struct ray_frame *f)
  * takes sphere i as the nearest hit if it meets the ray at some 0 < t <
  * *nearest, with t the smallest such root (the far one when the origin is
  * inside). With any_hit, once one hit is found, the rest are not looked at. */
-static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 o, float3 d,
-			    int i, bool any_hit, float *nearest, struct hit *best)
+static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 o, float3 d, int i,
+			    bool any_hit, float *nearest, struct hit *best)
 {
 	float radius2 = sphere_radius2(sphere);
 
@@ -247,8 +251,7 @@ static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt
  * there is none. With any_hit, returns the first such object found instead:
  * enough for a shadow ray. The one loop serves both kinds of ray, so that
  * work-items of a SIMD group tracing different kinds still run it together. */
-static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float max_t,
-				  bool any_hit)
+static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float max_t, bool any_hit)
 {
 	struct hit best = {0.0f, -1, -1};
 	float nearest = max_t;
@@ -266,7 +269,8 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 		float g2 = sphere_gap(s2, &frame);
 		float g3 = sphere_gap(s3, &frame);
 
-		COUNT_FLOPS(tr, FLOPS_SPHERE_GAP * min(RT_SPHERE_GROUP, tr->scene->sphere_count - i));
+		COUNT_FLOPS(tr,
+			    FLOPS_SPHERE_GAP * min(RT_SPHERE_GROUP, tr->scene->sphere_count - i));
 		if ((g0 <= sphere_radius2(s0)) | (g1 <= sphere_radius2(s1)) |
 		    (g2 <= sphere_radius2(s2)) | (g3 <= sphere_radius2(s3))) {
 			sphere_consider(tr, s0, g0, o, d, i, any_hit, &nearest, &best);
@@ -440,8 +444,8 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 						      ray->weight * m->transmit, ray->depth + 1};
 			spawned |= SPAWNED_REFRACTED;
 			/* t_dir before normalizing: eta d, eta c − sqrt(k) (3), × n, + */
-			COUNT_FLOPS(tr, FLOPS_MUL3 + 3 + FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_NORMALIZE3 +
-						FLOPS_MUL3 + FLOPS_ADD3 + 1);
+			COUNT_FLOPS(tr, FLOPS_MUL3 + 3 + FLOPS_MUL3 + FLOPS_ADD3 +
+						FLOPS_NORMALIZE3 + FLOPS_MUL3 + FLOPS_ADD3 + 1);
 		}
 	}
 	if (reflect_weight > 0.0f) {
@@ -547,7 +551,7 @@ struct walk {
 	int top; /* rays waiting */
 	struct ray_progress rp;
 	float3 color;
-	int pixel;	     /* y * width + x */
+	int pixel;	    /* y * width + x */
 	ulong flops_before; /* the work-item's count when the pixel began */
 };
 
