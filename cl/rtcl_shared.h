@@ -5,12 +5,17 @@
  * material, sphere, plane and light arrays at the byte offsets the header
  * gives. Every struct is a whole number of 16-byte units so that the block can
  * be copied into __local memory as uint4 words. Vectors are float4 on both
- * sides (cl_float4 on the host) with w unused, except where one 16-byte load
- * must feed a hot test or one shading step: a sphere's centre carries
- * radius², a plane's normal its offset, a material's colour ka, a queued
- * ray's origin its weight. The kernels read those w
- * lanes only through the accessors at the end of this file; every other
- * scalar has a field of its own.
+ * sides (cl_float4 on the host) with w unused, except where a scalar shares
+ * the 16-byte load of the vector beside it: a sphere's centre carries
+ * radius² (one load feeds the sphere test), a plane's normal its offset, a
+ * material's colour ka, a queued ray's origin its weight, and the camera
+ * vectors the half-extents and epsilon. Fields of their own would cost the
+ * walk extra loads (tried: four more scalar loads in each walk kernel's NVPTX
+ * code from clang, where the w lanes come with 16-byte loads made anyway). The
+ * kernels read those lanes only through named accessors: the ones at the end
+ * of this file, and for the scene header, which lives in __local or
+ * __global memory as the host decides, scene_epsilon, scene_half_width and
+ * scene_half_height in cl/tracer.cl.
  */
 #ifndef RTCL_SHARED_H
 #define RTCL_SHARED_H
@@ -75,9 +80,9 @@ struct rt_light {
 
 struct rt_scene {
 	/* Camera, per docs/RENDERING.md: forward f, right r, up u. */
-	rt_vec4 eye;
-	rt_vec4 forward;
-	rt_vec4 right;
+	rt_vec4 eye;	 /* w: a·h, the horizontal half-extent at distance 1 */
+	rt_vec4 forward; /* w: h = tan(fov/2), the vertical half-extent */
+	rt_vec4 right;	 /* w: epsilon, how far secondary rays start off the surface */
 	rt_vec4 up;
 	rt_vec4 background;
 	rt_vec4 ambient;
@@ -87,10 +92,8 @@ struct rt_scene {
 	rt_int material_count, sphere_count, plane_count, light_count;
 	/* Byte offsets of the arrays from the start of this header. */
 	rt_uint material_offset, sphere_offset, plane_offset, light_offset;
-	rt_uint total_bytes;  /* the whole block, a multiple of 16 */
-	rt_float half_width;  /* a·h, the image's horizontal half-extent at distance 1 */
-	rt_float half_height; /* h = tan(fov/2), the vertical half-extent */
-	rt_float epsilon;     /* how far secondary rays start off the surface */
+	rt_uint total_bytes; /* the whole block, a multiple of 16 */
+	rt_uint pad1, pad2, pad3;
 };
 
 /* A ray waiting in the wavefront kernel's queue. */
@@ -115,8 +118,6 @@ _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_scene) == 160, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");
-_Static_assert(offsetof(struct rt_scene, half_width) == 148, "rt_scene layout");
-_Static_assert(offsetof(struct rt_scene, epsilon) == 156, "rt_scene layout");
 #endif
 
 /* The scalars that share a 16-byte load with a vector, by name. They take the

@@ -69,6 +69,23 @@
 
 typedef RTCL_SCENE_SPACE const struct rt_scene *scene_ptr;
 
+/* The scene header's scalars, in the camera vectors' w lanes
+ * (rtcl_shared.h says why). */
+static inline float scene_half_width(scene_ptr scene)
+{
+	return scene->eye.w;
+}
+
+static inline float scene_half_height(scene_ptr scene)
+{
+	return scene->forward.w;
+}
+
+static inline float scene_epsilon(scene_ptr scene)
+{
+	return scene->right.w;
+}
+
 /* The scene as the tracer sees it, and the work-item's flop counter. */
 struct tracer {
 	scene_ptr scene;
@@ -355,7 +372,7 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	COUNT_FLOPS(tr, FLOPS_DOT3);
 
 	sh->color = material_ambient(sh->m->color) * sh->base * scene->ambient.xyz;
-	sh->shadow_origin = sh->p + scene->epsilon * sh->n;
+	sh->shadow_origin = sh->p + scene_epsilon(scene) * sh->n;
 	sh->next_light = 0;
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
@@ -419,7 +436,7 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 {
 	scene_ptr scene = tr->scene;
 	RTCL_SCENE_SPACE const struct rt_material *m = sh->m;
-	float epsilon = scene->epsilon;
+	float epsilon = scene_epsilon(scene);
 	float3 n = sh->n;
 	int spawned = 0;
 
@@ -479,11 +496,12 @@ struct ray_outcome {
 	struct ray_job refracted, reflected;
 };
 
-/* Intersects the next ray of rp, the ray itself or one of its shadow rays,
- * and takes the result: returns true when the ray is done, with *out set,
- * false when a shadow ray is to be traced next. The one intersect_scene call
- * serves both kinds of ray, so that work-items of a SIMD group at different
- * points of their trees still run the costly loop over the objects together. */
+/* The per-ray step: intersects the next ray of rp, the ray itself or one of
+ * its shadow rays, and takes the hit. Returns true when the ray is done,
+ * with *out set, false when a shadow ray is to be traced next. The one
+ * intersect_scene call serves both kinds of ray, so that work-items of a
+ * SIMD group at different points of their trees still run the costly loop
+ * over the objects together. */
 static inline bool ray_step(struct tracer *tr, struct ray_progress *rp, struct ray_outcome *out)
 {
 	bool shadow = rp->shadow;
@@ -515,7 +533,10 @@ static inline bool ray_step(struct tracer *tr, struct ray_progress *rp, struct r
 /* Traces one ray of the tree with its shadow rays: returns what it adds to
  * its pixel, weight included, and writes the rays it spawns into
  * children[0..*spawned): the refracted ray, then the reflected one. The
- * wavefront kernel's bounce. */
+ * wavefront kernel's bounce. (Stepping through ray_step's one
+ * intersect_scene call, rather than one call for the ray and one for its
+ * shadow rays, also gives the smaller NVPTX code: no larger stack frame,
+ * fewer local-memory accesses.) */
 static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray_job children[2],
 			int *spawned)
 {
@@ -559,18 +580,21 @@ struct walk {
 static float3 primary_direction(struct tracer *tr, int x, int y)
 {
 	scene_ptr scene = tr->scene;
-	float sx = (2.0f * ((float)x + 0.5f) / (float)scene->width - 1.0f) * scene->half_width;
-	float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)scene->height) * scene->half_height;
+	float sx =
+		(2.0f * ((float)x + 0.5f) / (float)scene->width - 1.0f) * scene_half_width(scene);
+	float sy =
+		(1.0f - 2.0f * ((float)y + 0.5f) / (float)scene->height) * scene_half_height(scene);
 
 	/* sx and sy 5 each, by hand; two scaled vectors added; the normalize */
 	COUNT_FLOPS(tr, 10 + 2 * (FLOPS_MUL3 + FLOPS_ADD3) + FLOPS_NORMALIZE3);
 	return normalize3(scene->forward.xyz + sx * scene->right.xyz + sy * scene->up.xyz);
 }
 
-/* Returns pixel (x, y)'s primary ray. */
-static struct ray_job primary_ray(struct tracer *tr, int x, int y)
+/* Sets *ray to pixel (x, y)'s primary ray. (Written in place: returning the
+ * struct cost the walk a store in NVPTX code.) */
+static inline void primary_ray(struct tracer *tr, int x, int y, struct ray_job *ray)
 {
-	return (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y), 1.0f, 0};
+	*ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y), 1.0f, 0};
 }
 
 /* Starts the walk of pixel (x, y), which must lie inside the image. */
@@ -578,7 +602,7 @@ static void walk_start(struct tracer *tr, struct walk *w, int x, int y)
 {
 	w->flops_before = tracer_flops(tr);
 	w->pixel = y * tr->scene->width + x;
-	w->rp.ray = primary_ray(tr, x, y);
+	primary_ray(tr, x, y, &w->rp.ray);
 	w->top = 0;
 	w->rp.shadow = false;
 	w->color = (float3)(0.0f);

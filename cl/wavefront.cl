@@ -71,7 +71,9 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts);
 	if (x < tr.scene->width && y < tr.scene->height) {
 		int pixel = y * tr.scene->width + x;
-		struct ray_job ray = primary_ray(&tr, x, y);
+		struct ray_job ray;
+
+		primary_ray(&tr, x, y, &ray);
 		store_ray(queue, pixel, &ray, pixel);
 		store_pixel_flops(pixel_flops, pixel, tracer_flops(&tr)); /* bounces add theirs */
 		count_write(write_counts, pixel);

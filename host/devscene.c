@@ -51,13 +51,11 @@ static void pack_camera(struct rt_scene *out, const struct scene *scene, int wid
 	normalize(right);
 	cross(right, forward, up);
 
-	out->eye = vec4(cam->eye, 0.0);
-	out->forward = vec4(forward, 0.0);
-	out->right = vec4(right, 0.0);
+	/* The scalars in w: scene_half_width, scene_half_height, scene_epsilon. */
+	out->eye = vec4(cam->eye, aspect * h);
+	out->forward = vec4(forward, h);
+	out->right = vec4(right, scene->epsilon);
 	out->up = vec4(up, 0.0);
-	out->half_width = (float)(aspect * h);
-	out->half_height = (float)h;
-	out->epsilon = (float)scene->epsilon;
 }
 
 static void pack_material(struct rt_material *out, const struct scene_material *in)

@@ -33,9 +33,10 @@ static const char *devscene_problem(const void *packed)
 	if (!vec4_finite(h->eye) || !vec4_finite(h->forward) || !vec4_finite(h->right) ||
 	    !vec4_finite(h->up))
 		return "camera not finite";
-	if (!float_positive(h->half_height) || !float_positive(h->half_width))
+	/* The scalars in w lanes (cl/rtcl_shared.h): the half-extents, epsilon. */
+	if (!float_positive(h->forward.s[3]) || !float_positive(h->eye.s[3]))
 		return "image half-extent not positive";
-	if (!float_positive(h->epsilon))
+	if (!float_positive(h->right.s[3]))
 		return "epsilon not positive in float";
 	if (!vec4_finite(h->background) || !vec4_finite(h->ambient))
 		return "background or ambient not finite";
