@@ -5,7 +5,7 @@
  * intersection, shading, the per-ray step (ray_step), the two ways of walking a
  * pixel's ray tree with it (render_pixel's stack walk, trace_one for the
  * wavefront kernel), and last the helpers the scheduling kernels share. It is
- * one file of about 750 lines, over the usual 450, because the host hands the
+ * one file of about 760 lines, over the usual 450, because the host hands the
  * OpenCL compiler exactly rtcl_shared.h, this file and one kernel file
  * (host/render.c, test/test_flops.c): splitting it means changing that list.
  *
