@@ -6,37 +6,34 @@
  * condition stands at the loop's head: PoCL 3.1 mis-compiled an earlier
  * version that left the loop from the middle of its body, after the barriers
  * (with flop counting on it wrote past the image at 61x47, and it hung with
- * POCL_WORK_GROUP_METHOD=loops). The host resets
- * the counter before every launch. */
+ * POCL_WORK_GROUP_METHOD=loops). The host resets next_chunk_counter, the
+ * number of the next chunk to hand out, to 0 before every launch. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *chunk_counter, __global ulong *counts,
-		     __global uint *write_counts)
+		     __global float *image, __global uint *next_chunk_counter,
+		     __global ulong *counts, __global uint *write_counts)
 {
-	__local uint next_chunk;
+	__local uint group_chunk; /* the chunk item (0,0) took for the group */
 	struct tracer tr;
-	int chunk_w = get_local_size(0);
-	int chunk_h = get_local_size(1);
 	bool first_item = get_local_id(0) == 0 && get_local_id(1) == 0;
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
-	uint chunks_x = (tr.scene->width + chunk_w - 1) / chunk_w;
-	uint chunks = chunks_x * ((tr.scene->height + chunk_h - 1) / chunk_h);
+	struct chunk_grid grid = chunk_grid(tr.scene);
+	uint chunks = chunk_count(&grid);
 
 	if (first_item)
-		next_chunk = atomic_inc(chunk_counter);
+		group_chunk = atomic_inc(next_chunk_counter);
 	barrier(CLK_LOCAL_MEM_FENCE);
-	uint chunk = next_chunk;
+	uint chunk = group_chunk;
 	while (chunk < chunks) {
-		int x = (chunk % chunks_x) * chunk_w + get_local_id(0);
-		int y = (chunk / chunks_x) * chunk_h + get_local_id(1);
-		if (x < tr.scene->width && y < tr.scene->height)
-			render_pixel(&tr, image, write_counts, x, y);
-		/* Everyone has read next_chunk before it is replaced. */
+		render_pixel_if_inside(
+			&tr, image, write_counts,
+			numbered_chunk_pixel(&grid, chunk, get_local_id(0), get_local_id(1)));
+		/* Everyone has read group_chunk before it is replaced. */
 		barrier(CLK_LOCAL_MEM_FENCE);
 		if (first_item)
-			next_chunk = atomic_inc(chunk_counter);
+			group_chunk = atomic_inc(next_chunk_counter);
 		barrier(CLK_LOCAL_MEM_FENCE);
-		chunk = next_chunk;
+		chunk = group_chunk;
 	}
-	store_counts(&tr, counts, get_global_id(1) * get_global_size(0) + get_global_id(0));
+	store_counts(&tr, counts, global_item());
 }

@@ -6,39 +6,37 @@
  * a __local batch; OpenCL C 1.2 has no sub-groups, so each work-item fetches
  * for itself.)
  *
- * Pixels are handed out in tiles of the work-group's shape, row-major within a
- * tile and tiles in row-major order, so that work-items fetching at the same
- * time trace neighbouring pixels. Indices that fall outside the image (partial
- * tiles at the right and bottom edges) are skipped. */
+ * Pixels are numbered through the chunks of the work-group's shape, row-major
+ * within a chunk and chunks in row-major order, so that work-items fetching at
+ * the same time trace neighbouring pixels. Numbers that fall outside the image
+ * (partial chunks at the right and bottom edges) are skipped. The host resets
+ * next_pixel_counter, the number of the next pixel to hand out, to 0 before
+ * every launch. */
 #ifndef RTCL_BATCH
 #define RTCL_BATCH 1
 #endif
 
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *chunk_counter, __global ulong *counts,
-		     __global uint *write_counts)
+		     __global float *image, __global uint *next_pixel_counter,
+		     __global ulong *counts, __global uint *write_counts)
 {
 	struct tracer tr;
-	uint tile_w = get_local_size(0);
-	uint tile_h = get_local_size(1);
-	uint tile_pixels = tile_w * tile_h;
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
-	uint tiles_x = (tr.scene->width + tile_w - 1) / tile_w;
-	uint tiles_y = (tr.scene->height + tile_h - 1) / tile_h;
-	uint total = tiles_x * tiles_y * tile_pixels;
+	struct chunk_grid grid = chunk_grid(tr.scene);
+	uint chunk_pixels = grid.chunk_w * grid.chunk_h;
+	uint pixels = chunk_count(&grid) * chunk_pixels; /* the edge chunks' overhang included */
 
-	for (uint first = atomic_add(chunk_counter, RTCL_BATCH); first < total;
-	     first = atomic_add(chunk_counter, RTCL_BATCH)) {
-		uint end = min(first + RTCL_BATCH, total);
+	for (uint first = atomic_add(next_pixel_counter, RTCL_BATCH); first < pixels;
+	     first = atomic_add(next_pixel_counter, RTCL_BATCH)) {
+		uint end = min(first + RTCL_BATCH, pixels);
 		for (uint i = first; i < end; i++) {
-			uint tile = i / tile_pixels;
-			uint within = i % tile_pixels;
-			int x = (tile % tiles_x) * tile_w + within % tile_w;
-			int y = (tile / tiles_x) * tile_h + within / tile_w;
-			if (x < tr.scene->width && y < tr.scene->height)
-				render_pixel(&tr, image, write_counts, x, y);
+			uint within = i % chunk_pixels;
+			render_pixel_if_inside(&tr, image, write_counts,
+					       numbered_chunk_pixel(&grid, i / chunk_pixels,
+								    within % grid.chunk_w,
+								    within / grid.chunk_w));
 		}
 	}
-	store_counts(&tr, counts, get_global_id(1) * get_global_size(0) + get_global_id(0));
+	store_counts(&tr, counts, global_item());
 }

@@ -1,11 +1,21 @@
 /* Everything that crosses the host/device boundary, written once and included
- * both by the C host and by OpenCL C (STYLE.md rule 2).
+ * both by the C host and by OpenCL C (docs/STYLE.md rule 2).
  *
  * The device scene is one contiguous block: a struct rt_scene header, then the
  * material, sphere, plane and light arrays at the byte offsets the header
  * gives. Every struct is a whole number of 16-byte units so that the block can
  * be copied into __local memory as uint4 words. Vectors are float4 on both
- * sides (cl_float4 on the host) with w unused unless noted.
+ * sides (cl_float4 on the host) with w unused, except where a scalar shares
+ * the 16-byte load of the vector beside it: a sphere's centre carries
+ * radius² (one load feeds the sphere test), a plane's normal its offset, a
+ * material's colour ka, a queued ray's origin its weight, and the camera
+ * vectors the half-extents and epsilon. Fields of their own would cost the
+ * walk extra loads (tried: four more scalar loads in each walk kernel's NVPTX
+ * code from clang, where the w lanes come with 16-byte loads made anyway). The
+ * kernels read those lanes only through named accessors: the ones at the end
+ * of this file, and for the scene header, which lives in __local or
+ * __global memory as the host decides, scene_epsilon, scene_half_width and
+ * scene_half_height in cl/tracer.cl.
  */
 #ifndef RTCL_SHARED_H
 #define RTCL_SHARED_H
@@ -27,7 +37,8 @@ typedef cl_uint rt_uint;
 #endif
 
 struct rt_material {
-	rt_vec4 color;	    /* C; w: ka */
+	rt_vec4 color;	    /* C; w: ka, loaded with the colour it scales
+			       (material_ambient) */
 	rt_float diffuse;   /* kd */
 	rt_float specular;  /* ks */
 	rt_float shininess; /* Blinn-Phong exponent */
@@ -42,8 +53,9 @@ struct rt_material {
 #define RT_SPHERE_GROUP 4
 
 struct rt_sphere {
-	rt_vec4 center;	     /* w: radius², so that one 16-byte load feeds a test;
-				-1 in the padding, which nothing hits */
+	rt_vec4 center; /* w: radius², so that one 16-byte load feeds a test
+			   (sphere_radius2); -1 in the padding, which
+			   nothing hits */
 	rt_float radius;
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
@@ -51,8 +63,10 @@ struct rt_sphere {
 };
 
 struct rt_plane {
-	rt_vec4 normal;	       /* unit; w: dot(normal, point), the plane's offset */
-	rt_vec4 checker_color; /* w: checker square size */
+	rt_vec4 normal;	       /* unit; w: dot(normal, point), the plane's offset,
+				  loaded with the normal (plane_offset) */
+	rt_vec4 checker_color; /* w: checker square size (checker_size); the
+				  struct has no room for a field of its own */
 	rt_int material;
 	rt_int has_checker;
 	rt_int checker_s_axis; /* the two world axes kept for the checker pattern */
@@ -65,10 +79,10 @@ struct rt_light {
 };
 
 struct rt_scene {
-	/* Camera, per RENDERING.md: forward f, right r, up u; w fields: */
-	rt_vec4 eye;	 /* w: a·h, the horizontal half-extent */
+	/* Camera, per docs/RENDERING.md: forward f, right r, up u. */
+	rt_vec4 eye;	 /* w: a·h, the horizontal half-extent at distance 1 */
 	rt_vec4 forward; /* w: h = tan(fov/2), the vertical half-extent */
-	rt_vec4 right;	 /* w: epsilon */
+	rt_vec4 right;	 /* w: epsilon, how far secondary rays start off the surface */
 	rt_vec4 up;
 	rt_vec4 background;
 	rt_vec4 ambient;
@@ -84,7 +98,8 @@ struct rt_scene {
 
 /* A ray waiting in the wavefront kernel's queue. */
 struct rt_ray {
-	rt_vec4 origin; /* w: weight, the product of kr/kt along the path */
+	rt_vec4 origin; /* w: weight, the product of kr/kt along the path
+			   (ray_weight), stored and loaded with the origin */
 	rt_vec4 dir;	/* unit */
 	rt_int pixel;	/* y * width + x */
 	rt_int depth;
@@ -103,6 +118,40 @@ _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_scene) == 160, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");
+#endif
+
+/* The scalars that share a 16-byte load with a vector, by name. They take the
+ * float4 already loaded, so that reading the scalar adds no load. */
+#ifdef __OPENCL_VERSION__
+/* center: struct rt_sphere's centre lane */
+static inline float sphere_radius2(float4 center)
+{
+	return center.w;
+}
+
+/* normal: struct rt_plane's normal lane */
+static inline float plane_offset(float4 normal)
+{
+	return normal.w;
+}
+
+/* color: struct rt_material's colour lane */
+static inline float material_ambient(float4 color)
+{
+	return color.w;
+}
+
+/* checker_color: struct rt_plane's checker lane */
+static inline float checker_size(float4 checker_color)
+{
+	return checker_color.w;
+}
+
+/* origin: struct rt_ray's origin lane */
+static inline float ray_weight(float4 origin)
+{
+	return origin.w;
+}
 #endif
 
 #endif

@@ -1,5 +1,13 @@
-/* The tracer: what a pixel is (../shared/docs/RENDERING.md), written once and
- * used by every scheduling kernel. OpenCL C 1.2.
+/* The tracer: what a pixel is (docs/RENDERING.md), written once and used by
+ * every scheduling kernel. OpenCL C 1.2.
+ *
+ * Read it top to bottom: counting, the scene as the tracer sees it,
+ * intersection, shading, the per-ray step (ray_step), the two ways of walking a
+ * pixel's ray tree with it (render_pixel's stack walk, trace_one for the
+ * wavefront kernel), and last the helpers the scheduling kernels share. It is
+ * one file of about 760 lines, over the usual 450, because the host hands the
+ * OpenCL compiler exactly rtcl_shared.h, this file and one kernel file
+ * (host/render.c, test/test_flops.c): splitting it means changing that list.
  *
  * Build-time options, set by the host (host/render.c):
  *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack
@@ -31,6 +39,9 @@
  * 1..max_depth. */
 #define RAY_STACK_SIZE (RTCL_MAX_DEPTH > 0 ? RTCL_MAX_DEPTH : 1)
 
+/* Counting (RENDERING.md, "Counting floating-point operations"): each
+ * COUNT_FLOPS stands beside the arithmetic it counts. Without
+ * RTCL_COUNT_FLOPS it is a no-op. */
 #ifdef RTCL_COUNT_FLOPS
 #define COUNT_FLOPS(tr, n) ((tr)->flops += (n))
 #define COUNT_RAY(tr) ((tr)->rays++)
@@ -39,7 +50,41 @@
 #define COUNT_RAY(tr) ((void)0)
 #endif
 
+/* What the operations written below cost, by RENDERING.md's rules: +, −, ×,
+ * ÷, sqrt, pow, min and max of floats 1 each, a fused multiply-add 2,
+ * comparisons and integer work 0. Here also rsqrt 1, like the sqrt it
+ * replaces, and a sign flip (unary −) 0. Scalar arithmetic is counted by
+ * hand where it is written, one per operator. */
+#define FLOPS_FMA 2
+/* A 3-vector + or − a 3-vector, or a scalar added to one: 3. */
+#define FLOPS_ADD3 3
+/* A 3-vector × a scalar, or × a 3-vector component-wise: 3. */
+#define FLOPS_MUL3 3
+/* dot3: a product and two fmas, 5. */
+#define FLOPS_DOT3 (1 + 2 * FLOPS_FMA)
+/* normalize3: the squared length, its rsqrt and the scaling, 9. */
+#define FLOPS_NORMALIZE3 (FLOPS_DOT3 + 1 + FLOPS_MUL3)
+/* sphere_gap: two chains of three fmas, then an fma and a product, 15. */
+#define FLOPS_SPHERE_GAP (6 * FLOPS_FMA + FLOPS_FMA + 1)
+
 typedef RTCL_SCENE_SPACE const struct rt_scene *scene_ptr;
+
+/* The scene header's scalars, in the camera vectors' w lanes
+ * (rtcl_shared.h says why). */
+static inline float scene_half_width(scene_ptr scene)
+{
+	return scene->eye.w;
+}
+
+static inline float scene_half_height(scene_ptr scene)
+{
+	return scene->forward.w;
+}
+
+static inline float scene_epsilon(scene_ptr scene)
+{
+	return scene->right.w;
+}
 
 /* The scene as the tracer sees it, and the work-item's flop counter. */
 struct tracer {
@@ -48,10 +93,10 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_sphere *spheres;
 	RTCL_SCENE_SPACE const struct rt_plane *planes;
 	RTCL_SCENE_SPACE const struct rt_light *lights;
+	__global ulong *pixel_flops; /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
 	ulong flops;
-	ulong rays;		     /* primary, secondary and shadow rays traced */
-	__global ulong *pixel_flops; /* flops spent on each pixel */
+	ulong rays; /* primary, secondary and shadow rays traced */
 #endif
 };
 
@@ -74,7 +119,7 @@ static inline float dot3(float3 a, float3 b)
 	return fma(a.z, b.z, fma(a.y, b.y, a.x * b.x));
 }
 
-/* Counted 9, like the division by the length it stands for. */
+/* Counted FLOPS_NORMALIZE3: rsqrt stands for the division by the length. */
 static inline float3 normalize3(float3 v)
 {
 	return v * rsqrt(dot3(v, v));
@@ -108,12 +153,21 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *coun
 	tr->spheres = (RTCL_SCENE_SPACE const struct rt_sphere *)(base + scene->sphere_offset);
 	tr->planes = (RTCL_SCENE_SPACE const struct rt_plane *)(base + scene->plane_offset);
 	tr->lights = (RTCL_SCENE_SPACE const struct rt_light *)(base + scene->light_offset);
+	tr->pixel_flops = counts + 2 * get_global_size(0) * get_global_size(1);
 #ifdef RTCL_COUNT_FLOPS
 	tr->flops = 0;
 	tr->rays = 0;
-	tr->pixel_flops = counts + 2 * get_global_size(0) * get_global_size(1);
+#endif
+}
+
+/* Returns the flops counted so far, 0 when not counting. */
+static inline ulong tracer_flops(const struct tracer *tr)
+{
+#ifdef RTCL_COUNT_FLOPS
+	return tr->flops;
 #else
-	(void)counts;
+	(void)tr;
+	return 0;
 #endif
 }
 
@@ -144,13 +198,13 @@ static struct ray_frame ray_frame(struct tracer *tr, float3 o, float3 d)
 	f.v = (float3)(b, sign + d.y * d.y * a, -d.y);
 	f.ou = -dot3(o, f.u);
 	f.ov = -dot3(o, f.v);
-	COUNT_FLOPS(tr, 2 + 2 + 4 + 1 + 1 + 3 + 5 + 5);
+	COUNT_FLOPS(tr, 13 + 2 * FLOPS_DOT3); /* by hand: a 2, b 2, u 6, v 3 */
 	return f;
 }
 
 /* Returns the squared distance between the sphere's centre and the ray, which
- * is more than radius² when the ray misses. The caller counts its 15 flops
- * (two fma chains of 6, one fma and one product). */
+ * is more than radius² when the ray misses. The caller counts its
+ * FLOPS_SPHERE_GAP. sphere: the centre, with radius² in w. */
 static float sphere_gap(float4 sphere, const struct ray_frame *f)
 {
 	float x = fma(sphere.z, f->u.z, fma(sphere.y, f->u.y, fma(sphere.x, f->u.x, f->ou)));
@@ -163,22 +217,24 @@ static float sphere_gap(float4 sphere, const struct ray_frame *f)
  * takes sphere i as the nearest hit if it meets the ray at some 0 < t <
  * *nearest, with t the smallest such root (the far one when the origin is
  * inside). With any_hit, once one hit is found, the rest are not looked at. */
-static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 o, float3 d,
-			    int i, bool any_hit, float *nearest, struct hit *best)
+static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 o, float3 d, int i,
+			    bool any_hit, float *nearest, struct hit *best)
 {
-	if (!(gap <= sphere.w) || (any_hit && best->sphere >= 0))
+	float radius2 = sphere_radius2(sphere);
+
+	if (!(gap <= radius2) || (any_hit && best->sphere >= 0))
 		return;
 	float3 oc = o - sphere.xyz;
 	float b = dot3(oc, d);
-	float far = sqrt(sphere.w - gap) - b;
+	float far = sqrt(radius2 - gap) - b;
 	float t;
-	COUNT_FLOPS(tr, 3 + 5 + 1 + 2);
+	COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3 + 3);
 	if (b > 0.0f) { /* the centre is behind the origin: only the far root can be ahead */
 		t = far;
 	} else {
 		/* The near root as c/far, free of the cancellation in −b − sqrt(disc). */
-		float near = (dot3(oc, oc) - sphere.w) / far;
-		COUNT_FLOPS(tr, 7);
+		float near = (dot3(oc, oc) - radius2) / far;
+		COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
 		t = near > 0.0f ? near : far;
 	}
 	if (t > 0.0f && t < *nearest) {
@@ -192,14 +248,15 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_plane *pl,
 			     float3 o, float3 d)
 {
-	float3 n = pl->normal.xyz;
+	float4 normal = pl->normal; /* the normal and the plane's offset */
+	float3 n = normal.xyz;
 	float denom = dot3(n, d);
 
-	COUNT_FLOPS(tr, 5);
+	COUNT_FLOPS(tr, FLOPS_DOT3);
 	if (denom == 0.0f)
 		return 0.0f;
-	float t = (pl->normal.w - dot3(n, o)) / denom;
-	COUNT_FLOPS(tr, 7);
+	float t = (plane_offset(normal) - dot3(n, o)) / denom;
+	COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
 	return t > 0.0f ? t : 0.0f;
 }
 
@@ -211,8 +268,7 @@ static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt
  * there is none. With any_hit, returns the first such object found instead:
  * enough for a shadow ray. The one loop serves both kinds of ray, so that
  * work-items of a SIMD group tracing different kinds still run it together. */
-static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float max_t,
-				  bool any_hit)
+static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float max_t, bool any_hit)
 {
 	struct hit best = {0.0f, -1, -1};
 	float nearest = max_t;
@@ -230,8 +286,10 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 		float g2 = sphere_gap(s2, &frame);
 		float g3 = sphere_gap(s3, &frame);
 
-		COUNT_FLOPS(tr, 15 * min(RT_SPHERE_GROUP, tr->scene->sphere_count - i));
-		if ((g0 <= s0.w) | (g1 <= s1.w) | (g2 <= s2.w) | (g3 <= s3.w)) {
+		COUNT_FLOPS(tr,
+			    FLOPS_SPHERE_GAP * min(RT_SPHERE_GROUP, tr->scene->sphere_count - i));
+		if ((g0 <= sphere_radius2(s0)) | (g1 <= sphere_radius2(s1)) |
+		    (g2 <= sphere_radius2(s2)) | (g3 <= sphere_radius2(s3))) {
 			sphere_consider(tr, s0, g0, o, d, i, any_hit, &nearest, &best);
 			sphere_consider(tr, s1, g1, o, d, i + 1, any_hit, &nearest, &best);
 			sphere_consider(tr, s2, g2, o, d, i + 2, any_hit, &nearest, &best);
@@ -262,11 +320,12 @@ static float3 plane_color(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_pl
 {
 	if (!pl->has_checker)
 		return material_color;
-	float size = pl->checker_color.w;
+	float4 checker = pl->checker_color; /* the colour and the square size */
+	float size = checker_size(checker);
 	int square = (int)floor(component(p, pl->checker_s_axis) / size) +
 		     (int)floor(component(p, pl->checker_t_axis) / size);
 	COUNT_FLOPS(tr, 2);
-	return (square & 1) ? pl->checker_color.xyz : material_color;
+	return (square & 1) ? checker.xyz : material_color;
 }
 
 /* A hit being shaded (RENDERING.md steps 2-4), carried across the shadow rays
@@ -295,13 +354,13 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	float3 normal;
 
 	sh->p = ray->origin + hit.t * ray->dir;
-	COUNT_FLOPS(tr, 6);
+	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3);
 	if (hit.sphere >= 0) {
 		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
 		normal = (sh->p - s->center.xyz) * s->inv_radius;
 		sh->m = &tr->materials[s->material];
 		sh->base = sh->m->color.xyz;
-		COUNT_FLOPS(tr, 6);
+		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_MUL3);
 	} else {
 		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
 		normal = pl->normal.xyz;
@@ -310,12 +369,12 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	}
 	sh->inside = dot3(normal, ray->dir) > 0.0f;
 	sh->n = sh->inside ? -normal : normal;
-	COUNT_FLOPS(tr, 5);
+	COUNT_FLOPS(tr, FLOPS_DOT3);
 
-	sh->color = sh->m->color.w * sh->base * scene->ambient.xyz;
-	sh->shadow_origin = sh->p + scene->right.w * sh->n;
+	sh->color = material_ambient(sh->m->color) * sh->base * scene->ambient.xyz;
+	sh->shadow_origin = sh->p + scene_epsilon(scene) * sh->n;
 	sh->next_light = 0;
-	COUNT_FLOPS(tr, 6 + 6);
+	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
 
 /* Moves on to the next light that needs a shadow ray: computes its
@@ -332,16 +391,18 @@ static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
 		float distance = distance2 * inv_distance;
 		float3 l = to_light * inv_distance;
 		float diffuse = m->diffuse * fmax(0.0f, dot3(sh->n, l));
-		COUNT_FLOPS(tr, 3 + 5 + 1 + 1 + 3 + 7);
+		/* to_light, distance2, rsqrt, distance, l, diffuse */
+		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3 + 1 + 1 + FLOPS_MUL3 + FLOPS_DOT3 + 2);
 
 		float specular = 0.0f;
 		float3 half_vector = l - d;
 		float half_length2 = dot3(half_vector, half_vector);
-		COUNT_FLOPS(tr, 3 + 5);
+		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3);
 		if (half_length2 > 0.0f) {
 			float3 h = half_vector * rsqrt(half_length2);
 			specular = m->specular * power(fmax(0.0f, dot3(sh->n, h)), m->shininess);
-			COUNT_FLOPS(tr, 4 + 5 + 3);
+			/* h: rsqrt and scale; ks, max, pow */
+			COUNT_FLOPS(tr, 1 + FLOPS_MUL3 + FLOPS_DOT3 + 3);
 		}
 		if (diffuse == 0.0f && specular == 0.0f)
 			continue;
@@ -360,7 +421,7 @@ static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
 static void shading_add_light(struct tracer *tr, struct shading *sh)
 {
 	sh->color += (sh->diffuse * sh->base + sh->specular) * tr->lights[sh->light].color.xyz;
-	COUNT_FLOPS(tr, 3 + 3 + 3 + 3);
+	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
 
 /* What shading_spawn spawned: a bit per ray. */
@@ -375,7 +436,7 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 {
 	scene_ptr scene = tr->scene;
 	RTCL_SCENE_SPACE const struct rt_material *m = sh->m;
-	float epsilon = scene->right.w;
+	float epsilon = scene_epsilon(scene);
 	float3 n = sh->n;
 	int spawned = 0;
 
@@ -389,7 +450,7 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 		float eta = sh->inside ? m->ior : m->inv_ior;
 		float c = -dot3(ray->dir, n);
 		float k = 1.0f - eta * eta * (1.0f - c * c);
-		COUNT_FLOPS(tr, 5 + 5);
+		COUNT_FLOPS(tr, FLOPS_DOT3 + 5);
 		if (k < 0.0f) {
 			/* Total internal reflection: the light goes the reflected way. */
 			reflect_weight += m->transmit;
@@ -399,7 +460,9 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 			*refracted = (struct ray_job){sh->p - epsilon * n, t_dir,
 						      ray->weight * m->transmit, ray->depth + 1};
 			spawned |= SPAWNED_REFRACTED;
-			COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
+			/* t_dir before normalizing: eta d, eta c − sqrt(k) (3), × n, + */
+			COUNT_FLOPS(tr, FLOPS_MUL3 + 3 + FLOPS_MUL3 + FLOPS_ADD3 +
+						FLOPS_NORMALIZE3 + FLOPS_MUL3 + FLOPS_ADD3 + 1);
 		}
 	}
 	if (reflect_weight > 0.0f) {
@@ -407,132 +470,189 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 		*reflected = (struct ray_job){sh->p + epsilon * n, r_dir,
 					      ray->weight * reflect_weight, ray->depth + 1};
 		spawned |= SPAWNED_REFLECTED;
-		COUNT_FLOPS(tr, 12 + 9 + 6 + 1);
+		/* r_dir before normalizing: d·n, 2×, × n, d − */
+		COUNT_FLOPS(tr, FLOPS_DOT3 + 1 + FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_NORMALIZE3 +
+					FLOPS_MUL3 + FLOPS_ADD3 + 1);
 	}
 	return spawned;
 }
 
-/* Traces one ray of the tree (RENDERING.md trace, steps 1-5) with its shadow
- * rays: returns what it adds to its pixel, weight included, and writes the
- * rays it spawns into children[0..*spawned): the refracted ray, then the
- * reflected one. The wavefront kernel's step; walk_step below interleaves
- * the same steps. */
+/* One ray of a pixel's tree being traced (RENDERING.md trace, steps 1-5),
+ * one intersection at a time: first the ray itself, then a shadow ray for
+ * each light that could add to its hit. Both ways of walking the tree, the
+ * stack walk below and the wavefront kernel's trace_one, advance a ray only
+ * through ray_step. */
+struct ray_progress {
+	struct ray_job ray;
+	struct shading sh; /* the hit of ray being shaded */
+	bool shadow;	   /* the next intersection: a shadow ray of sh, or ray */
+};
+
+/* What a finished ray gives: its colour, weight applied, and the rays it
+ * spawned (SPAWNED_* bits; refracted and reflected are set for those). */
+struct ray_outcome {
+	float3 color;
+	int spawned;
+	struct ray_job refracted, reflected;
+};
+
+/* The per-ray step: intersects the next ray of rp, the ray itself or one of
+ * its shadow rays, and takes the hit. Returns true when the ray is done,
+ * with *out set, false when a shadow ray is to be traced next. The one
+ * intersect_scene call serves both kinds of ray, so that work-items of a
+ * SIMD group at different points of their trees still run the costly loop
+ * over the objects together. */
+static inline bool ray_step(struct tracer *tr, struct ray_progress *rp, struct ray_outcome *out)
+{
+	bool shadow = rp->shadow;
+	struct hit hit = intersect_scene(tr, shadow ? rp->sh.shadow_origin : rp->ray.origin,
+					 shadow ? rp->sh.to_light_dir : rp->ray.dir,
+					 shadow ? rp->sh.light_distance : INFINITY, shadow);
+
+	if (!shadow)
+		COUNT_RAY(tr);
+	if (!shadow && hit.t == 0.0f) {
+		out->color = rp->ray.weight * tr->scene->background.xyz;
+		out->spawned = 0;
+		COUNT_FLOPS(tr, FLOPS_MUL3);
+		return true;
+	}
+	if (!shadow)
+		shading_begin(tr, &rp->ray, hit, &rp->sh);
+	else if (hit.t == 0.0f)
+		shading_add_light(tr, &rp->sh);
+	rp->shadow = shading_next_light(tr, &rp->sh, rp->ray.dir);
+	if (rp->shadow)
+		return false;
+	out->color = rp->ray.weight * rp->sh.color;
+	COUNT_FLOPS(tr, FLOPS_MUL3);
+	out->spawned = shading_spawn(tr, &rp->ray, &rp->sh, &out->refracted, &out->reflected);
+	return true;
+}
+
+/* Traces one ray of the tree with its shadow rays: returns what it adds to
+ * its pixel, weight included, and writes the rays it spawns into
+ * children[0..*spawned): the refracted ray, then the reflected one. The
+ * wavefront kernel's bounce. (With ray_step's one intersect_scene call
+ * instead of one for the ray and one for its shadow rays, clang's NVPTX code
+ * for the bounce has a 160-byte stack frame instead of 176.) */
 static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray_job children[2],
 			int *spawned)
 {
-	struct hit hit = intersect_scene(tr, ray->origin, ray->dir, INFINITY, false);
-	struct shading sh;
+	struct ray_progress rp;
+	struct ray_outcome out;
+	int n = 0;
 
-	*spawned = 0;
-	COUNT_RAY(tr);
-	if (hit.t == 0.0f) {
-		COUNT_FLOPS(tr, 3);
-		return ray->weight * tr->scene->background.xyz;
-	}
-	shading_begin(tr, ray, hit, &sh);
-	while (shading_next_light(tr, &sh, ray->dir))
-		if (intersect_scene(tr, sh.shadow_origin, sh.to_light_dir, sh.light_distance, true)
-			    .t == 0.0f)
-			shading_add_light(tr, &sh);
-	COUNT_FLOPS(tr, 3);
-	int which = shading_spawn(tr, ray, &sh, &children[0], &children[1]);
-	if (which == SPAWNED_REFLECTED)
-		children[0] = children[1];
-	*spawned = popcount(which);
-	return ray->weight * sh.color;
+	rp.ray = *ray;
+	rp.shadow = false;
+	while (!ray_step(tr, &rp, &out))
+		;
+	if (out.spawned & SPAWNED_REFRACTED)
+		children[n++] = out.refracted;
+	if (out.spawned & SPAWNED_REFLECTED)
+		children[n++] = out.reflected;
+	*spawned = n;
+	return out.color;
 }
 
 /* A pixel's ray tree being walked depth first (OpenCL C has no recursion),
- * each ray's shadow rays right after it, one intersection at a time. Every
- * ray, of either kind, goes through the one intersect_scene call of
- * walk_step: work-items of a SIMD group at different points of their trees
- * (one on a shadow ray, another on a reflection, or, in the persistent
- * kernel, another on a new pixel) run the costly loop over the objects
- * together instead of one after the other.
+ * each ray's shadow rays right after it, one ray_step at a time, so that in
+ * the persistent kernel a work-item on a new pixel and one deep in a tree
+ * still step together.
  *
  * The walk goes on with the last ray a hit spawns, which stays in registers;
  * a refracted ray that has a reflected sibling waits on a stack in private
  * memory, waiting[RAY_STACK_SIZE], kept apart from struct walk: a compiler
  * puts a struct with a dynamically indexed array in it wholly in memory, and
- * the walk's other fields are used at every step. This is the order of a
- * stack onto which both children are pushed, and the sums are those of
- * trace_one. */
+ * the walk's other fields are used at every step (docs/performance.md step
+ * 5). This is the order of a stack onto which both children are pushed, and
+ * the sums are those of trace_one. */
 struct walk {
 	int top; /* rays waiting */
-	struct ray_job ray;
-	struct shading sh;
-	bool shadow; /* the ray to intersect next: a shadow ray of sh, or ray */
+	struct ray_progress rp;
 	float3 color;
-	int pixel; /* y * width + x */
-#ifdef RTCL_COUNT_FLOPS
-	ulong flops_before;
-#endif
+	int pixel;	    /* y * width + x */
+	ulong flops_before; /* the work-item's count when the pixel began */
 };
 
 /* Returns the unit direction of pixel (x, y)'s primary ray. */
 static float3 primary_direction(struct tracer *tr, int x, int y)
 {
 	scene_ptr scene = tr->scene;
-	float sx = (2.0f * ((float)x + 0.5f) / (float)scene->width - 1.0f) * scene->eye.w;
-	float sy = (1.0f - 2.0f * ((float)y + 0.5f) / (float)scene->height) * scene->forward.w;
+	float sx =
+		(2.0f * ((float)x + 0.5f) / (float)scene->width - 1.0f) * scene_half_width(scene);
+	float sy =
+		(1.0f - 2.0f * ((float)y + 0.5f) / (float)scene->height) * scene_half_height(scene);
 
-	COUNT_FLOPS(tr, 10 + 6 + 6 + 9);
+	/* sx and sy 5 each, by hand; two scaled vectors added; the normalize */
+	COUNT_FLOPS(tr, 10 + 2 * (FLOPS_MUL3 + FLOPS_ADD3) + FLOPS_NORMALIZE3);
 	return normalize3(scene->forward.xyz + sx * scene->right.xyz + sy * scene->up.xyz);
+}
+
+/* Sets *ray to pixel (x, y)'s primary ray. (Written in place: returning the
+ * struct cost the walk a store in NVPTX code.) */
+static inline void primary_ray(struct tracer *tr, int x, int y, struct ray_job *ray)
+{
+	*ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y), 1.0f, 0};
 }
 
 /* Starts the walk of pixel (x, y), which must lie inside the image. */
 static void walk_start(struct tracer *tr, struct walk *w, int x, int y)
 {
-#ifdef RTCL_COUNT_FLOPS
-	w->flops_before = tr->flops;
-#endif
+	w->flops_before = tracer_flops(tr);
 	w->pixel = y * tr->scene->width + x;
-	w->ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y), 1.0f, 0};
+	primary_ray(tr, x, y, &w->rp.ray);
 	w->top = 0;
-	w->shadow = false;
+	w->rp.shadow = false;
 	w->color = (float3)(0.0f);
 }
 
-/* Traces the walk's next ray and returns whether the walk is done; w->color is
- * then the pixel's colour. */
+/* Takes the walk's next ray_step and returns whether the walk is done;
+ * w->color is then the pixel's colour. */
 static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting)
 {
-	bool shadow = w->shadow;
-	struct hit hit = intersect_scene(tr, shadow ? w->sh.shadow_origin : w->ray.origin,
-					 shadow ? w->sh.to_light_dir : w->ray.dir,
-					 shadow ? w->sh.light_distance : INFINITY, shadow);
-	struct ray_job refracted, reflected;
-	int spawned = 0;
+	struct ray_outcome out;
 
-	if (!shadow)
-		COUNT_RAY(tr);
-	if (!shadow && hit.t == 0.0f) {
-		w->color += w->ray.weight * tr->scene->background.xyz;
-		COUNT_FLOPS(tr, 3 + 3);
-	} else {
-		if (!shadow)
-			shading_begin(tr, &w->ray, hit, &w->sh);
-		else if (hit.t == 0.0f)
-			shading_add_light(tr, &w->sh);
-		w->shadow = shading_next_light(tr, &w->sh, w->ray.dir);
-		if (w->shadow)
-			return false;
-		w->color += w->ray.weight * w->sh.color;
-		COUNT_FLOPS(tr, 3 + 3);
-		spawned = shading_spawn(tr, &w->ray, &w->sh, &refracted, &reflected);
-	}
-	/* The tree below this ray is done or spawned: on to the next ray. */
-	if (spawned == SPAWNED_BOTH)
-		waiting[w->top++] = refracted;
-	if (spawned & SPAWNED_REFLECTED)
-		w->ray = reflected;
-	else if (spawned & SPAWNED_REFRACTED)
-		w->ray = refracted;
+	if (!ray_step(tr, &w->rp, &out))
+		return false;
+	w->color += out.color;
+	COUNT_FLOPS(tr, FLOPS_ADD3);
+	/* The tree below this ray is done or spawned: on to the next ray. A
+	 * done ray leaves rp.shadow false, as a new ray needs it. */
+	if (out.spawned == SPAWNED_BOTH)
+		waiting[w->top++] = out.refracted;
+	if (out.spawned & SPAWNED_REFLECTED)
+		w->rp.ray = out.reflected;
+	else if (out.spawned & SPAWNED_REFRACTED)
+		w->rp.ray = out.refracted;
 	else if (w->top > 0)
-		w->ray = waiting[--w->top];
+		w->rp.ray = waiting[--w->top];
 	else
 		return true;
 	return false;
+}
+
+/* Counts a write of pixel, when the tests ask for it (RTCL_COUNT_WRITES). */
+static inline void count_write(__global uint *write_counts, int pixel)
+{
+#ifdef RTCL_COUNT_WRITES
+	atomic_inc(&write_counts[pixel]);
+#else
+	(void)write_counts;
+	(void)pixel;
+#endif
+}
+
+/* Stores flops as pixel's cost, when counting. */
+static inline void store_pixel_flops(__global ulong *pixel_flops, int pixel, ulong flops)
+{
+#ifdef RTCL_COUNT_FLOPS
+	pixel_flops[pixel] = flops;
+#else
+	(void)pixel_flops;
+	(void)pixel;
+	(void)flops;
+#endif
 }
 
 /* Stores the colour of a finished walk, and what it cost when counting. */
@@ -540,14 +660,8 @@ static void walk_store(struct tracer *tr, const struct walk *w, __global float *
 		       __global uint *write_counts)
 {
 	vstore3(w->color, w->pixel, image);
-#ifdef RTCL_COUNT_FLOPS
-	tr->pixel_flops[w->pixel] = tr->flops - w->flops_before;
-#endif
-#ifdef RTCL_COUNT_WRITES
-	atomic_inc(&write_counts[w->pixel]);
-#else
-	(void)write_counts;
-#endif
+	store_pixel_flops(tr->pixel_flops, w->pixel, tracer_flops(tr) - w->flops_before);
+	count_write(write_counts, w->pixel);
 }
 
 /* Traces pixel (x, y), which must lie inside the image, and stores it. */
@@ -594,4 +708,56 @@ static void store_counts(struct tracer *tr, __global ulong *counts, uint item)
 	(void)counts;
 	(void)item;
 #endif
+}
+
+/* Returns this work-item's index, row-major over the global NDRange: where
+ * it stores its counts. */
+static inline uint global_item(void)
+{
+	return get_global_id(1) * get_global_size(0) + get_global_id(0);
+}
+
+/* The image cut into chunks of the work-group's shape, the unit of work the
+ * scheduling kernels hand out. The chunks at the right and bottom edges may
+ * reach past the image; their pixels outside it are skipped. */
+struct chunk_grid {
+	uint chunk_w, chunk_h; /* a chunk's size in pixels: the work-group's */
+	uint across, down;     /* chunks per row and per column */
+};
+
+static inline struct chunk_grid chunk_grid(scene_ptr scene)
+{
+	struct chunk_grid g;
+
+	g.chunk_w = get_local_size(0);
+	g.chunk_h = get_local_size(1);
+	g.across = (scene->width + g.chunk_w - 1) / g.chunk_w;
+	g.down = (scene->height + g.chunk_h - 1) / g.chunk_h;
+	return g;
+}
+
+/* Returns the number of chunks, numbered row-major from 0. */
+static inline uint chunk_count(const struct chunk_grid *g)
+{
+	return g->across * g->down;
+}
+
+/* Returns pixel (dx, dy) of the chunk in column cx and row cy of the grid. */
+static inline int2 chunk_pixel(const struct chunk_grid *g, uint cx, uint cy, uint dx, uint dy)
+{
+	return (int2)(cx * g->chunk_w + dx, cy * g->chunk_h + dy);
+}
+
+/* Returns pixel (dx, dy) of chunk number chunk. */
+static inline int2 numbered_chunk_pixel(const struct chunk_grid *g, uint chunk, uint dx, uint dy)
+{
+	return chunk_pixel(g, chunk % g->across, chunk / g->across, dx, dy);
+}
+
+/* Traces and stores pixel p if it lies inside the image. */
+static inline void render_pixel_if_inside(struct tracer *tr, __global float *image,
+					  __global uint *write_counts, int2 p)
+{
+	if (p.x < tr->scene->width && p.y < tr->scene->height)
+		render_pixel(tr, image, write_counts, p.x, p.y);
 }

@@ -14,6 +14,19 @@
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #endif
 
+/* Adds flops to pixel's cost, when counting: the work-items of several
+ * bounces trace rays of one pixel. */
+static void add_pixel_flops(__global ulong *pixel_flops, int pixel, ulong flops)
+{
+#ifdef RTCL_COUNT_FLOPS
+	atom_add(&pixel_flops[pixel], flops);
+#else
+	(void)pixel_flops;
+	(void)pixel;
+	(void)flops;
+#endif
+}
+
 /* *p += value, atomically. */
 static void atomic_add_float(volatile __global float *p, float value)
 {
@@ -38,6 +51,7 @@ static void add_to_pixel(__global float *image, int pixel, float3 color)
 static void store_ray(__global struct rt_ray *queue, uint slot, const struct ray_job *ray,
 		      int pixel)
 {
+	/* The weight rides in the origin's w lane (ray_weight). */
 	queue[slot].origin = (float4)(ray->origin, ray->weight);
 	queue[slot].dir = (float4)(ray->dir, 0.0f);
 	queue[slot].pixel = pixel;
@@ -57,22 +71,14 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts);
 	if (x < tr.scene->width && y < tr.scene->height) {
 		int pixel = y * tr.scene->width + x;
-		struct ray_job ray = {tr.scene->eye.xyz, primary_direction(&tr, x, y), 1.0f, 0};
+		struct ray_job ray;
+
+		primary_ray(&tr, x, y, &ray);
 		store_ray(queue, pixel, &ray, pixel);
-#ifdef RTCL_COUNT_FLOPS
-		pixel_flops[pixel] = tr.flops; /* the bounces add theirs */
-#endif
-#ifdef RTCL_COUNT_WRITES
-		atomic_inc(&write_counts[pixel]);
-#endif
+		store_pixel_flops(pixel_flops, pixel, tracer_flops(&tr)); /* bounces add theirs */
+		count_write(write_counts, pixel);
 	}
-#ifndef RTCL_COUNT_WRITES
-	(void)write_counts;
-#endif
-#ifndef RTCL_COUNT_FLOPS
-	(void)pixel_flops;
-#endif
-	store_counts(&tr, item_counts, y * get_global_size(0) + x);
+	store_counts(&tr, item_counts, global_item());
 }
 
 /* One work-item per queued ray (1D NDRange, rounded up). Spawned rays go to
@@ -89,14 +95,15 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts);
 	if (i < queued) {
-		struct ray_job ray = {queue[i].origin.xyz, queue[i].dir.xyz, queue[i].origin.w,
+		float4 origin = queue[i].origin;
+		struct ray_job ray = {origin.xyz, queue[i].dir.xyz, ray_weight(origin),
 				      queue[i].depth};
 		int pixel = queue[i].pixel;
 		struct ray_job children[2];
 		int spawned;
 
 		add_to_pixel(image, pixel, trace_one(&tr, &ray, children, &spawned));
-		COUNT_FLOPS(&tr, 3);
+		COUNT_FLOPS(&tr, FLOPS_ADD3);
 		for (int c = 0; c < spawned; c++) {
 			uint slot = atomic_inc(next_count);
 			if (slot < capacity)
@@ -104,12 +111,7 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 			else
 				atomic_or(overflow, 1u);
 		}
-#ifdef RTCL_COUNT_FLOPS
-		atom_add(&pixel_flops[pixel], tr.flops);
-#endif
+		add_pixel_flops(pixel_flops, pixel, tracer_flops(&tr));
 	}
-#ifndef RTCL_COUNT_FLOPS
-	(void)pixel_flops;
-#endif
-	store_counts(&tr, item_counts, i);
+	store_counts(&tr, item_counts, global_item());
 }

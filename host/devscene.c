@@ -51,10 +51,31 @@ static void pack_camera(struct rt_scene *out, const struct scene *scene, int wid
 	normalize(right);
 	cross(right, forward, up);
 
+	/* The scalars in w: scene_half_width, scene_half_height, scene_epsilon. */
 	out->eye = vec4(cam->eye, aspect * h);
 	out->forward = vec4(forward, h);
 	out->right = vec4(right, scene->epsilon);
 	out->up = vec4(up, 0.0);
+}
+
+static void pack_material(struct rt_material *out, const struct scene_material *in)
+{
+	out->color = vec4(in->color, in->ambient); /* ka in w: material_ambient */
+	out->diffuse = (float)in->diffuse;
+	out->specular = (float)in->specular;
+	out->shininess = (float)in->shininess;
+	out->reflect = (float)in->reflect;
+	out->transmit = (float)in->transmit;
+	out->ior = (float)in->ior;
+	out->inv_ior = (float)(1.0 / in->ior);
+}
+
+static void pack_sphere(struct rt_sphere *out, const struct scene_sphere *in)
+{
+	out->center = vec4(in->center, in->radius * in->radius); /* sphere_radius2 */
+	out->radius = (float)in->radius;
+	out->inv_radius = (float)(1.0 / in->radius);
+	out->material = in->material;
 }
 
 static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
@@ -68,6 +89,7 @@ static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
 		drop = 1;
 	if (fabs(n[2]) > fabs(n[drop]))
 		drop = 2;
+	/* The offset and the square size ride in w (plane_offset, checker_size). */
 	out->normal = vec4(n, dot(n, in->point));
 	out->checker_color = vec4(in->checker_color, in->checker_size);
 	out->material = in->material;
@@ -110,26 +132,12 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	header->total_bytes = (rt_uint)total;
 
 	struct rt_material *materials = (struct rt_material *)(block + material_offset);
-	for (int i = 0; i < scene->material_count; i++) {
-		const struct scene_material *m = &scene->materials[i];
-		materials[i].color = vec4(m->color, m->ambient);
-		materials[i].diffuse = (float)m->diffuse;
-		materials[i].specular = (float)m->specular;
-		materials[i].shininess = (float)m->shininess;
-		materials[i].reflect = (float)m->reflect;
-		materials[i].transmit = (float)m->transmit;
-		materials[i].ior = (float)m->ior;
-		materials[i].inv_ior = (float)(1.0 / m->ior);
-	}
+	for (int i = 0; i < scene->material_count; i++)
+		pack_material(&materials[i], &scene->materials[i]);
 
 	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
-	for (int i = 0; i < scene->sphere_count; i++) {
-		const struct scene_sphere *s = &scene->spheres[i];
-		spheres[i].center = vec4(s->center, s->radius * s->radius);
-		spheres[i].radius = (float)s->radius;
-		spheres[i].inv_radius = (float)(1.0 / s->radius);
-		spheres[i].material = s->material;
-	}
+	for (int i = 0; i < scene->sphere_count; i++)
+		pack_sphere(&spheres[i], &scene->spheres[i]);
 	/* The padding: radius² -1, which no squared distance is below. */
 	for (int i = scene->sphere_count; i < sphere_slots; i++)
 		spheres[i].center.s[3] = -1.0f;

@@ -33,6 +33,7 @@ static const char *devscene_problem(const void *packed)
 	if (!vec4_finite(h->eye) || !vec4_finite(h->forward) || !vec4_finite(h->right) ||
 	    !vec4_finite(h->up))
 		return "camera not finite";
+	/* The scalars in w lanes (cl/rtcl_shared.h): the half-extents, epsilon. */
 	if (!float_positive(h->forward.s[3]) || !float_positive(h->eye.s[3]))
 		return "image half-extent not positive";
 	if (!float_positive(h->right.s[3]))
