@@ -67,7 +67,7 @@ HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o 
 	outputs.o \
 	workmap.o image_common.o reference.o embedded.o) \
 	$(IMAGE_BACKEND)
-CL_SOURCES := cl/rtcl_shared.h cl/tracer.cl $(filter-out cl/tracer.cl,$(wildcard cl/*.cl))
+CL_SOURCES := cl/rtcl_shared.h $(wildcard cl/*.cl)
 EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)

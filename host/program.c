@@ -10,6 +10,16 @@
 #include "embedded.h"
 #include "files.h"
 
+/* The tracer's sources, in the order the compiler sees them; the kernel's own
+ * cl/NAME.cl follows. */
+const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl",	  "intersect.cl",
+					      "shade.cl",      "walk.cl",	  "scheduling.cl"};
+const int program_tracer_source_count =
+	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
+
+/* The tracer's sources and the kernel's own. */
+#define MAX_SOURCES 8
+
 /* A kernel source read from RTCL_CL_DIR is at most this large. */
 #define KERNEL_SOURCE_MAX_BYTES ((size_t)16 << 20)
 
@@ -103,27 +113,48 @@ static int dump_binary(cl_program program, char *err, size_t err_size)
  * most about 150 of the BUILD_OPTIONS_SIZE (512) in render_result. */
 #define BUILD_OPTIONS_EXTRA_MAX 256
 
-int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
-		  cl_program *program, char *options, char *err, size_t err_size)
+/* The tracer's sources and cl/KERNEL.cl, in build order. */
+struct sources {
+	const char *texts[MAX_SOURCES];
+	int loaded[MAX_SOURCES]; /* read from RTCL_CL_DIR: free the text */
+	int count;
+};
+
+static void free_sources(struct sources *src)
+{
+	for (int i = 0; i < src->count; i++)
+		if (src->loaded[i])
+			free((char *)src->texts[i]);
+}
+
+static int load_sources(const char *dir, const char *kernel_name, struct sources *src, char *err,
+			size_t err_size)
 {
 	char kernel_file[64];
-	const char *names[3] = {"rtcl_shared.h", "tracer.cl", kernel_file};
-	const char *texts[3] = {NULL, NULL, NULL};
-	int loaded[3] = {0, 0, 0};
-	int ret = -1;
-	cl_int status;
 
-	snprintf(kernel_file, sizeof(kernel_file), "%s.cl", s->kernel->name);
-	for (int i = 0; i < 3; i++) {
-		texts[i] = load_source(s->source_dir, names[i], &loaded[i], err, err_size);
-		if (!texts[i])
-			goto out_free_sources;
+	snprintf(kernel_file, sizeof(kernel_file), "%s.cl", kernel_name);
+	memset(src, 0, sizeof(*src));
+	for (int i = 0; i <= program_tracer_source_count; i++) {
+		const char *name =
+			i < program_tracer_source_count ? program_tracer_sources[i] : kernel_file;
+		src->texts[i] = load_source(dir, name, &src->loaded[i], err, err_size);
+		if (!src->texts[i])
+			return -1;
+		src->count++;
 	}
+	return 0;
+}
+
+/* rtcl's build options for the settings, then RTCL_BUILD_OPTIONS. */
+static int format_options(const struct device *dev, const struct render_settings *s,
+			  int scene_in_local, char *options, char *err, size_t err_size)
+{
 	const char *extra = getenv("RTCL_BUILD_OPTIONS");
+
 	if (extra && strlen(extra) > BUILD_OPTIONS_EXTRA_MAX) {
 		snprintf(err, err_size, "RTCL_BUILD_OPTIONS is too long (at most %d characters)",
 			 BUILD_OPTIONS_EXTRA_MAX);
-		goto out_free_sources;
+		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
 		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s", s->max_depth,
@@ -132,8 +163,21 @@ int program_build(struct device *dev, const struct render_settings *s, int scene
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
 		 extra ? extra : "");
+	return 0;
+}
 
-	*program = clCreateProgramWithSource(dev->context, 3, texts, NULL, &status);
+int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
+		  cl_program *program, char *options, char *err, size_t err_size)
+{
+	struct sources src;
+	int ret = -1;
+	cl_int status;
+
+	if (load_sources(s->source_dir, s->kernel->name, &src, err, err_size) ||
+	    format_options(dev, s, scene_in_local, options, err, err_size))
+		goto out_free_sources;
+	*program = clCreateProgramWithSource(dev->context, (cl_uint)src.count, src.texts, NULL,
+					     &status);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "clCreateProgramWithSource failed: %s",
 			 cl_error_name(status));
@@ -146,8 +190,7 @@ int program_build(struct device *dev, const struct render_settings *s, int scene
 				      NULL);
 		snprintf(err, err_size,
 			 "building kernel '%s' for %s failed: %s\noptions: %s\nbuild log:\n%s",
-			 s->kernel->name, dev->name, cl_error_name(status), options,
-			 log);
+			 s->kernel->name, dev->name, cl_error_name(status), options, log);
 		goto out_free_sources;
 	}
 	if (s->verbose)
@@ -155,9 +198,7 @@ int program_build(struct device *dev, const struct render_settings *s, int scene
 	ret = dump_binary(*program, err, err_size);
 
 out_free_sources:
-	for (int i = 0; i < 3; i++)
-		if (loaded[i])
-			free((char *)texts[i]);
+	free_sources(&src);
 	return ret;
 }
 

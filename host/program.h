@@ -4,7 +4,12 @@
 
 #include "settings.h"
 
-/* Builds cl/rtcl_shared.h + cl/tracer.cl + cl/KERNEL.cl for the settings,
+/* The tracer's sources in cl/, in the order they are built (the kernel's
+ * cl/NAME.cl follows them). */
+extern const char *const program_tracer_sources[];
+extern const int program_tracer_source_count;
+
+/* Builds the tracer's sources and cl/KERNEL.cl for the settings,
  * with the scene in __local memory when scene_in_local, and writes the
  * options used to options[BUILD_OPTIONS_SIZE]. With settings->verbose the
  * compiler's messages go to stderr; RTCL_BUILD_OPTIONS adds options and

@@ -1,7 +1,7 @@
 /* Flop counting (RENDERING.md): the shared tracer's pieces count exactly their
  * hand-counted operations, and every kernel counts the same work per pixel.
  *
- * The unit tests build cl/tracer.cl with RTCL_COUNT_FLOPS and a small test
+ * The unit tests build the tracer (cl/tracer.cl and the files after it) with RTCL_COUNT_FLOPS and a small test
  * kernel that calls one tracer function on the analytic scene: a sphere of
  * radius 1 at the origin, a plane y = -1, a light at (3,0,5), eye (0,0,5).
  */
@@ -15,6 +15,7 @@
 #include "devscene.h"
 #include "device.h"
 #include "embedded.h"
+#include "program.h"
 #include "render.h"
 #include "scene.h"
 
@@ -71,16 +72,20 @@ struct fixture {
 
 static void setup(struct fixture *f)
 {
-	const char *sources[3] = {embedded_file("rtcl_shared.h"), embedded_file("tracer.cl"),
-				  test_kernels};
+	const char *sources[16];
+	int count = 0;
 	size_t bytes;
 	cl_int status;
 
+	for (; count < program_tracer_source_count; count++)
+		sources[count] = embedded_file(program_tracer_sources[count]);
+	sources[count++] = test_kernels;
 	cr_assert_eq(device_open(&f->dev, -1, -1, err, sizeof(err)), 0, "%s", err);
 	cr_assert_eq(scene_load_string(&f->scene, analytic_json, "analytic", err, sizeof(err)), 0,
 		     "%s", err);
 	void *block = devscene_pack(&f->scene, 3, 3, 1, &bytes);
-	f->program = clCreateProgramWithSource(f->dev.context, 3, sources, NULL, &status);
+	f->program = clCreateProgramWithSource(f->dev.context, (cl_uint)count, sources, NULL,
+					       &status);
 	cr_assert_eq(status, CL_SUCCESS);
 	status = clBuildProgram(f->program, 1, &f->dev.id,
 				"-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS", NULL, NULL);

@@ -1,0 +1,145 @@
+/* Intersection (docs/RENDERING.md, trace step 1): the nearest hit of a ray
+ * over every sphere and plane, or any hit for shadow rays. Part of the
+ * tracer: built after tracer.cl (host/program.c lists the order). */
+
+/* A frame across a ray: unit u and v, perpendicular to its direction d and to
+ * each other (Duff et al., "Building an Orthonormal Basis, Revisited", JCGT
+ * 2017, branch-free), and the origin's coordinates along them, negated. A
+ * sphere's centre c, projected on u and v, gives the offset (x, y) of c from
+ * the ray in the plane across it, so the squared distance between c and the
+ * ray is x² + y²: 8 arithmetic instructions per sphere instead of 12 for
+ * o − c, b = (o − c)·d and |o − c − b d|². Like the closest-point form of
+ * Haines et al. ("Precision Improvements for Ray/Sphere Intersection", Ray
+ * Tracing Gems, 2019) it takes no difference of squares, whose cancellation
+ * puts the hit points of far spheres off the surface by more than epsilon
+ * (speckled self-shadowing with the textbook b² − c). d must be unit. */
+struct ray_frame {
+	float3 u, v;
+	float ou, ov; /* −o·u, −o·v */
+};
+
+static struct ray_frame ray_frame(struct tracer *tr, float3 o, float3 d)
+{
+	float sign = copysign(1.0f, d.z);
+	float a = -1.0f / (sign + d.z);
+	float b = d.x * d.y * a;
+	struct ray_frame f;
+
+	f.u = (float3)(1.0f + sign * d.x * d.x * a, sign * b, -sign * d.x);
+	f.v = (float3)(b, sign + d.y * d.y * a, -d.y);
+	f.ou = -dot3(o, f.u);
+	f.ov = -dot3(o, f.v);
+	COUNT_FLOPS(tr, 13 + 2 * FLOPS_DOT3); /* by hand: a 2, b 2, u 6, v 3 */
+	return f;
+}
+
+/* Returns the squared distance between the sphere's centre and the ray, which
+ * is more than radius² when the ray misses. The caller counts its
+ * FLOPS_SPHERE_GAP. sphere: the centre, with radius² in w. */
+static float sphere_gap(float4 sphere, const struct ray_frame *f)
+{
+	float x = fma(sphere.z, f->u.z, fma(sphere.y, f->u.y, fma(sphere.x, f->u.x, f->ou)));
+	float y = fma(sphere.z, f->v.z, fma(sphere.y, f->v.y, fma(sphere.x, f->v.x, f->ov)));
+
+	return fma(y, y, x * x);
+}
+
+/* Where sphere_gap found the ray within the sphere's radius (gap <= radius²):
+ * takes sphere i as the nearest hit if it meets the ray at some 0 < t <
+ * *nearest, with t the smallest such root (the far one when the origin is
+ * inside). With any_hit, once one hit is found, the rest are not looked at. */
+static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 o, float3 d, int i,
+			    bool any_hit, float *nearest, struct hit *best)
+{
+	float radius2 = sphere_radius2(sphere);
+
+	if (!(gap <= radius2) || (any_hit && best->sphere >= 0))
+		return;
+	float3 oc = o - sphere.xyz;
+	float b = dot3(oc, d);
+	float far = sqrt(radius2 - gap) - b;
+	float t;
+	COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3 + 3);
+	if (b > 0.0f) { /* the centre is behind the origin: only the far root can be ahead */
+		t = far;
+	} else {
+		/* The near root as c/far, free of the cancellation in −b − sqrt(disc). */
+		float near = (dot3(oc, oc) - radius2) / far;
+		COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
+		t = near > 0.0f ? near : far;
+	}
+	if (t > 0.0f && t < *nearest) {
+		*nearest = t;
+		best->sphere = i;
+	}
+}
+
+/* Returns t > 0 where the ray meets the plane, or 0 if it does not (parallel
+ * or behind). */
+static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_plane *pl,
+			     float3 o, float3 d)
+{
+	float4 normal = pl->normal; /* the normal and the plane's offset */
+	float3 n = normal.xyz;
+	float denom = dot3(n, d);
+
+	COUNT_FLOPS(tr, FLOPS_DOT3);
+	if (denom == 0.0f)
+		return 0.0f;
+	float t = (plane_offset(normal) - dot3(n, o)) / denom;
+	COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
+	return t > 0.0f ? t : 0.0f;
+}
+
+#if RT_SPHERE_GROUP != 4
+#error "intersect_scene tests spheres four at a time"
+#endif
+
+/* Returns the nearest object on the ray with 0 < t < max_t; hit.t is 0 when
+ * there is none. With any_hit, returns the first such object found instead:
+ * enough for a shadow ray. The one loop serves both kinds of ray, so that
+ * work-items of a SIMD group tracing different kinds still run it together. */
+static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float max_t, bool any_hit)
+{
+	struct hit best = {0.0f, -1, -1};
+	float nearest = max_t;
+
+	/* RT_SPHERE_GROUP spheres at a time, so that when the ray misses them
+	 * all, as it mostly does, they cost one branch. */
+	struct ray_frame frame = ray_frame(tr, o, d);
+	for (int i = 0; i < tr->scene->sphere_slots; i += RT_SPHERE_GROUP) {
+		float4 s0 = tr->spheres[i].center; /* one load: the centre and radius² */
+		float4 s1 = tr->spheres[i + 1].center;
+		float4 s2 = tr->spheres[i + 2].center;
+		float4 s3 = tr->spheres[i + 3].center;
+		float g0 = sphere_gap(s0, &frame);
+		float g1 = sphere_gap(s1, &frame);
+		float g2 = sphere_gap(s2, &frame);
+		float g3 = sphere_gap(s3, &frame);
+
+		COUNT_FLOPS(tr,
+			    FLOPS_SPHERE_GAP * min(RT_SPHERE_GROUP, tr->scene->sphere_count - i));
+		if ((g0 <= sphere_radius2(s0)) | (g1 <= sphere_radius2(s1)) |
+		    (g2 <= sphere_radius2(s2)) | (g3 <= sphere_radius2(s3))) {
+			sphere_consider(tr, s0, g0, o, d, i, any_hit, &nearest, &best);
+			sphere_consider(tr, s1, g1, o, d, i + 1, any_hit, &nearest, &best);
+			sphere_consider(tr, s2, g2, o, d, i + 2, any_hit, &nearest, &best);
+			sphere_consider(tr, s3, g3, o, d, i + 3, any_hit, &nearest, &best);
+			if (any_hit && best.sphere >= 0)
+				break;
+		}
+	}
+	for (int i = 0; i < tr->scene->plane_count && !(any_hit && best.sphere >= 0); i++) {
+		float t = intersect_plane(tr, &tr->planes[i], o, d);
+		if (t > 0.0f && t < nearest) {
+			nearest = t;
+			best.sphere = -1;
+			best.plane = i;
+			if (any_hit)
+				break;
+		}
+	}
+	if (best.sphere >= 0 || best.plane >= 0)
+		best.t = nearest;
+	return best;
+}

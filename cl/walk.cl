@@ -1,0 +1,204 @@
+/* Walking a pixel's ray tree: ray_step advances one ray by one
+ * intersection; render_pixel walks the tree depth first with a stack, and
+ * trace_one gives the wavefront kernel one ray's colour and children. Part
+ * of the tracer: built after shade.cl. */
+
+/* One ray of a pixel's tree being traced (RENDERING.md trace, steps 1-5),
+ * one intersection at a time: first the ray itself, then a shadow ray for
+ * each light that could add to its hit. Both ways of walking the tree, the
+ * stack walk below and the wavefront kernel's trace_one, advance a ray only
+ * through ray_step. */
+struct ray_progress {
+	struct ray_job ray;
+	struct shading sh; /* the hit of ray being shaded */
+	bool shadow;	   /* the next intersection: a shadow ray of sh, or ray */
+};
+
+/* What a finished ray gives: its colour, weight applied, and the rays it
+ * spawned (SPAWNED_* bits; refracted and reflected are set for those). */
+struct ray_outcome {
+	float3 color;
+	int spawned;
+	struct ray_job refracted, reflected;
+};
+
+/* The per-ray step: intersects the next ray of rp, the ray itself or one of
+ * its shadow rays, and takes the hit. Returns true when the ray is done,
+ * with *out set, false when a shadow ray is to be traced next. The one
+ * intersect_scene call serves both kinds of ray, so that work-items of a
+ * SIMD group at different points of their trees still run the costly loop
+ * over the objects together. */
+static inline bool ray_step(struct tracer *tr, struct ray_progress *rp, struct ray_outcome *out)
+{
+	bool shadow = rp->shadow;
+	struct hit hit = intersect_scene(tr, shadow ? rp->sh.shadow_origin : rp->ray.origin,
+					 shadow ? rp->sh.to_light_dir : rp->ray.dir,
+					 shadow ? rp->sh.light_distance : INFINITY, shadow);
+
+	if (!shadow)
+		COUNT_RAY(tr);
+	if (!shadow && hit.t == 0.0f) {
+		out->color = rp->ray.weight * tr->scene->background.xyz;
+		out->spawned = 0;
+		COUNT_FLOPS(tr, FLOPS_MUL3);
+		return true;
+	}
+	if (!shadow)
+		shading_begin(tr, &rp->ray, hit, &rp->sh);
+	else if (hit.t == 0.0f)
+		shading_add_light(tr, &rp->sh);
+	rp->shadow = shading_next_light(tr, &rp->sh, rp->ray.dir);
+	if (rp->shadow)
+		return false;
+	out->color = rp->ray.weight * rp->sh.color;
+	COUNT_FLOPS(tr, FLOPS_MUL3);
+	out->spawned = shading_spawn(tr, &rp->ray, &rp->sh, &out->refracted, &out->reflected);
+	return true;
+}
+
+/* Traces one ray of the tree with its shadow rays: returns what it adds to
+ * its pixel, weight included, and writes the rays it spawns into
+ * children[0..*spawned): the refracted ray, then the reflected one. The
+ * wavefront kernel's bounce. (With ray_step's one intersect_scene call
+ * instead of one for the ray and one for its shadow rays, clang's NVPTX code
+ * for the bounce has a 160-byte stack frame instead of 176.) */
+static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray_job children[2],
+			int *spawned)
+{
+	struct ray_progress rp;
+	struct ray_outcome out;
+	int n = 0;
+
+	rp.ray = *ray;
+	rp.shadow = false;
+	while (!ray_step(tr, &rp, &out))
+		;
+	if (out.spawned & SPAWNED_REFRACTED)
+		children[n++] = out.refracted;
+	if (out.spawned & SPAWNED_REFLECTED)
+		children[n++] = out.reflected;
+	*spawned = n;
+	return out.color;
+}
+
+/* A pixel's ray tree being walked depth first (OpenCL C has no recursion),
+ * each ray's shadow rays right after it, one ray_step at a time, so that in
+ * the persistent kernel a work-item on a new pixel and one deep in a tree
+ * still step together.
+ *
+ * The walk goes on with the last ray a hit spawns, which stays in registers;
+ * a refracted ray that has a reflected sibling waits on a stack in private
+ * memory, waiting[RAY_STACK_SIZE], kept apart from struct walk: a compiler
+ * puts a struct with a dynamically indexed array in it wholly in memory, and
+ * the walk's other fields are used at every step (docs/performance.md step
+ * 5). This is the order of a stack onto which both children are pushed, and
+ * the sums are those of trace_one. */
+struct walk {
+	int top; /* rays waiting */
+	struct ray_progress rp;
+	float3 color;
+	int pixel;	    /* y * width + x */
+	ulong flops_before; /* the work-item's count when the pixel began */
+};
+
+/* Returns the unit direction of pixel (x, y)'s primary ray. */
+static float3 primary_direction(struct tracer *tr, int x, int y)
+{
+	scene_ptr scene = tr->scene;
+	float sx =
+		(2.0f * ((float)x + 0.5f) / (float)scene->width - 1.0f) * scene_half_width(scene);
+	float sy =
+		(1.0f - 2.0f * ((float)y + 0.5f) / (float)scene->height) * scene_half_height(scene);
+
+	/* sx and sy 5 each, by hand; two scaled vectors added; the normalize */
+	COUNT_FLOPS(tr, 10 + 2 * (FLOPS_MUL3 + FLOPS_ADD3) + FLOPS_NORMALIZE3);
+	return normalize3(scene->forward.xyz + sx * scene->right.xyz + sy * scene->up.xyz);
+}
+
+/* Sets *ray to pixel (x, y)'s primary ray. (Written in place: returning the
+ * struct cost the walk a store in NVPTX code.) */
+static inline void primary_ray(struct tracer *tr, int x, int y, struct ray_job *ray)
+{
+	*ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y), 1.0f, 0};
+}
+
+/* Starts the walk of pixel (x, y), which must lie inside the image. */
+static void walk_start(struct tracer *tr, struct walk *w, int x, int y)
+{
+	w->flops_before = tracer_flops(tr);
+	w->pixel = y * tr->scene->width + x;
+	primary_ray(tr, x, y, &w->rp.ray);
+	w->top = 0;
+	w->rp.shadow = false;
+	w->color = (float3)(0.0f);
+}
+
+/* Takes the walk's next ray_step and returns whether the walk is done;
+ * w->color is then the pixel's colour. */
+static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting)
+{
+	struct ray_outcome out;
+
+	if (!ray_step(tr, &w->rp, &out))
+		return false;
+	w->color += out.color;
+	COUNT_FLOPS(tr, FLOPS_ADD3);
+	/* The tree below this ray is done or spawned: on to the next ray. A
+	 * done ray leaves rp.shadow false, as a new ray needs it. */
+	if (out.spawned == SPAWNED_BOTH)
+		waiting[w->top++] = out.refracted;
+	if (out.spawned & SPAWNED_REFLECTED)
+		w->rp.ray = out.reflected;
+	else if (out.spawned & SPAWNED_REFRACTED)
+		w->rp.ray = out.refracted;
+	else if (w->top > 0)
+		w->rp.ray = waiting[--w->top];
+	else
+		return true;
+	return false;
+}
+
+/* Counts a write of pixel, when the tests ask for it (RTCL_COUNT_WRITES). */
+static inline void count_write(__global uint *write_counts, int pixel)
+{
+#ifdef RTCL_COUNT_WRITES
+	atomic_inc(&write_counts[pixel]);
+#else
+	(void)write_counts;
+	(void)pixel;
+#endif
+}
+
+/* Stores flops as pixel's cost, when counting. */
+static inline void store_pixel_flops(__global ulong *pixel_flops, int pixel, ulong flops)
+{
+#ifdef RTCL_COUNT_FLOPS
+	pixel_flops[pixel] = flops;
+#else
+	(void)pixel_flops;
+	(void)pixel;
+	(void)flops;
+#endif
+}
+
+/* Stores the colour of a finished walk, and what it cost when counting. */
+static void walk_store(struct tracer *tr, const struct walk *w, __global float *image,
+		       __global uint *write_counts)
+{
+	vstore3(w->color, w->pixel, image);
+	store_pixel_flops(tr->pixel_flops, w->pixel, tracer_flops(tr) - w->flops_before);
+	count_write(write_counts, w->pixel);
+}
+
+/* Traces pixel (x, y), which must lie inside the image, and stores it. */
+static void render_pixel(struct tracer *tr, __global float *image, __global uint *write_counts,
+			 int x, int y)
+{
+	struct walk w;
+	struct ray_job waiting[RAY_STACK_SIZE];
+
+	walk_start(tr, &w, x, y);
+	while (!walk_step(tr, &w, waiting))
+		;
+	walk_store(tr, &w, image, write_counts);
+}
