@@ -75,3 +75,89 @@ def test_many_groups_within_the_limits_still_render(kernel, tmp_path):
 
 def test_help_states_the_work_item_limit():
     assert "2^31 work-items in all" in rtcl("--help").stdout
+
+
+# ---- options given values they do not take, unknown options -------------------
+
+@pytest.mark.parametrize("arg,message", [
+    ("--quiet=1", "option --quiet takes no value (see --help)"),
+    ("--verbose=yes", "option --verbose takes no value (see --help)"),
+    ("--help=1", "option --help takes no value (see --help)"),
+    ("--version=2", "option --version takes no value (see --help)"),
+    ("--list-devices=0", "option --list-devices takes no value (see --help)"),
+    ("--qui=1", "option --quiet takes no value (see --help)"),  # an abbreviation
+    ("--quiet=", "option --quiet takes no value (see --help)"),
+    ("--nope", "unknown option --nope (see --help)"),
+    ("--nope=3", "unknown option --nope (see --help)"),
+    ("--ver", "ambiguous option --ver (see --help)"),  # --verbose or --version
+    ("-x", "unknown option -x (see --help)"),
+    ("-qx", "unknown option -x (see --help)"),
+    ("-xq", "unknown option -x (see --help)"),
+    ("--stats", "--stats needs a value (see --help)"),
+    ("-vk", "-k needs a value (see --help)"),
+])
+def test_option_errors_name_the_option(arg, message, tmp_path):
+    result = rtcl("-o", str(tmp_path / "out.png"), arg)
+    expect_failure(result, 2, message, tmp_path)
+    assert result.stderr == "rtcl: " + message + "\n"
+
+
+# ---- empty file names are usage errors -----------------------------------------
+
+@pytest.mark.parametrize("option,name", [
+    ("-o", "-o/--output"), ("--output", "-o/--output"), ("-s", "-s/--scene"),
+    ("--scene", "-s/--scene"), ("--stats", "--stats"), ("--flops", "--flops"),
+    ("--work-map", "--work-map"),
+])
+def test_empty_file_name_is_a_usage_error(option, name, tmp_path):
+    args = ["-o", str(tmp_path / "out.png")] if name != "-o/--output" else []
+    result = rtcl(*TINY, *args, option, "")
+    expect_failure(result, 2, name + ": the file name is empty", tmp_path)
+
+
+# ---- integers: digits only --------------------------------------------------------
+
+@pytest.mark.parametrize("args,message", [
+    (["--size", " 8x 8"], '--size: expected WxH (e.g. 8x8), got " 8x 8"'),
+    (["--size", "+8x+8"], '--size: expected WxH (e.g. 8x8), got "+8x+8"'),
+    (["--size", "8x8 "], '--size: expected WxH (e.g. 8x8), got "8x8 "'),
+    (["--size", "8x-8"], '--size: expected WxH (e.g. 8x8), got "8x-8"'),
+    (["-w", "+8x8"], '-w/--workgroup: expected WxH (e.g. 8x8), got "+8x8"'),
+    (["--groups", "\t2x2"], '--groups: expected WxH (e.g. 8x8), got "\t2x2"'),
+    (["--depth", "+3"], '--depth: expected an integer between 0 and 64, got "+3"'),
+    (["--depth", " 3"], '--depth: expected an integer between 0 and 64, got " 3"'),
+    (["-r", "+2"], '-r/--repeat: expected an integer between 1 and 100000, got "+2"'),
+    (["--batch", " 4"], '--batch: expected an integer between 1 and 4096, got " 4"'),
+    (["-p", "+0"], '-p/--platform: expected an integer between 0 and 1000, got "+0"'),
+    (["-d", " 0"], '-d/--device: expected an integer between 0 and 1000, got " 0"'),
+    (["--size", "99999999999999999999x8"],
+     "--size: each size must be between 1 and 32768, got 99999999999999999999x8"),
+])
+def test_integers_are_digits_only(args, message, tmp_path):
+    result = rtcl("-o", str(tmp_path / "out.png"), *args)
+    expect_failure(result, 2, message, tmp_path)
+
+
+def test_leading_zeros_are_still_decimal(tmp_path):
+    out = tmp_path / "out.ppm"
+    result = rtcl("-q", "--size", "010x08", "--depth", "03", "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    fields = [f for line in out.read_bytes().split(b"\n")[:4] if not line.startswith(b"#")
+              for f in line.split()]
+    assert fields[:3] == [b"P6", b"10", b"8"]
+
+
+# ---- --flops writes NumPy data: a .npy name ------------------------------------------
+
+@pytest.mark.parametrize("name", ["f.txt", "f", "f.npy.json", "f.np"])
+def test_flops_needs_a_npy_name(name, tmp_path):
+    result = rtcl(*TINY, "-o", str(tmp_path / "out.png"), "--flops", str(tmp_path / name))
+    expect_failure(result, 2, "--flops: the file name must end in .npy", tmp_path)
+    assert str(tmp_path / name) in result.stderr
+
+
+def test_flops_npy_extension_in_any_case(tmp_path):
+    flops = tmp_path / "F.NPY"
+    result = rtcl("-q", *TINY, "-o", str(tmp_path / "out.ppm"), "--flops", str(flops))
+    assert result.returncode == 0, result.stderr
+    assert flops.read_bytes().startswith(b"\x93NUMPY")
