@@ -113,6 +113,8 @@ void cli_print_help(FILE *out)
 		"  RTCL_BUILD_OPTIONS=OPTS  add OPTS to the program build options, e.g.\n"
 		"                           -cl-nv-verbose (its report shows with -v)\n"
 		"  RTCL_DUMP_BINARY=FILE    write the built program binary (PTX on NVIDIA)\n"
+		"  POCL_CACHE_DIR=DIR       PoCL's kernel cache; PoCL finds no device unless it\n"
+		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
 		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH);

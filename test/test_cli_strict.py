@@ -161,3 +161,92 @@ def test_flops_npy_extension_in_any_case(tmp_path):
     result = rtcl("-q", *TINY, "-o", str(tmp_path / "out.ppm"), "--flops", str(flops))
     assert result.returncode == 0, result.stderr
     assert flops.read_bytes().startswith(b"\x93NUMPY")
+
+
+# ---- PoCL without a writable cache directory ---------------------------------------
+
+POCL_VARIABLES = ("HOME", "XDG_CACHE_HOME", "POCL_CACHE_DIR")
+
+
+def as_unprivileged(*args, **env):
+    """Runs rtcl as `nobody` when we are root (root can create /nonexistent,
+    so PoCL never fails for it), with the PoCL cache variables given in env
+    and no others."""
+    base = {k: v for k, v in os.environ.items() if k not in POCL_VARIABLES}
+    prefix = []
+    if os.geteuid() == 0:
+        setpriv = shutil.which("setpriv")
+        if not setpriv:
+            pytest.skip("running as root without setpriv to drop privileges")
+        prefix = [setpriv, "--reuid=65534", "--regid=65534", "--clear-groups"]
+    return subprocess.run([*prefix, RTCL, *args], capture_output=True, text=True,
+                          cwd="/", env={**base, **env}, timeout=300)
+
+
+@pytest.fixture
+def shared_dir():
+    """A directory anyone may write in, for the unprivileged runs."""
+    path = tempfile.mkdtemp(prefix="rtcl-test-")
+    os.chmod(path, 0o777)
+    yield pathlib.Path(path)
+    shutil.rmtree(path, ignore_errors=True)
+
+
+@pytest.fixture
+def unprivileged_rtcl_works(shared_dir):
+    cache = shared_dir / "cache"
+    result = as_unprivileged("--list-devices", POCL_CACHE_DIR=str(cache))
+    if "Device #0" not in result.stdout:
+        pytest.skip("rtcl cannot run unprivileged here: " + result.stdout + result.stderr)
+
+
+ADVICE = "set POCL_CACHE_DIR to a writable directory, e.g. POCL_CACHE_DIR=$(mktemp -d)"
+
+
+@pytest.mark.parametrize("env,cause", [
+    ({"HOME": "/nonexistent"},
+     "cannot create /nonexistent/.cache/pocl (from HOME=/nonexistent): /nonexistent does not "
+     "exist and / is not writable"),
+    ({"HOME": "/", "XDG_CACHE_HOME": "/nonexistent/xdg"},
+     "cannot create /nonexistent/xdg/pocl (from XDG_CACHE_HOME=/nonexistent/xdg)"),
+    ({"HOME": "/", "POCL_CACHE_DIR": "/proc/rtcl-pocl"},
+     "cannot create /proc/rtcl-pocl (from POCL_CACHE_DIR): /proc/rtcl-pocl does not exist "
+     "and /proc is not writable"),
+])
+def test_no_writable_pocl_cache_is_explained(env, cause, shared_dir, unprivileged_rtcl_works):
+    out = shared_dir / "out"
+    out.mkdir()
+    out.chmod(0o777)
+    result = as_unprivileged(*TINY, "-o", str(out / "x.png"), **env)
+    expect_failure(result, 1, "no OpenCL device found on any platform; PoCL needs a writable "
+                   "cache directory and " + cause, out)
+    assert ADVICE in result.stderr
+
+
+def test_unwritable_home_is_explained(shared_dir, unprivileged_rtcl_works):
+    home = shared_dir / "home"
+    home.mkdir(mode=0o555)
+    home.chmod(0o555)  # root's: not writable by nobody
+    result = as_unprivileged(*TINY, "-o", str(shared_dir / "x.png"), HOME=str(home))
+    expect_failure(result, 1, f"(from HOME={home}): {home}/.cache does not exist and {home} "
+                   "is not writable", home)
+    assert ADVICE in result.stderr
+
+
+def test_list_devices_explains_a_platform_without_devices(shared_dir, unprivileged_rtcl_works):
+    result = as_unprivileged("--list-devices", HOME="/nonexistent")
+    assert result.returncode == 0, result.stderr
+    assert " `-- no devices; PoCL needs a writable cache directory" in result.stdout
+    assert ADVICE in result.stdout
+
+
+def test_writable_pocl_cache_dir_renders(shared_dir, unprivileged_rtcl_works):
+    out = shared_dir / "x.ppm"
+    result = as_unprivileged("-q", *TINY, "-o", str(out), HOME="/nonexistent",
+                             POCL_CACHE_DIR=str(shared_dir / "cache"))
+    assert result.returncode == 0, result.stderr
+    assert out.stat().st_size > 0
+
+
+def test_help_names_pocl_cache_dir():
+    assert "POCL_CACHE_DIR=DIR" in rtcl("--help").stdout
