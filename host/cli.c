@@ -43,25 +43,9 @@ static const struct option long_options[] = {
 	{NULL, 0, NULL, 0},
 };
 
-void cli_print_help(FILE *out)
+/* --help from the reference renderer on: the options after the kernels. */
+static void print_help_after_kernels(FILE *out)
 {
-	fprintf(out,
-		"Usage: rtcl [OPTION]...\n"
-		"Ray-trace a scene with OpenCL, scheduling pixels over work-items with one of\n"
-		"several kernels, and write the image.\n"
-		"\n"
-		"Examples:\n"
-		"  rtcl                                  the built-in 60-ball scene, dynamic "
-		"kernel\n"
-		"  rtcl -k cyclic -w 8x8 --groups 25x25  the paper's cyclic geometry\n"
-		"  rtcl -s scenes/two_balls.json -o balls.exr --size 800x600\n"
-		"  rtcl -k naive -r 10 --stats run.json  median of 10 timed launches, as JSON\n"
-		"\n"
-		"Scheduling:\n"
-		"  -k, --kernel NAME      which work-item traces which pixel (default dynamic):\n");
-	for (int i = 0; i < render_kernel_count; i++)
-		fprintf(out, "                           %-9s %s\n", render_kernels[i].name,
-			render_kernels[i].summary);
 	fprintf(out,
 		"                           %-9s the CPU reference renderer (C++, double "
 		"precision)\n"
@@ -118,6 +102,28 @@ void cli_print_help(FILE *out)
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
 		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH);
+}
+
+void cli_print_help(FILE *out)
+{
+	fprintf(out,
+		"Usage: rtcl [OPTION]...\n"
+		"Ray-trace a scene with OpenCL, scheduling pixels over work-items with one of\n"
+		"several kernels, and write the image.\n"
+		"\n"
+		"Examples:\n"
+		"  rtcl                                  the built-in 60-ball scene, dynamic "
+		"kernel\n"
+		"  rtcl -k cyclic -w 8x8 --groups 25x25  the paper's cyclic geometry\n"
+		"  rtcl -s scenes/two_balls.json -o balls.exr --size 800x600\n"
+		"  rtcl -k naive -r 10 --stats run.json  median of 10 timed launches, as JSON\n"
+		"\n"
+		"Scheduling:\n"
+		"  -k, --kernel NAME      which work-item traces which pixel (default dynamic):\n");
+	for (int i = 0; i < render_kernel_count; i++)
+		fprintf(out, "                           %-9s %s\n", render_kernels[i].name,
+			render_kernels[i].summary);
+	print_help_after_kernels(out);
 }
 
 /* Parses the first len characters of text as a decimal number in [min, max]:
