@@ -1,10 +1,9 @@
 #include "cli.h"
 
-#include <errno.h>
 #include <getopt.h>
-#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "render.h"
 #include "scene.h"
@@ -44,34 +43,20 @@ static const struct option long_options[] = {
 	{NULL, 0, NULL, 0},
 };
 
-void cli_print_help(FILE *out)
+/* --help from the reference renderer on: the options after the kernels. */
+static void print_help_after_kernels(FILE *out)
 {
-	fprintf(out,
-		"Usage: rtcl [OPTION]...\n"
-		"Ray-trace a scene with OpenCL, scheduling pixels over work-items with one of\n"
-		"several kernels, and write the image.\n"
-		"\n"
-		"Examples:\n"
-		"  rtcl                                  the built-in 60-ball scene, dynamic "
-		"kernel\n"
-		"  rtcl -k cyclic -w 8x8 --groups 25x25  the paper's cyclic geometry\n"
-		"  rtcl -s scenes/two_balls.json -o balls.exr --size 800x600\n"
-		"  rtcl -k naive -r 10 --stats run.json  median of 10 timed launches, as JSON\n"
-		"\n"
-		"Scheduling:\n"
-		"  -k, --kernel NAME      which work-item traces which pixel (default dynamic):\n");
-	for (int i = 0; i < render_kernel_count; i++)
-		fprintf(out, "                           %-9s %s\n", render_kernels[i].name,
-			render_kernels[i].summary);
 	fprintf(out,
 		"                           %-9s the CPU reference renderer (C++, double "
 		"precision)\n"
 		"  -w, --workgroup WxH    work-group shape, also the chunk shape (default 8x8)\n"
 		"      --groups GXxGY     persistent work-groups for cyclic, dynamic and "
 		"persistent\n"
-		"                         (default: enough to fill the device)\n"
+		"                         (default: enough to fill the device); at most\n"
+		"                         2^31 work-items in all, GX*GY times -w's W*H\n"
 		"      --batch N          pixels a work-item of the persistent kernel fetches\n"
-		"                         at a time (default 1)\n"
+		"                         at a time (default 1); the image's pixels plus N per\n"
+		"                         work-item must stay below 2^32\n"
 		"\n"
 		"Scene and image:\n"
 		"  -s, --scene FILE       scene file (SCENE.md); default: the built-in paper60\n"
@@ -112,19 +97,53 @@ void cli_print_help(FILE *out)
 		"  RTCL_BUILD_OPTIONS=OPTS  add OPTS to the program build options, e.g.\n"
 		"                           -cl-nv-verbose (its report shows with -v)\n"
 		"  RTCL_DUMP_BINARY=FILE    write the built program binary (PTX on NVIDIA)\n"
+		"  POCL_CACHE_DIR=DIR       PoCL's kernel cache; PoCL finds no device unless it\n"
+		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
 		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH);
 }
 
-/* Parses a decimal integer in [min, max]; the whole string must be a number. */
-static int parse_int(const char *text, long min, long max, long *value)
+void cli_print_help(FILE *out)
 {
-	char *end;
+	fprintf(out,
+		"Usage: rtcl [OPTION]...\n"
+		"Ray-trace a scene with OpenCL, scheduling pixels over work-items with one of\n"
+		"several kernels, and write the image.\n"
+		"\n"
+		"Examples:\n"
+		"  rtcl                                  the built-in 60-ball scene, dynamic "
+		"kernel\n"
+		"  rtcl -k cyclic -w 8x8 --groups 25x25  the paper's cyclic geometry\n"
+		"  rtcl -s scenes/two_balls.json -o balls.exr --size 800x600\n"
+		"  rtcl -k naive -r 10 --stats run.json  median of 10 timed launches, as JSON\n"
+		"\n"
+		"Scheduling:\n"
+		"  -k, --kernel NAME      which work-item traces which pixel (default dynamic):\n");
+	for (int i = 0; i < render_kernel_count; i++)
+		fprintf(out, "                           %-9s %s\n", render_kernels[i].name,
+			render_kernels[i].summary);
+	print_help_after_kernels(out);
+}
 
-	errno = 0;
-	*value = strtol(text, &end, 10);
-	return text[0] == '\0' || *end != '\0' || errno || *value < min || *value > max ? -1 : 0;
+/* Parses the first len characters of text as a decimal number in [min, max]:
+ * digits only, no sign, no spaces. Returns 0, -1 when they are not such a
+ * number, or -2 when it is out of range. */
+static int parse_decimal(const char *text, size_t len, long min, long max, long *value)
+{
+	if (len == 0)
+		return -1;
+	*value = 0;
+	for (size_t i = 0; i < len; i++) {
+		if (text[i] < '0' || text[i] > '9')
+			return -1;
+	}
+	for (size_t i = 0; i < len; i++) {
+		*value = *value * 10 + (text[i] - '0');
+		if (*value > max)
+			return -2;
+	}
+	return *value < min ? -2 : 0;
 }
 
 /* Parses "WxH" with each side in [1, max]. */
@@ -132,20 +151,15 @@ static int parse_shape(const char *option, const char *text, long max, int out[2
 		       size_t err_size)
 {
 	const char *x = strchr(text, 'x');
-	char first[32];
 	long w, h;
+	int w_status = x ? parse_decimal(text, (size_t)(x - text), 1, max, &w) : -1;
+	int h_status = x ? parse_decimal(x + 1, strlen(x + 1), 1, max, &h) : -1;
 
-	if (!x || (size_t)(x - text) >= sizeof(first)) {
+	if (w_status == -1 || h_status == -1) {
 		snprintf(err, err_size, "%s: expected WxH (e.g. 8x8), got \"%s\"", option, text);
 		return -1;
 	}
-	memcpy(first, text, (size_t)(x - text));
-	first[x - text] = '\0';
-	if (parse_int(first, LONG_MIN, LONG_MAX, &w) || parse_int(x + 1, LONG_MIN, LONG_MAX, &h)) {
-		snprintf(err, err_size, "%s: expected WxH (e.g. 8x8), got \"%s\"", option, text);
-		return -1;
-	}
-	if (w < 1 || h < 1 || w > max || h > max) {
+	if (w_status || h_status) {
 		snprintf(err, err_size, "%s: each size must be between 1 and %ld, got %s", option,
 			 max, text);
 		return -1;
@@ -160,13 +174,39 @@ static int parse_bounded(const char *option, const char *text, long min, long ma
 {
 	long value;
 
-	if (parse_int(text, min, max, &value)) {
+	if (parse_decimal(text, strlen(text), min, max, &value)) {
 		snprintf(err, err_size, "%s: expected an integer between %ld and %ld, got \"%s\"",
 			 option, min, max, text);
 		return -1;
 	}
 	*out = (int)value;
 	return 0;
+}
+
+/* Takes a file name for an option; an empty one is a usage error. */
+static int take_file_name(const char *option, const char *name, const char **out, char *err,
+			  size_t err_size)
+{
+	*out = name;
+	if (name[0] != '\0')
+		return 0;
+	snprintf(err, err_size, "%s: the file name is empty", option);
+	return -1;
+}
+
+/* --flops writes a NumPy array: its name must say so. */
+static int take_flops_name(const char *name, const char **out, char *err, size_t err_size)
+{
+	size_t len = strlen(name);
+
+	if (take_file_name("--flops", name, out, err, err_size))
+		return -1;
+	if (len > 4 && strcasecmp(name + len - 4, ".npy") == 0)
+		return 0;
+	snprintf(err, err_size,
+		 "--flops: the file name must end in .npy (it holds a NumPy array), got \"%s\"",
+		 name);
+	return -1;
 }
 
 static int check_kernel(const char *name, char *err, size_t err_size)
@@ -179,6 +219,129 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 	if (n >= 0 && (size_t)n < err_size)
 		snprintf(err + n, err_size - (size_t)n, " reference)");
 	return -1;
+}
+
+/* Applies option c with its value arg (NULL for an option without one).
+ * Returns 0, or -1 with a message; a flat switch, one case per option. */
+static int apply_option(int c, const char *arg, struct options *o, char *err, size_t err_size)
+{
+	switch (c) {
+	case 'k':
+		o->kernel = arg;
+		return check_kernel(arg, err, err_size);
+	case 'w':
+		return parse_shape("-w/--workgroup", arg, 65536, o->workgroup, err, err_size);
+	case OPT_GROUPS:
+		return parse_shape("--groups", arg, 65536, o->groups, err, err_size);
+	case OPT_BATCH:
+		return parse_bounded("--batch", arg, 1, 4096, &o->batch, err, err_size);
+	case 's':
+		return take_file_name("-s/--scene", arg, &o->scene_path, err, err_size);
+	case 'o':
+		return take_file_name("-o/--output", arg, &o->output, err, err_size);
+	case OPT_SIZE:
+		return parse_shape("--size", arg, SCENE_MAX_IMAGE_SIDE, o->size, err, err_size);
+	case OPT_DEPTH:
+		return parse_bounded("--depth", arg, 0, SCENE_MAX_DEPTH, &o->depth, err, err_size);
+	case 'p':
+		return parse_bounded("-p/--platform", arg, 0, 1000, &o->platform, err, err_size);
+	case 'd':
+		return parse_bounded("-d/--device", arg, 0, 1000, &o->device, err, err_size);
+	case 'r':
+		return parse_bounded("-r/--repeat", arg, 1, 100000, &o->repeat, err, err_size);
+	case OPT_STATS:
+		return take_file_name("--stats", arg, &o->stats_path, err, err_size);
+	case OPT_FLOPS:
+		return take_flops_name(arg, &o->flops_path, err, err_size);
+	case OPT_WORK_MAP:
+		return take_file_name("--work-map", arg, &o->work_map_path, err, err_size);
+	case OPT_LIST_DEVICES:
+		o->list_devices = 1;
+		return 0;
+	case 'q':
+		o->quiet = 1;
+		return 0;
+	case 'v':
+		o->verbose = 1;
+		return 0;
+	case 'h':
+		o->help = 1;
+		return 0;
+	case OPT_VERSION:
+		o->version = 1;
+		return 0;
+	}
+	snprintf(err, err_size, "unknown option (see --help)");
+	return -1;
+}
+
+/* The long option that arg ("--name" or "--name=value") names, getopt_long
+ * taking unambiguous abbreviations, or NULL; *matches counts the candidates. */
+static const struct option *find_long_option(const char *arg, int *matches)
+{
+	const char *name = arg + 2;
+	size_t len = strcspn(name, "=");
+	const struct option *found = NULL;
+
+	*matches = 0;
+	for (const struct option *opt = long_options; opt->name; opt++) {
+		if (strncmp(opt->name, name, len) != 0)
+			continue;
+		if (strlen(opt->name) == len) {
+			*matches = 1;
+			return opt;
+		}
+		found = opt;
+		(*matches)++;
+	}
+	return found;
+}
+
+/* Describes the option getopt_long refused ('?') or found without its value
+ * (':'). It reports a long option given a value it does not take as its
+ * short form ("--quiet=1" as optopt 'q'), and does not advance optind
+ * within a cluster of short options, so the argument's own text decides. */
+static void describe_bad_option(int c, int argc, char **argv, char *err, size_t err_size)
+{
+	const char *arg = optind >= 1 && optind <= argc ? argv[optind - 1] : "";
+	int is_long = strncmp(arg, "--", 2) == 0 && arg[2] != '\0';
+	int matches = 0;
+	const struct option *opt = is_long ? find_long_option(arg, &matches) : NULL;
+	int name_len = (int)strcspn(arg, "=");
+
+	if (is_long && opt && matches == 1 && opt->val == optopt) {
+		if (c == ':')
+			snprintf(err, err_size, "--%s needs a value (see --help)", opt->name);
+		else
+			snprintf(err, err_size, "option --%s takes no value (see --help)",
+				 opt->name);
+	} else if (is_long && optopt == 0) {
+		snprintf(err, err_size, "%s option %.*s (see --help)",
+			 matches > 1 ? "ambiguous" : "unknown", name_len, arg);
+	} else if (optopt > 0 && optopt < OPT_GROUPS) {
+		snprintf(err, err_size,
+			 c == ':' ? "-%c needs a value (see --help)"
+				  : "unknown option -%c (see --help)",
+			 optopt);
+	} else {
+		snprintf(err, err_size, "bad option %s (see --help)", arg);
+	}
+}
+
+/* Rules between options, checked once all are read. */
+static int check_combination(const struct options *o, char *err, size_t err_size)
+{
+	if (strcmp(o->kernel, "reference") == 0 && (o->flops_path || o->work_map_path)) {
+		snprintf(err, err_size,
+			 "--flops and --work-map count the OpenCL kernels' work; the reference "
+			 "renderer does not count (choose an OpenCL kernel)");
+		return -1;
+	}
+	if (o->quiet && o->verbose) {
+		snprintf(err, err_size, "-q/--quiet and -v/--verbose contradict each other");
+		return -1;
+	}
+	return 0;
 }
 
 int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_size)
@@ -197,92 +360,11 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	opterr = 0;
 	optind = 1;
 	while ((c = getopt_long(argc, argv, ":k:w:s:o:p:d:r:qvh", long_options, NULL)) != -1) {
-		int failed = 0;
-
-		switch (c) {
-		case 'k':
-			o->kernel = optarg;
-			failed = check_kernel(optarg, err, err_size);
-			break;
-		case 'w':
-			failed = parse_shape("-w/--workgroup", optarg, 65536, o->workgroup, err,
-					     err_size);
-			break;
-		case OPT_BATCH:
-			failed =
-				parse_bounded("--batch", optarg, 1, 4096, &o->batch, err, err_size);
-			break;
-		case OPT_GROUPS:
-			failed = parse_shape("--groups", optarg, 65536, o->groups, err, err_size);
-			break;
-		case 's':
-			o->scene_path = optarg;
-			break;
-		case 'o':
-			o->output = optarg;
-			if (optarg[0] == '\0') {
-				snprintf(err, err_size, "-o/--output: the file name is empty");
-				failed = 1;
-			}
-			break;
-		case OPT_SIZE:
-			failed = parse_shape("--size", optarg, SCENE_MAX_IMAGE_SIDE, o->size, err,
-					     err_size);
-			break;
-		case OPT_DEPTH:
-			failed = parse_bounded("--depth", optarg, 0, SCENE_MAX_DEPTH, &o->depth,
-					       err, err_size);
-			break;
-		case 'p':
-			failed = parse_bounded("-p/--platform", optarg, 0, 1000, &o->platform, err,
-					       err_size);
-			break;
-		case 'd':
-			failed = parse_bounded("-d/--device", optarg, 0, 1000, &o->device, err,
-					       err_size);
-			break;
-		case OPT_LIST_DEVICES:
-			o->list_devices = 1;
-			break;
-		case 'r':
-			failed = parse_bounded("-r/--repeat", optarg, 1, 100000, &o->repeat, err,
-					       err_size);
-			break;
-		case OPT_STATS:
-			o->stats_path = optarg;
-			break;
-		case OPT_FLOPS:
-			o->flops_path = optarg;
-			break;
-		case OPT_WORK_MAP:
-			o->work_map_path = optarg;
-			break;
-		case 'q':
-			o->quiet = 1;
-			break;
-		case 'v':
-			o->verbose = 1;
-			break;
-		case 'h':
-			o->help = 1;
-			break;
-		case OPT_VERSION:
-			o->version = 1;
-			break;
-		case ':':
-			snprintf(err, err_size, "%s needs a value (see --help)", argv[optind - 1]);
-			failed = 1;
-			break;
-		default:
-			if (optopt)
-				snprintf(err, err_size, "unknown option -%c (see --help)", optopt);
-			else
-				snprintf(err, err_size, "unknown option %s (see --help)",
-					 argv[optind - 1]);
-			failed = 1;
-			break;
+		if (c == '?' || c == ':') {
+			describe_bad_option(c, argc, argv, err, err_size);
+			return -1;
 		}
-		if (failed)
+		if (apply_option(c, optarg, o, err, err_size))
 			return -1;
 	}
 	if (optind < argc) {
@@ -290,15 +372,5 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 			 argv[optind]);
 		return -1;
 	}
-	if (strcmp(o->kernel, "reference") == 0 && (o->flops_path || o->work_map_path)) {
-		snprintf(err, err_size,
-			 "--flops and --work-map count the OpenCL kernels' work; the reference "
-			 "renderer does not count (choose an OpenCL kernel)");
-		return -1;
-	}
-	if (o->quiet && o->verbose) {
-		snprintf(err, err_size, "-q/--quiet and -v/--verbose contradict each other");
-		return -1;
-	}
-	return 0;
+	return check_combination(o, err, err_size);
 }

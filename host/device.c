@@ -1,11 +1,90 @@
 #include "device.h"
 
+#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
 
 #define MAX_PLATFORMS 16
 #define MAX_DEVICES 64
+
+#define POCL_PLATFORM_NAME "Portable Computing Language"
+
+/* The directory PoCL 3.1 keeps its kernel cache in, as it chooses it:
+ * POCL_CACHE_DIR, else $XDG_CACHE_HOME/pocl, else $HOME/.cache/pocl, else
+ * /tmp/pocl. *source says where the choice came from, for a message. */
+static void pocl_cache_dir(char *dir, size_t size, char *source, size_t source_size)
+{
+	const char *value;
+
+	if ((value = getenv("POCL_CACHE_DIR"))) {
+		snprintf(dir, size, "%s", value);
+		snprintf(source, source_size, "from POCL_CACHE_DIR");
+	} else if ((value = getenv("XDG_CACHE_HOME"))) {
+		snprintf(dir, size, "%s/pocl", value);
+		snprintf(source, source_size, "from XDG_CACHE_HOME=%s", value);
+	} else if ((value = getenv("HOME"))) {
+		snprintf(dir, size, "%s/.cache/pocl", value);
+		snprintf(source, source_size, "from HOME=%s", value);
+	} else {
+		snprintf(dir, size, "/tmp/pocl");
+		snprintf(source, source_size, "PoCL's choice when HOME is not set");
+	}
+}
+
+/* Whether this process could create and write directory `dir`, as
+ * `mkdir -p` would: its nearest existing ancestor, or itself, must be a
+ * directory it may write. If not, says why in `why`. */
+static int can_create_dir(const char *dir, char *why, size_t why_size)
+{
+	char path[1024], missing[1024] = "";
+	struct stat st;
+
+	snprintf(path, sizeof(path), "%s", dir);
+	while (stat(path, &st) != 0) {
+		char *slash = strrchr(path, '/');
+		if (errno != ENOENT || strcmp(path, ".") == 0) {
+			snprintf(why, why_size, "%s cannot be read: %s", path, strerror(errno));
+			return 0;
+		}
+		snprintf(missing, sizeof(missing), "%s", path);
+		if (!slash)
+			snprintf(path, sizeof(path), ".");
+		else
+			slash[slash == path] = '\0'; /* keep the root's slash */
+	}
+	if (S_ISDIR(st.st_mode) && access(path, W_OK | X_OK) == 0)
+		return 1;
+	if (!S_ISDIR(st.st_mode))
+		snprintf(why, why_size, "%s is not a directory", path);
+	else if (missing[0])
+		snprintf(why, why_size, "%s does not exist and %s is not writable", missing, path);
+	else
+		snprintf(why, why_size, "%s is not writable", path);
+	return 0;
+}
+
+/* Appends to err why PoCL may have found no device: it reports none when it
+ * cannot create its cache directory (without a writable HOME, say). Only
+ * when `platform` is PoCL and that directory is out of reach. */
+static void explain_pocl_without_devices(cl_platform_id platform, char *err, size_t err_size)
+{
+	char name[256] = "", dir[1024], source[1024], why[1200];
+	size_t used = strlen(err);
+
+	clGetPlatformInfo(platform, CL_PLATFORM_NAME, sizeof(name), name, NULL);
+	if (!strstr(name, POCL_PLATFORM_NAME) || used >= err_size)
+		return;
+	pocl_cache_dir(dir, sizeof(dir), source, sizeof(source));
+	if (can_create_dir(dir, why, sizeof(why)))
+		return;
+	snprintf(err + used, err_size - used,
+		 "; PoCL needs a writable cache directory and cannot create %s (%s): %s; set "
+		 "POCL_CACHE_DIR to a writable directory, e.g. POCL_CACHE_DIR=$(mktemp -d)",
+		 dir, source, why);
+}
 
 static int get_platforms(cl_platform_id *platforms, cl_uint *count, char *err, size_t err_size)
 {
@@ -72,6 +151,8 @@ static int choose_device(struct device *dev, int platform_index, int device_inde
 				 "device %d does not exist on platform %d: it has %u "
 				 "(see --list-devices)",
 				 device_index, p, count);
+			if (count == 0)
+				explain_pocl_without_devices(platforms[p], err, err_size);
 			return -1;
 		}
 		dev->platform = platforms[p];
@@ -100,6 +181,9 @@ static int choose_device(struct device *dev, int platform_index, int device_inde
 		snprintf(err, err_size, "platform %d has no devices", platform_index);
 	else
 		snprintf(err, err_size, "no OpenCL device found on any platform");
+	for (cl_uint p = 0; p < platform_count; p++)
+		if (platform_index < 0 || (int)p == platform_index)
+			explain_pocl_without_devices(platforms[p], err, err_size);
 	return -1;
 }
 
@@ -237,6 +321,11 @@ int device_list(FILE *out, char *err, size_t err_size)
 
 		clGetPlatformInfo(platforms[p], CL_PLATFORM_NAME, sizeof(name), name, NULL);
 		fprintf(out, "Platform #%u: %s\n", p, name);
+		if (count == 0) {
+			char none[2048] = "no devices";
+			explain_pocl_without_devices(platforms[p], none, sizeof(none));
+			fprintf(out, " `-- %s\n", none);
+		}
 		for (cl_uint d = 0; d < count; d++) {
 			cl_device_type type = 0;
 			cl_uint units = 0;

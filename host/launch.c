@@ -1,8 +1,10 @@
 #include "launch.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 #include <time.h>
 
 #include "devscene.h"
@@ -34,8 +36,8 @@ void launch_default_groups(const struct device *dev, const struct render_setting
 	groups[1] = gy;
 }
 
-int launch_check_workgroup(const struct device *dev, const struct render_settings *s,
-			   char *err, size_t err_size)
+int launch_check_workgroup(const struct device *dev, const struct render_settings *s, char *err,
+			   size_t err_size)
 {
 	const size_t *max_items = dev->max_work_item_sizes;
 	size_t wx = (size_t)s->workgroup[0], wy = (size_t)s->workgroup[1];
@@ -49,6 +51,57 @@ int launch_check_workgroup(const struct device *dev, const struct render_setting
 		return -1;
 	}
 	return 0;
+}
+
+/* Checks the NDRange against what the kernels can index. Every work-item's
+ * row-major index is a uint in cl/tracer.cl (store_counts() writes at
+ * 2 * index, also a uint), so a launch may have at most 2^31 work-items; that
+ * also keeps the work-group count below PoCL 3.1's 32-bit count of groups
+ * (2^32 groups crash its pthread driver with SIGFPE) and every global size
+ * within a 32-bit device size_t (CL_DEVICE_ADDRESS_BITS), so no device query
+ * is needed. */
+static int check_work_items(const struct render_settings *s, const struct render_result *res,
+			    char *err, size_t err_size)
+{
+	uint64_t groups = (uint64_t)res->groups[0] * (uint64_t)res->groups[1];
+	uint64_t group_items = (uint64_t)res->local_size[0] * res->local_size[1];
+
+	if (groups * group_items <= LAUNCH_MAX_WORK_ITEMS)
+		return 0;
+	snprintf(err, err_size,
+		 "%s %dx%d: %llu work-groups of %llu work-item%s is more than the kernels can "
+		 "index (at most %llu work-items in all); choose fewer groups",
+		 s->kernel->uses_groups && s->groups[0] > 0 ? "--groups" : "work-groups",
+		 res->groups[0], res->groups[1], (unsigned long long)groups,
+		 (unsigned long long)group_items, group_items == 1 ? "" : "s",
+		 (unsigned long long)LAUNCH_MAX_WORK_ITEMS);
+	return -1;
+}
+
+/* Checks the persistent kernel's uint pixel counter (cl/persistent.cl): it
+ * hands out every pixel of the whole chunks, then each work-item's last fetch
+ * of --batch pixels overshoots, so the counter must count that far without
+ * wrapping to 0 (which would hand out pixels again). */
+static int check_pixel_counter(const struct render_settings *s, const struct render_result *res,
+			       char *err, size_t err_size)
+{
+	uint64_t chunk_w = res->local_size[0], chunk_h = res->local_size[1];
+	uint64_t chunks =
+		((s->width + chunk_w - 1) / chunk_w) * ((s->height + chunk_h - 1) / chunk_h);
+	uint64_t items = (uint64_t)res->global_size[0] * res->global_size[1];
+	uint64_t batch = s->batch > 0 ? (uint64_t)s->batch : 1;
+	uint64_t end = chunks * chunk_w * chunk_h + (items + 1) * batch;
+
+	if (!s->kernel->pixel_counter || end <= UINT32_MAX)
+		return 0;
+	snprintf(err, err_size,
+		 "%s %dx%d with --batch %llu: the persistent kernel's 32-bit pixel counter "
+		 "would count to %llu (the pixels, then one fetch of %llu by each of %llu "
+		 "work-items), more than %lu; choose fewer groups or a smaller --batch",
+		 s->kernel->uses_groups && s->groups[0] > 0 ? "--groups" : "work-groups",
+		 res->groups[0], res->groups[1], (unsigned long long)batch, (unsigned long long)end,
+		 (unsigned long long)batch, (unsigned long long)items, (unsigned long)UINT32_MAX);
+	return -1;
 }
 
 int launch_plan(const struct device *dev, const struct render_settings *s,
@@ -77,14 +130,15 @@ int launch_plan(const struct device *dev, const struct render_settings *s,
 		res->groups[0] = (int)((s->width + wx - 1) / wx);
 		res->groups[1] = (int)((s->height + wy - 1) / wy);
 	}
+	if (check_work_items(s, res, err, err_size))
+		return -1;
 	res->global_size[0] = (size_t)res->groups[0] * wx;
 	res->global_size[1] = (size_t)res->groups[1] * wy;
-	return 0;
+	return check_pixel_counter(s, res, err, err_size);
 }
 
-int launch_check_kernel(const struct device *dev, cl_kernel kernel,
-			const struct render_result *res, const char *name, char *err,
-			size_t err_size)
+int launch_check_kernel(const struct device *dev, cl_kernel kernel, const struct render_result *res,
+			const char *name, char *err, size_t err_size)
 {
 	size_t max_items = 0;
 	cl_int status = clGetKernelWorkGroupInfo(kernel, dev->id, CL_KERNEL_WORK_GROUP_SIZE,
@@ -182,8 +236,8 @@ static cl_int wait_for(cl_event event, const char *label, int progress)
 }
 
 cl_int launch_run(struct device *dev, const struct render_settings *s, cl_kernel kernel,
-		     cl_uint dims, const size_t *global, const size_t *local, const char *label,
-		     double *ms, const char **call)
+		  cl_uint dims, const size_t *global, const size_t *local, const char *label,
+		  double *ms, const char **call)
 {
 	cl_event event;
 	cl_ulong start = 0, end = 0;
@@ -212,7 +266,6 @@ cl_int launch_run(struct device *dev, const struct render_settings *s, cl_kernel
 	clReleaseEvent(event);
 	return status;
 }
-
 
 int launch_setup(struct device *dev, const struct scene *scene, const struct render_settings *s,
 		 struct render_result *res, void **scene_block, cl_program *program, char *err,

@@ -13,6 +13,10 @@
 /* Bytes of __local memory the kernels need besides the scene. */
 #define LOCAL_MEM_RESERVE 256
 
+/* The most work-items one launch may have: the kernels index them with
+ * 32-bit uints (launch.c says where). */
+#define LAUNCH_MAX_WORK_ITEMS (1ull << 31)
+
 /* The groups used when --groups is not given: enough work-groups of the given
  * size to fill the device, shaped to cover the image's chunks. */
 void launch_default_groups(const struct device *dev, const struct render_settings *settings,
@@ -23,7 +27,9 @@ int launch_check_workgroup(const struct device *dev, const struct render_setting
 			   char *err, size_t err_size);
 
 /* Chooses the 2D NDRange of a single-pass kernel (result->local_size,
- * global_size and groups) and checks it against the device. */
+ * global_size and groups) and checks it against the device and against what
+ * the kernels can index (LAUNCH_MAX_WORK_ITEMS, the persistent kernel's
+ * pixel counter). */
 int launch_plan(const struct device *dev, const struct render_settings *settings,
 		struct render_result *result, char *err, size_t err_size);
 

@@ -12,19 +12,19 @@
 #include "wavefront.h"
 
 const struct kernel_info render_kernels[] = {
-	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0,
+	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0, 0,
 	 singlepass_render},
-	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0, 0,
+	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0, 0, 0,
 	 singlepass_render},
 	{"cyclic", "persistent work-groups, chunk (cx,cy) to group (cx mod GX, cy mod GY)", 1, 0,
-	 0, singlepass_render},
-	{"dynamic", "persistent work-groups fetch chunks from a global atomic counter", 1, 0, 0,
+	 0, 0, singlepass_render},
+	{"dynamic", "persistent work-groups fetch chunks from a global atomic counter", 1, 0, 0, 0,
 	 singlepass_render},
 	{"persistent",
 	 "persistent work-groups whose work-items each fetch --batch pixels, no barrier", 1, 0, 0,
-	 singlepass_render},
+	 1, singlepass_render},
 	{"wavefront", "one launch per bounce over a queue of live rays: paths split in pieces", 0,
-	 0, 1, wavefront_render},
+	 0, 1, 0, wavefront_render},
 };
 const int render_kernel_count = sizeof(render_kernels) / sizeof(render_kernels[0]);
 

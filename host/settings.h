@@ -26,6 +26,7 @@ struct kernel_info {
 	int uses_groups;      /* persistent work-groups: --groups applies */
 	int single_item;      /* one work-item renders everything: -w does not apply */
 	int multi_pass;	      /* several launches per frame (wavefront) */
+	int pixel_counter;    /* its work counter counts pixels, --batch at a time */
 	renderer_fn renderer; /* singlepass_render or wavefront_render */
 };
 
