@@ -116,7 +116,7 @@ def test_interrupts_while_writing_leave_the_old_files_or_all_new_ones(tmp_path):
 
 @pytest.mark.parametrize("options", [
     ["-o", "x.png", "--stats", "x.png"],
-    ["-o", "x.png", "--flops", "x.png"],
+    ["-o", "x.png", "--flops", "alias.npy"],
     ["-o", "x.png", "--work-map", "x.png"],
     ["--flops", "f.npy", "--stats", "f.npy.json"],
     ["-o", "x.png", "--stats", "./x.png"],
@@ -127,9 +127,10 @@ def test_two_outputs_naming_one_file_are_refused(tmp_path, options):
     (tmp_path / "link").symlink_to(".")
     (tmp_path / "x.png").write_bytes(b"previous")
     os.link(tmp_path / "x.png", tmp_path / "hard.png")
+    (tmp_path / "alias.npy").symlink_to("x.png")
     result = rtcl(*SMALL, *options, cwd=tmp_path)
     expect_refused(result, 2, "name the same file: give each output a file of its own")
-    assert sorted(os.listdir(tmp_path)) == ["hard.png", "link", "x.png"]
+    assert sorted(os.listdir(tmp_path)) == ["alias.npy", "hard.png", "link", "x.png"]
     assert (tmp_path / "x.png").read_bytes() == b"previous"
 
 
