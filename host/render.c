@@ -716,7 +716,7 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	if (render_check_fits(dev, "the image", (double)pixels * 3 * sizeof(float), err, err_size))
 		return -1;
 	if (s->count_flops &&
-	    render_check_fits(dev, "the flop counts",
+	    render_check_fits(dev, "the flop count buffer",
 			      ((double)res->global_size[0] * res->global_size[1] * 2 + pixels) * 8,
 			      err, err_size))
 		return -1;
