@@ -217,8 +217,8 @@ static void check_against_reference(const char *path, int width, int height)
  * once returned inf there (its directions drifted from unit length). */
 static void check_every_kernel_at_depth_64(const char *path, int width, int height)
 {
-	static const char *const kernels[] = {"serial",	    "naive",	  "cyclic",
-					      "dynamic",    "persistent", "wavefront"};
+	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
+					      "dynamic", "persistent", "wavefront"};
 	for (size_t k = 0; k < sizeof(kernels) / sizeof(kernels[0]); k++)
 		check_kernel_against_reference(path, kernels[k], width, height, 64);
 }

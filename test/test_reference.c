@@ -603,8 +603,9 @@ static double colour_bound(const struct scene *s, int max_depth)
 		for (int p = 0; p < s->plane_count; p++)
 			for (int c = 0; c < 3; c++)
 				color_max = fmax(color_max, s->planes[p].checker_color[c]);
-		local_max = fmax(local_max, m->ambient * color_max * ambient_max +
-						    (m->diffuse * color_max + m->specular) * light_max);
+		local_max =
+			fmax(local_max, m->ambient * color_max * ambient_max +
+						(m->diffuse * color_max + m->specular) * light_max);
 		w = fmax(w, m->reflect + m->transmit);
 	}
 	for (int k = 0; k <= max_depth; k++, level *= w)
