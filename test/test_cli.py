@@ -286,6 +286,15 @@ def test_bad_scene_message(tmp_path, name):
     assert os.listdir(tmp_path) == []
 
 
+def test_scene_with_byte_order_mark_renders(tmp_path):
+    """SCENE.md: a UTF-8 byte-order mark at the start of the file is skipped."""
+    scene = tmp_path / "bom.json"
+    scene.write_bytes(b"\xef\xbb\xbf" + (ROOT / "scenes" / "two_balls.json").read_bytes())
+    result = rtcl("-s", str(scene), "-o", str(tmp_path / "out.ppm"), *SMALL)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "out.ppm").stat().st_size > 0
+
+
 def test_bad_scene_leaves_existing_output_untouched(tmp_path):
     out = tmp_path / "out.png"
     out.write_bytes(b"precious")
