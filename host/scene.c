@@ -148,6 +148,9 @@ struct loader {
 	json_t *name_index; /* material name -> index into scene.materials */
 	int default_used;   /* some object has no material */
 	struct scene *scene;
+	const json_t *doc;
+	const char *text; /* the JSON text of doc, without a byte-order mark */
+	size_t text_len;
 };
 
 /* A key below `parent`; top-level keys get a root-less path. */
@@ -290,10 +293,16 @@ enum range {
 	FOV,	      /* 0 < x < 180 */
 };
 
+#define WRITTEN_NUMBER_MAX 40
+
+static const char *underflow_text(const struct loader *ld, const json_t *v,
+				  char buf[WRITTEN_NUMBER_MAX]);
+
 static int check_number(struct loader *ld, const struct path *p, json_t *v, enum range range,
 			double *out)
 {
-	char num[32];
+	char num[32], written_buf[WRITTEN_NUMBER_MAX];
+	const char *written;
 	double x;
 
 	if (!json_is_number(v))
@@ -302,6 +311,19 @@ static int check_number(struct loader *ld, const struct path *p, json_t *v, enum
 	/* jansson refuses overflowing literals; this is a second line. */
 	if (!isfinite(x))
 		return fail(ld, p, "must be finite, got %s", fmt_num(x, num));
+	/* jansson reads 1e-400 as 0 without a word: where a positive value is
+	 * required, name the number as written rather than "got 0". */
+	written = (range == POSITIVE || range == FOV) && fpclassify(x) != FP_NORMAL
+			  ? underflow_text(ld, v, written_buf)
+			  : NULL;
+	if (written) {
+		if (range == POSITIVE)
+			return fail(ld, p,
+				    "must be between %g and %g (rtcl computes in float), got %s, "
+				    "which underflows to 0",
+				    SCENE_MIN_MAGNITUDE, SCENE_MAX_MAGNITUDE, written);
+		return fail(ld, p, "must be > 0 and < 180, got %s, which underflows to 0", written);
+	}
 	switch (range) {
 	case DIRECTION:
 	case ANY:
@@ -794,6 +816,110 @@ static int read_scene(struct loader *ld, json_t *doc)
 	return 0;
 }
 
+/* The number literals of a document jansson has accepted, in document
+ * order: next_number_literal sets *start and *len to the next one and returns
+ * 1, or returns 0 at the end. Strings (keys too) are skipped; true, false and
+ * null hold no digit or '-', so a number starts at the first '-' or digit. */
+struct literal_scan {
+	const char *at, *end;
+};
+
+static int next_number_literal(struct literal_scan *sc, const char **start, size_t *len)
+{
+	while (sc->at < sc->end) {
+		char c = *sc->at;
+
+		if (c == '"') {
+			for (sc->at++; sc->at < sc->end && *sc->at != '"'; sc->at++)
+				if (*sc->at == '\\')
+					sc->at++;
+			sc->at++;
+		} else if (c == '-' || (c >= '0' && c <= '9')) {
+			*start = sc->at;
+			while (sc->at < sc->end && *sc->at && strchr("+-.eE0123456789", *sc->at))
+				sc->at++;
+			*len = (size_t)(sc->at - *start);
+			return 1;
+		} else {
+			sc->at++;
+		}
+	}
+	return 0;
+}
+
+/* Whether a number literal has a nonzero digit before its exponent. */
+static int nonzero_as_written(const char *start, size_t len)
+{
+	for (size_t i = 0; i < len && start[i] != 'e' && start[i] != 'E'; i++)
+		if (start[i] >= '1' && start[i] <= '9')
+			return 1;
+	return 0;
+}
+
+/* Walks `v` in document order (jansson keeps the order of object keys),
+ * pairing each number with the next literal of the text, until it meets
+ * `target`: returns 1 with *start and *len set to its literal, 0 if target is
+ * not below v, -1 if the numbers and the literals do not pair up. */
+static int find_literal(const json_t *v, const json_t *target, struct literal_scan *sc,
+			const char **start, size_t *len)
+{
+	const char *key;
+	json_t *member;
+	size_t i;
+	int found;
+
+	switch (json_typeof(v)) {
+	case JSON_OBJECT:
+		json_object_foreach((json_t *)v, key, member)
+		{
+			found = find_literal(member, target, sc, start, len);
+			if (found)
+				return found;
+		}
+		return 0;
+	case JSON_ARRAY:
+		json_array_foreach(v, i, member)
+		{
+			found = find_literal(member, target, sc, start, len);
+			if (found)
+				return found;
+		}
+		return 0;
+	case JSON_INTEGER:
+	case JSON_REAL:
+		if (!next_number_literal(sc, start, len))
+			return -1;
+		return v == target;
+	default:
+		return 0;
+	}
+}
+
+/* The number `v` as written in the file ("a 400-character number" if too
+ * long to quote) if that text is nonzero but jansson read it as 0 or a
+ * denormal (1e-400, 1e-320), else NULL. Looked up only for the one number
+ * that fails a check, so a scene costs at most one walk. */
+static const char *underflow_text(const struct loader *ld, const json_t *v,
+				  char buf[WRITTEN_NUMBER_MAX])
+{
+	struct literal_scan sc = {ld->text, ld->text + ld->text_len};
+	const char *start;
+	size_t len;
+
+	if (!ld->doc || find_literal(ld->doc, v, &sc, &start, &len) != 1 ||
+	    !nonzero_as_written(start, len))
+		return NULL;
+	if (len < WRITTEN_NUMBER_MAX)
+		snprintf(buf, WRITTEN_NUMBER_MAX, "%.*s", (int)len, start);
+	else
+		snprintf(buf, WRITTEN_NUMBER_MAX, "a %zu-character number", len);
+	return buf;
+}
+
+/* The UTF-8 encoding of U+FEFF, which some editors put at the start of a
+ * file; SCENE.md allows it there. */
+static const char utf8_bom[] = "\xef\xbb\xbf";
+
 /* Parses and validates `len` bytes of JSON; `source` names them in messages. */
 static int load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
 		       char *err, size_t err_size)
@@ -809,6 +935,10 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 			  len, SCENE_MAX_BYTES);
 		return -1;
 	}
+	if (len >= 3 && memcmp(json, utf8_bom, 3) == 0) {
+		json += 3;
+		len -= 3;
+	}
 	doc = json_loadb(json, len, JSON_REJECT_DUPLICATES, &jerr);
 	if (!doc) {
 		struct sbuf sb = {err, err_size, 0};
@@ -823,6 +953,9 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 		write_err(&ld, "%s: out of memory", source);
 		ret = -1;
 	} else {
+		ld.doc = doc;
+		ld.text = json;
+		ld.text_len = len;
 		ret = read_scene(&ld, doc);
 	}
 	json_decref(ld.name_index);

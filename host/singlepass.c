@@ -215,7 +215,7 @@ int singlepass_render(struct device *dev, const struct scene *scene,
 	memset(&st, 0, sizeof(st));
 	if (launch_setup(dev, scene, s, res, &scene_block, &st.program, err, err_size) ||
 	    (s->count_flops &&
-	     device_check_fits(dev, "the flop counts", counts_bytes(s, res), err, err_size)))
+	     device_check_fits(dev, "the flop count buffer", counts_bytes(s, res), err, err_size)))
 		goto out;
 	st.kernel = program_create_kernel(st.program, "render", err, err_size);
 	if (!st.kernel)

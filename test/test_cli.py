@@ -221,6 +221,19 @@ def test_bad_option(tmp_path, args, status, message):
     assert result.stderr.startswith("rtcl: ")
 
 
+def test_flop_count_buffer_too_large(tmp_path):
+    """An image that just fits the device's largest buffer, whose flop count
+    buffer (8 bytes per work-item, twice, and per pixel) does not."""
+    probe = rtcl("-o", str(tmp_path / "out.png"), "--size", "32768x32768")
+    limit = int(re.search(r"allows at most (\d+) bytes", probe.stderr).group(1))
+    height = limit // 12 // 32768
+    if not 1 <= height <= 32768:
+        pytest.skip(f"the device allows {limit} bytes in one buffer")
+    result = rtcl("-k", "naive", "-o", str(tmp_path / "out.png"), "--size", f"32768x{height}",
+                  "--flops", str(tmp_path / "flops.npy"))
+    expect_failure(result, 1, "the flop count buffer needs ", tmp_path)
+
+
 def test_unwritable_output_directory(tmp_path):
     result = rtcl(*SMALL, "-o", str(tmp_path / "missing" / "out.png"))
     expect_failure(result, 1, "does not exist", tmp_path)
@@ -271,6 +284,15 @@ def test_bad_scene_message(tmp_path, name):
     assert result.stderr == want.replace("{FILE}", str(scene)) + "\n"
     assert result.stdout == ""
     assert os.listdir(tmp_path) == []
+
+
+def test_scene_with_byte_order_mark_renders(tmp_path):
+    """SCENE.md: a UTF-8 byte-order mark at the start of the file is skipped."""
+    scene = tmp_path / "bom.json"
+    scene.write_bytes(b"\xef\xbb\xbf" + (ROOT / "scenes" / "two_balls.json").read_bytes())
+    result = rtcl("-s", str(scene), "-o", str(tmp_path / "out.ppm"), *SMALL)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "out.ppm").stat().st_size > 0
 
 
 def test_bad_scene_leaves_existing_output_untouched(tmp_path):

@@ -575,3 +575,133 @@ Test(reference, plane_seen_from_behind_uses_flipped_normal)
 	render_pixel(&ts, 1, 1, 0, 0, 0, px);
 	expect_rgb(px, 0.65, 0.65, 0.65, 1e-6, "floor from below");
 }
+
+/* ---- deep ray trees and extreme accepted values stay finite ---- */
+
+/* An upper bound on any pixel, from RENDERING.md alone: a local colour is at
+ * most Lmax = max over materials of ka max(C) max(ambient) + sum over lights
+ * of (kd max(C) + ks) max(Lc) (the cosines are at most 1), or the
+ * background; a ray's children carry at most w = max(kr + kt) of its weight
+ * (TIR moves kt to the reflection), so level k of the tree weighs at most w^k
+ * and a pixel is at most Lmax (1 + w + ... + w^max_depth). */
+static double colour_bound(const struct scene *s, int max_depth)
+{
+	double light_max = 0, ambient_max = 0, local_max = 0, w = 0, bound = 0, level = 1;
+
+	for (int i = 0; i < s->light_count; i++)
+		for (int c = 0; c < 3; c++)
+			light_max += s->lights[i].color[c]; /* over lights: >= the sum of maxima */
+	for (int c = 0; c < 3; c++) {
+		ambient_max = fmax(ambient_max, s->ambient[c]);
+		local_max = fmax(local_max, s->background[c]);
+	}
+	for (int i = 0; i < s->material_count; i++) {
+		const struct scene_material *m = &s->materials[i];
+		double color_max = 0;
+		for (int c = 0; c < 3; c++)
+			color_max = fmax(color_max, m->color[c]);
+		for (int p = 0; p < s->plane_count; p++)
+			for (int c = 0; c < 3; c++)
+				color_max = fmax(color_max, s->planes[p].checker_color[c]);
+		local_max =
+			fmax(local_max, m->ambient * color_max * ambient_max +
+						(m->diffuse * color_max + m->specular) * light_max);
+		w = fmax(w, m->reflect + m->transmit);
+	}
+	for (int k = 0; k <= max_depth; k++, level *= w)
+		bound += local_max * level;
+	return bound;
+}
+
+/* Renders at max_depth and checks every channel is finite and within
+ * colour_bound. */
+static void expect_finite_and_bounded(const struct scene *s, int width, int height, int max_depth,
+				      const char *what)
+{
+	size_t values = 3 * (size_t)width * (size_t)height;
+	float *rgb = malloc(sizeof(float) * values);
+	cr_assert_not_null(rgb);
+	cr_assert_eq(reference_render(s, width, height, max_depth, rgb), 0);
+	double bound = colour_bound(s, max_depth);
+	size_t bad = 0, first = 0;
+	for (size_t i = 0; i < values; i++)
+		if (!(isfinite(rgb[i]) && rgb[i] >= 0 && rgb[i] <= bound) && bad++ == 0)
+			first = i;
+	cr_expect_eq(bad, 0,
+		     "%s, max_depth %d: %zu of %zu channels not finite or above the bound %g;"
+		     " the first, pixel (%zu, %zu) channel %zu, is %g",
+		     what, max_depth, bad, values, bound, first / 3 % (size_t)width,
+		     first / 3 / (size_t)width, first % 3, bad ? (double)rgb[first] : 0.0);
+	free(rgb);
+}
+
+static void load_scene(struct scene *s, const char *path)
+{
+	char err[1024];
+	cr_assert_eq(scene_load_file(s, path, err, sizeof(err)), 0, "%s", err);
+}
+
+Test(reference, finite_at_depth_64)
+{
+	/* Glass balls (kr + kt = 0.8) over a reflective floor: every bounce
+	 * feeds the next ray's direction into the intersection tests, which
+	 * assume |d| = 1. The reference once let |d| drift (1e-16 at the camera,
+	 * 0.3 by depth 13): 4.6e24 at depth 20, inf from depth 24. */
+	static const char *const scenes[] = {"scenes/two_balls.json", "scenes/paper60.json"};
+	for (int i = 0; i < 2; i++) {
+		struct scene s;
+		load_scene(&s, scenes[i]);
+		expect_finite_and_bounded(&s, 8, 6, 64, scenes[i]);
+		scene_free(&s);
+	}
+}
+
+Test(reference, finite_with_ior_1e18)
+{
+	/* SCENE.md accepts an ior up to 1e18: eta = 1e18 leaving the glass. */
+	struct scene s;
+	load_scene(&s, "scenes/two_balls.json");
+	for (int i = 0; i < s.material_count; i++)
+		s.materials[i].ior = 1e18;
+	expect_finite_and_bounded(&s, 8, 6, 16, "two_balls.json with ior 1e18");
+	scene_free(&s);
+}
+
+Test(reference, finite_with_radius_1e18)
+{
+	/* The camera inside a mirror sphere of radius 1e18 around a reflective
+	 * ball of radius 1: rays come back to the ball from 1e18 away, where
+	 * b*b - c of the intersection cancels to noise far above radius^2, so the
+	 * hit point can miss the ball's surface by far more than its radius. */
+	struct test_scene ts;
+	scene_init(&ts);
+	set3(ts.scene.background, 0.2, 0.4, 0.6);
+	set3(ts.scene.ambient, 0.1, 0.1, 0.1);
+	int wall = add_material(&ts, 0.5, 0.5, 0.5, 1, 0.7, 0.3, 32, 0.5, 0, 1.5);
+	int ball = add_material(&ts, 1, 0.3, 0.2, 1, 0.7, 0.3, 32, 0.5, 0, 1.5);
+	add_sphere(&ts, 0, 0, 0, 1e18, wall);
+	add_sphere(&ts, 0, 0, 0, 1, ball);
+	add_light(&ts, 3, 3, 5, 1, 1, 1);
+	expect_finite_and_bounded(&ts.scene, 16, 12, 5, "inside a sphere of radius 1e18");
+	expect_finite_and_bounded(&ts.scene, 16, 12, 64, "inside a sphere of radius 1e18");
+}
+
+Test(reference, refraction_with_ior_1e18_at_normal_incidence)
+{
+	/* As refraction_through_sphere_at_normal_incidence, with ior 1e18 and a
+	 * wall behind the sphere, the plane z = -3 facing the camera, C = 0.5,
+	 * ka 1, so its local colour is 0.5 * 0.2 = 0.1. Leaving the sphere at
+	 * (0,0,-1): n = (0,0,1), d = (0,0,-1), eta = 1e18, c = 1, k = 1,
+	 * T = eta d + (eta c - 1) n = (0,0,-1): straight on to the wall. (Written
+	 * in that order in double, 1e18 - 1 rounds to 1e18 and T cancels to 0.)
+	 *   max_depth 2: l + kt (l + kt wall) = 0.05 + 0.5 (0.05 + 0.05) = 0.1 */
+	struct test_scene ts;
+	glass_scene(&ts, 0, 0.5);
+	ts.materials[0].ior = 1e18;
+	int wall = add_material(&ts, 0.5, 0.5, 0.5, 1, 0, 0, 32, 0, 0, 1.5);
+	add_plane(&ts, 0, 0, -3, 0, 0, 1, wall);
+
+	float px[3];
+	render_pixel(&ts, 3, 3, 2, 1, 1, px);
+	expect_rgb(px, 0.1, 0.1, 0.1, 1e-6, "ior 1e18, max_depth 2");
+}

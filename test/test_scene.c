@@ -459,8 +459,26 @@ static const struct {
 	{SCENE(", \"spheres\": [{\"center\": [0, -1e39, 0], \"radius\": 1}]"),
 	 "t.json: spheres[0].center[1]: must be 0 or between 1e-18 and 1e+18 in magnitude (rtcl "
 	 "computes in float), got -1e+39"},
+	/* A nonzero number that reads as 0 or a denormal where a positive one is
+	 * required is named as written, not as "got 0". */
 	{SCENE(", \"epsilon\": 1e-320"), "t.json: epsilon: must be between 1e-18 and 1e+18 (rtcl "
-					 "computes in float), got 9.99989e-321"},
+					 "computes in float), got 1e-320, which underflows to 0"},
+	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1e-400}]"),
+	 "t.json: spheres[0].radius: must be between 1e-18 and 1e+18 (rtcl computes in float), "
+	 "got 1e-400, which underflows to 0"},
+	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 0.0}, {\"center\": [0, 0, 0], "
+	       "\"radius\": 1e-400}]"),
+	 "t.json: spheres[0].radius: must be > 0, got 0"},
+	/* The walk pairs numbers with their text past keys and strings that
+	 * hold digits, quotes and e. */
+	{SCENE(", \"materials\": {\"a\\\"1e-400\": {\"ior\": 2, \"color\": [0, 1e-999, 0]},"
+	       " \"m\": {\"reflect\": 0.5, \"ior\": -1E-400}}"),
+	 "t.json: materials.m.ior: must be between 1e-18 and 1e+18 (rtcl computes in float), got "
+	 "-1E-400, which underflows to 0"},
+	{SCENE(", \"materials\": {\"m\": {\"ior\": 0e-9}}"),
+	 "t.json: materials.m.ior: must be > 0, got 0"},
+	{"{" HEADER "\"camera\": {\"eye\": [0, 1, -5], \"look_at\": [0, 1, 0], \"fov\": 1e-400}}",
+	 "t.json: camera.fov: must be > 0 and < 180, got 1e-400, which underflows to 0"},
 	{SCENE(", \"materials\": {\"glass\": {\"ior\": 1e308}}"),
 	 "t.json: materials.glass.ior: must be between 1e-18 and 1e+18 (rtcl computes in float), "
 	 "got 1e+308"},
@@ -516,6 +534,37 @@ Test(scene, every_error_rule_has_its_message)
 {
 	for (size_t i = 0; i < sizeof(error_cases) / sizeof(error_cases[0]); i++)
 		load_fails(error_cases[i].json, error_cases[i].message);
+}
+
+/* A number too long to quote is described by its length. */
+Test(scene, long_underflowing_number_is_described)
+{
+	char json[1024];
+	char number[400] = "0.";
+
+	memset(number + 2, '0', 330); /* 1e-331: below the smallest denormal */
+	strcpy(number + 332, "1");
+	snprintf(json, sizeof(json), SCENE(", \"epsilon\": %s"), number);
+	load_fails(json, "t.json: epsilon: must be between 1e-18 and 1e+18 (rtcl computes in "
+			 "float), got a 333-character number, which underflows to 0");
+}
+
+/* SCENE.md: a leading UTF-8 byte-order mark is skipped; JSON error columns
+ * then count from after it, as an editor shows them. */
+Test(scene, leading_byte_order_mark_is_skipped)
+{
+	struct scene s;
+
+	load_ok(&s, "\xef\xbb\xbf" SCENE(", \"epsilon\": 0.5"));
+	cr_expect_eq(s.epsilon, 0.5);
+	scene_free(&s);
+	load_fails("\xef\xbb\xbf" SCENE(", \"radius\": 1"),
+		   "t.json: (top level): unknown key \"radius\"");
+	load_fails("\xef\xbb\xbf[", "t.json:1:1: ']' expected near end of file");
+	/* Only one, and only at the start. */
+	load_fails("\xef\xbb\xbf\xef\xbb\xbf{}",
+		   "t.json:1:1: '[' or '{' expected near '\xef\xbb\xbf'");
+	load_fails(" \xef\xbb\xbf{}", "t.json:1:2: '[' or '{' expected near '\xef\xbb\xbf'");
 }
 
 /* A typo is reported as the typo, not as the field it hides. */
