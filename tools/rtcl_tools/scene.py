@@ -14,6 +14,7 @@ SceneError.
 
 import json
 import math
+import sys
 
 from .vector import normalize
 
@@ -113,6 +114,27 @@ def required(obj, key, path):
     return obj[key]
 
 
+class Written(float):
+    """A JSON number that keeps its text, to name a number that underflows."""
+
+    def __new__(cls, text):
+        number = super().__new__(cls, text)
+        number.text = text
+        return number
+
+
+def underflow_text(value):
+    """The text of a number written nonzero that reads as 0 or a denormal, as
+    rtcl quotes it; None for any other number."""
+    text = getattr(value, "text", None)
+    x = float(value)
+    if text is None or (x != 0 and abs(x) >= sys.float_info.min):
+        return None
+    if not any(c in "123456789" for c in text.lower().split("e")[0]):
+        return None             # written as zero: 0.0, 0e-9
+    return text if len(text) < 40 else f"a {len(text)}-character number"
+
+
 def number(value, path, kind="any"):
     """Returns value as a float if it is a number in range kind (rtcl's check_number)."""
     if isinstance(value, bool) or not isinstance(value, (int, float)):
@@ -123,6 +145,12 @@ def number(value, path, kind="any"):
         x = math.inf if value > 0 else -math.inf
     if not math.isfinite(x):
         fail(path, f"must be finite, got {format_number(x)}")
+    written = underflow_text(value) if kind in ("positive", "fov") else None
+    if written and kind == "positive":
+        fail(path, f"must be between 1e-18 and 1e+18 (rtcl computes in float), got {written}, "
+                   "which underflows to 0")
+    if written:
+        fail(path, f"must be > 0 and < 180, got {written}, which underflows to 0")
     ranges = {"positive": (x > 0, "must be > 0"), "non-negative": (x >= 0, "must be >= 0"),
               "unit": (0 <= x <= 1, "must be between 0 and 1"),
               "fov": (0 < x < 180, "must be > 0 and < 180")}
@@ -328,7 +356,10 @@ def _no_duplicates(pairs):
 
 
 def parse(data):
-    """Returns the JSON document of data (bytes or str), strict about duplicate keys."""
+    """Returns the JSON document of data (bytes or str), strict about duplicate keys.
+    A byte-order mark at the very start is skipped, as rtcl does."""
+    if isinstance(data, bytes) and data.startswith(b"\xef\xbb\xbf"):
+        data = data[3:]
     if isinstance(data, bytes):
         try:
             data = data.decode("utf-8")
@@ -338,7 +369,7 @@ def parse(data):
             raise SceneError(f"{line}:{column}: unable to decode byte "
                              f"0x{data[error.start]:02x}") from None
     try:
-        return json.loads(data, object_pairs_hook=_no_duplicates)
+        return json.loads(data, object_pairs_hook=_no_duplicates, parse_float=Written)
     except json.JSONDecodeError as error:
         raise SceneError(f"{error.lineno}:{error.colno}: {error.msg}") from None
 
