@@ -62,7 +62,8 @@ endif
 LDLIBS += -lstdc++
 
 # Every host module but main; tests link them too.
-HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o timing.o files.o \
+HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
+	scene_literal.o timing.o files.o \
 	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
 	outputs.o \
 	workmap.o image_common.o reference.o embedded.o) \
@@ -131,10 +132,15 @@ FUZZ_DIR := build/fuzz
 FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=all \
 	-fno-omit-frame-pointer -std=c11 $(WARNINGS) -Ihost -Icl -D_DEFAULT_SOURCE
 
-$(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h host/scene.c host/devscene.c \
-		host/scene.h host/devscene.h cl/rtcl_shared.h
+# The scene loader and what it calls: its parts, the file reader, the interrupt
+# bookkeeping the file module keeps.
+FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/files.c \
+	host/interrupt.c host/devscene.c
+
+$(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h $(FUZZ_SOURCES) host/scene.h \
+		host/scene_loader.h host/files.h host/devscene.h cl/rtcl_shared.h
 	mkdir -p $(FUZZ_DIR)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -o $@ test/fuzz_scene.c host/scene.c host/devscene.c -ljansson -lm
+	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson -lm
 
 fuzz: $(FUZZ_DIR)/fuzz_scene
 	mkdir -p $(FUZZ_DIR)/corpus $(FUZZ_DIR)/artifacts
