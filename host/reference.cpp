@@ -112,6 +112,10 @@ class tracer
 	bool nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const;
 	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
 	dvec3 base_color(const hit &h, const dvec3 &p) const;
+	dvec3 local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
+			  const dvec3 &d) const;
+	void secondary_colors(const material &m, const dvec3 &p, const dvec3 &n, const dvec3 &d,
+			      bool inside, int depth, dvec3 *reflected, dvec3 *refracted) const;
 
 	std::vector<material> materials;
 	std::vector<sphere> spheres;
@@ -238,6 +242,24 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 	dvec3 c = base_color(h, p);
 
 	/* 4. */
+	dvec3 color = local_color(m, c, p, n, d);
+
+	/* 5. (in the order of the sums before this function was split) */
+	if (depth < max_depth) {
+		dvec3 reflected, refracted;
+		secondary_colors(m, p, n, d, inside, depth, &reflected, &refracted);
+		color += reflected;
+		color += refracted;
+	}
+
+	/* 6. */
+	return color;
+}
+
+/* RENDERING.md trace step 4: ambient, then each light not in shadow. */
+dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
+			  const dvec3 &d) const
+{
 	dvec3 color = m.ka * c * ambient;
 	dvec3 shadow_origin = p + epsilon * n;
 	for (const light &li : lights) {
@@ -261,42 +283,45 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 				 li.color;
 		}
 	}
-
-	/* 5. R and T are unit vectors in exact arithmetic, but trace() needs
-	 * |d| = 1 to the last bit: intersect_sphere solves t^2 + 2bt + c = 0,
-	 * which holds only for a unit d. Unnormalised, the rounding error of |d|
-	 * grew about 16-fold per bounce (1e-16 at the camera, 0.3 at depth 13 of
-	 * two_balls.json), hits landed off the surfaces, the normals
-	 * (p - center)/radius lost unit length and the colours went to inf past
-	 * depth 20. Normalising each new direction keeps the error at 1 ulp. */
-	if (depth < max_depth) {
-		double reflect_weight = m.kr;
-		dvec3 refracted(0.0);
-		if (m.kt > 0.0) {
-			double eta = inside ? m.ior : 1.0 / m.ior;
-			double cos_i = -glm::dot(d, n);
-			double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
-			if (k < 0.0) {
-				reflect_weight += m.kt; /* total internal reflection */
-			} else {
-				/* RENDERING.md's T = eta*d + (eta*c - sqrt(k))*n, grouped
-				 * as eta*(d + c*n) - sqrt(k)*n: d + c*n is d's part along
-				 * the surface, of length sin(i), so no two large terms
-				 * cancel (with ior 1e18 at normal incidence the written
-				 * order gives 1e18*d - 1e18*d = 0, and no direction). */
-				dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
-				refracted = m.kt * trace(p - epsilon * n, T, depth + 1);
-			}
-		}
-		if (reflect_weight > 0.0) {
-			dvec3 R = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
-			color += reflect_weight * trace(p + epsilon * n, R, depth + 1);
-		}
-		color += refracted;
-	}
-
-	/* 6. */
 	return color;
+}
+
+/* RENDERING.md trace step 5: the colours of the reflected and refracted
+ * rays, weighted (zero where there is none).
+ *
+ * R and T are unit vectors in exact arithmetic, but trace() needs
+ * |d| = 1 to the last bit: intersect_sphere solves t^2 + 2bt + c = 0,
+ * which holds only for a unit d. Unnormalised, the rounding error of |d|
+ * grew about 16-fold per bounce (1e-16 at the camera, 0.3 at depth 13 of
+ * two_balls.json), hits landed off the surfaces, the normals
+ * (p - center)/radius lost unit length and the colours went to inf past
+ * depth 20. Normalising each new direction keeps the error at 1 ulp. */
+void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n, const dvec3 &d,
+			      bool inside, int depth, dvec3 *reflected, dvec3 *refracted) const
+{
+	double reflect_weight = m.kr;
+
+	*reflected = *refracted = dvec3(0.0);
+	if (m.kt > 0.0) {
+		double eta = inside ? m.ior : 1.0 / m.ior;
+		double cos_i = -glm::dot(d, n);
+		double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+		if (k < 0.0) {
+			reflect_weight += m.kt; /* total internal reflection */
+		} else {
+			/* RENDERING.md's T = eta*d + (eta*c - sqrt(k))*n, grouped
+			 * as eta*(d + c*n) - sqrt(k)*n: d + c*n is d's part along
+			 * the surface, of length sin(i), so no two large terms
+			 * cancel (with ior 1e18 at normal incidence the written
+			 * order gives 1e18*d - 1e18*d = 0, and no direction). */
+			dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
+			*refracted = m.kt * trace(p - epsilon * n, T, depth + 1);
+		}
+	}
+	if (reflect_weight > 0.0) {
+		dvec3 R = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
+		*reflected = reflect_weight * trace(p + epsilon * n, R, depth + 1);
+	}
 }
 
 } // namespace
