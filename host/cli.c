@@ -17,6 +17,7 @@ enum long_only_option {
 	OPT_STATS,
 	OPT_FLOPS,
 	OPT_WORK_MAP,
+	OPT_ENCODING,
 	OPT_VERSION,
 };
 
@@ -36,6 +37,7 @@ static const struct option long_options[] = {
 	{"stats", required_argument, NULL, OPT_STATS},
 	{"flops", required_argument, NULL, OPT_FLOPS},
 	{"work-map", required_argument, NULL, OPT_WORK_MAP},
+	{"encoding", required_argument, NULL, OPT_ENCODING},
 	{"quiet", no_argument, NULL, 'q'},
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
@@ -65,6 +67,10 @@ static void print_help_after_kernels(FILE *out)
 		"      --size WxH         image size, overriding the scene's (1..%d each)\n"
 		"      --depth N          reflection/refraction depth, overriding max_depth "
 		"(0..%d)\n"
+		"      --encoding srgb|linear  how 8-bit formats (PNG, JPEG, TIFF, PPM...) store\n"
+		"                         the linear colours: the sRGB curve (default), or\n"
+		"                         round(255 c) as in the paper; EXR, HDR and PFM are\n"
+		"                         always linear\n"
 		"\n"
 		"Device:\n"
 		"  -p, --platform N       OpenCL platform index (default: the first with a GPU)\n"
@@ -223,6 +229,16 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 
 /* Applies option c with its value arg (NULL for an option without one).
  * Returns 0, or -1 with a message; a flat switch, one case per option. */
+static int parse_encoding(const char *text, int *linear, char *err, size_t err_size)
+{
+	if (strcmp(text, "srgb") != 0 && strcmp(text, "linear") != 0) {
+		snprintf(err, err_size, "--encoding: expected srgb or linear, got \"%s\"", text);
+		return -1;
+	}
+	*linear = strcmp(text, "linear") == 0;
+	return 0;
+}
+
 static int apply_option(int c, const char *arg, struct options *o, char *err, size_t err_size)
 {
 	switch (c) {
@@ -255,6 +271,8 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return take_flops_name(arg, &o->flops_path, err, err_size);
 	case OPT_WORK_MAP:
 		return take_file_name("--work-map", arg, &o->work_map_path, err, err_size);
+	case OPT_ENCODING:
+		return parse_encoding(arg, &o->linear_encoding, err, err_size);
 	case OPT_LIST_DEVICES:
 		o->list_devices = 1;
 		return 0;

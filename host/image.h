@@ -8,7 +8,8 @@
  *
  * Float formats keep the linear values: .exr (32-bit float), .hdr (RGBE) and
  * .pfm (32-bit float). Every other format, TIFF included, gets 8 bits per
- * channel from image_to_8bit(), with no transfer curve (SCENE.md).
+ * channel from image_encode_8bit() in the image's encoding (RENDERING.md,
+ * "Writing the image"), and is tagged with it where the format can say so.
  *
  * Messages are one line, "PATH: what is wrong", without a trailing newline.
  */
@@ -21,10 +22,19 @@
 extern "C" {
 #endif
 
+/* How the 8-bit formats store a value c in [0, 1]. */
+enum image_encoding {
+	IMAGE_LINEAR,  /* round(255 c), tagged linear (the paper's images) */
+	IMAGE_SRGB,    /* round(255 E(c)), E the sRGB curve, tagged sRGB */
+	IMAGE_DISPLAY, /* round(255 c), tagged sRGB: values already meant for a
+			  display (the work map's colour scale) */
+};
+
 struct image_meta {
 	const char *software; /* e.g. "rtcl 0.1.0"; NULL for none */
 	const char
 		*description; /* e.g. "scene: scenes/paper60.json, kernel dynamic"; NULL for none */
+	enum image_encoding encoding; /* a NULL meta: IMAGE_LINEAR */
 };
 
 /* Checks, before any rendering, that `path` can be written: its extension
@@ -51,9 +61,22 @@ struct staged_file;
 int image_stage(struct staged_file *staged, const char *path, const float *rgb, int width,
 		int height, const struct image_meta *meta, char *err, size_t err_size);
 
-/* round(255 · clamp(c, 0, 1)), ties up; NaN gives 0. The one 8-bit
- * conversion used everywhere. */
+/* round(255 · clamp(c, 0, 1)), ties up; NaN gives 0. */
 unsigned char image_to_8bit(float c);
+
+/* The IEC 61966-2-1 (sRGB) transfer curve of c in [0, 1]: 12.92 c up to
+ * 0.0031308, else 1.055 c^(1/2.4) − 0.055; computed in double. */
+double image_srgb_curve(double c);
+
+/* round(255 · E(clamp(c, 0, 1))), ties up, NaN gives 0, with E the sRGB curve
+ * for IMAGE_SRGB and the identity otherwise: the one 8-bit conversion. */
+unsigned char image_encode_8bit(float c, enum image_encoding encoding);
+
+/* The encoding a meta asks for (IMAGE_LINEAR for NULL). */
+static inline enum image_encoding image_meta_encoding(const struct image_meta *meta)
+{
+	return meta ? meta->encoding : IMAGE_LINEAR;
+}
 
 #ifdef __cplusplus
 }

@@ -24,6 +24,18 @@
 
 
 
+double image_srgb_curve(double c)
+{
+	return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
+}
+
+unsigned char image_encode_8bit(float c, enum image_encoding encoding)
+{
+	if (encoding != IMAGE_SRGB || !(c > 0.0f) || c >= 1.0f)
+		return image_to_8bit(c);
+	return (unsigned char)floor(255.0 * image_srgb_curve((double)c) + 0.5);
+}
+
 unsigned char image_to_8bit(float c)
 {
 	if (!(c > 0.0f)) /* also NaN */
@@ -95,13 +107,15 @@ static int write_ppm(FILE *file, const float *rgb, int width, int height,
 		write_comment(file, "Software", meta->software);
 	if (meta && meta->description)
 		write_comment(file, "ImageDescription", meta->description);
+	if (meta)
+		write_comment(file, "Encoding", meta->encoding == IMAGE_LINEAR ? "linear" : "sRGB");
 	fprintf(file, "%d %d\n255\n", width, height);
 
 	for (y = 0; y < height; y++) {
 		const float *in = rgb + (size_t)y * row_length;
 
 		for (x = 0; x < 3 * width; x++)
-			row[x] = image_to_8bit(in[x]);
+			row[x] = image_encode_8bit(in[x], image_meta_encoding(meta));
 		if (fwrite(row, 1, row_length, file) != row_length)
 			break;
 	}

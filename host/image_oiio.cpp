@@ -153,6 +153,14 @@ int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb,
 	if (meta && meta->description)
 		spec.attribute("ImageDescription", meta->description);
 	set_date(spec);
+	// Float formats hold linear values; 8-bit ones say how they are encoded.
+	// Not TIFF: OIIO 2.4 records sRGB there in an EXIF directory, which its
+	// TIFF writer cannot add through the write-only I/O proxy (the file then
+	// does not read back); a TIFF has no other place for it.
+	if (std::strcmp(out->format_name(), "tiff") != 0)
+		spec.attribute("oiio:ColorSpace",
+			       is_float || image_meta_encoding(meta) == IMAGE_LINEAR ? "linear"
+										 : "sRGB");
 
 	if (!out->open(tmp_path, spec)) {
 		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
@@ -166,7 +174,7 @@ int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb,
 	} else {
 		std::vector<unsigned char> bytes(3 * size_t(width) * size_t(height));
 		for (size_t i = 0; i < bytes.size(); i++)
-			bytes[i] = image_to_8bit(rgb[i]);
+			bytes[i] = image_encode_8bit(rgb[i], image_meta_encoding(meta));
 		written = out->write_image(OIIO::TypeDesc::UINT8, bytes.data());
 	}
 	// close() even after a failed write, so that the file is released

@@ -110,7 +110,8 @@ static int stage_all(const struct run *run, char *sidecar, struct staged_file *s
 	const struct options *opt = run->opt;
 	const struct render_settings *s = &run->settings;
 	char description[1024];
-	struct image_meta meta = {"rtcl " RTCL_VERSION, description};
+	struct image_meta meta = {"rtcl " RTCL_VERSION, description,
+				  opt->linear_encoding ? IMAGE_LINEAR : IMAGE_SRGB};
 	int n = 0;
 
 	snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",

@@ -316,6 +316,7 @@ int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *
 		 "flops per pixel, 0 (dark) to %" PRIu64 " (bright), viridis", max);
 	meta.software = "rtcl " RTCL_VERSION;
 	meta.description = description;
+	meta.encoding = IMAGE_DISPLAY; /* viridis is a scale of display colours */
 	status = image_stage(staged, path, rgb, width, total_height, &meta, err, err_size);
 	free(rgb);
 	return status;

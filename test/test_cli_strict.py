@@ -142,7 +142,7 @@ def test_leading_zeros_are_still_decimal(tmp_path):
     out = tmp_path / "out.ppm"
     result = rtcl("-q", "--size", "010x08", "--depth", "03", "-o", str(out))
     assert result.returncode == 0, result.stderr
-    fields = [f for line in out.read_bytes().split(b"\n")[:4] if not line.startswith(b"#")
+    fields = [f for line in out.read_bytes().split(b"\n")[:8] if not line.startswith(b"#")
               for f in line.split()]
     assert fields[:3] == [b"P6", b"10", b"8"]
 

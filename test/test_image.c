@@ -20,7 +20,7 @@
 
 #define ERR_SIZE 512
 
-static const struct image_meta test_meta = {"rtcl test", "scene: test\nline two"};
+static const struct image_meta test_meta = {"rtcl test", "scene: test\nline two", IMAGE_LINEAR};
 
 /* A fresh empty directory; remove_dir() deletes it and its files. */
 static char *make_dir(void)
@@ -163,6 +163,36 @@ static const float small_rgb[3 * W * H] = {
 	0.2f,  0.4f, 0.6f,  /* (1,1) */
 	0.8f,  1.5f, -1.0f, /* (2,1) */
 };
+
+/* The sRGB curve (IEC 61966-2-1) at its end points, at the joint of its two
+ * pieces and in the middle, worked out by hand. */
+Test(image, srgb_curve_points)
+{
+	cr_assert_float_eq(image_srgb_curve(0.0), 0.0, 1e-15);
+	cr_assert_float_eq(image_srgb_curve(1.0), 1.0, 1e-15);
+	/* linear below the joint: 12.92 * 0.002 */
+	cr_assert_float_eq(image_srgb_curve(0.002), 0.02584, 1e-15);
+	/* both pieces meet at 0.0031308 (to 1e-7: the standard rounds them) */
+	cr_assert_float_eq(12.92 * 0.0031308, 1.055 * pow(0.0031308, 1 / 2.4) - 0.055, 1e-7);
+	/* 1.055 * 0.5^(1/2.4) - 0.055 = 0.735356983... */
+	cr_assert_float_eq(image_srgb_curve(0.5), 0.7353569830524495, 1e-12);
+}
+
+Test(image, encode_8bit_srgb_and_linear)
+{
+	cr_assert_eq(image_encode_8bit(0.0f, IMAGE_SRGB), 0);
+	cr_assert_eq(image_encode_8bit(1.0f, IMAGE_SRGB), 255);
+	cr_assert_eq(image_encode_8bit(0.5f, IMAGE_SRGB), 188); /* 187.516 */
+	cr_assert_eq(image_encode_8bit(0.18f, IMAGE_SRGB), 118); /* 18 % grey: 117.65 */
+	cr_assert_eq(image_encode_8bit(0.002f, IMAGE_SRGB), 7);	 /* 6.589, the linear piece */
+	cr_assert_eq(image_encode_8bit(-1.0f, IMAGE_SRGB), 0);
+	cr_assert_eq(image_encode_8bit(2.0f, IMAGE_SRGB), 255);
+	cr_assert_eq(image_encode_8bit(NAN, IMAGE_SRGB), 0);
+	/* linear and display values are stored as they are */
+	cr_assert_eq(image_encode_8bit(0.5f, IMAGE_LINEAR), 128);
+	cr_assert_eq(image_encode_8bit(0.5f, IMAGE_DISPLAY), 128);
+	cr_assert_eq(image_encode_8bit(0.18f, IMAGE_LINEAR), 46);
+}
 
 Test(image, to_8bit_edges)
 {

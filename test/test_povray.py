@@ -335,7 +335,9 @@ def render_both(tmp_path, scene, size, *extra):
     done = run_tool("-s", scene, "--size", size, "--image", pov, *extra)
     assert done.returncode == 0, done.stderr
     assert re.search(r"POV-Ray trace time over 1 run\(s\): median [0-9.]+ s", done.stdout)
-    rtcl = subprocess.run([RTCL, "-s", str(scene), "--size", size, "-o", str(ref), *extra],
+    # POV-Ray writes File_Gamma 1.0: the paper's linear bytes.
+    rtcl = subprocess.run([RTCL, "-s", str(scene), "--size", size, "-o", str(ref),
+                           "--encoding", "linear", *extra],
                           capture_output=True, text=True, cwd=ROOT, timeout=600)
     assert rtcl.returncode == 0, rtcl.stderr
     return read_ppm(pov), read_ppm(ref)

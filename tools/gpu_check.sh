@@ -21,7 +21,7 @@ run() { # name, options...
 	local name=$1
 	shift
 	echo "== $name: $rtcl $*"
-	"$rtcl" "$@" "${device_options[@]}" -o "$out/$name.ppm" --stats "$out/$name.json" || echo "FAILED: $name"
+	"$rtcl" "$@" "${device_options[@]}" -o "$out/$name.ppm" --encoding linear --stats "$out/$name.json" || echo "FAILED: $name"
 }
 device_options=("$@")
 

@@ -114,7 +114,7 @@ def rtcl_command(settings, name, kernel, workgroup, groups, repeat, batch, flops
     """Returns the argument list of one rtcl call writing NAME.ppm and NAME.json."""
     command = [settings.rtcl, "-k", kernel, *settings.common,
                "-r", str(repeat or settings.repeat), "-q",
-               "-o", str(settings.temp_dir / f"{name}.ppm"),
+               "-o", str(settings.temp_dir / f"{name}.ppm"), "--encoding", "linear",
                "--stats", str(settings.temp_dir / f"{name}.json")]
     for flag, value in (("-w", workgroup), ("--groups", groups), ("--batch", batch),
                         ("--flops", flops_path)):
