@@ -146,20 +146,31 @@ def draw_speedup(figure, bars, device_name):
                          bottom=1.0, color=color)
         axes.bar_label(drawn, labels=[format_number(value, 0 if value >= 10 else 1)
                                       for value in values], fontsize="small")
-        axes.set_xticks(range(len(shown)), [label for label, _ in shown])
+        axes.set_xticks(range(len(shown)), [label for label, _ in shown], fontsize="small")
         axes.set_yscale("log")
-        axes.set_ylim(*speedup_limits(values))
+        bottom, top = speedup_limits(values)
+        axes.set_ylim(bottom, top)
+        _plain_log_labels(axes.yaxis, minor=top / bottom < 20)
         axes.set_ylabel("speedup")
         axes.set_title(title, fontsize="medium")
         axes_list.append(axes)
     return axes_list
 
 
+def _plain_log_labels(axis, minor):
+    """Labels a log axis 0.1, 1, 10, 1,000 (not 10^3); its minor ticks too if minor."""
+    from matplotlib import ticker
+    plain = ticker.FuncFormatter(lambda value, _: format_number(value, 0 if value >= 1
+                                                                else 1))
+    axis.set_major_formatter(plain)
+    axis.set_minor_formatter(plain if minor else ticker.NullFormatter())
+
+
 def plot_speedup(bars, out_path, device_name):
     """Writes Figure 6 (draw_speedup) into out_path."""
     output_format(out_path)  # fail before drawing anything
     counts = [sum(1 for bar in bars if bar[column]) for _, column, _ in SPEEDUP_PANELS]
-    width = max(9, 0.9 * sum(max(3, count) for count in counts if count) + 2)
+    width = max(9, 0.75 * sum(max(3, count) for count in counts if count) + 2)
     plt = pyplot()
     figure = plt.figure(figsize=(width, 5), layout="constrained")
     try:
