@@ -183,6 +183,25 @@ def test_bench_md_sorts_by_kernel_then_time_and_bolds_each_best():
         assert text_part in text
 
 
+def test_best_per_kernel_is_the_fastest_measured_row_with_its_own_time():
+    # bench.py does not re-time its best: the summary repeats the sweep's row.
+    configs = [fake_config("dynamic", 41.8, groups="46x46", group_scale=1.0),
+               fake_config("dynamic", 37.8, workgroup="16x8", groups="92x92",
+                           group_scale=4.0),
+               fake_config("dynamic", 39.0, groups="10x10", paper=True),
+               bench_plan.Config("dynamic", "64x64", skipped="too big")]
+    text = bench_report.render_bench_md(configs, fp32_peak.Peak(100.0, "given"),
+                                        {"commit": "x", "repeat": 10, "command": "c",
+                                         "date": "today"})
+    summary = text.split("## Best per kernel")[1].split("## Every configuration")[0]
+    (row,) = [[cell.strip() for cell in line.strip("|").split("|")]
+              for line in summary.splitlines() if line.startswith("| dynamic")]
+    assert row[:3] == ["dynamic", "dynamic -w 16x8 --groups 92x92", "37.800"]
+    bold = [line for line in text.split("## Every configuration")[1].splitlines()
+            if line.startswith("| **")]
+    assert len(bold) == 1 and "**37.800**" in bold[0] and "**92x92**" in bold[0]
+
+
 # ---- end to end against rtcl ----------------------------------------------------
 
 def read_csv(path):

@@ -287,7 +287,8 @@ def fake_experiment():
                      global_size=(80, 80), efficiency=0.9),
             fake_run("paper", "wavefront", 400.0, groups="250x250",
                      global_size=(2000, 2000), efficiency=0.45),
-            fake_run("sweep", "cyclic", 90.0, workgroup="16x8", groups="20x20"),
+            fake_run("sweep", "cyclic", 90.0, workgroup="8x8", groups="46x46"),
+            fake_run("sweep", "cyclic", 80.0, workgroup="16x8", groups="20x20"),
             fake_run("best", "cyclic", 80.0, workgroup="16x8", groups="20x20")]
 
 
@@ -337,10 +338,11 @@ def test_scaled_groups():
 
 
 def test_planned_run_count_matches_the_sweep_size():
-    # serial, reference, 5 paper runs; naive and wavefront 5 shapes + best; cyclic,
-    # dynamic and persistent 5 shapes + 2 scaled counts + the paper's count + best.
+    # serial, reference, 5 paper runs; naive and wavefront 5 shapes; cyclic, dynamic
+    # and persistent 5 shapes + 2 scaled counts + the paper's count.  The best of
+    # each sweep is not run again.
     sweep = paper.SWEEP_WORKGROUPS, paper.SWEEP_GROUP_SCALES
-    assert experiment.planned_run_count(False, False, False, *sweep) == 7 + 2 * 6 + 3 * 9
+    assert experiment.planned_run_count(False, False, False, *sweep) == 7 + 2 * 5 + 3 * 8
     assert experiment.planned_run_count(False, True, True, *sweep) == 6
     assert experiment.planned_run_count(True, True, True, *sweep) == 5
 
@@ -418,6 +420,80 @@ def test_plot_speedup_writes_png(tmp_path):
     assert out.read_bytes().startswith(PNG_SIGNATURE)
 
 
+def dynamic_sweep():
+    """A sweep whose fastest entry (37.8 ms) is neither the first nor the last."""
+    return [fake_run("sweep", "dynamic", 41.8, workgroup="8x8", groups="46x46"),
+            fake_run("sweep", "dynamic", 37.8, workgroup="16x8", groups="92x92"),
+            fake_run("sweep", "dynamic", 39.0, workgroup="8x8", groups="10x10")]
+
+
+def test_best_of_sweep_is_the_fastest_entry_with_its_own_time():
+    sweep = dynamic_sweep()
+    best = experiment.best_of_sweep(sweep)
+    assert best.role == "best" and best.kernel == "dynamic"
+    assert best.stats["kernel_ms"] == 37.8 == min(run.stats["kernel_ms"] for run in sweep)
+    assert (best.workgroup, best.stats["groups"]) == ("16x8", "92x92")
+    assert best.command == sweep[1].command and sweep[1].role == "sweep"
+
+
+def test_table1_best_row_is_the_fastest_sweep_entry():
+    runs = fake_experiment()[:7] + dynamic_sweep()
+    runs.append(experiment.best_of_sweep(runs[7:]))
+    table = table1.render_table1(runs, {"commit": "x", "repeat": 5, "date": "today"})
+    best = table_rows(table)["dynamic (best of sweep)"]
+    assert best[1:4] == ["16x8", "92x92 / 200x200", "37.80"]
+    assert best[-3] == "1,322.8"     # 50,000 ms of serial / 37.8 ms
+    assert "entry's own time (median of 3 launches), not re-timed" in table
+    commands = table.split("## Commands")[1]
+    assert commands.count("./rtcl -k dynamic") == 1 + 3   # paper, then the sweep's
+    (bar,) = [bar for bar in table1.speedup_bars(runs) if bar[0] == "dynamic\n(best)"]
+    assert bar[1] == pytest.approx(50_000.0 / 37.8)
+
+
+def speedup_figure(bars):
+    """Returns (figure, axes) of Figure 6 drawn on the Agg backend."""
+    plt = plots.pyplot()
+    figure = plt.figure()
+    return figure, plots.draw_speedup(figure, bars, "test device")
+
+
+def test_speedup_figure_has_a_panel_per_baseline_with_log_axes_from_1():
+    bars = table1.speedup_bars(fake_experiment())
+    figure, axes_list = speedup_figure(bars)
+    try:
+        titles = [axes.get_title() for axes in axes_list]
+        assert titles == ["rtcl over one work-item on this device\n(the serial kernel)",
+                          "rtcl over its CPU reference\n(C++, one core)",
+                          "the paper over its CPU program\n(serial C, Lincoln, 2009)"]
+        assert len({id(axes) for axes in axes_list}) == 3
+        for axes in axes_list:
+            assert axes.get_yscale() == "log"
+            assert axes.get_ylim()[0] == 1.0
+            assert not axes.get_shared_y_axes().get_siblings(axes)[1:]
+        ours, _, theirs = axes_list
+        tops = [patch.get_y() + patch.get_height() for patch in ours.patches]
+        assert tops == pytest.approx([100.0, 500.0, 400.0, 200.0, 125.0, 625.0])
+        assert [patch.get_y() for patch in ours.patches] == [1.0] * 6
+        assert [tick.get_text() for tick in theirs.get_xticklabels()] == \
+            ["naive", "cyclic", "dynamic"]
+        tops = [patch.get_y() + patch.get_height() for patch in theirs.patches]
+        assert tops == pytest.approx([52.0, 211.0, 206.0])
+    finally:
+        plots.pyplot().close(figure)
+
+
+def test_speedup_figure_leaves_out_an_unmeasured_baseline_and_shows_slowdowns():
+    bars = [("naive", None, 0.5, 52.0), ("cyclic", None, 4.0, 211.0)]
+    figure, axes_list = speedup_figure(bars)
+    try:
+        assert [axes.get_title().split("\n")[0] for axes in axes_list] == \
+            ["rtcl over its CPU reference", "the paper over its CPU program"]
+        assert axes_list[0].get_ylim()[0] == 0.1      # the 0.5 bar still shows
+        assert axes_list[1].get_ylim()[0] == 1.0
+    finally:
+        plots.pyplot().close(figure)
+
+
 def test_failing_rtcl_is_reported_with_its_command_and_stderr(tmp_path):
     fake = tmp_path / "rtcl"
     fake.write_text("#!/bin/sh\necho 'rtcl: no OpenCL platform' >&2\nexit 3\n")
@@ -427,6 +503,73 @@ def test_failing_rtcl_is_reported_with_its_command_and_stderr(tmp_path):
     assert "rtcl: no OpenCL platform" in result.stderr
     assert f"{fake} -k serial" in result.stderr
     assert not (tmp_path / "out").exists()
+
+
+FAKE_RTCL = """\
+import json, pathlib, sys
+import numpy as np
+
+# Every call is 1 ms slower than the one before: a re-timing of the sweep's
+# fastest geometry would come out slower than every entry of the sweep.
+options = [arg for arg in sys.argv[1:] if arg != "-q"]   # -q: the one flag
+args = dict(zip(options[::2], options[1::2]))
+counter = pathlib.Path(__file__).with_name("calls")
+calls = int(counter.read_text()) + 1 if counter.exists() else 1
+counter.write_text(str(calls))
+kernel = args["-k"]
+workgroup = args.get("-w", "8x8")
+groups = args.get("--groups", "4x4")
+counts = np.full((4, 4), 100, dtype="<u8")
+stats = {"device": "Fake device (NVIDIA CUDA)", "kernel": kernel,
+         "kernel_ms": 10.0 + calls, "workgroup": workgroup, "groups": groups,
+         "global_size": [4, 4], "width": 4, "height": 4, "max_depth": 5,
+         "scene": "fake", "gflop": counts.sum() / 1e9, "parallel_efficiency": 1.0}
+pathlib.Path(args["--stats"]).write_text(json.dumps(stats))
+if "--flops" in args:
+    np.save(args["--flops"], counts)
+    pathlib.Path(args["--flops"] + ".json").write_text(json.dumps(
+        {"kernel": kernel, "workgroup": workgroup, "groups": groups,
+         "global_size": [4, 4], "total_flops": int(counts.sum())}))
+"""
+
+
+def markdown_section_rows(markdown, heading):
+    """Returns the rows (lists of cells) of the first table under heading."""
+    rows = []
+    for line in markdown.split(heading, 1)[1].splitlines()[3:]:
+        if not line.startswith("|"):
+            break
+        rows.append([cell.strip() for cell in line.strip("|").split("|")])
+    return rows
+
+
+def test_experiments_best_rows_keep_their_sweep_time_when_a_rerun_would_differ(tmp_path):
+    fake = tmp_path / "bin" / "rtcl"
+    fake.parent.mkdir()
+    fake.write_text(f"#!{sys.executable}\n" + FAKE_RTCL)
+    fake.chmod(0o755)
+    result = run_tool("experiments.py", "--rtcl", fake, "--quick", "--no-reference",
+                      "--out", tmp_path / "out")
+    assert result.returncode == 0, result.stderr
+    (device_dir,) = (tmp_path / "out").iterdir()
+    table = (device_dir / "table1.md").read_text()
+    rows = table_rows(table)
+    sweep = markdown_section_rows(table, "## Sweep")
+    for kernel in paper.PARALLEL_KERNELS:
+        entries = [row for row in sweep if row[0] == kernel]
+        fastest = min(entries, key=lambda row: float(row[3]))
+        best = rows[f"{kernel} (best of sweep)"]
+        assert best[1:4] == fastest[1:4], kernel   # work-group, groups, time
+    results = json.loads((device_dir / "results.json").read_text())
+    for best in (run for run in results["runs"] if run["role"] == "best"):
+        sweep_runs = [run for run in results["runs"]
+                      if run["role"] == "sweep" and run["kernel"] == best["kernel"]]
+        assert best["stats"] == min(sweep_runs, key=lambda run: run["stats"]["kernel_ms"])[
+            "stats"]
+    calls = int((fake.parent / "calls").read_text())
+    assert calls == len(results["runs"]) - len(paper.PARALLEL_KERNELS)  # no reruns
+    assert f"[{calls}/{calls}]" in result.stderr
+    assert (device_dir / "histograms_best.png").read_bytes().startswith(PNG_SIGNATURE)
 
 
 # ---- experiments: end to end against the real rtcl --------------------------

@@ -13,11 +13,13 @@ On one OpenCL device, runs
     (the bounce launches are 1D, 64 work-items a group); the wavefront honours
     only -w, not --groups or --batch;
   - the CPU reference, once: a native single-core baseline (skip: --no-reference);
-  - unless --no-sweep, every parallel kernel again at the fastest geometry of a
-    small sweep: every work-group shape of SWEEP_WORKGROUPS at rtcl's default
-    group count, then, for cyclic, dynamic and persistent, the fastest shape with
-    the group count scaled up to 4x and with the paper-like group count (-r 3 per
-    sweep run).
+  - unless --no-sweep, a small sweep of every parallel kernel: every work-group
+    shape of SWEEP_WORKGROUPS at rtcl's default group count, then, for cyclic,
+    dynamic and persistent, the fastest shape with the group count scaled up to
+    4x and with the paper-like group count (-r 3 per sweep run).  Each kernel's
+    fastest sweep entry is its "best of sweep" row, with that entry's own time:
+    it is not run again, so that no re-timing can make it slower than another
+    entry of the sweep.
 The paper measured neither persistent nor wavefront (its section 3.4 proposed
 such schemes and judged them impossible on a GPU), so their paper cells are empty.
 Every run is one `rtcl --flops --stats` call: rtcl counts flops in one launch and
@@ -26,7 +28,9 @@ frame (the primary-ray launch, then one per bounce) and writes their work-items
 one after the other; its parallel efficiency and its histogram cover the
 work-items of all its launches.  Under OUT/<device-slug>/ it writes
   table1.md          Table 1, ours beside the paper's, with the commands used;
-  speedup.png        Figure 6: speedup per implementation, ours and the paper's;
+  speedup.png        Figure 6: speedup per implementation, a panel per baseline
+                     (ours over the serial kernel, ours over the CPU reference,
+                     the paper's over its CPU program), log axes from 1;
   histograms.png     Figure 7: flops per work-item, paper(-like) geometries;
   histograms_best.png  the same for the sweep's best geometries (with the sweep);
   results.json       every run's command and rtcl statistics.

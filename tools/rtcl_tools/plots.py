@@ -98,33 +98,83 @@ def plot_flops_histograms(flops_files, out_path, *, overlay=False, log=False,
         plt.close(figure)
 
 
-def plot_speedup(bars, out_path, device_name):
-    """Writes Figure 6: grouped bars of speedup, ours and the paper's.
+# Figure 6's panels: (title, column of table1.speedup_bars, colour).  Each speedup
+# has its own baseline, so each gets its own axes: the paper's serial is a CPU
+# program on its 2009 server, ours a single work-item on the device measured.
+SPEEDUP_PANELS = (("rtcl over one work-item on this device\n(the serial kernel)",
+                   1, "tab:blue"),
+                  ("rtcl over its CPU reference\n(C++, one core)", 2, "tab:green"),
+                  ("the paper over its CPU program\n(serial C, Lincoln, 2009)",
+                   3, "tab:gray"))
+
+
+def speedup_limits(values):
+    """Returns (bottom, top) of a log speedup axis: from 1 (no speedup) past the top.
+
+    A bar below 1 (slower than the baseline) moves the bottom to the power of ten
+    under it, so that the bar still shows.
+    """
+    bottom = min(1.0, 10.0 ** math.floor(math.log10(min(values))))
+    return bottom, max(values) * 3.0   # room above the tallest bar for its label
+
+
+def draw_speedup(figure, bars, device_name):
+    """Draws Figure 6 onto figure, one panel per baseline; returns the axes drawn.
 
     bars: [(label, ours over serial, ours over reference, paper)], as
-    table1.speedup_bars returns them.
+    table1.speedup_bars returns them.  A panel shows only the bars it has a value
+    for and is left out when it has none (no serial run, say).  Bars rise from 1.
     """
-    series = (("ours, over the serial kernel", 1, "tab:blue"),
-              ("ours, over the CPU reference", 2, "tab:green"),
-              ("paper, over serial C on the CPU", 3, "tab:gray"))
-    width = 0.8 / len(series)
-    plt = pyplot()
-    figure, axes = plt.subplots(figsize=(max(9, 1.2 * len(bars)), 5), layout="constrained")
-    try:
-        for index, (label, column, color) in enumerate(series):
-            positions = [i + (index - 1) * width for i in range(len(bars))]
-            values = [bar[column] or 0.0 for bar in bars]
-            drawn = axes.bar(positions, values, width, label=label, color=color)
-            axes.bar_label(drawn, labels=[format_number(bar[column], 0)
-                                          if bar[column] else "" for bar in bars],
-                           fontsize="small")
-        axes.set_xticks(range(len(bars)), [bar[0] for bar in bars])
-        values = [v for bar in bars for v in bar[1:] if v]
-        if values and max(values) / min(values) > 100:
-            axes.set_yscale("log")
+    panels = []
+    for title, column, color in SPEEDUP_PANELS:
+        shown = [(bar[0], bar[column]) for bar in bars if bar[column]]
+        if shown:
+            panels.append((title, color, shown))
+    figure.suptitle(f"Speedup (Figure 6): {device_name}")
+    if not panels:
+        axes = figure.add_subplot(1, 1, 1)
+        axes.text(0.5, 0.5, "no speedup measured", ha="center", va="center")
+        axes.set_axis_off()
+        return [axes]
+    grid = figure.add_gridspec(1, len(panels),
+                               width_ratios=[max(3, len(shown)) for _, _, shown in panels])
+    axes_list = []
+    for index, (title, color, shown) in enumerate(panels):
+        axes = figure.add_subplot(grid[0, index])
+        values = [value for _, value in shown]
+        drawn = axes.bar(range(len(shown)), [value - 1.0 for value in values], 0.6,
+                         bottom=1.0, color=color)
+        axes.bar_label(drawn, labels=[format_number(value, 0 if value >= 10 else 1)
+                                      for value in values], fontsize="small")
+        axes.set_xticks(range(len(shown)), [label for label, _ in shown], fontsize="small")
+        axes.set_yscale("log")
+        bottom, top = speedup_limits(values)
+        axes.set_ylim(bottom, top)
+        _plain_log_labels(axes.yaxis, minor=top / bottom < 20)
         axes.set_ylabel("speedup")
-        axes.set_title(f"Speedup (Figure 6): {device_name}")
-        axes.legend(fontsize="small")
+        axes.set_title(title, fontsize="medium")
+        axes_list.append(axes)
+    return axes_list
+
+
+def _plain_log_labels(axis, minor):
+    """Labels a log axis 0.1, 1, 10, 1,000 (not 10^3); its minor ticks too if minor."""
+    from matplotlib import ticker
+    plain = ticker.FuncFormatter(lambda value, _: format_number(value, 0 if value >= 1
+                                                                else 1))
+    axis.set_major_formatter(plain)
+    axis.set_minor_formatter(plain if minor else ticker.NullFormatter())
+
+
+def plot_speedup(bars, out_path, device_name):
+    """Writes Figure 6 (draw_speedup) into out_path."""
+    output_format(out_path)  # fail before drawing anything
+    counts = [sum(1 for bar in bars if bar[column]) for _, column, _ in SPEEDUP_PANELS]
+    width = max(9, 0.75 * sum(max(3, count) for count in counts if count) + 2)
+    plt = pyplot()
+    figure = plt.figure(figsize=(width, 5), layout="constrained")
+    try:
+        draw_speedup(figure, bars, device_name)
         files.save_figure(figure, out_path, output_format(out_path))
     finally:
         plt.close(figure)
