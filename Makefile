@@ -10,11 +10,15 @@
 #   make experiments  the paper's Table 1 and Figures 6-7 (DEVICE="-p N -d M")
 #   make bench        every kernel over work-group shapes, group counts and batches
 #                     (DEVICE="-p N -d M", BENCH="more tools/bench.py options")
+#   make install      the built rtcl, its man page, the tools (as rtcl-genscene,
+#                     rtcl-bench, ...) and the scenes under DESTDIR/PREFIX
+#   make uninstall    remove exactly what install put there
 #   make clean
 #
 # Variables: OIIO=0|1, BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
-# has numpy, matplotlib and pytest from `make deps`), SAN=1 (sanitizers),
-# FUZZ_SECONDS (default 60), FUZZ_CC (default clang).
+# has numpy, matplotlib and pytest from `make deps`; the installed tools run with it), SAN=1 (sanitizers),
+# FUZZ_SECONDS (default 60), FUZZ_CC (default clang), PREFIX (default /usr/local),
+# DESTDIR (staging root for packaging, default empty).
 
 OIIO ?= 1
 CC ?= gcc
@@ -73,7 +77,7 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test experiments bench clean fuzz valgrind
+.PHONY: all deps render test experiments bench clean fuzz valgrind install uninstall
 all: $(BIN)
 
 $(BIN): $(BUILD)/main.o $(HOST_OBJS)
@@ -153,6 +157,50 @@ fuzz: $(FUZZ_DIR)/fuzz_scene
 # Memcheck on full renders; test/valgrind.supp covers the OpenCL runtime only.
 valgrind: $(BIN)
 	bash test/valgrind.sh $(BIN)
+
+# Install: the program, its man page, the scenes, and the tools with one
+# wrapper command each (tools/NAME.py runs as rtcl-NAME, _ as -; the wrapper is
+# tools/build/tool_wrapper.sh.in); the man page names the files under PREFIX.
+# install depends on the binary, so an up-to-date one is copied as built,
+# never rebuilt with other flags.
+PREFIX ?= /usr/local
+DESTDIR ?=
+INSTALL ?= install
+BINDIR := $(DESTDIR)$(PREFIX)/bin
+MAN1DIR := $(DESTDIR)$(PREFIX)/share/man/man1
+DATADIR := $(DESTDIR)$(PREFIX)/share/rtcl
+TOOL_SCRIPTS := $(wildcard tools/*.py)
+TOOL_MODULES := $(wildcard tools/rtcl_tools/*.py)
+TOOL_COMMANDS := $(addprefix rtcl-,$(subst _,-,$(basename $(notdir $(TOOL_SCRIPTS)))))
+SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
+
+install: $(BIN)
+	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools
+	$(INSTALL) -m 755 $(BIN) $(BINDIR)/rtcl
+	sed 's|/usr/local/share/rtcl|$(PREFIX)/share/rtcl|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
+	chmod 644 $(MAN1DIR)/rtcl.1
+	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
+	$(INSTALL) -m 755 $(TOOL_SCRIPTS) $(DATADIR)/tools
+	$(INSTALL) -m 644 $(TOOL_MODULES) $(DATADIR)/tools/rtcl_tools
+	for script in $(notdir $(TOOL_SCRIPTS)); do \
+		command=rtcl-$$(basename $$script .py | tr _ -); \
+		sed -e "s|@COMMAND@|$$command|g" -e "s|@SCRIPT@|$$script|g" \
+			-e "s|@PYTHON@|$(PYTHON)|g" tools/build/tool_wrapper.sh.in \
+			> $(BINDIR)/$$command && chmod 755 $(BINDIR)/$$command || exit 1; \
+	done
+
+# What install wrote (and the __pycache__ that running the tools with python3
+# directly may have left), then the folders it made under share/rtcl, each only
+# if nothing else is left in it; bin, share/man and PREFIX stay.
+uninstall:
+	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
+	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
+	rm -f $(addprefix $(DATADIR)/tools/,$(notdir $(TOOL_SCRIPTS)))
+	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
+	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__
+	for dir in $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools $(DATADIR)/tools $(DATADIR); do \
+		if [ -d $$dir ] && [ -z "$$(ls -A $$dir)" ]; then rmdir $$dir; fi; \
+	done
 
 clean:
 	rm -rf $(BUILD) build-san build/fuzz rtcl

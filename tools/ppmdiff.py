@@ -2,7 +2,7 @@
 """Compares the pixels of binary PPM files with a reference, ignoring headers
 (rtcl's name the kernel that rendered them).
 
-Usage: ppmdiff.py REFERENCE.ppm FILE.ppm...
+Usage: ppmdiff.py REFERENCE.ppm FILE.ppm...   (or -h, --help: this text)
 Prints, per file, how many channel values differ from the reference and by
 how much at most; exits 1 if any file's size differs from the reference's.
 """
@@ -12,6 +12,9 @@ from rtcl_tools.ppm import differences, pixels
 
 
 def main(argv):
+    if len(argv) == 2 and argv[1] in ("-h", "--help"):
+        print(__doc__.strip())
+        return 0
     if len(argv) < 3:
         sys.exit(__doc__.strip())
     size, reference = pixels(argv[1])

@@ -1,0 +1,257 @@
+"""make install and make uninstall, and the man page kept in step with --help.
+
+Installs the built ./rtcl (or $RTCL) with `make install DESTDIR=<tmp> PREFIX=/usr`
+and checks the tree file by file, that the installed rtcl renders on the first
+OpenCL device (PoCL in CI), that the man page formats without warnings, that
+the tool commands run from any folder, and that `make uninstall` removes exactly
+what install wrote. Nothing is written outside the temporary DESTDIR.
+"""
+
+import os
+import pathlib
+import re
+import shutil
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+MAN_PAGE = ROOT / "docs" / "rtcl.1"
+PREFIX = "usr"
+# The commands the README and the man page name; one per tools/*.py.
+TOOL_COMMANDS = {"rtcl-bench", "rtcl-experiments", "rtcl-flops-hist", "rtcl-genscene",
+                 "rtcl-povray", "rtcl-ppmdiff"}
+MAN_SECTIONS = ["NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "ENVIRONMENT", "FILES",
+                "EXIT STATUS", "EXAMPLES", "SEE ALSO"]
+LONG_OPTION = re.compile(r"(?<![\w-])--[a-z][a-z-]*")
+SHORT_OPTION = re.compile(r"(?<![\w-])-[a-zA-Z](?![\w-])")
+
+
+def make_environment():
+    """The environment for a nested make: the outer make's variables (SAN=1
+    chooses the binary and its objects) but not its job server, whose file
+    descriptors subprocess does not pass on."""
+    env = {key: value for key, value in os.environ.items()
+           if key not in ("MAKEFLAGS", "MFLAGS", "MAKELEVEL")}
+    flags = os.environ.get("MAKEFLAGS", "")
+    if " -- " in flags:
+        env["MAKEFLAGS"] = " -- " + flags.split(" -- ", 1)[1]
+    return env
+
+
+def make(target, destdir):
+    return subprocess.run(["make", "--no-print-directory", target, f"DESTDIR={destdir}",
+                           f"PREFIX=/{PREFIX}", f"BIN={RTCL}"],
+                          cwd=ROOT, capture_output=True, text=True, env=make_environment(),
+                          timeout=120)
+
+
+def install(destdir):
+    before = os.stat(RTCL).st_mtime_ns
+    result = make("install", destdir)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert os.stat(RTCL).st_mtime_ns == before, \
+        "make install rebuilt rtcl (build it first with make):\n" + result.stdout
+    return result
+
+
+def files_under(folder):
+    return {str(path.relative_to(folder)) for path in pathlib.Path(folder).rglob("*")
+            if not path.is_dir()}
+
+
+def expected_files():
+    tools = sorted((ROOT / "tools").glob("*.py"))
+    share = f"{PREFIX}/share/rtcl"
+    return ({f"{PREFIX}/bin/rtcl", f"{PREFIX}/share/man/man1/rtcl.1",
+             f"{share}/scenes/README.md"}
+            | {f"{PREFIX}/bin/rtcl-" + path.stem.replace("_", "-") for path in tools}
+            | {f"{share}/scenes/{path.name}" for path in (ROOT / "scenes").glob("*.json")}
+            | {f"{share}/tools/{path.name}" for path in tools}
+            | {f"{share}/tools/rtcl_tools/{path.name}"
+               for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")})
+
+
+@pytest.fixture(scope="module")
+def installed(tmp_path_factory):
+    destdir = tmp_path_factory.mktemp("destdir")
+    install(destdir)
+    return destdir
+
+
+def is_ppm_8x8(path):
+    """A binary PPM of 8x8 pixels; rtcl's header has comment lines before the size."""
+    data = path.read_bytes()
+    return data.startswith(b"P6\n") and b"\n8 8\n255\n" in data
+
+
+def run_installed(destdir, args, cwd, env=None):
+    path = f"{destdir}/{PREFIX}/bin{os.pathsep}{os.environ['PATH']}"
+    return subprocess.run(args, cwd=cwd, capture_output=True, text=True, timeout=300,
+                          env={**os.environ, "PATH": path, **(env or {})})
+
+
+def test_install_writes_exactly_the_program_man_page_scenes_and_tools(installed):
+    assert files_under(installed) == expected_files()
+    bin_dir = installed / PREFIX / "bin"
+    assert TOOL_COMMANDS <= {path.name for path in bin_dir.iterdir()}
+    for path in bin_dir.iterdir():
+        assert os.access(path, os.X_OK), path
+    assert (installed / PREFIX / "share/rtcl/scenes/paper60.json").read_bytes() == \
+        (ROOT / "scenes/paper60.json").read_bytes()
+
+
+def test_installed_rtcl_runs_and_renders(installed, tmp_path):
+    version = run_installed(installed, ["rtcl", "--version"], tmp_path)
+    assert version.returncode == 0, version.stderr
+    assert version.stdout == subprocess.run([RTCL, "--version"], capture_output=True,
+                                            text=True).stdout
+    render = run_installed(installed, ["rtcl", "--size", "8x8", "-o", "x.ppm"], tmp_path)
+    assert render.returncode == 0, render.stderr
+    assert is_ppm_8x8(tmp_path / "x.ppm")
+    scene = installed / PREFIX / "share/rtcl/scenes/two_balls.json"
+    render = run_installed(installed, ["rtcl", "-q", "-s", str(scene), "--size", "8x8", "-o",
+                                       "balls.ppm"], tmp_path)
+    assert render.returncode == 0, render.stderr
+    assert (tmp_path / "balls.ppm").is_file()
+
+
+@pytest.mark.parametrize("command", sorted(TOOL_COMMANDS))
+def test_installed_tool_commands_run_from_any_folder(installed, tmp_path, command):
+    result = run_installed(installed, [command, "--help"], tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert result.stdout.strip()
+    assert not list(installed.rglob("__pycache__")), "a tool left __pycache__ when run"
+
+
+def test_installed_genscene_output_renders_with_installed_rtcl(installed, tmp_path):
+    scene = run_installed(installed, ["rtcl-genscene", "--balls", "3", "--size", "8x8", "-o",
+                                      "three.json"], tmp_path)
+    assert scene.returncode == 0, scene.stderr
+    render = run_installed(installed, ["rtcl", "-q", "-s", "three.json", "-o", "three.ppm"],
+                           tmp_path)
+    assert render.returncode == 0, render.stderr
+    assert is_ppm_8x8(tmp_path / "three.ppm")
+
+
+def test_installed_man_page_formats_without_warnings(installed):
+    page = installed / PREFIX / "share/man/man1/rtcl.1"
+    assert f"/{PREFIX}/share/rtcl/scenes/" in page.read_text()
+    if shutil.which("groff") is None:
+        pytest.skip("groff is not installed (.ci/install-deps installs groff-base)")
+    result = subprocess.run(["groff", "-man", "-Tutf8", "-ww", "-z", str(page)],
+                            capture_output=True, text=True)
+    assert result.returncode == 0 and result.stderr == "", result.stderr
+
+
+def test_uninstall_leaves_no_file(tmp_path):
+    install(tmp_path)
+    result = make("uninstall", tmp_path)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert files_under(tmp_path) == set()
+    assert not (tmp_path / PREFIX / "share/rtcl").exists()
+
+
+def test_uninstall_keeps_what_it_did_not_install(tmp_path):
+    install(tmp_path)
+    mine = {f"{PREFIX}/bin/rtcl-mine", f"{PREFIX}/share/rtcl/scenes/mine.json",
+            f"{PREFIX}/share/man/man1/mine.1"}
+    for name in mine:
+        (tmp_path / name).write_text("mine\n")
+    result = make("uninstall", tmp_path)
+    assert result.returncode == 0, result.stdout + result.stderr
+    assert files_under(tmp_path) == mine
+
+
+# The man page against --help: options, kernels, environment variables.
+
+def roff_text(source):
+    """The man page's words: roff's escaped dash as a dash, no font changes."""
+    return re.sub(r"\\f[BIRP]", "", source).replace("\\-", "-")
+
+
+def man_sections():
+    sections, name = {}, None
+    for line in MAN_PAGE.read_text().splitlines():
+        if line.startswith(".SH "):
+            name = line[4:].strip('"')
+            sections[name] = []
+        elif name:
+            sections[name].append(line)
+    return sections
+
+
+def help_text():
+    result = subprocess.run([RTCL, "--help"], capture_output=True, text=True)
+    assert result.returncode == 0, result.stderr
+    return result.stdout
+
+
+def help_defined_options(text):
+    """The options --help lists, one per line: "  -k, --kernel NAME" or "      --size WxH"."""
+    options = set()
+    for line in text.splitlines():
+        match = re.match(r"  (?:(-\w), )?(--[a-z][a-z-]*)", line) or \
+            re.match(r" {6}(--[a-z][a-z-]*)", line)
+        if match:
+            options.update(group for group in match.groups() if group)
+    return options
+
+
+def man_defined_options():
+    """The options the man page's OPTIONS section defines: the tag line after each .TP."""
+    lines = man_sections()["OPTIONS"]
+    options = set()
+    for tag, line in zip(lines, lines[1:]):
+        if tag.startswith(".TP"):
+            text = roff_text(line)
+            options.update(LONG_OPTION.findall(text) + SHORT_OPTION.findall(text))
+    return options
+
+
+def mentioned_options(text):
+    return set(LONG_OPTION.findall(text) + SHORT_OPTION.findall(text))
+
+
+def test_man_page_has_every_section():
+    assert list(man_sections()) == MAN_SECTIONS
+
+
+def test_man_page_and_help_define_the_same_options():
+    in_help = help_defined_options(help_text())
+    in_man = man_defined_options()
+    assert len(in_help) > 20
+    assert in_help - in_man == set(), "in --help but not in docs/rtcl.1's OPTIONS"
+    assert in_man - in_help == set(), "in docs/rtcl.1's OPTIONS but not in --help"
+
+
+def test_every_option_mentioned_is_defined():
+    defined = help_defined_options(help_text())
+    assert mentioned_options(help_text()) - defined == set()
+    assert mentioned_options(roff_text(MAN_PAGE.read_text())) - defined == set()
+
+
+def test_man_page_lists_every_kernel():
+    text = help_text()
+    section = text[text.index("--kernel"):text.index("--workgroup")]
+    in_help = set(re.findall(r"^ {27}(\w+) ", section, re.MULTILINE))
+    options = man_sections()["OPTIONS"]
+    kernel_list = options[options.index(".RS"):options.index(".RE")]
+    in_man = {line[3:] for tag, line in zip(kernel_list, kernel_list[1:])
+              if tag.startswith(".TP") and line.startswith(".B ")}
+    assert "reference" in in_help and in_help == in_man
+
+
+def test_man_page_environment_covers_help_and_output_dates():
+    in_help = set(re.findall(r"^  ([A-Z_]+)=", help_text(), re.MULTILINE))
+    in_man = {match for line in man_sections()["ENVIRONMENT"]
+              for match in re.findall(r"^\.BI ([A-Z_]+)= ", line)}
+    assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "POCL_CACHE_DIR"}
+    assert in_man == in_help | {"SOURCE_DATE_EPOCH"}
+
+
+def test_man_page_names_the_version():
+    version = subprocess.run([RTCL, "--version"], capture_output=True, text=True).stdout.strip()
+    title = next(line for line in MAN_PAGE.read_text().splitlines() if line.startswith(".TH "))
+    assert f'"{version}"' in title
