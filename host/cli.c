@@ -80,7 +80,8 @@ static void print_help_after_kernels(FILE *out)
 		"      --list-devices     list platforms and devices with their indices, and exit\n"
 		"\n"
 		"Measuring:\n"
-		"  -r, --repeat N         timed launches after one warm-up launch (default 1);\n"
+		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
+		"                         -r, one launch: the image, timed, no warm-up;\n"
 		"                         prints the median, min and max kernel time\n"
 		"      --stats FILE       write every printed figure to FILE as JSON\n"
 		"      --flops FILE.npy   count floating-point operations (RENDERING.md) in a\n"
@@ -372,7 +373,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	o->output = "render.png";
 	o->depth = -1;
 	o->platform = o->device = -1;
-	o->repeat = 1;
+	o->repeat = 0; /* not given: one launch, no warm-up */
 	o->batch = 1;
 
 	opterr = 0;

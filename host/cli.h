@@ -22,7 +22,7 @@ struct options {
 	int depth;	      /* --depth N; -1 when not given */
 	int platform, device; /* -p, -d; -1 when not given */
 	int list_devices;
-	int repeat;
+	int repeat; /* -r N; 0 when not given */
 	const char *stats_path;
 	const char *flops_path;	   /* --flops FILE.npy */
 	const char *work_map_path; /* --work-map IMAGE */

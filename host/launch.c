@@ -188,6 +188,7 @@ int launch_begin_timing(const struct render_settings *s, struct render_result *r
 {
 	/* Counting runs are not timed: one run is enough. */
 	int timed = s->count_flops ? 1 : s->repeat;
+	int warm_up = !s->count_flops && s->warm_up;
 
 	res->kernel_ms = calloc((size_t)timed, sizeof(double));
 	if (!res->kernel_ms) {
@@ -195,7 +196,8 @@ int launch_begin_timing(const struct render_settings *s, struct render_result *r
 		return -1;
 	}
 	res->repeat = timed;
-	return s->count_flops ? 1 : timed + 1;
+	res->launches = timed + warm_up;
+	return res->launches;
 }
 
 void launch_record_frame(struct render_result *res, int frame, int frames, double ms)
@@ -271,11 +273,16 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 		 struct render_result *res, void **scene_block, cl_program *program, char *err,
 		 size_t err_size)
 {
+	double lap = timing_now();
+
 	if (launch_plan(dev, s, res, err, err_size) ||
 	    device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height),
 			      err, err_size) ||
 	    launch_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
-	return program_build(dev, s, res->scene_in_local, program, res->build_options, err,
-			     err_size);
+	res->times.scene = timing_lap_ms(&lap);
+	if (program_build(dev, s, res->scene_in_local, program, res->build_options, err, err_size))
+		return -1;
+	res->times.build = timing_lap_ms(&lap);
+	return 0;
 }

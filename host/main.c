@@ -20,6 +20,7 @@
 #include "render.h"
 #include "scene.h"
 #include "stats.h"
+#include "timing.h"
 
 #define DEFAULT_SCENE "paper60.json"
 #define ERR_SIZE 65536 /* room for a kernel build log */
@@ -46,7 +47,8 @@ static void choose_settings(struct run *run, const struct options *opt, const st
 	s->width = opt->size[0] ? opt->size[0] : scene->width;
 	s->height = opt->size[1] ? opt->size[1] : scene->height;
 	s->max_depth = opt->depth >= 0 ? opt->depth : scene->max_depth;
-	s->repeat = opt->repeat;
+	s->repeat = opt->repeat ? opt->repeat : 1;
+	s->warm_up = opt->repeat > 0;
 	s->batch = opt->batch;
 	s->source_dir = getenv("RTCL_CL_DIR");
 	s->progress = !opt->quiet && isatty(STDERR_FILENO);
@@ -81,8 +83,11 @@ static int render_on_device(struct run *run, char *err, size_t err_size)
 	struct device dev;
 	int failed = 0;
 
+	double lap = timing_now();
+
 	if (device_open(&dev, opt->platform, opt->device, err, err_size))
 		return -1;
+	run->device_ms = timing_lap_ms(&lap);
 	record_device(run, &dev);
 	if (opt->verbose)
 		fprintf(stderr, "rtcl: platform %d, device %d: %s\n", dev.platform_index,
@@ -91,6 +96,7 @@ static int render_on_device(struct run *run, char *err, size_t err_size)
 		struct render_settings counting = run->settings;
 		counting.count_flops = 1;
 		failed = render(&dev, run->scene, &counting, &run->counted, err, err_size);
+		run->counting_ms = timing_lap_ms(&lap);
 		if (!failed)
 			flop_summary_compute(&run->flops, run->counted.item_flops,
 					     run->counted.item_count, run->counted.total_rays);
@@ -138,10 +144,13 @@ static int render_and_write(struct run *run, char *err, size_t err_size)
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_FAILED;
 	}
+	run->write_start = timing_now();
 	if (outputs_write(run, err, err_size)) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_FAILED;
 	}
+	if (run->opt->verbose)
+		stats_print_times(run);
 	if (!run->opt->quiet)
 		stats_print_summary(run);
 	return 0;
@@ -150,6 +159,7 @@ static int render_and_write(struct run *run, char *err, size_t err_size)
 int main(int argc, char **argv)
 {
 	static char err[ERR_SIZE];
+	double start = timing_now();
 	struct options opt;
 	struct scene scene;
 	struct run run;
@@ -172,6 +182,7 @@ int main(int argc, char **argv)
 		return EXIT_FAILED;
 	}
 	choose_settings(&run, &opt, &scene);
+	run.start = start;
 	status = render_and_write(&run, err, sizeof(err));
 	render_result_free(&run.result);
 	render_result_free(&run.counted);

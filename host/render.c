@@ -67,6 +67,9 @@ int render_reference(const struct scene *scene, const struct render_settings *s,
 		res->kernel_ms[i] = (timing_now() - start) * 1e3;
 	}
 	res->repeat = s->repeat;
+	res->launches = s->repeat;
+	for (int i = 0; i < s->repeat; i++)
+		res->times.kernels += res->kernel_ms[i];
 	res->groups[0] = res->groups[1] = 1;
 	if (timing_summarize(res->kernel_ms, res->repeat, &res->kernel_ms_median,
 			     &res->kernel_ms_min, &res->kernel_ms_max, err, err_size) == 0)

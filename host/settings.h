@@ -36,7 +36,8 @@ struct render_settings {
 	int groups[2];	   /* persistent work-groups; 0x0: enough to fill the device */
 	int width, height; /* image size */
 	int max_depth;
-	int repeat;		/* timed launches after one warm-up launch */
+	int repeat;		/* timed launches */
+	int warm_up;		/* one untimed launch first (-r given) */
 	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
 	int check_writes;	/* tests: count writes per pixel, poison the image and
@@ -49,6 +50,14 @@ struct render_settings {
 	int verbose;
 };
 
+/* Where a render's host time went, in milliseconds (wall clock). */
+struct render_times {
+	double build;	  /* the program build */
+	double scene;	  /* packing the scene, creating and filling the buffers */
+	double kernels;	  /* every launch, warm-up included, with its waits */
+	double read_back; /* the image and counts back to the host */
+};
+
 /* Room for rtcl's own build options and RTCL_BUILD_OPTIONS (program.h). */
 #define BUILD_OPTIONS_SIZE 512
 
@@ -57,6 +66,8 @@ struct render_result {
 	double kernel_ms_median, kernel_ms_min, kernel_ms_max;
 	double *kernel_ms; /* each timed launch, in order */
 	int repeat;
+	int launches; /* frames rendered: the timed ones and any warm-up */
+	struct render_times times;
 	int groups[2]; /* as launched (1x1 for serial; the NDRange's for naive) */
 	size_t global_size[2], local_size[2];
 	int scene_in_local;

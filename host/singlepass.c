@@ -10,6 +10,7 @@
 #include "checks.h"
 #include "launch.h"
 #include "program.h"
+#include "timing.h"
 
 /* The arguments of every single-pass kernel, in order. */
 enum render_arg {
@@ -223,10 +224,16 @@ int singlepass_render(struct device *dev, const struct scene *scene,
 	if (!s->kernel->single_item &&
 	    launch_check_kernel(dev, st.kernel, res, s->kernel->name, err, err_size))
 		goto out;
-	if (create_buffers(dev, s, &st, res, scene_block, err, err_size) ||
-	    launch_all(dev, s, &st, res, err, err_size) ||
-	    read_back(dev, s, &st, res, err, err_size))
+	double lap = timing_now();
+	if (create_buffers(dev, s, &st, res, scene_block, err, err_size))
 		goto out;
+	res->times.scene += timing_lap_ms(&lap);
+	if (launch_all(dev, s, &st, res, err, err_size))
+		goto out;
+	res->times.kernels = timing_lap_ms(&lap);
+	if (read_back(dev, s, &st, res, err, err_size))
+		goto out;
+	res->times.read_back = timing_lap_ms(&lap);
 	ret = 0;
 
 out:

@@ -33,10 +33,19 @@ struct run {
 	int on_device;		/* an OpenCL device (not the CPU reference) */
 	unsigned compute_units; /* CL_DEVICE_MAX_COMPUTE_UNITS */
 	unsigned max_clock_mhz; /* CL_DEVICE_MAX_CLOCK_FREQUENCY */
+
+	/* Where the process's time went (timing.h clock, seconds or ms). */
+	double start;	    /* main began */
+	double device_ms;   /* platform and device set-up */
+	double counting_ms; /* the whole counting run, with --flops/--work-map */
+	double write_start; /* the outputs began to be written */
 };
 
 void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flops, size_t items,
 			  uint64_t rays);
+
+/* -v: where the process's time went, on stderr. */
+void stats_print_times(const struct run *run);
 
 /* Prints the run's summary on stdout (unless -q). */
 void stats_print_summary(const struct run *run);

@@ -13,6 +13,14 @@ double timing_now(void)
 	return (double)ts.tv_sec + ts.tv_nsec * 1e-9;
 }
 
+double timing_lap_ms(double *since)
+{
+	double now = timing_now(), ms = (now - *since) * 1e3;
+
+	*since = now;
+	return ms;
+}
+
 static int compare_doubles(const void *a, const void *b)
 {
 	double x = *(const double *)a, y = *(const double *)b;

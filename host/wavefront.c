@@ -16,6 +16,7 @@
 #include "checks.h"
 #include "launch.h"
 #include "program.h"
+#include "timing.h"
 #include "wavefront.h"
 
 #define FRAME_OVERFLOWED 1
@@ -318,10 +319,16 @@ int wavefront_render(struct device *dev, const struct scene *scene,
 	w.start = program_create_kernel(w.program, "wavefront_start", err, err_size);
 	w.bounce =
 		w.start ? program_create_kernel(w.program, "wavefront_bounce", err, err_size) : NULL;
-	if (!w.bounce || create_buffers(dev, s, res, &w, scene_block, err, err_size) ||
-	    render_frames(dev, s, res, &w, err, err_size) ||
-	    read_back(dev, s, res, &w, err, err_size))
+	double lap = timing_now();
+	if (!w.bounce || create_buffers(dev, s, res, &w, scene_block, err, err_size))
 		goto out;
+	res->times.scene += timing_lap_ms(&lap);
+	if (render_frames(dev, s, res, &w, err, err_size))
+		goto out;
+	res->times.kernels = timing_lap_ms(&lap);
+	if (read_back(dev, s, res, &w, err, err_size))
+		goto out;
+	res->times.read_back = timing_lap_ms(&lap);
 	ret = 0;
 
 out:
