@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 
 #include "files.h"
@@ -24,6 +25,42 @@ struct output {
 	const char *option;
 	const char *path;
 };
+
+/* What --work-map FILE writes, by FILE's extension. */
+enum work_map_kind {
+	WORK_MAP_PICTURE, /* the viridis picture with its scale bar */
+	WORK_MAP_NPY,	  /* the counts, uint64, for numpy */
+	WORK_MAP_FLOATS,  /* the counts in a float image format */
+};
+
+static enum work_map_kind work_map_kind(const char *path)
+{
+	const char *ext = files_extension(path);
+
+	if (strcasecmp(ext, ".npy") == 0)
+		return WORK_MAP_NPY;
+	if (strcasecmp(ext, ".pfm") == 0 || strcasecmp(ext, ".exr") == 0 ||
+	    strcasecmp(ext, ".hdr") == 0)
+		return WORK_MAP_FLOATS;
+	return WORK_MAP_PICTURE;
+}
+
+static int stage_work_map(struct staged_file *staged, const struct run *run, char *err,
+			  size_t err_size)
+{
+	const char *path = run->opt->work_map_path;
+	const uint64_t *counts = run->counted.pixel_flops;
+	int w = run->settings.width, h = run->settings.height;
+
+	switch (work_map_kind(path)) {
+	case WORK_MAP_NPY:
+		return stats_stage_pixel_counts(staged, path, run, err, err_size);
+	case WORK_MAP_FLOATS:
+		return workmap_stage_counts(staged, path, counts, w, h, err, err_size);
+	default:
+		return workmap_stage(staged, path, counts, w, h, err, err_size);
+	}
+}
 
 /* Lists the outputs the options ask for, the sidecar written into sidecar. */
 static int list_outputs(const struct options *opt, char *sidecar, struct output *out)
@@ -93,7 +130,10 @@ int outputs_check(const struct options *opt, char *err, size_t err_size)
 	}
 	if (image_check_writable(opt->output, err, err_size))
 		return -1;
-	if (opt->work_map_path && image_check_writable(opt->work_map_path, err, err_size))
+	if (opt->work_map_path &&
+	    (work_map_kind(opt->work_map_path) == WORK_MAP_NPY
+		     ? files_check_writable(opt->work_map_path, err, err_size)
+		     : image_check_writable(opt->work_map_path, err, err_size)))
 		return -1;
 	for (int i = 0; i < n; i++)
 		if (strcmp(out[i].option, "-o/--output") && strcmp(out[i].option, "--work-map") &&
@@ -119,9 +159,7 @@ static int stage_all(const struct run *run, char *sidecar, struct staged_file *s
 	if (image_stage(&staged[n++], opt->output, run->result.rgb, s->width, s->height, &meta,
 			err, err_size))
 		goto out_discard;
-	if (opt->work_map_path &&
-	    workmap_stage(&staged[n++], opt->work_map_path, run->counted.pixel_flops, s->width,
-			  s->height, err, err_size))
+	if (opt->work_map_path && stage_work_map(&staged[n++], run, err, err_size))
 		goto out_discard;
 	if (opt->flops_path) {
 		snprintf(sidecar, SIDECAR_PATH_SIZE, "%s.json", opt->flops_path);

@@ -81,6 +81,15 @@ static int fill_npy(FILE *file, const void *context)
 	return fwrite(a->counts, sizeof(uint64_t), n, file) == n ? 0 : -1;
 }
 
+int stats_stage_pixel_counts(struct staged_file *staged, const char *path, const struct run *run,
+			     char *err, size_t err_size)
+{
+	struct npy_array array = {run->counted.pixel_flops, (size_t)run->settings.height,
+				  (size_t)run->settings.width};
+
+	return files_stage_with(staged, path, fill_npy, &array, err, err_size);
+}
+
 int stats_stage_flops(struct staged_file *staged, const char *path, const struct run *run,
 		      char *err, size_t err_size)
 {

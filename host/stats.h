@@ -64,6 +64,11 @@ int stats_stage_run(struct staged_file *staged, const char *path, const struct r
 int stats_stage_flops(struct staged_file *staged, const char *path, const struct run *run,
 		      char *err, size_t err_size);
 
+/* The counting run's flops per pixel as a .npy file of little-endian
+ * uint64, shape (height, width), row 0 at the top: --work-map FILE.npy. */
+int stats_stage_pixel_counts(struct staged_file *staged, const char *path, const struct run *run,
+			     char *err, size_t err_size);
+
 /* The --flops sidecar: how the counts were launched, and the figures. */
 int stats_stage_flops_sidecar(struct staged_file *staged, const char *path, const struct run *run,
 			      char *err, size_t err_size);

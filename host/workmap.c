@@ -331,3 +331,25 @@ int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int 
 		return -1;
 	return files_commit(&staged, 1, err, err_size);
 }
+
+int workmap_stage_counts(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
+			 int width, int height, char *err, size_t err_size)
+{
+	size_t pixels = (size_t)width * (size_t)height;
+	struct image_meta meta = {"rtcl " RTCL_VERSION,
+				  "flops per pixel: the counts, the same in every channel",
+				  IMAGE_LINEAR};
+	float *rgb = malloc(3 * sizeof(float) * pixels);
+	int status;
+
+	if (!rgb) {
+		snprintf(err, err_size, "%s: out of memory for a %d x %d work map", path, width,
+			 height);
+		return -1;
+	}
+	for (size_t i = 0; i < pixels; i++)
+		rgb[3 * i] = rgb[3 * i + 1] = rgb[3 * i + 2] = (float)pixel_flops[i];
+	status = image_stage(staged, path, rgb, width, height, &meta, err, err_size);
+	free(rgb);
+	return status;
+}

@@ -23,6 +23,12 @@ int workmap_bar_height(int width);
 int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int height, char *err,
 		  size_t err_size);
 
+/* Writes the counts themselves to a float image format (EXR, PFM, HDR): each
+ * pixel's count in all three channels, as float (exact up to 2^24). Staged
+ * like workmap_stage. */
+int workmap_stage_counts(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
+			 int width, int height, char *err, size_t err_size);
+
 /* Like workmap_write, but leaves the image staged for the caller to commit
  * with the run's other outputs (files.h). */
 struct staged_file;
