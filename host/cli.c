@@ -18,6 +18,7 @@ enum long_only_option {
 	OPT_FLOPS,
 	OPT_WORK_MAP,
 	OPT_ENCODING,
+	OPT_WORK_MAP_SCALE,
 	OPT_VERSION,
 };
 
@@ -38,6 +39,7 @@ static const struct option long_options[] = {
 	{"flops", required_argument, NULL, OPT_FLOPS},
 	{"work-map", required_argument, NULL, OPT_WORK_MAP},
 	{"encoding", required_argument, NULL, OPT_ENCODING},
+	{"work-map-scale", required_argument, NULL, OPT_WORK_MAP_SCALE},
 	{"quiet", no_argument, NULL, 'q'},
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
@@ -94,6 +96,8 @@ static void print_help_after_kernels(FILE *out)
 		"                         holds the counts themselves (uint64 in the .npy,\n"
 		"                         height x width); any other image format, a picture\n"
 		"                         with a colour scale bar\n"
+		"      --work-map-scale linear|log  the picture's colour scale (default linear);\n"
+		"                         log spreads the many cheap pixels\n"
 		"\n"
 		"Other:\n"
 		"  -q, --quiet            print nothing but errors\n"
@@ -233,13 +237,16 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 
 /* Applies option c with its value arg (NULL for an option without one).
  * Returns 0, or -1 with a message; a flat switch, one case per option. */
-static int parse_encoding(const char *text, int *linear, char *err, size_t err_size)
+/* One of two words: *second is set when it is the second. */
+static int parse_choice(const char *option, const char *text, const char *first,
+			const char *second, int *is_second, char *err, size_t err_size)
 {
-	if (strcmp(text, "srgb") != 0 && strcmp(text, "linear") != 0) {
-		snprintf(err, err_size, "--encoding: expected srgb or linear, got \"%s\"", text);
+	if (strcmp(text, first) != 0 && strcmp(text, second) != 0) {
+		snprintf(err, err_size, "%s: expected %s or %s, got \"%s\"", option, first, second,
+			 text);
 		return -1;
 	}
-	*linear = strcmp(text, "linear") == 0;
+	*is_second = strcmp(text, second) == 0;
 	return 0;
 }
 
@@ -275,8 +282,12 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return take_flops_name(arg, &o->flops_path, err, err_size);
 	case OPT_WORK_MAP:
 		return take_file_name("--work-map", arg, &o->work_map_path, err, err_size);
+	case OPT_WORK_MAP_SCALE:
+		return parse_choice("--work-map-scale", arg, "linear", "log", &o->work_map_log, err,
+				    err_size);
 	case OPT_ENCODING:
-		return parse_encoding(arg, &o->linear_encoding, err, err_size);
+		return parse_choice("--encoding", arg, "srgb", "linear", &o->linear_encoding, err,
+				    err_size);
 	case OPT_LIST_DEVICES:
 		o->list_devices = 1;
 		return 0;

@@ -26,6 +26,7 @@ struct options {
 	const char *stats_path;
 	const char *flops_path;	   /* --flops FILE.npy */
 	const char *work_map_path; /* --work-map IMAGE */
+	int work_map_log;	   /* --work-map-scale log */
 	int linear_encoding;	   /* --encoding linear: 8-bit files hold round(255 c) */
 	int quiet, verbose;
 	int help, version;

@@ -58,7 +58,9 @@ static int stage_work_map(struct staged_file *staged, const struct run *run, cha
 	case WORK_MAP_FLOATS:
 		return workmap_stage_counts(staged, path, counts, w, h, err, err_size);
 	default:
-		return workmap_stage(staged, path, counts, w, h, err, err_size);
+		return workmap_stage(staged, path, counts, w, h,
+				     run->opt->work_map_log ? WORKMAP_LOG : WORKMAP_LINEAR, err,
+				     err_size);
 	}
 }
 

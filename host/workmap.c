@@ -2,6 +2,7 @@
  * bitmap font. */
 #include <inttypes.h>
 #include <limits.h>
+#include <math.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -191,13 +192,30 @@ static struct bar_layout bar_layout(int width, int map_height)
 	return bar;
 }
 
-/* Colours the map part: t = count / max, all 0 when max is 0. */
-static void draw_map(float *rgb, const uint64_t *pixel_flops, size_t pixels, uint64_t max)
+/* Where count lies on the scale, 0 to 1 (0 when max is 0). */
+static double scale_position(uint64_t count, uint64_t max, enum workmap_scale scale)
 {
-	size_t i;
+	if (!max)
+		return 0.0;
+	if (scale == WORKMAP_LOG)
+		return log1p((double)count) / log1p((double)max);
+	return (double)count / (double)max;
+}
 
-	for (i = 0; i < pixels; i++)
-		viridis(max ? (double)pixel_flops[i] / (double)max : 0.0, &rgb[3 * i]);
+/* The count at position t of the scale: the inverse of scale_position. */
+static double scale_value(double t, uint64_t max, enum workmap_scale scale)
+{
+	if (scale == WORKMAP_LOG)
+		return expm1(t * log1p((double)max));
+	return t * (double)max;
+}
+
+/* Colours the map part. */
+static void draw_map(float *rgb, const uint64_t *pixel_flops, size_t pixels, uint64_t max,
+		     enum workmap_scale scale)
+{
+	for (size_t i = 0; i < pixels; i++)
+		viridis(scale_position(pixel_flops[i], max, scale), &rgb[3 * i]);
 }
 
 /* Background, the strip from viridis(0) at its left end to viridis(1) at its
@@ -243,7 +261,7 @@ static int label_fits(int left, int text_width, int width, int spacing, const st
 /* Labels "0", max and max / 2, in that order of priority; a label that
  * would leave the image or crowd one already placed is left out. */
 static void draw_labels(float *rgb, int width, int height, const struct bar_layout *bar,
-			uint64_t max)
+			uint64_t max, enum workmap_scale scale)
 {
 	struct span placed[3];
 	char text[3][32];
@@ -252,7 +270,7 @@ static void draw_labels(float *rgb, int width, int height, const struct bar_layo
 
 	format_count(0.0, text[0], sizeof(text[0]));
 	format_count((double)max, text[1], sizeof(text[1]));
-	format_count((double)max / 2.0, text[2], sizeof(text[2]));
+	format_count(scale_value(0.5, max, scale), text[2], sizeof(text[2]));
 	left[0] = bar->strip_left;
 	left[1] = bar->strip_right + 1 - text_width(text[1], bar->scale);
 	left[2] = bar->strip_left + (bar->strip_right - bar->strip_left + 1) / 2 -
@@ -280,7 +298,7 @@ static uint64_t max_count(const uint64_t *pixel_flops, size_t pixels)
 }
 
 int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
-		  int width, int height, char *err, size_t err_size)
+		  int width, int height, enum workmap_scale scale, char *err, size_t err_size)
 {
 	const char *name = path ? path : "work map";
 	int bar_height = workmap_bar_height(width);
@@ -308,12 +326,13 @@ int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *
 
 	max = max_count(pixel_flops, pixels);
 	bar = bar_layout(width, height);
-	draw_map(rgb, pixel_flops, pixels, max);
+	draw_map(rgb, pixel_flops, pixels, max, scale);
 	draw_strip(rgb, width, total_height, &bar);
-	draw_labels(rgb, width, total_height, &bar, max);
+	draw_labels(rgb, width, total_height, &bar, max, scale);
 
 	snprintf(description, sizeof(description),
-		 "flops per pixel, 0 (dark) to %" PRIu64 " (bright), viridis", max);
+		 "flops per pixel, 0 (dark) to %" PRIu64 " (bright), viridis, %s scale", max,
+		 scale == WORKMAP_LOG ? "log" : "linear");
 	meta.software = "rtcl " RTCL_VERSION;
 	meta.description = description;
 	meta.encoding = IMAGE_DISPLAY; /* viridis is a scale of display colours */
@@ -327,7 +346,8 @@ int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int 
 {
 	struct staged_file staged;
 
-	if (workmap_stage(&staged, path, pixel_flops, width, height, err, err_size))
+	if (workmap_stage(&staged, path, pixel_flops, width, height, WORKMAP_LINEAR, err,
+			  err_size))
 		return -1;
 	return files_commit(&staged, 1, err, err_size);
 }

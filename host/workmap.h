@@ -29,10 +29,15 @@ int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int 
 int workmap_stage_counts(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
 			 int width, int height, char *err, size_t err_size);
 
-/* Like workmap_write, but leaves the image staged for the caller to commit
- * with the run's other outputs (files.h). */
+/* How a count maps to the colour scale: t = count / max, or
+ * t = log(1 + count) / log(1 + max), which spreads the many cheap pixels. */
+enum workmap_scale { WORKMAP_LINEAR, WORKMAP_LOG };
+
+/* Like workmap_write (which draws the linear scale), but on the given scale,
+ * and leaves the image staged for the caller to commit with the run's other
+ * outputs (files.h). */
 struct staged_file;
 int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
-		  int width, int height, char *err, size_t err_size);
+		  int width, int height, enum workmap_scale scale, char *err, size_t err_size);
 
 #endif

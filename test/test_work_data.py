@@ -57,3 +57,29 @@ def test_a_float_image_holds_the_counts(tmp_path):
 def test_a_picture_is_still_a_picture(tmp_path):
     path, _ = counts(tmp_path, "naive", "map.ppm")
     assert path.read_bytes().startswith(b"P6")
+
+
+def luminance_of_map(path, height):
+    """Mean luma of the map part of a PPM work map (the bar below excluded)."""
+    data = path.read_bytes()
+    fields, at = [], 0
+    while len(fields) < 4:
+        end = data.index(b"\n", at)
+        line = data[at:end]
+        at = end + 1
+        if not line.startswith(b"#"):
+            fields += line.split()
+    width = int(fields[1])
+    pixels = np.frombuffer(data[at:], dtype=np.uint8).reshape(-1, width, 3)[:height]
+    return float((pixels @ np.array([0.2126, 0.7152, 0.0722])).mean()), data[:at]
+
+
+def test_the_log_scale_lifts_the_cheap_pixels(tmp_path):
+    linear, _ = counts(tmp_path, "naive", "linear.ppm")
+    log, _ = counts(tmp_path, "naive", "log.ppm", "--work-map-scale", "log")
+    linear_luma, linear_header = luminance_of_map(linear, 30)
+    log_luma, log_header = luminance_of_map(log, 30)
+    assert b"viridis, linear scale" in linear_header and b"viridis, log scale" in log_header
+    # viridis brightens along the scale; most pixels cost far less than the
+    # dearest, so the log scale moves them up.
+    assert log_luma > linear_luma + 10
