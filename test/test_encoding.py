@@ -4,11 +4,14 @@ import os
 import pathlib
 import shutil
 import subprocess
+import sys
 
 import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+sys.path.insert(0, str(ROOT / "tools"))
+from rtcl_tools import ppm  # noqa: E402
 SMALL = ["--size", "40x30"]
 
 
@@ -21,15 +24,7 @@ def rtcl(*args, cwd):
 
 def ppm_pixels(path):
     """The pixel bytes of a binary PPM, after its header and comments."""
-    data = path.read_bytes()
-    fields, at = [], 0
-    while len(fields) < 4:
-        end = data.index(b"\n", at)
-        line = data[at:end]
-        at = end + 1
-        if not line.startswith(b"#"):
-            fields += line.split()
-    return data[at:]
+    return ppm.pixels(path)[1]
 
 
 def pfm_values(path):

@@ -4,6 +4,7 @@ import json
 import os
 import pathlib
 import subprocess
+import sys
 
 import pytest
 
@@ -11,6 +12,8 @@ np = pytest.importorskip("numpy")
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+sys.path.insert(0, str(ROOT / "tools"))
+from rtcl_tools import ppm  # noqa: E402
 SIZE = ["--size", "40x30"]
 KERNELS = ["serial", "naive", "cyclic", "dynamic", "persistent", "wavefront"]
 
@@ -60,18 +63,11 @@ def test_a_picture_is_still_a_picture(tmp_path):
 
 
 def luminance_of_map(path, height):
-    """Mean luma of the map part of a PPM work map (the bar below excluded)."""
-    data = path.read_bytes()
-    fields, at = [], 0
-    while len(fields) < 4:
-        end = data.index(b"\n", at)
-        line = data[at:end]
-        at = end + 1
-        if not line.startswith(b"#"):
-            fields += line.split()
-    width = int(fields[1])
-    pixels = np.frombuffer(data[at:], dtype=np.uint8).reshape(-1, width, 3)[:height]
-    return float((pixels @ np.array([0.2126, 0.7152, 0.0722])).mean()), data[:at]
+    """Mean luma of the map part of a PPM work map (the bar below excluded),
+    and the file's first bytes (its header)."""
+    (width, _), data = ppm.pixels(path)
+    pixels = np.frombuffer(data, dtype=np.uint8).reshape(-1, width, 3)[:height]
+    return float((pixels @ np.array([0.2126, 0.7152, 0.0722])).mean()), path.read_bytes()[:300]
 
 
 def test_the_log_scale_lifts_the_cheap_pixels(tmp_path):
