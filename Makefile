@@ -40,7 +40,11 @@ CFLAGS ?= -O2 -g
 CFLAGS += -std=c11 $(WARNINGS) -pthread
 CXXFLAGS ?= -O2 -g
 CXXFLAGS += -std=c++17 $(WARNINGS)
-LDLIBS = -lOpenCL -ljansson -lm -pthread
+# Mesh files (docs/SCENE.md version 2) through the Open Asset Import Library.
+# Expanded when used, like OIIO_LIBS below.
+ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
+ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
+LDLIBS = -lOpenCL -ljansson $(ASSIMP_LIBS) -lm -pthread
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -67,7 +71,7 @@ LDLIBS += -lstdc++
 
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
-	scene_literal.o timing.o files.o \
+	scene_literal.o scene_material.o scene_mesh.o mesh.o timing.o files.o \
 	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
 	outputs.o \
 	workmap.o image_common.o reference.o embedded.o) \
@@ -87,7 +91,7 @@ $(BUILD)/embedded.c: tools/build/embed.py $(EMBEDDED) | $(BUILD)
 	$(PYTHON) tools/build/embed.py $@ $(EMBEDDED)
 
 $(BUILD)/%.o: host/%.c | $(BUILD)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -c -o $@ $<
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(ASSIMP_CFLAGS) -MMD -c -o $@ $<
 
 $(BUILD)/embedded.o: $(BUILD)/embedded.c
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c -o $@ $<
@@ -138,13 +142,13 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 
 # The scene loader and what it calls: its parts, the file reader, the interrupt
 # bookkeeping the file module keeps.
-FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/files.c \
-	host/interrupt.c host/devscene.c
+FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c \
+	host/scene_mesh.c host/mesh.c host/files.c host/interrupt.c host/devscene.c
 
 $(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h $(FUZZ_SOURCES) host/scene.h \
-		host/scene_loader.h host/files.h host/devscene.h cl/rtcl_shared.h
+		host/scene_loader.h host/mesh.h host/files.h host/devscene.h cl/rtcl_shared.h
 	mkdir -p $(FUZZ_DIR)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson -lm
+	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson $(ASSIMP_LIBS) -lm
 
 fuzz: $(FUZZ_DIR)/fuzz_scene
 	mkdir -p $(FUZZ_DIR)/corpus $(FUZZ_DIR)/artifacts
