@@ -67,8 +67,8 @@ static inline bool ray_step(struct tracer *tr, struct ray_progress *rp, struct r
 	rp->shadow = shading_next_light(tr, &rp->sh, rp->ray.dir);
 	if (rp->shadow)
 		return false;
-	out->color = ray_shaded(tr, &rp->ray, &rp->sh, &out->refracted, &out->reflected,
-				&out->spawned);
+	out->color =
+		ray_shaded(tr, &rp->ray, &rp->sh, &out->refracted, &out->reflected, &out->spawned);
 	return true;
 }
 
