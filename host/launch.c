@@ -172,10 +172,9 @@ int launch_check_scene_fits(const struct device *dev, const struct scene *scene,
 	if (bytes <= limit)
 		return 0;
 	snprintf(err, err_size,
-		 "%s: the scene (%d triangles, %d spheres, %d planes) needs %zu bytes of device "
+		 "%s: the scene (%d triangles) needs %zu bytes of device "
 		 "memory, more than the limit of %llu bytes in one buffer on %s (%s)",
-		 scene->source, scene->triangle_count, scene->sphere_count, scene->plane_count,
-		 bytes, limit, dev->name,
+		 scene->source, scene->triangle_count, bytes, limit, dev->name,
 		 limit == dev->max_alloc_size ? "CL_DEVICE_MAX_MEM_ALLOC_SIZE"
 					      : "rtcl's 32-bit scene offsets");
 	return -1;

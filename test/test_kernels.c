@@ -13,7 +13,9 @@
 #include <string.h>
 
 #include "device.h"
+#include "devscene.h"
 #include "image.h"
+#include "launch.h"
 #include "reference.h"
 #include "render.h"
 #include "scene.h"
@@ -246,6 +248,48 @@ Test(kernels, matches_reference_two_balls, .timeout = 600)
 Test(kernels, matches_reference_tir, .timeout = 600)
 {
 	check_against_reference("scenes/tir.json", 320, 240);
+}
+
+/* Glass through closed meshes (an icosphere with the file's normals, a cube
+ * without, flat), a mesh with area-weighted normals, an inline triangle, a
+ * sphere and a plane. */
+Test(kernels, identical_mesh_scene, .timeout = 900)
+{
+	check_kernels_identical("test/meshes/mesh_scene.json");
+}
+
+Test(kernels, matches_reference_mesh_scene, .timeout = 600)
+{
+	check_against_reference("test/meshes/mesh_scene.json", 160, 120);
+}
+
+Test(kernels, depth_64_matches_reference_mesh_scene, .timeout = 600)
+{
+	check_every_kernel_at_depth_64("test/meshes/mesh_scene.json", 8, 6);
+}
+
+/* A scene larger than one device buffer is refused with its size and the
+ * limit, before anything is packed or allocated. */
+Test(kernels, scene_larger_than_a_buffer_is_refused)
+{
+	struct device dev;
+	struct scene scene;
+	char want[512];
+
+	memset(&dev, 0, sizeof(dev));
+	snprintf(dev.name, sizeof(dev.name), "Tiny Device");
+	load(&scene, "test/meshes/mesh_scene.json");
+	dev.max_alloc_size = devscene_bytes(&scene);
+	cr_expect_eq(launch_check_scene_fits(&dev, &scene, err, sizeof(err)), 0, "%s", err);
+	dev.max_alloc_size--;
+	cr_assert_eq(launch_check_scene_fits(&dev, &scene, err, sizeof(err)), -1);
+	snprintf(want, sizeof(want),
+		 "test/meshes/mesh_scene.json: the scene (335 triangles) needs "
+		 "%zu bytes of device memory, more than the limit of %zu bytes in one buffer on "
+		 "Tiny Device (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
+		 devscene_bytes(&scene), devscene_bytes(&scene) - 1);
+	cr_expect_str_eq(err, want);
+	scene_free(&scene);
 }
 
 Test(kernels, matches_reference_empty, .timeout = 600)
