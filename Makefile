@@ -177,6 +177,8 @@ TOOL_SCRIPTS := $(wildcard tools/*.py)
 TOOL_MODULES := $(wildcard tools/rtcl_tools/*.py)
 TOOL_COMMANDS := $(addprefix rtcl-,$(subst _,-,$(basename $(notdir $(TOOL_SCRIPTS)))))
 SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
+# The mesh files the version 2 scenes place, relative to them.
+SCENE_MODELS := $(wildcard scenes/models/*)
 
 install: $(BIN)
 	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools
@@ -184,6 +186,8 @@ install: $(BIN)
 	sed 's|/usr/local/share/rtcl|$(PREFIX)/share/rtcl|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
+	$(INSTALL) -d $(DATADIR)/scenes/models
+	$(INSTALL) -m 644 $(SCENE_MODELS) $(DATADIR)/scenes/models
 	$(INSTALL) -m 755 $(TOOL_SCRIPTS) $(DATADIR)/tools
 	$(INSTALL) -m 644 $(TOOL_MODULES) $(DATADIR)/tools/rtcl_tools
 	for script in $(notdir $(TOOL_SCRIPTS)); do \
@@ -199,10 +203,11 @@ install: $(BIN)
 uninstall:
 	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
+	rm -f $(addprefix $(DATADIR)/scenes/models/,$(notdir $(SCENE_MODELS)))
 	rm -f $(addprefix $(DATADIR)/tools/,$(notdir $(TOOL_SCRIPTS)))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
 	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__
-	for dir in $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools $(DATADIR)/tools $(DATADIR); do \
+	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools $(DATADIR)/tools $(DATADIR); do \
 		if [ -d $$dir ] && [ -z "$$(ls -A $$dir)" ]; then rmdir $$dir; fi; \
 	done
 
