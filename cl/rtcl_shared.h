@@ -125,8 +125,24 @@ struct rt_ray {
 	rt_int pad0, pad1;
 };
 
+/* What one launch (or one wavefront pass) renders: a rectangle of the image
+ * and a range of each of its pixels' samples. A plain render is one or more
+ * pieces covering the whole image; a multi-device render hands pieces to
+ * several devices. The kernels write the full-image buffers at the pixels'
+ * own positions, y * width + x. */
+struct rt_piece {
+	rt_int x0, y0, width, height;	 /* a rectangle of the image, in pixels */
+	rt_int sample_begin, sample_end; /* the samples of each pixel traced now:
+					    [begin, end) */
+	rt_int samples;			 /* N, samples per pixel of the whole render */
+	rt_int pad;
+};
+
 #ifndef __OPENCL_VERSION__
 #include <stddef.h>
+_Static_assert(sizeof(struct rt_piece) == 32, "rt_piece layout");
+_Static_assert(offsetof(struct rt_piece, sample_begin) == 16, "rt_piece layout");
+_Static_assert(offsetof(struct rt_piece, samples) == 24, "rt_piece layout");
 _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");
 _Static_assert(sizeof(struct rt_material) == 48, "rt_material layout");
 _Static_assert(sizeof(struct rt_sphere) == 32, "rt_sphere layout");

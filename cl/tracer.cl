@@ -4,11 +4,12 @@
  * The tracer is five files, built in this order before the kernel file
  * (host/program.c lists them) and read best in the same order:
  *   tracer.cl      counting, the scene as the tracer sees it, vector helpers
+ *   sample.cl      where a pixel's samples lie
  *   intersect.cl   the nearest (or any) hit over spheres, triangles and planes
  *   shade.cl       the base colour, lights and shadow rays, spawned rays
  *   walk.cl        ray_step, one ray by one intersection; the pixel's walk
  *   scheduling.cl  what the scheduling kernels share: scene loading, counts,
- *                  the chunk grid
+ *                  the chunk grid over the piece being rendered
  * host/reference.cpp computes the same model in double precision, written
  * independently from RENDERING.md: it is the readable version of it.
  *
@@ -108,6 +109,7 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_light *lights;
 	RTCL_SCENE_SPACE const struct rt_triangle *triangles;
 	RTCL_SCENE_SPACE const struct rt_triangle_shading *triangle_shading;
+	__global ulong *item_counts; /* flops and rays per work-item, when counting */
 	__global ulong *pixel_flops; /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
 	ulong flops;
@@ -165,9 +167,11 @@ static inline float component(float3 v, int axis)
 	return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
 }
 
-/* Counts, when counting: per launched work-item (flops, rays), row-major over
- * the global NDRange, then per pixel the flops spent on it. */
-static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *counts)
+/* Counts, when counting: item_counts per launched work-item (flops, rays),
+ * row-major over the global NDRange; pixel_flops per pixel of the image, added
+ * to by every piece and pass that traces the pixel. */
+static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item_counts,
+			__global ulong *pixel_flops)
 {
 	RTCL_SCENE_SPACE const uchar *base = (RTCL_SCENE_SPACE const uchar *)scene;
 
@@ -181,7 +185,8 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *coun
 		(RTCL_SCENE_SPACE const struct rt_triangle *)(base + scene->triangle_offset);
 	tr->triangle_shading =
 		(RTCL_SCENE_SPACE const struct rt_triangle_shading *)(base + scene->shading_offset);
-	tr->pixel_flops = counts + 2 * get_global_size(0) * get_global_size(1);
+	tr->item_counts = item_counts;
+	tr->pixel_flops = pixel_flops;
 #ifdef RTCL_COUNT_FLOPS
 	tr->flops = 0;
 	tr->rays = 0;
