@@ -63,7 +63,7 @@ static const char test_kernels[] =
 	"	struct tracer tr;\n"
 	"	float t = 0.0f;\n"
 	"	float2 uv;\n"
-	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
 	"	bool hit = triangle_hit(&tr, 0, o.xyz, d.xyz, INFINITY, &t, &uv);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(hit ? t : -1.0f);\n"
