@@ -103,8 +103,8 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	size_t material_offset = round16(sizeof(struct rt_scene));
 	size_t sphere_offset =
 		material_offset + (size_t)scene->material_count * sizeof(struct rt_material);
-	int sphere_slots =
-		(scene->sphere_count + RT_SPHERE_GROUP - 1) / RT_SPHERE_GROUP * RT_SPHERE_GROUP;
+	int sphere_slots = (scene->sphere_count + RT_SPHERE_GROUP - 1) / RT_SPHERE_GROUP *
+			   RT_SPHERE_GROUP;
 	size_t plane_offset = sphere_offset + (size_t)sphere_slots * sizeof(struct rt_sphere);
 	size_t light_offset = plane_offset + (size_t)scene->plane_count * sizeof(struct rt_plane);
 	size_t total = light_offset + (size_t)scene->light_count * sizeof(struct rt_light);

@@ -45,8 +45,8 @@ static int open_regular(const char *path, const char *noun, size_t max_bytes, si
 	return -1;
 }
 
-int files_read(const char *path, const char *noun, size_t max_bytes, char **out, size_t *out_len,
-	       char *err, size_t err_size)
+int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
+	       size_t *out_len, char *err, size_t err_size)
 {
 	size_t len = 0, capacity;
 	char *buf;
@@ -243,7 +243,8 @@ out_discard:
 	return -1;
 }
 
-int files_write(const char *path, files_fill fill, const void *context, char *err, size_t err_size)
+int files_write(const char *path, files_fill fill, const void *context, char *err,
+		size_t err_size)
 {
 	struct staged_file f;
 

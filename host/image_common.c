@@ -22,6 +22,8 @@
 #include "files.h"
 #include "image_backend.h"
 
+
+
 double image_srgb_curve(double c)
 {
 	return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
@@ -216,8 +218,8 @@ static int verify_netpbm(const char *path, const char *tmp, int width, int heigh
 			if (ch == '#')
 				while ((ch = fgetc(file)) != EOF && ch != '\n')
 					;
-		ok = ch != EOF && ungetc(ch, file) != EOF && fscanf(file, "%d %d", &w, &h) == 2 &&
-		     w == width && h == height;
+		ok = ch != EOF && ungetc(ch, file) != EOF &&
+		     fscanf(file, "%d %d", &w, &h) == 2 && w == width && h == height;
 	}
 	if (file)
 		fclose(file);

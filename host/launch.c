@@ -276,8 +276,8 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	double lap = timing_now();
 
 	if (launch_plan(dev, s, res, err, err_size) ||
-	    device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height), err,
-			      err_size) ||
+	    device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height),
+			      err, err_size) ||
 	    launch_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);

@@ -28,8 +28,8 @@ static int compare_doubles(const void *a, const void *b)
 	return (x > y) - (x < y);
 }
 
-int timing_summarize(const double *ms, int n, double *median, double *min, double *max, char *err,
-		     size_t err_size)
+int timing_summarize(const double *ms, int n, double *median, double *min, double *max,
+		     char *err, size_t err_size)
 {
 	double *sorted = malloc((size_t)n * sizeof(double));
 

@@ -13,7 +13,7 @@ double timing_lap_ms(double *since);
 
 /* Sets *median, *min and *max of ms[0 .. n), n ≥ 1. Returns 0, or -1 with a
  * message when out of memory. */
-int timing_summarize(const double *ms, int n, double *median, double *min, double *max, char *err,
-		     size_t err_size);
+int timing_summarize(const double *ms, int n, double *median, double *min, double *max,
+		     char *err, size_t err_size);
 
 #endif

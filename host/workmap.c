@@ -346,7 +346,8 @@ int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int 
 {
 	struct staged_file staged;
 
-	if (workmap_stage(&staged, path, pixel_flops, width, height, WORKMAP_LINEAR, err, err_size))
+	if (workmap_stage(&staged, path, pixel_flops, width, height, WORKMAP_LINEAR, err,
+			  err_size))
 		return -1;
 	return files_commit(&staged, 1, err, err_size);
 }
