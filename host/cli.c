@@ -20,6 +20,7 @@ enum long_only_option {
 	OPT_ENCODING,
 	OPT_WORK_MAP_SCALE,
 	OPT_VERSION,
+	OPT_SPP,
 };
 
 static const struct option long_options[] = {
@@ -31,6 +32,7 @@ static const struct option long_options[] = {
 	{"output", required_argument, NULL, 'o'},
 	{"size", required_argument, NULL, OPT_SIZE},
 	{"depth", required_argument, NULL, OPT_DEPTH},
+	{"spp", required_argument, NULL, OPT_SPP},
 	{"platform", required_argument, NULL, 'p'},
 	{"device", required_argument, NULL, 'd'},
 	{"list-devices", no_argument, NULL, OPT_LIST_DEVICES},
@@ -69,6 +71,9 @@ static void print_help_after_kernels(FILE *out)
 		"      --size WxH         image size, overriding the scene's (1..%d each)\n"
 		"      --depth N          reflection/refraction depth, overriding max_depth "
 		"(0..%d)\n"
+		"      --spp N            samples per pixel, overriding image.samples (1..%d;\n"
+		"                         default 1, the pixel centre): antialiasing with a\n"
+		"                         box filter, traced in passes with progress\n"
 		"      --encoding srgb|linear  how 8-bit formats (PNG, JPEG, TIFF, PPM...) store\n"
 		"                         the linear colours: the sRGB curve (default), or\n"
 		"                         round(255 c) as in the paper; EXR, HDR and PFM are\n"
@@ -115,7 +120,7 @@ static void print_help_after_kernels(FILE *out)
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH);
+		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES);
 }
 
 void cli_print_help(FILE *out)
@@ -270,6 +275,8 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return parse_shape("--size", arg, SCENE_MAX_IMAGE_SIDE, o->size, err, err_size);
 	case OPT_DEPTH:
 		return parse_bounded("--depth", arg, 0, SCENE_MAX_DEPTH, &o->depth, err, err_size);
+	case OPT_SPP:
+		return parse_bounded("--spp", arg, 1, SCENE_MAX_SAMPLES, &o->spp, err, err_size);
 	case 'p':
 		return parse_bounded("-p/--platform", arg, 0, 1000, &o->platform, err, err_size);
 	case 'd':

@@ -20,6 +20,7 @@ struct options {
 	const char *output;
 	int size[2];	      /* --size WxH; 0x0 when not given */
 	int depth;	      /* --depth N; -1 when not given */
+	int spp;	      /* --spp N; 0 when not given */
 	int platform, device; /* -p, -d; -1 when not given */
 	int list_devices;
 	int repeat; /* -r N; 0 when not given */

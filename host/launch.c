@@ -259,7 +259,7 @@ static cl_int wait_for(cl_event event, const char *label, int progress)
 		fprintf(stderr, "\r%s: %.1f s", label, timing_now() - start);
 		nanosleep(&tick, NULL);
 	}
-	fprintf(stderr, "\r%*s\r", 60, "");
+	fprintf(stderr, "\r%*s\r", 79, ""); /* the longest label with its time */
 	return state < 0 ? state : clWaitForEvents(1, &event);
 }
 

@@ -47,6 +47,7 @@ static void choose_settings(struct run *run, const struct options *opt, const st
 	s->width = opt->size[0] ? opt->size[0] : scene->width;
 	s->height = opt->size[1] ? opt->size[1] : scene->height;
 	s->max_depth = opt->depth >= 0 ? opt->depth : scene->max_depth;
+	s->samples = opt->spp ? opt->spp : scene->samples;
 	s->repeat = opt->repeat ? opt->repeat : 1;
 	s->warm_up = opt->repeat > 0;
 	s->batch = opt->batch;

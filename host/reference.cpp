@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <new>
 #include <vector>
 
@@ -408,12 +409,57 @@ void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
 	}
 }
 
+/* RENDERING.md's hash of a pixel's coordinates: lowbias32. */
+uint32_t sample_hash(uint32_t v)
+{
+	v = (v ^ (v >> 16)) * 0x7feb352du;
+	v = (v ^ (v >> 15)) * 0x846ca68bu;
+	return v ^ (v >> 16);
+}
+
+/* The Sobol' points as RENDERING.md writes them, through the generator
+ * matrices rather than direction numbers: dimension 0's is the identity (the
+ * radical inverse), dimension 1's has binomial(i, j) mod 2 in row j, column i
+ * (the Pascal matrix), so output bit j (of weight 2^-(j+1)) is the XOR of the
+ * bits i >= j of k with odd binomial(i, j), that is with (i & j) == j. */
+uint32_t sobol_point(uint32_t k, int dimension)
+{
+	uint32_t r = 0;
+
+	for (int j = 0; j < 32; j++) {
+		uint32_t bit = 0;
+		for (int i = j; i < 32; i++)
+			if ((k >> i) & 1u)
+				bit ^= dimension == 0 ? (uint32_t)(i == j)
+						      : (uint32_t)((i & j) == j);
+		r |= bit << (31 - j);
+	}
+	return r;
+}
+
 } // namespace
 
-extern "C" int reference_render(const struct scene *scene, int width, int height, int max_depth,
-				float *rgb)
+extern "C" void reference_sample_position(int x, int y, int k, int n, double uv[2])
 {
-	if (!scene || !rgb || width < 1 || height < 1 || max_depth < 0)
+	if (n == 1) {
+		uv[0] = uv[1] = 0.5;
+		return;
+	}
+	uint32_t scramble_u = sample_hash(sample_hash((uint32_t)x) ^ (uint32_t)y);
+	uint32_t scramble_v = sample_hash(scramble_u);
+	uv[0] = std::ldexp((double)((sobol_point((uint32_t)k, 0) ^ scramble_u) >> 8), -24);
+	uv[1] = std::ldexp((double)((sobol_point((uint32_t)k, 1) ^ scramble_v) >> 8), -24);
+}
+
+int reference_render(const struct scene *scene, int width, int height, int max_depth, float *rgb)
+{
+	return reference_render_samples(scene, width, height, max_depth, 1, rgb);
+}
+
+int reference_render_samples(const struct scene *scene, int width, int height, int max_depth,
+			     int samples, float *rgb)
+{
+	if (!scene || !rgb || width < 1 || height < 1 || max_depth < 0 || samples < 1)
 		return -1;
 
 	try {
@@ -428,11 +474,17 @@ extern "C" int reference_render(const struct scene *scene, int width, int height
 		double a = (double)width / (double)height;
 
 		for (int y = 0; y < height; y++) {
-			double sy = (1.0 - 2.0 * (y + 0.5) / height) * h;
 			for (int x = 0; x < width; x++) {
-				double sx = (2.0 * (x + 0.5) / width - 1.0) * a * h;
-				dvec3 dir = glm::normalize(f + sx * r + sy * u);
-				dvec3 c = tr.trace(eye, dir, 0);
+				dvec3 sum(0.0);
+				for (int k = 0; k < samples; k++) {
+					double uv[2];
+					reference_sample_position(x, y, k, samples, uv);
+					double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
+					double sy = (1.0 - 2.0 * (y + uv[1]) / height) * h;
+					dvec3 dir = glm::normalize(f + sx * r + sy * u);
+					sum += tr.trace(eye, dir, 0);
+				}
+				dvec3 c = sum / (double)samples;
 				float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);
 				out[0] = (float)c.r;
 				out[1] = (float)c.g;

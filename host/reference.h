@@ -20,6 +20,16 @@ extern "C" {
  * < 1, max_depth < 0) or allocation failure; rgb is then left unspecified. */
 int reference_render(const struct scene *scene, int width, int height, int max_depth, float *rgb);
 
+/* reference_render with `samples` samples per pixel (RENDERING.md, "Samples
+ * per pixel"): the pixel is the mean of its samples' colours. samples < 1 is
+ * refused (-1). reference_render is samples = 1. */
+int reference_render_samples(const struct scene *scene, int width, int height, int max_depth,
+			     int samples, float *rgb);
+
+/* Sets uv to sample k (0 <= k < n) of pixel (x, y)'s position in the pixel, in
+ * [0, 1)^2 from its top-left corner, as RENDERING.md defines it. */
+void reference_sample_position(int x, int y, int k, int n, double uv[2]);
+
 #ifdef __cplusplus
 }
 #endif

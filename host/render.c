@@ -198,7 +198,8 @@ int render_reference(const struct scene *scene, const struct render_settings *s,
 	}
 	for (int i = 0; i < s->repeat; i++) {
 		double start = timing_now();
-		if (reference_render(scene, s->width, s->height, s->max_depth, res->rgb)) {
+		if (reference_render_samples(scene, s->width, s->height, s->max_depth,
+					     s->samples > 0 ? s->samples : 1, res->rgb)) {
 			snprintf(err, err_size,
 				 "the CPU reference renderer failed (out of memory)");
 			goto out_free;

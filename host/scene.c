@@ -135,13 +135,14 @@ static int read_camera(struct loader *ld, json_t *doc)
 
 static int read_image_and_globals(struct loader *ld, json_t *doc)
 {
-	static const char *const image_keys[] = {"width", "height", NULL};
+	static const char *const image_keys[] = {"width", "height", "samples", NULL};
 	struct path image = child_key(&root_path, "image");
 	struct scene *s = ld->scene;
 	json_t *obj;
 
 	s->width = 640;
 	s->height = 480;
+	s->samples = 1;
 	s->background[0] = s->background[1] = s->background[2] = 0;
 	s->ambient[0] = s->ambient[1] = s->ambient[2] = 0.1;
 	s->max_depth = 5;
@@ -153,7 +154,9 @@ static int read_image_and_globals(struct loader *ld, json_t *doc)
 		    loader_read_int(ld, &image, obj, "width", OPTIONAL, 1, SCENE_MAX_IMAGE_SIDE,
 				    &s->width) ||
 		    loader_read_int(ld, &image, obj, "height", OPTIONAL, 1, SCENE_MAX_IMAGE_SIDE,
-				    &s->height)))
+				    &s->height) ||
+		    loader_read_int(ld, &image, obj, "samples", OPTIONAL, 1, SCENE_MAX_SAMPLES,
+				    &s->samples)))
 		return -1;
 	if (read_camera(ld, doc) ||
 	    loader_read_vec3(ld, &root_path, doc, "background", OPTIONAL, NON_NEGATIVE,

@@ -15,6 +15,7 @@ extern "C" {
 
 #define SCENE_MAX_IMAGE_SIDE 32768
 #define SCENE_MAX_DEPTH 64
+#define SCENE_MAX_SAMPLES 65536 /* image.samples and --spp */
 
 struct scene_material {
 	double color[3];
@@ -68,6 +69,7 @@ struct scene_camera {
 struct scene {
 	char *source; /* file name (or "name (built-in)") used in messages */
 	int width, height;
+	int samples; /* per pixel, image.samples (1 when not given) */
 	struct scene_camera camera;
 	double background[3];
 	double ambient[3];

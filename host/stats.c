@@ -134,7 +134,7 @@ static json_t *run_document(const struct run *run)
 	for (int i = 0; i < r->repeat; i++)
 		json_array_append_new(times, json_real(r->kernel_ms[i]));
 	return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:[I,I], s:i, s:i, s:i, s:s, s:b,"
-			 " s:f, s:f, s:f, s:i, s:o, s:s, s:i}",
+			 " s:f, s:f, s:f, s:i, s:o, s:s, s:i, s:i, s:i}",
 			 "rtcl_version", RTCL_VERSION, "device", run->device_name, "device_version",
 			 run->device_version, "driver", run->driver, "kernel",
 			 s->kernel ? s->kernel->name : "reference", "workgroup", workgroup,
@@ -144,7 +144,8 @@ static json_t *run_document(const struct run *run)
 			 "scene_in_local_memory", r->scene_in_local, "kernel_ms",
 			 r->kernel_ms_median, "kernel_ms_min", r->kernel_ms_min, "kernel_ms_max",
 			 r->kernel_ms_max, "repeat", r->repeat, "kernel_ms_all", times,
-			 "build_options", r->build_options, "batch", s->batch);
+			 "build_options", r->build_options, "batch", s->batch, "samples",
+			 s->samples > 0 ? s->samples : 1, "passes", r->passes > 0 ? r->passes : 1);
 }
 
 /* The device's size and clock, for peak-throughput estimates (not for the
@@ -170,11 +171,11 @@ static json_t *flops_sidecar(const struct run *run)
 		"width", s->width, "height", s->height, "max_depth", s->max_depth, "device",
 		run->device_name, "scene", run->scene->source, "layout",
 		s->kernel->multi_pass
-			? "counts[0][i]: every launch's work-items one after the other (the "
-			  "primary-ray launch, then one launch per bounce)"
-			: "counts[y][x] for the work-item at global id (x, y); 0 for those given "
-			  "no "
-			  "pixel");
+			? "counts[0][i]: every launch's work-items one after the other (per "
+			  "sample: the primary-ray launch, one launch per bounce, the "
+			  "accumulate launch)"
+			: "counts[y][x] for the work-item at global id (x, y), summed over the "
+			  "passes; 0 for those given no pixel");
 
 	if (doc)
 		add_flop_figures(doc, run);
@@ -231,6 +232,9 @@ void stats_print_summary(const struct run *run)
 		       r->groups[1], r->global_size[0], r->global_size[1]);
 	printf("image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
 	       run->scene->source);
+	if (s->samples > 1)
+		printf("samples: %d per pixel in %d pass%s\n", s->samples, r->passes,
+		       r->passes == 1 ? "" : "es");
 	if (r->repeat > 1)
 		printf("time:    %.3f ms median of %d launches (min %.3f, max %.3f)\n",
 		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);

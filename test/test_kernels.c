@@ -51,8 +51,8 @@ static struct render_settings settings_for(const char *kernel, int width, int he
 	return s;
 }
 
-/* Renders and checks that every pixel was written exactly once and nothing
- * around the image was touched. Returns the image in 8 bits. */
+/* Renders and checks that every pixel was written exactly once per pass and
+ * nothing around the image was touched. Returns the image in 8 bits. */
 static unsigned char *render_checked(struct device *dev, const struct scene *scene,
 				     const struct render_settings *s, const char *what)
 {
@@ -62,8 +62,9 @@ static unsigned char *render_checked(struct device *dev, const struct scene *sce
 	cr_assert_eq(render(dev, scene, s, &res, err, sizeof(err)), 0, "%s: %s", what, err);
 	cr_assert(res.guards_intact, "%s: wrote outside the image", what);
 	for (size_t i = 0; i < pixels; i++)
-		cr_assert_eq(res.write_counts[i], 1, "%s: pixel (%zu, %zu) written %u times", what,
-			     i % s->width, i / s->width, res.write_counts[i]);
+		cr_assert_eq(res.write_counts[i], (uint32_t)res.passes,
+			     "%s: pixel (%zu, %zu) written %u times in %d passes", what,
+			     i % s->width, i / s->width, res.write_counts[i], res.passes);
 
 	unsigned char *bytes = malloc(pixels * 3);
 	cr_assert_not_null(bytes);
@@ -162,8 +163,8 @@ Test(kernels, identical_empty, .timeout = 600)
 /* The image of `kernel` at max_depth (< 0: the scene's) against the
  * double-precision reference: PSNR >= 40 dB and at most 0.1% of the pixels
  * off by more than 2/255. */
-static void check_kernel_against_reference(const char *path, const char *kernel, int width,
-					   int height, int max_depth)
+static void check_kernel_against_reference_spp(const char *path, const char *kernel, int width,
+					       int height, int max_depth, int samples)
 {
 	struct device dev;
 	struct scene scene;
@@ -174,14 +175,15 @@ static void check_kernel_against_reference(const char *path, const char *kernel,
 	load(&scene, path);
 	if (max_depth < 0)
 		max_depth = scene.max_depth;
-	snprintf(what, sizeof(what), "%s %s depth %d", path, kernel, max_depth);
+	snprintf(what, sizeof(what), "%s %s depth %d spp %d", path, kernel, max_depth, samples);
 	float *want = malloc(pixels * 3 * sizeof(float));
 	cr_assert_not_null(want);
-	cr_assert_eq(reference_render(&scene, width, height, max_depth, want), 0);
+	cr_assert_eq(reference_render_samples(&scene, width, height, max_depth, samples, want), 0);
 	for (size_t i = 0; i < pixels * 3; i++)
 		cr_assert(isfinite(want[i]), "%s: the reference gave %g at pixel (%zu, %zu)", what,
 			  (double)want[i], i / 3 % width, i / 3 / width);
 	struct render_settings s = settings_for(kernel, width, height, 8, 8, max_depth);
+	s.samples = samples;
 	unsigned char *got = render_checked(&dev, &scene, &s, what);
 
 	double squared = 0;
@@ -208,6 +210,12 @@ static void check_kernel_against_reference(const char *path, const char *kernel,
 	free(want);
 	scene_free(&scene);
 	device_close(&dev);
+}
+
+static void check_kernel_against_reference(const char *path, const char *kernel, int width,
+					   int height, int max_depth)
+{
+	check_kernel_against_reference_spp(path, kernel, width, height, max_depth, 1);
 }
 
 static void check_against_reference(const char *path, int width, int height)
@@ -538,9 +546,11 @@ static int band_pieces(struct rt_piece *out, int w, int h, int band, int begin, 
 }
 
 /* Every kernel, rendering the image as 4 odd tiles and as row bands (given
- * bottom band first, to show the order does not matter), gives the serial
- * kernel's whole-image render: the same bytes (the wavefront within its
- * documented 1/255), the same flops per pixel, and every pixel written once. */
+ * bottom band first, to show the order does not matter), and with several
+ * samples as tiles over the first half of the samples then bands over the
+ * rest, gives the serial kernel's whole-image render: the same bytes (the
+ * wavefront within its documented 1/255), the same flops per pixel, and every
+ * pixel written once per piece that covers it. */
 static void check_pieces(const char *path, int w, int h, int samples)
 {
 	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
@@ -558,11 +568,22 @@ static void check_pieces(const char *path, int w, int h, int samples)
 		&dev, &scene, &s, (struct rt_piece[]){renderer_whole_image(&s, 0, samples)}, 1,
 		"serial, whole image");
 	for (int k = 0; k < 6; k++) {
-		for (int layout = 0; layout < 2; layout++) {
+		for (int layout = 0; layout < (samples > 1 ? 3 : 2); layout++) {
 			char what[256];
-			int count = layout ? band_pieces(pieces, w, h, 10, 0, samples, samples)
-					   : tile_pieces(pieces, w, h, 23, 17, 0, samples, samples);
-			if (layout) /* bottom band first */
+			int count = layout == 1 ? band_pieces(pieces, w, h, 10, 0, samples, samples)
+						: tile_pieces(pieces, w, h, 23, 17, 0, samples,
+							      samples);
+			uint32_t writes = 1;
+			if (layout == 2) { /* tiles for the first half of the samples, bands
+					      for the rest */
+				int half = samples / 2;
+				for (int i = 0; i < count; i++)
+					pieces[i].sample_end = half;
+				count += band_pieces(pieces + count, w, h, 10, half, samples,
+						     samples);
+				writes = 2;
+			}
+			if (layout == 1) /* bottom band first */
 				for (int i = 0; i < count / 2; i++) {
 					struct rt_piece t = pieces[i];
 					pieces[i] = pieces[count - 1 - i];
@@ -572,11 +593,14 @@ static void check_pieces(const char *path, int w, int h, int samples)
 			s.samples = samples;
 			s.count_flops = 1;
 			snprintf(what, sizeof(what), "%s %s %dx%d spp %d as %d %s", path,
-				 kernels[k], w, h, samples, count, layout ? "row bands" : "tiles");
+				 kernels[k], w, h, samples, count,
+				 layout == 2 ? "tiles, then bands"
+				 : layout    ? "row bands"
+					     : "tiles");
 			struct pieces_result got =
 				render_pieces(&dev, &scene, &s, pieces, count, what);
 			for (size_t i = 0; i < (size_t)w * h; i++) {
-				cr_assert_eq(got.write_counts[i], 1,
+				cr_assert_eq(got.write_counts[i], writes,
 					     "%s: pixel %zu written %u times", what, i,
 					     got.write_counts[i]);
 				cr_assert_eq(got.pixel_flops[i], want.pixel_flops[i],
@@ -601,4 +625,103 @@ static void check_pieces(const char *path, int w, int h, int samples)
 Test(kernels, pieces_give_the_whole_image, .timeout = 600)
 {
 	check_pieces("scenes/paper60.json", 61, 47, 1);
+}
+
+/* Antialiased (RENDERING.md, "Samples per pixel"): 4 samples, pieces that
+ * split both the image and the samples. */
+Test(kernels, pieces_give_the_whole_image_at_4_spp, .timeout = 600)
+{
+	check_pieces("scenes/two_balls.json", 37, 29, 4);
+}
+
+/* Every kernel at 7 samples per pixel, in one pass and in passes of 3, 3 and
+ * 1 samples: the same bytes as the serial kernel in one pass (the wavefront
+ * within its 1/255), the same flops per pixel, each pixel written once per
+ * pass. */
+Test(kernels, passes_give_the_image_of_one_pass, .timeout = 600)
+{
+	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
+					      "dynamic", "persistent", "wavefront"};
+	struct device dev;
+	struct scene scene;
+	size_t pixels = 45 * 31;
+
+	open_device(&dev);
+	load(&scene, "scenes/paper60.json");
+	struct render_settings s = settings_for("serial", 45, 31, 1, 1, scene.max_depth);
+	s.samples = 7;
+	unsigned char *want = render_checked(&dev, &scene, &s, "serial, one pass of 7 samples");
+	for (int k = 0; k < 6; k++) {
+		char what[128];
+		s = settings_for(kernels[k], 45, 31, 8, 8, scene.max_depth);
+		s.samples = 7;
+		s.samples_per_pass = 3;
+		cr_assert_eq(render_pass_samples(&s), 3);
+		snprintf(what, sizeof(what), "%s, 7 samples in passes of 3", kernels[k]);
+		unsigned char *got = render_checked(&dev, &scene, &s, what);
+		for (size_t i = 0; i < pixels * 3; i++)
+			cr_assert_leq(abs(got[i] - want[i]), k == 5 ? 1 : 0,
+				      "%s: pixel %zu channel %zu is %u, serial gave %u", what,
+				      i / 3, i % 3, got[i], want[i]);
+		free(got);
+	}
+	free(want);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+Test(kernels, matches_reference_at_16_spp_paper60, .timeout = 600)
+{
+	check_kernel_against_reference_spp("scenes/paper60.json", "dynamic", 120, 90, -1, 16);
+}
+
+Test(kernels, wavefront_matches_reference_at_4_spp_tir, .timeout = 600)
+{
+	check_kernel_against_reference_spp("scenes/tir.json", "wavefront", 80, 60, -1, 4);
+}
+
+/* With N samples every pixel costs N samples: in the empty scene every ray
+ * misses, so a sample costs what the centre ray costs (F1 flops) plus the 2
+ * of its position, and the pixel N - 1 additions of 3 and the division by N,
+ * 3: N (F1 + 2) + 3 (N - 1) + 3, counted the same by every kernel. */
+Test(kernels, flops_count_every_sample, .timeout = 600)
+{
+	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
+					      "dynamic", "persistent", "wavefront"};
+	static const int counts[] = {2, 5, 16};
+	struct device dev;
+	struct scene scene;
+	struct render_result res;
+
+	open_device(&dev);
+	load(&scene, "scenes/empty.json");
+	struct render_settings s = settings_for("serial", 13, 9, 1, 1, scene.max_depth);
+	s.count_flops = 1;
+	cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
+	uint64_t one = res.pixel_flops[0];
+	cr_assert_gt(one, 0);
+	for (int i = 0; i < 13 * 9; i++)
+		cr_assert_eq(res.pixel_flops[i], one);
+	render_result_free(&res);
+	for (int k = 0; k < 6; k++)
+		for (int c = 0; c < 3; c++) {
+			int n = counts[c];
+			uint64_t want = (uint64_t)n * (one + 2) + 3 * (uint64_t)(n - 1) + 3;
+			s = settings_for(kernels[k], 13, 9, 4, 4, scene.max_depth);
+			s.count_flops = 1;
+			s.samples = n;
+			s.samples_per_pass = 3;
+			cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s",
+				     err);
+			for (int i = 0; i < 13 * 9; i++)
+				cr_assert_eq(res.pixel_flops[i], want,
+					     "%s at %d spp: pixel %d counts %llu, want %llu",
+					     kernels[k], n, i,
+					     (unsigned long long)res.pixel_flops[i],
+					     (unsigned long long)want);
+			cr_assert_eq(res.total_flops, want * 13 * 9, "%s at %d spp", kernels[k], n);
+			render_result_free(&res);
+		}
+	scene_free(&scene);
+	device_close(&dev);
 }
