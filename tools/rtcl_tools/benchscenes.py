@@ -75,7 +75,7 @@ def write(bench, folder):
     return path
 
 
-def standard_set(models=ASSIMP_MODELS):
+def standard_set(models=ASSIMP_MODELS, with_lake=True):
     """Yields every Bench of `make bench-scenes`, one at a time (the lake is large)."""
     for size in (3, 4):
         yield spd.balls(size)
@@ -86,4 +86,5 @@ def standard_set(models=ASSIMP_MODELS):
     for n in RANDOM_BALL_SERIES:
         yield random_balls(n)
     yield assimp_models(models)
-    yield spd.lake(10)
+    if with_lake:
+        yield spd.lake(10)
