@@ -140,7 +140,8 @@ def benches(args):
 
 def summary(bench):
     scene = bench.scene
-    parts = ["%d %s" % (len(scene[key]), key if len(scene[key]) > 1 else key[:-1])
+    singular = {"spheres": "sphere", "planes": "plane", "triangles": "triangle", "meshes": "mesh"}
+    parts = ["%d %s" % (len(scene[key]), key if len(scene[key]) > 1 else singular[key])
              for key in ("spheres", "planes", "triangles", "meshes") if scene.get(key)]
     parts += ["%s: %d triangles" % (name, len(faces))
               for name, (_, faces) in bench.meshes.items()]
