@@ -10,6 +10,8 @@
 #   make experiments  the paper's Table 1 and Figures 6-7 (DEVICE="-p N -d M")
 #   make bench        every kernel over work-group shapes, group counts and batches
 #                     (DEVICE="-p N -d M", BENCH="more tools/bench.py options")
+#   make bench-scenes the benchmark scenes (SPD balls, tetra, mount, random balls,
+#                     assimp-testmodels, the 2 M-triangle lake) in build/bench-scenes/
 #   make install      the built rtcl, its man page, the tools (as rtcl-genscene,
 #                     rtcl-bench, ...) and the scenes under DESTDIR/PREFIX
 #   make uninstall    remove exactly what install put there
@@ -81,7 +83,7 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test experiments bench clean fuzz valgrind install uninstall
+.PHONY: all deps render test experiments bench bench-scenes clean fuzz valgrind install uninstall
 all: $(BIN)
 
 $(BIN): $(BUILD)/main.o $(HOST_OBJS)
@@ -130,6 +132,11 @@ experiments: $(BIN)
 # BENCH="--scaling"; results in docs/results/<device>/bench.md and bench.csv.
 bench: $(BIN)
 	$(PYTHON) tools/bench.py --rtcl ./$(BIN) $(DEVICE) $(BENCH)
+
+# The benchmark scenes (docs/benchmark-scenes.md), generated, never committed.
+BENCH_SCENES ?= build/bench-scenes
+bench-scenes:
+	$(PYTHON) tools/genbench.py all -o $(BENCH_SCENES)
 
 # libFuzzer on the scene loader and devscene_pack (test/fuzz_scene.c), seeded
 # with the shipped and the bad scenes; the seeds are copied, the growing corpus

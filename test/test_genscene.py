@@ -37,7 +37,8 @@ def test_validator_catches_mistakes():
         lambda s: s["spheres"][0]["material"].update(reflect=1.5),
         lambda s: s["spheres"][0]["material"].update(color=[0.5, -0.1, 0.2]),
         lambda s: s["spheres"][0].update(material="nosuch"),
-        lambda s: s.update(version=2),
+        lambda s: s.update(version=3),
+        lambda s: s.update(triangles=[]),
         lambda s: s.update(colour=[0, 0, 0]),
         lambda s: s["planes"][0]["checker"].pop("size"),
     ]

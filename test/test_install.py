@@ -20,7 +20,8 @@ RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 MAN_PAGE = ROOT / "docs" / "rtcl.1"
 PREFIX = "usr"
 # The commands the README and the man page name; one per tools/*.py.
-TOOL_COMMANDS = {"rtcl-bench", "rtcl-experiments", "rtcl-flops-hist", "rtcl-genscene",
+TOOL_COMMANDS = {"rtcl-bench", "rtcl-experiments", "rtcl-flops-hist", "rtcl-genbench",
+                 "rtcl-genscene",
                  "rtcl-povray", "rtcl-ppmdiff"}
 MAN_SECTIONS = ["NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "ENVIRONMENT", "FILES",
                 "EXIT STATUS", "EXAMPLES", "SEE ALSO"]

@@ -281,7 +281,9 @@ def test_malformed_json_names_line_and_column(tmp_path):
      'spheres[0].material: unknown material "gold"'),
     ({"spheres": [{"center": [0, 0, 0], "radius": -1}]}, "spheres[0].radius: must be > 0"),
     ({"spheres": [{"center": [0, 0, 0], "radus": 1}]}, 'spheres[0]: unknown key "radus"'),
-    ({"version": 2}, "version: must be 1"),
+    ({"version": 3}, "version: must be 1 or 2"),
+    ({"version": 2, "triangles": [{"vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}]},
+     "meshes and triangles (scene version 2) are not converted"),
 ])
 def test_bad_scene_one_line(tmp_path, overrides, fragment):
     out = tmp_path / "s.pov"

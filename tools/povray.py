@@ -105,6 +105,7 @@ What still differs:
    level; rtcl counts the depth.  Overlapping (not nested) transparent objects,
    or a sphere straddling a transparent plane, refract differently.
 8. POV-Ray ignores objects farther than 1e7 (MAX_DISTANCE); rtcl allows 1e18.
+9. Version 2's meshes and triangles are not converted yet: such a scene is refused.
 """
 
 import argparse
@@ -189,6 +190,10 @@ def main(argv=None):
     except (SceneError, OSError) as e:
         message = e.strerror if isinstance(e, OSError) else e
         print("%s: %s: %s" % (PROG, args.scene, message), file=sys.stderr)
+        return 1
+    if scene["meshes"] or scene["triangles"]:
+        print("%s: %s: meshes and triangles (scene version 2) are not converted to POV-Ray yet"
+              % (PROG, args.scene), file=sys.stderr)
         return 1
     size = args.size or scene["size"]
     depth = scene["max_depth"] if args.depth is None else args.depth

@@ -134,6 +134,31 @@ def make_material(rng, kind):
     raise ValueError(kind)
 
 
+class ScreenGrid:
+    """Screen discs hashed by centre, so that the test of a new disc against the
+    placed ones looks only at those near enough to matter.  hides() needs the
+    centres closer than the sum of the radii, so the answer is the one a test
+    against every disc gives: the same seed still gives the same scene."""
+
+    def __init__(self, cell):
+        self.cell = cell
+        self.cells = {}
+        self.largest = 0.0      # the largest radius placed so far
+
+    def near(self, disc):
+        reach = disc[2] + self.largest
+        low_x, high_x = (int(math.floor((disc[0] + s * reach) / self.cell)) for s in (-1, 1))
+        low_y, high_y = (int(math.floor((disc[1] + s * reach) / self.cell)) for s in (-1, 1))
+        for i in range(low_x, high_x + 1):
+            for j in range(low_y, high_y + 1):
+                yield from self.cells.get((i, j), ())
+
+    def add(self, disc):
+        key = (int(math.floor(disc[0] / self.cell)), int(math.floor(disc[1] / self.cell)))
+        self.cells.setdefault(key, []).append(disc)
+        self.largest = max(self.largest, disc[2])
+
+
 def kind_counts(n):
     """Exact number of balls per kind: diffuse and mirror rounded, glass the rest."""
     counts = {}
@@ -147,7 +172,8 @@ def place_balls(rng, n, framing, scale):
     """Return [(x, z, radius)] of n non-overlapping balls inside the framing."""
     grid = Grid()
     balls = []
-    discs = []
+    # Screen radii shrink as 1/scale; about one ball per cell.
+    discs = ScreenGrid(0.1 / scale)
     attempts = 0
     limit = 20000 + 5000 * n
     while len(balls) < n:
@@ -164,11 +190,12 @@ def place_balls(rng, n, framing, scale):
         if not framing.frames_ball(x, z, radius) or not grid.fits(x, z, radius):
             continue
         disc = framing.disc(x, z, radius)
-        if any(hides(disc, d) if disc[3] < d[3] else hides(d, disc) for d in discs):
+        if any(hides(disc, d) if disc[3] < d[3] else hides(d, disc)
+               for d in discs.near(disc)):
             continue
         grid.add(x, z, radius)
         balls.append((x, z, radius))
-        discs.append(disc)
+        discs.add(disc)
     return balls
 
 

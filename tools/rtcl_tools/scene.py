@@ -1,19 +1,24 @@
-"""The tools' scene validator: docs/SCENE.md (format version 1) in Python.
+"""The tools' scene validator: docs/SCENE.md (format versions 1 and 2) in Python.
 
 host/scene.c is the authority; this module mirrors it for the tools (povray.py
 reads scenes through it) and for the tests, rule for rule and in the same
 order, with the same "PATH: what is wrong" messages, so that every file rtcl
 refuses is refused here too (test/test_rtcl_tools.py checks that against
 test/bad_scenes/).  JSON syntax errors are "LINE:COLUMN: what" as in rtcl, in
-Python's wording.  One deliberate difference: a newer version says "must be 1".
+Python's wording.  One deliberate difference: a newer version says "must be 1
+or 2".  Version 2 (meshes, inline triangles) is read here before rtcl reads it;
+test/bad_scenes_v2/ holds its bad scenes until the C loader follows.  A mesh
+file is only checked to exist and be readable: parsing it is the importer's job.
 
-load_scene(path) and read_scene(document) return the scene with every default
-filled in (colours and vectors as tuples, plane normals normalised); both raise
-SceneError.
+load_scene(path) and read_scene(document, base_dir) return the scene with every
+default filled in (colours and vectors as tuples, plane normals normalised);
+both raise SceneError.  base_dir is the folder that mesh files are relative to
+(load_scene passes the scene file's); None skips the check that they exist.
 """
 
 import json
 import math
+import os
 import sys
 
 from .vector import normalize
@@ -22,10 +27,14 @@ MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-18, 1e18   # SCENE.md: the device computes in 
 PARALLEL_SINE = 1e-9                         # camera.up "parallel" below this sine
 MAX_IMAGE_SIDE = 32768
 MAX_DEPTH = 64
+MAX_SAMPLES = 65536
+VERSIONS = (1, 2)
 NAME_MAX = 64                                # longer keys are cut in messages
 
 TOP_KEYS = ("format", "version", "image", "camera", "background", "ambient", "max_depth",
             "epsilon", "materials", "lights", "spheres", "planes")
+VERSION_2_KEYS = ("meshes", "triangles")
+MESH_KEYS = ("file", "material", "scale", "rotate", "translate", "smooth")
 MATERIAL_DEFAULTS = {"color": (1.0, 1.0, 1.0), "ambient": 1.0, "diffuse": 0.7,
                      "specular": 0.3, "shininess": 32.0, "reflect": 0.0,
                      "transmit": 0.0, "ior": 1.5}
@@ -204,6 +213,7 @@ def length(v):
 # ---- the scene -------------------------------------------------------------------------
 
 def read_header(doc):
+    """Returns the version of the document after checking its header and top-level keys."""
     if not isinstance(doc, dict):
         fail("", f"must be an object, got {type_name(doc)}")
     fmt = required(doc, "format", "")
@@ -212,10 +222,14 @@ def read_header(doc):
     if fmt != "rtcl-scene":
         fail("format", f'must be "rtcl-scene", got "{_escaped(fmt)}"')
     version = integer(required(doc, "version", ""), "version", -2**63, 2**63 - 1)
-    if version != 1:
-        fail("version", f"must be 1, got {version}"
-                        + (" (this tool reads version 1)" if version > 1 else ""))
-    check_keys(doc, "", TOP_KEYS)
+    if version not in VERSIONS:
+        fail("version", f"must be 1 or 2, got {version}"
+                        + (" (this tool reads versions 1 and 2)" if version > 2 else ""))
+    for key in doc:
+        if key in VERSION_2_KEYS and version < 2:
+            fail(key, f"needs version 2, the file says version {version}")
+    check_keys(doc, "", TOP_KEYS + VERSION_2_KEYS)
+    return version
 
 
 def read_camera(doc):
@@ -241,12 +255,13 @@ def read_camera(doc):
 
 def read_globals(doc):
     """Returns the image size, camera and the global settings, in rtcl's order."""
-    size = (640, 480)
+    size, samples = (640, 480), 1
     if "image" in doc:
-        image = check_keys(doc["image"], "image", ("width", "height"))
+        image = check_keys(doc["image"], "image", ("width", "height", "samples"))
         size = tuple(optional(image, key, "image", integer, default, 1, MAX_IMAGE_SIDE)
                      for key, default in (("width", 640), ("height", 480)))
-    return {"size": size, "camera": read_camera(doc),
+        samples = optional(image, "samples", "image", integer, 1, 1, MAX_SAMPLES)
+    return {"size": size, "samples": samples, "camera": read_camera(doc),
             "background": optional(doc, "background", "", vec3, (0.0, 0.0, 0.0),
                                    "non-negative"),
             "ambient": optional(doc, "ambient", "", vec3, (0.1, 0.1, 0.1), "non-negative"),
@@ -324,12 +339,100 @@ def read_planes(items, materials):
     return planes
 
 
-def read_scene(doc):
-    """Returns the parsed document doc as a scene with its defaults; SceneError if bad."""
-    read_header(doc)
+def non_zero(value, path):
+    """Returns value as a float if it is a number other than 0 (a mesh's scale)."""
+    x = number(value, path)
+    if x == 0:
+        fail(path, "must be non-zero, got 0")
+    return x
+
+
+def read_scale(value, path):
+    """Returns a mesh's scale, a number or a vec3 with no part 0, as a tuple."""
+    if isinstance(value, list):
+        vec3(value, path)
+        return tuple(non_zero(part, child(path, i)) for i, part in enumerate(value))
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        fail(path, f"must be a number or an array of 3 numbers, got {type_name(value)}")
+    return (non_zero(value, path),) * 3
+
+
+def boolean(value, path):
+    if not isinstance(value, bool):
+        fail(path, f"must be true or false, got {type_name(value)}")
+    return value
+
+
+def mesh_file(value, path, base_dir):
+    """Returns the path of a mesh file, after checking that it can be opened for reading."""
+    if not isinstance(value, str):
+        fail(path, f"must be a string, got {type_name(value)}")
+    if not value:
+        fail(path, "must not be empty")
+    if base_dir is None:
+        return value
+    # An absolute path stays as it is (os.path.join drops base_dir).
+    resolved = os.path.join(base_dir, value)
+    try:
+        with open(resolved, "rb"):
+            pass
+    except OSError as error:
+        fail(path, f'cannot read "{_escaped(value)}": {error.strerror}')
+    return resolved
+
+
+def read_meshes(items, materials, base_dir):
+    meshes = []
+    for i, value in enumerate(items):
+        path = child("meshes", i)
+        check_keys(value, path, MESH_KEYS)
+        meshes.append({
+            "file": mesh_file(required(value, "file", path), child(path, "file"), base_dir),
+            "material": material_of(value, path, materials),
+            "scale": optional(value, "scale", path, read_scale, (1.0, 1.0, 1.0)),
+            "rotate": optional(value, "rotate", path, vec3, (0.0, 0.0, 0.0)),
+            "translate": optional(value, "translate", path, vec3, (0.0, 0.0, 0.0)),
+            "smooth": optional(value, "smooth", path, boolean, True)})
+    return meshes
+
+
+def read_vertices(value, path):
+    """Returns the three vertices of an inline triangle, which must span an area."""
+    if not isinstance(value, list):
+        fail(path, f"must be an array of 3 points, got {type_name(value)}")
+    if len(value) != 3:
+        fail(path, f"must be an array of 3 points, got {len(value)} "
+                   f"element{'' if len(value) == 1 else 's'}")
+    a, b, c = (vec3(point, child(path, i)) for i, point in enumerate(value))
+    # Halved so that no difference overflows; only "exactly 0" matters here.
+    u = [y / 2 - x / 2 for x, y in zip(a, b)]
+    v = [y / 2 - x / 2 for x, y in zip(a, c)]
+    if not any((u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0])):
+        fail(path, "must span a triangle of non-zero area, got "
+                   + ", ".join(format_vector(p) for p in (a, b, c)))
+    return a, b, c
+
+
+def read_triangles(items, materials):
+    triangles = []
+    for i, value in enumerate(items):
+        path = child("triangles", i)
+        check_keys(value, path, ("vertices", "material"))
+        triangles.append({"vertices": read_vertices(required(value, "vertices", path),
+                                                    child(path, "vertices")),
+                          "material": material_of(value, path, materials)})
+    return triangles
+
+
+def read_scene(doc, base_dir=None):
+    """Returns the parsed document doc as a scene with its defaults; SceneError if bad.
+    Mesh files are looked up relative to base_dir (None: not looked up)."""
+    version = read_header(doc)
     scene = read_globals(doc)
+    scene["version"] = version
     arrays = {}
-    for key in ("lights", "spheres", "planes"):
+    for key in ("lights", "spheres", "planes") + VERSION_2_KEYS:
         arrays[key] = doc.get(key, [])
         if not isinstance(arrays[key], list):
             fail(key, f"must be an array, got {type_name(arrays[key])}")
@@ -340,7 +443,9 @@ def read_scene(doc):
                  for name, value in named.items()}
     scene.update(lights=read_lights(arrays["lights"]),
                  spheres=read_spheres(arrays["spheres"], materials),
-                 planes=read_planes(arrays["planes"], materials))
+                 planes=read_planes(arrays["planes"], materials),
+                 meshes=read_meshes(arrays["meshes"], materials, base_dir),
+                 triangles=read_triangles(arrays["triangles"], materials))
     return scene
 
 
@@ -378,9 +483,10 @@ def load_scene(path):
     """Returns the scene in the file at path; SceneError (or OSError) if it cannot."""
     with open(path, "rb") as stream:
         data = stream.read()
-    return read_scene(parse(data))
+    return read_scene(parse(data), os.path.dirname(os.path.abspath(path)))
 
 
-def validate(doc):
-    """Raises SceneError unless the parsed document doc follows SCENE.md."""
-    read_scene(doc)
+def validate(doc, base_dir=None):
+    """Raises SceneError unless the parsed document doc follows SCENE.md; mesh files
+    are looked up relative to base_dir when it is given."""
+    read_scene(doc, base_dir)
