@@ -69,6 +69,7 @@ LDLIBS += -lstdc++
 HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
 	scene_literal.o timing.o files.o \
 	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
+	devices.o multidev.o devstats.o frames.o \
 	outputs.o \
 	workmap.o image_common.o reference.o embedded.o) \
 	$(IMAGE_BACKEND)

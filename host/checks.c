@@ -2,6 +2,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "launch.h"
 
@@ -38,8 +39,8 @@ void checks_release_image(struct guarded_image *g)
 	g->image = g->parent = NULL;
 }
 
-cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s,
-				  char *err, size_t err_size)
+cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s, char *err,
+				  size_t err_size)
 {
 	size_t bytes = s->check_writes ? (size_t)s->width * s->height * sizeof(cl_uint)
 				       : UNUSED_BUFFER_BYTES;
@@ -60,10 +61,9 @@ cl_int checks_poison(struct device *dev, const struct render_settings *s,
 	status = clEnqueueFillBuffer(dev->queue, write_counts, &zero, sizeof(zero), 0,
 				     pixels * sizeof(cl_uint), 0, NULL, NULL);
 	if (status == CL_SUCCESS)
-		status = clEnqueueFillBuffer(dev->queue, g->parent, &poison, sizeof(poison), 0,
-					     image_float_bytes(s->width, s->height) +
-						     2 * g->guard_bytes,
-					     0, NULL, NULL);
+		status = clEnqueueFillBuffer(
+			dev->queue, g->parent, &poison, sizeof(poison), 0,
+			image_float_bytes(s->width, s->height) + 2 * g->guard_bytes, 0, NULL, NULL);
 	return status;
 }
 
@@ -102,4 +102,37 @@ int checks_device_fault_injected(void)
 	const char *fault = getenv("RTCL_TEST_DEVICE_FAULT");
 
 	return fault && strcmp(fault, "1") == 0;
+}
+
+/* Parses "K:N" from the environment variable name; 0 when set and well
+ * formed. */
+static int env_pair(const char *name, long *k, long *n)
+{
+	const char *value = getenv(name);
+	char *end;
+
+	if (!value)
+		return -1;
+	*k = strtol(value, &end, 10);
+	if (end == value || *end != ':')
+		return -1;
+	*n = strtol(end + 1, &end, 10);
+	return *end == '\0' ? 0 : -1;
+}
+
+void checks_piece_delay(int device)
+{
+	long k, ms;
+
+	if (env_pair("RTCL_TEST_SLOW_DEVICE", &k, &ms) == 0 && k == device && ms > 0) {
+		struct timespec wait = {ms / 1000, (ms % 1000) * 1000000L};
+		nanosleep(&wait, NULL);
+	}
+}
+
+int checks_piece_fault(int device, int nth_piece)
+{
+	long k, n;
+
+	return env_pair("RTCL_TEST_FAIL_DEVICE", &k, &n) == 0 && k == device && n == nth_piece;
 }

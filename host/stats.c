@@ -33,9 +33,8 @@ static int fill_json(FILE *file, const void *document)
 	return fputc('\n', file) == EOF ? -1 : 0;
 }
 
-/* Stages doc and releases it; returns 0, or -1 with a message. */
-static int stage_document(struct staged_file *staged, const char *path, json_t *doc, char *err,
-			  size_t err_size)
+int stats_stage_document(struct staged_file *staged, const char *path, json_t *doc, char *err,
+			 size_t err_size)
 {
 	int failed = !doc || files_stage_with(staged, path, fill_json, doc, err, err_size);
 
@@ -188,14 +187,14 @@ static json_t *times_document(const struct run *run)
 	double now = timing_now();
 
 	return json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:i}", "device_setup",
-			 run->device_ms, "scene_and_upload", t->scene, "build", t->build,
-			 "kernels", t->kernels, "read_back", t->read_back, "counting_run",
-			 run->counting_ms, "encode_and_write", (now - run->write_start) * 1e3,
-			 "total", (now - run->start) * 1e3, "launches", run->result.launches);
+			 run->device_ms, "scene_and_upload", t->scene, "build", t->build, "kernels",
+			 t->kernels, "read_back", t->read_back, "counting_run", run->counting_ms,
+			 "encode_and_write", (now - run->write_start) * 1e3, "total",
+			 (now - run->start) * 1e3, "launches", run->result.launches);
 }
 
-int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run,
-		    char *err, size_t err_size)
+int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run, char *err,
+		    size_t err_size)
 {
 	json_t *doc = run_document(run);
 
@@ -206,13 +205,13 @@ int stats_stage_run(struct staged_file *staged, const char *path, const struct r
 		add_flop_figures(doc, run);
 	if (doc)
 		add_device_figures(doc, run);
-	return stage_document(staged, path, doc, err, err_size);
+	return stats_stage_document(staged, path, doc, err, err_size);
 }
 
 int stats_stage_flops_sidecar(struct staged_file *staged, const char *path, const struct run *run,
 			      char *err, size_t err_size)
 {
-	return stage_document(staged, path, flops_sidecar(run), err, err_size);
+	return stats_stage_document(staged, path, flops_sidecar(run), err, err_size);
 }
 
 void stats_print_summary(const struct run *run)
@@ -252,7 +251,6 @@ void stats_print_summary(const struct run *run)
 		printf(", flops %s", run->opt->flops_path);
 	printf("\n");
 }
-
 
 void stats_print_times(const struct run *run)
 {
