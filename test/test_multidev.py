@@ -1,0 +1,144 @@
+"""Several devices in one process (--devices, --split) and animations
+(--frames), end to end under PoCL, which exposes two CPU devices with
+POCL_DEVICES="pthread pthread". A slower device is simulated with
+RTCL_TEST_SLOW_DEVICE=K:MS, a failing one with RTCL_TEST_FAIL_DEVICE=K:N
+(host/checks.h)."""
+import json
+import os
+import pathlib
+import subprocess
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+sys.path.insert(0, str(ROOT / "tools"))
+from rtcl_tools.ppm import pixels  # noqa: E402
+
+TWO = {"POCL_DEVICES": "pthread pthread"}
+SMALL = ["--size", "32x24"]
+
+
+def run(*args, env=None):
+    return subprocess.run([RTCL, *args], capture_output=True, text=True, cwd=ROOT, timeout=300,
+                          env={**os.environ, **TWO, **(env or {})})
+
+
+def expect_failure(result, status, message, directory):
+    assert result.returncode == status, (result.returncode, result.stderr)
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert message in lines[0], lines[0]
+    assert result.stdout == ""
+    assert sorted(os.listdir(directory)) == [], "a failed run left files behind"
+
+
+def frames_run(directory, *args, env=None):
+    stats = directory / "s.json"
+    result = run(*SMALL, "-o", str(directory / "f.ppm"), "--stats", str(stats), *args, env=env)
+    assert result.returncode == 0, result.stderr
+    return result, json.loads(stats.read_text())
+
+
+def test_frames_on_two_devices_match_one_device_byte_for_byte(tmp_path):
+    one, two = tmp_path / "one", tmp_path / "two"
+    one.mkdir()
+    two.mkdir()
+    _, stats1 = frames_run(one, "--frames", "3:6", "-p", "0", "-d", "0")
+    _, stats2 = frames_run(two, "--frames", "3:6", "--devices", "0:0,0:1")
+    names = [f"f_{f:04d}.ppm" for f in range(3, 7)]
+    assert sorted(p.name for p in two.iterdir()) == sorted(names + ["s.json"])
+    for name in names:
+        assert (one / name).read_bytes() == (two / name).read_bytes(), name
+    # Every frame differs: the camera moves.
+    assert len({pixels(two / name) for name in names}) == 4
+    assert len(stats1["multidevice"]["devices"]) == 1
+    assert len(stats2["multidevice"]["devices"]) == 2
+
+
+def test_first_frame_is_the_scenes_camera(tmp_path):
+    frames_run(tmp_path, "--frames", "0:2", "--devices", "0:1,0:0")
+    plain = run(*SMALL, "-o", str(tmp_path / "plain.ppm"), "-q")
+    assert plain.returncode == 0, plain.stderr
+    # The same pixels (the header's description names the frame).
+    assert pixels(tmp_path / "f_0000.ppm") == pixels(tmp_path / "plain.ppm")
+
+
+def test_every_frame_rendered_once_and_accounted(tmp_path):
+    result, stats = frames_run(tmp_path, "--frames", "1:7", "--devices", "all")
+    md = stats["multidevice"]
+    assert [d["index"] for d in md["devices"]] == [0, 1]
+    assert sum(d["pieces"] for d in md["devices"]) == 7
+    assert sum(d["pixels"] for d in md["devices"]) == 7 * 32 * 24
+    busy = [d["busy_ms"] for d in md["devices"]]
+    assert md["device_efficiency"] == pytest.approx(sum(busy) / 2 / max(busy), rel=1e-6)
+    assert "device-level efficiency" in result.stdout
+    assert "f_0001.ppm .. " in result.stdout and "f_0007.ppm" in result.stdout
+
+
+def test_dynamic_split_gives_a_slow_device_fewer_pieces(tmp_path):
+    _, stats = frames_run(tmp_path, "--frames", "0:9", "--devices", "0:0,0:1",
+                          env={"RTCL_TEST_SLOW_DEVICE": "1:400"})
+    pieces = [d["pieces"] for d in stats["multidevice"]["devices"]]
+    assert sum(pieces) == 10
+    assert pieces[1] < pieces[0], pieces
+    assert stats["multidevice"]["split"] == "dynamic"
+
+
+def test_static_split_gives_equal_shares_whatever_the_speed(tmp_path):
+    _, stats = frames_run(tmp_path, "--frames", "0:9", "--devices", "0:0,0:1", "--split",
+                          "static", env={"RTCL_TEST_SLOW_DEVICE": "1:100"})
+    pieces = [d["pieces"] for d in stats["multidevice"]["devices"]]
+    assert pieces == [5, 5]
+    assert stats["multidevice"]["split"] == "static"
+
+
+def test_a_device_failing_mid_render_writes_nothing(tmp_path):
+    result = run(*SMALL, "--frames", "0:5", "--devices", "0:0,0:1", "-o",
+                 str(tmp_path / "f.png"), "--stats", str(tmp_path / "s.json"),
+                 env={"RTCL_TEST_FAIL_DEVICE": "1:2"})
+    expect_failure(result, 1, "device 0:1 (", tmp_path)
+    assert "failed on its piece 2" in result.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--devices", "0"], "--devices: expected all or a list of PLATFORM:DEVICE indices"),
+    (["--devices", "0:0,"], "--devices: expected all or a list"),
+    (["--devices", "0:-1"], "--devices: expected all or a list"),
+    (["--devices", "0:0,0:0"], "--devices: device 0:0 is listed twice"),
+    (["--devices", "0:0", "-d", "0"], "--devices and -p/-d both choose devices"),
+    (["--devices", "0:0", "-k", "reference"], "the reference renderer runs on the host"),
+    (["--split", "half"], "--split: expected dynamic or static, got \"half\""),
+    (["--frames", "5"], "--frames: expected A:B"),
+    (["--frames", "5:x"], "--frames: expected A:B"),
+    (["--frames", "5:4"], "the last frame must not come before the first"),
+    (["--frames", "0:1000"], "at most 1000 frames"),
+    (["--frames", "0:1", "-r", "2"], "--frames renders each frame once"),
+    (["--frames", "0:1", "--flops", "x.npy"], "--frames renders each frame once"),
+])
+def test_option_errors(tmp_path, args, message):
+    result = run(*args, "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 2, message, tmp_path)
+
+
+def test_device_out_of_range_names_what_exists(tmp_path):
+    result = run("--devices", "0:0,0:5", "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 1, "--devices 0:5: device 5 does not exist on platform 0: it has 2",
+                   tmp_path)
+    result = run("--devices", "7:0", "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 1, "--devices 7:0: platform 7 does not exist", tmp_path)
+
+
+def test_frames_refuse_an_unwritable_frame_before_rendering(tmp_path):
+    (tmp_path / "f_0002.png").mkdir()
+    result = run(*SMALL, "--frames", "1:3", "-o", str(tmp_path / "f.png"))
+    assert result.returncode == 1, result.stderr
+    assert "f_0002.png" in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f_0002.png"]
+
+
+def test_stats_naming_a_frame_is_refused(tmp_path):
+    result = run(*SMALL, "--frames", "1:3", "-o", str(tmp_path / "f.png"), "--stats",
+                 str(tmp_path / "f_0003.png"))
+    expect_failure(result, 1, "name the same file", tmp_path)
