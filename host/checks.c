@@ -39,8 +39,8 @@ void checks_release_image(struct guarded_image *g)
 	g->image = g->parent = NULL;
 }
 
-cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s, char *err,
-				  size_t err_size)
+cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s,
+				  char *err, size_t err_size)
 {
 	size_t bytes = s->check_writes ? (size_t)s->width * s->height * sizeof(cl_uint)
 				       : UNUSED_BUFFER_BYTES;
@@ -61,9 +61,10 @@ cl_int checks_poison(struct device *dev, const struct render_settings *s,
 	status = clEnqueueFillBuffer(dev->queue, write_counts, &zero, sizeof(zero), 0,
 				     pixels * sizeof(cl_uint), 0, NULL, NULL);
 	if (status == CL_SUCCESS)
-		status = clEnqueueFillBuffer(
-			dev->queue, g->parent, &poison, sizeof(poison), 0,
-			image_float_bytes(s->width, s->height) + 2 * g->guard_bytes, 0, NULL, NULL);
+		status = clEnqueueFillBuffer(dev->queue, g->parent, &poison, sizeof(poison), 0,
+					     image_float_bytes(s->width, s->height) +
+						     2 * g->guard_bytes,
+					     0, NULL, NULL);
 	return status;
 }
 
@@ -135,4 +136,12 @@ int checks_piece_fault(int device, int nth_piece)
 	long k, n;
 
 	return env_pair("RTCL_TEST_FAIL_DEVICE", &k, &n) == 0 && k == device && n == nth_piece;
+}
+
+int checks_rank_dies(int rank, int nth_piece)
+{
+	long r, n;
+
+	return env_pair("RTCL_TEST_RANK_DIES", &r, &n) == 0 && r == rank && r != 0 &&
+	       n == nth_piece;
 }

@@ -2,8 +2,8 @@
  * with guard zones, the poison written over it before a checked launch, the
  * per-pixel write counts read back, and an injected device fault. Active
  * only with render_settings.check_writes (kernel tests) or
- * RTCL_TEST_DEVICE_FAULT=1, RTCL_TEST_SLOW_DEVICE and RTCL_TEST_FAIL_DEVICE
- * (CLI tests). */
+ * RTCL_TEST_DEVICE_FAULT=1, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE and
+ * RTCL_TEST_RANK_DIES (CLI tests). */
 #ifndef RTCL_CHECKS_H
 #define RTCL_CHECKS_H
 
@@ -29,8 +29,8 @@ void checks_release_image(struct guarded_image *g);
 
 /* Creates the per-pixel write-count buffer (a small placeholder without
  * check_writes, since the kernels always take the argument). */
-cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s, char *err,
-				  size_t err_size);
+cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s,
+				  char *err, size_t err_size);
 
 /* With check_writes, enqueues the poison over the image and its guard zones
  * and zeroes the write counts; otherwise does nothing. */
@@ -40,8 +40,7 @@ cl_int checks_poison(struct device *dev, const struct render_settings *s,
 /* With check_writes: reads the per-pixel write counts into
  * result->write_counts and checks the guard zones (result->guards_intact). */
 cl_int checks_read(struct device *dev, const struct render_settings *s,
-		   const struct guarded_image *g, cl_mem write_counts,
-		   struct render_result *result);
+		   const struct guarded_image *g, cl_mem write_counts, struct render_result *result);
 
 /* RTCL_TEST_DEVICE_FAULT=1: the last launch of a frame fails as a device that
  * failed mid-render does (there is no way to make a real one fail on demand). */
@@ -55,5 +54,9 @@ void checks_piece_delay(int device);
 /* RTCL_TEST_FAIL_DEVICE=K:N: device K's N-th piece fails, as a device that
  * fails mid-render does. */
 int checks_piece_fault(int device, int nth_piece);
+
+/* RTCL_TEST_RANK_DIES=R:N: MPI rank R (not 0) dies (SIGKILL) when it is
+ * given its N-th piece, as a node that goes down. */
+int checks_rank_dies(int rank, int nth_piece);
 
 #endif

@@ -260,8 +260,8 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 /* Applies option c with its value arg (NULL for an option without one).
  * Returns 0, or -1 with a message; a flat switch, one case per option. */
 /* One of two words: *second is set when it is the second. */
-static int parse_choice(const char *option, const char *text, const char *first, const char *second,
-			int *is_second, char *err, size_t err_size)
+static int parse_choice(const char *option, const char *text, const char *first,
+			const char *second, int *is_second, char *err, size_t err_size)
 {
 	if (strcmp(text, first) != 0 && strcmp(text, second) != 0) {
 		snprintf(err, err_size, "%s: expected %s or %s, got \"%s\"", option, first, second,

@@ -84,46 +84,63 @@ int frames_check_outputs(const struct options *opt, char *err, size_t err_size)
 	return 0;
 }
 
-/* What the devices' threads share. */
-struct frames_context {
-	const struct run *run;
-	struct device *devs;
-	char (*names)[PATH_MAX];
-	struct staged_file *staged; /* one per frame, then the --stats document */
-};
-
-/* A multidev render_piece: frame first + piece, rendered whole and staged. */
-static int render_frame(void *context, int device, int piece, long long *pixels, char *err,
-			size_t err_size)
+int frames_output_open(struct frames_output *o, const struct options *opt, char *err,
+		       size_t err_size)
 {
-	const struct frames_context *c = context;
-	const struct run *run = c->run;
+	int n = frame_count(opt);
+
+	o->names = calloc((size_t)n, PATH_MAX);
+	o->staged = calloc((size_t)n + 1, sizeof(struct staged_file));
+	if (!o->names || !o->staged) {
+		frames_output_close(o, 0);
+		snprintf(err, err_size, "out of host memory for %d frames", n);
+		return -1;
+	}
+	for (int i = 0; i < n; i++)
+		frames_output_name(opt->output, opt->frames[0] + i, o->names[i]);
+	return 0;
+}
+
+void frames_output_close(struct frames_output *o, int staged_count)
+{
+	for (int i = 0; o->staged && i < staged_count; i++)
+		files_discard(&o->staged[i]);
+	free(o->names);
+	free(o->staged);
+	o->names = NULL;
+	o->staged = NULL;
+}
+
+int frames_render_frame(const struct run *run, struct device *dev, int piece,
+			struct render_result *result, char *err, size_t err_size)
+{
+	const struct options *opt = run->opt;
+	struct scene scene = *run->scene;
+
+	frames_orbit(&run->scene->camera, opt->frames[0] + piece, opt->frames[0], opt->frames[1],
+		     &scene.camera);
+	return render(dev, &scene, &run->settings, result, err, err_size);
+}
+
+int frames_stage_image(const struct run *run, struct frames_output *o, int piece, const float *rgb,
+		       char *err, size_t err_size)
+{
 	const struct render_settings *s = &run->settings;
 	const struct options *opt = run->opt;
-	int frame = opt->frames[0] + piece;
-	struct scene scene = *run->scene;
-	struct render_result result;
 	char description[1024];
 	struct image_meta meta = {"rtcl " RTCL_VERSION, description,
 				  opt->linear_encoding ? IMAGE_LINEAR : IMAGE_SRGB};
 
-	frames_orbit(&run->scene->camera, frame, opt->frames[0], opt->frames[1], &scene.camera);
-	if (render(&c->devs[device], &scene, s, &result, err, err_size))
-		return -1;
 	snprintf(description, sizeof(description),
-		 "scene %s, kernel %s, %dx%d, max depth %d, frame %d of %d..%d", scene.source,
-		 opt->kernel, s->width, s->height, s->max_depth, frame, opt->frames[0],
-		 opt->frames[1]);
-	int failed = image_stage(&c->staged[piece], c->names[piece], result.rgb, s->width,
-				 s->height, &meta, err, err_size);
-	render_result_free(&result);
-	*pixels = (long long)s->width * s->height;
-	return failed ? -1 : 0;
+		 "scene %s, kernel %s, %dx%d, max depth %d, frame %d of %d..%d", run->scene->source,
+		 opt->kernel, s->width, s->height, s->max_depth, opt->frames[0] + piece,
+		 opt->frames[0], opt->frames[1]);
+	return image_stage(&o->staged[piece], o->names[piece], rgb, s->width, s->height, &meta, err,
+			   err_size);
 }
 
 /* The --stats document of an animation. */
-static json_t *frames_document(const struct run *run, struct device *devs,
-			       const struct device_work *work, int count, double wall_ms)
+static json_t *frames_document(const struct run *run, const struct frames_report *r)
 {
 	const struct render_settings *s = &run->settings;
 
@@ -131,12 +148,12 @@ static json_t *frames_document(const struct run *run, struct device *devs,
 			 RTCL_VERSION, "kernel", s->kernel->name, "width", s->width, "height",
 			 s->height, "max_depth", s->max_depth, "scene", run->scene->source,
 			 "frames", run->opt->frames[0], run->opt->frames[1], "camera_path", "orbit",
-			 "wall_ms", wall_ms, "multidevice",
-			 devstats_json(devs, work, count, run->opt->split_static, "frame"));
+			 "wall_ms", r->wall_ms, "multidevice",
+			 devstats_json(r->devs, r->ranks, r->work, r->count, run->opt->split_static,
+				       "frame"));
 }
 
-static void print_summary(const struct run *run, struct device *devs,
-			  const struct device_work *work, int count, double wall_ms)
+static void print_summary(const struct run *run, const struct frames_report *r)
 {
 	const struct render_settings *s = &run->settings;
 	const struct options *opt = run->opt;
@@ -146,76 +163,80 @@ static void print_summary(const struct run *run, struct device *devs,
 	printf("frames:  %d..%d (%d), camera orbit, %dx%d, max depth %d, scene %s, kernel %s\n",
 	       opt->frames[0], opt->frames[1], n, s->width, s->height, s->max_depth,
 	       run->scene->source, s->kernel->name);
-	devstats_print(stdout, devs, work, count, "frame");
-	printf("time:    %.1f ms for %d frame%s (%.1f ms each), %s split\n", wall_ms, n,
-	       n == 1 ? "" : "s", wall_ms / n, opt->split_static ? "static" : "dynamic");
+	devstats_print(stdout, r->devs, r->ranks, r->work, r->count, "frame");
+	printf("time:    %.1f ms for %d frame%s (%.1f ms each), %s split\n", r->wall_ms, n,
+	       n == 1 ? "" : "s", r->wall_ms / n, opt->split_static ? "static" : "dynamic");
 	frames_output_name(opt->output, opt->frames[0], first);
 	frames_output_name(opt->output, opt->frames[1], last);
 	printf("output:  %s%s%s\n", first, n > 1 ? " .. " : "", n > 1 ? last : "");
 }
 
-static void discard_all(struct staged_file *staged, int n)
+int frames_commit(const struct run *run, struct frames_output *o, const struct frames_report *r,
+		  char *err, size_t err_size)
 {
-	for (int i = 0; i < n; i++)
-		files_discard(&staged[i]);
-}
-
-/* Stages the --stats document after the frames and commits them all. */
-static int commit_all(struct frames_context *c, struct device_work *work, int count, double wall_ms,
-		      char *err, size_t err_size)
-{
-	const struct options *opt = c->run->opt;
+	const struct options *opt = run->opt;
 	int n = frame_count(opt);
 
 	if (opt->stats_path) {
-		if (stats_stage_document(&c->staged[n], opt->stats_path,
-					 frames_document(c->run, c->devs, work, count, wall_ms),
+		if (stats_stage_document(&o->staged[n], opt->stats_path, frames_document(run, r),
 					 err, err_size))
 			return -1;
 		n++;
 	}
 	interrupt_hold();
-	int ret = files_commit(c->staged, n, err, err_size);
+	int ret = files_commit(o->staged, n, err, err_size);
 	if (ret == 0)
 		interrupt_set_outcome("the outputs were written");
 	interrupt_release();
+	if (ret == 0 && !opt->quiet)
+		print_summary(run, r);
 	return ret;
+}
+
+/* What the devices' threads share. */
+struct frames_context {
+	const struct run *run;
+	struct device *devs;
+	struct frames_output *output;
+};
+
+/* A multidev render_piece: frame first + piece, rendered whole and staged. */
+static int render_piece(void *context, int device, int piece, long long *pixels, char *err,
+			size_t err_size)
+{
+	const struct frames_context *c = context;
+	const struct render_settings *s = &c->run->settings;
+	struct render_result result;
+
+	if (frames_render_frame(c->run, &c->devs[device], piece, &result, err, err_size))
+		return -1;
+	int failed = frames_stage_image(c->run, c->output, piece, result.rgb, err, err_size);
+	render_result_free(&result);
+	*pixels = (long long)s->width * s->height;
+	return failed ? -1 : 0;
 }
 
 int frames_render(struct run *run, struct device *devs, int count, char *err, size_t err_size)
 {
 	int n = frame_count(run->opt);
 	struct device_work work[DEVICES_MAX];
-	struct frames_context c = {run, devs, calloc((size_t)n, PATH_MAX),
-				   calloc((size_t)n + 1, sizeof(struct staged_file))};
-	struct multidev_job job = {n,	 run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
-				   NULL, render_frame,
-				   NULL, &c};
-	int ret = -1;
+	struct frames_output output;
+	struct frames_context c = {run, devs, &output};
+	struct multidev_job job = {.piece_count = n,
+				   .split = run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+				   .render_piece = render_piece,
+				   .context = &c};
 
-	if (!c.names || !c.staged) {
-		snprintf(err, err_size, "out of host memory for %d frames", n);
-		goto out_free;
-	}
-	for (int i = 0; i < n; i++)
-		frames_output_name(run->opt->output, run->opt->frames[0] + i, c.names[i]);
+	if (frames_output_open(&output, run->opt, err, err_size))
+		return -1;
 	run->settings.progress = 0; /* several threads: no one progress line */
 	double start = timing_now();
 	if (multidev_run(&job, devs, count, work, err, err_size)) {
-		discard_all(c.staged, n);
-		goto out_free;
+		frames_output_close(&output, n);
+		return -1;
 	}
-	double wall_ms = (timing_now() - start) * 1e3;
-	if (commit_all(&c, work, count, wall_ms, err, err_size)) {
-		discard_all(c.staged, n + 1);
-		goto out_free;
-	}
-	if (!run->opt->quiet)
-		print_summary(run, devs, work, count, wall_ms);
-	ret = 0;
-
-out_free:
-	free(c.names);
-	free(c.staged);
-	return ret;
+	struct frames_report report = {devs, NULL, work, count, (timing_now() - start) * 1e3};
+	int failed = frames_commit(run, &output, &report, err, err_size);
+	frames_output_close(&output, n + 1);
+	return failed ? -1 : 0;
 }

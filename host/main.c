@@ -18,6 +18,7 @@
 #include "frames.h"
 #include "embedded.h"
 #include "interrupt.h"
+#include "mpi_render.h"
 #include "outputs.h"
 #include "render.h"
 #include "scene.h"
@@ -177,11 +178,30 @@ static int answer_query(const struct options *opt, char *err, size_t err_size)
 	return 0;
 }
 
+/* --mpi: under mpirun, rank 0 hands out the pieces (mpi_render.h). Returns
+ * the exit status. */
+static int render_mpi(struct run *run)
+{
+	if (!mpi_render_available()) {
+		fprintf(stderr, "rtcl: %s\n", MPI_MISSING_MESSAGE);
+		return EXIT_FAILED;
+	}
+	if (!run->opt->frames_given) {
+		fprintf(stderr, "rtcl: --mpi: one image over several ranks needs the piece "
+				"interface, not in this build yet; --mpi --frames A:B spreads an "
+				"animation's frames\n");
+		return EXIT_FAILED;
+	}
+	return mpi_render_frames(run);
+}
+
 /* Renders and writes the outputs; returns the exit status. */
 static int render_and_write(struct run *run, char *err, size_t err_size)
 {
 	int checked;
 
+	if (run->opt->mpi)
+		return render_mpi(run);
 	if (run->opt->frames_given)
 		return render_frames(run, err, err_size);
 	checked = outputs_check(run->opt, err, err_size);

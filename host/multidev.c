@@ -38,6 +38,12 @@ static int take_piece(struct dispenser *d, int k)
 {
 	int piece = -1;
 
+	if (d->job->take_piece) {
+		pthread_mutex_lock(&d->lock);
+		int failed = d->failed;
+		pthread_mutex_unlock(&d->lock);
+		return failed ? -1 : d->job->take_piece(d->job->context, k);
+	}
 	pthread_mutex_lock(&d->lock);
 	if (d->failed)
 		piece = -1;
@@ -54,6 +60,27 @@ static void mark_failed(struct dispenser *d)
 	pthread_mutex_lock(&d->lock);
 	d->failed = 1;
 	pthread_mutex_unlock(&d->lock);
+}
+
+/* "DEVICE P:D (NAME): what failed" */
+static void describe_failure(const struct worker *w, char *out, size_t size)
+{
+	snprintf(out, size, "device %d:%d (%s): %s", w->dev->platform_index, w->dev->device_index,
+		 w->dev->name, w->err);
+}
+
+/* Stops the job after w's failure, telling the job's failed callback. */
+static void fail(struct worker *w)
+{
+	const struct multidev_job *job = w->dispenser->job;
+	char message[WORKER_ERR_SIZE + 600];
+
+	w->failed = 1;
+	mark_failed(w->dispenser);
+	if (job->failed) {
+		describe_failure(w, message, sizeof(message));
+		job->failed(job->context, w->index, message);
+	}
 }
 
 /* One piece, with the test-only delay and fault (checks.h) around it. */
@@ -80,16 +107,14 @@ static void *work_loop(void *arg)
 	int piece;
 
 	if (job->begin && job->begin(job->context, w->index, w->err, sizeof(w->err))) {
-		w->failed = 1;
-		mark_failed(w->dispenser);
+		fail(w);
 		return NULL;
 	}
 	w->work->setup_ms = timing_lap_ms(&lap);
 	while ((piece = take_piece(w->dispenser, w->index)) >= 0) {
 		long long pixels = 0;
 		if (render_one(w, piece, &pixels)) {
-			w->failed = 1;
-			mark_failed(w->dispenser);
+			fail(w);
 			break;
 		}
 		w->work->pieces++;
@@ -119,8 +144,7 @@ static void report_failure(const struct worker *workers, int count, char *err, s
 	for (int k = 0; k < count; k++) {
 		const struct worker *w = &workers[k];
 		if (w->failed) {
-			snprintf(err, err_size, "device %d:%d (%s): %s", w->dev->platform_index,
-				 w->dev->device_index, w->dev->name, w->err);
+			describe_failure(w, err, err_size);
 			return;
 		}
 	}

@@ -41,6 +41,11 @@ struct multidev_job {
 	/* Optional: once per device after its last piece, also after a failure
 	 * (releases what begin made). */
 	void (*end)(void *context, int device);
+	/* Optional: hands out device's next piece instead of the job's own
+	 * counter (under MPI, rank 0 does); -1 when there is none. */
+	int (*take_piece)(void *context, int device);
+	/* Optional: told at once when a piece fails, with the job's message. */
+	void (*failed)(void *context, int device, const char *message);
 	void *context;
 };
 

@@ -158,8 +158,8 @@ static int stage_all(const struct run *run, char *sidecar, struct staged_file *s
 
 	snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
 		 run->scene->source, opt->kernel, s->width, s->height, s->max_depth);
-	if (image_stage(&staged[n++], opt->output, run->result.rgb, s->width, s->height, &meta, err,
-			err_size))
+	if (image_stage(&staged[n++], opt->output, run->result.rgb, s->width, s->height, &meta,
+			err, err_size))
 		goto out_discard;
 	if (opt->work_map_path && stage_work_map(&staged[n++], run, err, err_size))
 		goto out_discard;

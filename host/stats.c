@@ -187,14 +187,14 @@ static json_t *times_document(const struct run *run)
 	double now = timing_now();
 
 	return json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:i}", "device_setup",
-			 run->device_ms, "scene_and_upload", t->scene, "build", t->build, "kernels",
-			 t->kernels, "read_back", t->read_back, "counting_run", run->counting_ms,
-			 "encode_and_write", (now - run->write_start) * 1e3, "total",
-			 (now - run->start) * 1e3, "launches", run->result.launches);
+			 run->device_ms, "scene_and_upload", t->scene, "build", t->build,
+			 "kernels", t->kernels, "read_back", t->read_back, "counting_run",
+			 run->counting_ms, "encode_and_write", (now - run->write_start) * 1e3,
+			 "total", (now - run->start) * 1e3, "launches", run->result.launches);
 }
 
-int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run, char *err,
-		    size_t err_size)
+int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run,
+		    char *err, size_t err_size)
 {
 	json_t *doc = run_document(run);
 
@@ -251,6 +251,7 @@ void stats_print_summary(const struct run *run)
 		printf(", flops %s", run->opt->flops_path);
 	printf("\n");
 }
+
 
 void stats_print_times(const struct run *run)
 {

@@ -60,8 +60,8 @@ int stats_stage_document(struct staged_file *staged, const char *path, struct js
 			 char *err, size_t err_size);
 
 /* The --stats document. */
-int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run, char *err,
-		    size_t err_size);
+int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run,
+		    char *err, size_t err_size);
 
 /* The counting run's per-work-item flops as a .npy file of little-endian
  * uint64 (numpy.load reads it directly): shape (global y, global x), or (1,

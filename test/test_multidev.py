@@ -6,6 +6,7 @@ RTCL_TEST_SLOW_DEVICE=K:MS, a failing one with RTCL_TEST_FAIL_DEVICE=K:N
 import json
 import os
 import pathlib
+import re
 import subprocess
 import sys
 
@@ -142,3 +143,85 @@ def test_stats_naming_a_frame_is_refused(tmp_path):
     result = run(*SMALL, "--frames", "1:3", "-o", str(tmp_path / "f.png"), "--stats",
                  str(tmp_path / "f_0003.png"))
     expect_failure(result, 1, "name the same file", tmp_path)
+
+
+# ---- MPI: mpirun --oversubscribe -np 3 over loopback ------------------------
+
+MPIRUN = ["mpirun", "--oversubscribe", "-np", "3"]
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp"}
+
+
+def built_with_mpi():
+    probe = subprocess.run([RTCL, "--mpi", "--size", "8x8", "-o", "/nonexistent/x.png"],
+                           capture_output=True, text=True, timeout=60)
+    return "built without MPI" not in probe.stderr
+
+
+needs_mpi = pytest.mark.skipif(
+    subprocess.run(["sh", "-c", "command -v mpirun"], capture_output=True).returncode != 0
+    or not built_with_mpi(), reason="rtcl built without MPI, or no mpirun")
+
+
+def mpi_run(*args, env=None):
+    return subprocess.run([*MPIRUN, RTCL, "--mpi", *args], capture_output=True, text=True,
+                          cwd=ROOT, timeout=300, env={**os.environ, **MPI_ENV, **(env or {})})
+
+
+@needs_mpi
+def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
+    ranks, single = tmp_path / "ranks", tmp_path / "single"
+    ranks.mkdir()
+    single.mkdir()
+    result = mpi_run(*SMALL, "--frames", "0:7", "-o", str(ranks / "f.ppm"), "--stats",
+                     str(ranks / "s.json"))
+    assert result.returncode == 0, result.stderr
+    frames_run(single, "--frames", "0:7", "-d", "0")
+    stats = json.loads((ranks / "s.json").read_text())
+    devices = stats["multidevice"]["devices"]
+    assert sorted(d["rank"] for d in devices) == [0, 1, 2]
+    assert sum(d["pieces"] for d in devices) == 8
+    assert sum(d["pixels"] for d in devices) == 8 * 32 * 24
+    for f in range(8):
+        name = f"f_{f:04d}.ppm"
+        assert (ranks / name).read_bytes() == (single / name).read_bytes(), name
+    assert result.stdout.count("rank ") == 3
+
+
+@needs_mpi
+def test_mpi_static_split_gives_every_rank_its_share(tmp_path):
+    result = mpi_run(*SMALL, "--frames", "0:8", "--split", "static", "-o",
+                     str(tmp_path / "f.ppm"), "--stats", str(tmp_path / "s.json"),
+                     env={"RTCL_TEST_SLOW_DEVICE": "0:50"})
+    assert result.returncode == 0, result.stderr
+    devices = json.loads((tmp_path / "s.json").read_text())["multidevice"]["devices"]
+    assert [d["pieces"] for d in devices] == [3, 3, 3]
+
+
+@needs_mpi
+def test_mpi_device_failure_on_a_rank_writes_nothing(tmp_path):
+    result = mpi_run(*SMALL, "--frames", "0:8", "-o", str(tmp_path / "f.ppm"),
+                     env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
+    assert result.returncode == 1, result.stderr
+    ours = [line for line in result.stderr.splitlines() if line.startswith("rtcl:")]
+    assert len(ours) == 1, result.stderr
+    assert re.match(r"rtcl: rank \d, device 0:0 \(.*\): the device failed on its piece 2", ours[0])
+    assert os.listdir(tmp_path) == []
+
+
+@needs_mpi
+def test_mpi_rank_that_dies_fails_the_run_with_no_output(tmp_path):
+    result = mpi_run(*SMALL, "--frames", "0:11", "-o", str(tmp_path / "f.ppm"), "--stats",
+                     str(tmp_path / "s.json"), env={"RTCL_TEST_RANK_DIES": "2:2"})
+    assert result.returncode != 0
+    assert "rank 2" in result.stderr and "signal 9" in result.stderr, result.stderr
+    assert "no output written" in result.stderr
+    assert os.listdir(tmp_path) == [], "a dead rank left files behind"
+
+
+def test_mpi_without_frames_or_without_mpi_says_what_to_do(tmp_path):
+    result = run("--mpi", "-o", str(tmp_path / "x.png"))
+    assert result.returncode == 1
+    assert ("--mpi: rtcl was built without MPI: install Open MPI" in result.stderr
+            or "--mpi --frames A:B" in result.stderr), result.stderr
+    assert os.listdir(tmp_path) == []
