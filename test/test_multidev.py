@@ -225,3 +225,13 @@ def test_mpi_without_frames_or_without_mpi_says_what_to_do(tmp_path):
     assert ("--mpi: rtcl was built without MPI: install Open MPI" in result.stderr
             or "--mpi --frames A:B" in result.stderr), result.stderr
     assert os.listdir(tmp_path) == []
+
+
+def test_help_and_man_page_teach_the_options():
+    help_text = run("--help").stdout
+    man = (ROOT / "docs" / "rtcl.1").read_text()
+    for option in ["--devices LIST|all", "--split dynamic|static", "--frames A:B", "--mpi",
+                   "out_0000.png"]:
+        assert option in help_text, option
+    for option in [r"\-\-devices", r"\-\-split", r"\-\-frames", r"\-\-mpi"]:
+        assert option in man, option
