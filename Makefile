@@ -40,7 +40,11 @@ CFLAGS ?= -O2 -g
 CFLAGS += -std=c11 $(WARNINGS) -pthread
 CXXFLAGS ?= -O2 -g
 CXXFLAGS += -std=c++17 $(WARNINGS)
-LDLIBS = -lOpenCL -ljansson -lm -pthread
+# Mesh files (docs/SCENE.md version 2) through the Open Asset Import Library.
+# Expanded when used, like OIIO_LIBS below.
+ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
+ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
+LDLIBS = -lOpenCL -ljansson $(ASSIMP_LIBS) -lm -pthread
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -78,7 +82,7 @@ endif
 
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
-	scene_literal.o timing.o files.o \
+	scene_literal.o scene_material.o scene_mesh.o mesh.o timing.o files.o \
 	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
 	devices.o multidev.o devstats.o frames.o \
 	outputs.o \
@@ -99,7 +103,7 @@ $(BUILD)/embedded.c: tools/build/embed.py $(EMBEDDED) | $(BUILD)
 	$(PYTHON) tools/build/embed.py $@ $(EMBEDDED)
 
 $(BUILD)/%.o: host/%.c | $(BUILD)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -c -o $@ $<
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(ASSIMP_CFLAGS) -MMD -c -o $@ $<
 
 $(BUILD)/mpi_render.o: host/mpi_render.c | $(BUILD)
 	$(CC) $(CPPFLAGS) $(MPI_CFLAGS) $(CFLAGS) -MMD -c -o $@ $<
@@ -153,13 +157,13 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 
 # The scene loader and what it calls: its parts, the file reader, the interrupt
 # bookkeeping the file module keeps.
-FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/files.c \
-	host/interrupt.c host/devscene.c
+FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c \
+	host/scene_mesh.c host/mesh.c host/files.c host/interrupt.c host/devscene.c
 
 $(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h $(FUZZ_SOURCES) host/scene.h \
-		host/scene_loader.h host/files.h host/devscene.h cl/rtcl_shared.h
+		host/scene_loader.h host/mesh.h host/files.h host/devscene.h cl/rtcl_shared.h
 	mkdir -p $(FUZZ_DIR)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson -lm
+	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson $(ASSIMP_LIBS) -lm
 
 fuzz: $(FUZZ_DIR)/fuzz_scene
 	mkdir -p $(FUZZ_DIR)/corpus $(FUZZ_DIR)/artifacts
@@ -188,6 +192,8 @@ TOOL_SCRIPTS := $(wildcard tools/*.py)
 TOOL_MODULES := $(wildcard tools/rtcl_tools/*.py)
 TOOL_COMMANDS := $(addprefix rtcl-,$(subst _,-,$(basename $(notdir $(TOOL_SCRIPTS)))))
 SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
+# The mesh files the version 2 scenes place, relative to them.
+SCENE_MODELS := $(wildcard scenes/models/*)
 
 install: $(BIN)
 	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools
@@ -195,6 +201,8 @@ install: $(BIN)
 	sed 's|/usr/local/share/rtcl|$(PREFIX)/share/rtcl|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
+	$(INSTALL) -d $(DATADIR)/scenes/models
+	$(INSTALL) -m 644 $(SCENE_MODELS) $(DATADIR)/scenes/models
 	$(INSTALL) -m 755 $(TOOL_SCRIPTS) $(DATADIR)/tools
 	$(INSTALL) -m 644 $(TOOL_MODULES) $(DATADIR)/tools/rtcl_tools
 	for script in $(notdir $(TOOL_SCRIPTS)); do \
@@ -210,10 +218,11 @@ install: $(BIN)
 uninstall:
 	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
+	rm -f $(addprefix $(DATADIR)/scenes/models/,$(notdir $(SCENE_MODELS)))
 	rm -f $(addprefix $(DATADIR)/tools/,$(notdir $(TOOL_SCRIPTS)))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
 	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__
-	for dir in $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools $(DATADIR)/tools $(DATADIR); do \
+	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools $(DATADIR)/tools $(DATADIR); do \
 		if [ -d $$dir ] && [ -z "$$(ls -A $$dir)" ]; then rmdir $$dir; fi; \
 	done
 

@@ -5,18 +5,18 @@
  * paper's geometry. The assignment is fixed, so work_counter is unused. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *work_counter, __global ulong *counts,
-		     __global uint *write_counts)
+		     __global uint *write_counts, struct rt_piece piece)
 {
 	struct tracer tr;
 
 	(void)work_counter;
-	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
-	struct chunk_grid grid = chunk_grid(tr.scene);
+	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
+	struct chunk_grid grid = chunk_grid(&piece);
 
 	for (uint cy = get_group_id(1); cy < grid.down; cy += get_num_groups(1))
 		for (uint cx = get_group_id(0); cx < grid.across; cx += get_num_groups(0))
 			render_pixel_if_inside(
-				&tr, image, write_counts,
+				&tr, &piece, image, write_counts,
 				chunk_pixel(&grid, cx, cy, get_local_id(0), get_local_id(1)));
-	store_counts(&tr, counts, global_item());
+	store_counts(&tr, global_item());
 }

@@ -10,14 +10,14 @@
  * number of the next chunk to hand out, to 0 before every launch. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *next_chunk_counter,
-		     __global ulong *counts, __global uint *write_counts)
+		     __global ulong *counts, __global uint *write_counts, struct rt_piece piece)
 {
 	__local uint group_chunk; /* the chunk item (0,0) took for the group */
 	struct tracer tr;
 	bool first_item = get_local_id(0) == 0 && get_local_id(1) == 0;
 
-	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
-	struct chunk_grid grid = chunk_grid(tr.scene);
+	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
+	struct chunk_grid grid = chunk_grid(&piece);
 	uint chunks = chunk_count(&grid);
 
 	if (first_item)
@@ -26,7 +26,7 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	uint chunk = group_chunk;
 	while (chunk < chunks) {
 		render_pixel_if_inside(
-			&tr, image, write_counts,
+			&tr, &piece, image, write_counts,
 			numbered_chunk_pixel(&grid, chunk, get_local_id(0), get_local_id(1)));
 		/* Everyone has read group_chunk before it is replaced. */
 		barrier(CLK_LOCAL_MEM_FENCE);
@@ -35,5 +35,5 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 		barrier(CLK_LOCAL_MEM_FENCE);
 		chunk = group_chunk;
 	}
-	store_counts(&tr, counts, global_item());
+	store_counts(&tr, global_item());
 }

@@ -1,5 +1,5 @@
 /* Intersection (docs/RENDERING.md, trace step 1): the nearest hit of a ray
- * over every sphere and plane, or any hit for shadow rays. Part of the
+ * over every sphere, triangle and plane, or any hit for shadow rays. Part of the
  * tracer: built after tracer.cl (host/program.c lists the order). */
 
 /* A frame across a ray: unit u and v, perpendicular to its direction d and to
@@ -91,6 +91,64 @@ static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt
 	return t > 0.0f ? t : 0.0f;
 }
 
+/* The ray-triangle test, one triangle by index (Moller and Trumbore, "Fast,
+ * Minimum Storage Ray/Triangle Intersection", JGT 1997): true when the ray
+ * meets triangle i, from either side, at 0 < t < t_max, with *t and the
+ * barycentric coordinates of v1 and v2 in *uv. A ray in the triangle's plane
+ * (det 0) misses it. Counts its flops, stage by stage (FLOPS_TRIANGLE_*): the
+ * brute-force loop below and an acceleration structure's leaves call it. */
+static bool triangle_hit(struct tracer *tr, int i, float3 o, float3 d, float t_max, float *t,
+			 float2 *uv)
+{
+	RTCL_SCENE_SPACE const struct rt_triangle *tri = &tr->triangles[i];
+	float3 e1 = tri->e1.xyz, e2 = tri->e2.xyz;
+	float3 p = cross3(d, e2);
+	float det = dot3(e1, p);
+
+	COUNT_FLOPS(tr, FLOPS_TRIANGLE_DET);
+	if (det == 0.0f)
+		return false;
+	float inv_det = 1.0f / det;
+	float3 s = o - tri->v0.xyz;
+	float u = dot3(s, p) * inv_det;
+	COUNT_FLOPS(tr, FLOPS_TRIANGLE_U);
+	if (u < 0.0f || u > 1.0f)
+		return false;
+	float3 q = cross3(s, e1);
+	float v = dot3(d, q) * inv_det;
+	COUNT_FLOPS(tr, FLOPS_TRIANGLE_V);
+	if (v < 0.0f || u + v > 1.0f)
+		return false;
+	float hit_t = dot3(e2, q) * inv_det;
+	COUNT_FLOPS(tr, FLOPS_TRIANGLE_T);
+	if (!(hit_t > 0.0f && hit_t < t_max))
+		return false;
+	*t = hit_t;
+	*uv = (float2)(u, v);
+	return true;
+}
+
+/* Every triangle in turn (--accel none): takes the nearest hit below
+ * *nearest into *best, or with any_hit the first. */
+static void triangles_brute_force(struct tracer *tr, float3 o, float3 d, bool any_hit,
+				  float *nearest, struct hit *best)
+{
+	for (int i = 0; i < tr->scene->triangle_count; i++) {
+		float t;
+		float2 uv;
+
+		if (!triangle_hit(tr, i, o, d, *nearest, &t, &uv))
+			continue;
+		*nearest = t;
+		best->sphere = -1;
+		best->triangle = i;
+		best->u = uv.x;
+		best->v = uv.y;
+		if (any_hit)
+			return;
+	}
+}
+
 #if RT_SPHERE_GROUP != 4
 #error "intersect_scene tests spheres four at a time"
 #endif
@@ -101,7 +159,7 @@ static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt
  * work-items of a SIMD group tracing different kinds still run it together. */
 static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float max_t, bool any_hit)
 {
-	struct hit best = {0.0f, -1, -1};
+	struct hit best = {0.0f, -1, -1, -1, 0.0f, 0.0f};
 	float nearest = max_t;
 
 	/* RT_SPHERE_GROUP spheres at a time, so that when the ray misses them
@@ -129,17 +187,22 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 				break;
 		}
 	}
-	for (int i = 0; i < tr->scene->plane_count && !(any_hit && best.sphere >= 0); i++) {
+	if (!(any_hit && best.sphere >= 0))
+		triangles_brute_force(tr, o, d, any_hit, &nearest, &best);
+	for (int i = 0;
+	     i < tr->scene->plane_count && !(any_hit && (best.sphere >= 0 || best.triangle >= 0));
+	     i++) {
 		float t = intersect_plane(tr, &tr->planes[i], o, d);
 		if (t > 0.0f && t < nearest) {
 			nearest = t;
 			best.sphere = -1;
+			best.triangle = -1;
 			best.plane = i;
 			if (any_hit)
 				break;
 		}
 	}
-	if (best.sphere >= 0 || best.plane >= 0)
+	if (best.sphere >= 0 || best.plane >= 0 || best.triangle >= 0)
 		best.t = nearest;
 	return best;
 }

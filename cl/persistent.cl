@@ -18,12 +18,12 @@
 
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *next_pixel_counter,
-		     __global ulong *counts, __global uint *write_counts)
+		     __global ulong *counts, __global uint *write_counts, struct rt_piece piece)
 {
 	struct tracer tr;
 
-	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
-	struct chunk_grid grid = chunk_grid(tr.scene);
+	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
+	struct chunk_grid grid = chunk_grid(&piece);
 	uint chunk_pixels = grid.chunk_w * grid.chunk_h;
 	uint pixels = chunk_count(&grid) * chunk_pixels; /* the edge chunks' overhang included */
 
@@ -32,11 +32,11 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 		uint end = min(first + RTCL_BATCH, pixels);
 		for (uint i = first; i < end; i++) {
 			uint within = i % chunk_pixels;
-			render_pixel_if_inside(&tr, image, write_counts,
+			render_pixel_if_inside(&tr, &piece, image, write_counts,
 					       numbered_chunk_pixel(&grid, i / chunk_pixels,
 								    within % grid.chunk_w,
 								    within / grid.chunk_w));
 		}
 	}
-	store_counts(&tr, counts, global_item());
+	store_counts(&tr, global_item());
 }

@@ -2,13 +2,13 @@
  * both by the C host and by OpenCL C (docs/STYLE.md rule 2).
  *
  * The device scene is one contiguous block: a struct rt_scene header, then the
- * material, sphere, plane and light arrays at the byte offsets the header
- * gives. Every struct is a whole number of 16-byte units so that the block can
- * be copied into __local memory as uint4 words. Vectors are float4 on both
- * sides (cl_float4 on the host) with w unused, except where a scalar shares
- * the 16-byte load of the vector beside it: a sphere's centre carries
- * radius² (one load feeds the sphere test), a plane's normal its offset, a
- * material's colour ka, a queued ray's origin its weight, and the camera
+ * material, sphere, plane, light, triangle and triangle-shading arrays at the
+ * byte offsets the header gives. Every struct is a whole number of 16-byte units so that the block
+ * can be copied into __local memory as uint4 words. Vectors are float4 on both sides (cl_float4 on
+ * the host) with w unused, except where a scalar shares the 16-byte load of the vector beside it: a
+ * sphere's centre carries radius² (one load feeds the sphere test), a plane's normal its offset, a
+ * triangle's first vertex its material, a triangle's geometric normal whether
+ * it is smooth, a material's colour ka, a queued ray's origin its weight, and the camera
  * vectors the half-extents and epsilon. Fields of their own would cost the
  * walk extra loads (tried: four more scalar loads in each walk kernel's NVPTX
  * code from clang, where the w lanes come with 16-byte loads made anyway). The
@@ -78,6 +78,24 @@ struct rt_light {
 	rt_vec4 color;
 };
 
+/* What the ray-triangle test reads (Moller-Trumbore: the first vertex and the
+ * two edges from it), three 16-byte loads per triangle. The edges are
+ * computed in double on the host and rounded once. */
+struct rt_triangle {
+	rt_vec4 v0; /* w: the material index, its int bits (triangle_material) */
+	rt_vec4 e1; /* v1 − v0 */
+	rt_vec4 e2; /* v2 − v0 */
+};
+
+/* What only the hit reads, in an array of its own so that the test's loads
+ * stay dense: triangle i's shading is element i. */
+struct rt_triangle_shading {
+	rt_vec4 normal;	    /* the unit geometric normal, normalize(e1 × e2) computed in
+			       double; w: 1 when the shading normal is interpolated from
+			       n0, n1, n2, 0 when it is this normal (triangle_smooth) */
+	rt_vec4 n0, n1, n2; /* unit shading normals at v0, v1, v2 */
+};
+
 struct rt_scene {
 	/* Camera, per docs/RENDERING.md: forward f, right r, up u. */
 	rt_vec4 eye;	 /* w: a·h, the horizontal half-extent at distance 1 */
@@ -92,8 +110,9 @@ struct rt_scene {
 	rt_int material_count, sphere_count, plane_count, light_count;
 	/* Byte offsets of the arrays from the start of this header. */
 	rt_uint material_offset, sphere_offset, plane_offset, light_offset;
-	rt_uint total_bytes; /* the whole block, a multiple of 16 */
-	rt_uint pad1, pad2, pad3;
+	rt_uint total_bytes;			 /* the whole block, a multiple of 16 */
+	rt_uint triangle_offset, shading_offset; /* struct rt_triangle, rt_triangle_shading */
+	rt_int triangle_count;
 };
 
 /* A ray waiting in the wavefront kernel's queue. */
@@ -106,8 +125,24 @@ struct rt_ray {
 	rt_int pad0, pad1;
 };
 
+/* What one launch (or one wavefront pass) renders: a rectangle of the image
+ * and a range of each of its pixels' samples. A plain render is one or more
+ * pieces covering the whole image; a multi-device render hands pieces to
+ * several devices. The kernels write the full-image buffers at the pixels'
+ * own positions, y * width + x. */
+struct rt_piece {
+	rt_int x0, y0, width, height;	 /* a rectangle of the image, in pixels */
+	rt_int sample_begin, sample_end; /* the samples of each pixel traced now:
+					    [begin, end) */
+	rt_int samples;			 /* N, samples per pixel of the whole render */
+	rt_int pad;
+};
+
 #ifndef __OPENCL_VERSION__
 #include <stddef.h>
+_Static_assert(sizeof(struct rt_piece) == 32, "rt_piece layout");
+_Static_assert(offsetof(struct rt_piece, sample_begin) == 16, "rt_piece layout");
+_Static_assert(offsetof(struct rt_piece, samples) == 24, "rt_piece layout");
 _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");
 _Static_assert(sizeof(struct rt_material) == 48, "rt_material layout");
 _Static_assert(sizeof(struct rt_sphere) == 32, "rt_sphere layout");
@@ -115,9 +150,12 @@ _Static_assert(offsetof(struct rt_sphere, material) == 24, "rt_sphere layout");
 _Static_assert(sizeof(struct rt_plane) == 48, "rt_plane layout");
 _Static_assert(offsetof(struct rt_plane, material) == 32, "rt_plane layout");
 _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
+_Static_assert(sizeof(struct rt_triangle) == 48, "rt_triangle layout");
+_Static_assert(sizeof(struct rt_triangle_shading) == 64, "rt_triangle_shading layout");
 _Static_assert(sizeof(struct rt_scene) == 160, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");
+_Static_assert(offsetof(struct rt_scene, triangle_offset) == 148, "rt_scene layout");
 #endif
 
 /* The scalars that share a 16-byte load with a vector, by name. They take the
@@ -139,6 +177,18 @@ static inline float plane_offset(float4 normal)
 static inline float material_ambient(float4 color)
 {
 	return color.w;
+}
+
+/* v0: struct rt_triangle's first-vertex lane */
+static inline int triangle_material(float4 v0)
+{
+	return as_int(v0.w);
+}
+
+/* normal: struct rt_triangle_shading's geometric-normal lane */
+static inline bool triangle_smooth(float4 normal)
+{
+	return normal.w != 0.0f;
 }
 
 /* checker_color: struct rt_plane's checker lane */

@@ -1,6 +1,6 @@
 /* What the scheduling kernels share and nothing else uses: the scene block
  * loaded per work-group, the per-work-item counts, the global item index and
- * the chunk grid. Part of the tracer: built after walk.cl, before the kernel
+ * the chunk grid over the piece of the image being rendered (struct rt_piece). Part of the tracer: built after walk.cl, before the kernel
  * file (serial.cl, naive.cl, ...). */
 
 /* Copies the scene block into the work-group's __local memory when the scene
@@ -23,15 +23,22 @@ static scene_ptr load_scene(__global const uint4 *scene_global, __local uint4 *s
 #endif
 }
 
+/* Sets up the tracer of a single-pass kernel, whose counts buffer holds the
+ * flops per pixel of the whole image, then the flops and rays per work-item
+ * of this launch: the pixels' place does not depend on the launch's size. */
+static void tracer_init_counts(struct tracer *tr, scene_ptr scene, __global ulong *counts)
+{
+	tracer_init(tr, scene, counts + (size_t)scene->width * scene->height, counts);
+}
+
 /* Stores what this work-item counted, once, at its end. */
-static void store_counts(struct tracer *tr, __global ulong *counts, uint item)
+static void store_counts(struct tracer *tr, uint item)
 {
 #ifdef RTCL_COUNT_FLOPS
-	counts[2 * item] = tr->flops;
-	counts[2 * item + 1] = tr->rays;
+	tr->item_counts[2 * item] = tr->flops;
+	tr->item_counts[2 * item + 1] = tr->rays;
 #else
 	(void)tr;
-	(void)counts;
 	(void)item;
 #endif
 }
@@ -43,22 +50,25 @@ static inline uint global_item(void)
 	return get_global_id(1) * get_global_size(0) + get_global_id(0);
 }
 
-/* The image cut into chunks of the work-group's shape, the unit of work the
- * scheduling kernels hand out. The chunks at the right and bottom edges may
- * reach past the image; their pixels outside it are skipped. */
+/* The piece's rectangle cut into chunks of the work-group's shape, the unit
+ * of work the scheduling kernels hand out. The chunks at the right and bottom
+ * edges may reach past the rectangle; their pixels outside it are skipped. */
 struct chunk_grid {
 	uint chunk_w, chunk_h; /* a chunk's size in pixels: the work-group's */
 	uint across, down;     /* chunks per row and per column */
+	int x0, y0;	       /* the rectangle's top-left pixel */
 };
 
-static inline struct chunk_grid chunk_grid(scene_ptr scene)
+static inline struct chunk_grid chunk_grid(const struct rt_piece *piece)
 {
 	struct chunk_grid g;
 
 	g.chunk_w = get_local_size(0);
 	g.chunk_h = get_local_size(1);
-	g.across = (scene->width + g.chunk_w - 1) / g.chunk_w;
-	g.down = (scene->height + g.chunk_h - 1) / g.chunk_h;
+	g.across = ((uint)piece->width + g.chunk_w - 1) / g.chunk_w;
+	g.down = ((uint)piece->height + g.chunk_h - 1) / g.chunk_h;
+	g.x0 = piece->x0;
+	g.y0 = piece->y0;
 	return g;
 }
 
@@ -68,10 +78,11 @@ static inline uint chunk_count(const struct chunk_grid *g)
 	return g->across * g->down;
 }
 
-/* Returns pixel (dx, dy) of the chunk in column cx and row cy of the grid. */
+/* Returns pixel (dx, dy) of the chunk in column cx and row cy of the grid,
+ * in image coordinates. */
 static inline int2 chunk_pixel(const struct chunk_grid *g, uint cx, uint cy, uint dx, uint dy)
 {
-	return (int2)(cx * g->chunk_w + dx, cy * g->chunk_h + dy);
+	return (int2)(g->x0 + (int)(cx * g->chunk_w + dx), g->y0 + (int)(cy * g->chunk_h + dy));
 }
 
 /* Returns pixel (dx, dy) of chunk number chunk. */
@@ -80,10 +91,12 @@ static inline int2 numbered_chunk_pixel(const struct chunk_grid *g, uint chunk, 
 	return chunk_pixel(g, chunk % g->across, chunk / g->across, dx, dy);
 }
 
-/* Traces and stores pixel p if it lies inside the image. */
-static inline void render_pixel_if_inside(struct tracer *tr, __global float *image,
-					  __global uint *write_counts, int2 p)
+/* Traces and stores pixel p (image coordinates) if it lies inside the
+ * piece's rectangle. */
+static inline void render_pixel_if_inside(struct tracer *tr, const struct rt_piece *piece,
+					  __global float *image, __global uint *write_counts,
+					  int2 p)
 {
-	if (p.x < tr->scene->width && p.y < tr->scene->height)
-		render_pixel(tr, image, write_counts, p.x, p.y);
+	if (p.x < piece->x0 + piece->width && p.y < piece->y0 + piece->height)
+		render_pixel(tr, piece, image, write_counts, p.x, p.y);
 }

@@ -1,16 +1,16 @@
-/* serial: one work-item renders every pixel in row-major order, the paper's
- * serial code run on the device. Launched as a single work-item; it hands out
+/* serial: one work-item renders every pixel of the piece in row-major order,
+ * the paper's serial code run on the device. Launched as a single work-item; it hands out
  * no work, so work_counter is unused. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *work_counter, __global ulong *counts,
-		     __global uint *write_counts)
+		     __global uint *write_counts, struct rt_piece piece)
 {
 	struct tracer tr;
 
 	(void)work_counter;
-	tracer_init(&tr, load_scene(scene_global, scene_local), counts);
-	for (int y = 0; y < tr.scene->height; y++)
-		for (int x = 0; x < tr.scene->width; x++)
-			render_pixel(&tr, image, write_counts, x, y);
-	store_counts(&tr, counts, global_item());
+	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
+	for (int y = piece.y0; y < piece.y0 + piece.height; y++)
+		for (int x = piece.x0; x < piece.x0 + piece.width; x++)
+			render_pixel(&tr, &piece, image, write_counts, x, y);
+	store_counts(&tr, global_item());
 }

@@ -22,6 +22,8 @@ static float3 plane_color(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_pl
  * through the same intersect_scene call as every other ray. */
 struct shading {
 	float3 p, n, base;
+	float3 n_face; /* the geometric normal turned to the ray's side: where the
+			  spawned rays start from (n itself but on a smooth triangle) */
 	bool inside;
 	RTCL_SCENE_SPACE const struct rt_material *m;
 	float3 color;	      /* the local colour so far, weight not applied */
@@ -34,34 +36,71 @@ struct shading {
 	int light;
 };
 
+/* RENDERING.md step 2 on a smooth triangle: the shading normal, interpolated
+ * at the hit's barycentric (u, v) from the vertex normals, normalised and
+ * turned to the side of n_face (the geometric normal facing the ray); n_face
+ * itself where the interpolation gives the zero vector. */
+static float3 triangle_shading_normal(struct tracer *tr,
+				      RTCL_SCENE_SPACE const struct rt_triangle_shading *ts,
+				      struct hit hit, float3 n_face)
+{
+	float w = 1.0f - hit.u - hit.v;
+	float3 n = w * ts->n0.xyz + hit.u * ts->n1.xyz + hit.v * ts->n2.xyz;
+	float length2 = dot3(n, n);
+	/* w (2), three scalings and two sums, the squared length */
+	COUNT_FLOPS(tr, 2 + 3 * FLOPS_MUL3 + 2 * FLOPS_ADD3 + FLOPS_DOT3);
+	if (length2 == 0.0f)
+		return n_face;
+	n = n * rsqrt(length2);
+	COUNT_FLOPS(tr, 1 + FLOPS_MUL3 + FLOPS_DOT3);
+	return dot3(n, n_face) < 0.0f ? -n : n;
+}
+
+/* The geometric normal at the hit (step 2), the material and base colour
+ * (step 3). A triangle's shading normal is left to shading_begin. */
+static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, struct shading *sh)
+{
+	float3 normal;
+
+	if (hit.sphere >= 0) {
+		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
+		normal = (p - s->center.xyz) * s->inv_radius;
+		sh->m = &tr->materials[s->material];
+		sh->base = sh->m->color.xyz;
+		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_MUL3);
+	} else if (hit.triangle >= 0) {
+		normal = tr->triangle_shading[hit.triangle].normal.xyz;
+		sh->m = &tr->materials[triangle_material(tr->triangles[hit.triangle].v0)];
+		sh->base = sh->m->color.xyz;
+	} else {
+		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
+		normal = pl->normal.xyz;
+		sh->m = &tr->materials[pl->material];
+		sh->base = plane_color(tr, pl, sh->m->color.xyz, p);
+	}
+	return normal;
+}
+
 /* Starts shading the hit of ray: the hit point, the normals, the base colour
  * and the ambient term. */
 static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct hit hit,
 			  struct shading *sh)
 {
 	scene_ptr scene = tr->scene;
-	float3 normal;
 
 	sh->p = ray->origin + hit.t * ray->dir;
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3);
-	if (hit.sphere >= 0) {
-		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
-		normal = (sh->p - s->center.xyz) * s->inv_radius;
-		sh->m = &tr->materials[s->material];
-		sh->base = sh->m->color.xyz;
-		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_MUL3);
-	} else {
-		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
-		normal = pl->normal.xyz;
-		sh->m = &tr->materials[pl->material];
-		sh->base = plane_color(tr, pl, sh->m->color.xyz, sh->p);
-	}
+	float3 normal = hit_surface(tr, hit, sh->p, sh);
 	sh->inside = dot3(normal, ray->dir) > 0.0f;
-	sh->n = sh->inside ? -normal : normal;
+	sh->n_face = sh->inside ? -normal : normal;
+	sh->n = sh->n_face;
 	COUNT_FLOPS(tr, FLOPS_DOT3);
+	if (hit.triangle >= 0 && triangle_smooth(tr->triangle_shading[hit.triangle].normal))
+		sh->n = triangle_shading_normal(tr, &tr->triangle_shading[hit.triangle], hit,
+						sh->n_face);
 
 	sh->color = material_ambient(sh->m->color) * sh->base * scene->ambient.xyz;
-	sh->shadow_origin = sh->p + scene_epsilon(scene) * sh->n;
+	sh->shadow_origin = sh->p + scene_epsilon(scene) * sh->n_face;
 	sh->next_light = 0;
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
@@ -146,7 +185,7 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 			COUNT_FLOPS(tr, 1);
 		} else {
 			float3 t_dir = normalize3(eta * ray->dir + (eta * c - sqrt(k)) * n);
-			*refracted = (struct ray_job){sh->p - epsilon * n, t_dir,
+			*refracted = (struct ray_job){sh->p - epsilon * sh->n_face, t_dir,
 						      ray->weight * m->transmit, ray->depth + 1};
 			spawned |= SPAWNED_REFRACTED;
 			/* t_dir before normalizing: eta d, eta c − sqrt(k) (3), × n, + */
@@ -156,7 +195,7 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 	}
 	if (reflect_weight > 0.0f) {
 		float3 r_dir = normalize3(ray->dir - 2.0f * dot3(ray->dir, n) * n);
-		*reflected = (struct ray_job){sh->p + epsilon * n, r_dir,
+		*reflected = (struct ray_job){sh->p + epsilon * sh->n_face, r_dir,
 					      ray->weight * reflect_weight, ray->depth + 1};
 		spawned |= SPAWNED_REFLECTED;
 		/* r_dir before normalizing: d·n, 2×, × n, d − */

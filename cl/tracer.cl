@@ -4,11 +4,12 @@
  * The tracer is five files, built in this order before the kernel file
  * (host/program.c lists them) and read best in the same order:
  *   tracer.cl      counting, the scene as the tracer sees it, vector helpers
- *   intersect.cl   the nearest (or any) hit over spheres and planes
+ *   sample.cl      where a pixel's samples lie
+ *   intersect.cl   the nearest (or any) hit over spheres, triangles and planes
  *   shade.cl       the base colour, lights and shadow rays, spawned rays
  *   walk.cl        ray_step, one ray by one intersection; the pixel's walk
  *   scheduling.cl  what the scheduling kernels share: scene loading, counts,
- *                  the chunk grid
+ *                  the chunk grid over the piece being rendered
  * host/reference.cpp computes the same model in double precision, written
  * independently from RENDERING.md: it is the readable version of it.
  *
@@ -69,6 +70,16 @@
 #define FLOPS_NORMALIZE3 (FLOPS_DOT3 + 1 + FLOPS_MUL3)
 /* sphere_gap: two chains of three fmas, then an fma and a product, 15. */
 #define FLOPS_SPHERE_GAP (6 * FLOPS_FMA + FLOPS_FMA + 1)
+/* cross3: per component a product and an fma, 9. */
+#define FLOPS_CROSS3 (3 * (1 + FLOPS_FMA))
+/* triangle_hit (Moller-Trumbore) in stages, each counted when reached:
+ * p = d × e2 and det = e1·p, 14; then 1/det, s = o − v0, u = (s·p)/det, 10
+ * more; then q = s × e1, v = (d·q)/det and u + v, 16 more; then
+ * t = (e2·q)/det, 6 more: a ray that reaches t costs 46. */
+#define FLOPS_TRIANGLE_DET (FLOPS_CROSS3 + FLOPS_DOT3)
+#define FLOPS_TRIANGLE_U (1 + FLOPS_ADD3 + FLOPS_DOT3 + 1)
+#define FLOPS_TRIANGLE_V (FLOPS_CROSS3 + FLOPS_DOT3 + 1 + 1)
+#define FLOPS_TRIANGLE_T (FLOPS_DOT3 + 1)
 
 typedef RTCL_SCENE_SPACE const struct rt_scene *scene_ptr;
 
@@ -96,6 +107,9 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_sphere *spheres;
 	RTCL_SCENE_SPACE const struct rt_plane *planes;
 	RTCL_SCENE_SPACE const struct rt_light *lights;
+	RTCL_SCENE_SPACE const struct rt_triangle *triangles;
+	RTCL_SCENE_SPACE const struct rt_triangle_shading *triangle_shading;
+	__global ulong *item_counts; /* flops and rays per work-item, when counting */
 	__global ulong *pixel_flops; /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
 	ulong flops;
@@ -112,14 +126,23 @@ struct ray_job {
 
 struct hit {
 	float t;
-	int sphere; /* index of the sphere hit, or -1 */
-	int plane;  /* index of the plane hit, or -1 */
+	int sphere;   /* index of the sphere hit, or -1 */
+	int plane;    /* index of the plane hit, or -1 */
+	int triangle; /* index of the triangle hit, or -1 */
+	float u, v;   /* on a triangle: the barycentric coordinates of v1 and v2 */
 };
 
 /* Vector helpers, written out so that each operation is what is counted. */
 static inline float dot3(float3 a, float3 b)
 {
 	return fma(a.z, b.z, fma(a.y, b.y, a.x * b.x));
+}
+
+/* a × b, counted FLOPS_CROSS3: each component a product and an fma. */
+static inline float3 cross3(float3 a, float3 b)
+{
+	return (float3)(fma(a.y, b.z, -(a.z * b.y)), fma(a.z, b.x, -(a.x * b.z)),
+			fma(a.x, b.y, -(a.y * b.x)));
 }
 
 /* Counted FLOPS_NORMALIZE3: rsqrt stands for the division by the length. */
@@ -144,9 +167,11 @@ static inline float component(float3 v, int axis)
 	return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
 }
 
-/* Counts, when counting: per launched work-item (flops, rays), row-major over
- * the global NDRange, then per pixel the flops spent on it. */
-static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *counts)
+/* Counts, when counting: item_counts per launched work-item (flops, rays),
+ * row-major over the global NDRange; pixel_flops per pixel of the image, added
+ * to by every piece and pass that traces the pixel. */
+static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item_counts,
+			__global ulong *pixel_flops)
 {
 	RTCL_SCENE_SPACE const uchar *base = (RTCL_SCENE_SPACE const uchar *)scene;
 
@@ -156,7 +181,12 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *coun
 	tr->spheres = (RTCL_SCENE_SPACE const struct rt_sphere *)(base + scene->sphere_offset);
 	tr->planes = (RTCL_SCENE_SPACE const struct rt_plane *)(base + scene->plane_offset);
 	tr->lights = (RTCL_SCENE_SPACE const struct rt_light *)(base + scene->light_offset);
-	tr->pixel_flops = counts + 2 * get_global_size(0) * get_global_size(1);
+	tr->triangles =
+		(RTCL_SCENE_SPACE const struct rt_triangle *)(base + scene->triangle_offset);
+	tr->triangle_shading =
+		(RTCL_SCENE_SPACE const struct rt_triangle_shading *)(base + scene->shading_offset);
+	tr->item_counts = item_counts;
+	tr->pixel_flops = pixel_flops;
 #ifdef RTCL_COUNT_FLOPS
 	tr->flops = 0;
 	tr->rays = 0;

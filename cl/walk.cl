@@ -67,8 +67,8 @@ static inline bool ray_step(struct tracer *tr, struct ray_progress *rp, struct r
 	rp->shadow = shading_next_light(tr, &rp->sh, rp->ray.dir);
 	if (rp->shadow)
 		return false;
-	out->color = ray_shaded(tr, &rp->ray, &rp->sh, &out->refracted, &out->reflected,
-				&out->spawned);
+	out->color =
+		ray_shaded(tr, &rp->ray, &rp->sh, &out->refracted, &out->reflected, &out->spawned);
 	return true;
 }
 
@@ -119,44 +119,43 @@ struct walk {
 	int top; /* rays waiting */
 	struct ray_progress rp;
 	float3 color;
-	int pixel;	    /* y * width + x */
-	ulong flops_before; /* the work-item's count when the pixel began */
 };
 
-/* Returns the unit direction of pixel (x, y)'s primary ray. */
-static float3 primary_direction(struct tracer *tr, int x, int y)
+/* Returns the unit direction of pixel (x, y)'s primary ray through the point
+ * offset (in [0, 1)^2, from the pixel's top-left corner; 0.5 is the centre). */
+static float3 primary_direction(struct tracer *tr, int x, int y, float2 offset)
 {
 	scene_ptr scene = tr->scene;
-	float sx =
-		(2.0f * ((float)x + 0.5f) / (float)scene->width - 1.0f) * scene_half_width(scene);
-	float sy =
-		(1.0f - 2.0f * ((float)y + 0.5f) / (float)scene->height) * scene_half_height(scene);
+	float sx = (2.0f * ((float)x + offset.x) / (float)scene->width - 1.0f) *
+		   scene_half_width(scene);
+	float sy = (1.0f - 2.0f * ((float)y + offset.y) / (float)scene->height) *
+		   scene_half_height(scene);
 
 	/* sx and sy 5 each, by hand; two scaled vectors added; the normalize */
 	COUNT_FLOPS(tr, 10 + 2 * (FLOPS_MUL3 + FLOPS_ADD3) + FLOPS_NORMALIZE3);
 	return normalize3(scene->forward.xyz + sx * scene->right.xyz + sy * scene->up.xyz);
 }
 
-/* Sets *ray to pixel (x, y)'s primary ray. (Written in place: returning the
- * struct cost the walk a store in NVPTX code.) */
-static inline void primary_ray(struct tracer *tr, int x, int y, struct ray_job *ray)
+/* Sets *ray to pixel (x, y)'s primary ray through offset. (Written in place:
+ * returning the struct cost the walk a store in NVPTX code.) */
+static inline void primary_ray(struct tracer *tr, int x, int y, float2 offset,
+			       struct ray_job *ray)
 {
-	*ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y), 1.0f, 0};
+	*ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y, offset), 1.0f, 0};
 }
 
-/* Starts the walk of pixel (x, y), which must lie inside the image. */
-static void walk_start(struct tracer *tr, struct walk *w, int x, int y)
+/* Starts the walk of pixel (x, y)'s sample at offset; the pixel must lie
+ * inside the image. */
+static void walk_start(struct tracer *tr, struct walk *w, int x, int y, float2 offset)
 {
-	w->flops_before = tracer_flops(tr);
-	w->pixel = y * tr->scene->width + x;
-	primary_ray(tr, x, y, &w->rp.ray);
+	primary_ray(tr, x, y, offset, &w->rp.ray);
 	w->top = 0;
 	w->rp.shadow = false;
 	w->color = (float3)(0.0f);
 }
 
 /* Takes the walk's next ray_step and returns whether the walk is done;
- * w->color is then the pixel's colour. */
+ * w->color is then the sample's colour. */
 static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting)
 {
 	struct ray_outcome out;
@@ -191,11 +190,12 @@ static inline void count_write(__global uint *write_counts, int pixel)
 #endif
 }
 
-/* Stores flops as pixel's cost, when counting. */
-static inline void store_pixel_flops(__global ulong *pixel_flops, int pixel, ulong flops)
+/* Adds flops to pixel's cost, when counting. Every piece and pass that
+ * traces the pixel adds its part; one work-item at a time does. */
+static inline void count_pixel_flops(__global ulong *pixel_flops, int pixel, ulong flops)
 {
 #ifdef RTCL_COUNT_FLOPS
-	pixel_flops[pixel] = flops;
+	pixel_flops[pixel] += flops;
 #else
 	(void)pixel_flops;
 	(void)pixel;
@@ -203,24 +203,26 @@ static inline void store_pixel_flops(__global ulong *pixel_flops, int pixel, ulo
 #endif
 }
 
-/* Stores the colour of a finished walk, and what it cost when counting. */
-static void walk_store(struct tracer *tr, const struct walk *w, __global float *image,
-		       __global uint *write_counts)
-{
-	vstore3(w->color, w->pixel, image);
-	store_pixel_flops(tr->pixel_flops, w->pixel, tracer_flops(tr) - w->flops_before);
-	count_write(write_counts, w->pixel);
-}
-
-/* Traces pixel (x, y), which must lie inside the image, and stores it. */
-static void render_pixel(struct tracer *tr, __global float *image, __global uint *write_counts,
-			 int x, int y)
+/* Traces samples [sample_begin, sample_end) of pixel (x, y), which must lie
+ * inside the image, and stores the running sum of its sample colours, or
+ * after the last sample their mean (sample.cl). */
+static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __global float *image,
+			 __global uint *write_counts, int x, int y)
 {
 	struct walk w;
 	struct ray_job waiting[RAY_STACK_SIZE];
+	int pixel = y * tr->scene->width + x;
+	ulong flops_before = tracer_flops(tr);
+	/* The sum so far is in the image, unless this pass starts the pixel. */
+	float3 sum = piece->sample_begin > 0 ? vload3(pixel, image) : (float3)(0.0f);
 
-	walk_start(tr, &w, x, y);
-	while (!walk_step(tr, &w, waiting))
-		;
-	walk_store(tr, &w, image, write_counts);
+	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
+		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples));
+		while (!walk_step(tr, &w, waiting))
+			;
+		sum = sample_add(tr, sum, w.color, k);
+	}
+	vstore3(sample_finish(tr, sum, piece), pixel, image);
+	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
+	count_write(write_counts, pixel);
 }

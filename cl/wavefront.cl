@@ -58,30 +58,96 @@ static void store_ray(__global struct rt_ray *queue, uint slot, const struct ray
 	queue[slot].depth = ray->depth;
 }
 
-/* One work-item per pixel (2D NDRange, rounded up): the primary rays, in
- * pixel order, queue[y * width + x]. */
+/* Returns what sample_flops holds for pixel, 0 when not counting (the buffer
+ * is then a placeholder). */
+static inline ulong sample_pixel_flops(__global const ulong *sample_flops, int pixel)
+{
+#ifdef RTCL_COUNT_FLOPS
+	return sample_flops[pixel];
+#else
+	(void)sample_flops;
+	(void)pixel;
+	return 0;
+#endif
+}
+
+/* Sets pixel's count of the sample being traced, when counting. */
+static inline void start_sample_flops(__global ulong *sample_flops, int pixel, ulong flops)
+{
+#ifdef RTCL_COUNT_FLOPS
+	sample_flops[pixel] = flops;
+#else
+	(void)sample_flops;
+	(void)pixel;
+	(void)flops;
+#endif
+}
+
+/* A pass of the wavefront traces one sample of every pixel of the piece:
+ * wavefront_start, wavefront_bounce until the queue is empty, then
+ * wavefront_accumulate. The bounces add the sample's colour and cost into
+ * sample_rgb and sample_flops, which the accumulate adds to the image's
+ * running sum in sample order, as the other kernels do.
+ *
+ * wavefront_start: one work-item per pixel of the piece (2D NDRange over its
+ * rectangle, rounded up): the primary rays of sample `sample`, in pixel order
+ * within the piece, queue[(y - y0) * width + (x - x0)]; the sample's colour
+ * cleared. */
 __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 *scene_local,
 			      __global struct rt_ray *queue, __global ulong *item_counts,
-			      __global ulong *pixel_flops, __global uint *write_counts)
+			      __global ulong *sample_flops, __global float *sample_rgb,
+			      struct rt_piece piece, uint sample)
 {
 	struct tracer tr;
-	int x = get_global_id(0);
-	int y = get_global_id(1);
+	int dx = get_global_id(0), dy = get_global_id(1);
 
-	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts);
-	if (x < tr.scene->width && y < tr.scene->height) {
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, sample_flops);
+	if (dx < piece.width && dy < piece.height) {
+		int x = piece.x0 + dx, y = piece.y0 + dy;
 		int pixel = y * tr.scene->width + x;
 		struct ray_job ray;
 
-		primary_ray(&tr, x, y, &ray);
-		store_ray(queue, pixel, &ray, pixel);
-		store_pixel_flops(pixel_flops, pixel, tracer_flops(&tr)); /* bounces add theirs */
-		count_write(write_counts, pixel);
+		primary_ray(&tr, x, y, sample_offset(&tr, x, y, sample, piece.samples), &ray);
+		store_ray(queue, dy * piece.width + dx, &ray, pixel);
+		vstore3((float3)(0.0f), pixel, sample_rgb);
+		start_sample_flops(sample_flops, pixel, tracer_flops(&tr)); /* bounces add theirs */
 	}
-	store_counts(&tr, item_counts, global_item());
+	store_counts(&tr, global_item());
 }
 
-/* One work-item per queued ray (1D NDRange, rounded up). Spawned rays go to
+/* One work-item per pixel of the piece, like wavefront_start: adds sample
+ * `sample`'s colour to the pixel's running sum, or stores the mean after the
+ * render's last sample (sample.cl), and the sample's cost to the pixel's. The
+ * pass's last sample counts as the pixel's write. */
+__kernel void wavefront_accumulate(__global const uint4 *scene_global, __local uint4 *scene_local,
+				   __global float *image, __global const float *sample_rgb,
+				   __global ulong *item_counts, __global ulong *pixel_flops,
+				   __global const ulong *sample_flops, __global uint *write_counts,
+				   struct rt_piece piece, uint sample)
+{
+	struct tracer tr;
+	int dx = get_global_id(0), dy = get_global_id(1);
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	if (dx < piece.width && dy < piece.height) {
+		int pixel = (piece.y0 + dy) * tr.scene->width + piece.x0 + dx;
+		float3 sum = sample > 0 ? vload3(pixel, image) : (float3)(0.0f);
+
+		sum = sample_add(&tr, sum, vload3(pixel, sample_rgb), (int)sample);
+		if ((int)sample == piece.sample_end - 1) {
+			sum = sample_finish(&tr, sum, &piece);
+			count_write(write_counts, pixel);
+		}
+		vstore3(sum, pixel, image);
+		count_pixel_flops(pixel_flops, pixel,
+				  sample_pixel_flops(sample_flops, pixel) + tracer_flops(&tr));
+	}
+	store_counts(&tr, global_item());
+}
+
+/* One work-item per queued ray (1D NDRange, rounded up); image and
+ * pixel_flops are the sample's (sample_rgb, sample_flops), and each ray
+ * carries its pixel, so the bounce needs no piece. Spawned rays go to
  * next[atomic_inc(next_count)]; one that finds the queue full sets *overflow
  * and is dropped, and the host renders the frame again with larger queues. */
 __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4 *scene_local,
@@ -93,7 +159,7 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 	struct tracer tr;
 	uint i = get_global_id(0);
 
-	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts);
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
 	if (i < queued) {
 		float4 origin = queue[i].origin;
 		struct ray_job ray = {origin.xyz, queue[i].dir.xyz, ray_weight(origin),
@@ -113,5 +179,5 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 		}
 		add_pixel_flops(pixel_flops, pixel, tracer_flops(&tr));
 	}
-	store_counts(&tr, item_counts, global_item());
+	store_counts(&tr, global_item());
 }

@@ -98,18 +98,73 @@ static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
 	out->checker_t_axis = drop == 2 ? 1 : 2;
 }
 
+/* The material index rides in v0's w lane as its int bits (triangle_material). */
+static void pack_triangle(struct rt_triangle *out, struct rt_triangle_shading *shading,
+			  const struct scene_triangle *in)
+{
+	double e1[3], e2[3], n[3];
+	rt_int material = in->material;
+
+	for (int i = 0; i < 3; i++) {
+		e1[i] = in->v[1][i] - in->v[0][i];
+		e2[i] = in->v[2][i] - in->v[0][i];
+	}
+	out->v0 = vec4(in->v[0], 0.0);
+	memcpy(&out->v0.s[3], &material, sizeof(material));
+	out->e1 = vec4(e1, 0.0);
+	out->e2 = vec4(e2, 0.0);
+	/* The loader made sure the area is not 0; scaled first so that the cross
+	 * product of large edges cannot overflow. */
+	double m = fmax(fmax(fabs(e1[0]), fabs(e1[1])), fmax(fabs(e1[2]), 1e-300));
+	for (int i = 0; i < 3; i++)
+		e1[i] /= m;
+	cross(e1, e2, n);
+	normalize(n);
+	shading->normal = vec4(n, in->smooth ? 1.0 : 0.0); /* triangle_smooth */
+	shading->n0 = vec4(in->normal[0], 0.0);
+	shading->n1 = vec4(in->normal[1], 0.0);
+	shading->n2 = vec4(in->normal[2], 0.0);
+}
+
+/* Where the arrays go in the block (byte offsets) and its size. */
+struct layout {
+	size_t material, sphere, plane, light, triangle, shading, total;
+	int sphere_slots;
+};
+
+static struct layout layout_of(const struct scene *scene)
+{
+	struct layout l;
+
+	l.material = round16(sizeof(struct rt_scene));
+	l.sphere = l.material + (size_t)scene->material_count * sizeof(struct rt_material);
+	l.sphere_slots =
+		(scene->sphere_count + RT_SPHERE_GROUP - 1) / RT_SPHERE_GROUP * RT_SPHERE_GROUP;
+	l.plane = l.sphere + (size_t)l.sphere_slots * sizeof(struct rt_sphere);
+	l.light = l.plane + (size_t)scene->plane_count * sizeof(struct rt_plane);
+	l.triangle = l.light + (size_t)scene->light_count * sizeof(struct rt_light);
+	l.shading = l.triangle + (size_t)scene->triangle_count * sizeof(struct rt_triangle);
+	l.total = l.shading + (size_t)scene->triangle_count * sizeof(struct rt_triangle_shading);
+	return l;
+}
+
+size_t devscene_bytes(const struct scene *scene)
+{
+	return layout_of(scene).total;
+}
+
 void *devscene_pack(const struct scene *scene, int width, int height, int max_depth, size_t *bytes)
 {
-	size_t material_offset = round16(sizeof(struct rt_scene));
-	size_t sphere_offset =
-		material_offset + (size_t)scene->material_count * sizeof(struct rt_material);
-	int sphere_slots = (scene->sphere_count + RT_SPHERE_GROUP - 1) / RT_SPHERE_GROUP *
-			   RT_SPHERE_GROUP;
-	size_t plane_offset = sphere_offset + (size_t)sphere_slots * sizeof(struct rt_sphere);
-	size_t light_offset = plane_offset + (size_t)scene->plane_count * sizeof(struct rt_plane);
-	size_t total = light_offset + (size_t)scene->light_count * sizeof(struct rt_light);
-	unsigned char *block = calloc(1, total);
+	struct layout l = layout_of(scene);
+	size_t material_offset = l.material, sphere_offset = l.sphere, plane_offset = l.plane;
+	size_t light_offset = l.light, total = l.total;
+	int sphere_slots = l.sphere_slots;
+	unsigned char *block;
 
+	/* The header's offsets are 32-bit (launch_prepare_scene refuses more). */
+	if (total > DEVSCENE_MAX_BYTES)
+		return NULL;
+	block = calloc(1, total);
 	if (!block)
 		return NULL;
 
@@ -130,6 +185,9 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	header->plane_offset = (rt_uint)plane_offset;
 	header->light_offset = (rt_uint)light_offset;
 	header->total_bytes = (rt_uint)total;
+	header->triangle_offset = (rt_uint)l.triangle;
+	header->shading_offset = (rt_uint)l.shading;
+	header->triangle_count = scene->triangle_count;
 
 	struct rt_material *materials = (struct rt_material *)(block + material_offset);
 	for (int i = 0; i < scene->material_count; i++)
@@ -151,6 +209,11 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 		lights[i].position = vec4(scene->lights[i].position, 0.0);
 		lights[i].color = vec4(scene->lights[i].color, 0.0);
 	}
+
+	struct rt_triangle *triangles = (struct rt_triangle *)(block + l.triangle);
+	struct rt_triangle_shading *shading = (struct rt_triangle_shading *)(block + l.shading);
+	for (int i = 0; i < scene->triangle_count; i++)
+		pack_triangle(&triangles[i], &shading[i], &scene->triangles[i]);
 
 	*bytes = total;
 	return block;

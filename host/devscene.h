@@ -3,12 +3,20 @@
 #define RTCL_DEVSCENE_H
 
 #include <stddef.h>
+#include <stdint.h>
 #include "scene.h"
 
 /* Returns a malloc'd block holding struct rt_scene followed by its arrays, for
  * the scene at width×height with the given max_depth, and its size in *bytes;
  * NULL when out of memory. The camera basis is computed in double precision
  * and rounded once to float. */
+/* The most the block may hold: struct rt_scene's offsets are 32-bit. */
+#define DEVSCENE_MAX_BYTES ((size_t)UINT32_MAX - 15)
+
+/* The size of the block devscene_pack makes for the scene. */
+size_t devscene_bytes(const struct scene *scene);
+
+/* (NULL too when the block would be larger than DEVSCENE_MAX_BYTES.) */
 void *devscene_pack(const struct scene *scene, int width, int height, int max_depth, size_t *bytes);
 
 #endif

@@ -160,21 +160,47 @@ int launch_check_kernel(const struct device *dev, cl_kernel kernel, const struct
 	return 0;
 }
 
+int launch_check_scene_fits(const struct device *dev, const struct scene *scene, char *err,
+			    size_t err_size)
+{
+	size_t bytes = devscene_bytes(scene);
+	/* One buffer holds the whole block, whose offsets are 32-bit. */
+	unsigned long long limit = dev->max_alloc_size < DEVSCENE_MAX_BYTES
+					   ? (unsigned long long)dev->max_alloc_size
+					   : (unsigned long long)DEVSCENE_MAX_BYTES;
+
+	if (bytes <= limit)
+		return 0;
+	snprintf(err, err_size,
+		 "%s: the scene (%d triangles) needs %zu bytes of device "
+		 "memory, more than the limit of %llu bytes in one buffer on %s (%s)",
+		 scene->source, scene->triangle_count, bytes, limit, dev->name,
+		 limit == dev->max_alloc_size ? "CL_DEVICE_MAX_MEM_ALLOC_SIZE"
+					      : "rtcl's 32-bit scene offsets");
+	return -1;
+}
+
 int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			 const struct render_settings *s, struct render_result *res, void **block,
 			 char *err, size_t err_size)
 {
+	*block = NULL;
+	if (launch_check_scene_fits(dev, scene, err, err_size))
+		return -1;
 	*block = devscene_pack(scene, s->width, s->height, s->max_depth, &res->scene_bytes);
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
 	if (!*block || !res->rgb) {
-		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
-			 s->height);
+		snprintf(err, err_size, "out of host memory for a %dx%d image and the scene",
+			 s->width, s->height);
 		return -1;
 	}
-	if (device_check_fits(dev, "the scene", (double)res->scene_bytes, err, err_size))
-		return -1;
 	res->scene_in_local = !s->force_global_scene &&
 			      res->scene_bytes + LOCAL_MEM_RESERVE <= dev->local_mem_size;
+	if (s->verbose && (scene->triangle_count || scene->skipped_triangles))
+		fprintf(stderr,
+			"rtcl: %d triangles; %ld of area 0 (after placement) skipped from mesh "
+			"files\n",
+			scene->triangle_count, scene->skipped_triangles);
 	if (s->verbose)
 		fprintf(stderr, "rtcl: scene is %zu bytes; %s\n", res->scene_bytes,
 			res->scene_in_local
@@ -276,8 +302,8 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	double lap = timing_now();
 
 	if (launch_plan(dev, s, res, err, err_size) ||
-	    device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height),
-			      err, err_size) ||
+	    device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height), err,
+			      err_size) ||
 	    launch_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);

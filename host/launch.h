@@ -38,6 +38,11 @@ int launch_check_kernel(const struct device *dev, cl_kernel kernel,
 			const struct render_result *result, const char *name, char *err,
 			size_t err_size);
 
+/* Refuses a scene whose device block (devscene_bytes) is larger than one
+ * buffer on dev may be, naming the size and the limit. */
+int launch_check_scene_fits(const struct device *dev, const struct scene *scene, char *err,
+			    size_t err_size);
+
 /* Packs the scene into *block (result->scene_bytes), allocates result->rgb
  * and decides whether the scene lives in __local memory. */
 int launch_prepare_scene(struct device *dev, const struct scene *scene,

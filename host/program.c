@@ -12,13 +12,14 @@
 
 /* The tracer's sources, in the order the compiler sees them; the kernel's own
  * cl/NAME.cl follows. */
-const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl",	  "intersect.cl",
-					      "shade.cl",      "walk.cl",	  "scheduling.cl"};
+const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl", "sample.cl",
+					      "intersect.cl",  "shade.cl",  "walk.cl",
+					      "scheduling.cl"};
 const int program_tracer_source_count =
 	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
 
 /* The tracer's sources and the kernel's own. */
-#define MAX_SOURCES 8
+#define MAX_SOURCES 12
 
 /* A kernel source read from RTCL_CL_DIR is at most this large. */
 #define KERNEL_SOURCE_MAX_BYTES ((size_t)16 << 20)
@@ -52,8 +53,7 @@ static void print_build_log(cl_program program, const struct device *dev)
 {
 	char log[32768] = "";
 
-	clGetProgramBuildInfo(program, dev->id, CL_PROGRAM_BUILD_LOG, sizeof(log) - 1, log,
-			      NULL);
+	clGetProgramBuildInfo(program, dev->id, CL_PROGRAM_BUILD_LOG, sizeof(log) - 1, log, NULL);
 	if (log[strspn(log, " \t\r\n")] != '\0')
 		fprintf(stderr, "rtcl: build log:\n%s\n", log);
 }
@@ -214,4 +214,3 @@ cl_kernel program_create_kernel(cl_program program, const char *name, char *err,
 	}
 	return kernel;
 }
-

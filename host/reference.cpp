@@ -45,16 +45,27 @@ struct plane {
 	int dropped_axis; /* world axis left out of the checker coordinates */
 };
 
+struct triangle {
+	dvec3 v0, v1, v2;
+	dvec3 n_g;	 /* unit geometric normal, (v1 - v0) x (v2 - v0) normalised */
+	dvec3 normal[3]; /* unit shading normals at the vertices */
+	bool smooth;
+	int material;
+};
+
 struct light {
 	dvec3 position;
 	dvec3 color;
 };
 
-/* The nearest hit of a ray: exactly one of sphere and plane is set. */
+/* The nearest hit of a ray: exactly one of sphere, triangle and plane is
+ * set; u and v are the barycentric coordinates of v1 and v2 on a triangle. */
 struct hit {
 	double t;
 	const struct sphere *sphere;
 	const struct plane *plane;
+	const struct triangle *tri;
+	double u, v;
 };
 
 /* The axis along which `n` has its largest |component|; ties go to the
@@ -100,6 +111,29 @@ double intersect_plane(const plane &p, const dvec3 &o, const dvec3 &d)
 	return t > 0.0 ? t : 0.0;
 }
 
+/* Returns t > 0 where the ray meets the triangle (either side), or 0 if it
+ * does not, with the barycentric coordinates of v1 and v2 in *u and *v:
+ * Moller and Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection"
+ * (1997), the textbook form in double. A ray in the triangle's plane misses. */
+double intersect_triangle(const triangle &tri, const dvec3 &o, const dvec3 &d, double *u, double *v)
+{
+	dvec3 e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+	dvec3 pv = glm::cross(d, e2);
+	double det = glm::dot(e1, pv);
+	if (det == 0.0)
+		return 0.0;
+	dvec3 s = o - tri.v0;
+	*u = glm::dot(s, pv) / det;
+	if (*u < 0.0 || *u > 1.0)
+		return 0.0;
+	dvec3 q = glm::cross(s, e1);
+	*v = glm::dot(d, q) / det;
+	if (*v < 0.0 || *u + *v > 1.0)
+		return 0.0;
+	double t = glm::dot(e2, q) / det;
+	return t > 0.0 ? t : 0.0;
+}
+
 class tracer
 {
       public:
@@ -113,12 +147,14 @@ class tracer
 	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
 	dvec3 base_color(const hit &h, const dvec3 &p) const;
 	dvec3 local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
-			  const dvec3 &d) const;
-	void secondary_colors(const material &m, const dvec3 &p, const dvec3 &n, const dvec3 &d,
-			      bool inside, int depth, dvec3 *reflected, dvec3 *refracted) const;
+			  const dvec3 &n_face, const dvec3 &d) const;
+	void secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
+			      dvec3 *reflected, dvec3 *refracted) const;
 
 	std::vector<material> materials;
 	std::vector<sphere> spheres;
+	std::vector<triangle> triangles;
 	std::vector<plane> planes;
 	std::vector<light> lights;
 	dvec3 background;
@@ -146,27 +182,44 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 		planes.push_back({to_dvec3(p.point), normal, p.material, p.has_checker != 0,
 				  p.checker_size, to_dvec3(p.checker_color), largest_axis(normal)});
 	}
+	for (int i = 0; i < sc.triangle_count; i++) {
+		const scene_triangle &t = sc.triangles[i];
+		dvec3 v0 = to_dvec3(t.v[0]), v1 = to_dvec3(t.v[1]), v2 = to_dvec3(t.v[2]);
+		triangles.push_back(
+			{v0,
+			 v1,
+			 v2,
+			 glm::normalize(glm::cross(v1 - v0, v2 - v0)),
+			 {to_dvec3(t.normal[0]), to_dvec3(t.normal[1]), to_dvec3(t.normal[2])},
+			 t.smooth != 0,
+			 t.material});
+	}
 	for (int i = 0; i < sc.light_count; i++) {
 		const scene_light &l = sc.lights[i];
 		lights.push_back({to_dvec3(l.position), to_dvec3(l.color)});
 	}
 }
 
-/* Step 1. Spheres are tested before planes, each in scene order, and only a
- * strictly smaller t replaces a hit, so an exact tie goes to the object
- * listed first. Returns false when nothing is hit. */
+/* Step 1. Spheres are tested first, then triangles, then planes, each in
+ * scene order, and only a strictly smaller t replaces a hit, so an exact tie
+ * goes to the object listed first. Returns false when nothing is hit. */
 bool tracer::nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const
 {
-	hit best = {0.0, nullptr, nullptr};
+	hit best = {0.0, nullptr, nullptr, nullptr, 0.0, 0.0};
 	for (const sphere &s : spheres) {
 		double t = intersect_sphere(s, o, d);
 		if (t > 0.0 && (best.t == 0.0 || t < best.t))
-			best = {t, &s, nullptr};
+			best = {t, &s, nullptr, nullptr, 0.0, 0.0};
+	}
+	for (const triangle &tri : triangles) {
+		double u, v, t = intersect_triangle(tri, o, d, &u, &v);
+		if (t > 0.0 && (best.t == 0.0 || t < best.t))
+			best = {t, nullptr, nullptr, &tri, u, v};
 	}
 	for (const plane &p : planes) {
 		double t = intersect_plane(p, o, d);
 		if (t > 0.0 && (best.t == 0.0 || t < best.t))
-			best = {t, nullptr, &p};
+			best = {t, nullptr, &p, nullptr, 0.0, 0.0};
 	}
 	*out = best;
 	return best.t > 0.0;
@@ -177,6 +230,11 @@ bool tracer::blocked(const dvec3 &o, const dvec3 &d, double distance) const
 {
 	for (const sphere &s : spheres) {
 		double t = intersect_sphere(s, o, d);
+		if (t > 0.0 && t < distance)
+			return true;
+	}
+	for (const triangle &tri : triangles) {
+		double u, v, t = intersect_triangle(tri, o, d, &u, &v);
 		if (t > 0.0 && t < distance)
 			return true;
 	}
@@ -194,6 +252,8 @@ dvec3 tracer::base_color(const hit &h, const dvec3 &p) const
 {
 	if (h.sphere)
 		return materials[h.sphere->material].color;
+	if (h.tri)
+		return materials[h.tri->material].color;
 
 	const plane &pl = *h.plane;
 	if (!pl.has_checker)
@@ -218,6 +278,21 @@ dvec3 tracer::base_color(const hit &h, const dvec3 &p) const
 	return odd ? pl.checker_color : materials[pl.material].color;
 }
 
+/* RENDERING.md step 2 on a triangle: the shading normal, interpolated from
+ * the vertex normals at the barycentric (u, v) of the hit, and turned to the
+ * side of the surface the ray is on (n_face, the geometric normal facing the
+ * ray). A flat triangle's is n_face itself. */
+dvec3 shading_normal(const triangle &tri, double u, double v, const dvec3 &n_face)
+{
+	if (!tri.smooth)
+		return n_face;
+	dvec3 n = (1.0 - u - v) * tri.normal[0] + u * tri.normal[1] + v * tri.normal[2];
+	if (n == dvec3(0.0))
+		return n_face;
+	n = glm::normalize(n);
+	return glm::dot(n, n_face) < 0.0 ? -n : n;
+}
+
 dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 {
 	/* 1. */
@@ -233,21 +308,27 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 	 * intersect_sphere cancels to noise and p can miss the surface by orders
 	 * of magnitude more than the radius; a normal of length 1e10 then makes
 	 * pow(n.H, shininess) inf. Normalising gives the same n on the surface. */
-	dvec3 n_g = h.sphere ? glm::normalize(p - h.sphere->center) : h.plane->normal;
+	dvec3 n_g = h.sphere ? glm::normalize(p - h.sphere->center)
+		    : h.tri  ? h.tri->n_g
+			     : h.plane->normal;
 	bool inside = glm::dot(n_g, d) > 0.0;
-	dvec3 n = inside ? -n_g : n_g;
-	const material &m = materials[h.sphere ? h.sphere->material : h.plane->material];
+	dvec3 n_face = inside ? -n_g : n_g;
+	dvec3 n = h.tri ? shading_normal(*h.tri, h.u, h.v, n_face) : n_face;
+	int material_index = h.sphere ? h.sphere->material
+			     : h.tri  ? h.tri->material
+				      : h.plane->material;
+	const material &m = materials[material_index];
 
 	/* 3. */
 	dvec3 c = base_color(h, p);
 
 	/* 4. */
-	dvec3 color = local_color(m, c, p, n, d);
+	dvec3 color = local_color(m, c, p, n, n_face, d);
 
 	/* 5. (in the order of the sums before this function was split) */
 	if (depth < max_depth) {
 		dvec3 reflected, refracted;
-		secondary_colors(m, p, n, d, inside, depth, &reflected, &refracted);
+		secondary_colors(m, p, n, n_face, d, inside, depth, &reflected, &refracted);
 		color += reflected;
 		color += refracted;
 	}
@@ -258,10 +339,12 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 
 /* RENDERING.md trace step 4: ambient, then each light not in shadow. */
 dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
-			  const dvec3 &d) const
+			  const dvec3 &n_face, const dvec3 &d) const
 {
 	dvec3 color = m.ka * c * ambient;
-	dvec3 shadow_origin = p + epsilon * n;
+	/* Off the surface along the geometric normal (n itself but on a smooth
+	 * triangle), so that the shadow ray starts on the ray's side of it. */
+	dvec3 shadow_origin = p + epsilon * n_face;
 	for (const light &li : lights) {
 		/* The shadow ray runs from shadow_origin straight to the light, and
 		 * t is measured along it, so "distance" is from shadow_origin. */
@@ -296,8 +379,9 @@ dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, con
  * two_balls.json), hits landed off the surfaces, the normals
  * (p - center)/radius lost unit length and the colours went to inf past
  * depth 20. Normalising each new direction keeps the error at 1 ulp. */
-void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n, const dvec3 &d,
-			      bool inside, int depth, dvec3 *reflected, dvec3 *refracted) const
+void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
+			      dvec3 *reflected, dvec3 *refracted) const
 {
 	double reflect_weight = m.kr;
 
@@ -315,12 +399,12 @@ void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
 			 * cancel (with ior 1e18 at normal incidence the written
 			 * order gives 1e18*d - 1e18*d = 0, and no direction). */
 			dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
-			*refracted = m.kt * trace(p - epsilon * n, T, depth + 1);
+			*refracted = m.kt * trace(p - epsilon * n_face, T, depth + 1);
 		}
 	}
 	if (reflect_weight > 0.0) {
 		dvec3 R = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
-		*reflected = reflect_weight * trace(p + epsilon * n, R, depth + 1);
+		*reflected = reflect_weight * trace(p + epsilon * n_face, R, depth + 1);
 	}
 }
 

@@ -1,30 +1,34 @@
-/* The kernels rtcl knows and render(), which hands a frame to the renderer of
- * the chosen kernel (singlepass.c or wavefront.c) or to the CPU reference. */
+/* The kernels rtcl knows; the renderer of a piece (renderer.h), which hands
+ * it to the chosen kernel's functions (singlepass.c or wavefront.c); and
+ * render(), a frame as passes over the whole image, or the CPU reference. */
 #include "render.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
+#include "launch.h"
 #include "reference.h"
+#include "renderer.h"
 #include "singlepass.h"
 #include "timing.h"
 #include "wavefront.h"
 
 const struct kernel_info render_kernels[] = {
 	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0, 0,
-	 singlepass_render},
+	 &singlepass_ops},
 	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0, 0, 0,
-	 singlepass_render},
-	{"cyclic", "persistent work-groups, chunk (cx,cy) to group (cx mod GX, cy mod GY)", 1, 0,
-	 0, 0, singlepass_render},
+	 &singlepass_ops},
+	{"cyclic", "persistent work-groups, chunk (cx,cy) to group (cx mod GX, cy mod GY)", 1, 0, 0,
+	 0, &singlepass_ops},
 	{"dynamic", "persistent work-groups fetch chunks from a global atomic counter", 1, 0, 0, 0,
-	 singlepass_render},
+	 &singlepass_ops},
 	{"persistent",
 	 "persistent work-groups whose work-items each fetch --batch pixels, no barrier", 1, 0, 0,
-	 1, singlepass_render},
+	 1, &singlepass_ops},
 	{"wavefront", "one launch per bounce over a queue of live rays: paths split in pieces", 0,
-	 0, 1, 0, wavefront_render},
+	 0, 1, 0, &wavefront_ops},
 };
 const int render_kernel_count = sizeof(render_kernels) / sizeof(render_kernels[0]);
 
@@ -36,12 +40,147 @@ const struct kernel_info *render_find_kernel(const char *name)
 	return NULL;
 }
 
+int renderer_open(struct renderer *r, struct device *dev, const struct scene *scene,
+		  const struct render_settings *s, struct render_result *res, char *err,
+		  size_t err_size)
+{
+	memset(r, 0, sizeof(*r));
+	memset(res, 0, sizeof(*res));
+	r->ops = s->kernel->ops;
+	r->dev = dev;
+	r->settings = s;
+	r->result = res;
+	snprintf(r->label, sizeof(r->label), "rendering (%s)", s->kernel->name);
+	if (r->ops->open(r, scene, err, err_size) == 0)
+		return 0;
+	r->ops->close(r);
+	return -1;
+}
+
+int renderer_piece(struct renderer *r, const struct rt_piece *p, struct piece_result *out,
+		   char *err, size_t err_size)
+{
+	const struct render_settings *s = r->settings;
+	int samples = s->samples > 0 ? s->samples : 1;
+
+	if (p->x0 < 0 || p->y0 < 0 || p->width < 1 || p->height < 1 ||
+	    p->width > s->width - p->x0 || p->height > s->height - p->y0 || p->samples != samples ||
+	    p->sample_begin < 0 || p->sample_end <= p->sample_begin || p->sample_end > samples) {
+		snprintf(err, err_size,
+			 "internal error: piece %dx%d at (%d, %d), samples [%d, %d) of %d, does "
+			 "not fit a %dx%d image of %d samples per pixel",
+			 p->width, p->height, p->x0, p->y0, p->sample_begin, p->sample_end,
+			 p->samples, s->width, s->height, samples);
+		return -1;
+	}
+	return r->ops->piece(r, p, out, err, err_size);
+}
+
+int renderer_read_back(struct renderer *r, char *err, size_t err_size)
+{
+	return r->ops->read_back(r, err, err_size);
+}
+
+void renderer_close(struct renderer *r)
+{
+	if (r->ops)
+		r->ops->close(r);
+	r->ops = NULL;
+}
+
+struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end)
+{
+	struct rt_piece p = {0, 0, s->width, s->height, begin, end, s->samples > 0 ? s->samples : 1,
+			     0};
+	return p;
+}
+
+int render_pass_samples(const struct render_settings *s)
+{
+	int samples = s->samples > 0 ? s->samples : 1;
+	double pixels = (double)s->width * s->height;
+	double per_pass = s->samples_per_pass > 0 ? s->samples_per_pass
+						  : floor(RENDER_PASS_PIXEL_SAMPLES / pixels);
+
+	return per_pass < 1 ? 1 : per_pass > samples ? samples : (int)per_pass;
+}
+
+/* Sets the progress line the launches show: the frame, the share of its
+ * samples done and, once a pass is done, the time left at the pace so far. */
+static void set_progress(struct renderer *r, int frame, int frames, int done, int samples,
+			 double elapsed)
+{
+	char left[48] = "";
+	int n = 0;
+
+	if (done > 0)
+		snprintf(left, sizeof(left), ", about %.0f s left",
+			 elapsed / done * (samples - done));
+	if (frames > 1)
+		n = snprintf(r->label, sizeof(r->label), "rendering (%s, frame %d of %d",
+			     r->settings->kernel->name, frame + 1, frames);
+	else
+		n = snprintf(r->label, sizeof(r->label), "rendering (%s",
+			     r->settings->kernel->name);
+	snprintf(r->label + n, sizeof(r->label) - (size_t)n, ", %d%%%s)", 100 * done / samples,
+		 left);
+}
+
+/* Renders one frame as passes over the whole image, each a range of the
+ * samples, and sets *ms to the sum of their kernel times. */
+static int render_frame(struct renderer *r, int frame, int frames, double *ms, char *err,
+			size_t err_size)
+{
+	const struct render_settings *s = r->settings;
+	int samples = s->samples > 0 ? s->samples : 1;
+	int per_pass = render_pass_samples(s);
+	double start = timing_now();
+
+	*ms = 0;
+	for (int begin = 0; begin < samples; begin += per_pass) {
+		int end = samples - begin > per_pass ? begin + per_pass : samples;
+		struct rt_piece piece = renderer_whole_image(s, begin, end);
+		struct piece_result out;
+
+		set_progress(r, frame, frames, begin, samples, timing_now() - start);
+		if (renderer_piece(r, &piece, &out, err, err_size))
+			return -1;
+		*ms += out.kernel_ms;
+	}
+	return 0;
+}
+
 int render(struct device *dev, const struct scene *scene, const struct render_settings *s,
 	   struct render_result *res, char *err, size_t err_size)
 {
-	memset(res, 0, sizeof(*res));
-	if (s->kernel->renderer(dev, scene, s, res, err, err_size) == 0)
-		return 0;
+	struct renderer r;
+	int per_pass = render_pass_samples(s), samples = s->samples > 0 ? s->samples : 1;
+
+	if (renderer_open(&r, dev, scene, s, res, err, err_size))
+		goto out_free;
+	double lap = timing_now();
+	int frames = launch_begin_timing(s, res, err, err_size);
+	if (frames < 0)
+		goto out_close;
+	res->passes = (samples + per_pass - 1) / per_pass;
+	for (int frame = 0; frame < frames; frame++) {
+		double ms;
+		if (render_frame(&r, frame, frames, &ms, err, err_size))
+			goto out_close;
+		launch_record_frame(res, frame, frames, ms);
+	}
+	if (launch_end_timing(res, err, err_size))
+		goto out_close;
+	res->times.kernels = timing_lap_ms(&lap);
+	if (renderer_read_back(&r, err, err_size))
+		goto out_close;
+	res->times.read_back = timing_lap_ms(&lap);
+	renderer_close(&r);
+	return 0;
+
+out_close:
+	renderer_close(&r);
+out_free:
 	render_result_free(res);
 	return -1;
 }

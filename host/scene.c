@@ -31,69 +31,6 @@
  * angle between them is below this. */
 #define SCENE_PARALLEL_SINE 1e-9
 
-static const struct scene_material default_material = {
-	.color = {1, 1, 1},
-	.ambient = 1.0,
-	.diffuse = 0.7,
-	.specular = 0.3,
-	.shininess = 32,
-	.reflect = 0,
-	.transmit = 0,
-	.ior = 1.5,
-};
-
-static int read_material_fields(struct loader *ld, const struct path *p, json_t *obj,
-				struct scene_material *m)
-{
-	static const char *const keys[] = {"color",    "ambient",   "diffuse",
-					   "specular", "shininess", "reflect",
-					   "transmit", "ior",	    NULL};
-
-	*m = default_material;
-	if (loader_expect_object(ld, p, obj, keys) ||
-	    loader_read_vec3(ld, p, obj, "color", OPTIONAL, NON_NEGATIVE, m->color) ||
-	    loader_read_number(ld, p, obj, "ambient", OPTIONAL, NON_NEGATIVE, &m->ambient) ||
-	    loader_read_number(ld, p, obj, "diffuse", OPTIONAL, NON_NEGATIVE, &m->diffuse) ||
-	    loader_read_number(ld, p, obj, "specular", OPTIONAL, NON_NEGATIVE, &m->specular) ||
-	    loader_read_number(ld, p, obj, "shininess", OPTIONAL, NON_NEGATIVE, &m->shininess) ||
-	    loader_read_number(ld, p, obj, "reflect", OPTIONAL, UNIT, &m->reflect) ||
-	    loader_read_number(ld, p, obj, "transmit", OPTIONAL, UNIT, &m->transmit) ||
-	    loader_read_number(ld, p, obj, "ior", OPTIONAL, POSITIVE, &m->ior))
-		return -1;
-	return 0;
-}
-
-/* An object's "material": a name, an inline object (appended after the
- * named ones), or absent (-1 until the default material gets its index). */
-static int read_material_ref(struct loader *ld, const struct path *p, json_t *obj, int *index)
-{
-	struct path field = child_key(p, "material");
-	struct scene *s = ld->scene;
-	json_t *v = json_object_get(obj, "material");
-
-	if (!v) {
-		ld->default_used = 1;
-		*index = -1;
-		return 0;
-	}
-	if (json_is_string(v)) {
-		json_t *named = json_object_get(ld->name_index, json_string_value(v));
-
-		if (!named)
-			return loader_fail_quoted(ld, &field, "unknown material ",
-						  json_string_value(v));
-		*index = (int)json_integer_value(named);
-		return 0;
-	}
-	if (!json_is_object(v))
-		return loader_fail(ld, &field, "must be a material name or an object, got %s",
-				   loader_type_name(v));
-	if (read_material_fields(ld, &field, v, &s->materials[s->material_count]))
-		return -1;
-	*index = s->material_count++;
-	return 0;
-}
-
 /* Fetches an optional top-level array; a missing one counts as empty. */
 static int get_array(struct loader *ld, json_t *doc, const char *key, json_t **out, size_t *count)
 {
@@ -138,13 +75,23 @@ static int read_header(struct loader *ld, json_t *doc)
 		return -1;
 	if (loader_check_integer(ld, &version, v, LLONG_MIN, LLONG_MAX, &n))
 		return -1;
-	if (n > 1)
+	if (n > 2)
 		return loader_fail(ld, &version,
 				   "version %" JSON_INTEGER_FORMAT
-				   " is not supported (this rtcl reads version 1)",
+				   " is not supported (this rtcl reads versions 1 and 2)",
 				   n);
 	if (n < 1)
 		return loader_fail(ld, &version, "must be 1, got %" JSON_INTEGER_FORMAT, n);
+	ld->version = (int)n;
+	/* Before unknown keys: a version 1 file with meshes gets told why. */
+	for (int i = 0; i < 2 && n == 1; i++) {
+		const char *key = i == 0 ? "meshes" : "triangles";
+		struct path field = child_key(&root_path, key);
+
+		if (json_object_get(doc, key))
+			return loader_fail(ld, &field,
+					   "needs \"version\": 2 (the file says \"version\": 1)");
+	}
 	return 0;
 }
 
@@ -219,34 +166,6 @@ static int read_image_and_globals(struct loader *ld, json_t *doc)
 	return 0;
 }
 
-static int read_named_materials(struct loader *ld, json_t *doc)
-{
-	struct path p = child_key(&root_path, "materials");
-	struct scene *s = ld->scene;
-	const char *name;
-	json_t *named, *value;
-
-	if (loader_get_field(ld, &root_path, doc, "materials", OPTIONAL, &named))
-		return -1;
-	if (!named)
-		return 0;
-	if (!json_is_object(named))
-		return loader_fail(ld, &p, "must be an object, got %s", loader_type_name(named));
-	json_object_foreach(named, name, value)
-	{
-		struct path m = child_key(&p, name);
-
-		if (read_material_fields(ld, &m, value, &s->materials[s->material_count]))
-			return -1;
-		if (json_object_set_new(ld->name_index, name, json_integer(s->material_count))) {
-			loader_write_err(ld, "%s: out of memory", ld->source);
-			return -1;
-		}
-		s->material_count++;
-	}
-	return 0;
-}
-
 static int read_lights(struct loader *ld, json_t *array)
 {
 	static const char *const keys[] = {"position", "color", NULL};
@@ -282,7 +201,7 @@ static int read_spheres(struct loader *ld, json_t *array)
 		if (loader_expect_object(ld, &item, obj, keys) ||
 		    loader_read_vec3(ld, &item, obj, "center", REQUIRED, ANY, sp->center) ||
 		    loader_read_number(ld, &item, obj, "radius", REQUIRED, POSITIVE, &sp->radius) ||
-		    read_material_ref(ld, &item, obj, &sp->material))
+		    loader_read_material_ref(ld, &item, obj, &sp->material))
 			return -1;
 		s->sphere_count++;
 	}
@@ -330,7 +249,7 @@ static int read_planes(struct loader *ld, json_t *array)
 		len = loader_length3(n);
 		for (int k = 0; k < 3; k++)
 			pl->normal[k] = n[k] / len;
-		if (read_material_ref(ld, &item, obj, &pl->material) ||
+		if (loader_read_material_ref(ld, &item, obj, &pl->material) ||
 		    read_checker(ld, &item, obj, pl))
 			return -1;
 		s->plane_count++;
@@ -339,8 +258,9 @@ static int read_planes(struct loader *ld, json_t *array)
 }
 
 static const char *const top_level_keys[] = {
-	"format",  "version",	"image",  "camera",  "background", "ambient", "max_depth",
-	"epsilon", "materials", "lights", "spheres", "planes",	   NULL,
+	"format",  "version",	"image",   "camera",	"background",
+	"ambient", "max_depth", "epsilon", "materials", "lights",
+	"spheres", "planes",	"meshes",  "triangles", NULL,
 };
 
 /* Fills ld->scene from the parsed document; on failure the caller frees
@@ -348,20 +268,23 @@ static const char *const top_level_keys[] = {
 static int read_scene(struct loader *ld, json_t *doc)
 {
 	struct scene *s = ld->scene;
-	json_t *lights, *spheres, *planes, *named;
-	size_t light_count, sphere_count, plane_count, material_capacity;
+	json_t *lights, *spheres, *planes, *meshes, *triangles, *named;
+	size_t light_count, sphere_count, plane_count, mesh_count, triangle_count;
+	size_t material_capacity;
 
 	if (read_header(ld, doc) || loader_check_keys(ld, &root_path, doc, top_level_keys) ||
 	    read_image_and_globals(ld, doc) ||
 	    get_array(ld, doc, "lights", &lights, &light_count) ||
 	    get_array(ld, doc, "spheres", &spheres, &sphere_count) ||
-	    get_array(ld, doc, "planes", &planes, &plane_count))
+	    get_array(ld, doc, "planes", &planes, &plane_count) ||
+	    get_array(ld, doc, "meshes", &meshes, &mesh_count) ||
+	    get_array(ld, doc, "triangles", &triangles, &triangle_count))
 		return -1;
 
 	/* Upper bound: every object brings an inline material, plus the default. */
 	named = json_object_get(doc, "materials");
 	material_capacity = (json_is_object(named) ? json_object_size(named) : 0) + sphere_count +
-			    plane_count + 1;
+			    plane_count + mesh_count + triangle_count + 1;
 	s->materials = calloc(material_capacity, sizeof(*s->materials));
 	s->lights = calloc(light_count ? light_count : 1, sizeof(*s->lights));
 	s->spheres = calloc(sphere_count ? sphere_count : 1, sizeof(*s->spheres));
@@ -372,20 +295,24 @@ static int read_scene(struct loader *ld, json_t *doc)
 		return -1;
 	}
 
-	if (read_named_materials(ld, doc) || read_lights(ld, lights) || read_spheres(ld, spheres) ||
-	    read_planes(ld, planes))
+	if (loader_read_named_materials(ld, doc) || read_lights(ld, lights) ||
+	    read_spheres(ld, spheres) || read_planes(ld, planes) ||
+	    loader_read_meshes(ld, meshes) || loader_read_triangles(ld, triangles))
 		return -1;
 
 	if (ld->default_used) {
 		int index = s->material_count++;
 
-		s->materials[index] = default_material;
+		s->materials[index] = loader_default_material;
 		for (int i = 0; i < s->sphere_count; i++)
 			if (s->spheres[i].material < 0)
 				s->spheres[i].material = index;
 		for (int i = 0; i < s->plane_count; i++)
 			if (s->planes[i].material < 0)
 				s->planes[i].material = index;
+		for (int i = 0; i < s->triangle_count; i++)
+			if (s->triangles[i].material < 0)
+				s->triangles[i].material = index;
 	}
 	return 0;
 }
@@ -396,9 +323,13 @@ static const char utf8_bom[] = "\xef\xbb\xbf";
 
 /* Parses and validates `len` bytes of JSON; `source` names them in messages. */
 static int load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
-		       char *err, size_t err_size)
+		       const char *base_dir, char *err, size_t err_size)
 {
-	struct loader ld = {.source = source, .err = err, .err_size = err_size, .scene = scene};
+	struct loader ld = {.source = source,
+			    .err = err,
+			    .err_size = err_size,
+			    .scene = scene,
+			    .base_dir = base_dir};
 	json_error_t jerr;
 	json_t *doc;
 	int ret;
@@ -436,15 +367,24 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 
 int scene_load_file(struct scene *scene, const char *path, char *err, size_t err_size)
 {
+	const char *slash = strrchr(path, '/');
+	char *dir = strndup(path, slash ? (size_t)(slash - path) + 1 : 0);
 	size_t len;
 	char *buf;
 	int ret;
 
 	memset(scene, 0, sizeof(*scene));
-	if (files_read(path, "scene", SCENE_MAX_BYTES, &buf, &len, err, err_size))
+	if (!dir) {
+		snprintf(err, err_size, "%s: out of memory", path);
 		return -1;
-	ret = load_buffer(scene, buf, len, path, err, err_size);
-	free(buf);
+	}
+	ret = files_read(path, "scene", SCENE_MAX_BYTES, &buf, &len, err, err_size);
+	if (ret == 0) {
+		/* Mesh files are found relative to the scene file's folder. */
+		ret = load_buffer(scene, buf, len, path, dir, err, err_size);
+		free(buf);
+	}
+	free(dir);
 	return ret;
 }
 
@@ -460,7 +400,7 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		loader_write_err(&ld, "%s: no scene text", name);
 		return -1;
 	}
-	return load_buffer(scene, json, strlen(json), name, err, err_size);
+	return load_buffer(scene, json, strlen(json), name, NULL, err, err_size);
 }
 
 void scene_free(struct scene *scene)
@@ -470,5 +410,6 @@ void scene_free(struct scene *scene)
 	free(scene->spheres);
 	free(scene->planes);
 	free(scene->lights);
+	free(scene->triangles);
 	memset(scene, 0, sizeof(*scene));
 }

@@ -1,4 +1,4 @@
-/* Scene files (docs/SCENE.md, format version 1).
+/* Scene files (docs/SCENE.md, format versions 1 and 2).
  *
  * The loader validates everything SCENE.md asks for and fills a plain C
  * struct in double precision; the OpenCL runtime packs it into the device
@@ -42,6 +42,17 @@ struct scene_plane {
 	double checker_color[3];
 };
 
+/* A triangle of a mesh file or of the inline "triangles", placed in the
+ * world. Its geometric normal is (v1 - v0) x (v2 - v0) normalised; normal[k]
+ * is the unit shading normal at vertex k (the geometric normal for a flat
+ * triangle). */
+struct scene_triangle {
+	double v[3][3];
+	double normal[3][3];
+	int material;
+	int smooth; /* the shading normals are interpolated */
+};
+
 struct scene_light {
 	double position[3];
 	double color[3];
@@ -73,6 +84,10 @@ struct scene {
 	int plane_count;
 	struct scene_light *lights;
 	int light_count;
+	/* Version 2: the triangles of the meshes in order, then the inline ones. */
+	struct scene_triangle *triangles;
+	int triangle_count;
+	long skipped_triangles; /* zero-area triangles of mesh files, left out */
 };
 
 /* Loads and validates a scene file. Returns 0 on success; otherwise writes

@@ -342,32 +342,37 @@ int loader_read_int(struct loader *ld, const struct path *p, json_t *obj, const 
 	return 0;
 }
 
-/* A vec3 (range ANY or DIRECTION) or a color (range NON_NEGATIVE). */
-int loader_read_vec3(struct loader *ld, const struct path *p, json_t *obj, const char *key,
-		     enum presence presence, enum range range, double out[3])
+int loader_check_vec3(struct loader *ld, const struct path *p, json_t *v, enum range range,
+		      double out[3])
 {
-	struct path field = child_key(p, key);
 	double parts[3];
-	json_t *v;
 
-	if (loader_get_field(ld, p, obj, key, presence, &v))
-		return -1;
-	if (!v)
-		return 0;
 	if (!json_is_array(v))
-		return loader_fail(ld, &field, "must be an array of 3 numbers, got %s",
+		return loader_fail(ld, p, "must be an array of 3 numbers, got %s",
 				   loader_type_name(v));
 	if (json_array_size(v) != 3)
-		return loader_fail(ld, &field, "must be an array of 3 numbers, got %zu element%s",
+		return loader_fail(ld, p, "must be an array of 3 numbers, got %zu element%s",
 				   json_array_size(v), json_array_size(v) == 1 ? "" : "s");
 	for (size_t i = 0; i < 3; i++) {
-		struct path part = child_index(&field, i);
+		struct path part = child_index(p, i);
 
 		if (loader_check_number(ld, &part, json_array_get(v, i), range, &parts[i]))
 			return -1;
 	}
 	memcpy(out, parts, sizeof(parts));
 	return 0;
+}
+
+/* A vec3 (range ANY or DIRECTION) or a color (range NON_NEGATIVE). */
+int loader_read_vec3(struct loader *ld, const struct path *p, json_t *obj, const char *key,
+		     enum presence presence, enum range range, double out[3])
+{
+	struct path field = child_key(p, key);
+	json_t *v;
+
+	if (loader_get_field(ld, p, obj, key, presence, &v))
+		return -1;
+	return v ? loader_check_vec3(ld, &field, v, range, out) : 0;
 }
 
 const char *loader_fmt_vec3(const double v[3], char buf[100])

@@ -37,6 +37,9 @@ struct loader {
 	const json_t *doc;
 	const char *text; /* the JSON text of doc, without a byte-order mark */
 	size_t text_len;
+	int version;		  /* the file's "version" */
+	const char *base_dir;	  /* mesh files are relative to it; NULL: the working folder */
+	size_t triangle_capacity; /* room in scene->triangles */
 };
 
 /* A key below `parent`; top-level keys get a root-less path. */
@@ -109,9 +112,31 @@ int loader_check_integer(struct loader *ld, const struct path *p, json_t *v, jso
 int loader_read_int(struct loader *ld, const struct path *p, json_t *obj, const char *key,
 		    enum presence presence, int lo, int hi, int *out);
 
+/* A vec3 (range ANY or DIRECTION) or a color (range NON_NEGATIVE), the value
+ * v found at p. */
+int loader_check_vec3(struct loader *ld, const struct path *p, json_t *v, enum range range,
+		      double out[3]);
+
 /* A vec3 (range ANY or DIRECTION) or a color (range NON_NEGATIVE). */
 int loader_read_vec3(struct loader *ld, const struct path *p, json_t *obj, const char *key,
 		     enum presence presence, enum range range, double out[3]);
+
+/* SCENE.md's material defaults, for fields left out and for objects without
+ * a material. */
+extern const struct scene_material loader_default_material;
+
+/* The top-level "materials", each appended to scene->materials and named in
+ * ld->name_index. */
+int loader_read_named_materials(struct loader *ld, json_t *doc);
+
+/* An object's "material": a name, an inline object (appended after the
+ * named ones), or absent (-1 until the default material gets its index). */
+int loader_read_material_ref(struct loader *ld, const struct path *p, json_t *obj, int *index);
+
+/* Version 2 (scene_mesh.c): the "meshes" and the inline "triangles",
+ * appended to scene->triangles in that order. */
+int loader_read_meshes(struct loader *ld, json_t *array);
+int loader_read_triangles(struct loader *ld, json_t *array);
 
 const char *loader_fmt_vec3(const double v[3], char buf[100]);
 

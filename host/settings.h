@@ -12,22 +12,17 @@
 
 struct render_settings;
 struct render_result;
-
-/* Renders a frame with one family of kernels. Returns 0, or -1 with one
- * message in err; on failure the caller frees what result holds. */
-typedef int (*renderer_fn)(struct device *dev, const struct scene *scene,
-			   const struct render_settings *settings, struct render_result *result,
-			   char *err, size_t err_size);
+struct renderer_ops; /* renderer.h */
 
 /* The scheduling kernels, one cl/NAME.cl each. */
 struct kernel_info {
 	const char *name;
 	const char *summary;
-	int uses_groups;      /* persistent work-groups: --groups applies */
-	int single_item;      /* one work-item renders everything: -w does not apply */
-	int multi_pass;	      /* several launches per frame (wavefront) */
-	int pixel_counter;    /* its work counter counts pixels, --batch at a time */
-	renderer_fn renderer; /* singlepass_render or wavefront_render */
+	int uses_groups;		/* persistent work-groups: --groups applies */
+	int single_item;		/* one work-item renders everything: -w does not apply */
+	int multi_pass;			/* several launches per frame (wavefront) */
+	int pixel_counter;		/* its work counter counts pixels, --batch at a time */
+	const struct renderer_ops *ops; /* singlepass_ops or wavefront_ops */
 };
 
 struct render_settings {
@@ -36,7 +31,9 @@ struct render_settings {
 	int groups[2];	   /* persistent work-groups; 0x0: enough to fill the device */
 	int width, height; /* image size */
 	int max_depth;
-	int repeat;		/* timed launches */
+	int samples;		/* N, samples per pixel (0 counts as 1) */
+	int samples_per_pass;	/* 0: chosen by render_pass_samples() */
+	int repeat;		/* timed frames */
 	int warm_up;		/* one untimed launch first (-r given) */
 	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
@@ -67,6 +64,7 @@ struct render_result {
 	double *kernel_ms; /* each timed launch, in order */
 	int repeat;
 	int launches; /* frames rendered: the timed ones and any warm-up */
+	int passes;   /* passes per frame, each a range of the samples */
 	struct render_times times;
 	int groups[2]; /* as launched (1x1 for serial; the NDRange's for naive) */
 	size_t global_size[2], local_size[2];

@@ -1,6 +1,6 @@
 /* The single-pass renderer: serial, naive, cyclic, dynamic and persistent
- * (cl/NAME.cl) each trace a whole frame in one launch of their `render`
- * kernel. */
+ * (cl/NAME.cl) each trace a piece of the image (renderer.h) in one launch of
+ * their `render` kernel. */
 #include "singlepass.h"
 
 #include <stdio.h>
@@ -20,6 +20,7 @@ enum render_arg {
 	ARG_WORK_COUNTER,
 	ARG_COUNTS,
 	ARG_WRITE_COUNTS,
+	ARG_PIECE,
 	RENDER_ARGS
 };
 
@@ -30,12 +31,17 @@ struct launch_state {
 	cl_mem scene_buffer;
 	struct guarded_image image;
 	cl_mem work_counter; /* the next chunk or pixel to hand out */
-	cl_mem counts;	     /* flops and rays per work-item, then flops per pixel */
+	cl_mem counts;	     /* flops per pixel, then flops and rays per work-item */
 	cl_mem write_counts;
+	void *scene_block;
+	uint64_t *item_flops; /* per work-item of the plan, added over the launches */
+	uint64_t rays;
 };
 
 static void release_state(struct launch_state *st)
 {
+	free(st->item_flops);
+	free(st->scene_block);
 	if (st->write_counts)
 		clReleaseMemObject(st->write_counts);
 	if (st->counts)
@@ -51,8 +57,8 @@ static void release_state(struct launch_state *st)
 		clReleaseProgram(st->program);
 }
 
-/* Bytes of the counts buffer: two per work-item (flops, rays), then one per
- * pixel (flops). */
+/* Bytes of the counts buffer: one per pixel (flops), then two per work-item
+ * of the largest launch, the whole image's (flops, rays). */
 static double counts_bytes(const struct render_settings *s, const struct render_result *res)
 {
 	double items = (double)res->global_size[0] * res->global_size[1];
@@ -60,22 +66,29 @@ static double counts_bytes(const struct render_settings *s, const struct render_
 	return (items * 2 + (double)s->width * s->height) * sizeof(cl_ulong);
 }
 
+/* Bytes of the per-pixel flops at the head of the counts buffer. */
+static size_t pixel_counts_bytes(const struct render_settings *s)
+{
+	return (size_t)s->width * s->height * sizeof(cl_ulong);
+}
+
 static int set_args(const struct launch_state *st, const struct render_result *res, char *err,
 		    size_t err_size)
 {
 	const cl_mem *buffers[RENDER_ARGS] = {
-		[ARG_SCENE] = &st->scene_buffer,	 [ARG_IMAGE] = &st->image.image,
+		[ARG_SCENE] = &st->scene_buffer,	[ARG_IMAGE] = &st->image.image,
 		[ARG_WORK_COUNTER] = &st->work_counter, [ARG_COUNTS] = &st->counts,
 		[ARG_WRITE_COUNTS] = &st->write_counts,
 	};
 
 	for (cl_uint i = 0; i < RENDER_ARGS; i++) {
 		cl_int status;
+		if (i == ARG_PIECE)
+			continue; /* set per piece */
 		if (i == ARG_SCENE_LOCAL)
-			status = clSetKernelArg(st->kernel, i,
-						res->scene_in_local ? res->scene_bytes
-								    : UNUSED_BUFFER_BYTES,
-						NULL);
+			status = clSetKernelArg(
+				st->kernel, i,
+				res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES, NULL);
 		else
 			status = clSetKernelArg(st->kernel, i, sizeof(cl_mem), buffers[i]);
 		if (status != CL_SUCCESS) {
@@ -101,10 +114,10 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 	if (!st->work_counter)
 		return -1;
 	res->item_count = res->global_size[0] * res->global_size[1];
-	st->counts = device_create_buffer(
-		dev, CL_MEM_READ_WRITE,
-		s->count_flops ? (size_t)counts_bytes(s, res) : UNUSED_BUFFER_BYTES, NULL,
-		"flop counts", err, err_size);
+	st->counts = device_create_buffer(dev, CL_MEM_READ_WRITE,
+					  s->count_flops ? (size_t)counts_bytes(s, res)
+							 : UNUSED_BUFFER_BYTES,
+					  NULL, "flop counts", err, err_size);
 	if (!st->counts)
 		return -1;
 	st->write_counts = checks_create_write_counts(dev, s, err, err_size);
@@ -113,78 +126,104 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 	return set_args(st, res, err, err_size);
 }
 
-/* Renders the warm-up and timed frames, one launch each; the host resets the
- * work counter before every launch. */
-static int launch_all(struct device *dev, const struct render_settings *s, struct launch_state *st,
-		      struct render_result *res, char *err, size_t err_size)
+/* The NDRange of piece: the plan's, except the naive kernel's, which covers
+ * the piece's rectangle rounded up to whole work-groups. */
+static void piece_global_size(const struct render_settings *s, const struct render_result *res,
+			      const struct rt_piece *piece, size_t global[2])
 {
-	int launches = launch_begin_timing(s, res, err, err_size);
-
-	if (launches < 0)
-		return -1;
-	for (int i = 0; i < launches; i++) {
-		char label[96];
-		double ms = 0;
-		const char *call = "clEnqueueFillBuffer";
-		cl_uint zero = 0;
-		cl_int status = clEnqueueFillBuffer(dev->queue, st->work_counter, &zero,
-						    sizeof(zero), 0, sizeof(zero), 0, NULL, NULL);
-
-		if (status == CL_SUCCESS)
-			status = checks_poison(dev, s, &st->image, st->write_counts);
-		snprintf(label, sizeof(label), "rendering (%s, launch %d of %d)", s->kernel->name,
-			 i + 1, launches);
-		if (status == CL_SUCCESS)
-			status = launch_run(dev, s, st->kernel, 2, res->global_size,
-					    res->local_size, label, &ms, &call);
-		if (status == CL_SUCCESS && i == launches - 1 && checks_device_fault_injected()) {
-			call = "waiting for the kernel";
-			status = CL_OUT_OF_RESOURCES;
-		}
-		if (status != CL_SUCCESS) {
-			snprintf(err, err_size, "%s failed (kernel '%s' on %s): %s", call,
-				 s->kernel->name, dev->name, cl_error_name(status));
-			return -1;
-		}
-		launch_record_frame(res, i, launches, ms);
-	}
-	return launch_end_timing(res, err, err_size);
+	global[0] = res->global_size[0];
+	global[1] = res->global_size[1];
+	if (s->kernel->uses_groups || s->kernel->single_item)
+		return;
+	global[0] = ((size_t)piece->width + res->local_size[0] - 1) / res->local_size[0] *
+		    res->local_size[0];
+	global[1] = ((size_t)piece->height + res->local_size[1] - 1) / res->local_size[1] *
+		    res->local_size[1];
 }
 
-/* Reads the per-work-item flops and rays (interleaved on the device) and the
- * per-pixel flops that follow them. */
-static cl_int read_counts(struct device *dev, const struct render_settings *s,
-			  const struct launch_state *st, struct render_result *res)
+/* Adds the launch's per-work-item counts to the host's sums. */
+static cl_int add_item_counts(struct device *dev, const struct render_settings *s,
+			      struct launch_state *st, size_t items)
 {
-	size_t pixels = (size_t)s->width * s->height;
-	size_t item_bytes = res->item_count * 2 * sizeof(cl_ulong);
-	cl_ulong *counts = malloc(item_bytes);
+	cl_ulong *counts = malloc(items * 2 * sizeof(cl_ulong));
 	cl_int status;
 
-	res->item_flops = malloc(res->item_count * sizeof(uint64_t));
-	res->pixel_flops = malloc(pixels * sizeof(uint64_t));
-	if (!counts || !res->item_flops || !res->pixel_flops) {
-		free(counts);
+	if (!counts)
 		return CL_OUT_OF_HOST_MEMORY;
-	}
-	status = clEnqueueReadBuffer(dev->queue, st->counts, CL_TRUE, 0, item_bytes, counts, 0,
-				     NULL, NULL);
-	if (status == CL_SUCCESS)
-		status = clEnqueueReadBuffer(dev->queue, st->counts, CL_TRUE, item_bytes,
-					     pixels * sizeof(cl_ulong), res->pixel_flops, 0, NULL,
-					     NULL);
-	for (size_t i = 0; status == CL_SUCCESS && i < res->item_count; i++) {
-		res->item_flops[i] = counts[2 * i];
-		res->total_flops += counts[2 * i];
-		res->total_rays += counts[2 * i + 1];
+	status = clEnqueueReadBuffer(dev->queue, st->counts, CL_TRUE, pixel_counts_bytes(s),
+				     items * 2 * sizeof(cl_ulong), counts, 0, NULL, NULL);
+	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
+		st->item_flops[i] += counts[2 * i];
+		st->rays += counts[2 * i + 1];
 	}
 	free(counts);
 	return status;
 }
 
-static int read_back(struct device *dev, const struct render_settings *s, struct launch_state *st,
-		     struct render_result *res, char *err, size_t err_size)
+/* Renders a piece with one launch; the host resets the work counter first. */
+static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
+			    struct piece_result *out, char *err, size_t err_size)
 {
+	struct device *dev = r->dev;
+	const struct render_settings *s = r->settings;
+	struct launch_state *st = r->state;
+	const char *call = "clEnqueueFillBuffer";
+	size_t global[2];
+	cl_uint zero = 0;
+	cl_int status = clEnqueueFillBuffer(dev->queue, st->work_counter, &zero, sizeof(zero), 0,
+					    sizeof(zero), 0, NULL, NULL);
+
+	piece_global_size(s, r->result, piece, global);
+	out->kernel_ms = 0;
+	out->launches = 1;
+	if (status == CL_SUCCESS) {
+		call = "clSetKernelArg";
+		status = clSetKernelArg(st->kernel, ARG_PIECE, sizeof(*piece), piece);
+	}
+	if (status == CL_SUCCESS)
+		status = launch_run(dev, s, st->kernel, 2, global, r->result->local_size, r->label,
+				    &out->kernel_ms, &call);
+	if (status == CL_SUCCESS && checks_device_fault_injected()) {
+		call = "waiting for the kernel";
+		status = CL_OUT_OF_RESOURCES;
+	}
+	if (status == CL_SUCCESS && s->count_flops) {
+		call = "reading the flop counts";
+		status = add_item_counts(dev, s, st, global[0] * global[1]);
+	}
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "%s failed (kernel '%s' on %s): %s", call, s->kernel->name,
+			 dev->name, cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
+/* Reads the per-pixel flops and hands over the per-work-item sums. */
+static cl_int read_counts(struct device *dev, const struct render_settings *s,
+			  struct launch_state *st, struct render_result *res)
+{
+	size_t pixels = (size_t)s->width * s->height;
+
+	res->pixel_flops = malloc(pixels * sizeof(uint64_t));
+	if (!res->pixel_flops)
+		return CL_OUT_OF_HOST_MEMORY;
+	res->item_flops = st->item_flops;
+	st->item_flops = NULL;
+	res->total_flops = 0;
+	for (size_t i = 0; i < res->item_count; i++)
+		res->total_flops += res->item_flops[i];
+	res->total_rays = st->rays;
+	return clEnqueueReadBuffer(dev->queue, st->counts, CL_TRUE, 0, pixel_counts_bytes(s),
+				   res->pixel_flops, 0, NULL, NULL);
+}
+
+static int singlepass_read_back(struct renderer *r, char *err, size_t err_size)
+{
+	struct device *dev = r->dev;
+	const struct render_settings *s = r->settings;
+	struct launch_state *st = r->state;
+	struct render_result *res = r->result;
 	cl_int status = clEnqueueReadBuffer(dev->queue, st->image.image, CL_TRUE, 0,
 					    image_float_bytes(s->width, s->height), res->rgb, 0,
 					    NULL, NULL);
@@ -205,39 +244,68 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 	return 0;
 }
 
-int singlepass_render(struct device *dev, const struct scene *scene,
-		      const struct render_settings *s, struct render_result *res, char *err,
-		      size_t err_size)
+/* Zeroes the counts and, with check_writes, poisons the image: the pieces
+ * add to what the buffers hold. */
+static int clear_buffers(struct device *dev, const struct render_settings *s,
+			 struct launch_state *st, char *err, size_t err_size)
 {
-	struct launch_state st;
-	void *scene_block = NULL;
-	int ret = -1;
+	cl_ulong zero = 0;
+	cl_int status = checks_poison(dev, s, &st->image, st->write_counts);
 
-	memset(&st, 0, sizeof(st));
-	if (launch_setup(dev, scene, s, res, &scene_block, &st.program, err, err_size) ||
+	if (status == CL_SUCCESS && s->count_flops)
+		status = clEnqueueFillBuffer(dev->queue, st->counts, &zero, sizeof(zero), 0,
+					     pixel_counts_bytes(s), 0, NULL, NULL);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clEnqueueFillBuffer failed: %s", cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
+static int singlepass_open(struct renderer *r, const struct scene *scene, char *err,
+			   size_t err_size)
+{
+	struct device *dev = r->dev;
+	const struct render_settings *s = r->settings;
+	struct render_result *res = r->result;
+	struct launch_state *st = calloc(1, sizeof(*st));
+
+	if (!st) {
+		snprintf(err, err_size, "out of host memory");
+		return -1;
+	}
+	r->state = st;
+	if (launch_setup(dev, scene, s, res, &st->scene_block, &st->program, err, err_size) ||
 	    (s->count_flops &&
 	     device_check_fits(dev, "the flop count buffer", counts_bytes(s, res), err, err_size)))
-		goto out;
-	st.kernel = program_create_kernel(st.program, "render", err, err_size);
-	if (!st.kernel)
-		goto out;
+		return -1;
+	st->kernel = program_create_kernel(st->program, "render", err, err_size);
+	if (!st->kernel)
+		return -1;
 	if (!s->kernel->single_item &&
-	    launch_check_kernel(dev, st.kernel, res, s->kernel->name, err, err_size))
-		goto out;
+	    launch_check_kernel(dev, st->kernel, res, s->kernel->name, err, err_size))
+		return -1;
 	double lap = timing_now();
-	if (create_buffers(dev, s, &st, res, scene_block, err, err_size))
-		goto out;
+	if (create_buffers(dev, s, st, res, st->scene_block, err, err_size))
+		return -1;
+	st->item_flops = calloc(res->item_count, sizeof(uint64_t));
+	if (!st->item_flops) {
+		snprintf(err, err_size, "out of host memory for the flop counts");
+		return -1;
+	}
+	if (clear_buffers(dev, s, st, err, err_size))
+		return -1;
 	res->times.scene += timing_lap_ms(&lap);
-	if (launch_all(dev, s, &st, res, err, err_size))
-		goto out;
-	res->times.kernels = timing_lap_ms(&lap);
-	if (read_back(dev, s, &st, res, err, err_size))
-		goto out;
-	res->times.read_back = timing_lap_ms(&lap);
-	ret = 0;
-
-out:
-	release_state(&st);
-	free(scene_block);
-	return ret;
+	return 0;
 }
+
+static void singlepass_close(struct renderer *r)
+{
+	if (r->state)
+		release_state(r->state);
+	free(r->state);
+	r->state = NULL;
+}
+
+const struct renderer_ops singlepass_ops = {singlepass_open, singlepass_piece, singlepass_read_back,
+					    singlepass_close};

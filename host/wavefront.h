@@ -2,12 +2,11 @@
 #ifndef RTCL_WAVEFRONT_H
 #define RTCL_WAVEFRONT_H
 
-#include "settings.h"
+#include "renderer.h"
 
-/* A renderer_fn (settings.h): one launch for the primary rays, then one per
- * bounce over a queue of live rays, for the warm-up and timed frames. */
-int wavefront_render(struct device *dev, const struct scene *scene,
-		     const struct render_settings *settings, struct render_result *result,
-		     char *err, size_t err_size);
+/* renderer.h's functions for the wavefront: per sample of a piece, one launch
+ * for the primary rays, one per bounce over a queue of live rays, and one
+ * that adds the sample to the image. */
+extern const struct renderer_ops wavefront_ops;
 
 #endif

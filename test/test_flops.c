@@ -1,9 +1,9 @@
 /* Flop counting (RENDERING.md): the shared tracer's pieces count exactly their
  * hand-counted operations, and every kernel counts the same work per pixel.
  *
- * The unit tests build the tracer (cl/tracer.cl and the files after it) with RTCL_COUNT_FLOPS and a small test
- * kernel that calls one tracer function on the analytic scene: a sphere of
- * radius 1 at the origin, a plane y = -1, a light at (3,0,5), eye (0,0,5).
+ * The unit tests build the tracer (cl/tracer.cl and the files after it) with RTCL_COUNT_FLOPS and a
+ * small test kernel that calls one tracer function on the analytic scene: a sphere of radius 1 at
+ * the origin, a plane y = -1, a light at (3,0,5), eye (0,0,5).
  */
 #include <criterion/criterion.h>
 
@@ -29,6 +29,13 @@ static const char analytic_json[] =
 	" \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1}],"
 	" \"planes\": [{\"point\": [0, -1, 0], \"normal\": [0, 1, 0]}]}";
 
+/* One triangle in the plane z = 0, seen from the same eye: v0 = (-1,-1,0),
+ * e1 = (2,0,0), e2 = (1,2,0). */
+static const char triangle_json[] =
+	"{\"format\": \"rtcl-scene\", \"version\": 2,"
+	" \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+	" \"triangles\": [{\"vertices\": [[-1, -1, 0], [1, -1, 0], [0, 1, 0]]}]}";
+
 /* Each test kernel writes the flops counted into out[0] and a result into
  * out[1] (as float bits) so the test can check it took the intended path. */
 static const char test_kernels[] =
@@ -36,7 +43,7 @@ static const char test_kernels[] =
 	"                           float4 o, float4 d)\n"
 	"{\n"
 	"	struct tracer tr;\n"
-	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
 	"	struct hit hit = intersect_scene(&tr, o.xyz, d.xyz, INFINITY, false);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(hit.t);\n"
@@ -45,10 +52,21 @@ static const char test_kernels[] =
 	"                          float4 o, float4 d)\n"
 	"{\n"
 	"	struct tracer tr;\n"
-	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
 	"	float t = intersect_plane(&tr, &tr.planes[0], o.xyz, d.xyz);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(t);\n"
+	"}\n"
+	"__kernel void count_triangle(__global const uint4 *scene, __global ulong *out,"
+	"                             float4 o, float4 d)\n"
+	"{\n"
+	"	struct tracer tr;\n"
+	"	float t = 0.0f;\n"
+	"	float2 uv;\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	bool hit = triangle_hit(&tr, 0, o.xyz, d.xyz, INFINITY, &t, &uv);\n"
+	"	out[0] = tr.flops;\n"
+	"	out[1] = as_uint(hit ? t : -1.0f);\n"
 	"}\n"
 	"__kernel void count_shading(__global const uint4 *scene, __global ulong *out,"
 	"                            float4 o, float4 d)\n"
@@ -57,7 +75,7 @@ static const char test_kernels[] =
 	"	struct ray_job ray = {o.xyz, d.xyz, 1.0f, RTCL_MAX_DEPTH};\n"
 	"	struct ray_job children[2];\n"
 	"	int spawned;\n"
-	"	tracer_init(&tr, (scene_ptr)scene, out);\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
 	"	float3 c = trace_one(&tr, &ray, children, &spawned);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(c.x);\n"
@@ -70,7 +88,7 @@ struct fixture {
 	cl_mem scene_buffer, out;
 };
 
-static void setup(struct fixture *f)
+static void setup_scene(struct fixture *f, const char *json)
 {
 	const char *sources[16];
 	int count = 0;
@@ -81,11 +99,11 @@ static void setup(struct fixture *f)
 		sources[count] = embedded_file(program_tracer_sources[count]);
 	sources[count++] = test_kernels;
 	cr_assert_eq(device_open(&f->dev, -1, -1, err, sizeof(err)), 0, "%s", err);
-	cr_assert_eq(scene_load_string(&f->scene, analytic_json, "analytic", err, sizeof(err)), 0,
-		     "%s", err);
+	cr_assert_eq(scene_load_string(&f->scene, json, "analytic", err, sizeof(err)), 0, "%s",
+		     err);
 	void *block = devscene_pack(&f->scene, 3, 3, 1, &bytes);
-	f->program = clCreateProgramWithSource(f->dev.context, (cl_uint)count, sources, NULL,
-					       &status);
+	f->program =
+		clCreateProgramWithSource(f->dev.context, (cl_uint)count, sources, NULL, &status);
 	cr_assert_eq(status, CL_SUCCESS);
 	status = clBuildProgram(f->program, 1, &f->dev.id,
 				"-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS", NULL, NULL);
@@ -100,6 +118,11 @@ static void setup(struct fixture *f)
 	f->out = clCreateBuffer(f->dev.context, CL_MEM_READ_WRITE, 64, NULL, &status);
 	cr_assert_eq(status, CL_SUCCESS);
 	free(block);
+}
+
+static void setup(struct fixture *f)
+{
+	setup_scene(f, analytic_json);
 }
 
 static void teardown(struct fixture *f)
@@ -214,6 +237,37 @@ Test(flops, shading_evaluation)
 	teardown(&f);
 }
 
+/* triangle_hit by stage (RENDERING.md): det = e1.(d x e2), a cross product
+ * 9 and a dot product 5: 14, where a ray parallel to the triangle stops;
+ * 1/det 1, s = o - v0 3, u = (s.p)/det 5 + 1: 24, where u outside [0, 1]
+ * stops; q = s x e1 9, v = (d.q)/det 5 + 1, u + v 1: 40, where v < 0 or
+ * u + v > 1 stops; t = (e2.q)/det 5 + 1: 46. */
+Test(flops, ray_triangle_test)
+{
+	struct fixture f;
+	const float eye[4] = {0, 0, 5, 0}, ahead[4] = {0, 0, -1, 0}, behind[4] = {0, 0, 1, 0};
+	const float parallel[4] = {1, 0, 0, 0};
+	const float right_of_it[4] = {3, 0, 5, 0}, above_it[4] = {0.9f, 0.5f, 5, 0};
+	float t;
+
+	setup_scene(&f, triangle_json);
+	cr_expect_eq(run_kernel(&f, "count_triangle", eye, ahead, &t), 46);
+	cr_expect_float_eq(t, 5.0f, 1e-6f);
+	/* From behind the eye's side, the plane is behind: all 46, no hit. */
+	cr_expect_eq(run_kernel(&f, "count_triangle", eye, behind, &t), 46);
+	cr_expect_eq(t, -1.0f);
+	/* d x e2 = (0,0,2), e1.(0,0,2) = 0. */
+	cr_expect_eq(run_kernel(&f, "count_triangle", eye, parallel, &t), 14);
+	cr_expect_eq(t, -1.0f);
+	/* Through (3,0,0): s = (4,1,5), p = (2,-1,0), det 4, u = 7/4. */
+	cr_expect_eq(run_kernel(&f, "count_triangle", right_of_it, ahead, &t), 24);
+	cr_expect_eq(t, -1.0f);
+	/* Through (0.9,0.5,0): u = 0.575, v = 0.75, u + v > 1. */
+	cr_expect_eq(run_kernel(&f, "count_triangle", above_it, ahead, &t), 40);
+	cr_expect_eq(t, -1.0f);
+	teardown(&f);
+}
+
 static struct render_settings counting(const char *kernel, int wx, int wy, int max_depth)
 {
 	struct render_settings s;
@@ -233,7 +287,7 @@ static struct render_settings counting(const char *kernel, int wx, int wy, int m
 
 /* Every kernel counts the same total and the same work for each pixel; the
  * per-pixel counts add up to the per-work-item ones. */
-Test(flops, kernels_count_the_same_work, .timeout = 300)
+static void check_same_work(const char *path)
 {
 	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
 					      "dynamic", "persistent", "wavefront"};
@@ -243,8 +297,7 @@ Test(flops, kernels_count_the_same_work, .timeout = 300)
 	size_t pixels = 61 * 47;
 
 	cr_assert_eq(device_open(&dev, -1, -1, err, sizeof(err)), 0, "%s", err);
-	cr_assert_eq(scene_load_file(&scene, "scenes/two_balls.json", err, sizeof(err)), 0, "%s",
-		     err);
+	cr_assert_eq(scene_load_file(&scene, path, err, sizeof(err)), 0, "%s", err);
 	struct render_settings s = counting("serial", 1, 1, scene.max_depth);
 	cr_assert_eq(render(&dev, &scene, &s, &want, err, sizeof(err)), 0, "%s", err);
 	cr_assert_gt(want.total_flops, 0);
@@ -285,4 +338,15 @@ Test(flops, kernels_count_the_same_work, .timeout = 300)
 	render_result_free(&want);
 	scene_free(&scene);
 	device_close(&dev);
+}
+
+Test(flops, kernels_count_the_same_work, .timeout = 300)
+{
+	check_same_work("scenes/two_balls.json");
+}
+
+/* Spheres, triangles (glass through closed meshes) and planes. */
+Test(flops, kernels_count_the_same_work_on_meshes, .timeout = 600)
+{
+	check_same_work("test/meshes/mesh_scene.json");
 }

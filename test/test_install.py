@@ -68,6 +68,8 @@ def expected_files():
              f"{share}/scenes/README.md"}
             | {f"{PREFIX}/bin/rtcl-" + path.stem.replace("_", "-") for path in tools}
             | {f"{share}/scenes/{path.name}" for path in (ROOT / "scenes").glob("*.json")}
+            | {f"{share}/scenes/models/{path.name}"
+               for path in (ROOT / "scenes" / "models").glob("*")}
             | {f"{share}/tools/{path.name}" for path in tools}
             | {f"{share}/tools/rtcl_tools/{path.name}"
                for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")})

@@ -13,9 +13,12 @@
 #include <string.h>
 
 #include "device.h"
+#include "devscene.h"
 #include "image.h"
+#include "launch.h"
 #include "reference.h"
 #include "render.h"
+#include "renderer.h"
 #include "scene.h"
 
 static char err[65536];
@@ -248,6 +251,48 @@ Test(kernels, matches_reference_tir, .timeout = 600)
 	check_against_reference("scenes/tir.json", 320, 240);
 }
 
+/* Glass through closed meshes (an icosphere with the file's normals, a cube
+ * without, flat), a mesh with area-weighted normals, an inline triangle, a
+ * sphere and a plane. */
+Test(kernels, identical_mesh_scene, .timeout = 900)
+{
+	check_kernels_identical("test/meshes/mesh_scene.json");
+}
+
+Test(kernels, matches_reference_mesh_scene, .timeout = 600)
+{
+	check_against_reference("test/meshes/mesh_scene.json", 160, 120);
+}
+
+Test(kernels, depth_64_matches_reference_mesh_scene, .timeout = 600)
+{
+	check_every_kernel_at_depth_64("test/meshes/mesh_scene.json", 8, 6);
+}
+
+/* A scene larger than one device buffer is refused with its size and the
+ * limit, before anything is packed or allocated. */
+Test(kernels, scene_larger_than_a_buffer_is_refused)
+{
+	struct device dev;
+	struct scene scene;
+	char want[512];
+
+	memset(&dev, 0, sizeof(dev));
+	snprintf(dev.name, sizeof(dev.name), "Tiny Device");
+	load(&scene, "test/meshes/mesh_scene.json");
+	dev.max_alloc_size = devscene_bytes(&scene);
+	cr_expect_eq(launch_check_scene_fits(&dev, &scene, err, sizeof(err)), 0, "%s", err);
+	dev.max_alloc_size--;
+	cr_assert_eq(launch_check_scene_fits(&dev, &scene, err, sizeof(err)), -1);
+	snprintf(want, sizeof(want),
+		 "test/meshes/mesh_scene.json: the scene (335 triangles) needs "
+		 "%zu bytes of device memory, more than the limit of %zu bytes in one buffer on "
+		 "Tiny Device (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
+		 devscene_bytes(&scene), devscene_bytes(&scene) - 1);
+	cr_expect_str_eq(err, want);
+	scene_free(&scene);
+}
+
 Test(kernels, matches_reference_empty, .timeout = 600)
 {
 	check_against_reference("scenes/empty.json", 64, 48);
@@ -414,4 +459,146 @@ Test(kernels, wavefront_matches_the_stack_walk, .timeout = 900)
 		differing, pixels, 100.0 * differing / pixels);
 	cr_expect_leq(100.0 * differing / pixels, 0.01);
 	device_close(&dev);
+}
+
+/* A render as pieces (renderer.h): the image, per-pixel flops and write
+ * counts read back after the pieces ran. */
+struct pieces_result {
+	unsigned char *bytes;
+	uint64_t *pixel_flops;
+	uint32_t *write_counts;
+};
+
+/* Renders the pieces pieces[0..count) with `kernel` in the order given and
+ * checks that nothing outside the image was written. */
+static struct pieces_result render_pieces(struct device *dev, const struct scene *scene,
+					  const struct render_settings *s,
+					  const struct rt_piece *pieces, int count,
+					  const char *what)
+{
+	struct renderer r;
+	struct render_result res;
+	struct pieces_result out;
+	size_t pixels = (size_t)s->width * s->height;
+
+	cr_assert_eq(renderer_open(&r, dev, scene, s, &res, err, sizeof(err)), 0, "%s: %s", what,
+		     err);
+	for (int i = 0; i < count; i++) {
+		struct piece_result pr;
+		cr_assert_eq(renderer_piece(&r, &pieces[i], &pr, err, sizeof(err)), 0,
+			     "%s: piece %d: %s", what, i, err);
+		cr_assert_geq(pr.launches, 1, "%s: piece %d", what, i);
+	}
+	cr_assert_eq(renderer_read_back(&r, err, sizeof(err)), 0, "%s: %s", what, err);
+	renderer_close(&r);
+	cr_assert(res.guards_intact, "%s: wrote outside the image", what);
+	out.bytes = malloc(pixels * 3);
+	cr_assert_not_null(out.bytes);
+	for (size_t i = 0; i < pixels * 3; i++)
+		out.bytes[i] = image_to_8bit(res.rgb[i]);
+	out.pixel_flops = res.pixel_flops;
+	out.write_counts = res.write_counts;
+	res.pixel_flops = NULL;
+	res.write_counts = NULL;
+	render_result_free(&res);
+	return out;
+}
+
+static void pieces_free(struct pieces_result *p)
+{
+	free(p->bytes);
+	free(p->pixel_flops);
+	free(p->write_counts);
+}
+
+/* Cuts the w x h image into 4 tiles of odd sizes (split at x = sx, y = sy) or
+ * into row bands of `band` rows, each over samples [begin, end) of n. Returns
+ * the number of pieces. */
+static int tile_pieces(struct rt_piece *out, int w, int h, int sx, int sy, int begin, int end,
+		       int n)
+{
+	int xs[3] = {0, sx, w}, ys[3] = {0, sy, h}, count = 0;
+
+	for (int j = 0; j < 2; j++)
+		for (int i = 0; i < 2; i++)
+			out[count++] = (struct rt_piece){
+				xs[i], ys[j], xs[i + 1] - xs[i], ys[j + 1] - ys[j], begin, end,
+				n,     0};
+	return count;
+}
+
+static int band_pieces(struct rt_piece *out, int w, int h, int band, int begin, int end, int n)
+{
+	int count = 0;
+
+	for (int y = 0; y < h; y += band)
+		out[count++] =
+			(struct rt_piece){0, y, w, h - y < band ? h - y : band, begin, end, n, 0};
+	return count;
+}
+
+/* Every kernel, rendering the image as 4 odd tiles and as row bands (given
+ * bottom band first, to show the order does not matter), gives the serial
+ * kernel's whole-image render: the same bytes (the wavefront within its
+ * documented 1/255), the same flops per pixel, and every pixel written once. */
+static void check_pieces(const char *path, int w, int h, int samples)
+{
+	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
+					      "dynamic", "persistent", "wavefront"};
+	struct device dev;
+	struct scene scene;
+	struct rt_piece pieces[64];
+
+	open_device(&dev);
+	load(&scene, path);
+	struct render_settings s = settings_for("serial", w, h, 1, 1, scene.max_depth);
+	s.samples = samples;
+	s.count_flops = 1;
+	struct pieces_result want = render_pieces(
+		&dev, &scene, &s, (struct rt_piece[]){renderer_whole_image(&s, 0, samples)}, 1,
+		"serial, whole image");
+	for (int k = 0; k < 6; k++) {
+		for (int layout = 0; layout < 2; layout++) {
+			char what[256];
+			int count = layout ? band_pieces(pieces, w, h, 10, 0, samples, samples)
+					   : tile_pieces(pieces, w, h, 23, 17, 0, samples, samples);
+			if (layout) /* bottom band first */
+				for (int i = 0; i < count / 2; i++) {
+					struct rt_piece t = pieces[i];
+					pieces[i] = pieces[count - 1 - i];
+					pieces[count - 1 - i] = t;
+				}
+			s = settings_for(kernels[k], w, h, 8, 4, scene.max_depth);
+			s.samples = samples;
+			s.count_flops = 1;
+			snprintf(what, sizeof(what), "%s %s %dx%d spp %d as %d %s", path,
+				 kernels[k], w, h, samples, count, layout ? "row bands" : "tiles");
+			struct pieces_result got =
+				render_pieces(&dev, &scene, &s, pieces, count, what);
+			for (size_t i = 0; i < (size_t)w * h; i++) {
+				cr_assert_eq(got.write_counts[i], 1,
+					     "%s: pixel %zu written %u times", what, i,
+					     got.write_counts[i]);
+				cr_assert_eq(got.pixel_flops[i], want.pixel_flops[i],
+					     "%s: pixel %zu counts %llu flops, serial %llu", what,
+					     i, (unsigned long long)got.pixel_flops[i],
+					     (unsigned long long)want.pixel_flops[i]);
+				for (int c = 0; c < 3; c++) {
+					int d = abs(got.bytes[3 * i + c] - want.bytes[3 * i + c]);
+					cr_assert_leq(d, k == 5 ? 1 : 0,
+						      "%s: pixel %zu channel %d off by %d/255",
+						      what, i, c, d);
+				}
+			}
+			pieces_free(&got);
+		}
+	}
+	pieces_free(&want);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+Test(kernels, pieces_give_the_whole_image, .timeout = 600)
+{
+	check_pieces("scenes/paper60.json", 61, 47, 1);
 }

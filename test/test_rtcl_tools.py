@@ -17,7 +17,7 @@ BAD_SCENES = ROOT / "test" / "bad_scenes"
 GOOD_SCENES = sorted((ROOT / "scenes").glob("*.json")) \
     + sorted((ROOT / "test" / "scenes").glob("*.json"))
 # Where the Python validator's message differs from rtcl's on purpose (see scene.py).
-OWN_WORDING = {"version_2"}
+OWN_WORDING = {"version_3"}
 
 
 # ---- files: the atomic writer -------------------------------------------------------

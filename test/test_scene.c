@@ -318,8 +318,8 @@ static const struct {
 	{"{\"format\": \"scene\"}", "t.json: format: must be \"rtcl-scene\", got \"scene\""},
 	{"{\"format\": null}", "t.json: format: must be the string \"rtcl-scene\", got null"},
 	{"{\"format\": \"rtcl-scene\"}", "t.json: version: required field is missing"},
-	{"{\"format\": \"rtcl-scene\", \"version\": 2, \"new_thing\": 1}",
-	 "t.json: version: version 2 is not supported (this rtcl reads version 1)"},
+	{"{\"format\": \"rtcl-scene\", \"version\": 3, \"new_thing\": 1}",
+	 "t.json: version: version 3 is not supported (this rtcl reads versions 1 and 2)"},
 	{"{\"format\": \"rtcl-scene\", \"version\": 0}", "t.json: version: must be 1, got 0"},
 	{"{\"format\": \"rtcl-scene\", \"version\": 1.5}",
 	 "t.json: version: must be an integer, got 1.5"},
@@ -699,4 +699,148 @@ Test(scene_file, bad_scenes_match_their_expect_files)
 	}
 	closedir(dir);
 	cr_expect_geq(checked, 30, "only %d bad scenes found", checked);
+}
+
+/* ---- Version 2: meshes and inline triangles (SCENE.md) ---- */
+
+#define SCENE2(extra) "{\"format\": \"rtcl-scene\", \"version\": 2, " CAMERA extra "}"
+
+Test(scene_v2, inline_triangle_gets_its_geometric_normal_and_the_default_material)
+{
+	struct scene s;
+
+	load_ok(&s, SCENE2(", \"triangles\": [{\"vertices\": [[0, 0, 0], [0, 2, 0], [2, 0, 0]]}]"));
+	cr_assert_eq(s.triangle_count, 1);
+	expect_vec3(s.triangles[0].v[1], 0, 2, 0);
+	/* (v1 - v0) x (v2 - v0) = (0,2,0) x (2,0,0) = (0,0,-4) */
+	for (int k = 0; k < 3; k++)
+		expect_vec3(s.triangles[0].normal[k], 0, 0, -1);
+	cr_expect_eq(s.triangles[0].smooth, 0);
+	cr_assert_eq(s.material_count, 1);
+	cr_expect_eq(s.triangles[0].material, 0);
+	expect_default_material(&s.materials[0]);
+	scene_free(&s);
+}
+
+/* scale, then rotate (x, then y, then z, world axes), then translate. */
+Test(scene_v2, placement_is_scale_then_rotate_then_translate)
+{
+	struct scene s;
+
+	load_ok(&s, SCENE2(", \"meshes\": [{\"file\": \"test/meshes/tri.stl\", \"scale\": [2, 3, "
+			   "1], \"rotate\": [0, 0, 90], \"translate\": [10, 0, 0]}]"));
+	cr_assert_eq(s.triangle_count, 1);
+	/* (1,0,0) -> (2,0,0) -> about z by 90: (0,2,0) -> (10,2,0);
+	 * (0,1,0) -> (0,3,0) -> (-3,0,0) -> (7,0,0). */
+	expect_vec3(s.triangles[0].v[0], 10, 0, 0);
+	expect_vec3(s.triangles[0].v[1], 10, 2, 0);
+	expect_vec3(s.triangles[0].v[2], 7, 0, 0);
+	/* The file's facet normal (0,0,1) stays (0,0,1) and is used, smooth. */
+	cr_expect_eq(s.triangles[0].smooth, 1);
+	expect_vec3(s.triangles[0].normal[0], 0, 0, 1);
+	scene_free(&s);
+
+	/* x first, then y: (1,0,0) about x stays, about y by 90 goes to (0,0,-1). */
+	load_ok(&s, SCENE2(", \"meshes\": [{\"file\": \"test/meshes/tri.stl\", "
+			   "\"rotate\": [90, 90, 0]}]"));
+	expect_vec3(s.triangles[0].v[1], 0, 0, -1);
+	/* (0,1,0) about x by 90: (0,0,1); about y by 90: (1,0,0). */
+	expect_vec3(s.triangles[0].v[2], 1, 0, 0);
+	scene_free(&s);
+}
+
+Test(scene_v2, gltf_node_transforms_come_before_the_placement)
+{
+	struct scene s;
+
+	load_ok(&s, SCENE2(", \"meshes\": [{\"file\": \"test/meshes/nodes.gltf\", \"translate\": "
+			   "[1, 0, 0], \"smooth\": false}]"));
+	cr_assert_eq(s.triangle_count, 1);
+	/* The nodes: scale 2, then translate (0,0,5); then ours, (1,0,0). */
+	expect_vec3(s.triangles[0].v[0], 1, 0, 5);
+	expect_vec3(s.triangles[0].v[1], 3, 0, 5);
+	expect_vec3(s.triangles[0].v[2], 1, 2, 5);
+	scene_free(&s);
+}
+
+Test(scene_v2, zero_area_triangles_of_files_are_skipped_and_counted)
+{
+	struct scene s;
+
+	load_ok(&s, SCENE2(", \"meshes\": [{\"file\": \"test/meshes/degenerate.obj\"}]"));
+	cr_expect_eq(s.triangle_count, 1);
+	cr_expect_eq(s.skipped_triangles, 1);
+	scene_free(&s);
+	/* An inline one is an error that names it. */
+	load_fails(SCENE2(", \"triangles\": [{\"vertices\": [[0, 0, 0], [1, 1, 1], [3, 3, 3]]}]"),
+		   "t.json: triangles[0].vertices: the triangle has zero area");
+}
+
+/* Quads are triangulated; without normals in the file, smooth normals are
+ * area-weighted over the triangles at each position (a flat quad: its own). */
+Test(scene_v2, area_weighted_normals_without_file_normals)
+{
+	struct scene s;
+
+	load_ok(&s, SCENE2(", \"meshes\": [{\"file\": \"test/meshes/quad.ply\"}]"));
+	cr_assert_eq(s.triangle_count, 2);
+	for (int t = 0; t < 2; t++) {
+		cr_expect_eq(s.triangles[t].smooth, 1);
+		for (int k = 0; k < 3; k++)
+			expect_vec3(s.triangles[t].normal[k], 0, 0, 1);
+	}
+	scene_free(&s);
+
+	/* A cube's corners: the sum over the faces that meet there leans out of
+	 * the cube, along the corner's diagonal's sign in every axis. */
+	load_ok(&s, SCENE2(", \"meshes\": [{\"file\": \"test/meshes/cube.obj\"}]"));
+	cr_assert_eq(s.triangle_count, 12);
+	for (int t = 0; t < 12; t++)
+		for (int k = 0; k < 3; k++)
+			for (int i = 0; i < 3; i++)
+				cr_expect_gt(s.triangles[t].normal[k][i] * s.triangles[t].v[k][i],
+					     0);
+	scene_free(&s);
+}
+
+/* A mirroring scale reverses each triangle's vertex order, so that the
+ * geometric normals of a closed mesh still point out of it. */
+Test(scene_v2, mirroring_scale_keeps_normals_outward)
+{
+	struct scene s;
+
+	load_ok(&s, SCENE2(", \"meshes\": [{\"file\": \"test/meshes/cube.obj\", \"scale\": [-1, 2, "
+			   "1], \"smooth\": false}]"));
+	cr_assert_eq(s.triangle_count, 12);
+	for (int t = 0; t < 12; t++) {
+		const struct scene_triangle *tri = &s.triangles[t];
+		double centroid = 0;
+
+		for (int i = 0; i < 3; i++)
+			centroid +=
+				tri->normal[0][i] * (tri->v[0][i] + tri->v[1][i] + tri->v[2][i]);
+		cr_expect_gt(centroid, 0, "triangle %d points into the cube", t);
+	}
+	scene_free(&s);
+}
+
+/* Mesh files are found relative to the scene file's folder. */
+Test(scene_v2, mesh_paths_are_relative_to_the_scene_file)
+{
+	struct scene s;
+	char err[512];
+
+	cr_assert_eq(scene_load_file(&s, "test/meshes/mesh_scene.json", err, sizeof(err)), 0, "%s",
+		     err);
+	cr_expect_eq(s.triangle_count, 320 + 12 + 2 + 1);
+	cr_expect_eq(s.skipped_triangles, 0);
+	scene_free(&s);
+}
+
+Test(scene_v2, version_1_refuses_meshes_and_reads_as_before)
+{
+	load_fails(SCENE(", \"triangles\": []"),
+		   "t.json: triangles: needs \"version\": 2 (the file says \"version\": 1)");
+	load_fails(SCENE2(", \"meshes\": [{\"file\": \"test/meshes/cube.obj\", \"scale\": 0}]"),
+		   "t.json: meshes[0].scale: must not be 0");
 }

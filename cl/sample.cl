@@ -1,0 +1,90 @@
+/* Where the samples of a pixel lie (docs/RENDERING.md, "Samples per pixel"):
+ * the first two dimensions of the Sobol' sequence, a (0,2)-sequence,
+ * scrambled per pixel by an XOR with a hash of (x, y), in 24-bit fixed point.
+ * Integer work only, then one exact scaling by 2^-24, so every device, kernel
+ * and the CPU reference (host/reference.cpp) place the samples on the same
+ * bits. Part of the tracer: built after tracer.cl. */
+
+/* Fixed-point bits of a sample coordinate: 2^-24 · bits is exact in float. */
+#define SAMPLE_BITS 24
+
+/* A 32-bit integer hash with good avalanche (Wellons's "lowbias32"). */
+static inline uint sample_hash(uint v)
+{
+	v ^= v >> 16;
+	v *= 0x7feb352du;
+	v ^= v >> 15;
+	v *= 0x846ca68bu;
+	v ^= v >> 16;
+	return v;
+}
+
+/* Sobol' dimension 0 of index k: the van der Corput radical inverse in base 2. */
+static inline uint sobol_dim0(uint k)
+{
+	uint r = 0;
+
+	for (uint v = 1u << 31; k; k >>= 1, v >>= 1)
+		if (k & 1u)
+			r ^= v;
+	return r;
+}
+
+/* Sobol' dimension 1 of index k (primitive polynomial x + 1, direction
+ * numbers v_{i+1} = v_i ^ (v_i >> 1)). */
+static inline uint sobol_dim1(uint k)
+{
+	uint r = 0;
+
+	for (uint v = 1u << 31; k; k >>= 1, v ^= v >> 1)
+		if (k & 1u)
+			r ^= v;
+	return r;
+}
+
+/* Returns sample k of pixel (x, y) out of n, in [0, 1)^2, as the 24-bit
+ * integers u·2^24 and v·2^24. n = 1 gives the centre (2^23, 2^23). */
+static inline uint2 sample_bits(int x, int y, uint k, uint n)
+{
+	if (n == 1)
+		return (uint2)(1u << (SAMPLE_BITS - 1));
+	uint su = sample_hash(sample_hash((uint)x) ^ (uint)y);
+	uint sv = sample_hash(su);
+	return (uint2)((sobol_dim0(k) ^ su) >> (32 - SAMPLE_BITS),
+		       (sobol_dim1(k) ^ sv) >> (32 - SAMPLE_BITS));
+}
+
+/* Returns sample k of pixel (x, y) out of n as offsets in [0, 1)^2 from the
+ * pixel's corner. Counted 2 (the two scalings; the conversions are exact and
+ * count 0 like integer work); n = 1 is the constant 0.5 and counts 0. */
+static inline float2 sample_offset(struct tracer *tr, int x, int y, uint k, uint n)
+{
+	uint2 bits = sample_bits(x, y, k, n);
+
+	if (n == 1)
+		return (float2)(0.5f);
+	COUNT_FLOPS(tr, 2);
+	return convert_float2(bits) * 0x1p-24f;
+}
+
+/* Returns the running sum of a pixel's sample colours once sample k's colour
+ * is added: sum + color in sample order, with sample 0 taken as it is (no
+ * addition, so that one sample costs nothing here). Counted 3 for k > 0. */
+static inline float3 sample_add(struct tracer *tr, float3 sum, float3 color, int k)
+{
+	if (k == 0)
+		return color;
+	COUNT_FLOPS(tr, FLOPS_ADD3);
+	return sum + color;
+}
+
+/* Returns what the image holds after the piece's pass: the running sum, or
+ * once the last sample is in, the mean sum / N (a division, not a product by
+ * 1/N, counted 3; N = 1 is the sum itself and counts 0). */
+static inline float3 sample_finish(struct tracer *tr, float3 sum, const struct rt_piece *piece)
+{
+	if (piece->sample_end < piece->samples || piece->samples == 1)
+		return sum;
+	COUNT_FLOPS(tr, 3); /* one division per channel */
+	return sum / (float)piece->samples;
+}
