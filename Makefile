@@ -17,7 +17,7 @@
 #   make uninstall    remove exactly what install put there
 #   make clean
 #
-# Variables: OIIO=0|1, BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
+# Variables: OIIO=0|1, MPI=0|1 (default: 1 when Open MPI's ompi-c is installed), BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
 # has numpy, matplotlib and pytest from `make deps`; the installed tools run with it), SAN=1 (sanitizers),
 # FUZZ_SECONDS (default 60), FUZZ_CC (default clang), PREFIX (default /usr/local),
 # DESTDIR (staging root for packaging, default empty).
@@ -71,13 +71,25 @@ IMAGE_BACKEND := $(BUILD)/image_ppm.o
 endif
 LDLIBS += -lstdc++
 
+# MPI=1: --mpi through Open MPI (host/mpi_render.c); MPI=0: host/mpi_stub.c,
+# whose --mpi says how to get it. The default: 1 when Open MPI is installed.
+MPI ?= $(shell pkg-config --exists ompi-c 2>/dev/null && echo 1 || echo 0)
+ifeq ($(MPI),1)
+MPI_MODULE := $(BUILD)/mpi_render.o
+MPI_CFLAGS = $(shell pkg-config --cflags ompi-c)
+LDLIBS += $(shell pkg-config --libs ompi-c)
+else
+MPI_MODULE := $(BUILD)/mpi_stub.o
+endif
+
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
 	scene_literal.o scene_material.o scene_mesh.o mesh.o timing.o files.o \
 	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
+	devices.o multidev.o devstats.o frames.o \
 	outputs.o \
 	workmap.o image_common.o reference.o embedded.o) \
-	$(IMAGE_BACKEND)
+	$(IMAGE_BACKEND) $(MPI_MODULE)
 CL_SOURCES := cl/rtcl_shared.h $(wildcard cl/*.cl)
 EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
@@ -94,6 +106,9 @@ $(BUILD)/embedded.c: tools/build/embed.py $(EMBEDDED) | $(BUILD)
 
 $(BUILD)/%.o: host/%.c | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) $(ASSIMP_CFLAGS) -MMD -c -o $@ $<
+
+$(BUILD)/mpi_render.o: host/mpi_render.c | $(BUILD)
+	$(CC) $(CPPFLAGS) $(MPI_CFLAGS) $(CFLAGS) -MMD -c -o $@ $<
 
 $(BUILD)/embedded.o: $(BUILD)/embedded.c
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c -o $@ $<

@@ -2,6 +2,7 @@
 
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "launch.h"
 
@@ -102,4 +103,45 @@ int checks_device_fault_injected(void)
 	const char *fault = getenv("RTCL_TEST_DEVICE_FAULT");
 
 	return fault && strcmp(fault, "1") == 0;
+}
+
+/* Parses "K:N" from the environment variable name; 0 when set and well
+ * formed. */
+static int env_pair(const char *name, long *k, long *n)
+{
+	const char *value = getenv(name);
+	char *end;
+
+	if (!value)
+		return -1;
+	*k = strtol(value, &end, 10);
+	if (end == value || *end != ':')
+		return -1;
+	*n = strtol(end + 1, &end, 10);
+	return *end == '\0' ? 0 : -1;
+}
+
+void checks_piece_delay(int device)
+{
+	long k, ms;
+
+	if (env_pair("RTCL_TEST_SLOW_DEVICE", &k, &ms) == 0 && k == device && ms > 0) {
+		struct timespec wait = {ms / 1000, (ms % 1000) * 1000000L};
+		nanosleep(&wait, NULL);
+	}
+}
+
+int checks_piece_fault(int device, int nth_piece)
+{
+	long k, n;
+
+	return env_pair("RTCL_TEST_FAIL_DEVICE", &k, &n) == 0 && k == device && n == nth_piece;
+}
+
+int checks_rank_dies(int rank, int nth_piece)
+{
+	long r, n;
+
+	return env_pair("RTCL_TEST_RANK_DIES", &r, &n) == 0 && r == rank && r != 0 &&
+	       n == nth_piece;
 }

@@ -2,7 +2,8 @@
  * with guard zones, the poison written over it before a checked launch, the
  * per-pixel write counts read back, and an injected device fault. Active
  * only with render_settings.check_writes (kernel tests) or
- * RTCL_TEST_DEVICE_FAULT=1 (CLI tests). */
+ * RTCL_TEST_DEVICE_FAULT=1, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE and
+ * RTCL_TEST_RANK_DIES (CLI tests). */
 #ifndef RTCL_CHECKS_H
 #define RTCL_CHECKS_H
 
@@ -44,5 +45,18 @@ cl_int checks_read(struct device *dev, const struct render_settings *s,
 /* RTCL_TEST_DEVICE_FAULT=1: the last launch of a frame fails as a device that
  * failed mid-render does (there is no way to make a real one fail on demand). */
 int checks_device_fault_injected(void);
+
+/* RTCL_TEST_SLOW_DEVICE=K:MS: device K of a several-device job (multidev.h)
+ * sleeps MS milliseconds after each piece, inside its busy time, as a
+ * slower device would take longer. */
+void checks_piece_delay(int device);
+
+/* RTCL_TEST_FAIL_DEVICE=K:N: device K's N-th piece fails, as a device that
+ * fails mid-render does. */
+int checks_piece_fault(int device, int nth_piece);
+
+/* RTCL_TEST_RANK_DIES=R:N: MPI rank R (not 0) dies (SIGKILL) when it is
+ * given its N-th piece, as a node that goes down. */
+int checks_rank_dies(int rank, int nth_piece);
 
 #endif

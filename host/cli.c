@@ -5,6 +5,7 @@
 #include <string.h>
 #include <strings.h>
 
+#include "frames.h"
 #include "render.h"
 #include "scene.h"
 
@@ -21,6 +22,10 @@ enum long_only_option {
 	OPT_WORK_MAP_SCALE,
 	OPT_VERSION,
 	OPT_SPP,
+	OPT_DEVICES,
+	OPT_SPLIT,
+	OPT_FRAMES,
+	OPT_MPI,
 };
 
 static const struct option long_options[] = {
@@ -36,6 +41,10 @@ static const struct option long_options[] = {
 	{"platform", required_argument, NULL, 'p'},
 	{"device", required_argument, NULL, 'd'},
 	{"list-devices", no_argument, NULL, OPT_LIST_DEVICES},
+	{"devices", required_argument, NULL, OPT_DEVICES},
+	{"split", required_argument, NULL, OPT_SPLIT},
+	{"frames", required_argument, NULL, OPT_FRAMES},
+	{"mpi", no_argument, NULL, OPT_MPI},
 	{"repeat", required_argument, NULL, 'r'},
 	{"stats", required_argument, NULL, OPT_STATS},
 	{"flops", required_argument, NULL, OPT_FLOPS},
@@ -86,6 +95,19 @@ static void print_help_after_kernels(FILE *out)
 		"                         else its first device)\n"
 		"      --list-devices     list platforms and devices with their indices, and exit\n"
 		"\n"
+		"Several devices and animations:\n"
+		"      --devices LIST|all render on several devices at once: PLATFORM:DEVICE\n"
+		"                         indices (e.g. 1:0,0:0), or all (every GPU and CPU);\n"
+		"                         not with -p/-d\n"
+		"      --split dynamic|static  how pieces go to the devices: each takes the\n"
+		"                         next when it is free (default), or equal shares\n"
+		"      --frames A:B       render frames A to B (0..99999, at most %d), the\n"
+		"                         camera's eye turned about look_at along up by\n"
+		"                         360 (f-A)/(B-A+1) degrees; -o out.png writes\n"
+		"                         out_0000.png.. (the frame number before the extension)\n"
+		"      --mpi              run under mpirun: rank 0 hands the pieces out to every\n"
+		"                         rank's devices and writes the outputs\n"
+		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
 		"                         -r, one launch: the image, timed, no warm-up;\n"
@@ -120,7 +142,8 @@ static void print_help_after_kernels(FILE *out)
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES);
+		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES,
+		FRAMES_MAX);
 }
 
 void cli_print_help(FILE *out)
@@ -255,6 +278,32 @@ static int parse_choice(const char *option, const char *text, const char *first,
 	return 0;
 }
 
+/* --frames A:B, 0 <= A <= B <= 99999, at most FRAMES_MAX frames. */
+static int parse_frames(const char *text, int frames[2], char *err, size_t err_size)
+{
+	const char *colon = strchr(text, ':');
+	long a, b;
+
+	if (!colon || parse_decimal(text, (size_t)(colon - text), 0, 99999, &a) ||
+	    parse_decimal(colon + 1, strlen(colon + 1), 0, 99999, &b)) {
+		snprintf(err, err_size,
+			 "--frames: expected A:B, frame numbers from 0 to 99999 (e.g. 1:120), "
+			 "got \"%s\"",
+			 text);
+		return -1;
+	}
+	if (b < a || b - a + 1 > FRAMES_MAX) {
+		snprintf(err, err_size,
+			 "--frames: the last frame must not come before the first, and at most %d "
+			 "frames, got %s",
+			 FRAMES_MAX, text);
+		return -1;
+	}
+	frames[0] = (int)a;
+	frames[1] = (int)b;
+	return 0;
+}
+
 static int apply_option(int c, const char *arg, struct options *o, char *err, size_t err_size)
 {
 	switch (c) {
@@ -295,6 +344,18 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_ENCODING:
 		return parse_choice("--encoding", arg, "srgb", "linear", &o->linear_encoding, err,
 				    err_size);
+	case OPT_DEVICES:
+		o->devices_given = 1;
+		return devices_parse(arg, &o->devices, err, err_size);
+	case OPT_SPLIT:
+		return parse_choice("--split", arg, "dynamic", "static", &o->split_static, err,
+				    err_size);
+	case OPT_FRAMES:
+		o->frames_given = 1;
+		return parse_frames(arg, o->frames, err, err_size);
+	case OPT_MPI:
+		o->mpi = 1;
+		return 0;
 	case OPT_LIST_DEVICES:
 		o->list_devices = 1;
 		return 0;
@@ -375,6 +436,24 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 		snprintf(err, err_size,
 			 "--flops and --work-map count the OpenCL kernels' work; the reference "
 			 "renderer does not count (choose an OpenCL kernel)");
+		return -1;
+	}
+	if (o->devices_given && (o->platform >= 0 || o->device >= 0)) {
+		snprintf(err, err_size,
+			 "--devices and -p/-d both choose devices: give one or the other");
+		return -1;
+	}
+	if ((o->devices_given || o->frames_given || o->mpi) &&
+	    strcmp(o->kernel, "reference") == 0) {
+		snprintf(err, err_size,
+			 "--devices, --frames and --mpi render on OpenCL devices; the reference "
+			 "renderer runs on the host (choose an OpenCL kernel)");
+		return -1;
+	}
+	if (o->frames_given && (o->repeat || o->flops_path || o->work_map_path)) {
+		snprintf(err, err_size,
+			 "--frames renders each frame once: -r/--repeat, --flops and --work-map "
+			 "do not apply");
 		return -1;
 	}
 	if (o->quiet && o->verbose) {

@@ -5,6 +5,8 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "devices.h"
+
 #define RTCL_VERSION "0.1.0"
 
 /* Exit statuses. */
@@ -23,6 +25,12 @@ struct options {
 	int spp;	      /* --spp N; 0 when not given */
 	int platform, device; /* -p, -d; -1 when not given */
 	int list_devices;
+	struct device_list devices; /* --devices LIST|all */
+	int devices_given;
+	int split_static; /* --split static */
+	int frames[2];	  /* --frames A:B */
+	int frames_given;
+	int mpi;    /* --mpi: rank 0 hands out the pieces (mpi_render.h) */
 	int repeat; /* -r N; 0 when not given */
 	const char *stats_path;
 	const char *flops_path;	   /* --flops FILE.npy */

@@ -296,6 +296,30 @@ cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes
 	return buffer;
 }
 
+int device_find_all(int *platform_indices, int *device_indices, int max, char *err, size_t err_size)
+{
+	cl_platform_id platforms[MAX_PLATFORMS];
+	cl_uint platform_count = 0;
+	int n = 0;
+
+	if (get_platforms(platforms, &platform_count, err, err_size))
+		return -1;
+	for (cl_uint p = 0; p < platform_count; p++) {
+		cl_device_id devices[MAX_DEVICES];
+		cl_uint count = get_devices(platforms[p], CL_DEVICE_TYPE_ALL, devices);
+
+		for (cl_uint d = 0; d < count && n < max; d++) {
+			cl_device_type type = 0;
+			clGetDeviceInfo(devices[d], CL_DEVICE_TYPE, sizeof(type), &type, NULL);
+			if (!(type & (CL_DEVICE_TYPE_GPU | CL_DEVICE_TYPE_CPU)))
+				continue;
+			platform_indices[n] = (int)p;
+			device_indices[n++] = (int)d;
+		}
+	}
+	return n;
+}
+
 static const char *type_name(cl_device_type type)
 {
 	if (type & CL_DEVICE_TYPE_GPU)

@@ -48,6 +48,11 @@ int device_check_fits(const struct device *dev, const char *what, double bytes, 
 cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
 			    const char *what, char *err, size_t err_size);
 
+/* Finds every GPU and CPU device of every platform, platform by platform
+ * in index order, and writes up to max of their indices to platforms[] and
+ * devices[]. Returns how many, or -1 with a message in err. */
+int device_find_all(int *platforms, int *devices, int max, char *err, size_t err_size);
+
 /* Prints every platform and device in the style of `clinfo -l`, with the
  * indices -p and -d take. Returns 0, or -1 with a message in err. */
 int device_list(FILE *out, char *err, size_t err_size);

@@ -27,7 +27,7 @@ void interrupt_release(void);
 /* Under interrupt_hold(): removes path if a signal comes before
  * interrupt_untrack(path). At most INTERRUPT_MAX_TRACKED paths, each kept by
  * reference (the caller keeps the string alive). Returns 0, or -1 when full. */
-#define INTERRUPT_MAX_TRACKED 16
+#define INTERRUPT_MAX_TRACKED 1024 /* room for every frame of an animation */
 int interrupt_track(const char *path);
 void interrupt_untrack(const char *path);
 

@@ -14,8 +14,11 @@
 
 #include "cli.h"
 #include "device.h"
+#include "devices.h"
+#include "frames.h"
 #include "embedded.h"
 #include "interrupt.h"
+#include "mpi_render.h"
 #include "outputs.h"
 #include "render.h"
 #include "scene.h"
@@ -76,38 +79,83 @@ static void record_device(struct run *run, const struct device *dev)
 	run->max_clock_mhz = dev->max_clock_mhz;
 }
 
+/* Opens the device -p/-d name, or those of --devices. */
+static int open_devices(const struct options *opt, struct device *devs, int *count, char *err,
+			size_t err_size)
+{
+	if (opt->devices_given)
+		return devices_open(&opt->devices, devs, count, err, err_size);
+	*count = 1;
+	return device_open(&devs[0], opt->platform, opt->device, err, err_size);
+}
+
 /* With --flops or --work-map, a separate counting run first; then the timed
  * run. */
-static int render_on_device(struct run *run, char *err, size_t err_size)
+static int render_on_device(struct run *run, struct device *dev, char *err, size_t err_size)
 {
 	const struct options *opt = run->opt;
-	struct device dev;
 	int failed = 0;
-
 	double lap = timing_now();
 
-	if (device_open(&dev, opt->platform, opt->device, err, err_size))
-		return -1;
-	run->device_ms = timing_lap_ms(&lap);
-	record_device(run, &dev);
+	record_device(run, dev);
 	if (opt->verbose)
-		fprintf(stderr, "rtcl: platform %d, device %d: %s\n", dev.platform_index,
-			dev.device_index, run->device_name);
+		fprintf(stderr, "rtcl: platform %d, device %d: %s\n", dev->platform_index,
+			dev->device_index, run->device_name);
 	if (run->counting) {
 		struct render_settings counting = run->settings;
 		counting.count_flops = 1;
-		failed = render(&dev, run->scene, &counting, &run->counted, err, err_size);
+		failed = render(dev, run->scene, &counting, &run->counted, err, err_size);
 		run->counting_ms = timing_lap_ms(&lap);
 		if (!failed)
 			flop_summary_compute(&run->flops, run->counted.item_flops,
 					     run->counted.item_count, run->counted.total_rays);
 	}
 	if (!failed)
-		failed = render(&dev, run->scene, &run->settings, &run->result, err, err_size);
+		failed = render(dev, run->scene, &run->settings, &run->result, err, err_size);
 	if (!failed && opt->verbose)
 		fprintf(stderr, "rtcl: build options: %s\n", run->result.build_options);
-	device_close(&dev);
 	return failed ? -1 : 0;
+}
+
+/* One image on the device(s) the options name. */
+static int render_on_devices(struct run *run, char *err, size_t err_size)
+{
+	struct device devs[DEVICES_MAX];
+	int count = 0, failed;
+	double lap = timing_now();
+
+	if (open_devices(run->opt, devs, &count, err, err_size))
+		return -1;
+	run->device_ms = timing_lap_ms(&lap);
+	if (count == 1) {
+		failed = render_on_device(run, &devs[0], err, err_size);
+	} else {
+		snprintf(err, err_size,
+			 "--devices: one image on several devices needs the piece interface, "
+			 "not in this build yet; --frames A:B spreads an animation's frames");
+		failed = -1;
+	}
+	devices_close(devs, count);
+	return failed;
+}
+
+/* --frames: every frame's image and the summary, or nothing. Returns the exit
+ * status. */
+static int render_frames(struct run *run, char *err, size_t err_size)
+{
+	struct device devs[DEVICES_MAX];
+	int count = 0, failed;
+
+	if (frames_check_outputs(run->opt, err, err_size) ||
+	    open_devices(run->opt, devs, &count, err, err_size)) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		return EXIT_FAILED;
+	}
+	failed = frames_render(run, devs, count, err, err_size);
+	devices_close(devs, count);
+	if (failed)
+		fprintf(stderr, "rtcl: %s\n", err);
+	return failed ? EXIT_FAILED : 0;
 }
 
 /* --help, --version and --list-devices: answers that need no scene. Returns
@@ -131,16 +179,38 @@ static int answer_query(const struct options *opt, char *err, size_t err_size)
 	return 0;
 }
 
+/* --mpi: under mpirun, rank 0 hands out the pieces (mpi_render.h). Returns
+ * the exit status. */
+static int render_mpi(struct run *run)
+{
+	if (!mpi_render_available()) {
+		fprintf(stderr, "rtcl: %s\n", MPI_MISSING_MESSAGE);
+		return EXIT_FAILED;
+	}
+	if (!run->opt->frames_given) {
+		fprintf(stderr, "rtcl: --mpi: one image over several ranks needs the piece "
+				"interface, not in this build yet; --mpi --frames A:B spreads an "
+				"animation's frames\n");
+		return EXIT_FAILED;
+	}
+	return mpi_render_frames(run);
+}
+
 /* Renders and writes the outputs; returns the exit status. */
 static int render_and_write(struct run *run, char *err, size_t err_size)
 {
-	int checked = outputs_check(run->opt, err, err_size);
+	int checked;
 
+	if (run->opt->mpi)
+		return render_mpi(run);
+	if (run->opt->frames_given)
+		return render_frames(run, err, err_size);
+	checked = outputs_check(run->opt, err, err_size);
 	if (checked) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return checked == OUTPUTS_CLASH ? EXIT_USAGE : EXIT_FAILED;
 	}
-	if (run->settings.kernel ? render_on_device(run, err, err_size)
+	if (run->settings.kernel ? render_on_devices(run, err, err_size)
 				 : render_on_cpu(run, err, err_size)) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_FAILED;

@@ -99,7 +99,7 @@ static void canonical(const char *path, char *out)
 		snprintf(out, CANONICAL_SIZE, "%s", path);
 }
 
-static int same_file(const char *a, const char *b)
+int outputs_same_file(const char *a, const char *b)
 {
 	char ca[CANONICAL_SIZE], cb[CANONICAL_SIZE];
 	struct stat sa, sb;
@@ -121,7 +121,7 @@ int outputs_check(const struct options *opt, char *err, size_t err_size)
 
 	for (int i = 0; i < n; i++) {
 		for (int j = 0; j < i; j++) {
-			if (same_file(out[i].path, out[j].path)) {
+			if (outputs_same_file(out[i].path, out[j].path)) {
 				snprintf(err, err_size,
 					 "%s %s and %s %s name the same file: give each output "
 					 "a file of its own",

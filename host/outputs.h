@@ -19,6 +19,9 @@
  * err. */
 int outputs_check(const struct options *opt, char *err, size_t err_size);
 
+/* Whether two paths name one file (through links and "./"). */
+int outputs_same_file(const char *a, const char *b);
+
 /* Writes every output of the run, or none of them. Returns 0, or -1 with one
  * message in err. */
 int outputs_write(const struct run *run, char *err, size_t err_size);

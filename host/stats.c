@@ -33,9 +33,8 @@ static int fill_json(FILE *file, const void *document)
 	return fputc('\n', file) == EOF ? -1 : 0;
 }
 
-/* Stages doc and releases it; returns 0, or -1 with a message. */
-static int stage_document(struct staged_file *staged, const char *path, json_t *doc, char *err,
-			  size_t err_size)
+int stats_stage_document(struct staged_file *staged, const char *path, json_t *doc, char *err,
+			 size_t err_size)
 {
 	int failed = !doc || files_stage_with(staged, path, fill_json, doc, err, err_size);
 
@@ -207,13 +206,13 @@ int stats_stage_run(struct staged_file *staged, const char *path, const struct r
 		add_flop_figures(doc, run);
 	if (doc)
 		add_device_figures(doc, run);
-	return stage_document(staged, path, doc, err, err_size);
+	return stats_stage_document(staged, path, doc, err, err_size);
 }
 
 int stats_stage_flops_sidecar(struct staged_file *staged, const char *path, const struct run *run,
 			      char *err, size_t err_size)
 {
-	return stage_document(staged, path, flops_sidecar(run), err, err_size);
+	return stats_stage_document(staged, path, flops_sidecar(run), err, err_size);
 }
 
 void stats_print_summary(const struct run *run)

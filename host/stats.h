@@ -54,6 +54,11 @@ void stats_print_summary(const struct run *run);
  * outputs (files.h). Each returns 0, or -1 with one message in err. */
 struct staged_file;
 
+/* Stages a JSON document (NULL: out of memory) and releases it. */
+struct json_t;
+int stats_stage_document(struct staged_file *staged, const char *path, struct json_t *doc,
+			 char *err, size_t err_size);
+
 /* The --stats document. */
 int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run,
 		    char *err, size_t err_size);

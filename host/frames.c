@@ -1,0 +1,242 @@
+#include "frames.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "devstats.h"
+#include "image.h"
+#include "interrupt.h"
+#include "outputs.h"
+#include "render.h"
+#include "timing.h"
+
+#define PI 3.14159265358979323846
+
+/* Rodrigues' rotation of v about the unit axis k by angle a. */
+static void rotate(const double v[3], const double k[3], double a, double out[3])
+{
+	double c = cos(a), s = sin(a);
+	double dot = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
+	double cross[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2],
+			   k[0] * v[1] - k[1] * v[0]};
+
+	for (int i = 0; i < 3; i++)
+		out[i] = v[i] * c + cross[i] * s + k[i] * dot * (1 - c);
+}
+
+void frames_orbit(const struct scene_camera *camera, int frame, int first, int last,
+		  struct scene_camera *out)
+{
+	double angle = 2 * PI * (frame - first) / (last - first + 1);
+	double length = sqrt(camera->up[0] * camera->up[0] + camera->up[1] * camera->up[1] +
+			     camera->up[2] * camera->up[2]);
+	double axis[3], offset[3], turned[3];
+
+	*out = *camera;
+	if (frame == first)
+		return; /* exactly the scene's camera */
+	for (int i = 0; i < 3; i++) {
+		axis[i] = camera->up[i] / length;
+		offset[i] = camera->eye[i] - camera->look_at[i];
+	}
+	rotate(offset, axis, angle, turned);
+	for (int i = 0; i < 3; i++)
+		out->eye[i] = camera->look_at[i] + turned[i];
+}
+
+int frames_output_name(const char *path, int frame, char *name)
+{
+	const char *ext = files_extension(path);
+	int stem = (int)(ext - path);
+	int n = snprintf(name, PATH_MAX, "%.*s_%04d%s", stem, path, frame, ext);
+
+	return n < 0 || n >= PATH_MAX ? -1 : 0;
+}
+
+static int frame_count(const struct options *opt)
+{
+	return opt->frames[1] - opt->frames[0] + 1;
+}
+
+int frames_check_outputs(const struct options *opt, char *err, size_t err_size)
+{
+	char name[PATH_MAX];
+
+	for (int f = opt->frames[0]; f <= opt->frames[1]; f++) {
+		if (frames_output_name(opt->output, f, name)) {
+			snprintf(err, err_size, "-o/--output: %s: the frame names are too long",
+				 opt->output);
+			return -1;
+		}
+		if (opt->stats_path && outputs_same_file(opt->stats_path, name)) {
+			snprintf(err, err_size,
+				 "--stats %s and frame %d's image %s name the same file: give each "
+				 "output a file of its own",
+				 opt->stats_path, f, name);
+			return -1;
+		}
+		if (image_check_writable(name, err, err_size))
+			return -1;
+	}
+	if (opt->stats_path && files_check_writable(opt->stats_path, err, err_size))
+		return -1;
+	return 0;
+}
+
+int frames_output_open(struct frames_output *o, const struct options *opt, char *err,
+		       size_t err_size)
+{
+	int n = frame_count(opt);
+
+	o->names = calloc((size_t)n, PATH_MAX);
+	o->staged = calloc((size_t)n + 1, sizeof(struct staged_file));
+	if (!o->names || !o->staged) {
+		frames_output_close(o, 0);
+		snprintf(err, err_size, "out of host memory for %d frames", n);
+		return -1;
+	}
+	for (int i = 0; i < n; i++)
+		frames_output_name(opt->output, opt->frames[0] + i, o->names[i]);
+	return 0;
+}
+
+void frames_output_close(struct frames_output *o, int staged_count)
+{
+	for (int i = 0; o->staged && i < staged_count; i++)
+		files_discard(&o->staged[i]);
+	free(o->names);
+	free(o->staged);
+	o->names = NULL;
+	o->staged = NULL;
+}
+
+int frames_render_frame(const struct run *run, struct device *dev, int piece,
+			struct render_result *result, char *err, size_t err_size)
+{
+	const struct options *opt = run->opt;
+	struct scene scene = *run->scene;
+
+	frames_orbit(&run->scene->camera, opt->frames[0] + piece, opt->frames[0], opt->frames[1],
+		     &scene.camera);
+	return render(dev, &scene, &run->settings, result, err, err_size);
+}
+
+int frames_stage_image(const struct run *run, struct frames_output *o, int piece, const float *rgb,
+		       char *err, size_t err_size)
+{
+	const struct render_settings *s = &run->settings;
+	const struct options *opt = run->opt;
+	char description[1024];
+	struct image_meta meta = {"rtcl " RTCL_VERSION, description,
+				  opt->linear_encoding ? IMAGE_LINEAR : IMAGE_SRGB};
+
+	snprintf(description, sizeof(description),
+		 "scene %s, kernel %s, %dx%d, max depth %d, frame %d of %d..%d", run->scene->source,
+		 opt->kernel, s->width, s->height, s->max_depth, opt->frames[0] + piece,
+		 opt->frames[0], opt->frames[1]);
+	return image_stage(&o->staged[piece], o->names[piece], rgb, s->width, s->height, &meta, err,
+			   err_size);
+}
+
+/* The --stats document of an animation. */
+static json_t *frames_document(const struct run *run, const struct frames_report *r)
+{
+	const struct render_settings *s = &run->settings;
+
+	return json_pack("{s:s, s:s, s:i, s:i, s:i, s:s, s:[i,i], s:s, s:f, s:o}", "rtcl_version",
+			 RTCL_VERSION, "kernel", s->kernel->name, "width", s->width, "height",
+			 s->height, "max_depth", s->max_depth, "scene", run->scene->source,
+			 "frames", run->opt->frames[0], run->opt->frames[1], "camera_path", "orbit",
+			 "wall_ms", r->wall_ms, "multidevice",
+			 devstats_json(r->devs, r->ranks, r->work, r->count, run->opt->split_static,
+				       "frame"));
+}
+
+static void print_summary(const struct run *run, const struct frames_report *r)
+{
+	const struct render_settings *s = &run->settings;
+	const struct options *opt = run->opt;
+	int n = frame_count(opt);
+	char first[PATH_MAX], last[PATH_MAX];
+
+	printf("frames:  %d..%d (%d), camera orbit, %dx%d, max depth %d, scene %s, kernel %s\n",
+	       opt->frames[0], opt->frames[1], n, s->width, s->height, s->max_depth,
+	       run->scene->source, s->kernel->name);
+	devstats_print(stdout, r->devs, r->ranks, r->work, r->count, "frame");
+	printf("time:    %.1f ms for %d frame%s (%.1f ms each), %s split\n", r->wall_ms, n,
+	       n == 1 ? "" : "s", r->wall_ms / n, opt->split_static ? "static" : "dynamic");
+	frames_output_name(opt->output, opt->frames[0], first);
+	frames_output_name(opt->output, opt->frames[1], last);
+	printf("output:  %s%s%s\n", first, n > 1 ? " .. " : "", n > 1 ? last : "");
+}
+
+int frames_commit(const struct run *run, struct frames_output *o, const struct frames_report *r,
+		  char *err, size_t err_size)
+{
+	const struct options *opt = run->opt;
+	int n = frame_count(opt);
+
+	if (opt->stats_path) {
+		if (stats_stage_document(&o->staged[n], opt->stats_path, frames_document(run, r),
+					 err, err_size))
+			return -1;
+		n++;
+	}
+	interrupt_hold();
+	int ret = files_commit(o->staged, n, err, err_size);
+	if (ret == 0)
+		interrupt_set_outcome("the outputs were written");
+	interrupt_release();
+	if (ret == 0 && !opt->quiet)
+		print_summary(run, r);
+	return ret;
+}
+
+/* What the devices' threads share. */
+struct frames_context {
+	const struct run *run;
+	struct device *devs;
+	struct frames_output *output;
+};
+
+/* A multidev render_piece: frame first + piece, rendered whole and staged. */
+static int render_piece(void *context, int device, int piece, long long *pixels, char *err,
+			size_t err_size)
+{
+	const struct frames_context *c = context;
+	const struct render_settings *s = &c->run->settings;
+	struct render_result result;
+
+	if (frames_render_frame(c->run, &c->devs[device], piece, &result, err, err_size))
+		return -1;
+	int failed = frames_stage_image(c->run, c->output, piece, result.rgb, err, err_size);
+	render_result_free(&result);
+	*pixels = (long long)s->width * s->height;
+	return failed ? -1 : 0;
+}
+
+int frames_render(struct run *run, struct device *devs, int count, char *err, size_t err_size)
+{
+	int n = frame_count(run->opt);
+	struct device_work work[DEVICES_MAX];
+	struct frames_output output;
+	struct frames_context c = {run, devs, &output};
+	struct multidev_job job = {.piece_count = n,
+				   .split = run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+				   .render_piece = render_piece,
+				   .context = &c};
+
+	if (frames_output_open(&output, run->opt, err, err_size))
+		return -1;
+	run->settings.progress = 0; /* several threads: no one progress line */
+	double start = timing_now();
+	if (multidev_run(&job, devs, count, work, err, err_size)) {
+		frames_output_close(&output, n);
+		return -1;
+	}
+	struct frames_report report = {devs, NULL, work, count, (timing_now() - start) * 1e3};
+	int failed = frames_commit(run, &output, &report, err, err_size);
+	frames_output_close(&output, n + 1);
+	return failed ? -1 : 0;
+}

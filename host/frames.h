@@ -1,0 +1,72 @@
+/* Animations (--frames A:B): one image per frame, the camera on an orbit,
+ * whole frames handed out to the devices as pieces (multidev.h). */
+#ifndef RTCL_FRAMES_H
+#define RTCL_FRAMES_H
+
+#include <stddef.h>
+
+#include "files.h"
+#include "multidev.h"
+#include "stats.h"
+
+/* The most frames one run writes (each stays staged until all are done). */
+#define FRAMES_MAX 1000
+
+/* The camera of frame f of first..last: the scene's camera with its eye
+ * turned about the axis through look_at along up, by 360° (f − first) /
+ * (last − first + 1), right-handed (counter-clockwise seen from above when up
+ * points up); look_at, up and fov stay. Frame `first` is the scene's camera,
+ * and the orbit closes one step after `last`. */
+void frames_orbit(const struct scene_camera *camera, int frame, int first, int last,
+		  struct scene_camera *out);
+
+/* The image name of frame f: "_NNNN" (the frame number, at least four
+ * digits) before path's extension: out.png -> out_0007.png, out -> out_0007.
+ * Returns 0, or -1 when it does not fit in name[PATH_MAX]. */
+int frames_output_name(const char *path, int frame, char *name);
+
+/* Checks before any work that every frame's image can be written and that
+ * --stats names none of them. Returns 0, or -1 with one message in err. */
+int frames_check_outputs(const struct options *opt, char *err, size_t err_size);
+
+/* The frames' image names, and their staged files (one per frame, then the
+ * --stats document). */
+struct frames_output {
+	char (*names)[PATH_MAX];
+	struct staged_file *staged;
+};
+
+int frames_output_open(struct frames_output *o, const struct options *opt, char *err,
+		       size_t err_size);
+
+/* Discards the first staged_count staged files still held, and frees. */
+void frames_output_close(struct frames_output *o, int staged_count);
+
+/* Renders frame first + piece on dev (settings as for one image). */
+int frames_render_frame(const struct run *run, struct device *dev, int piece,
+			struct render_result *result, char *err, size_t err_size);
+
+/* Stages frame first + piece's image for frames_commit. */
+int frames_stage_image(const struct run *run, struct frames_output *o, int piece, const float *rgb,
+		       char *err, size_t err_size);
+
+/* Who did what, for the summary and --stats. */
+struct frames_report {
+	const struct device *devs;
+	const int *ranks; /* each device's MPI rank, or NULL */
+	const struct device_work *work;
+	int count;
+	double wall_ms;
+};
+
+/* Stages the --stats document, commits every staged file together and prints
+ * the summary. Returns 0, or -1 with one message in err. */
+int frames_commit(const struct run *run, struct frames_output *o, const struct frames_report *r,
+		  char *err, size_t err_size);
+
+/* Renders frames first..last of run on devs[count], writes every frame's
+ * image (all or none) and the --stats document, and prints the summary.
+ * Returns 0, or -1 with one message in err and nothing written. */
+int frames_render(struct run *run, struct device *devs, int count, char *err, size_t err_size);
+
+#endif

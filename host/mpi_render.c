@@ -1,0 +1,449 @@
+#include "mpi_render.h"
+
+#include <limits.h>
+#include <mpi.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "checks.h"
+#include "cli.h"
+#include "frames.h"
+#include "interrupt.h"
+#include "render.h"
+#include "timing.h"
+
+#define ROOT 0
+#define MESSAGE_SIZE 8192
+
+/* Messages to rank 0, and its answers (TAG_GIVE + the asking device). */
+enum tag { TAG_TAKE = 1, TAG_RESULT, TAG_FAIL, TAG_DONE, TAG_GIVE = 100 };
+
+/* What a rank tells rank 0 of one of its devices once it is done. */
+struct device_report {
+	int device;
+	int platform_index, device_index;
+	char name[256], platform_name[256];
+	struct device_work work;
+};
+
+struct mpi_job {
+	struct run *run;
+	int rank, size;
+	struct device devs[DEVICES_MAX]; /* this rank's */
+	int count;
+	struct device_work work[DEVICES_MAX];
+	int taken; /* pieces this rank took (the test-only rank death) */
+	pthread_mutex_t lock;
+
+	/* Rank 0: the dispenser over every rank's devices, and the outputs. */
+	int *first;   /* global index of each rank's first device */
+	int *rank_of; /* each global device's rank */
+	int total;    /* devices over every rank */
+	int next;     /* dynamic split: the next piece */
+	int *next_static, *end_static;
+	int failed;
+	char message[MESSAGE_SIZE];
+	struct frames_output output;
+	struct device *all_devs;
+	struct device_work *all_work;
+};
+
+static int piece_count(const struct mpi_job *j)
+{
+	return j->run->opt->frames[1] - j->run->opt->frames[0] + 1;
+}
+
+/* Rank 0: records the first failure; later ones are their consequences. */
+static void record_failure(struct mpi_job *j, int rank, const char *message)
+{
+	pthread_mutex_lock(&j->lock);
+	if (!j->failed)
+		snprintf(j->message, sizeof(j->message), "rank %d, %.8000s", rank, message);
+	j->failed = 1;
+	pthread_mutex_unlock(&j->lock);
+}
+
+/* Rank 0: the next piece for global device g, or -1. */
+static int central_take(struct mpi_job *j, int g)
+{
+	int piece = -1;
+
+	pthread_mutex_lock(&j->lock);
+	if (j->failed)
+		piece = -1;
+	else if (j->run->opt->split_static)
+		piece = j->next_static[g] < j->end_static[g] ? j->next_static[g]++ : -1;
+	else if (j->next < piece_count(j))
+		piece = j->next++;
+	pthread_mutex_unlock(&j->lock);
+	return piece;
+}
+
+/* ---- the devices' threads, on every rank -------------------------------- */
+
+static int take_piece(void *context, int device)
+{
+	struct mpi_job *j = context;
+	int piece;
+
+	if (j->rank == ROOT)
+		return central_take(j, device);
+	if (MPI_Send(&device, 1, MPI_INT, ROOT, TAG_TAKE, MPI_COMM_WORLD) != MPI_SUCCESS ||
+	    MPI_Recv(&piece, 1, MPI_INT, ROOT, TAG_GIVE + device, MPI_COMM_WORLD,
+		     MPI_STATUS_IGNORE) != MPI_SUCCESS)
+		return -1;
+	pthread_mutex_lock(&j->lock);
+	int nth = piece >= 0 ? ++j->taken : 0;
+	pthread_mutex_unlock(&j->lock);
+	if (piece >= 0 && checks_rank_dies(j->rank, nth))
+		raise(SIGKILL); /* as a node that goes down */
+	return piece;
+}
+
+/* Sends a frame's pixels to rank 0: the piece number, then the floats. */
+static int send_result(int piece, const float *rgb, size_t bytes, char *err, size_t err_size)
+{
+	char *message = bytes + sizeof(int) <= INT_MAX ? malloc(sizeof(int) + bytes) : NULL;
+	int status;
+
+	if (!message) {
+		snprintf(err, err_size,
+			 "cannot send a frame of %zu bytes to rank 0 (at most 2 GiB, and host "
+			 "memory for a copy)",
+			 bytes);
+		return -1;
+	}
+	memcpy(message, &piece, sizeof(int));
+	memcpy(message + sizeof(int), rgb, bytes);
+	status = MPI_Send(message, (int)(sizeof(int) + bytes), MPI_BYTE, ROOT, TAG_RESULT,
+			  MPI_COMM_WORLD);
+	free(message);
+	if (status != MPI_SUCCESS) {
+		snprintf(err, err_size, "sending a frame to rank 0 failed (MPI error %d)", status);
+		return -1;
+	}
+	return 0;
+}
+
+static int render_piece(void *context, int device, int piece, long long *pixels, char *err,
+			size_t err_size)
+{
+	struct mpi_job *j = context;
+	const struct render_settings *s = &j->run->settings;
+	struct render_result result;
+	int failed;
+
+	if (frames_render_frame(j->run, &j->devs[device], piece, &result, err, err_size))
+		return -1;
+	if (j->rank == ROOT)
+		failed = frames_stage_image(j->run, &j->output, piece, result.rgb, err, err_size);
+	else
+		failed = send_result(piece, result.rgb, image_float_bytes(s->width, s->height), err,
+				     err_size);
+	render_result_free(&result);
+	*pixels = (long long)s->width * s->height;
+	return failed ? -1 : 0;
+}
+
+static void piece_failed(void *context, int device, const char *message)
+{
+	struct mpi_job *j = context;
+
+	(void)device;
+	if (j->rank == ROOT)
+		record_failure(j, ROOT, message);
+	else
+		MPI_Send(message, (int)strlen(message) + 1, MPI_CHAR, ROOT, TAG_FAIL,
+			 MPI_COMM_WORLD);
+}
+
+/* A device of a rank other than 0 is done: what it did, for the summary. */
+static void device_done(void *context, int device)
+{
+	struct mpi_job *j = context;
+	struct device_report r;
+
+	if (j->rank == ROOT)
+		return;
+	memset(&r, 0, sizeof(r));
+	r.device = device;
+	r.platform_index = j->devs[device].platform_index;
+	r.device_index = j->devs[device].device_index;
+	snprintf(r.name, sizeof(r.name), "%s", j->devs[device].name);
+	snprintf(r.platform_name, sizeof(r.platform_name), "%s", j->devs[device].platform_name);
+	r.work = j->work[device];
+	MPI_Send(&r, (int)sizeof(r), MPI_BYTE, ROOT, TAG_DONE, MPI_COMM_WORLD);
+}
+
+/* ---- rank 0's server: the other ranks' requests, pixels and reports ----- */
+
+static void serve_take(struct mpi_job *j, int source)
+{
+	int device, piece;
+
+	MPI_Recv(&device, 1, MPI_INT, source, TAG_TAKE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+	piece = device >= 0 && device < j->total ? central_take(j, j->first[source] + device) : -1;
+	MPI_Send(&piece, 1, MPI_INT, source, TAG_GIVE + device, MPI_COMM_WORLD);
+}
+
+static void serve_result(struct mpi_job *j, const MPI_Status *status)
+{
+	const struct render_settings *s = &j->run->settings;
+	char *message, err[MESSAGE_SIZE];
+	int bytes = 0, piece;
+
+	MPI_Get_count(status, MPI_BYTE, &bytes);
+	message = malloc(bytes > 0 ? (size_t)bytes : 1);
+	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
+		 MPI_STATUS_IGNORE);
+	if (!message || (size_t)bytes != sizeof(int) + image_float_bytes(s->width, s->height)) {
+		record_failure(j, status->MPI_SOURCE, "a frame arrived incomplete");
+	} else {
+		memcpy(&piece, message, sizeof(int));
+		if (piece < 0 || piece >= piece_count(j))
+			record_failure(j, status->MPI_SOURCE,
+				       "a frame number out of range arrived");
+		else if (!j->failed && frames_stage_image(j->run, &j->output, piece,
+							  (const float *)(message + sizeof(int)),
+							  err, sizeof(err)))
+			record_failure(j, ROOT, err);
+	}
+	free(message);
+}
+
+static void serve_fail(struct mpi_job *j, const MPI_Status *status)
+{
+	char message[MESSAGE_SIZE];
+	int length = 0;
+
+	MPI_Get_count(status, MPI_CHAR, &length);
+	char *text = malloc(length > 0 ? (size_t)length : 1);
+	MPI_Recv(text, length, MPI_CHAR, status->MPI_SOURCE, TAG_FAIL, MPI_COMM_WORLD,
+		 MPI_STATUS_IGNORE);
+	snprintf(message, sizeof(message), "%.*s", text ? length : 0, text ? text : "");
+	free(text);
+	record_failure(j, status->MPI_SOURCE, message);
+}
+
+/* Returns 1 when a device's report arrived. */
+static int serve_done(struct mpi_job *j, int source)
+{
+	struct device_report r;
+
+	MPI_Recv(&r, (int)sizeof(r), MPI_BYTE, source, TAG_DONE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+	int g = j->first[source] + r.device;
+	if (r.device < 0 || g >= j->total || (source + 1 < j->size && g >= j->first[source + 1]))
+		return 1;
+	struct device *d = &j->all_devs[g];
+	d->platform_index = r.platform_index;
+	d->device_index = r.device_index;
+	snprintf(d->name, sizeof(d->name), "%s", r.name);
+	snprintf(d->platform_name, sizeof(d->platform_name), "%s", r.platform_name);
+	j->all_work[g] = r.work;
+	return 1;
+}
+
+/* Until every device of the other ranks has reported. */
+static void *serve(void *context)
+{
+	struct mpi_job *j = context;
+	int remaining = j->total - j->count;
+
+	while (remaining > 0) {
+		MPI_Status status;
+		if (MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &status) !=
+		    MPI_SUCCESS) {
+			record_failure(j, ROOT, "waiting for the other ranks failed");
+			MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+		}
+		switch (status.MPI_TAG) {
+		case TAG_TAKE:
+			serve_take(j, status.MPI_SOURCE);
+			break;
+		case TAG_RESULT:
+			serve_result(j, &status);
+			break;
+		case TAG_FAIL:
+			serve_fail(j, &status);
+			break;
+		case TAG_DONE:
+			remaining -= serve_done(j, status.MPI_SOURCE);
+			break;
+		}
+	}
+	return NULL;
+}
+
+/* ---- start, run, finish -------------------------------------------------- */
+
+/* Opens this rank's devices; rank 0 first checks and prepares the outputs. */
+static int start_rank(struct mpi_job *j, char *err, size_t err_size)
+{
+	const struct options *opt = j->run->opt;
+
+	if (j->rank == ROOT && (frames_check_outputs(opt, err, err_size) ||
+				frames_output_open(&j->output, opt, err, err_size)))
+		return -1;
+	if (opt->devices_given)
+		return devices_open(&opt->devices, j->devs, &j->count, err, err_size);
+	j->count = 1;
+	if (device_open(&j->devs[0], opt->platform, opt->device, err, err_size) == 0)
+		return 0;
+	j->count = 0;
+	return -1;
+}
+
+/* Rank 0: where each rank's devices fall among all, and the static split. */
+static int plan_devices(struct mpi_job *j, const int *counts)
+{
+	j->first = calloc((size_t)j->size + 1, sizeof(int));
+	for (int r = 0; j->first && r < j->size; r++)
+		j->first[r + 1] = j->first[r] + counts[r];
+	j->total = j->first ? j->first[j->size] : 0;
+	j->rank_of = calloc((size_t)j->total, sizeof(int));
+	j->next_static = calloc((size_t)j->total, sizeof(int));
+	j->end_static = calloc((size_t)j->total, sizeof(int));
+	j->all_devs = calloc((size_t)j->total, sizeof(struct device));
+	j->all_work = calloc((size_t)j->total, sizeof(struct device_work));
+	if (!j->rank_of || !j->next_static || !j->end_static || !j->all_devs || !j->all_work)
+		return -1;
+	for (int r = 0; r < j->size; r++)
+		for (int g = j->first[r]; g < j->first[r + 1]; g++)
+			j->rank_of[g] = r;
+	for (int g = 0; g < j->total; g++) {
+		j->next_static[g] = multidev_static_first(g, j->total, piece_count(j));
+		j->end_static[g] = multidev_static_first(g + 1, j->total, piece_count(j));
+	}
+	return 0;
+}
+
+/* Every rank learns whether all started; the lowest rank that did not says
+ * why. Returns 0 when all started. */
+static int agree_on_start(struct mpi_job *j, int failed, const char *err)
+{
+	int mine = failed ? -1 : j->count, lowest = -1;
+	int *counts = malloc((size_t)j->size * sizeof(int));
+
+	if (!counts ||
+	    MPI_Allgather(&mine, 1, MPI_INT, counts, 1, MPI_INT, MPI_COMM_WORLD) != MPI_SUCCESS) {
+		fprintf(stderr,
+			"rtcl: rank %d: --mpi: the ranks could not exchange their "
+			"device counts\n",
+			j->rank);
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	for (int r = j->size - 1; r >= 0; r--)
+		if (counts[r] < 0)
+			lowest = r;
+	if (lowest == j->rank)
+		fprintf(stderr, "rtcl: rank %d: %s\n", j->rank, err);
+	if (lowest < 0 && j->rank == ROOT && plan_devices(j, counts)) {
+		fprintf(stderr, "rtcl: out of host memory for the device plan\n");
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	free(counts);
+	return lowest < 0 ? 0 : -1;
+}
+
+/* Rank 0 after every device is done: the outputs, or the failure. Returns
+ * the exit status. */
+static int finish_root(struct mpi_job *j, double wall_ms)
+{
+	char err[MESSAGE_SIZE];
+
+	for (int k = 0; k < j->count; k++) {
+		j->all_devs[k] = j->devs[k];
+		j->all_work[k] = j->work[k];
+	}
+	if (!j->failed) {
+		struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total,
+					       wall_ms};
+		if (frames_commit(j->run, &j->output, &report, err, sizeof(err)) == 0)
+			return 0;
+		record_failure(j, ROOT, err);
+	}
+	fprintf(stderr, "rtcl: %s\n", j->message);
+	return EXIT_FAILED;
+}
+
+/* Every rank's devices render; rank 0 serves the others meanwhile. */
+static int render_all(struct mpi_job *j)
+{
+	struct multidev_job job = {.piece_count = piece_count(j),
+				   .split =
+					   j->run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+				   .render_piece = render_piece,
+				   .end = device_done,
+				   .take_piece = take_piece,
+				   .failed = piece_failed,
+				   .context = j};
+	char err[MESSAGE_SIZE];
+	pthread_t server;
+	int status = 0;
+	double start = timing_now();
+
+	if (j->rank == ROOT && pthread_create(&server, NULL, serve, j) != 0) {
+		fprintf(stderr, "rtcl: cannot start rank 0's server thread\n");
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
+	if (j->rank == ROOT) {
+		pthread_join(server, NULL);
+		status = finish_root(j, (timing_now() - start) * 1e3);
+	}
+	MPI_Bcast(&status, 1, MPI_INT, ROOT, MPI_COMM_WORLD);
+	return status;
+}
+
+static void free_job(struct mpi_job *j)
+{
+	devices_close(j->devs, j->count);
+	if (j->rank == ROOT)
+		frames_output_close(&j->output, piece_count(j) + 1);
+	free(j->first);
+	free(j->rank_of);
+	free(j->next_static);
+	free(j->end_static);
+	free(j->all_devs);
+	free(j->all_work);
+	pthread_mutex_destroy(&j->lock);
+}
+
+int mpi_render_available(void)
+{
+	return 1;
+}
+
+int mpi_render_frames(struct run *run)
+{
+	static struct mpi_job j;
+	char err[MESSAGE_SIZE] = "";
+	int provided = 0, status = EXIT_FAILED;
+
+	if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
+		fprintf(stderr, "rtcl: --mpi: MPI_Init_thread failed (run rtcl under mpirun)\n");
+		return EXIT_FAILED;
+	}
+	MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+	memset(&j, 0, sizeof(j));
+	pthread_mutex_init(&j.lock, NULL);
+	j.run = run;
+	MPI_Comm_rank(MPI_COMM_WORLD, &j.rank);
+	MPI_Comm_size(MPI_COMM_WORLD, &j.size);
+	run->settings.progress = 0;
+	interrupt_set_outcome("no output written (under --mpi, mpirun ends every rank when one "
+			      "dies or is interrupted: see its report)");
+	if (provided < MPI_THREAD_MULTIPLE) {
+		snprintf(err, sizeof(err),
+			 "--mpi: this MPI library does not give threads MPI_THREAD_MULTIPLE");
+		agree_on_start(&j, 1, err);
+	} else if (agree_on_start(&j, start_rank(&j, err, sizeof(err)), err) == 0) {
+		status = render_all(&j);
+	}
+	free_job(&j);
+	MPI_Finalize();
+	return status;
+}

@@ -1,0 +1,19 @@
+/* mpi_render.h without MPI (MPI=0): --mpi is refused with MPI_MISSING_MESSAGE
+ * before any work (main.c). */
+#include "mpi_render.h"
+
+#include <stdio.h>
+
+#include "cli.h"
+
+int mpi_render_available(void)
+{
+	return 0;
+}
+
+int mpi_render_frames(struct run *run)
+{
+	(void)run;
+	fprintf(stderr, "rtcl: %s\n", MPI_MISSING_MESSAGE);
+	return EXIT_FAILED;
+}

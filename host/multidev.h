@@ -1,0 +1,65 @@
+/* Several devices rendering pieces of one job, one host thread per device.
+ *
+ * A job is a count of pieces (tiles or row bands of an image, or whole
+ * frames of an animation). The host hands them out: with the dynamic split
+ * each device's thread takes the next piece from a counter under a mutex as
+ * soon as its previous one is done, so a slower device takes fewer (the
+ * paper's dynamic scheme one level up); with the static split device k of n
+ * gets the pieces [k*count/n, (k+1)*count/n) whatever its speed. A thread
+ * waits for its device in the blocking OpenCL calls (an in-order queue,
+ * clFinish or a blocking read), never by polling. The first piece that fails
+ * stops the job: the other devices take no further piece, and the job
+ * reports that device's message. */
+#ifndef RTCL_MULTIDEV_H
+#define RTCL_MULTIDEV_H
+
+#include <stddef.h>
+
+#include "devices.h"
+
+enum split { SPLIT_DYNAMIC, SPLIT_STATIC };
+
+/* What one device did. */
+struct device_work {
+	int pieces;
+	long long pixels;
+	double busy_ms;	 /* in the piece function, from taking a piece to done */
+	double setup_ms; /* in the begin function */
+};
+
+/* The job's callbacks, each called in the device's own thread; `device` is
+ * the index into the job's devices. Each returns 0, or -1 with one message in
+ * err (the job adds which device it was). */
+struct multidev_job {
+	int piece_count;
+	enum split split;
+	/* Optional: once per device before its first piece (build, buffers). */
+	int (*begin)(void *context, int device, char *err, size_t err_size);
+	/* Renders piece `piece`, adding the pixels it wrote to *pixels. */
+	int (*render_piece)(void *context, int device, int piece, long long *pixels, char *err,
+			    size_t err_size);
+	/* Optional: once per device after its last piece, also after a failure
+	 * (releases what begin made). */
+	void (*end)(void *context, int device);
+	/* Optional: hands out device's next piece instead of the job's own
+	 * counter (under MPI, rank 0 does); -1 when there is none. */
+	int (*take_piece)(void *context, int device);
+	/* Optional: told at once when a piece fails, with the job's message. */
+	void (*failed)(void *context, int device, const char *message);
+	void *context;
+};
+
+/* Runs the job on devs[0..count) and fills work[count]. Returns 0, or -1
+ * with one message in err: "DEVICE (P:D): what failed". */
+int multidev_run(const struct multidev_job *job, struct device *devs, int count,
+		 struct device_work *work, char *err, size_t err_size);
+
+/* Device-level efficiency: the mean busy time over the largest (1 when
+ * every device was busy as long as the busiest; 1/n when one did it all). */
+double multidev_efficiency(const struct device_work *work, int count);
+
+/* Static split: the first piece of device k of n, for count pieces (the
+ * device's pieces end where device k+1's begin). */
+int multidev_static_first(int k, int n, int count);
+
+#endif

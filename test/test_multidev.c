@@ -1,0 +1,95 @@
+/* The host-side pieces of issue 13 that need no device: the --devices
+ * parser, the static split, the device-level efficiency, the orbit and the
+ * frame names. */
+#include <criterion/criterion.h>
+
+#include <math.h>
+#include <string.h>
+
+#include "devices.h"
+#include "files.h"
+#include "frames.h"
+#include "multidev.h"
+
+Test(multidev, devices_list_parses_entries_in_order)
+{
+	struct device_list list;
+	char err[256];
+
+	cr_assert_eq(devices_parse("1:0,0:12", &list, err, sizeof(err)), 0);
+	cr_assert_eq(list.count, 2);
+	cr_assert_eq(list.specs[0].platform, 1);
+	cr_assert_eq(list.specs[0].device, 0);
+	cr_assert_eq(list.specs[1].platform, 0);
+	cr_assert_eq(list.specs[1].device, 12);
+	cr_assert_eq(devices_parse("all", &list, err, sizeof(err)), 0);
+	cr_assert(list.all);
+}
+
+Test(multidev, devices_list_refuses_bad_entries)
+{
+	const char *bad[] = {"", "0", ":0", "0:", "0:0:0", "a:0", "0:0,", ",0:0", "0: 1", "+1:0"};
+	struct device_list list;
+	char err[256];
+
+	for (size_t i = 0; i < sizeof(bad) / sizeof(bad[0]); i++) {
+		cr_assert_eq(devices_parse(bad[i], &list, err, sizeof(err)), -1, "%s", bad[i]);
+		cr_assert(strstr(err, "--devices: expected all or a list"), "%s", err);
+	}
+	cr_assert_eq(devices_parse("0:1,1:0,0:1", &list, err, sizeof(err)), -1);
+	cr_assert_str_eq(err, "--devices: device 0:1 is listed twice");
+}
+
+Test(multidev, static_split_covers_every_piece_once)
+{
+	for (int n = 1; n <= 5; n++) {
+		for (int count = 0; count <= 13; count++) {
+			cr_assert_eq(multidev_static_first(0, n, count), 0);
+			cr_assert_eq(multidev_static_first(n, n, count), count);
+			for (int k = 0; k < n; k++) {
+				int size = multidev_static_first(k + 1, n, count) -
+					   multidev_static_first(k, n, count);
+				/* equal shares, one more for some */
+				cr_assert(size == count / n || size == count / n + 1);
+			}
+		}
+	}
+}
+
+Test(multidev, efficiency_is_mean_over_max_busy_time)
+{
+	struct device_work w[3] = {{.busy_ms = 100}, {.busy_ms = 50}, {.busy_ms = 0}};
+
+	cr_assert_float_eq(multidev_efficiency(w, 3), 50.0 / 100, 1e-12);
+	cr_assert_float_eq(multidev_efficiency(w, 1), 1.0, 1e-12);
+}
+
+Test(multidev, orbit_turns_the_eye_about_up_through_look_at)
+{
+	struct scene_camera c = {{0, 6, -24}, {0, 1, 0}, {0, 1, 0}, 45}, out;
+
+	frames_orbit(&c, 3, 3, 6, &out); /* frame A: the scene's camera, exactly */
+	cr_assert(memcmp(&out, &c, sizeof(c)) == 0);
+	frames_orbit(&c, 4, 3, 6, &out); /* a quarter turn, right-handed about +y */
+	cr_assert_float_eq(out.eye[0], -24, 1e-12);
+	cr_assert_float_eq(out.eye[1], 6, 1e-12);
+	cr_assert_float_eq(out.eye[2], 0, 1e-12);
+	frames_orbit(&c, 5, 3, 6, &out); /* half a turn */
+	cr_assert_float_eq(out.eye[0], 0, 1e-12);
+	cr_assert_float_eq(out.eye[2], 24, 1e-12);
+	cr_assert(memcmp(out.look_at, c.look_at, sizeof(c.look_at)) == 0);
+	cr_assert(memcmp(out.up, c.up, sizeof(c.up)) == 0);
+	cr_assert_eq(out.fov, 45);
+}
+
+Test(multidev, frame_names_put_the_number_before_the_extension)
+{
+	char name[PATH_MAX];
+
+	cr_assert_eq(frames_output_name("out.png", 7, name), 0);
+	cr_assert_str_eq(name, "out_0007.png");
+	cr_assert_eq(frames_output_name("dir.d/out", 12345, name), 0);
+	cr_assert_str_eq(name, "dir.d/out_12345");
+	cr_assert_eq(frames_output_name("a/.hidden.exr", 0, name), 0);
+	cr_assert_str_eq(name, "a/.hidden_0000.exr");
+}

@@ -1,0 +1,237 @@
+"""Several devices in one process (--devices, --split) and animations
+(--frames), end to end under PoCL, which exposes two CPU devices with
+POCL_DEVICES="pthread pthread". A slower device is simulated with
+RTCL_TEST_SLOW_DEVICE=K:MS, a failing one with RTCL_TEST_FAIL_DEVICE=K:N
+(host/checks.h)."""
+import json
+import os
+import pathlib
+import re
+import subprocess
+import sys
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+sys.path.insert(0, str(ROOT / "tools"))
+from rtcl_tools.ppm import pixels  # noqa: E402
+
+TWO = {"POCL_DEVICES": "pthread pthread"}
+SMALL = ["--size", "32x24"]
+
+
+def run(*args, env=None):
+    return subprocess.run([RTCL, *args], capture_output=True, text=True, cwd=ROOT, timeout=300,
+                          env={**os.environ, **TWO, **(env or {})})
+
+
+def expect_failure(result, status, message, directory):
+    assert result.returncode == status, (result.returncode, result.stderr)
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert message in lines[0], lines[0]
+    assert result.stdout == ""
+    assert sorted(os.listdir(directory)) == [], "a failed run left files behind"
+
+
+def frames_run(directory, *args, env=None):
+    stats = directory / "s.json"
+    result = run(*SMALL, "-o", str(directory / "f.ppm"), "--stats", str(stats), *args, env=env)
+    assert result.returncode == 0, result.stderr
+    return result, json.loads(stats.read_text())
+
+
+def test_frames_on_two_devices_match_one_device_byte_for_byte(tmp_path):
+    one, two = tmp_path / "one", tmp_path / "two"
+    one.mkdir()
+    two.mkdir()
+    _, stats1 = frames_run(one, "--frames", "3:6", "-p", "0", "-d", "0")
+    _, stats2 = frames_run(two, "--frames", "3:6", "--devices", "0:0,0:1")
+    names = [f"f_{f:04d}.ppm" for f in range(3, 7)]
+    assert sorted(p.name for p in two.iterdir()) == sorted(names + ["s.json"])
+    for name in names:
+        assert (one / name).read_bytes() == (two / name).read_bytes(), name
+    # Every frame differs: the camera moves.
+    assert len({pixels(two / name) for name in names}) == 4
+    assert len(stats1["multidevice"]["devices"]) == 1
+    assert len(stats2["multidevice"]["devices"]) == 2
+
+
+def test_first_frame_is_the_scenes_camera(tmp_path):
+    frames_run(tmp_path, "--frames", "0:2", "--devices", "0:1,0:0")
+    plain = run(*SMALL, "-o", str(tmp_path / "plain.ppm"), "-q")
+    assert plain.returncode == 0, plain.stderr
+    # The same pixels (the header's description names the frame).
+    assert pixels(tmp_path / "f_0000.ppm") == pixels(tmp_path / "plain.ppm")
+
+
+def test_every_frame_rendered_once_and_accounted(tmp_path):
+    result, stats = frames_run(tmp_path, "--frames", "1:7", "--devices", "all")
+    md = stats["multidevice"]
+    assert [d["index"] for d in md["devices"]] == [0, 1]
+    assert sum(d["pieces"] for d in md["devices"]) == 7
+    assert sum(d["pixels"] for d in md["devices"]) == 7 * 32 * 24
+    busy = [d["busy_ms"] for d in md["devices"]]
+    assert md["device_efficiency"] == pytest.approx(sum(busy) / 2 / max(busy), rel=1e-6)
+    assert "device-level efficiency" in result.stdout
+    assert "f_0001.ppm .. " in result.stdout and "f_0007.ppm" in result.stdout
+
+
+def test_dynamic_split_gives_a_slow_device_fewer_pieces(tmp_path):
+    _, stats = frames_run(tmp_path, "--frames", "0:9", "--devices", "0:0,0:1",
+                          env={"RTCL_TEST_SLOW_DEVICE": "1:400"})
+    pieces = [d["pieces"] for d in stats["multidevice"]["devices"]]
+    assert sum(pieces) == 10
+    assert pieces[1] < pieces[0], pieces
+    assert stats["multidevice"]["split"] == "dynamic"
+
+
+def test_static_split_gives_equal_shares_whatever_the_speed(tmp_path):
+    _, stats = frames_run(tmp_path, "--frames", "0:9", "--devices", "0:0,0:1", "--split",
+                          "static", env={"RTCL_TEST_SLOW_DEVICE": "1:100"})
+    pieces = [d["pieces"] for d in stats["multidevice"]["devices"]]
+    assert pieces == [5, 5]
+    assert stats["multidevice"]["split"] == "static"
+
+
+def test_a_device_failing_mid_render_writes_nothing(tmp_path):
+    result = run(*SMALL, "--frames", "0:5", "--devices", "0:0,0:1", "-o",
+                 str(tmp_path / "f.png"), "--stats", str(tmp_path / "s.json"),
+                 env={"RTCL_TEST_FAIL_DEVICE": "1:2"})
+    expect_failure(result, 1, "device 0:1 (", tmp_path)
+    assert "failed on its piece 2" in result.stderr
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--devices", "0"], "--devices: expected all or a list of PLATFORM:DEVICE indices"),
+    (["--devices", "0:0,"], "--devices: expected all or a list"),
+    (["--devices", "0:-1"], "--devices: expected all or a list"),
+    (["--devices", "0:0,0:0"], "--devices: device 0:0 is listed twice"),
+    (["--devices", "0:0", "-d", "0"], "--devices and -p/-d both choose devices"),
+    (["--devices", "0:0", "-k", "reference"], "the reference renderer runs on the host"),
+    (["--split", "half"], "--split: expected dynamic or static, got \"half\""),
+    (["--frames", "5"], "--frames: expected A:B"),
+    (["--frames", "5:x"], "--frames: expected A:B"),
+    (["--frames", "5:4"], "the last frame must not come before the first"),
+    (["--frames", "0:1000"], "at most 1000 frames"),
+    (["--frames", "0:1", "-r", "2"], "--frames renders each frame once"),
+    (["--frames", "0:1", "--flops", "x.npy"], "--frames renders each frame once"),
+])
+def test_option_errors(tmp_path, args, message):
+    result = run(*args, "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 2, message, tmp_path)
+
+
+def test_device_out_of_range_names_what_exists(tmp_path):
+    result = run("--devices", "0:0,0:5", "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 1, "--devices 0:5: device 5 does not exist on platform 0: it has 2",
+                   tmp_path)
+    result = run("--devices", "7:0", "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 1, "--devices 7:0: platform 7 does not exist", tmp_path)
+
+
+def test_frames_refuse_an_unwritable_frame_before_rendering(tmp_path):
+    (tmp_path / "f_0002.png").mkdir()
+    result = run(*SMALL, "--frames", "1:3", "-o", str(tmp_path / "f.png"))
+    assert result.returncode == 1, result.stderr
+    assert "f_0002.png" in result.stderr
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["f_0002.png"]
+
+
+def test_stats_naming_a_frame_is_refused(tmp_path):
+    result = run(*SMALL, "--frames", "1:3", "-o", str(tmp_path / "f.png"), "--stats",
+                 str(tmp_path / "f_0003.png"))
+    expect_failure(result, 1, "name the same file", tmp_path)
+
+
+# ---- MPI: mpirun --oversubscribe -np 3 over loopback ------------------------
+
+MPIRUN = ["mpirun", "--oversubscribe", "-np", "3"]
+MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp"}
+
+
+def built_with_mpi():
+    probe = subprocess.run([RTCL, "--mpi", "--size", "8x8", "-o", "/nonexistent/x.png"],
+                           capture_output=True, text=True, timeout=60)
+    return "built without MPI" not in probe.stderr
+
+
+needs_mpi = pytest.mark.skipif(
+    subprocess.run(["sh", "-c", "command -v mpirun"], capture_output=True).returncode != 0
+    or not built_with_mpi(), reason="rtcl built without MPI, or no mpirun")
+
+
+def mpi_run(*args, env=None):
+    return subprocess.run([*MPIRUN, RTCL, "--mpi", *args], capture_output=True, text=True,
+                          cwd=ROOT, timeout=300, env={**os.environ, **MPI_ENV, **(env or {})})
+
+
+@needs_mpi
+def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
+    ranks, single = tmp_path / "ranks", tmp_path / "single"
+    ranks.mkdir()
+    single.mkdir()
+    result = mpi_run(*SMALL, "--frames", "0:7", "-o", str(ranks / "f.ppm"), "--stats",
+                     str(ranks / "s.json"))
+    assert result.returncode == 0, result.stderr
+    frames_run(single, "--frames", "0:7", "-d", "0")
+    stats = json.loads((ranks / "s.json").read_text())
+    devices = stats["multidevice"]["devices"]
+    assert sorted(d["rank"] for d in devices) == [0, 1, 2]
+    assert sum(d["pieces"] for d in devices) == 8
+    assert sum(d["pixels"] for d in devices) == 8 * 32 * 24
+    for f in range(8):
+        name = f"f_{f:04d}.ppm"
+        assert (ranks / name).read_bytes() == (single / name).read_bytes(), name
+    assert result.stdout.count("rank ") == 3
+
+
+@needs_mpi
+def test_mpi_static_split_gives_every_rank_its_share(tmp_path):
+    result = mpi_run(*SMALL, "--frames", "0:8", "--split", "static", "-o",
+                     str(tmp_path / "f.ppm"), "--stats", str(tmp_path / "s.json"),
+                     env={"RTCL_TEST_SLOW_DEVICE": "0:50"})
+    assert result.returncode == 0, result.stderr
+    devices = json.loads((tmp_path / "s.json").read_text())["multidevice"]["devices"]
+    assert [d["pieces"] for d in devices] == [3, 3, 3]
+
+
+@needs_mpi
+def test_mpi_device_failure_on_a_rank_writes_nothing(tmp_path):
+    result = mpi_run(*SMALL, "--frames", "0:8", "-o", str(tmp_path / "f.ppm"),
+                     env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
+    assert result.returncode == 1, result.stderr
+    ours = [line for line in result.stderr.splitlines() if line.startswith("rtcl:")]
+    assert len(ours) == 1, result.stderr
+    assert re.match(r"rtcl: rank \d, device 0:0 \(.*\): the device failed on its piece 2", ours[0])
+    assert os.listdir(tmp_path) == []
+
+
+@needs_mpi
+def test_mpi_rank_that_dies_fails_the_run_with_no_output(tmp_path):
+    result = mpi_run(*SMALL, "--frames", "0:11", "-o", str(tmp_path / "f.ppm"), "--stats",
+                     str(tmp_path / "s.json"), env={"RTCL_TEST_RANK_DIES": "2:2"})
+    assert result.returncode != 0
+    assert "rank 2" in result.stderr and "signal 9" in result.stderr, result.stderr
+    assert "no output written" in result.stderr
+    assert os.listdir(tmp_path) == [], "a dead rank left files behind"
+
+
+def test_mpi_without_frames_or_without_mpi_says_what_to_do(tmp_path):
+    result = run("--mpi", "-o", str(tmp_path / "x.png"))
+    assert result.returncode == 1
+    assert ("--mpi: rtcl was built without MPI: install Open MPI" in result.stderr
+            or "--mpi --frames A:B" in result.stderr), result.stderr
+    assert os.listdir(tmp_path) == []
+
+
+def test_help_and_man_page_teach_the_options():
+    help_text = run("--help").stdout
+    man = (ROOT / "docs" / "rtcl.1").read_text()
+    for option in ["--devices LIST|all", "--split dynamic|static", "--frames A:B", "--mpi",
+                   "out_0000.png"]:
+        assert option in help_text, option
+    for option in [r"\-\-devices", r"\-\-split", r"\-\-frames", r"\-\-mpi"]:
+        assert option in man, option

@@ -1,0 +1,103 @@
+#!/usr/bin/env python3
+"""Multi-device and MPI benchmark (issue 13): the same animation on one device,
+on several devices in one process, and over MPI ranks; the wall time of each
+(median of --runs), each device's share and the device-level efficiency; and
+the overhead per piece (a tiny frame, whose render time is negligible).
+
+    tools/multidevice_bench.py --single 1:0 --multi 1:0,0:0 [--mpi-np 2 --mpi-devices 0:0]
+        [--frames 1:16] [--size 1000x1000] [--runs 3] [--out docs/results/multidevice/NAME.md]
+
+--single and --multi are --devices lists (platform:device, see rtcl --list-devices);
+--mpi-np N adds `mpirun -np N rtcl --mpi --devices MPI_DEVICES` (each rank the
+listed devices; under PoCL set POCL_DEVICES per rank with --mpi-env). The
+target on a GPU+CPU node: --multi no slower than --single on a >= 1 s render.
+"""
+import argparse
+import json
+import os
+import pathlib
+import statistics
+import subprocess
+import sys
+import tempfile
+
+
+def run(command, env, stats):
+    result = subprocess.run(command, capture_output=True, text=True, env=env, timeout=3600)
+    if result.returncode != 0:
+        sys.exit(f"multidevice_bench: {' '.join(command)} failed:\n{result.stderr}")
+    return json.loads(pathlib.Path(stats).read_text())
+
+
+def measure(label, command, env, runs, workdir):
+    docs = []
+    for i in range(runs):
+        stats = os.path.join(workdir, f"s{i}.json")
+        docs.append(run([*command, "--stats", stats, "-o", os.path.join(workdir, "f.ppm")],
+                        env, stats))
+    best = sorted(docs, key=lambda d: d["wall_ms"])[len(docs) // 2]
+    md = best["multidevice"]
+    shares = ", ".join(f"{d.get('rank', 0)}/{d['platform']}:{d['index']} {d['pieces']}"
+                       for d in md["devices"])
+    return {"label": label, "wall_ms": statistics.median(d["wall_ms"] for d in docs),
+            "efficiency": md["device_efficiency"], "shares": shares,
+            "command": " ".join(command)}
+
+
+def main():
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--rtcl", default="./rtcl")
+    parser.add_argument("--single", required=True)
+    parser.add_argument("--multi", required=True)
+    parser.add_argument("--mpi-np", type=int, default=0)
+    parser.add_argument("--mpi-devices", default="0:0")
+    parser.add_argument("--mpi-env", default="", help="VAR=VALUE passed to every rank")
+    parser.add_argument("--frames", default="1:16")
+    parser.add_argument("--size", default="1000x1000")
+    parser.add_argument("--kernel", default="dynamic")
+    parser.add_argument("--runs", type=int, default=3)
+    parser.add_argument("--out", default=None)
+    args = parser.parse_args()
+
+    env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+    base = [args.rtcl, "-q", "-k", args.kernel, "--size", args.size, "--frames", args.frames]
+    configs = [(f"one device {args.single}", [*base, "--devices", args.single]),
+               (f"--devices {args.multi} (dynamic)", [*base, "--devices", args.multi]),
+               (f"--devices {args.multi} --split static",
+                [*base, "--devices", args.multi, "--split", "static"])]
+    if args.mpi_np:
+        mpi = ["mpirun", "--oversubscribe", "-np", str(args.mpi_np)]
+        if args.mpi_env:
+            mpi += ["-x", args.mpi_env]
+        configs.append((f"mpirun -np {args.mpi_np}, each --devices {args.mpi_devices}",
+                        [*mpi, *base, "--mpi", "--devices", args.mpi_devices]))
+    rows = []
+    with tempfile.TemporaryDirectory() as workdir:
+        for label, command in configs:
+            rows.append(measure(label, command, env, args.runs, workdir))
+            print(f"{rows[-1]['label']}: {rows[-1]['wall_ms']:.1f} ms", file=sys.stderr)
+        first, last = (int(x) for x in args.frames.split(":"))
+        tiny = [args.rtcl, "-q", "-k", args.kernel, "--size", "8x8", "--frames", args.frames,
+                "--devices", args.single]
+        overhead = measure("overhead", tiny, env, args.runs, workdir)
+    frames = last - first + 1
+    lines = [f"# Multi-device: {args.frames} ({frames} frames) at {args.size}, kernel "
+             f"{args.kernel}, median of {args.runs}", "",
+             "| configuration | wall ms | ms/frame | speed-up | device-level efficiency | "
+             "frames per device (rank/platform:device) |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['label']} | {r['wall_ms']:.1f} | {r['wall_ms'] / frames:.1f} | "
+                     f"{rows[0]['wall_ms'] / r['wall_ms']:.2f}x | {100 * r['efficiency']:.1f}% | "
+                     f"{r['shares']} |")
+    lines += ["", f"Overhead per piece (a whole frame at 8x8 on {args.single}, set-up, build "
+              f"from the cache, upload, launch, read-back, staging): "
+              f"{overhead['wall_ms'] / frames:.1f} ms", "", "Commands:", ""]
+    lines += [f"    {r['command']}" for r in rows]
+    text = "\n".join(lines) + "\n"
+    print(text)
+    if args.out:
+        pathlib.Path(args.out).write_text(text)
+
+
+if __name__ == "__main__":
+    main()
