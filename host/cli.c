@@ -117,6 +117,8 @@ static void print_help_after_kernels(FILE *out)
 		"  RTCL_BUILD_OPTIONS=OPTS  add OPTS to the program build options, e.g.\n"
 		"                           -cl-nv-verbose (its report shows with -v)\n"
 		"  RTCL_DUMP_BINARY=FILE    write the built program binary (PTX on NVIDIA)\n"
+		"  RTCL_CACHE=0             do not keep or load built programs in\n"
+		"                           $XDG_CACHE_HOME/rtcl (default: ~/.cache/rtcl)\n"
 		"  POCL_CACHE_DIR=DIR       PoCL's kernel cache; PoCL finds no device unless it\n"
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
