@@ -247,8 +247,9 @@ def test_man_page_environment_covers_help_and_output_dates():
     in_help = set(re.findall(r"^  ([A-Z_]+)=", help_text(), re.MULTILINE))
     in_man = {match for line in man_sections()["ENVIRONMENT"]
               for match in re.findall(r"^\.BI ([A-Z_]+)= ", line)}
-    assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "POCL_CACHE_DIR"}
-    assert in_man == in_help | {"SOURCE_DATE_EPOCH"}
+    assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "RTCL_CACHE",
+                       "POCL_CACHE_DIR"}
+    assert in_man == in_help | {"SOURCE_DATE_EPOCH", "XDG_CACHE_HOME"}
 
 
 def test_man_page_names_the_version():
