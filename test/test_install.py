@@ -21,7 +21,7 @@ MAN_PAGE = ROOT / "docs" / "rtcl.1"
 PREFIX = "usr"
 # The commands the README and the man page name; one per tools/*.py.
 TOOL_COMMANDS = {"rtcl-bench", "rtcl-experiments", "rtcl-flops-hist", "rtcl-genscene",
-                 "rtcl-povray", "rtcl-ppmdiff"}
+                 "rtcl-povray", "rtcl-ppmdiff", "rtcl-time-to-image"}
 MAN_SECTIONS = ["NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "ENVIRONMENT", "FILES",
                 "EXIT STATUS", "EXAMPLES", "SEE ALSO"]
 LONG_OPTION = re.compile(r"(?<![\w-])--[a-z][a-z-]*")
@@ -70,7 +70,15 @@ def expected_files():
             | {f"{share}/scenes/{path.name}" for path in (ROOT / "scenes").glob("*.json")}
             | {f"{share}/tools/{path.name}" for path in tools}
             | {f"{share}/tools/rtcl_tools/{path.name}"
-               for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")})
+               for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")}
+            | ({f"{PREFIX}/lib/rtcl/rtcl-oiio.so"} if has_oiio() else set()))
+
+
+def has_oiio():
+    """Whether rtcl was built with OpenImageIO (as a module; OIIO=0 refuses .tif)."""
+    probe = subprocess.run([RTCL, "--size", "4x4", "-o", "/nonexistent-dir/x.tif"],
+                           capture_output=True, text=True, timeout=300)
+    return "no OpenImageIO" not in probe.stderr
 
 
 @pytest.fixture(scope="module")
