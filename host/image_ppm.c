@@ -7,10 +7,11 @@
 
 int image_backend_check_format(const char *path, const char *ext, char *err, size_t err_size)
 {
-	image_set_error(err, err_size,
-			"%s: this build has no OpenImageIO and writes only .ppm, .pfm and .png%s%s%s "
-			"(rebuild without OIIO=0 for other formats)",
-			path, *ext ? ", not \"" : "", ext, *ext ? "\"" : "");
+	image_set_error(
+		err, err_size,
+		"%s: this build has no OpenImageIO and writes only .ppm, .pfm and .png%s%s%s "
+		"(rebuild without OIIO=0 for other formats)",
+		path, *ext ? ", not \"" : "", ext, *ext ? "\"" : "");
 	return -1;
 }
 
