@@ -1,8 +1,10 @@
 /* The PNG writer (see image_png.h): one IDAT stream compressed by zlib, each
  * row with the Up filter (the row minus the one above), which suits renders'
- * smooth areas and costs one subtraction a byte. Compression level 3: on a
- * 1000x1000 render about as small as libpng's default (level 6, adaptive
- * filters) at a fraction of its time. */
+ * smooth areas and costs one subtraction a byte. zlib level 1: on a
+ * 1000x1000 render of 60 balls (busy machine) 585 kB in 75 ms of encoding and
+ * writing, against 537 kB in 110 ms at level 3 and 469 kB (OpenImageIO's
+ * size) in 310 ms at level 6; a render's time to image matters more than a
+ * fifth of its file. */
 #include "image_png.h"
 
 #include <errno.h>
@@ -11,7 +13,7 @@
 #include <string.h>
 #include <zlib.h>
 
-#define PNG_LEVEL 3
+#define PNG_LEVEL 1
 
 static const unsigned char signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
 
