@@ -77,6 +77,8 @@ def test_runs_both_interleaved_and_reports(tmp_path, fakes):
                      out, re.M)
     assert re.search(r"^ratio rtcl/povray \(medians\): [0-9.]+; target <= 0\.50: (met|missed)$",
                      out, re.M)
+    assert re.search(r"^CPU time \(user \+ system, all threads\), median: rtcl [0-9.]+ s, "
+                     r"povray [0-9.]+ s, ratio [0-9.]+$", out, re.M)
     assert ("rtcl -v breakdown (median of 3): device set-up 20.5, scene and upload 0.1, "
             "build 3.0, kernels 290.0, read-back 6.0, counting run 0.0, encoding and writing "
             "40.0, total 360.0 ms") in out

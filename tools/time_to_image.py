@@ -19,7 +19,8 @@ Each run is one whole process, timed from start to exit on the wall clock:
 writes round(255 c) as POV-Ray's File_Gamma 1.0 does; the SDL is
 tools/povray.py's). The two alternate, round by round, so that a busy spell of
 the machine falls on both; the report gives the median, min and max of each,
-the ratio of the medians, the load average before and after, the device (rtcl
+the ratio of the medians, the median CPU time (user + system over all threads,
+which a busy machine hardly changes; the wall time it does), the load average before and after, the device (rtcl
 -v) and the CPU (lscpu), and the median of rtcl's own -v time breakdown over
 --runs more rtcl -v runs (untimed here: where rtcl's time goes). rtcl's
 program cache (RTCL_CACHE, ~/.cache/rtcl) and PoCL's are left as they are:
@@ -101,17 +102,19 @@ def measure(args, rtcl, povray, folder, scene):
         f.write(to_sdl(doc, args.size, doc["max_depth"], scene))
     plain = rtcl_command(rtcl, scene, args.size, "render.png")
     pov = povray_command(povray, args.size, args.threads)
-    jobs = [("rtcl", lambda: time_once(plain, rtcl_dir, "render.png")[0]),
-            ("povray", lambda: time_once(pov, pov_dir, "render.png")[0])]
+    jobs = [("rtcl", lambda: time_once(plain, rtcl_dir, "render.png")[:2]),
+            ("povray", lambda: time_once(pov, pov_dir, "render.png")[:2])]
     interleaved(jobs, 1)  # warm-up: caches, page cache
-    walls = interleaved(jobs, args.runs)
+    times = interleaved(jobs, args.runs)
     verbose = rtcl_command(rtcl, scene, args.size, "render.png", verbose=True)
-    breakdowns = [parse_breakdown(time_once(verbose, rtcl_dir, "render.png")[1])
+    breakdowns = [parse_breakdown(time_once(verbose, rtcl_dir, "render.png")[2])
                   for _ in range(args.runs)]
-    return walls, breakdowns
+    return times, breakdowns
 
 
-def report(args, name, device, cpu, version, loads, walls, breakdown):
+def report(args, name, device, cpu, version, loads, times, breakdown):
+    walls = {name: [t[0] for t in runs] for name, runs in times.items()}
+    cpus = {name: [t[1] for t in runs] for name, runs in times.items()}
     rtcl_s, pov_s = median(walls["rtcl"]), median(walls["povray"])
     ratio, verdict = ratio_verdict(rtcl_s, pov_s, TARGET)
     lines = [
@@ -126,6 +129,9 @@ def report(args, name, device, cpu, version, loads, walls, breakdown):
         "rtcl runs:   %s s" % " ".join("%.3f" % w for w in walls["rtcl"]),
         "povray runs: %s s" % " ".join("%.3f" % w for w in walls["povray"]),
         "ratio rtcl/povray (medians): %.3f; target <= %.2f: %s" % (ratio, TARGET, verdict),
+        "CPU time (user + system, all threads), median: rtcl %.3f s, povray %.3f s, "
+        "ratio %.3f" % (median(cpus["rtcl"]), median(cpus["povray"]),
+                        median(cpus["rtcl"]) / max(median(cpus["povray"]), 1e-9)),
         "rtcl -v breakdown (median of %d): %s" % (args.runs, format_breakdown(breakdown)),
     ]
     return "\n".join(lines) + "\n"
@@ -143,9 +149,9 @@ def run(args):
         scene, name = scene_file(args, folder)
         device = rtcl_device(rtcl, folder)
         before = os.getloadavg()
-        walls, breakdowns = measure(args, rtcl, povray, folder, scene)
+        times, breakdowns = measure(args, rtcl, povray, folder, scene)
         after = os.getloadavg()
-    return report(args, name, device, cpu_model(), version, (before, after), walls,
+    return report(args, name, device, cpu_model(), version, (before, after), times,
                   median_breakdown(breakdowns))
 
 

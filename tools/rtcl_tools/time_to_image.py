@@ -3,6 +3,7 @@ tools/time_to_image.py is the command line; this is what it runs and parses."""
 
 import os
 import re
+import resource
 import statistics
 import subprocess
 import time
@@ -40,12 +41,21 @@ def parse_breakdown(stderr):
     return parts
 
 
+def children_cpu():
+    """User and system CPU seconds of the waited-for children so far."""
+    usage = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return usage.ru_utime + usage.ru_stime
+
+
 def time_once(cmd, cwd, output, env=None):
-    """Runs cmd in cwd; returns (wall seconds, stderr). The output file must
-    appear (it is removed first)."""
+    """Runs cmd in cwd; returns (wall seconds, CPU seconds, stderr). The
+    output file must appear (it is removed first). The CPU time (user and
+    system, every thread) hardly depends on what else the machine runs; the
+    wall time does."""
     path = os.path.join(cwd, output)
     if os.path.exists(path):
         os.remove(path)
+    cpu = children_cpu()
     start = time.perf_counter()
     try:
         done = subprocess.run(cmd, cwd=cwd, capture_output=True, text=True, errors="replace",
@@ -57,7 +67,7 @@ def time_once(cmd, cwd, output, env=None):
         text = (done.stderr.strip() or done.stdout.strip() or "no output").splitlines()
         raise RunError("%s failed (exit %d): %s" % (os.path.basename(cmd[0]), done.returncode,
                                                     text[-1] if text else "no output"))
-    return wall, done.stderr
+    return wall, children_cpu() - cpu, done.stderr
 
 
 def interleaved(jobs, runs):
