@@ -1,6 +1,6 @@
 # rtcl: an OpenCL ray tracer for studying load balancing.
 #
-#   make              build ./rtcl (OIIO=0: without OpenImageIO, .ppm/.pfm only)
+#   make              build ./rtcl (OIIO=0: without OpenImageIO, .ppm/.pfm/.png only)
 #   make deps         install the dependencies (Debian/Ubuntu, uses apt-get)
 #   make render       build and render the default scene to render.png
 #   make test         unit, kernel (PoCL), command-line and tools tests
@@ -46,7 +46,7 @@ CXXFLAGS += -std=c++17 $(WARNINGS)
 # Expanded when used, like OIIO_LIBS below.
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
-LDLIBS = -lOpenCL -ljansson $(ASSIMP_LIBS) -lm -pthread
+LDLIBS = -lOpenCL -ljansson $(ASSIMP_LIBS) -lz -lm -pthread
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -61,11 +61,14 @@ export LSAN_OPTIONS := suppressions=$(CURDIR)/test/lsan.supp:print_suppressions=
 endif
 
 ifeq ($(OIIO),1)
-IMAGE_BACKEND := $(BUILD)/image_oiio.o
+# OpenImageIO's backend is a module that rtcl loads only for the formats it
+# does not write itself (host/image_dl.c says why).
+IMAGE_BACKEND := $(BUILD)/image_dl.o
+OIIO_MODULE := $(BUILD)/rtcl-oiio.so
+LDLIBS += -ldl
 # Expanded when used, so that `make deps render` finds what deps installed.
 OIIO_CFLAGS = $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
 OIIO_LIBS = $(shell pkg-config --libs OpenImageIO 2>/dev/null)
-LDLIBS += $(OIIO_LIBS)
 else
 IMAGE_BACKEND := $(BUILD)/image_ppm.o
 endif
@@ -85,10 +88,10 @@ endif
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
 	scene_literal.o scene_material.o scene_mesh.o mesh.o timing.o files.o \
-	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
-	devices.o multidev.o devstats.o frames.o \
+	interrupt.o checks.o program.o progcache.o launch.o singlepass.o wavefront.o render.o \
+	stats.o devices.o multidev.o devstats.o frames.o \
 	outputs.o \
-	workmap.o image_common.o reference.o embedded.o) \
+	workmap.o image_common.o image_encode.o image_png.o reference.o embedded.o) \
 	$(IMAGE_BACKEND) $(MPI_MODULE)
 CL_SOURCES := cl/rtcl_shared.h $(wildcard cl/*.cl)
 EMBEDDED := $(CL_SOURCES) scenes/paper60.json
@@ -98,8 +101,15 @@ UNIT_TESTS := $(wildcard test/test_*.c)
 .PHONY: all deps render test experiments bench bench-scenes clean fuzz valgrind install uninstall
 all: $(BIN)
 
-$(BIN): $(BUILD)/main.o $(HOST_OBJS)
-	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS)
+$(BIN): $(BUILD)/main.o $(HOST_OBJS) $(OIIO_MODULE)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
+
+$(BUILD)/image_dl.o: CPPFLAGS += -DRTCL_MODULE_DIR='"$(abspath $(BUILD))"'
+
+$(BUILD)/rtcl-oiio.so: host/image_oiio.cpp host/image_encode.c | $(BUILD)
+	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -c -o $(BUILD)/image_encode.pic.o host/image_encode.c
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) $(OIIO_CFLAGS) -fPIC -shared -MMD -MF $(BUILD)/rtcl-oiio.d \
+		$(LDFLAGS) -o $@ $< $(BUILD)/image_encode.pic.o $(OIIO_LIBS)
 
 $(BUILD)/embedded.c: tools/build/embed.py $(EMBEDDED) | $(BUILD)
 	$(PYTHON) tools/build/embed.py $@ $(EMBEDDED)
@@ -119,8 +129,8 @@ $(BUILD)/%.o: host/%.cpp | $(BUILD)
 $(BUILD)/test/%.o: test/%.c | $(BUILD)/test
 	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -c -o $@ $<
 
-$(BUILD)/unit_tests: $(UNIT_TESTS:test/%.c=$(BUILD)/test/%.o) $(HOST_OBJS)
-	$(CC) $(LDFLAGS) -o $@ $^ $(LDLIBS) -lcriterion
+$(BUILD)/unit_tests: $(UNIT_TESTS:test/%.c=$(BUILD)/test/%.o) $(HOST_OBJS) $(OIIO_MODULE)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS) -lcriterion
 
 $(BUILD) $(BUILD)/test:
 	mkdir -p $@
@@ -194,6 +204,7 @@ DESTDIR ?=
 INSTALL ?= install
 BINDIR := $(DESTDIR)$(PREFIX)/bin
 MAN1DIR := $(DESTDIR)$(PREFIX)/share/man/man1
+LIBDIR := $(DESTDIR)$(PREFIX)/lib/rtcl
 DATADIR := $(DESTDIR)$(PREFIX)/share/rtcl
 TOOL_SCRIPTS := $(wildcard tools/*.py)
 TOOL_MODULES := $(wildcard tools/rtcl_tools/*.py)
@@ -205,6 +216,7 @@ SCENE_MODELS := $(wildcard scenes/models/*)
 install: $(BIN)
 	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools
 	$(INSTALL) -m 755 $(BIN) $(BINDIR)/rtcl
+	$(if $(OIIO_MODULE),$(INSTALL) -d $(LIBDIR) && $(INSTALL) -m 644 $(OIIO_MODULE) $(LIBDIR))
 	sed 's|/usr/local/share/rtcl|$(PREFIX)/share/rtcl|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
@@ -224,12 +236,14 @@ install: $(BIN)
 # if nothing else is left in it; bin, share/man and PREFIX stay.
 uninstall:
 	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
+	rm -f $(LIBDIR)/rtcl-oiio.so
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
 	rm -f $(addprefix $(DATADIR)/scenes/models/,$(notdir $(SCENE_MODELS)))
 	rm -f $(addprefix $(DATADIR)/tools/,$(notdir $(TOOL_SCRIPTS)))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
 	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__
-	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools $(DATADIR)/tools $(DATADIR); do \
+	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools \
+			$(DATADIR)/tools $(DATADIR) $(LIBDIR); do \
 		if [ -d $$dir ] && [ -z "$$(ls -A $$dir)" ]; then rmdir $$dir; fi; \
 	done
 

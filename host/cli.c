@@ -8,6 +8,7 @@
 #include "frames.h"
 #include "render.h"
 #include "scene.h"
+#include "workmap.h"
 
 enum long_only_option {
 	OPT_GROUPS = 256,
@@ -20,6 +21,7 @@ enum long_only_option {
 	OPT_WORK_MAP,
 	OPT_ENCODING,
 	OPT_WORK_MAP_SCALE,
+	OPT_WORK_MAP_BAR,
 	OPT_VERSION,
 	OPT_SPP,
 	OPT_DEVICES,
@@ -51,6 +53,7 @@ static const struct option long_options[] = {
 	{"work-map", required_argument, NULL, OPT_WORK_MAP},
 	{"encoding", required_argument, NULL, OPT_ENCODING},
 	{"work-map-scale", required_argument, NULL, OPT_WORK_MAP_SCALE},
+	{"work-map-bar", required_argument, NULL, OPT_WORK_MAP_BAR},
 	{"quiet", no_argument, NULL, 'q'},
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
@@ -125,6 +128,9 @@ static void print_help_after_kernels(FILE *out)
 		"                         with a colour scale bar\n"
 		"      --work-map-scale linear|log  the picture's colour scale (default linear);\n"
 		"                         log spreads the many cheap pixels\n"
+		"      --work-map-bar FILE  write the picture's scale bar to the image FILE: as\n"
+		"                         wide as the render (at least 170 pixels), labels 0,\n"
+		"                         middle and max, and the unit \"flops per pixel\"\n"
 		"\n"
 		"Other:\n"
 		"  -q, --quiet            print nothing but errors\n"
@@ -138,6 +144,8 @@ static void print_help_after_kernels(FILE *out)
 		"  RTCL_BUILD_OPTIONS=OPTS  add OPTS to the program build options, e.g.\n"
 		"                           -cl-nv-verbose (its report shows with -v)\n"
 		"  RTCL_DUMP_BINARY=FILE    write the built program binary (PTX on NVIDIA)\n"
+		"  RTCL_CACHE=0             do not keep or load built programs in\n"
+		"                           $XDG_CACHE_HOME/rtcl (default: ~/.cache/rtcl)\n"
 		"  POCL_CACHE_DIR=DIR       PoCL's kernel cache; PoCL finds no device unless it\n"
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
@@ -266,8 +274,8 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 /* Applies option c with its value arg (NULL for an option without one).
  * Returns 0, or -1 with a message; a flat switch, one case per option. */
 /* One of two words: *second is set when it is the second. */
-static int parse_choice(const char *option, const char *text, const char *first,
-			const char *second, int *is_second, char *err, size_t err_size)
+static int parse_choice(const char *option, const char *text, const char *first, const char *second,
+			int *is_second, char *err, size_t err_size)
 {
 	if (strcmp(text, first) != 0 && strcmp(text, second) != 0) {
 		snprintf(err, err_size, "%s: expected %s or %s, got \"%s\"", option, first, second,
@@ -338,6 +346,8 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return take_flops_name(arg, &o->flops_path, err, err_size);
 	case OPT_WORK_MAP:
 		return take_file_name("--work-map", arg, &o->work_map_path, err, err_size);
+	case OPT_WORK_MAP_BAR:
+		return take_file_name("--work-map-bar", arg, &o->work_map_bar_path, err, err_size);
 	case OPT_WORK_MAP_SCALE:
 		return parse_choice("--work-map-scale", arg, "linear", "log", &o->work_map_log, err,
 				    err_size);
@@ -454,6 +464,13 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 		snprintf(err, err_size,
 			 "--frames renders each frame once: -r/--repeat, --flops and --work-map "
 			 "do not apply");
+		return -1;
+	}
+	if (o->work_map_bar_path &&
+	    (!o->work_map_path || workmap_kind(o->work_map_path) != WORKMAP_PICTURE)) {
+		snprintf(err, err_size,
+			 "--work-map-bar: the bar is the legend of a --work-map picture; give "
+			 "--work-map an image file (not .npy, .exr, .pfm or .hdr)");
 		return -1;
 	}
 	if (o->quiet && o->verbose) {

@@ -33,10 +33,11 @@ struct options {
 	int mpi;    /* --mpi: rank 0 hands out the pieces (mpi_render.h) */
 	int repeat; /* -r N; 0 when not given */
 	const char *stats_path;
-	const char *flops_path;	   /* --flops FILE.npy */
-	const char *work_map_path; /* --work-map IMAGE */
-	int work_map_log;	   /* --work-map-scale log */
-	int linear_encoding;	   /* --encoding linear: 8-bit files hold round(255 c) */
+	const char *flops_path;	       /* --flops FILE.npy */
+	const char *work_map_path;     /* --work-map IMAGE */
+	int work_map_log;	       /* --work-map-scale log */
+	const char *work_map_bar_path; /* --work-map-bar IMAGE */
+	int linear_encoding;	       /* --encoding linear: 8-bit files hold round(255 c) */
 	int quiet, verbose;
 	int help, version;
 };

@@ -1,10 +1,12 @@
 /* Image output.
  *
- * One interface, two implementations chosen at build time: image_oiio.cpp
- * writes every format OpenImageIO knows, image_ppm.c (OIIO=0) only .ppm and
- * .pfm. Both link image_common.c, which owns the 8-bit conversion, the
- * checks, the temporary file and the .ppm/.pfm writers, so a .ppm or .pfm is
- * byte for byte the same whichever implementation wrote it.
+ * One interface, two implementations chosen at build time: image_dl.c loads
+ * the module rtcl-oiio.so (image_oiio.cpp), which writes every format
+ * OpenImageIO knows; image_ppm.c (OIIO=0) refuses them. Both link
+ * image_common.c, which owns the checks, the temporary file and the .ppm/.pfm
+ * writers, image_png.c, rtcl's own PNG writer, and image_encode.c, the 8-bit
+ * conversion, so a .ppm, .pfm or .png is byte for byte the same whichever
+ * implementation is linked.
  *
  * Float formats keep the linear values: .exr (32-bit float), .hdr (RGBE) and
  * .pfm (32-bit float). Every other format, TIFF included, gets 8 bits per

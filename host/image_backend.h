@@ -1,8 +1,8 @@
 /* Between image_common.c and the implementation linked with it
  * (image_oiio.cpp or image_ppm.c); not for the rest of the host.
  *
- * image_common.c validates, creates the temporary file, writes .ppm and .pfm
- * itself, syncs and renames. The implementation only says which other
+ * image_common.c validates, creates the temporary file, writes .ppm, .pfm and
+ * (with image_png.c) .png itself, syncs and renames. The implementation only says which other
  * extensions it can write and encodes those.
  */
 #ifndef RTCL_IMAGE_BACKEND_H
@@ -20,7 +20,7 @@ extern "C" {
 
 /* Returns 0 if this build can write the format named by `ext` (the file
  * name's extension with its dot, e.g. ".png" or ".TIF"; "" for none), else
- * -1 with "PATH: ..." in err. Never called for .ppm and .pfm. */
+ * -1 with "PATH: ..." in err. Never called for .ppm, .pfm and .png. */
 int image_backend_check_format(const char *path, const char *ext, char *err, size_t err_size);
 
 /* Encodes the image (as for image_write) into tmp_path, an empty file that

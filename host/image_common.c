@@ -1,5 +1,6 @@
 /* The part of image output shared by both builds (see image.h): checks,
- * the temporary file and its rename, and the .ppm/.pfm writers. */
+ * the temporary file and its rename, and the .ppm/.pfm writers (.png:
+ * image_png.c; the 8-bit encoding: image_encode.c). */
 #ifndef _POSIX_C_SOURCE
 #define _POSIX_C_SOURCE 200809L
 #endif
@@ -21,30 +22,7 @@
 #include "image.h"
 #include "files.h"
 #include "image_backend.h"
-
-
-
-double image_srgb_curve(double c)
-{
-	return c <= 0.0031308 ? 12.92 * c : 1.055 * pow(c, 1.0 / 2.4) - 0.055;
-}
-
-unsigned char image_encode_8bit(float c, enum image_encoding encoding)
-{
-	if (encoding != IMAGE_SRGB || !(c > 0.0f) || c >= 1.0f)
-		return image_to_8bit(c);
-	return (unsigned char)floor(255.0 * image_srgb_curve((double)c) + 0.5);
-}
-
-unsigned char image_to_8bit(float c)
-{
-	if (!(c > 0.0f)) /* also NaN */
-		return 0;
-	if (c >= 1.0f)
-		return 255;
-	/* 255 · c is exact in double, so this rounds the true product. */
-	return (unsigned char)floor(255.0 * (double)c + 0.5);
-}
+#include "image_png.h"
 
 static int is_ppm(const char *ext)
 {
@@ -54,6 +32,17 @@ static int is_ppm(const char *ext)
 static int is_pfm(const char *ext)
 {
 	return strcasecmp(ext, ".pfm") == 0;
+}
+
+static int is_png(const char *ext)
+{
+	return strcasecmp(ext, ".png") == 0;
+}
+
+/* The formats rtcl writes itself, without the backend. */
+static int is_native(const char *ext)
+{
+	return is_ppm(ext) || is_pfm(ext) || is_png(ext);
 }
 
 /* The format check (from the extension), then files_check_writable. */
@@ -73,7 +62,7 @@ static int check_path(const char *path, char *err, size_t err_size)
 				path);
 		return -1;
 	}
-	if (!is_ppm(ext) && !is_pfm(ext) && image_backend_check_format(path, ext, err, err_size))
+	if (!is_native(ext) && image_backend_check_format(path, ext, err, err_size))
 		return -1;
 	return files_check_writable(path, err, err_size);
 }
@@ -155,8 +144,8 @@ static int write_pfm(FILE *file, const float *rgb, int width, int height)
 	return ferror(file) ? -1 : 0;
 }
 
-/* Writes .ppm or .pfm into fd, which it closes. */
-static int write_netpbm(int fd, const char *path, const float *rgb, int width, int height,
+/* Writes .ppm, .pfm or .png into fd, which it closes. */
+static int write_native(int fd, const char *path, const float *rgb, int width, int height,
 			const struct image_meta *meta, char *err, size_t err_size)
 {
 	FILE *file = fdopen(fd, "wb");
@@ -168,7 +157,9 @@ static int write_netpbm(int fd, const char *path, const float *rgb, int width, i
 		return -1;
 	}
 	errno = 0;
-	if (is_pfm(files_extension(path)))
+	if (is_png(files_extension(path)))
+		failed = image_png_write(file, rgb, width, height, meta);
+	else if (is_pfm(files_extension(path)))
 		failed = write_pfm(file, rgb, width, height);
 	else
 		failed = write_ppm(file, rgb, width, height, meta);
@@ -202,10 +193,18 @@ static int write_with_backend(int fd, const char *path, const char *tmp, const f
 	return 0;
 }
 
-/* Reads the header of the written netpbm file back: magic, width, height. */
-static int verify_netpbm(const char *path, const char *tmp, int width, int height, char *err,
+/* Reads the header of the written file back: magic, width, height. */
+static int verify_native(const char *path, const char *tmp, int width, int height, char *err,
 			 size_t err_size)
 {
+	if (is_png(files_extension(path))) {
+		if (image_png_check(tmp, width, height))
+			return 0;
+		image_set_error(err, err_size,
+				"%s: the written file does not read back as a %dx%d PNG image",
+				path, width, height);
+		return -1;
+	}
 	const char *magic = is_pfm(files_extension(path)) ? "PF" : "P6";
 	FILE *file = fopen(tmp, "rb");
 	char found[3] = "";
@@ -218,8 +217,8 @@ static int verify_netpbm(const char *path, const char *tmp, int width, int heigh
 			if (ch == '#')
 				while ((ch = fgetc(file)) != EOF && ch != '\n')
 					;
-		ok = ch != EOF && ungetc(ch, file) != EOF &&
-		     fscanf(file, "%d %d", &w, &h) == 2 && w == width && h == height;
+		ok = ch != EOF && ungetc(ch, file) != EOF && fscanf(file, "%d %d", &w, &h) == 2 &&
+		     w == width && h == height;
 	}
 	if (file)
 		fclose(file);
@@ -234,7 +233,7 @@ int image_stage(struct staged_file *staged, const char *path, const float *rgb, 
 		int height, const struct image_meta *meta, char *err, size_t err_size)
 {
 	const char *ext = files_extension(path);
-	int netpbm = is_ppm(ext) || is_pfm(ext);
+	int native = is_native(ext);
 	int fd, failed;
 
 	if (check_path(path, err, err_size))
@@ -247,9 +246,9 @@ int image_stage(struct staged_file *staged, const char *path, const float *rgb, 
 	fd = files_stage(staged, path, err, err_size);
 	if (fd < 0)
 		return -1;
-	if (netpbm)
-		failed = write_netpbm(fd, path, rgb, width, height, meta, err, err_size) ||
-			 verify_netpbm(path, staged->temp, width, height, err, err_size);
+	if (native)
+		failed = write_native(fd, path, rgb, width, height, meta, err, err_size) ||
+			 verify_native(path, staged->temp, width, height, err, err_size);
 	else
 		failed = write_with_backend(fd, path, staged->temp, rgb, width, height, meta, err,
 					    err_size) ||

@@ -1,5 +1,5 @@
-/* Image output without OpenImageIO (OIIO=0): image_common.c writes .ppm
- * and .pfm itself; every other extension is refused here. */
+/* Image output without OpenImageIO (OIIO=0): image_common.c writes .ppm,
+ * .pfm and .png itself; every other extension is refused here. */
 #include <stddef.h>
 
 #include "image.h"
@@ -7,10 +7,11 @@
 
 int image_backend_check_format(const char *path, const char *ext, char *err, size_t err_size)
 {
-	image_set_error(err, err_size,
-			"%s: this build has no OpenImageIO and writes only .ppm and .pfm%s%s%s "
-			"(rebuild without OIIO=0 for other formats)",
-			path, *ext ? ", not \"" : "", ext, *ext ? "\"" : "");
+	image_set_error(
+		err, err_size,
+		"%s: this build has no OpenImageIO and writes only .ppm, .pfm and .png%s%s%s "
+		"(rebuild without OIIO=0 for other formats)",
+		path, *ext ? ", not \"" : "", ext, *ext ? "\"" : "");
 	return -1;
 }
 

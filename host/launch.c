@@ -307,7 +307,8 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	    launch_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);
-	if (program_build(dev, s, res->scene_in_local, program, res->build_options, err, err_size))
+	if (program_build(dev, s, res->scene_in_local, program, res->build_options,
+			  &res->build_cached, err, err_size))
 		return -1;
 	res->times.build = timing_lap_ms(&lap);
 	return 0;

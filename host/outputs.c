@@ -17,8 +17,9 @@
 #define SIDECAR_PATH_SIZE (PATH_MAX + 8)
 /* A resolved directory, a slash and a file name. */
 #define CANONICAL_SIZE (2 * PATH_MAX)
-/* The image, the work map, the flops and their sidecar, the stats. */
-#define MAX_OUTPUTS 5
+/* The image, the work map and its bar, the flops and their sidecar, the
+ * stats. */
+#define MAX_OUTPUTS 6
 
 /* One output file of the run, and the option that named it. */
 struct output {
@@ -26,23 +27,9 @@ struct output {
 	const char *path;
 };
 
-/* What --work-map FILE writes, by FILE's extension. */
-enum work_map_kind {
-	WORK_MAP_PICTURE, /* the viridis picture with its scale bar */
-	WORK_MAP_NPY,	  /* the counts, uint64, for numpy */
-	WORK_MAP_FLOATS,  /* the counts in a float image format */
-};
-
-static enum work_map_kind work_map_kind(const char *path)
+static enum workmap_scale work_map_scale(const struct options *opt)
 {
-	const char *ext = files_extension(path);
-
-	if (strcasecmp(ext, ".npy") == 0)
-		return WORK_MAP_NPY;
-	if (strcasecmp(ext, ".pfm") == 0 || strcasecmp(ext, ".exr") == 0 ||
-	    strcasecmp(ext, ".hdr") == 0)
-		return WORK_MAP_FLOATS;
-	return WORK_MAP_PICTURE;
+	return opt->work_map_log ? WORKMAP_LOG : WORKMAP_LINEAR;
 }
 
 static int stage_work_map(struct staged_file *staged, const struct run *run, char *err,
@@ -52,14 +39,13 @@ static int stage_work_map(struct staged_file *staged, const struct run *run, cha
 	const uint64_t *counts = run->counted.pixel_flops;
 	int w = run->settings.width, h = run->settings.height;
 
-	switch (work_map_kind(path)) {
-	case WORK_MAP_NPY:
+	switch (workmap_kind(path)) {
+	case WORKMAP_NPY:
 		return stats_stage_pixel_counts(staged, path, run, err, err_size);
-	case WORK_MAP_FLOATS:
+	case WORKMAP_FLOATS:
 		return workmap_stage_counts(staged, path, counts, w, h, err, err_size);
 	default:
-		return workmap_stage(staged, path, counts, w, h,
-				     run->opt->work_map_log ? WORKMAP_LOG : WORKMAP_LINEAR, err,
+		return workmap_stage(staged, path, counts, w, h, work_map_scale(run->opt), err,
 				     err_size);
 	}
 }
@@ -72,6 +58,8 @@ static int list_outputs(const struct options *opt, char *sidecar, struct output 
 	out[n++] = (struct output){"-o/--output", opt->output};
 	if (opt->work_map_path)
 		out[n++] = (struct output){"--work-map", opt->work_map_path};
+	if (opt->work_map_bar_path)
+		out[n++] = (struct output){"--work-map-bar", opt->work_map_bar_path};
 	if (opt->flops_path) {
 		snprintf(sidecar, SIDECAR_PATH_SIZE, "%s.json", opt->flops_path);
 		out[n++] = (struct output){"--flops", opt->flops_path};
@@ -133,12 +121,14 @@ int outputs_check(const struct options *opt, char *err, size_t err_size)
 	if (image_check_writable(opt->output, err, err_size))
 		return -1;
 	if (opt->work_map_path &&
-	    (work_map_kind(opt->work_map_path) == WORK_MAP_NPY
+	    (workmap_kind(opt->work_map_path) == WORKMAP_NPY
 		     ? files_check_writable(opt->work_map_path, err, err_size)
 		     : image_check_writable(opt->work_map_path, err, err_size)))
 		return -1;
+	if (opt->work_map_bar_path && image_check_writable(opt->work_map_bar_path, err, err_size))
+		return -1;
 	for (int i = 0; i < n; i++)
-		if (strcmp(out[i].option, "-o/--output") && strcmp(out[i].option, "--work-map") &&
+		if (strncmp(out[i].option, "-o", 2) && strncmp(out[i].option, "--work-map", 10) &&
 		    files_check_writable(out[i].path, err, err_size))
 			return -1;
 	return 0;
@@ -158,10 +148,14 @@ static int stage_all(const struct run *run, char *sidecar, struct staged_file *s
 
 	snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
 		 run->scene->source, opt->kernel, s->width, s->height, s->max_depth);
-	if (image_stage(&staged[n++], opt->output, run->result.rgb, s->width, s->height, &meta,
-			err, err_size))
+	if (image_stage(&staged[n++], opt->output, run->result.rgb, s->width, s->height, &meta, err,
+			err_size))
 		goto out_discard;
 	if (opt->work_map_path && stage_work_map(&staged[n++], run, err, err_size))
+		goto out_discard;
+	if (opt->work_map_bar_path &&
+	    workmap_stage_bar(&staged[n++], opt->work_map_bar_path, run->counted.pixel_flops,
+			      s->width, s->height, work_map_scale(opt), err, err_size))
 		goto out_discard;
 	if (opt->flops_path) {
 		snprintf(sidecar, SIDECAR_PATH_SIZE, "%s.json", opt->flops_path);

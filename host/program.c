@@ -9,6 +9,7 @@
 
 #include "embedded.h"
 #include "files.h"
+#include "progcache.h"
 
 /* The tracer's sources, in the order the compiler sees them; the kernel's own
  * cl/NAME.cl follows. */
@@ -166,22 +167,20 @@ static int format_options(const struct device *dev, const struct render_settings
 	return 0;
 }
 
-int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
-		  cl_program *program, char *options, char *err, size_t err_size)
+/* Builds the program from its sources; returns 0, or -1 with the build log
+ * in err. */
+static int build_from_source(struct device *dev, const struct render_settings *s,
+			     const struct sources *src, const char *options, cl_program *program,
+			     char *err, size_t err_size)
 {
-	struct sources src;
-	int ret = -1;
 	cl_int status;
 
-	if (load_sources(s->source_dir, s->kernel->name, &src, err, err_size) ||
-	    format_options(dev, s, scene_in_local, options, err, err_size))
-		goto out_free_sources;
-	*program = clCreateProgramWithSource(dev->context, (cl_uint)src.count, src.texts, NULL,
-					     &status);
+	*program = clCreateProgramWithSource(dev->context, (cl_uint)src->count,
+					     (const char **)src->texts, NULL, &status);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "clCreateProgramWithSource failed: %s",
 			 cl_error_name(status));
-		goto out_free_sources;
+		return -1;
 	}
 	status = clBuildProgram(*program, 1, &dev->id, options, NULL, NULL);
 	if (status != CL_SUCCESS) {
@@ -191,10 +190,33 @@ int program_build(struct device *dev, const struct render_settings *s, int scene
 		snprintf(err, err_size,
 			 "building kernel '%s' for %s failed: %s\noptions: %s\nbuild log:\n%s",
 			 s->kernel->name, dev->name, cl_error_name(status), options, log);
-		goto out_free_sources;
+		return -1;
 	}
 	if (s->verbose)
 		print_build_log(*program, dev);
+	return 0;
+}
+
+int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
+		  cl_program *program, char *options, int *cached, char *err, size_t err_size)
+{
+	struct progcache cache;
+	struct sources src;
+	int ret = -1;
+
+	*cached = 0;
+	if (load_sources(s->source_dir, s->kernel->name, &src, err, err_size) ||
+	    format_options(dev, s, scene_in_local, options, err, err_size))
+		goto out_free_sources;
+	progcache_init(&cache, dev, src.texts, src.count, options, s->verbose);
+	*program = progcache_load(&cache, dev);
+	if (*program) {
+		*cached = 1;
+	} else {
+		if (build_from_source(dev, s, &src, options, program, err, err_size))
+			goto out_free_sources;
+		progcache_save(&cache, *program);
+	}
 	ret = dump_binary(*program, err, err_size);
 
 out_free_sources:

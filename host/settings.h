@@ -71,6 +71,7 @@ struct render_result {
 	int scene_in_local;
 	size_t scene_bytes;
 	char build_options[BUILD_OPTIONS_SIZE];
+	int build_cached; /* the program came from rtcl's cache (progcache.h) */
 
 	/* With count_flops: per launched work-item, row-major over the global
 	 * NDRange. */

@@ -188,19 +188,21 @@ static json_t *times_document(const struct run *run)
 	double now = timing_now();
 
 	return json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:i}", "device_setup",
-			 run->device_ms, "scene_and_upload", t->scene, "build", t->build,
-			 "kernels", t->kernels, "read_back", t->read_back, "counting_run",
-			 run->counting_ms, "encode_and_write", (now - run->write_start) * 1e3,
-			 "total", (now - run->start) * 1e3, "launches", run->result.launches);
+			 run->device_ms, "scene_and_upload", t->scene, "build", t->build, "kernels",
+			 t->kernels, "read_back", t->read_back, "counting_run", run->counting_ms,
+			 "encode_and_write", (now - run->write_start) * 1e3, "total",
+			 (now - run->start) * 1e3, "launches", run->result.launches);
 }
 
-int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run,
-		    char *err, size_t err_size)
+int stats_stage_run(struct staged_file *staged, const char *path, const struct run *run, char *err,
+		    size_t err_size)
 {
 	json_t *doc = run_document(run);
 
-	if (doc)
+	if (doc) {
 		json_object_set_new(doc, "time_breakdown_ms", times_document(run));
+		json_object_set_new(doc, "build_cached", json_boolean(run->result.build_cached));
+	}
 
 	if (doc && run->counting)
 		add_flop_figures(doc, run);
@@ -256,17 +258,17 @@ void stats_print_summary(const struct run *run)
 	printf("\n");
 }
 
-
 void stats_print_times(const struct run *run)
 {
 	const struct render_times *t = &run->result.times;
 	double now = timing_now();
 
 	fprintf(stderr,
-		"rtcl: time: device set-up %.1f ms, scene and upload %.1f ms, build %.1f ms, "
+		"rtcl: time: device set-up %.1f ms, scene and upload %.1f ms, build %.1f ms%s, "
 		"kernels %.1f ms (%d launch%s), read-back %.1f ms, counting run %.1f ms, encoding "
 		"and writing %.1f ms; total %.1f ms\n",
-		run->device_ms, t->scene, t->build, t->kernels, run->result.launches,
-		run->result.launches == 1 ? "" : "es", t->read_back, run->counting_ms,
-		(now - run->write_start) * 1e3, (now - run->start) * 1e3);
+		run->device_ms, t->scene, t->build, run->result.build_cached ? " (cached)" : "",
+		t->kernels, run->result.launches, run->result.launches == 1 ? "" : "es",
+		t->read_back, run->counting_ms, (now - run->write_start) * 1e3,
+		(now - run->start) * 1e3);
 }

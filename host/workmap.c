@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "cli.h"
 #include "files.h"
@@ -14,14 +15,17 @@
 #include "workmap.h"
 
 /* Bar layout, in font pixels (multiplied by the font scale): a margin, the
- * gradient strip, ticks hanging from it, a gap, one line of labels and a
- * margin again. */
+ * gradient strip, ticks hanging from it, a gap, the line of labels, a gap,
+ * the line naming the unit and a margin again. */
 #define BAR_MARGIN 4
 #define STRIP_HEIGHT 10
 #define TICK_HEIGHT 3
 #define LABEL_GAP 2
+#define UNIT_GAP 3
 #define GLYPH_HEIGHT 7
-#define BAR_HEIGHT (BAR_MARGIN + STRIP_HEIGHT + TICK_HEIGHT + LABEL_GAP + GLYPH_HEIGHT + BAR_MARGIN)
+#define BAR_HEIGHT                                                                                 \
+	(BAR_MARGIN + STRIP_HEIGHT + TICK_HEIGHT + LABEL_GAP + GLYPH_HEIGHT + UNIT_GAP +           \
+	 GLYPH_HEIGHT + BAR_MARGIN)
 /* Least space between two labels, in font pixels. */
 #define LABEL_SPACING 3
 /* Image width per step of the font scale: 1x below 800 pixels, 3x at 2000. */
@@ -30,8 +34,13 @@
 static const float bar_background[3] = {0.08f, 0.08f, 0.08f};
 static const float label_colour[3] = {1.0f, 1.0f, 1.0f};
 
-/* A 5×7 font (the '.' is 2 wide) for the labels: '#' is ink. Only what
- * format_count() prints: digits, '.' and the suffixes k, M, G. */
+/* The unit line under the labels, by scale. */
+static const char unit_linear[] = "flops per pixel, linear scale";
+static const char unit_log[] = "flops per pixel, log scale";
+
+/* A 5×7 font ('.', ',' and ' ' are narrower) for the labels: '#' is ink.
+ * Only what the bar prints: format_count()'s digits, '.' and suffixes k, M,
+ * G, and the letters of the unit lines. */
 static const struct glyph {
 	char ch;
 	const char *rows[GLYPH_HEIGHT];
@@ -50,6 +59,21 @@ static const struct glyph {
 	{'k', {"#....", "#....", "#..#.", "#.#..", "##...", "#.#..", "#..#."}},
 	{'M', {"#...#", "##.##", "#.#.#", "#.#.#", "#...#", "#...#", "#...#"}},
 	{'G', {".###.", "#...#", "#....", "#.###", "#...#", "#...#", ".###."}},
+	{' ', {"...", "...", "...", "...", "...", "...", "..."}},
+	{',', {"..", "..", "..", "..", "..", ".#", "#."}},
+	{'a', {".....", ".....", ".###.", "....#", ".####", "#...#", ".####"}},
+	{'c', {".....", ".....", ".###.", "#....", "#....", "#...#", ".###."}},
+	{'e', {".....", ".....", ".###.", "#...#", "#####", "#....", ".###."}},
+	{'f', {"..##.", ".#..#", ".#...", "###..", ".#...", ".#...", ".#..."}},
+	{'g', {".....", ".####", "#...#", "#...#", ".####", "....#", ".###."}},
+	{'i', {"..#..", ".....", ".##..", "..#..", "..#..", "..#..", ".###."}},
+	{'l', {".##..", "..#..", "..#..", "..#..", "..#..", "..#..", ".###."}},
+	{'n', {".....", ".....", "#.##.", "##..#", "#...#", "#...#", "#...#"}},
+	{'o', {".....", ".....", ".###.", "#...#", "#...#", "#...#", ".###."}},
+	{'p', {".....", ".....", "####.", "#...#", "####.", "#....", "#...."}},
+	{'r', {".....", ".....", "#.##.", "##..#", "#....", "#....", "#...."}},
+	{'s', {".....", ".....", ".####", "#....", ".###.", "....#", "####."}},
+	{'x', {".....", ".....", "#...#", ".#.#.", "..#..", ".#.#.", "#...#"}},
 };
 
 /* Where the parts of the bar go, in image pixels. */
@@ -170,24 +194,38 @@ static int font_scale(int width)
 	return width / WIDTH_PER_SCALE + 1;
 }
 
-int workmap_bar_height(int width)
+/* The unit line: wide enough for the longer of the two. */
+static int unit_width(int scale)
 {
-	return BAR_HEIGHT * font_scale(width);
+	int linear = text_width(unit_linear, scale), log = text_width(unit_log, scale);
+
+	return linear > log ? linear : log;
 }
 
-static struct bar_layout bar_layout(int width, int map_height)
+void workmap_bar_size(int width, int *bar_width, int *bar_height)
+{
+	int scale = font_scale(width > 0 ? width : 1);
+	int least = unit_width(scale) + 2 * BAR_MARGIN * scale;
+
+	*bar_width = width > least ? width : least;
+	*bar_height = BAR_HEIGHT * scale;
+}
+
+/* The layout of a bar `width` pixels wide, drawn for a map `map_width` wide
+ * (which sets the font scale). */
+static struct bar_layout bar_layout(int width, int map_width)
 {
 	struct bar_layout bar;
 	int margin;
 
-	bar.scale = font_scale(width);
+	bar.scale = font_scale(map_width);
 	margin = BAR_MARGIN * bar.scale;
 	if (margin > width / 8)
 		margin = width / 8; /* narrow images: keep the strip wide */
-	bar.top = map_height;
+	bar.top = 0;
 	bar.strip_left = margin;
 	bar.strip_right = width - 1 - margin;
-	bar.strip_top = map_height + BAR_MARGIN * bar.scale;
+	bar.strip_top = BAR_MARGIN * bar.scale;
 	bar.label_top = bar.strip_top + (STRIP_HEIGHT + TICK_HEIGHT + LABEL_GAP) * bar.scale;
 	return bar;
 }
@@ -210,7 +248,7 @@ static double scale_value(double t, uint64_t max, enum workmap_scale scale)
 	return t * (double)max;
 }
 
-/* Colours the map part. */
+/* Colours the map. */
 static void draw_map(float *rgb, const uint64_t *pixel_flops, size_t pixels, uint64_t max,
 		     enum workmap_scale scale)
 {
@@ -258,11 +296,13 @@ static int label_fits(int left, int text_width, int width, int spacing, const st
 	return 1;
 }
 
-/* Labels "0", max and max / 2, in that order of priority; a label that
- * would leave the image or crowd one already placed is left out. */
+/* Labels "0", max and the middle of the scale, in that order of priority; a
+ * label that would leave the image or crowd one already placed is left out.
+ * Below them, centred, the unit and the scale. */
 static void draw_labels(float *rgb, int width, int height, const struct bar_layout *bar,
 			uint64_t max, enum workmap_scale scale)
 {
+	const char *unit = scale == WORKMAP_LOG ? unit_log : unit_linear;
 	struct span placed[3];
 	char text[3][32];
 	int left[3], i, w, count = 0;
@@ -284,6 +324,8 @@ static void draw_labels(float *rgb, int width, int height, const struct bar_layo
 		placed[count].left = left[i];
 		placed[count++].right = left[i] + w;
 	}
+	draw_text(rgb, width, height, (width - text_width(unit, bar->scale)) / 2,
+		  bar->label_top + (GLYPH_HEIGHT + UNIT_GAP) * bar->scale, bar->scale, unit);
 }
 
 static uint64_t max_count(const uint64_t *pixel_flops, size_t pixels)
@@ -297,38 +339,25 @@ static uint64_t max_count(const uint64_t *pixel_flops, size_t pixels)
 	return max;
 }
 
-int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
-		  int width, int height, enum workmap_scale scale, char *err, size_t err_size)
+/* Checks the map's arguments; returns 0, or -1 with one message in err. */
+static int check_map(const char *name, const uint64_t *pixel_flops, int width, int height,
+		     char *err, size_t err_size)
 {
-	const char *name = path ? path : "work map";
-	int bar_height = workmap_bar_height(width);
-	size_t pixels = (size_t)width * (size_t)height;
-	struct bar_layout bar;
-	struct image_meta meta;
+	if (pixel_flops && width > 0 && height > 0 &&
+	    (size_t)width <= SIZE_MAX / 12 / (size_t)height)
+		return 0;
+	snprintf(err, err_size, "%s: invalid work map (%d x %d pixels%s)", name, width, height,
+		 pixel_flops ? "" : ", no data");
+	return -1;
+}
+
+/* Stages rgb (width x height) with the work map's description. */
+static int stage_picture(struct staged_file *staged, const char *path, const float *rgb, int width,
+			 int height, uint64_t max, enum workmap_scale scale, char *err,
+			 size_t err_size)
+{
 	char description[128];
-	uint64_t max;
-	float *rgb;
-	int total_height, status;
-
-	if (!pixel_flops || width <= 0 || height <= 0 || height > INT_MAX - bar_height ||
-	    (size_t)width > SIZE_MAX / 12 / (size_t)(height + bar_height)) {
-		snprintf(err, err_size, "%s: invalid work map (%d x %d pixels%s)", name, width,
-			 height, pixel_flops ? "" : ", no data");
-		return -1;
-	}
-	total_height = height + bar_height;
-	rgb = malloc(3 * sizeof(float) * (size_t)width * (size_t)total_height);
-	if (!rgb) {
-		snprintf(err, err_size, "%s: out of memory for a %d x %d work map", name, width,
-			 total_height);
-		return -1;
-	}
-
-	max = max_count(pixel_flops, pixels);
-	bar = bar_layout(width, height);
-	draw_map(rgb, pixel_flops, pixels, max, scale);
-	draw_strip(rgb, width, total_height, &bar);
-	draw_labels(rgb, width, total_height, &bar, max, scale);
+	struct image_meta meta;
 
 	snprintf(description, sizeof(description),
 		 "flops per pixel, 0 (dark) to %" PRIu64 " (bright), viridis, %s scale", max,
@@ -336,20 +365,95 @@ int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *
 	meta.software = "rtcl " RTCL_VERSION;
 	meta.description = description;
 	meta.encoding = IMAGE_DISPLAY; /* viridis is a scale of display colours */
-	status = image_stage(staged, path, rgb, width, total_height, &meta, err, err_size);
+	return image_stage(staged, path, rgb, width, height, &meta, err, err_size);
+}
+
+int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
+		  int width, int height, enum workmap_scale scale, char *err, size_t err_size)
+{
+	const char *name = path ? path : "work map";
+	size_t pixels = (size_t)width * (size_t)height;
+	uint64_t max;
+	float *rgb;
+	int status;
+
+	if (check_map(name, pixel_flops, width, height, err, err_size))
+		return -1;
+	rgb = malloc(3 * sizeof(float) * pixels);
+	if (!rgb) {
+		snprintf(err, err_size, "%s: out of memory for a %d x %d work map", name, width,
+			 height);
+		return -1;
+	}
+	max = max_count(pixel_flops, pixels);
+	draw_map(rgb, pixel_flops, pixels, max, scale);
+	status = stage_picture(staged, path, rgb, width, height, max, scale, err, err_size);
 	free(rgb);
 	return status;
 }
 
-int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int height, char *err,
-		  size_t err_size)
+int workmap_stage_bar(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,
+		      int width, int height, enum workmap_scale scale, char *err, size_t err_size)
+{
+	const char *name = path ? path : "work map bar";
+	struct bar_layout bar;
+	uint64_t max;
+	float *rgb;
+	int bar_width, bar_height, status;
+
+	if (check_map(name, pixel_flops, width, height, err, err_size))
+		return -1;
+	workmap_bar_size(width, &bar_width, &bar_height);
+	rgb = malloc(3 * sizeof(float) * (size_t)bar_width * (size_t)bar_height);
+	if (!rgb) {
+		snprintf(err, err_size, "%s: out of memory for a %d x %d scale bar", name,
+			 bar_width, bar_height);
+		return -1;
+	}
+	max = max_count(pixel_flops, (size_t)width * (size_t)height);
+	bar = bar_layout(bar_width, width);
+	draw_strip(rgb, bar_width, bar_height, &bar);
+	draw_labels(rgb, bar_width, bar_height, &bar, max, scale);
+	status = stage_picture(staged, path, rgb, bar_width, bar_height, max, scale, err, err_size);
+	free(rgb);
+	return status;
+}
+
+/* Stages with stage() and commits the one file. */
+static int write_one(int (*stage)(struct staged_file *, const char *, const uint64_t *, int, int,
+				  enum workmap_scale, char *, size_t),
+		     const char *path, const uint64_t *pixel_flops, int width, int height,
+		     enum workmap_scale scale, char *err, size_t err_size)
 {
 	struct staged_file staged;
 
-	if (workmap_stage(&staged, path, pixel_flops, width, height, WORKMAP_LINEAR, err,
-			  err_size))
+	if (stage(&staged, path, pixel_flops, width, height, scale, err, err_size))
 		return -1;
 	return files_commit(&staged, 1, err, err_size);
+}
+
+int workmap_write(const char *path, const uint64_t *pixel_flops, int width, int height,
+		  enum workmap_scale scale, char *err, size_t err_size)
+{
+	return write_one(workmap_stage, path, pixel_flops, width, height, scale, err, err_size);
+}
+
+int workmap_write_bar(const char *path, const uint64_t *pixel_flops, int width, int height,
+		      enum workmap_scale scale, char *err, size_t err_size)
+{
+	return write_one(workmap_stage_bar, path, pixel_flops, width, height, scale, err, err_size);
+}
+
+enum workmap_kind workmap_kind(const char *path)
+{
+	const char *ext = files_extension(path);
+
+	if (strcasecmp(ext, ".npy") == 0)
+		return WORKMAP_NPY;
+	if (strcasecmp(ext, ".pfm") == 0 || strcasecmp(ext, ".exr") == 0 ||
+	    strcasecmp(ext, ".hdr") == 0)
+		return WORKMAP_FLOATS;
+	return WORKMAP_PICTURE;
 }
 
 int workmap_stage_counts(struct staged_file *staged, const char *path, const uint64_t *pixel_flops,

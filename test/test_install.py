@@ -21,8 +21,7 @@ MAN_PAGE = ROOT / "docs" / "rtcl.1"
 PREFIX = "usr"
 # The commands the README and the man page name; one per tools/*.py.
 TOOL_COMMANDS = {"rtcl-bench", "rtcl-experiments", "rtcl-flops-hist", "rtcl-genbench",
-                 "rtcl-genscene",
-                 "rtcl-povray", "rtcl-ppmdiff"}
+                 "rtcl-genscene", "rtcl-povray", "rtcl-ppmdiff", "rtcl-time-to-image"}
 MAN_SECTIONS = ["NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "ENVIRONMENT", "FILES",
                 "EXIT STATUS", "EXAMPLES", "SEE ALSO"]
 LONG_OPTION = re.compile(r"(?<![\w-])--[a-z][a-z-]*")
@@ -73,7 +72,15 @@ def expected_files():
                for path in (ROOT / "scenes" / "models").glob("*")}
             | {f"{share}/tools/{path.name}" for path in tools}
             | {f"{share}/tools/rtcl_tools/{path.name}"
-               for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")})
+               for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")}
+            | ({f"{PREFIX}/lib/rtcl/rtcl-oiio.so"} if has_oiio() else set()))
+
+
+def has_oiio():
+    """Whether rtcl was built with OpenImageIO (as a module; OIIO=0 refuses .tif)."""
+    probe = subprocess.run([RTCL, "--size", "4x4", "-o", "/nonexistent-dir/x.tif"],
+                           capture_output=True, text=True, timeout=300)
+    return "no OpenImageIO" not in probe.stderr
 
 
 @pytest.fixture(scope="module")
@@ -250,8 +257,9 @@ def test_man_page_environment_covers_help_and_output_dates():
     in_help = set(re.findall(r"^  ([A-Z_]+)=", help_text(), re.MULTILINE))
     in_man = {match for line in man_sections()["ENVIRONMENT"]
               for match in re.findall(r"^\.BI ([A-Z_]+)= ", line)}
-    assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "POCL_CACHE_DIR"}
-    assert in_man == in_help | {"SOURCE_DATE_EPOCH"}
+    assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "RTCL_CACHE",
+                       "POCL_CACHE_DIR"}
+    assert in_man == in_help | {"SOURCE_DATE_EPOCH", "XDG_CACHE_HOME"}
 
 
 def test_man_page_names_the_version():

@@ -26,8 +26,9 @@ def rtcl(*args, cwd, env=None, preexec_fn=None):
 
 
 def writes_png():
-    """Whether this build has OpenImageIO (an OIIO=0 build writes only .ppm/.pfm)."""
-    return "no OpenImageIO" not in rtcl(*SMALL, "-o", "/nonexistent-dir/x.png",
+    """Whether this build has OpenImageIO (an OIIO=0 build writes only .ppm, .pfm and
+    .png)."""
+    return "no OpenImageIO" not in rtcl(*SMALL, "-o", "/nonexistent-dir/x.tif",
                                         cwd="/").stderr
 
 

@@ -63,7 +63,7 @@ def test_a_picture_is_still_a_picture(tmp_path):
 
 
 def luminance_of_map(path, height):
-    """Mean luma of the map part of a PPM work map (the bar below excluded),
+    """Mean luma of a PPM work map (the first `height` rows: all of it),
     and the file's first bytes (its header)."""
     (width, _), data = ppm.pixels(path)
     pixels = np.frombuffer(data, dtype=np.uint8).reshape(-1, width, 3)[:height]

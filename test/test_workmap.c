@@ -1,4 +1,5 @@
-/* The work map (host/workmap.h), written as .ppm and read back. */
+/* The work map and its scale bar (host/workmap.h), written as .ppm and read
+ * back. */
 #include <criterion/criterion.h>
 #include <dirent.h>
 #include <errno.h>
@@ -110,17 +111,26 @@ static double luminance(const unsigned char *p)
 	return 0.2126 * p[0] + 0.7152 * p[1] + 0.0722 * p[2];
 }
 
-/* Writes the map to DIR/map.ppm and reads it back. */
-static struct ppm write_and_read(const uint64_t *flops, int width, int height)
+/* Writes the map (or with bar, its scale bar) to DIR/map.ppm and reads it
+ * back. */
+static struct ppm write_scale(const uint64_t *flops, int width, int height, int bar,
+			      enum workmap_scale scale)
 {
 	char *dir = make_dir(), *path = join(dir, "map.ppm");
 	char err[ERR_SIZE] = "";
 	struct ppm image;
 
-	cr_assert_eq(workmap_write(path, flops, width, height, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq((bar ? workmap_write_bar : workmap_write)(path, flops, width, height, scale,
+							       err, sizeof(err)),
+		     0, "%s", err);
 	image = read_ppm(path);
 	remove_dir(dir, path);
 	return image;
+}
+
+static struct ppm write_and_read(const uint64_t *flops, int width, int height)
+{
+	return write_scale(flops, width, height, 0, WORKMAP_LINEAR);
 }
 
 /* count = 1000 · x + y: rising to the right, largest at the bottom right. */
@@ -136,13 +146,24 @@ static uint64_t *gradient(int width, int height)
 	return flops;
 }
 
-static struct ppm gradient_map(int width, int height)
+static struct ppm gradient_image(int width, int height, int bar, enum workmap_scale scale)
 {
 	uint64_t *flops = gradient(width, height);
-	struct ppm image = write_and_read(flops, width, height);
+	struct ppm image = write_scale(flops, width, height, bar, scale);
 
 	free(flops);
 	return image;
+}
+
+static struct ppm gradient_map(int width, int height)
+{
+	return gradient_image(width, height, 0, WORKMAP_LINEAR);
+}
+
+/* The scale bar of the gradient map. */
+static struct ppm gradient_bar(int width, int height)
+{
+	return gradient_image(width, height, 1, WORKMAP_LINEAR);
 }
 
 /* The first row of the bar's strip: the bar row holding viridis(1). */
@@ -190,15 +211,39 @@ static int white_in_labels(const struct ppm *image, int map_height, int x0, int 
 	return 0;
 }
 
-Test(workmap, size_is_map_plus_bar)
+Test(workmap, picture_is_the_render_size)
 {
-	struct ppm image = gradient_map(64, 32);
+	static const int sizes[][2] = {{1, 1}, {64, 32}, {13, 77}, {801, 3}};
 
-	cr_assert_eq(image.width, 64);
-	cr_assert_gt(workmap_bar_height(64), 0);
-	cr_assert_eq(image.height, 32 + workmap_bar_height(64), "height %d, bar %d", image.height,
-		     workmap_bar_height(64));
-	free(image.pixels);
+	for (size_t i = 0; i < sizeof(sizes) / sizeof(sizes[0]); i++) {
+		struct ppm image = gradient_map(sizes[i][0], sizes[i][1]);
+
+		cr_expect_eq(image.width, sizes[i][0]);
+		cr_expect_eq(image.height, sizes[i][1]);
+		free(image.pixels);
+	}
+}
+
+/* 40 font pixels high, as wide as the map but never narrower than the unit
+ * line needs (170 pixels at 1x); the font grows every 800 pixels of width. */
+Test(workmap, bar_size)
+{
+	static const int cases[][3] = {
+		{64, 170, 40},	{170, 170, 40},	   {300, 300, 40}, {799, 799, 40},
+		{800, 800, 80}, {1600, 1600, 120}, {1, 170, 40},
+	};
+
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		struct ppm image = gradient_bar(cases[i][0], 2);
+		int w, h;
+
+		workmap_bar_size(cases[i][0], &w, &h);
+		cr_expect_eq(w, cases[i][1], "width %d: bar %d wide", cases[i][0], w);
+		cr_expect_eq(h, cases[i][2], "width %d: bar %d high", cases[i][0], h);
+		cr_expect_eq(image.width, w);
+		cr_expect_eq(image.height, h);
+		free(image.pixels);
+	}
 }
 
 Test(workmap, ends_are_viridis_0_and_1)
@@ -233,15 +278,15 @@ Test(workmap, description_names_the_max)
 
 Test(workmap, strip_runs_from_viridis_0_to_1)
 {
-	struct ppm image = gradient_map(64, 32);
+	struct ppm image = gradient_bar(200, 32);
 	const unsigned char *background = pixel(&image, 0, image.height - 1);
-	int y = strip_row(&image, 32), left = 0, right = 63, x;
+	int y = strip_row(&image, 0), left = 0, right = 199, x;
 
-	while (left < 64 && same(pixel(&image, left, y), background))
+	while (left < 200 && same(pixel(&image, left, y), background))
 		left++;
 	while (right > left && same(pixel(&image, right, y), background))
 		right--;
-	cr_assert(right - left > 32, "strip %d..%d is short", left, right);
+	cr_assert(right - left > 100, "strip %d..%d is short", left, right);
 	cr_assert(same(pixel(&image, left, y), viridis0), "left end");
 	cr_assert(same(pixel(&image, right, y), viridis1), "right end");
 	for (x = left + 1; x <= right; x++)
@@ -253,23 +298,24 @@ Test(workmap, strip_runs_from_viridis_0_to_1)
 Test(workmap, wide_map_has_three_labels)
 {
 	int width = 2000, third = width / 3;
-	struct ppm image = gradient_map(width, 8);
+	struct ppm image = gradient_bar(width, 8);
 
-	cr_assert_gt(label_row(&image, 8), 0, "no labels below the strip");
-	cr_expect(white_in_labels(&image, 8, 0, third), "no \"0\" label");
-	cr_expect(white_in_labels(&image, 8, third, 2 * third), "no midpoint label");
-	cr_expect(white_in_labels(&image, 8, 2 * third, width), "no max label");
+	cr_assert_gt(label_row(&image, 0), 0, "no labels below the strip");
+	cr_expect(white_in_labels(&image, 0, 0, third), "no \"0\" label");
+	cr_expect(white_in_labels(&image, 0, third, 2 * third), "no midpoint label");
+	cr_expect(white_in_labels(&image, 0, 2 * third, width), "no max label");
 	free(image.pixels);
 }
 
-/* Too narrow for three labels: the ends stay, nothing leaves the image. */
+/* A map narrower than the unit line: the bar is the unit line's width and
+ * keeps its end labels inside. */
 Test(workmap, narrow_map_keeps_end_labels)
 {
-	struct ppm image = gradient_map(61, 4);
+	struct ppm image = gradient_bar(61, 4);
 
-	cr_assert_eq(image.height, 4 + workmap_bar_height(61));
-	cr_expect(white_in_labels(&image, 4, 0, 10), "no \"0\" label");
-	cr_expect(white_in_labels(&image, 4, 51, 61), "no max label");
+	cr_assert_eq(image.width, 170);
+	cr_expect(white_in_labels(&image, 0, 0, 10), "no \"0\" label");
+	cr_expect(white_in_labels(&image, 0, 160, 170), "no max label");
 	free(image.pixels);
 }
 
@@ -303,7 +349,7 @@ Test(workmap, missing_directory_fails_cleanly)
 	char err[ERR_SIZE] = "";
 	struct stat st;
 
-	cr_assert_eq(workmap_write(path, flops, 2, 2, err, sizeof(err)), -1);
+	cr_assert_eq(workmap_write(path, flops, 2, 2, WORKMAP_LINEAR, err, sizeof(err)), -1);
 	cr_expect(strstr(err, path), "message does not name the file: %s", err);
 	cr_expect(!strchr(err, '\n'), "message is not one line: %s", err);
 	cr_expect_neq(stat(path, &st), 0, "%s was created", path);
@@ -314,9 +360,50 @@ Test(workmap, no_data_fails)
 {
 	char err[ERR_SIZE] = "";
 
-	cr_assert_eq(workmap_write("/tmp/unused.ppm", NULL, 2, 2, err, sizeof(err)), -1);
-	cr_expect_neq(err[0], '\0', "no message");
-	cr_assert_eq(workmap_write("/tmp/unused.ppm", (uint64_t[1]){1}, 0, 2, err, sizeof(err)),
+	cr_assert_eq(workmap_write("/tmp/unused.ppm", NULL, 2, 2, WORKMAP_LINEAR, err, sizeof(err)),
 		     -1);
 	cr_expect_neq(err[0], '\0', "no message");
+	cr_assert_eq(workmap_write("/tmp/unused.ppm", (uint64_t[1]){1}, 0, 2, WORKMAP_LINEAR, err,
+				   sizeof(err)),
+		     -1);
+	cr_expect_neq(err[0], '\0', "no message");
+}
+
+/* Rows [y0, y1) of the bar as text, '#' for white (label ink), '.' else. */
+static void ink_rows(const struct ppm *image, int y0, int y1, char *out)
+{
+	for (int y = y0; y < y1; y++) {
+		for (int x = 0; x < image->width; x++)
+			*out++ = same(pixel(image, x, y), white) ? '#' : '.';
+		*out++ = '\n';
+	}
+	*out = '\0';
+}
+
+/* The unit line: 7 rows of ink, centred, below the labels, and it names the
+ * scale (the two scales' lines differ; the strip and labels rows hold the
+ * same "0" label). The first glyph row of "flops per pixel, ..." starts with
+ * the 'f' and the 'l' (rows "..##." and ".##.." at 1x). */
+Test(workmap, bar_names_the_unit_and_scale)
+{
+	struct ppm lin = gradient_image(300, 8, 1, WORKMAP_LINEAR);
+	struct ppm log = gradient_image(300, 8, 1, WORKMAP_LOG);
+	int unit_top = label_row(&lin, 0) + 7 + 3, left = 0;
+	static char a[8 * 301 + 1], b[8 * 301 + 1];
+
+	ink_rows(&lin, unit_top, unit_top + 7, a);
+	ink_rows(&log, unit_top, unit_top + 7, b);
+	cr_assert(strchr(a, '#') && strchr(b, '#'), "no unit line");
+	cr_expect(strcmp(a, b), "the linear and log bars name the same scale");
+	/* The first row: 'f' at its start, then the 'l' one column after it. */
+	while (left < 300 && a[left] != '#')
+		left++;
+	cr_expect(!strncmp(&a[left - 2], "..##...##..", 11), "first glyph row: %.20s",
+		  &a[left - 2]);
+	cr_expect(left > 50 && left < 150, "unit line not centred: starts at %d", left);
+	/* Below it, the bottom margin: background only. */
+	ink_rows(&lin, unit_top + 7, lin.height, a);
+	cr_expect(!strchr(a, '#'), "ink below the unit line");
+	free(lin.pixels);
+	free(log.pixels);
 }

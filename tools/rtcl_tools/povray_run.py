@@ -37,6 +37,14 @@ def povray_error(text):
     return lines[-1] if lines else "no output"
 
 
+def command(exe, size, threads, out_name):
+    """POV-Ray's command line for scene.pov in the working directory: one ray per
+    pixel, no display, linear output (File_Gamma 1.0), PNG unless out_name is .ppm."""
+    return [exe, "+Iscene.pov", "+O" + out_name, "+W%d" % size[0], "+H%d" % size[1],
+            "-A", "+WT%d" % threads, "-D", "+FP" if out_name.endswith(".ppm") else "+FN",
+            "File_Gamma=1.0"]
+
+
 def render(exe, pov_text, size, threads, runs, image):
     """Render pov_text runs times; return (command, [(wall, trace, threads, cpu)])."""
     ext = ".ppm" if image and image.lower().endswith(".ppm") else ".png"
@@ -45,9 +53,7 @@ def render(exe, pov_text, size, threads, runs, image):
         with open(os.path.join(tmp, "scene.pov"), "w", encoding="utf-8") as f:
             f.write(pov_text)
         out_name = "render" + ext
-        cmd = [exe, "+Iscene.pov", "+O" + out_name, "+W%d" % size[0], "+H%d" % size[1],
-               "-A", "+WT%d" % threads, "-D", "+FP" if ext == ".ppm" else "+FN",
-               "File_Gamma=1.0"]
+        cmd = command(exe, size, threads, out_name)
         for _ in range(runs):
             out_path = os.path.join(tmp, out_name)
             if os.path.exists(out_path):

@@ -1,0 +1,108 @@
+"""rtcl's program binary cache (host/progcache.h): a second render loads the
+built program, says so in -v and --stats, and any trouble with the cache means
+a build from source, never a failure (issue 12 item 3)."""
+import json
+import os
+import pathlib
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+SMALL = ["--size", "24x16", "-k", "naive"]
+HEADER = 32  # magic, key, binary hash, binary size
+
+
+def environment(cache_home, **extra):
+    env = dict(os.environ, XDG_CACHE_HOME=str(cache_home), **extra)
+    # PoCL keeps its own cache under XDG_CACHE_HOME too: leave it where it
+    # was, so that these tests measure rtcl's cache, not PoCL's cold build.
+    env.setdefault("POCL_CACHE_DIR", str(pathlib.Path.home() / ".cache" / "pocl"))
+    env.pop("RTCL_CACHE", None)
+    env.update(extra)
+    return env
+
+
+def render(tmp_path, cache_home, *args, **env):
+    result = subprocess.run([RTCL, *SMALL, "-o", "x.ppm", "--stats", "s.json", *args],
+                            capture_output=True, text=True, cwd=tmp_path, timeout=300,
+                            env=environment(cache_home, **env))
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((tmp_path / "s.json").read_text())
+    return stats["build_cached"], (tmp_path / "x.ppm").read_bytes(), result.stderr
+
+
+def cache_files(cache_home):
+    folder = cache_home / "rtcl"
+    return sorted(folder.iterdir()) if folder.exists() else []
+
+
+def test_the_second_render_loads_the_cached_program(tmp_path):
+    cached, image, _ = render(tmp_path, tmp_path / "cache")
+    assert cached is False
+    files = cache_files(tmp_path / "cache")
+    assert len(files) == 1 and files[0].suffix == ".bin"
+    assert files[0].read_bytes()[:8] == b"rtclbin1"
+    cached, again, stderr = render(tmp_path, tmp_path / "cache", "-v")
+    assert cached is True and again == image
+    line = [l for l in stderr.splitlines() if l.startswith("rtcl: time: ")][0]
+    assert " ms (cached), kernels " in line, line
+
+
+def test_other_build_options_are_another_program(tmp_path):
+    render(tmp_path, tmp_path / "cache")
+    cached, _, _ = render(tmp_path, tmp_path / "cache", "--depth", "2")
+    assert cached is False and len(cache_files(tmp_path / "cache")) == 2
+    assert render(tmp_path, tmp_path / "cache", "--depth", "2")[0] is True
+
+
+def damage_truncate(data):
+    return data[:len(data) // 2]
+
+
+def damage_flip(data):
+    middle = HEADER + (len(data) - HEADER) // 2
+    return data[:middle] + bytes([data[middle] ^ 0x55]) + data[middle + 1:]
+
+
+def damage_garbage_with_a_good_hash(data):
+    """A whole, well-hashed file whose binary the device cannot load."""
+    garbage = b"not a program binary" * 50
+    digest = 0xcbf29ce484222325
+    for byte in garbage:
+        digest = ((digest ^ byte) * 0x100000001b3) & 0xffffffffffffffff
+    return (data[:16] + digest.to_bytes(8, "little") + len(garbage).to_bytes(8, "little")
+            + garbage)
+
+
+@pytest.mark.parametrize("damage", [damage_truncate, damage_flip,
+                                    damage_garbage_with_a_good_hash, lambda data: b""])
+def test_a_damaged_cache_file_means_a_build_from_source(tmp_path, damage):
+    _, image, _ = render(tmp_path, tmp_path / "cache")
+    path = cache_files(tmp_path / "cache")[0]
+    path.write_bytes(damage(path.read_bytes()))
+    cached, again, stderr = render(tmp_path, tmp_path / "cache")
+    assert cached is False and again == image and stderr == ""
+    # Rebuilt and saved whole again.
+    assert render(tmp_path, tmp_path / "cache")[0] is True
+
+
+def test_an_unwritable_cache_folder_still_renders(tmp_path):
+    (tmp_path / "file").write_text("a file where the cache folder would go")
+    cache_home = tmp_path / "file" / "sub"
+    cached, image, stderr = render(tmp_path, cache_home)
+    assert cached is False and stderr == ""  # silent without -v
+    cached, again, stderr = render(tmp_path, cache_home, "-v")
+    assert cached is False and again == image
+    warnings = [l for l in stderr.splitlines() if "program cache" in l]
+    assert len(warnings) == 1 and "cannot write" in warnings[0], stderr
+
+
+def test_rtcl_cache_0_turns_it_off(tmp_path):
+    for _ in range(2):
+        cached, _, _ = render(tmp_path, tmp_path / "cache", RTCL_CACHE="0")
+        assert cached is False
+    assert cache_files(tmp_path / "cache") == []
+    render(tmp_path, tmp_path / "cache")
+    assert render(tmp_path, tmp_path / "cache", RTCL_CACHE="0")[0] is False
