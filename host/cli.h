@@ -31,6 +31,7 @@ struct options {
 	int frames[2];	  /* --frames A:B */
 	int frames_given;
 	int mpi;    /* --mpi: rank 0 hands out the pieces (mpi_render.h) */
+	int piece_rows; /* --piece-rows N; 0: chosen (tiles.h) */
 	int repeat; /* -r N; 0 when not given */
 	const char *stats_path;
 	const char *flops_path;	   /* --flops FILE.npy */
