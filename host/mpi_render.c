@@ -605,7 +605,7 @@ static int mpi_render(struct run *run, int image)
 	pthread_mutex_init(&j.lock, NULL);
 	j.run = run;
 	j.image = image;
-	run->settings.check_writes |= image && tiles_check_writes_requested();
+	run->settings.check_writes |= image && checks_count_writes();
 	MPI_Comm_rank(MPI_COMM_WORLD, &j.rank);
 	MPI_Comm_size(MPI_COMM_WORLD, &j.size);
 	run->settings.progress = 0;

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "checks.h"
 #include "devstats.h"
 #include "launch.h"
 #include "render.h"
@@ -176,11 +177,19 @@ int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t e
 	return 0;
 }
 
-int tiles_check_writes_requested(void)
+/* RTCL_TEST_DOUBLE_BAND=1 (checks.h): band 0 rendered once more by another
+ * device, as a dispenser that handed it out twice would. */
+static int double_band(struct tiles_job *t, char *err, size_t err_size)
 {
-	const char *check = getenv("RTCL_TEST_CHECK_WRITES");
+	int owner = t->owner[0];
+	long long pixels;
 
-	return check && strcmp(check, "1") == 0;
+	if (!checks_double_band())
+		return 0;
+	if (tiles_render_band(t, (owner + 1) % t->count, 0, &pixels, err, err_size))
+		return -1;
+	t->owner[0] = owner;
+	return 0;
 }
 
 int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size)
@@ -346,7 +355,8 @@ static int render_image(const struct run *run, const struct render_settings *s,
 		goto out_free;
 	double lap = timing_now();
 	frames = render_frames(&t, run->opt->split_static, work, out, err, err_size);
-	if (frames < 0 || launch_end_timing(out, err, err_size))
+	if (frames < 0 || launch_end_timing(out, err, err_size) ||
+	    double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
 	out->passes = band_launches(s, rows, 0);
@@ -371,7 +381,7 @@ int tiles_render(struct run *run, struct device *devs, int count, struct device_
 	int rows = tiles_band_rows(s, run->opt->piece_rows, count);
 
 	s->progress = 0; /* several threads: no one progress line */
-	s->check_writes |= tiles_check_writes_requested();
+	s->check_writes |= checks_count_writes();
 	if (run->counting) {
 		struct render_settings counting = *s;
 		double lap = timing_now();

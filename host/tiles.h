@@ -89,11 +89,6 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
  * with the first pixel that was not in err. */
 int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
 
-/* RTCL_TEST_CHECK_WRITES=1: the CLI tests' hook that counts every pixel's
- * writes over every device (and rank) and fails the run unless each was
- * written exactly once per launch covering it. */
-int tiles_check_writes_requested(void);
-
 /* One image of run on devs[count] (count > 1): with --flops/--work-map a
  * counting run first, then the timed frames (-r: one warm-up, N timed, each
  * the whole image over every device). Fills run->result, run->counted,
