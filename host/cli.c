@@ -111,7 +111,7 @@ static void print_help_after_kernels(FILE *out)
 		"                         rank's devices and writes the outputs\n"
 		"      --piece-rows N     one image over several devices or ranks goes out in\n"
 		"                         row bands of N rows, each with all its samples\n"
-		"                         (default: about 8 bands per device, whole work-groups)\n"
+		"                         (default: about 32 bands per device, whole work-groups)\n"
 		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"

@@ -128,8 +128,7 @@ struct image_devices {
 
 /* One image on the device(s) the options name; several share it in bands
  * (tiles.h). The devices stay open for the summary (d->count of them). */
-static int render_on_devices(struct run *run, struct image_devices *d, char *err,
-			     size_t err_size)
+static int render_on_devices(struct run *run, struct image_devices *d, char *err, size_t err_size)
 {
 	double lap = timing_now();
 

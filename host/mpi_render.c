@@ -38,10 +38,10 @@ struct mpi_job {
 	struct device devs[DEVICES_MAX]; /* this rank's */
 	int count;
 	struct device_work work[DEVICES_MAX];
-	int taken; /* pieces this rank took (the test-only rank death) */
-	int image;  /* one image in bands (tiles.h), not --frames */
-	int pieces; /* frames, or bands */
-	struct tiles_job tiles;		  /* image: this rank's devices and bands */
+	int taken;			/* pieces this rank took (the test-only rank death) */
+	int image;			/* one image in bands (tiles.h), not --frames */
+	int pieces;			/* frames, or bands */
+	struct tiles_job tiles;		/* image: this rank's devices and bands */
 	int device_failed[DEVICES_MAX]; /* image: a piece of this device failed */
 	pthread_mutex_t lock;
 
@@ -288,8 +288,7 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
 	else if (j->image)
 		place_band(j, piece, rgb);
-	else if (!j->failed &&
-		 frames_stage_image(j->run, &j->output, piece, rgb, err, sizeof(err)))
+	else if (!j->failed && frames_stage_image(j->run, &j->output, piece, rgb, err, sizeof(err)))
 		record_failure(j, ROOT, err);
 	free(message);
 }
@@ -416,8 +415,8 @@ static int choose_pieces(struct mpi_job *j, int total)
 		return 0;
 	}
 	if (tiles_job_init(&j->tiles, run->scene, s,
-			   tiles_band_rows(s, run->opt->piece_rows, total), j->devs, j->count,
-			   err, sizeof(err)))
+			   tiles_band_rows(s, run->opt->piece_rows, total), j->devs, j->count, err,
+			   sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
 	if (j->rank != ROOT)
@@ -450,7 +449,8 @@ static int agree_on_start(struct mpi_job *j, int failed, const char *err)
 	int total = 0;
 	for (int r = 0; r < j->size; r++)
 		total += counts[r];
-	if (lowest < 0 && (choose_pieces(j, total) || (j->rank == ROOT && plan_devices(j, counts)))) {
+	if (lowest < 0 &&
+	    (choose_pieces(j, total) || (j->rank == ROOT && plan_devices(j, counts)))) {
 		fprintf(stderr, "rtcl: out of host memory for the device plan\n");
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
@@ -486,9 +486,9 @@ static int assemble_image(struct mpi_job *j, double wall_ms)
 	tiles_copy_facts(&j->tiles.dev[0].result, res);
 	snprintf(run->device_name, sizeof(run->device_name), "%d devices over %d ranks, first %s",
 		 j->total, j->size, j->devs[0].name);
-	run->multidevice = devstats_json(j->all_devs, j->rank_of, j->all_work, j->total,
-					 run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
-					 "band");
+	run->multidevice =
+		devstats_json(j->all_devs, j->rank_of, j->all_work, j->total,
+			      run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC, "band");
 	if (run->multidevice) {
 		json_object_set_new(run->multidevice, "band_rows", json_integer(j->tiles.rows));
 		json_object_set_new(run->multidevice, "bands", json_integer(j->pieces));

@@ -31,8 +31,7 @@ static int band_count(int height, int rows)
 	return (height + rows - 1) / rows;
 }
 
-struct rt_piece tiles_band(const struct render_settings *s, int rows, int index, int begin,
-			   int end)
+struct rt_piece tiles_band(const struct render_settings *s, int rows, int index, int begin, int end)
 {
 	int y0 = index * rows;
 	int height = s->height - y0 < rows ? s->height - y0 : rows;
@@ -60,9 +59,8 @@ static int band_launches(const struct render_settings *s, int rows, int band)
 	return (p.samples + per_pass - 1) / per_pass;
 }
 
-int tiles_job_init(struct tiles_job *t, const struct scene *scene,
-		   const struct render_settings *s, int rows, struct device *devs, int count,
-		   char *err, size_t err_size)
+int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
+		   int rows, struct device *devs, int count, char *err, size_t err_size)
 {
 	memset(t, 0, sizeof(*t));
 	t->settings = s;
@@ -123,8 +121,8 @@ int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, c
 		struct rt_piece piece = whole;
 		struct piece_result out;
 		piece.sample_begin = begin;
-		piece.sample_end = whole.samples - begin > per_pass ? begin + per_pass
-								    : whole.samples;
+		piece.sample_end =
+			whole.samples - begin > per_pass ? begin + per_pass : whole.samples;
 		if (renderer_piece(&t->dev[k].renderer, &piece, &out, err, err_size))
 			return -1;
 	}
@@ -162,8 +160,8 @@ void tiles_copy_band(const struct tiles_job *t, int band, const struct render_re
 		       pixels * sizeof(uint64_t));
 }
 
-int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected,
-		       char *err, size_t err_size)
+int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected, char *err,
+		       size_t err_size)
 {
 	for (int y = 0; y < height; y++)
 		for (int x = 0; x < width; x++)
@@ -340,9 +338,9 @@ static int render_frames(struct tiles_job *t, int split_static, struct device_wo
 }
 
 /* One image with settings s on devs[count] into out. */
-static int render_image(const struct run *run, const struct render_settings *s,
-			struct device *devs, int count, struct device_work *work,
-			struct render_result *out, char *err, size_t err_size)
+static int render_image(const struct run *run, const struct render_settings *s, struct device *devs,
+			int count, struct device_work *work, struct render_result *out, char *err,
+			size_t err_size)
 {
 	struct device_work setup[DEVICES_MAX];
 	struct tiles_job t;
@@ -355,8 +353,7 @@ static int render_image(const struct run *run, const struct render_settings *s,
 		goto out_free;
 	double lap = timing_now();
 	frames = render_frames(&t, run->opt->split_static, work, out, err, err_size);
-	if (frames < 0 || launch_end_timing(out, err, err_size) ||
-	    double_band(&t, err, err_size))
+	if (frames < 0 || launch_end_timing(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
 	out->passes = band_launches(s, rows, 0);
@@ -394,9 +391,9 @@ int tiles_render(struct run *run, struct device *devs, int count, struct device_
 	}
 	if (render_image(run, s, devs, count, work, &run->result, err, err_size))
 		return -1;
-	run->multidevice = devstats_json(devs, NULL, work, count,
-					 run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
-					 "band");
+	run->multidevice =
+		devstats_json(devs, NULL, work, count,
+			      run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC, "band");
 	if (run->multidevice) {
 		json_object_set_new(run->multidevice, "band_rows", json_integer(rows));
 		json_object_set_new(run->multidevice, "bands",

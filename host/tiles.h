@@ -15,12 +15,15 @@
 #include "renderer.h"
 #include "stats.h"
 
-/* Bands per device when --piece-rows is not given: enough that a slower
- * device can take fewer (docs/results/multidevice: the measured overhead per
- * band is a launch and its wait). */
-#define TILES_PER_DEVICE 8
+/* Bands per device when --piece-rows is not given: many, since a band costs
+ * only a launch and its wait (0.01 to 0.05 ms on PoCL,
+ * docs/results/multidevice) while the last band a slow device takes can end
+ * after the fast one is done: with n devices a device k times slower than
+ * the fastest delays the end by at most k / (32 n) of the fast device's time
+ * for the image. */
+#define TILES_PER_DEVICE 32
 
-/* Rows per band: piece_rows when given (> 0), else about height / (8 ×
+/* Rows per band: piece_rows when given (> 0), else about height / (32 ×
  * devices) rounded up to a multiple of the work-group height. */
 int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices);
 
@@ -54,9 +57,8 @@ struct tiles_job {
 };
 
 /* Returns 0, or -1 with one message in err (out of memory). */
-int tiles_job_init(struct tiles_job *t, const struct scene *scene,
-		   const struct render_settings *s, int rows, struct device *devs, int count,
-		   char *err, size_t err_size);
+int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
+		   int rows, struct device *devs, int count, char *err, size_t err_size);
 
 /* Releases every renderer and what they read back. */
 void tiles_job_free(struct tiles_job *t);
@@ -77,8 +79,8 @@ void tiles_copy_band(const struct tiles_job *t, int band, const struct render_re
 
 /* Checks write counts: every pixel of the image counted `expected` times
  * (check_writes). Returns 0, or -1 with the first pixel that was not in err. */
-int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected,
-		       char *err, size_t err_size);
+int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected, char *err,
+		       size_t err_size);
 
 /* The plan and build facts the summary shows (work-groups, NDRange, build
  * options, set-up times), from one device's result: the first device's. */

@@ -112,10 +112,10 @@ Test(multidev, band_rows_default_to_whole_work_groups_and_several_bands_per_devi
 {
 	struct render_settings s = band_settings(800, 600, 1);
 
-	/* 600 / 16 = 37.5 -> 38 -> 40, a multiple of 8: 15 bands for 2 devices. */
-	cr_assert_eq(tiles_band_rows(&s, 0, 2), 40);
-	cr_assert_eq(tiles_band_rows(&s, 0, 1), 80); /* 75 -> 80 */
-	cr_assert_eq(tiles_band_rows(&s, 7, 2), 7);   /* --piece-rows as given */
+	/* 600 / 64 = 9.4 -> 10 -> 16, a multiple of 8: 38 bands for 2 devices. */
+	cr_assert_eq(tiles_band_rows(&s, 0, 2), 16);
+	cr_assert_eq(tiles_band_rows(&s, 0, 1), 24); /* 18.75 -> 19 -> 24 */
+	cr_assert_eq(tiles_band_rows(&s, 7, 2), 7);  /* --piece-rows as given */
 	cr_assert_eq(tiles_band_rows(&s, 5000, 2), 600);
 	s.height = 5; /* never more than the image */
 	cr_assert_eq(tiles_band_rows(&s, 0, 4), 5);
