@@ -89,7 +89,7 @@ endif
 HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
 	scene_literal.o scene_material.o scene_mesh.o mesh.o timing.o files.o \
 	interrupt.o checks.o program.o progcache.o launch.o singlepass.o wavefront.o render.o \
-	stats.o devices.o multidev.o devstats.o frames.o \
+	stats.o devices.o multidev.o devstats.o frames.o tiles.o \
 	outputs.o \
 	workmap.o image_common.o image_encode.o image_png.o reference.o embedded.o) \
 	$(IMAGE_BACKEND) $(MPI_MODULE)
