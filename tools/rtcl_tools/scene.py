@@ -3,12 +3,13 @@
 host/scene.c is the authority; this module mirrors it for the tools (povray.py
 reads scenes through it) and for the tests, rule for rule and in the same
 order, with the same "PATH: what is wrong" messages, so that every file rtcl
-refuses is refused here too (test/test_rtcl_tools.py checks that against
-test/bad_scenes/).  JSON syntax errors are "LINE:COLUMN: what" as in rtcl, in
-Python's wording.  One deliberate difference: a newer version says "must be 1
-or 2".  Version 2 (meshes, inline triangles) is read here before rtcl reads it;
-test/bad_scenes_v2/ holds its bad scenes until the C loader follows.  A mesh
-file is only checked to exist and be readable: parsing it is the importer's job.
+refuses is refused here too, with rtcl's message (test/test_rtcl_tools.py
+checks that against test/bad_scenes/).  Two deliberate differences: JSON
+syntax errors are "LINE:COLUMN: what" as in rtcl, in Python's wording; and a
+mesh file is only checked to exist and be readable (after the mesh's other
+fields, where rtcl reads it): parsing it is the importer's job, so a file
+without triangles or with a non-finite vertex passes here (RTCL_ONLY in
+test/test_rtcl_tools.py lists those bad scenes).
 
 load_scene(path) and read_scene(document, base_dir) return the scene with every
 default filled in (colours and vectors as tuples, plane normals normalised);
@@ -222,12 +223,13 @@ def read_header(doc):
     if fmt != "rtcl-scene":
         fail("format", f'must be "rtcl-scene", got "{_escaped(fmt)}"')
     version = integer(required(doc, "version", ""), "version", -2**63, 2**63 - 1)
-    if version not in VERSIONS:
-        fail("version", f"must be 1 or 2, got {version}"
-                        + (" (this tool reads versions 1 and 2)" if version > 2 else ""))
-    for key in doc:
-        if key in VERSION_2_KEYS and version < 2:
-            fail(key, f"needs version 2, the file says version {version}")
+    if version > max(VERSIONS):
+        fail("version", f"version {version} is not supported (this rtcl reads versions 1 and 2)")
+    if version < min(VERSIONS):
+        fail("version", f"must be 1 or 2, got {version}")
+    for key in VERSION_2_KEYS:
+        if key in doc and version < 2:
+            fail(key, f'needs "version": 2 (the file says "version": {version})')
     check_keys(doc, "", TOP_KEYS + VERSION_2_KEYS)
     return version
 
@@ -343,7 +345,7 @@ def non_zero(value, path):
     """Returns value as a float if it is a number other than 0 (a mesh's scale)."""
     x = number(value, path)
     if x == 0:
-        fail(path, "must be non-zero, got 0")
+        fail(path, "must not be 0")
     return x
 
 
@@ -363,45 +365,62 @@ def boolean(value, path):
     return value
 
 
-def mesh_file(value, path, base_dir):
-    """Returns the path of a mesh file, after checking that it can be opened for reading."""
+def one_line(text):
+    """Returns a file name as rtcl quotes it (host/scene_mesh.c): control characters
+    become '?', cut after 299 bytes, without trailing '?' and spaces."""
+    raw = bytes(b if b >= 0x20 and b != 0x7f else 0x3f for b in text.encode("utf-8"))
+    return raw[:299].rstrip(b"? ").decode("utf-8", errors="replace")
+
+
+def mesh_name(value, path):
+    """Returns the file name of a mesh, a non-empty string."""
     if not isinstance(value, str):
         fail(path, f"must be a string, got {type_name(value)}")
     if not value:
-        fail(path, "must not be empty")
+        fail(path, 'must name a file, got ""')
+    return value
+
+
+def mesh_file(name, path, base_dir):
+    """Returns the path of a mesh file, after checking that it can be opened for
+    reading; relative to base_dir unless absolute (None: not looked up)."""
     if base_dir is None:
-        return value
+        return name
     # An absolute path stays as it is (os.path.join drops base_dir).
-    resolved = os.path.join(base_dir, value)
+    resolved = os.path.join(base_dir, name)
     try:
         with open(resolved, "rb"):
             pass
     except OSError as error:
-        fail(path, f'cannot read "{_escaped(value)}": {error.strerror}')
+        fail(path, f'cannot read "{one_line(name)}": {error.strerror}')
     return resolved
 
 
 def read_meshes(items, materials, base_dir):
+    """The meshes in rtcl's order: the file's name, the material and placement, and
+    only then the file itself."""
     meshes = []
     for i, value in enumerate(items):
         path = child("meshes", i)
         check_keys(value, path, MESH_KEYS)
-        meshes.append({
-            "file": mesh_file(required(value, "file", path), child(path, "file"), base_dir),
-            "material": material_of(value, path, materials),
-            "scale": optional(value, "scale", path, read_scale, (1.0, 1.0, 1.0)),
-            "rotate": optional(value, "rotate", path, vec3, (0.0, 0.0, 0.0)),
-            "translate": optional(value, "translate", path, vec3, (0.0, 0.0, 0.0)),
-            "smooth": optional(value, "smooth", path, boolean, True)})
+        where = child(path, "file")
+        name = mesh_name(required(value, "file", path), where)
+        mesh = {"material": material_of(value, path, materials),
+                "scale": optional(value, "scale", path, read_scale, (1.0, 1.0, 1.0)),
+                "rotate": optional(value, "rotate", path, vec3, (0.0, 0.0, 0.0)),
+                "translate": optional(value, "translate", path, vec3, (0.0, 0.0, 0.0)),
+                "smooth": optional(value, "smooth", path, boolean, True)}
+        mesh["file"] = mesh_file(name, where, base_dir)
+        meshes.append(mesh)
     return meshes
 
 
 def read_vertices(value, path):
     """Returns the three vertices of an inline triangle, which must span an area."""
     if not isinstance(value, list):
-        fail(path, f"must be an array of 3 points, got {type_name(value)}")
+        fail(path, f"must be an array of 3 vertices, got {type_name(value)}")
     if len(value) != 3:
-        fail(path, f"must be an array of 3 points, got {len(value)} "
+        fail(path, f"must be an array of 3 vertices, got {len(value)} "
                    f"element{'' if len(value) == 1 else 's'}")
     a, b, c = (vec3(point, child(path, i)) for i, point in enumerate(value))
     # Halved so that no difference overflows; only "exactly 0" matters here.
