@@ -38,10 +38,9 @@ static const char triangle_json[] =
 
 /* One smooth triangle from a file, v0 = (0,0,0), v1 = (1,0,0), v2 = (0,1,0),
  * with vertex normals n0 = (0,0,1), n1 = (0,0,-1), n2 = (0,0,1). */
-static const char smooth_json[] =
-	"{\"format\": \"rtcl-scene\", \"version\": 2,"
-	" \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
-	" \"meshes\": [{\"file\": \"test/meshes/opposed_normals.obj\"}]}";
+static const char smooth_json[] = "{\"format\": \"rtcl-scene\", \"version\": 2,"
+				  " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+				  " \"meshes\": [{\"file\": \"test/meshes/opposed_normals.obj\"}]}";
 
 /* Each test kernel writes the flops counted into out[0] and a result into
  * out[1] (as float bits) so the test can check it took the intended path. */
@@ -81,7 +80,7 @@ static const char test_kernels[] =
 	"	struct tracer tr;\n"
 	"	struct hit hit = {1.0f, -1, -1, 0, uv.x, uv.y};\n"
 	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
-	"	float3 n = triangle_shading_normal(&tr, &tr.triangle_shading[0], hit, n_face.xyz);\n"
+	"	float3 n = triangle_shading_normal(&tr, tr.triangle_shading, hit, n_face.xyz);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(n.z);\n"
 	"}\n"
