@@ -137,6 +137,16 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 	return 0;
 }
 
+/* Rank 0: keeps a frame's pixels (malloc'd, taken) until every frame has
+ * arrived; nothing goes to the output folder before (frames.h). */
+static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_t err_size)
+{
+	pthread_mutex_lock(&j->lock);
+	int failed = frames_hold(&j->output, piece, rgb, err, err_size);
+	pthread_mutex_unlock(&j->lock);
+	return failed;
+}
+
 static int render_piece(void *context, int device, int piece, long long *pixels, char *err,
 			size_t err_size)
 {
@@ -149,11 +159,13 @@ static int render_piece(void *context, int device, int piece, long long *pixels,
 		return tiles_render_band(&j->tiles, device, piece, pixels, err, err_size);
 	if (frames_render_frame(j->run, &j->devs[device], piece, &result, err, err_size))
 		return -1;
-	if (j->rank == ROOT)
-		failed = frames_stage_image(j->run, &j->output, piece, result.rgb, err, err_size);
-	else
+	if (j->rank == ROOT) {
+		failed = hold_frame(j, piece, result.rgb, err, err_size);
+		result.rgb = NULL; /* held, or freed */
+	} else {
 		failed = send_result(piece, result.rgb, image_float_bytes(s->width, s->height), err,
 				     err_size);
+	}
 	render_result_free(&result);
 	*pixels = (long long)s->width * s->height;
 	return failed ? -1 : 0;
@@ -282,14 +294,19 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	if (message && (size_t)bytes >= sizeof(int))
 		memcpy(&piece, message, sizeof(int));
 	const float *rgb = (const float *)(message + sizeof(int));
-	if (piece < 0 || piece >= piece_count(j))
+	if (piece < 0 || piece >= piece_count(j)) {
 		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
-	else if ((size_t)bytes != sizeof(int) + piece_bytes(j, piece))
+	} else if ((size_t)bytes != sizeof(int) + piece_bytes(j, piece)) {
 		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
-	else if (j->image)
+	} else if (j->image) {
 		place_band(j, piece, rgb);
-	else if (!j->failed && frames_stage_image(j->run, &j->output, piece, rgb, err, sizeof(err)))
-		record_failure(j, ROOT, err);
+	} else {
+		/* The frame's floats to the front: the buffer becomes the frame. */
+		memmove(message, rgb, (size_t)bytes - sizeof(int));
+		if (hold_frame(j, piece, (float *)message, err, sizeof(err)))
+			record_failure(j, status->MPI_SOURCE, err);
+		return;
+	}
 	free(message);
 }
 
@@ -365,6 +382,7 @@ static int start_rank(struct mpi_job *j, char *err, size_t err_size)
 
 	if (j->rank == ROOT && !j->image &&
 	    (frames_check_outputs(opt, err, err_size) ||
+	     frames_check_memory(opt, &j->run->settings, err, err_size) ||
 	     frames_output_open(&j->output, opt, err, err_size)))
 		return -1;
 	if (j->rank == ROOT && j->image && outputs_check(opt, err, err_size))
@@ -530,7 +548,7 @@ static int finish_root(struct mpi_job *j, double wall_ms)
 	} else if (!j->failed) {
 		struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total,
 					       wall_ms};
-		if (frames_commit(j->run, &j->output, &report, err, sizeof(err)) == 0)
+		if (frames_write_held(j->run, &j->output, &report, err, sizeof(err)) == 0)
 			return 0;
 		record_failure(j, ROOT, err);
 	}
