@@ -104,9 +104,9 @@ static int take_piece(void *context, int device)
 		     MPI_STATUS_IGNORE) != MPI_SUCCESS)
 		return -1;
 	pthread_mutex_lock(&j->lock);
-	int nth = piece >= 0 ? ++j->taken : 0;
+	int taken = piece >= 0 ? ++j->taken : j->taken;
 	pthread_mutex_unlock(&j->lock);
-	if (piece >= 0 && checks_rank_dies(j->rank, nth))
+	if (checks_rank_dies(j->rank, taken, piece < 0))
 		raise(SIGKILL); /* as a node that goes down */
 	return piece;
 }
