@@ -231,17 +231,24 @@ int frames_hold(struct frames_output *o, int piece, float *rgb, char *err, size_
 	return 0;
 }
 
-int frames_write_held(const struct run *run, struct frames_output *o, const struct frames_report *r,
-		      char *err, size_t err_size)
+int frames_check_held(const struct frames_output *o, char *err, size_t err_size)
 {
-	int n = frame_count(run->opt);
-
-	for (int i = 0; i < n; i++) {
+	for (int i = 0; i < o->count; i++) {
 		if (!o->held[i]) {
 			snprintf(err, err_size, "frame %s never arrived", o->names[i]);
 			return -1;
 		}
 	}
+	return 0;
+}
+
+int frames_write_held(const struct run *run, struct frames_output *o, const struct frames_report *r,
+		      char *err, size_t err_size)
+{
+	int n = frame_count(run->opt);
+
+	if (frames_check_held(o, err, err_size))
+		return -1;
 	/* Each frame is freed once staged: the encoders' memory comes on top. */
 	for (int i = 0; i < n; i++) {
 		if (frames_stage_image(run, o, i, o->held[i], err, err_size))

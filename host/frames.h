@@ -81,6 +81,10 @@ int frames_check_memory(const struct options *opt, const struct render_settings 
  * arrived already. Not thread-safe: the caller serialises. */
 int frames_hold(struct frames_output *o, int piece, float *rgb, char *err, size_t err_size);
 
+/* Every frame arrived. Returns 0, or -1 with one message in err naming the
+ * first missing. */
+int frames_check_held(const struct frames_output *o, char *err, size_t err_size);
+
 /* Stages every held frame's image, then frames_commit: the one short step
  * in which an output file exists before the end. Returns 0, or -1 with one
  * message in err (a frame missing, or a write) and nothing written. */

@@ -57,6 +57,7 @@ struct mpi_job {
 	struct device *all_devs;
 	struct device_work *all_work;
 	int *arrived; /* image: how often each band arrived */
+	double wall_ms;
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -530,9 +531,9 @@ static int write_image(struct mpi_job *j, char *err, size_t err_size)
 	return 0;
 }
 
-/* Rank 0 after every device is done: the outputs, or the failure. Returns
- * the exit status. */
-static int finish_root(struct mpi_job *j, double wall_ms)
+/* Rank 0 after every device is done: every piece arrived once, or the
+ * failure, printed. Returns the exit status. */
+static int finish_root(struct mpi_job *j)
 {
 	char err[MESSAGE_SIZE];
 
@@ -540,23 +541,33 @@ static int finish_root(struct mpi_job *j, double wall_ms)
 		j->all_devs[k] = j->devs[k];
 		j->all_work[k] = j->work[k];
 	}
-	if (!j->failed && j->image) {
-		if (assemble_image(j, wall_ms) == 0 && write_image(j, err, sizeof(err)) == 0)
-			return 0;
-		if (!j->failed)
-			record_failure(j, ROOT, err);
-	} else if (!j->failed) {
-		struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total,
-					       wall_ms};
-		if (frames_write_held(j->run, &j->output, &report, err, sizeof(err)) == 0)
-			return 0;
+	if (!j->failed && j->image)
+		assemble_image(j, j->wall_ms);
+	else if (!j->failed && frames_check_held(&j->output, err, sizeof(err)))
 		record_failure(j, ROOT, err);
-	}
+	if (!j->failed)
+		return 0;
 	fprintf(stderr, "rtcl: %s\n", j->message);
 	return EXIT_FAILED;
 }
 
-/* Every rank's devices render; rank 0 serves the others meanwhile. */
+/* Rank 0, after MPI_Finalize (mpi_render): the outputs and the summary.
+ * Returns the exit status. */
+static int write_root(struct mpi_job *j)
+{
+	struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total, j->wall_ms};
+	char err[MESSAGE_SIZE];
+	int failed = j->image ? write_image(j, err, sizeof(err))
+			      : frames_write_held(j->run, &j->output, &report, err, sizeof(err));
+
+	if (!failed)
+		return 0;
+	fprintf(stderr, "rtcl: rank 0, %s\n", err);
+	return EXIT_FAILED;
+}
+
+/* Every rank's devices render; rank 0 serves the others meanwhile. Every
+ * rank learns whether the render succeeded. Returns the exit status. */
 static int render_all(struct mpi_job *j)
 {
 	struct multidev_job job = {.piece_count = piece_count(j),
@@ -580,7 +591,8 @@ static int render_all(struct mpi_job *j)
 	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
-		status = finish_root(j, (timing_now() - start) * 1e3);
+		j->wall_ms = (timing_now() - start) * 1e3;
+		status = finish_root(j);
 	}
 	MPI_Bcast(&status, 1, MPI_INT, ROOT, MPI_COMM_WORLD);
 	return status;
@@ -636,8 +648,13 @@ static int mpi_render(struct run *run, int image)
 	} else if (agree_on_start(&j, start_rank(&j, err, sizeof(err)), err) == 0) {
 		status = render_all(&j);
 	}
-	free_job(&j);
+	/* Rank 0 writes once every rank has finalised: a rank that dies makes
+	 * mpirun kill the others, and a killed rank 0 could not remove what it
+	 * had staged; no rank is left to die now (frames.h). */
 	MPI_Finalize();
+	if (j.rank == ROOT && status == 0)
+		status = write_root(&j);
+	free_job(&j);
 	return status;
 }
 
