@@ -648,9 +648,16 @@ static int mpi_render(struct run *run, int image)
 	} else if (agree_on_start(&j, start_rank(&j, err, sizeof(err)), err) == 0) {
 		status = render_all(&j);
 	}
-	/* Rank 0 writes once every rank has finalised: a rank that dies makes
-	 * mpirun kill the others, and a killed rank 0 could not remove what it
-	 * had staged; no rank is left to die now (frames.h). */
+	/* Rank 0 writes once every rank has finalised. A rank that dies makes
+	 * Open MPI's daemon send the others SIGCONT, SIGTERM after
+	 * odls_base_sigkill_timeout (1 s), then SIGKILL after as long again; but
+	 * that sleep ends early on the SIGCHLD of a rank that exits on the
+	 * SIGTERM, so rank 0 is often killed before its interrupt thread can
+	 * remove a staged file. Hence: until here, rank 0 has created nothing
+	 * in the output folder (the frames, or the image, are in memory), so a
+	 * rank that dies before it leaves nothing; from here no other rank is
+	 * left to die, and the writing (staging, then one commit) takes about
+	 * 10-90 ms a frame (README). */
 	MPI_Finalize();
 	if (j.rank == ROOT && status == 0)
 		status = write_root(&j);
