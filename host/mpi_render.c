@@ -651,9 +651,12 @@ static int mpi_render(struct run *run, int image)
 	/* Rank 0 writes once every rank has finalised. A rank that dies makes
 	 * Open MPI's daemon send the others SIGCONT, SIGTERM after
 	 * odls_base_sigkill_timeout (1 s), then SIGKILL after as long again; but
-	 * that sleep ends early on the SIGCHLD of a rank that exits on the
-	 * SIGTERM, so rank 0 is often killed before its interrupt thread can
-	 * remove a staged file. Hence: until here, rank 0 has created nothing
+	 * that sleep(1) returns 0 when the SIGCHLD of a rank that exits on the
+	 * SIGTERM interrupts it, so SIGKILL follows in about 5 ms (strace of
+	 * Open MPI 4.1.4's mpirun), and a busy rank 0 is killed before its
+	 * interrupt thread can remove its staged files (left behind before this
+	 * design, which staged each frame as it arrived). Hence: until here,
+	 * rank 0 has created nothing
 	 * in the output folder (the frames, or the image, are in memory), so a
 	 * rank that dies before it leaves nothing; from here no other rank is
 	 * left to die, and the writing (staging, then one commit) takes about

@@ -220,9 +220,9 @@ def test_mpi_device_failure_on_a_rank_writes_nothing(tmp_path):
 
 # When a rank dies, mpirun's daemon sends the others SIGCONT, then SIGTERM
 # after odls_base_sigkill_timeout (1 s), then SIGKILL after as long again; but
-# that sleep ends early when a rank exits on the SIGTERM, so rank 0 may be
-# killed before its interrupt thread runs. A timeout of 0 kills at once (what
-# a busy machine does at random): nothing may depend on rank 0 cleaning up.
+# a rank exiting on the SIGTERM cuts that sleep short (SIGKILL ~5 ms after),
+# so rank 0 may be killed before its interrupt thread runs. A timeout of 0
+# kills at once, every time: nothing may depend on rank 0 cleaning up.
 HARD_KILL = {"OMPI_MCA_odls_base_sigkill_timeout": "0"}
 
 
