@@ -138,12 +138,12 @@ int checks_piece_fault(int device, int nth_piece)
 	return env_pair("RTCL_TEST_FAIL_DEVICE", &k, &n) == 0 && k == device && n == nth_piece;
 }
 
-int checks_rank_dies(int rank, int nth_piece)
+int checks_rank_dies(int rank, int taken, int none_left)
 {
 	long r, n;
 
 	return env_pair("RTCL_TEST_RANK_DIES", &r, &n) == 0 && r == rank && r != 0 &&
-	       n == nth_piece;
+	       (none_left ? taken < n : taken == n);
 }
 
 static int env_is_one(const char *name)

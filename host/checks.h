@@ -57,8 +57,10 @@ void checks_piece_delay(int device);
 int checks_piece_fault(int device, int nth_piece);
 
 /* RTCL_TEST_RANK_DIES=R:N: MPI rank R (not 0) dies (SIGKILL) when it is
- * given its N-th piece, as a node that goes down. */
-int checks_rank_dies(int rank, int nth_piece);
+ * given its N-th piece, as a node that goes down; or, having taken fewer
+ * (taken so far, none_left: told there are no more), when told there are
+ * none left, so that it dies before it reports whatever the timing. */
+int checks_rank_dies(int rank, int taken, int none_left);
 
 /* RTCL_TEST_CHECK_WRITES=1: one image over several devices or ranks
  * (tiles.h) counts every pixel's writes on every device and fails the run

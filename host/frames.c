@@ -3,6 +3,7 @@
 #include <math.h>
 #include <stdlib.h>
 #include <string.h>
+#include <unistd.h>
 
 #include "devstats.h"
 #include "image.h"
@@ -91,7 +92,9 @@ int frames_output_open(struct frames_output *o, const struct options *opt, char 
 
 	o->names = calloc((size_t)n, PATH_MAX);
 	o->staged = calloc((size_t)n + 1, sizeof(struct staged_file));
-	if (!o->names || !o->staged) {
+	o->held = calloc((size_t)n, sizeof(float *));
+	o->count = n;
+	if (!o->names || !o->staged || !o->held) {
 		frames_output_close(o, 0);
 		snprintf(err, err_size, "out of host memory for %d frames", n);
 		return -1;
@@ -105,10 +108,14 @@ void frames_output_close(struct frames_output *o, int staged_count)
 {
 	for (int i = 0; o->staged && i < staged_count; i++)
 		files_discard(&o->staged[i]);
+	for (int i = 0; o->held && i < o->count; i++)
+		free(o->held[i]);
 	free(o->names);
 	free(o->staged);
+	free(o->held);
 	o->names = NULL;
 	o->staged = NULL;
+	o->held = NULL;
 }
 
 int frames_render_frame(const struct run *run, struct device *dev, int piece,
@@ -191,6 +198,65 @@ int frames_commit(const struct run *run, struct frames_output *o, const struct f
 	if (ret == 0 && !opt->quiet)
 		print_summary(run, r);
 	return ret;
+}
+
+int frames_check_memory(const struct options *opt, const struct render_settings *s, char *err,
+			size_t err_size)
+{
+	const double gib = 1024.0 * 1024 * 1024;
+	double need = (double)frame_count(opt) * (double)image_float_bytes(s->width, s->height);
+	long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
+	double limit = pages > 0 && page_size > 0 ? (double)pages * (double)page_size / 2 : 0;
+
+	if (limit <= 0 || need <= limit)
+		return 0; /* an unknown host size: malloc says when it is too much */
+	snprintf(err, err_size,
+		 "--frames: under --mpi, rank 0 keeps every frame in host memory until all "
+		 "have arrived: %d frames of %dx%d need %.1f GiB (%zu bytes a pixel), more than "
+		 "the limit of %.1f GiB (half of this host's memory): render fewer frames per run "
+		 "or a smaller --size",
+		 frame_count(opt), s->width, s->height, need / gib, image_float_bytes(1, 1),
+		 limit / gib);
+	return -1;
+}
+
+int frames_hold(struct frames_output *o, int piece, float *rgb, char *err, size_t err_size)
+{
+	if (o->held[piece]) {
+		free(rgb);
+		snprintf(err, err_size, "frame %s arrived twice", o->names[piece]);
+		return -1;
+	}
+	o->held[piece] = rgb;
+	return 0;
+}
+
+int frames_check_held(const struct frames_output *o, char *err, size_t err_size)
+{
+	for (int i = 0; i < o->count; i++) {
+		if (!o->held[i]) {
+			snprintf(err, err_size, "frame %s never arrived", o->names[i]);
+			return -1;
+		}
+	}
+	return 0;
+}
+
+int frames_write_held(const struct run *run, struct frames_output *o, const struct frames_report *r,
+		      char *err, size_t err_size)
+{
+	int n = frame_count(run->opt);
+
+	if (frames_check_held(o, err, err_size))
+		return -1;
+	/* Each frame is freed once staged: the encoders' memory comes on top. */
+	for (int i = 0; i < n; i++) {
+		if (frames_stage_image(run, o, i, o->held[i], err, err_size))
+			return -1;
+		free(o->held[i]);
+		o->held[i] = NULL;
+	}
+	return frames_commit(run, o, r, err, err_size);
 }
 
 /* What the devices' threads share. */

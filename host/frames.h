@@ -29,17 +29,20 @@ int frames_output_name(const char *path, int frame, char *name);
  * --stats names none of them. Returns 0, or -1 with one message in err. */
 int frames_check_outputs(const struct options *opt, char *err, size_t err_size);
 
-/* The frames' image names, and their staged files (one per frame, then the
- * --stats document). */
+/* The frames' image names, their staged files (one per frame, then the
+ * --stats document), and under --mpi the frames held in memory. */
 struct frames_output {
 	char (*names)[PATH_MAX];
 	struct staged_file *staged;
+	float **held; /* frame first + i's pixels, or NULL before it arrived */
+	int count;    /* frames */
 };
 
 int frames_output_open(struct frames_output *o, const struct options *opt, char *err,
 		       size_t err_size);
 
-/* Discards the first staged_count staged files still held, and frees. */
+/* Discards the first staged_count staged files still held, frees the held
+ * frames, and frees. */
 void frames_output_close(struct frames_output *o, int staged_count);
 
 /* Renders frame first + piece on dev (settings as for one image). */
@@ -63,6 +66,30 @@ struct frames_report {
  * the summary. Returns 0, or -1 with one message in err. */
 int frames_commit(const struct run *run, struct frames_output *o, const struct frames_report *r,
 		  char *err, size_t err_size);
+
+/* Under --mpi, rank 0 keeps every frame in host memory and creates nothing
+ * in the output folder until all have arrived, because a rank that dies makes
+ * mpirun kill the others (SIGTERM, then SIGKILL) and a killed rank 0 cannot
+ * remove what it has staged (mpi_render.c). Checks up front that the frames
+ * fit: at most half of this host's memory. Returns 0, or -1 with one message
+ * in err giving the numbers. */
+int frames_check_memory(const struct options *opt, const struct render_settings *s, char *err,
+			size_t err_size);
+
+/* Keeps frame first + piece's pixels (malloc'd; o takes them, also on a
+ * failure). Returns 0, or -1 with one message in err when the frame had
+ * arrived already. Not thread-safe: the caller serialises. */
+int frames_hold(struct frames_output *o, int piece, float *rgb, char *err, size_t err_size);
+
+/* Every frame arrived. Returns 0, or -1 with one message in err naming the
+ * first missing. */
+int frames_check_held(const struct frames_output *o, char *err, size_t err_size);
+
+/* Stages every held frame's image, then frames_commit: the one short step
+ * in which an output file exists before the end. Returns 0, or -1 with one
+ * message in err (a frame missing, or a write) and nothing written. */
+int frames_write_held(const struct run *run, struct frames_output *o, const struct frames_report *r,
+		      char *err, size_t err_size);
 
 /* Renders frames first..last of run on devs[count], writes every frame's
  * image (all or none) and the --stats document, and prints the summary.

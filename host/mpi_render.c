@@ -57,6 +57,7 @@ struct mpi_job {
 	struct device *all_devs;
 	struct device_work *all_work;
 	int *arrived; /* image: how often each band arrived */
+	double wall_ms;
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -104,9 +105,9 @@ static int take_piece(void *context, int device)
 		     MPI_STATUS_IGNORE) != MPI_SUCCESS)
 		return -1;
 	pthread_mutex_lock(&j->lock);
-	int nth = piece >= 0 ? ++j->taken : 0;
+	int taken = piece >= 0 ? ++j->taken : j->taken;
 	pthread_mutex_unlock(&j->lock);
-	if (piece >= 0 && checks_rank_dies(j->rank, nth))
+	if (checks_rank_dies(j->rank, taken, piece < 0))
 		raise(SIGKILL); /* as a node that goes down */
 	return piece;
 }
@@ -137,6 +138,16 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 	return 0;
 }
 
+/* Rank 0: keeps a frame's pixels (malloc'd, taken) until every frame has
+ * arrived; nothing goes to the output folder before (frames.h). */
+static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_t err_size)
+{
+	pthread_mutex_lock(&j->lock);
+	int failed = frames_hold(&j->output, piece, rgb, err, err_size);
+	pthread_mutex_unlock(&j->lock);
+	return failed;
+}
+
 static int render_piece(void *context, int device, int piece, long long *pixels, char *err,
 			size_t err_size)
 {
@@ -149,11 +160,13 @@ static int render_piece(void *context, int device, int piece, long long *pixels,
 		return tiles_render_band(&j->tiles, device, piece, pixels, err, err_size);
 	if (frames_render_frame(j->run, &j->devs[device], piece, &result, err, err_size))
 		return -1;
-	if (j->rank == ROOT)
-		failed = frames_stage_image(j->run, &j->output, piece, result.rgb, err, err_size);
-	else
+	if (j->rank == ROOT) {
+		failed = hold_frame(j, piece, result.rgb, err, err_size);
+		result.rgb = NULL; /* held, or freed */
+	} else {
 		failed = send_result(piece, result.rgb, image_float_bytes(s->width, s->height), err,
 				     err_size);
+	}
 	render_result_free(&result);
 	*pixels = (long long)s->width * s->height;
 	return failed ? -1 : 0;
@@ -282,14 +295,19 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	if (message && (size_t)bytes >= sizeof(int))
 		memcpy(&piece, message, sizeof(int));
 	const float *rgb = (const float *)(message + sizeof(int));
-	if (piece < 0 || piece >= piece_count(j))
+	if (piece < 0 || piece >= piece_count(j)) {
 		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
-	else if ((size_t)bytes != sizeof(int) + piece_bytes(j, piece))
+	} else if ((size_t)bytes != sizeof(int) + piece_bytes(j, piece)) {
 		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
-	else if (j->image)
+	} else if (j->image) {
 		place_band(j, piece, rgb);
-	else if (!j->failed && frames_stage_image(j->run, &j->output, piece, rgb, err, sizeof(err)))
-		record_failure(j, ROOT, err);
+	} else {
+		/* The frame's floats to the front: the buffer becomes the frame. */
+		memmove(message, rgb, (size_t)bytes - sizeof(int));
+		if (hold_frame(j, piece, (float *)message, err, sizeof(err)))
+			record_failure(j, status->MPI_SOURCE, err);
+		return;
+	}
 	free(message);
 }
 
@@ -365,6 +383,7 @@ static int start_rank(struct mpi_job *j, char *err, size_t err_size)
 
 	if (j->rank == ROOT && !j->image &&
 	    (frames_check_outputs(opt, err, err_size) ||
+	     frames_check_memory(opt, &j->run->settings, err, err_size) ||
 	     frames_output_open(&j->output, opt, err, err_size)))
 		return -1;
 	if (j->rank == ROOT && j->image && outputs_check(opt, err, err_size))
@@ -512,9 +531,9 @@ static int write_image(struct mpi_job *j, char *err, size_t err_size)
 	return 0;
 }
 
-/* Rank 0 after every device is done: the outputs, or the failure. Returns
- * the exit status. */
-static int finish_root(struct mpi_job *j, double wall_ms)
+/* Rank 0 after every device is done: every piece arrived once, or the
+ * failure, printed. Returns the exit status. */
+static int finish_root(struct mpi_job *j)
 {
 	char err[MESSAGE_SIZE];
 
@@ -522,23 +541,33 @@ static int finish_root(struct mpi_job *j, double wall_ms)
 		j->all_devs[k] = j->devs[k];
 		j->all_work[k] = j->work[k];
 	}
-	if (!j->failed && j->image) {
-		if (assemble_image(j, wall_ms) == 0 && write_image(j, err, sizeof(err)) == 0)
-			return 0;
-		if (!j->failed)
-			record_failure(j, ROOT, err);
-	} else if (!j->failed) {
-		struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total,
-					       wall_ms};
-		if (frames_commit(j->run, &j->output, &report, err, sizeof(err)) == 0)
-			return 0;
+	if (!j->failed && j->image)
+		assemble_image(j, j->wall_ms);
+	else if (!j->failed && frames_check_held(&j->output, err, sizeof(err)))
 		record_failure(j, ROOT, err);
-	}
+	if (!j->failed)
+		return 0;
 	fprintf(stderr, "rtcl: %s\n", j->message);
 	return EXIT_FAILED;
 }
 
-/* Every rank's devices render; rank 0 serves the others meanwhile. */
+/* Rank 0, after MPI_Finalize (mpi_render): the outputs and the summary.
+ * Returns the exit status. */
+static int write_root(struct mpi_job *j)
+{
+	struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total, j->wall_ms};
+	char err[MESSAGE_SIZE];
+	int failed = j->image ? write_image(j, err, sizeof(err))
+			      : frames_write_held(j->run, &j->output, &report, err, sizeof(err));
+
+	if (!failed)
+		return 0;
+	fprintf(stderr, "rtcl: rank 0, %s\n", err);
+	return EXIT_FAILED;
+}
+
+/* Every rank's devices render; rank 0 serves the others meanwhile. Every
+ * rank learns whether the render succeeded. Returns the exit status. */
 static int render_all(struct mpi_job *j)
 {
 	struct multidev_job job = {.piece_count = piece_count(j),
@@ -562,7 +591,8 @@ static int render_all(struct mpi_job *j)
 	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
-		status = finish_root(j, (timing_now() - start) * 1e3);
+		j->wall_ms = (timing_now() - start) * 1e3;
+		status = finish_root(j);
 	}
 	MPI_Bcast(&status, 1, MPI_INT, ROOT, MPI_COMM_WORLD);
 	return status;
@@ -618,8 +648,23 @@ static int mpi_render(struct run *run, int image)
 	} else if (agree_on_start(&j, start_rank(&j, err, sizeof(err)), err) == 0) {
 		status = render_all(&j);
 	}
-	free_job(&j);
+	/* Rank 0 writes once every rank has finalised. A rank that dies makes
+	 * Open MPI's daemon send the others SIGCONT, SIGTERM after
+	 * odls_base_sigkill_timeout (1 s), then SIGKILL after as long again; but
+	 * that sleep(1) returns 0 when the SIGCHLD of a rank that exits on the
+	 * SIGTERM interrupts it, so SIGKILL follows in about 5 ms (strace of
+	 * Open MPI 4.1.4's mpirun), and a busy rank 0 is killed before its
+	 * interrupt thread can remove its staged files (left behind before this
+	 * design, which staged each frame as it arrived). Hence: until here,
+	 * rank 0 has created nothing
+	 * in the output folder (the frames, or the image, are in memory), so a
+	 * rank that dies before it leaves nothing; from here no other rank is
+	 * left to die, and the writing (staging, then one commit) takes about
+	 * 10-90 ms a frame (README). */
 	MPI_Finalize();
+	if (j.rank == ROOT && status == 0)
+		status = write_root(&j);
+	free_job(&j);
 	return status;
 }
 

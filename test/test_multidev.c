@@ -4,6 +4,7 @@
 #include <criterion/criterion.h>
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "devices.h"
@@ -94,6 +95,51 @@ Test(multidev, frame_names_put_the_number_before_the_extension)
 	cr_assert_str_eq(name, "dir.d/out_12345");
 	cr_assert_eq(frames_output_name("a/.hidden.exr", 0, name), 0);
 	cr_assert_str_eq(name, "a/.hidden_0000.exr");
+}
+
+/* Under --mpi rank 0 holds the frames: each arrives once, all must arrive,
+ * and what does not fit in half the host's memory is refused up front. */
+Test(multidev, held_frames_arrive_once_each_and_all_of_them)
+{
+	struct options opt;
+	struct frames_output o;
+	char err[512];
+
+	memset(&opt, 0, sizeof(opt));
+	opt.output = "out.ppm";
+	opt.frames[0] = 3;
+	opt.frames[1] = 5;
+	cr_assert_eq(frames_output_open(&o, &opt, err, sizeof(err)), 0);
+	cr_assert_eq(o.count, 3);
+	cr_assert_eq(frames_hold(&o, 0, malloc(12), err, sizeof(err)), 0);
+	cr_assert_eq(frames_hold(&o, 2, malloc(12), err, sizeof(err)), 0);
+	cr_assert_eq(frames_check_held(&o, err, sizeof(err)), -1);
+	cr_assert_str_eq(err, "frame out_0004.ppm never arrived");
+	cr_assert_eq(frames_hold(&o, 2, malloc(12), err, sizeof(err)), -1);
+	cr_assert_str_eq(err, "frame out_0005.ppm arrived twice");
+	cr_assert_eq(frames_hold(&o, 1, malloc(12), err, sizeof(err)), 0);
+	cr_assert_eq(frames_check_held(&o, err, sizeof(err)), 0);
+	frames_output_close(&o, 4); /* frees the held frames (ASan, valgrind) */
+}
+
+Test(multidev, held_frames_beyond_half_the_memory_are_refused_with_the_numbers)
+{
+	struct options opt;
+	struct render_settings s;
+	char err[512];
+
+	memset(&opt, 0, sizeof(opt));
+	memset(&s, 0, sizeof(s));
+	opt.frames[1] = 9;
+	s.width = 64;
+	s.height = 48;
+	cr_assert_eq(frames_check_memory(&opt, &s, err, sizeof(err)), 0);
+	opt.frames[1] = 999; /* 1000 frames of 16384x16384: 3000 GiB */
+	s.width = s.height = 16384;
+	cr_assert_eq(frames_check_memory(&opt, &s, err, sizeof(err)), -1);
+	cr_assert(strstr(err, "1000 frames of 16384x16384 need 3000.0 GiB (12 bytes a pixel)"),
+		  "%s", err);
+	cr_assert(strstr(err, "half of this host's memory"), "%s", err);
 }
 
 static struct render_settings band_settings(int width, int height, int samples)
