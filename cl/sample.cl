@@ -59,6 +59,26 @@ static inline uint2 sample_bits(int x, int y, uint k, uint n)
  * count 0 like integer work); n = 1 is the constant 0.5 and counts 0. */
 static inline float2 sample_offset(struct tracer *tr, int x, int y, uint k, uint n)
 {
+#if defined(RTCL_PROBE_JITTER) || defined(RTCL_PROBE_SAMPLE_WORK)
+	/* Measurement probes for one sample per pixel, defined only through
+	 * RTCL_BUILD_OPTIONS (docs/performance.md, "Why a sample costs more with
+	 * --spp N > 1"): JITTER traces sample 0 of 2's scrambled position, not
+	 * the centre (another image); with SHIFT too, one off-centre position
+	 * for every pixel (another image); SAMPLE_WORK computes the bits and
+	 * keeps the centre (the same image: k is 0, which the compiler cannot
+	 * know). */
+	if (n == 1) {
+		uint2 probe = sample_bits(x, y, k, 2);
+#if defined(RTCL_PROBE_JITTER) && defined(RTCL_PROBE_SHIFT)
+		return (float2)(0.3125f, 0.6875f) + convert_float2(probe & (uint2)(k));
+#elif defined(RTCL_PROBE_JITTER)
+		COUNT_FLOPS(tr, 2);
+		return convert_float2(probe) * 0x1p-24f;
+#else
+		return (float2)(0.5f) + convert_float2(probe & (uint2)(k));
+#endif
+	}
+#endif
 	uint2 bits = sample_bits(x, y, k, n);
 
 	if (n == 1)
