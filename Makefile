@@ -66,7 +66,7 @@ endif
 LDLIBS += -lstdc++
 
 # Every host module but main; tests link them too.
-HOST_OBJS := $(addprefix $(BUILD)/, cli.o clerror.o device.o devscene.o scene.o scene_check.o \
+HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devscene.o scene.o scene_check.o \
 	scene_literal.o timing.o files.o \
 	interrupt.o checks.o program.o launch.o singlepass.o wavefront.o render.o stats.o \
 	outputs.o \

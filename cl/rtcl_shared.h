@@ -93,8 +93,44 @@ struct rt_scene {
 	/* Byte offsets of the arrays from the start of this header. */
 	rt_uint material_offset, sphere_offset, plane_offset, light_offset;
 	rt_uint total_bytes; /* the whole block, a multiple of 16 */
-	rt_uint pad1, pad2, pad3;
+	/* The BVH over the bounded primitives (docs/bvh.md): bvh_node_count
+	   struct rt_bvh_node at bvh_node_offset, node 0 the root, and the
+	   primitive references (rt_uint, RT_PRIM_*) its leaves index at
+	   bvh_ref_offset. bvh_node_count is 0 with --accel none or no sphere. */
+	rt_uint bvh_node_offset, bvh_ref_offset;
+	rt_int bvh_node_count;
 };
+
+/* A BVH node of two children, both boxes in one 64-byte node so that one
+ * visit loads four 16-byte words and tests two boxes (docs/bvh.md says why
+ * two-wide). Child k's box is child[k].lo.xyz..child[k].hi.xyz, rounded
+ * outward; the w lanes, read through bvh_child_index and bvh_child_count,
+ * hold int bits: lo.w is the child node's index (an inner child) or its first
+ * primitive reference (a leaf), hi.w is 0 for an inner child and the leaf's
+ * reference count otherwise (0 with lo.w 0 too: an empty leaf, only beside a
+ * root's single primitive). */
+struct rt_bvh_box {
+	rt_vec4 lo, hi;
+};
+
+struct rt_bvh_node {
+	struct rt_bvh_box child[2];
+};
+
+/* A primitive reference: the kind in the top bit, the index into the kind's
+ * array below it. Triangles (branch meshes) are the second kind. */
+#define RT_PRIM_KIND_SHIFT 31
+#define RT_PRIM_SPHERE 0u
+#define RT_PRIM_TRIANGLE 1u
+#define RT_PRIM_INDEX_MASK 0x7fffffffu
+
+/* The deepest BVH the builder makes (the root at depth 0), which sizes the
+ * tracer's traversal stack: each level leaves at most one child waiting. */
+#define RT_BVH_MAX_DEPTH 64
+
+/* Counts per launched work-item in the counting build: flops, rays and BVH
+ * node visits. */
+#define RT_ITEM_COUNTS 3
 
 /* A ray waiting in the wavefront kernel's queue. */
 struct rt_ray {
@@ -118,6 +154,9 @@ _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_scene) == 160, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");
+_Static_assert(offsetof(struct rt_scene, bvh_node_offset) == 148, "rt_scene layout");
+_Static_assert(sizeof(struct rt_bvh_node) == 64, "rt_bvh_node layout");
+_Static_assert(offsetof(struct rt_bvh_node, child[1].lo) == 32, "rt_bvh_node layout");
 #endif
 
 /* The scalars that share a 16-byte load with a vector, by name. They take the
@@ -145,6 +184,18 @@ static inline float material_ambient(float4 color)
 static inline float checker_size(float4 checker_color)
 {
 	return checker_color.w;
+}
+
+/* lo, hi: a struct rt_bvh_box's corners. The child's node index or first
+ * primitive reference, and its reference count (0: an inner node). */
+static inline int bvh_child_index(float4 lo)
+{
+	return as_int(lo.w);
+}
+
+static inline int bvh_child_count(float4 hi)
+{
+	return as_int(hi.w);
 }
 
 /* origin: struct rt_ray's origin lane */

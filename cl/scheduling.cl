@@ -27,8 +27,9 @@ static scene_ptr load_scene(__global const uint4 *scene_global, __local uint4 *s
 static void store_counts(struct tracer *tr, __global ulong *counts, uint item)
 {
 #ifdef RTCL_COUNT_FLOPS
-	counts[2 * item] = tr->flops;
-	counts[2 * item + 1] = tr->rays;
+	counts[RT_ITEM_COUNTS * item] = tr->flops;
+	counts[RT_ITEM_COUNTS * item + 1] = tr->rays;
+	counts[RT_ITEM_COUNTS * item + 2] = tr->node_visits;
 #else
 	(void)tr;
 	(void)counts;

@@ -1,10 +1,11 @@
 /* The tracer: what a pixel is (docs/RENDERING.md), written once and used by
  * every scheduling kernel. OpenCL C 1.2.
  *
- * The tracer is five files, built in this order before the kernel file
+ * The tracer is six files, built in this order before the kernel file
  * (host/program.c lists them) and read best in the same order:
  *   tracer.cl      counting, the scene as the tracer sees it, vector helpers
  *   intersect.cl   the nearest (or any) hit over spheres and planes
+ *   traverse.cl    the same over the spheres through the BVH (RTCL_BVH)
  *   shade.cl       the base colour, lights and shadow rays, spawned rays
  *   walk.cl        ray_step, one ray by one intersection; the pixel's walk
  *   scheduling.cl  what the scheduling kernels share: scene loading, counts,
@@ -16,7 +17,10 @@
  *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack
  *   RTCL_SCENE_IN_LOCAL copy the scene into __local memory per work-group;
  *                       without it the tracer reads it from __global memory
- *   RTCL_COUNT_FLOPS    count floating-point operations and rays per work-item
+ *   RTCL_BVH            find sphere hits through the scene's BVH rather than
+ *                       by testing every sphere (--accel bvh)
+ *   RTCL_COUNT_FLOPS    count floating-point operations, rays and BVH node
+ *                       visits per work-item
  *   RTCL_COUNT_WRITES   count writes per pixel (tests only)
  *
  * Contraction into fused multiply-adds is off so that the same source gives the
@@ -48,9 +52,11 @@
 #ifdef RTCL_COUNT_FLOPS
 #define COUNT_FLOPS(tr, n) ((tr)->flops += (n))
 #define COUNT_RAY(tr) ((tr)->rays++)
+#define COUNT_NODE_VISIT(tr) ((tr)->node_visits++)
 #else
 #define COUNT_FLOPS(tr, n) ((void)0)
 #define COUNT_RAY(tr) ((void)0)
+#define COUNT_NODE_VISIT(tr) ((void)0)
 #endif
 
 /* What the operations written below cost, by RENDERING.md's rules: +, −, ×,
@@ -69,6 +75,12 @@
 #define FLOPS_NORMALIZE3 (FLOPS_DOT3 + 1 + FLOPS_MUL3)
 /* sphere_gap: two chains of three fmas, then an fma and a product, 15. */
 #define FLOPS_SPHERE_GAP (6 * FLOPS_FMA + FLOPS_FMA + 1)
+/* The BVH's per-ray set-up: 1/d, three divisions, and o/d, three products. */
+#define FLOPS_BOX_SETUP (3 + FLOPS_MUL3)
+/* box_hit, one box: six slab fmas, a min and a max per axis, the entry as
+ * the max of three and 0, the exit as the min of three and the nearest hit
+ * so far: 12 + 6 + 3 + 3 = 24. */
+#define FLOPS_BOX_TEST (6 * FLOPS_FMA + 6 + 3 + 3)
 
 typedef RTCL_SCENE_SPACE const struct rt_scene *scene_ptr;
 
@@ -96,10 +108,13 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_sphere *spheres;
 	RTCL_SCENE_SPACE const struct rt_plane *planes;
 	RTCL_SCENE_SPACE const struct rt_light *lights;
+	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
+	RTCL_SCENE_SPACE const uint *refs; /* the BVH leaves' primitives (RT_PRIM_*) */
 	__global ulong *pixel_flops; /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
 	ulong flops;
-	ulong rays; /* primary, secondary and shadow rays traced */
+	ulong rays;	   /* primary, secondary and shadow rays traced */
+	ulong node_visits; /* BVH nodes visited, every ray's */
 #endif
 };
 
@@ -156,10 +171,13 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *coun
 	tr->spheres = (RTCL_SCENE_SPACE const struct rt_sphere *)(base + scene->sphere_offset);
 	tr->planes = (RTCL_SCENE_SPACE const struct rt_plane *)(base + scene->plane_offset);
 	tr->lights = (RTCL_SCENE_SPACE const struct rt_light *)(base + scene->light_offset);
-	tr->pixel_flops = counts + 2 * get_global_size(0) * get_global_size(1);
+	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh_node *)(base + scene->bvh_node_offset);
+	tr->refs = (RTCL_SCENE_SPACE const uint *)(base + scene->bvh_ref_offset);
+	tr->pixel_flops = counts + RT_ITEM_COUNTS * get_global_size(0) * get_global_size(1);
 #ifdef RTCL_COUNT_FLOPS
 	tr->flops = 0;
 	tr->rays = 0;
+	tr->node_visits = 0;
 #endif
 }
 

@@ -28,6 +28,7 @@ struct options {
 	const char *work_map_path; /* --work-map IMAGE */
 	int work_map_log;	   /* --work-map-scale log */
 	int linear_encoding;	   /* --encoding linear: 8-bit files hold round(255 c) */
+	int accel;		   /* --accel: 1 bvh (ACCEL_BVH), 0 none */
 	int quiet, verbose;
 	int help, version;
 };

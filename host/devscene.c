@@ -98,7 +98,20 @@ static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
 	out->checker_t_axis = drop == 2 ? 1 : 2;
 }
 
-void *devscene_pack(const struct scene *scene, int width, int height, int max_depth, size_t *bytes)
+/* The BVH's nodes and references, after the lights (none without a BVH). */
+static void pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh)
+{
+	if (!bvh || bvh->node_count == 0)
+		return;
+	header->bvh_node_count = bvh->node_count;
+	memcpy(block + header->bvh_node_offset, bvh->nodes,
+	       (size_t)bvh->node_count * sizeof(*bvh->nodes));
+	memcpy(block + header->bvh_ref_offset, bvh->refs,
+	       (size_t)bvh->ref_count * sizeof(*bvh->refs));
+}
+
+void *devscene_pack(const struct scene *scene, const struct bvh *bvh, int width, int height,
+		    int max_depth, size_t *bytes)
 {
 	size_t material_offset = round16(sizeof(struct rt_scene));
 	size_t sphere_offset =
@@ -107,7 +120,9 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 			   RT_SPHERE_GROUP;
 	size_t plane_offset = sphere_offset + (size_t)sphere_slots * sizeof(struct rt_sphere);
 	size_t light_offset = plane_offset + (size_t)scene->plane_count * sizeof(struct rt_plane);
-	size_t total = light_offset + (size_t)scene->light_count * sizeof(struct rt_light);
+	size_t node_offset = light_offset + (size_t)scene->light_count * sizeof(struct rt_light);
+	size_t ref_offset = node_offset + (bvh ? (size_t)bvh->node_count * sizeof(*bvh->nodes) : 0);
+	size_t total = round16(ref_offset + (bvh ? (size_t)bvh->ref_count * sizeof(rt_uint) : 0));
 	unsigned char *block = calloc(1, total);
 
 	if (!block)
@@ -130,6 +145,9 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	header->plane_offset = (rt_uint)plane_offset;
 	header->light_offset = (rt_uint)light_offset;
 	header->total_bytes = (rt_uint)total;
+	header->bvh_node_offset = (rt_uint)node_offset;
+	header->bvh_ref_offset = (rt_uint)ref_offset;
+	pack_bvh(block, header, bvh);
 
 	struct rt_material *materials = (struct rt_material *)(block + material_offset);
 	for (int i = 0; i < scene->material_count; i++)

@@ -164,7 +164,22 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			 const struct render_settings *s, struct render_result *res, void **block,
 			 char *err, size_t err_size)
 {
-	*block = devscene_pack(scene, s->width, s->height, s->max_depth, &res->scene_bytes);
+	struct bvh bvh = {0};
+	int use_bvh = s->accel == ACCEL_BVH && scene->sphere_count > 0;
+	double lap = timing_now();
+
+	if (use_bvh && bvh_build_spheres(scene, &bvh)) {
+		snprintf(err, err_size, "out of host memory for the BVH of %d spheres",
+			 scene->sphere_count);
+		return -1;
+	}
+	res->bvh_build_ms = timing_lap_ms(&lap);
+	res->bvh_nodes = bvh.node_count;
+	res->bvh_depth = bvh.depth;
+	res->bvh_sah_cost = bvh.sah_cost;
+	*block = devscene_pack(scene, use_bvh ? &bvh : NULL, s->width, s->height, s->max_depth,
+			       &res->scene_bytes);
+	bvh_free(&bvh);
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
 	if (!*block || !res->rgb) {
 		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
@@ -175,6 +190,10 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 		return -1;
 	res->scene_in_local = !s->force_global_scene &&
 			      res->scene_bytes + LOCAL_MEM_RESERVE <= dev->local_mem_size;
+	if (s->verbose && use_bvh)
+		fprintf(stderr, "rtcl: BVH of %d spheres: %d nodes, depth %d, SAH cost %.2f, built in %.3f ms\n",
+			scene->sphere_count, res->bvh_nodes, res->bvh_depth, res->bvh_sah_cost,
+			res->bvh_build_ms);
 	if (s->verbose)
 		fprintf(stderr, "rtcl: scene is %zu bytes; %s\n", res->scene_bytes,
 			res->scene_in_local
@@ -281,7 +300,8 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	    launch_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);
-	if (program_build(dev, s, res->scene_in_local, program, res->build_options, err, err_size))
+	if (program_build(dev, s, res->scene_in_local, res->bvh_nodes > 0, program,
+			  res->build_options, err, err_size))
 		return -1;
 	res->times.build = timing_lap_ms(&lap);
 	return 0;

@@ -12,7 +12,7 @@
 
 /* The tracer's sources, in the order the compiler sees them; the kernel's own
  * cl/NAME.cl follows. */
-const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl",	  "intersect.cl",
+const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl",	  "intersect.cl", "traverse.cl",
 					      "shade.cl",      "walk.cl",	  "scheduling.cl"};
 const int program_tracer_source_count =
 	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
@@ -147,7 +147,8 @@ static int load_sources(const char *dir, const char *kernel_name, struct sources
 
 /* rtcl's build options for the settings, then RTCL_BUILD_OPTIONS. */
 static int format_options(const struct device *dev, const struct render_settings *s,
-			  int scene_in_local, char *options, char *err, size_t err_size)
+			  int scene_in_local, int use_bvh, char *options, char *err,
+			  size_t err_size)
 {
 	const char *extra = getenv("RTCL_BUILD_OPTIONS");
 
@@ -157,8 +158,9 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s", s->max_depth,
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s", s->max_depth,
 		 s->batch > 0 ? s->batch : 1, scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
+		 use_bvh ? " -DRTCL_BVH" : "",
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
@@ -167,14 +169,14 @@ static int format_options(const struct device *dev, const struct render_settings
 }
 
 int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
-		  cl_program *program, char *options, char *err, size_t err_size)
+		  int use_bvh, cl_program *program, char *options, char *err, size_t err_size)
 {
 	struct sources src;
 	int ret = -1;
 	cl_int status;
 
 	if (load_sources(s->source_dir, s->kernel->name, &src, err, err_size) ||
-	    format_options(dev, s, scene_in_local, options, err, err_size))
+	    format_options(dev, s, scene_in_local, use_bvh, options, err, err_size))
 		goto out_free_sources;
 	*program = clCreateProgramWithSource(dev->context, (cl_uint)src.count, src.texts, NULL,
 					     &status);

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../cl/rtcl_shared.h"
 #include "checks.h"
 #include "launch.h"
 #include "program.h"
@@ -51,13 +52,13 @@ static void release_state(struct launch_state *st)
 		clReleaseProgram(st->program);
 }
 
-/* Bytes of the counts buffer: two per work-item (flops, rays), then one per
- * pixel (flops). */
+/* Bytes of the counts buffer: RT_ITEM_COUNTS per work-item (flops, rays, node
+ * visits), then one per pixel (flops). */
 static double counts_bytes(const struct render_settings *s, const struct render_result *res)
 {
 	double items = (double)res->global_size[0] * res->global_size[1];
 
-	return (items * 2 + (double)s->width * s->height) * sizeof(cl_ulong);
+	return (items * RT_ITEM_COUNTS + (double)s->width * s->height) * sizeof(cl_ulong);
 }
 
 static int set_args(const struct launch_state *st, const struct render_result *res, char *err,
@@ -151,13 +152,14 @@ static int launch_all(struct device *dev, const struct render_settings *s, struc
 	return launch_end_timing(res, err, err_size);
 }
 
-/* Reads the per-work-item flops and rays (interleaved on the device) and the
+/* Reads the per-work-item flops, rays and node visits (interleaved on the
+ * device) and the
  * per-pixel flops that follow them. */
 static cl_int read_counts(struct device *dev, const struct render_settings *s,
 			  const struct launch_state *st, struct render_result *res)
 {
 	size_t pixels = (size_t)s->width * s->height;
-	size_t item_bytes = res->item_count * 2 * sizeof(cl_ulong);
+	size_t item_bytes = res->item_count * RT_ITEM_COUNTS * sizeof(cl_ulong);
 	cl_ulong *counts = malloc(item_bytes);
 	cl_int status;
 
@@ -174,9 +176,10 @@ static cl_int read_counts(struct device *dev, const struct render_settings *s,
 					     pixels * sizeof(cl_ulong), res->pixel_flops, 0, NULL,
 					     NULL);
 	for (size_t i = 0; status == CL_SUCCESS && i < res->item_count; i++) {
-		res->item_flops[i] = counts[2 * i];
-		res->total_flops += counts[2 * i];
-		res->total_rays += counts[2 * i + 1];
+		res->item_flops[i] = counts[RT_ITEM_COUNTS * i];
+		res->total_flops += counts[RT_ITEM_COUNTS * i];
+		res->total_rays += counts[RT_ITEM_COUNTS * i + 1];
+		res->total_node_visits += counts[RT_ITEM_COUNTS * i + 2];
 	}
 	free(counts);
 	return status;

@@ -32,7 +32,7 @@ struct wavefront {
 	size_t bounce_local;  /* 1D work-group size of the bounce launches */
 	uint64_t *item_flops; /* every launch's work-items, appended */
 	size_t item_count, item_alloc;
-	uint64_t rays;
+	uint64_t rays, node_visits;
 };
 
 static void release_queues(struct wavefront *w)
@@ -84,7 +84,7 @@ static int create_queues(struct device *dev, const struct render_settings *s, st
 	size_t rounded = (w->capacity + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
 	w->item_capacity = rounded > w->item_capacity ? rounded : w->item_capacity;
 	w->item_counts = device_create_buffer(dev, CL_MEM_READ_WRITE,
-					      s->count_flops ? w->item_capacity * 2 * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES, NULL,
+					      s->count_flops ? w->item_capacity * RT_ITEM_COUNTS * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES, NULL,
 					      "per-work-item counts", err, err_size);
 	return w->item_counts ? 0 : -1;
 }
@@ -123,14 +123,16 @@ static cl_int append_counts(struct device *dev, struct wavefront *w, size_t item
 		w->item_flops = grown;
 		w->item_alloc = alloc;
 	}
-	cl_ulong *counts = malloc(items * 2 * sizeof(cl_ulong));
+	cl_ulong *counts = malloc(items * RT_ITEM_COUNTS * sizeof(cl_ulong));
 	if (!counts)
 		return CL_OUT_OF_HOST_MEMORY;
 	cl_int status = clEnqueueReadBuffer(dev->queue, w->item_counts, CL_TRUE, 0,
-					    items * 2 * sizeof(cl_ulong), counts, 0, NULL, NULL);
+					    items * RT_ITEM_COUNTS * sizeof(cl_ulong), counts, 0,
+					    NULL, NULL);
 	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
-		w->item_flops[w->item_count++] = counts[2 * i];
-		w->rays += counts[2 * i + 1];
+		w->item_flops[w->item_count++] = counts[RT_ITEM_COUNTS * i];
+		w->rays += counts[RT_ITEM_COUNTS * i + 1];
+		w->node_visits += counts[RT_ITEM_COUNTS * i + 2];
 	}
 	free(counts);
 	return status;
@@ -225,6 +227,7 @@ static cl_int render_frame(struct device *dev, const struct render_settings *s,
 	*ms = 0;
 	w->item_count = 0;
 	w->rays = 0;
+	w->node_visits = 0;
 	status = launch_primary(dev, s, res, w, local_bytes, ms, label);
 	for (int bounce = 0; status == CL_SUCCESS && queued > 0; bounce++)
 		status = launch_bounce(dev, s, w, local_bytes, bounce, &queued, ms, label);
@@ -252,6 +255,7 @@ static int read_back(struct device *dev, const struct render_settings *s, struct
 		for (size_t i = 0; i < res->item_count; i++)
 			res->total_flops += res->item_flops[i];
 		res->total_rays = w->rays;
+		res->total_node_visits = w->node_visits;
 	}
 	if (status == CL_SUCCESS)
 		status = checks_read(dev, s, &w->image, w->write_counts, res);
