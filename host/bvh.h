@@ -30,7 +30,9 @@ struct bvh {
 };
 
 /* Leaves hold at most this many primitives. */
+#ifndef BVH_MAX_LEAF
 #define BVH_MAX_LEAF 4
+#endif
 /* SAH bins per axis. */
 #define BVH_BINS 16
 
@@ -49,7 +51,9 @@ void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *
  * (two box tests) costing BVH_NODE_COST: what a ray through the root's box
  * expects to spend. */
 double bvh_sah_cost(const struct bvh *bvh);
+#ifndef BVH_NODE_COST
 #define BVH_NODE_COST 1.0
+#endif
 
 void bvh_free(struct bvh *bvh);
 
