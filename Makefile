@@ -139,10 +139,10 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # The scene loader and what it calls: its parts, the file reader, the interrupt
 # bookkeeping the file module keeps.
 FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/files.c \
-	host/interrupt.c host/devscene.c
+	host/interrupt.c host/devscene.c host/bvh.c
 
 $(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h $(FUZZ_SOURCES) host/scene.h \
-		host/scene_loader.h host/files.h host/devscene.h cl/rtcl_shared.h
+		host/scene_loader.h host/files.h host/devscene.h host/bvh.h cl/rtcl_shared.h
 	mkdir -p $(FUZZ_DIR)
 	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson -lm
 
