@@ -73,38 +73,31 @@ static int centroid_bin(const struct bvh_prim *p, const struct split *s)
 	return bin < 0 ? 0 : bin >= BVH_BINS ? BVH_BINS - 1 : bin;
 }
 
-/* The best split of range along axis into *best, if cheaper than *best. */
-static void try_axis(const struct bvh_prim *prims, int begin, int end, const struct box *centroids,
-		     int axis, double parent_area, struct split *best)
+/* Primitives binned along one axis: per bin, how many and their box. */
+struct axis_bins {
+	struct split s;
+	int counts[BVH_BINS];
+	struct box boxes[BVH_BINS];
+};
+
+/* The best split of the binned axis into *best, if cheaper than *best: a
+ * sweep from the right for the right sides' costs, then from the left. */
+static void sweep_axis(const struct axis_bins *a, double parent_area, struct split *best)
 {
-	struct split s = {axis, 0, 0.0, centroids->lo[axis], 0.0f};
-	double extent = (double)centroids->hi[axis] - centroids->lo[axis];
-	struct box bins[BVH_BINS], right;
-	int counts[BVH_BINS] = {0};
+	struct split s = a->s;
+	struct box left, right;
 	double right_cost[BVH_BINS];
 
-	if (!(extent > 0.0))
-		return;
-	s.scale = (float)(BVH_BINS / extent);
-	for (int b = 0; b < BVH_BINS; b++)
-		box_empty(&bins[b]);
-	for (int i = begin; i < end; i++) {
-		int b = centroid_bin(&prims[i], &s);
-		counts[b]++;
-		box_grow(&bins[b], prims[i].lo, prims[i].hi);
-	}
-	/* Sweep from the right for the right sides' costs, then from the left. */
 	box_empty(&right);
 	for (int b = BVH_BINS - 1, n = 0; b > 0; b--) {
-		n += counts[b];
-		box_grow(&right, bins[b].lo, bins[b].hi);
+		n += a->counts[b];
+		box_grow(&right, a->boxes[b].lo, a->boxes[b].hi);
 		right_cost[b] = n ? box_area(&right) * n : -1.0;
 	}
-	struct box left;
 	box_empty(&left);
 	for (int b = 1, n = 0; b < BVH_BINS; b++) {
-		n += counts[b - 1];
-		box_grow(&left, bins[b - 1].lo, bins[b - 1].hi);
+		n += a->counts[b - 1];
+		box_grow(&left, a->boxes[b - 1].lo, a->boxes[b - 1].hi);
 		if (n == 0 || right_cost[b] < 0.0)
 			continue;
 		s.bin = b;
@@ -112,6 +105,36 @@ static void try_axis(const struct bvh_prim *prims, int begin, int end, const str
 		if (s.cost < best->cost)
 			*best = s;
 	}
+}
+
+/* Bins the range along every axis whose centroids spread, in one pass over
+ * the primitives, and keeps the cheapest split in *best. */
+static void find_split(const struct bvh_prim *prims, int begin, int end,
+		       const struct box *centroids, double parent_area, struct split *best)
+{
+	struct axis_bins bins[3];
+	int axis_count = 0;
+
+	for (int axis = 0; axis < 3; axis++) {
+		double extent = (double)centroids->hi[axis] - centroids->lo[axis];
+		if (!(extent > 0.0))
+			continue;
+		struct axis_bins *a = &bins[axis_count];
+		a->s = (struct split){axis, 0, 0.0, centroids->lo[axis], (float)(BVH_BINS / extent)};
+		memset(a->counts, 0, sizeof(a->counts));
+		for (int b = 0; b < BVH_BINS; b++)
+			box_empty(&a->boxes[b]);
+		axis_count++;
+	}
+	for (int i = begin; i < end; i++) {
+		for (int k = 0; k < axis_count; k++) {
+			int b = centroid_bin(&prims[i], &bins[k].s);
+			bins[k].counts[b]++;
+			box_grow(&bins[k].boxes[b], prims[i].lo, prims[i].hi);
+		}
+	}
+	for (int k = 0; k < axis_count; k++)
+		sweep_axis(&bins[k], parent_area, best);
 }
 
 /* Moves the primitives that go left to the front; returns the first that
@@ -147,8 +170,7 @@ static int choose_split(struct builder *b, int begin, int end, const struct box 
 	for (int i = begin; i < end; i++)
 		box_grow(&centroids, b->prims[i].centroid, b->prims[i].centroid);
 	double area = box_area(bounds);
-	for (int axis = 0; axis < 3; axis++)
-		try_axis(b->prims, begin, end, &centroids, axis, area > 0.0 ? area : 1.0, &best);
+	find_split(b->prims, begin, end, &centroids, area > 0.0 ? area : 1.0, &best);
 	if (best.cost == DBL_MAX) /* every centroid in one bin: no SAH split */
 		return n > BVH_MAX_LEAF || must_split ? begin + n / 2 : begin;
 	if (n <= BVH_MAX_LEAF && !must_split && best.cost >= n)
