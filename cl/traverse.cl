@@ -62,72 +62,56 @@ static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, flo
 	}
 }
 
-/* A node's child: a node (count 0) or a leaf of count references. */
-struct bvh_child {
+/* A child waiting on the traversal stack: a node (count 0) or a leaf. */
+struct bvh_entry {
 	int index, count;
 };
 
-/* Takes child c, whose box the ray meets: tests it at once if it is a leaf,
- * else makes it the next node, or when there is one already, makes it wait
- * on the stack. */
-static inline void bvh_take(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
-			    struct bvh_child c, bool any_hit, float *nearest, struct hit *best,
-			    int *next, int *stack, int *waiting)
-{
-	if (c.count > 0)
-		leaf_intersect(tr, frame, o, d, c.index, c.count, any_hit, nearest, best);
-	else if (*next < 0)
-		*next = c.index;
-	else
-		stack[(*waiting)++] = c.index;
-}
-
 /* Depth first from the root, nearer child first (by where the ray enters the
- * two boxes): leaves are tested as soon as their box is met, the nearer
- * inner child is visited next and the farther one waits on a stack of node
- * indices in private memory. Boxes beyond the nearest hit found so far are
- * skipped. With any_hit, stops at the first hit. The closest hit is that of
- * brute force: the same sphere test, ties to the lower index
- * (sphere_consider), and boxes padded so that every sphere the test hits is
- * inside (host/bvh.c, BVH_SPHERE_PAD). Only a node with two inner children
- * met leaves one waiting, so the stack holds at most one node per level. */
+ * two boxes), the farther one waiting on a stack in private memory; boxes
+ * beyond the nearest hit found so far are skipped. With any_hit, stops at
+ * the first hit. The closest hit is that of brute force: the same sphere
+ * test, ties to the lower index (sphere_consider), and boxes padded so that
+ * every sphere the test hits is inside (host/bvh.c, BVH_SPHERE_PAD). */
 static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
 			  bool any_hit, float *nearest, struct hit *best)
 {
-	int stack[RT_BVH_MAX_DEPTH];
-	int waiting = 0, node = 0; /* the root */
+	struct bvh_entry stack[RT_BVH_MAX_DEPTH];
+	struct bvh_entry at = {0, 0}; /* the root */
 	struct box_ray ray = box_ray(tr, o, d);
+	int waiting = 0;
 
 	for (;;) {
-		RTCL_SCENE_SPACE const struct rt_bvh_node *n = &tr->nodes[node];
-		float4 lo0 = n->child[0].lo, hi0 = n->child[0].hi;
-		float4 lo1 = n->child[1].lo, hi1 = n->child[1].hi;
-		float t0, t1;
-		bool hit0 = box_hit(lo0, hi0, &ray, *nearest, &t0);
-		bool hit1 = box_hit(lo1, hi1, &ray, *nearest, &t1);
-		struct bvh_child c0 = {bvh_child_index(lo0), bvh_child_count(hi0)};
-		struct bvh_child c1 = {bvh_child_index(lo1), bvh_child_count(hi1)};
-		bool swap = hit1 && (!hit0 || t1 < t0); /* child 1 is met first */
-		int next = -1;
-
-		COUNT_NODE_VISIT(tr);
-		COUNT_FLOPS(tr, 2 * FLOPS_BOX_TEST);
-		if (hit0 || hit1)
-			bvh_take(tr, frame, o, d, swap ? c1 : c0, any_hit, nearest, best, &next,
-				 stack, &waiting);
-		/* The farther child, unless the nearer one's leaf hit closer. */
-		if (hit0 && hit1 && (swap ? t0 : t1) <= *nearest &&
-		    !(any_hit && best->sphere >= 0))
-			bvh_take(tr, frame, o, d, swap ? c0 : c1, any_hit, nearest, best, &next,
-				 stack, &waiting);
-		if (any_hit && best->sphere >= 0)
-			return;
-		if (next < 0) {
-			if (waiting == 0)
+		if (at.count > 0) {
+			leaf_intersect(tr, frame, o, d, at.index, at.count, any_hit, nearest, best);
+			if (any_hit && best->sphere >= 0)
 				return;
-			next = stack[--waiting];
+		} else {
+			RTCL_SCENE_SPACE const struct rt_bvh_node *node = &tr->nodes[at.index];
+			float4 lo0 = node->child[0].lo, hi0 = node->child[0].hi;
+			float4 lo1 = node->child[1].lo, hi1 = node->child[1].hi;
+			float t0, t1;
+			bool hit0 = box_hit(lo0, hi0, &ray, *nearest, &t0);
+			bool hit1 = box_hit(lo1, hi1, &ray, *nearest, &t1);
+
+			COUNT_NODE_VISIT(tr);
+			COUNT_FLOPS(tr, 2 * FLOPS_BOX_TEST);
+			struct bvh_entry c0 = {bvh_child_index(lo0), bvh_child_count(hi0)};
+			struct bvh_entry c1 = {bvh_child_index(lo1), bvh_child_count(hi1)};
+			if (hit0 && hit1) {
+				bool first0 = t0 <= t1;
+				stack[waiting++] = first0 ? c1 : c0;
+				at = first0 ? c0 : c1;
+				continue;
+			}
+			if (hit0 || hit1) {
+				at = hit0 ? c0 : c1;
+				continue;
+			}
 		}
-		node = next;
+		if (waiting == 0)
+			return;
+		at = stack[--waiting];
 	}
 }
 
