@@ -298,7 +298,9 @@ Test(kernels, global_scene_matches_local, .timeout = 600)
 /* --accel bvh gives brute force's image, byte for byte, in every kernel and
  * with the scene (and so the BVH) in __local or __global memory: the same
  * sphere test, ties to the lower index, boxes padded beyond rounding
- * (docs/bvh.md). */
+ * (docs/bvh.md). The wavefront adds a pixel's rays in no fixed order
+ * (atomics), so its image may differ from the stack walk's, with either
+ * --accel, by 1/255 at most (wavefront_matches_the_stack_walk). */
 static void check_bvh_matches_brute_force(const char *path, int width, int height)
 {
 	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
@@ -320,7 +322,13 @@ static void check_bvh_matches_brute_force(const char *path, int width, int heigh
 			snprintf(what, sizeof(what), "%s %s --accel bvh, scene in %s", path,
 				 kernels[k], global ? "__global" : "__local if it fits");
 			unsigned char *got = render_checked(&dev, &scene, &s, what);
-			expect_same_image(want, got, width, height, what);
+			if (s.kernel->multi_pass)
+				for (size_t i = 0; i < (size_t)width * height * 3; i++)
+					cr_assert_leq(abs(got[i] - want[i]), 1,
+						      "%s: byte %zu is %u, brute force %u", what, i,
+						      got[i], want[i]);
+			else
+				expect_same_image(want, got, width, height, what);
 			free(got);
 		}
 	}
