@@ -120,7 +120,8 @@ static void find_split(const struct bvh_prim *prims, int begin, int end,
 		if (!(extent > 0.0))
 			continue;
 		struct axis_bins *a = &bins[axis_count];
-		a->s = (struct split){axis, 0, 0.0, centroids->lo[axis], (float)(BVH_BINS / extent)};
+		a->s = (struct split){axis, 0, 0.0, centroids->lo[axis],
+				      (float)(BVH_BINS / extent)};
 		memset(a->counts, 0, sizeof(a->counts));
 		for (int b = 0; b < BVH_BINS; b++)
 			box_empty(&a->boxes[b]);
@@ -155,8 +156,8 @@ static int partition(struct bvh_prim *prims, int begin, int end, const struct sp
 
 /* Returns where range [begin, end) splits, or begin when it stays a leaf.
  * must_split: the root, which is always a node. */
-static int choose_split(struct builder *b, int begin, int end, const struct box *bounds,
-			int depth, int must_split)
+static int choose_split(struct builder *b, int begin, int end, const struct box *bounds, int depth,
+			int must_split)
 {
 	int n = end - begin;
 	struct box centroids;

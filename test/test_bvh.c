@@ -127,8 +127,8 @@ Test(bvh, random_spheres_tree_and_cost)
 		/* Brute force costs n tests a ray; on 2000 small spheres the
 		 * tree's expected cost is a few dozen, below n / 25 (measured 13.9 for 400). */
 		fprintf(stderr, "%d spheres: SAH cost %.2f\n", n, bvh.sah_cost);
-		cr_expect_lt(bvh.sah_cost, n >= 400 ? n / 25.0 : n + 1.0, "%d spheres: SAH cost %.1f",
-			     n, bvh.sah_cost);
+		cr_expect_lt(bvh.sah_cost, n >= 400 ? n / 25.0 : n + 1.0,
+			     "%d spheres: SAH cost %.1f", n, bvh.sah_cost);
 		bvh_free(&bvh);
 	}
 }
