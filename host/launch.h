@@ -12,6 +12,9 @@
 
 /* Bytes of __local memory the kernels need besides the scene. */
 #define LOCAL_MEM_RESERVE 256
+/* The scene goes into __local memory when it takes at most 1/LOCAL_MEM_SHARE
+ * of it (launch_prepare_scene says why). */
+#define LOCAL_MEM_SHARE 3
 
 /* The most work-items one launch may have: the kernels index them with
  * 32-bit uints (launch.c says where). */
