@@ -68,7 +68,9 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 		COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
 		t = near > 0.0f ? near : far;
 	}
-	if (t > 0.0f && t < *nearest) {
+	/* Equal distances go to the lower index, as in brute force's index
+	 * order, so that the BVH's order of visits gives the same hits. */
+	if (t > 0.0f && (t < *nearest || (t == *nearest && i < best->sphere))) {
 		*nearest = t;
 		best->sphere = i;
 	}
@@ -153,6 +155,12 @@ static void triangles_brute_force(struct tracer *tr, float3 o, float3 d, bool an
 #error "intersect_scene tests spheres four at a time"
 #endif
 
+#ifdef RTCL_BVH
+/* cl/traverse.cl: the spheres' part of intersect_scene through the BVH. */
+static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
+			  bool any_hit, float *nearest, struct hit *best);
+#endif
+
 /* Returns the nearest object on the ray with 0 < t < max_t; hit.t is 0 when
  * there is none. With any_hit, returns the first such object found instead:
  * enough for a shadow ray. The one loop serves both kinds of ray, so that
@@ -165,6 +173,9 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 	/* RT_SPHERE_GROUP spheres at a time, so that when the ray misses them
 	 * all, as it mostly does, they cost one branch. */
 	struct ray_frame frame = ray_frame(tr, o, d);
+#ifdef RTCL_BVH
+	bvh_intersect(tr, &frame, o, d, any_hit, &nearest, &best);
+#else
 	for (int i = 0; i < tr->scene->sphere_slots; i += RT_SPHERE_GROUP) {
 		float4 s0 = tr->spheres[i].center; /* one load: the centre and radius² */
 		float4 s1 = tr->spheres[i + 1].center;
@@ -187,6 +198,7 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 				break;
 		}
 	}
+#endif
 	if (!(any_hit && best.sphere >= 0))
 		triangles_brute_force(tr, o, d, any_hit, &nearest, &best);
 	for (int i = 0;
