@@ -396,7 +396,7 @@ def test_accel_bvh_is_the_default_and_matches_none(tmp_path):
         if stats["accel"] == "bvh":
             assert stats["bvh"]["nodes"] == 16 and stats["bvh"]["depth"] >= 4
             assert stats["node_visits"] > 0 and stats["node_visits_per_ray"] > 1
-            assert "rtcl: BVH of 60 spheres: 16 nodes" in result.stderr
+            assert "rtcl: BVH of 60 spheres and 0 triangles: 16 nodes" in result.stderr
             assert "-DRTCL_BVH" in stats["build_options"]
             assert "BVH node visits" in result.stdout
         else:
