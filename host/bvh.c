@@ -285,15 +285,46 @@ void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *
 	out->ref = RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT | (uint32_t)i;
 }
 
-int bvh_build_spheres(const struct scene *scene, struct bvh *out)
+/* A triangle's box is padded like a sphere's, by BVH_SPHERE_PAD of its
+ * largest vertex coordinate: the Moller-Trumbore test and the box test round
+ * differently, and the pad keeps every ray the triangle test takes inside the
+ * box. It also gives an axis-aligned (flat) triangle a box of some thickness,
+ * so that the slab test never meets a zero-width slab. The vertices are the
+ * device's: v0 as float, v0 + e1 and v0 + e2 with the edges as the packer
+ * rounds them (host/devscene.c), which the triangle test works with. */
+void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim *out)
 {
-	int n = scene->sphere_count;
+	double v[3][3], scale = 0.0;
+
+	for (int k = 0; k < 3; k++) {
+		v[0][k] = (float)tri->v[0][k];
+		v[1][k] = v[0][k] + (float)(tri->v[1][k] - tri->v[0][k]);
+		v[2][k] = v[0][k] + (float)(tri->v[2][k] - tri->v[0][k]);
+		for (int j = 0; j < 3; j++)
+			scale = fmax(scale, fabs(v[j][k]));
+	}
+	double pad = BVH_SPHERE_PAD * scale;
+	for (int k = 0; k < 3; k++) {
+		double lo = fmin(fmin(v[0][k], v[1][k]), v[2][k]);
+		double hi = fmax(fmax(v[0][k], v[1][k]), v[2][k]);
+		out->lo[k] = nextafterf((float)(lo - pad), -FLT_MAX);
+		out->hi[k] = nextafterf((float)(hi + pad), FLT_MAX);
+		out->centroid[k] = (float)((v[0][k] + v[1][k] + v[2][k]) / 3.0);
+	}
+	out->ref = RT_PRIM_TRIANGLE << RT_PRIM_KIND_SHIFT | (uint32_t)i;
+}
+
+int bvh_build_scene(const struct scene *scene, struct bvh *out)
+{
+	int spheres = scene->sphere_count, n = spheres + scene->triangle_count;
 	struct bvh_prim *prims = malloc((size_t)(n ? n : 1) * sizeof(*prims));
 
 	if (!prims)
 		return -1;
-	for (int i = 0; i < n; i++)
+	for (int i = 0; i < spheres; i++)
 		bvh_sphere_prim(&scene->spheres[i], i, &prims[i]);
+	for (int i = 0; i < scene->triangle_count; i++)
+		bvh_triangle_prim(&scene->triangles[i], i, &prims[spheres + i]);
 	int ret = bvh_build(prims, n, out);
 	free(prims);
 	return ret;

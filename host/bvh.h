@@ -1,8 +1,8 @@
 /* The bounding volume hierarchy (docs/bvh.md): a binned surface-area-heuristic
  * builder over a generic list of primitive boxes, flattened into the
- * two-wide device layout of cl/rtcl_shared.h (struct rt_bvh_node). Spheres
- * enter through bvh_build_spheres; any other bounded primitive (triangles)
- * needs only its box, centroid and reference (RT_PRIM_*). */
+ * two-wide device layout of cl/rtcl_shared.h (struct rt_bvh_node). A scene's
+ * spheres and triangles enter through bvh_build_scene; any other bounded
+ * primitive needs only its box, centroid and reference (RT_PRIM_*). */
 #ifndef RTCL_BVH_H
 #define RTCL_BVH_H
 
@@ -43,12 +43,16 @@ struct bvh {
  * prims is reordered. Returns 0, or -1 when out of memory. */
 int bvh_build(struct bvh_prim *prims, int count, struct bvh *out);
 
-/* The BVH of the scene's spheres. Returns 0, or -1 when out of memory. */
-int bvh_build_spheres(const struct scene *scene, struct bvh *out);
+/* The BVH of the scene's spheres and triangles, in one hierarchy. Returns 0,
+ * or -1 when out of memory. */
+int bvh_build_scene(const struct scene *scene, struct bvh *out);
 
 /* Sphere i of the scene as a primitive, its box padded outward (bvh.c says
  * by how much and why). */
 void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *out);
+
+/* Triangle i of the scene as a primitive, its box padded outward too. */
+void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim *out);
 
 /* The tree's SAH cost, in units of one primitive test, with a node visit
  * (two box tests) costing BVH_NODE_COST: what a ray through the root's box

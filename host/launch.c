@@ -187,7 +187,7 @@ static int launch_build_bvh(const struct scene *scene, struct render_result *res
 {
 	double lap = timing_now();
 
-	if (bvh_build_spheres(scene, bvh)) {
+	if (bvh_build_scene(scene, bvh)) {
 		snprintf(err, err_size,
 			 "out of host memory for the BVH of %d spheres and %d triangles",
 			 scene->sphere_count, scene->triangle_count);
@@ -205,7 +205,8 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			 char *err, size_t err_size)
 {
 	struct bvh bvh = {0};
-	int use_bvh = s->accel == ACCEL_BVH && scene->sphere_count > 0;
+	int use_bvh =
+		s->accel == ACCEL_BVH && (scene->sphere_count > 0 || scene->triangle_count > 0);
 
 	*block = NULL;
 	if (use_bvh && launch_build_bvh(scene, res, &bvh, err, err_size))
@@ -238,10 +239,11 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			scene->triangle_count, scene->skipped_triangles);
 	if (s->verbose && use_bvh)
 		fprintf(stderr,
-			"rtcl: BVH of %d spheres and %d triangles: %d nodes, depth %d, SAH cost "
+			"rtcl: BVH of %d sphere%s and %d triangle%s: %d nodes, depth %d, SAH cost "
 			"%.2f, built in %.3f ms\n",
-			scene->sphere_count, scene->triangle_count, res->bvh_nodes, res->bvh_depth,
-			res->bvh_sah_cost, res->bvh_build_ms);
+			scene->sphere_count, scene->sphere_count == 1 ? "" : "s",
+			scene->triangle_count, scene->triangle_count == 1 ? "" : "s",
+			res->bvh_nodes, res->bvh_depth, res->bvh_sah_cost, res->bvh_build_ms);
 	if (s->verbose)
 		fprintf(stderr, "rtcl: scene is %zu bytes; %s\n", res->scene_bytes,
 			res->scene_in_local

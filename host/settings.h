@@ -88,7 +88,7 @@ struct render_result {
 	uint64_t total_flops, total_rays;
 	uint64_t total_node_visits; /* BVH nodes visited by every ray */
 
-	/* The BVH, with ACCEL_BVH and at least one sphere (else bvh_nodes 0). */
+	/* The BVH, with ACCEL_BVH and a sphere or triangle (else bvh_nodes 0). */
 	int bvh_nodes, bvh_depth;
 	double bvh_sah_cost, bvh_build_ms;
 

@@ -35,7 +35,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (scene_load_string(&scene, json, "fuzz.json", err, sizeof(err)) == 0) {
 		size_t bytes;
 		struct bvh bvh;
-		if (bvh_build_spheres(&scene, &bvh))
+		if (bvh_build_scene(&scene, &bvh))
 			abort();
 		void *packed = devscene_pack(&scene, &bvh, scene.width, scene.height,
 					     scene.max_depth, &bytes);

@@ -107,7 +107,7 @@ static void setup_scene(struct fixture *f, const char *json, int bvh)
 	cr_assert_eq(scene_load_string(&f->scene, json, "analytic", err, sizeof(err)), 0, "%s",
 		     err);
 	struct bvh tree;
-	cr_assert_eq(bvh_build_spheres(&f->scene, &tree), 0);
+	cr_assert_eq(bvh_build_scene(&f->scene, &tree), 0);
 	void *block = devscene_pack(&f->scene, bvh ? &tree : NULL, 3, 3, 1, &bytes);
 	bvh_free(&tree);
 	f->program =

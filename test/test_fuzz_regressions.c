@@ -55,7 +55,7 @@ static void load_cleanly(const char *path)
 	if (scene_load_string(&s, json, path, err, sizeof(err)) == 0) {
 		size_t bytes = 0;
 		struct bvh bvh;
-		cr_assert_eq(bvh_build_spheres(&s, &bvh), 0, "%s: out of memory", path);
+		cr_assert_eq(bvh_build_scene(&s, &bvh), 0, "%s: out of memory", path);
 		void *packed = devscene_pack(&s, &bvh, s.width, s.height, s.max_depth, &bytes);
 		bvh_free(&bvh);
 

@@ -409,6 +409,23 @@ Test(kernels, bvh_matches_brute_force_random300, .timeout = 600)
 	check_bvh_matches_brute_force("test/scenes/random300.json", 160, 120);
 }
 
+/* Spheres and triangles in one hierarchy: the closed glass and mirror meshes
+ * (rays inside them, ties between a mesh's triangles along shared edges). */
+Test(kernels, bvh_matches_brute_force_meshes, .timeout = 900)
+{
+	check_bvh_matches_brute_force("test/meshes/mesh_scene.json", 96, 72);
+	check_bvh_matches_brute_force("scenes/glass_mesh.json", 80, 60);
+}
+
+/* Triangles flat in axis planes, a ray in the floor's plane and the middle
+ * row and column of pixels with exactly zero direction components, from an
+ * eye off 0 (the slab test's ∞ − ∞ case: traverse.cl, BOX_MIN_DIR), mirrored
+ * by the floor. */
+Test(kernels, bvh_matches_brute_force_flat_triangles, .timeout = 600)
+{
+	check_bvh_matches_brute_force("test/scenes/flat_triangles.json", 33, 25);
+}
+
 /* One diffuse sphere of radius 1 at the origin, C = (0.8, 0.6, 0.4), ka 0.5,
  * kd 0.7, ks 0.3, shininess 2, ambient (0.1, 0.2, 0.3); one light at (3,0,5)
  * of colour (1, 0.5, 0.25); camera at (0,0,5) looking at the origin. The

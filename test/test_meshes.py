@@ -61,3 +61,27 @@ def test_shipped_mesh_scene_renders_with_its_models(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "rtcl: 333 triangles; 0 of area 0" in result.stderr
     assert out.stat().st_size > 40 * 30 * 3
+
+
+def test_mesh_scene_renders_through_the_bvh_by_default(tmp_path):
+    """Spheres and triangles in one hierarchy (docs/bvh.md): the default --accel bvh
+    builds it over the sphere and the 335 triangles, gives brute force's image, and
+    tests fewer triangles than brute force (fewer flops, some node visits)."""
+    runs = {}
+    for accel in ("none", None):
+        name = accel or "default"
+        args = ["--accel", accel] if accel else []
+        result = rtcl("-s", str(MESH_SCENE), "-o", str(tmp_path / f"{name}.ppm"),
+                      "--size", "24x16", "-v", "--stats", str(tmp_path / f"{name}.json"),
+                      "--flops", str(tmp_path / f"{name}.npy"), *args)
+        assert result.returncode == 0, result.stderr
+        runs[name] = (result, json.loads((tmp_path / f"{name}.json").read_text()))
+    result, stats = runs["default"]
+    assert stats["accel"] == "bvh"
+    assert "rtcl: BVH of 1 sphere and 335 triangles: " in result.stderr
+    # At most 8 primitives a leaf: at least 336 / 8 leaves, one node fewer.
+    assert stats["bvh"]["nodes"] >= 336 // 8 - 1
+    assert stats["node_visits"] > 0
+    assert stats["total_flops"] < runs["none"][1]["total_flops"]
+    assert runs["none"][1]["node_visits"] == 0
+    assert (tmp_path / "default.ppm").read_bytes() == (tmp_path / "none.ppm").read_bytes()
