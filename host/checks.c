@@ -145,3 +145,20 @@ int checks_rank_dies(int rank, int nth_piece)
 	return env_pair("RTCL_TEST_RANK_DIES", &r, &n) == 0 && r == rank && r != 0 &&
 	       n == nth_piece;
 }
+
+static int env_is_one(const char *name)
+{
+	const char *value = getenv(name);
+
+	return value && strcmp(value, "1") == 0;
+}
+
+int checks_count_writes(void)
+{
+	return env_is_one("RTCL_TEST_CHECK_WRITES");
+}
+
+int checks_double_band(void)
+{
+	return env_is_one("RTCL_TEST_DOUBLE_BAND");
+}

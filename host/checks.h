@@ -3,7 +3,8 @@
  * per-pixel write counts read back, and an injected device fault. Active
  * only with render_settings.check_writes (kernel tests) or
  * RTCL_TEST_DEVICE_FAULT=1, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE and
- * RTCL_TEST_RANK_DIES (CLI tests). */
+ * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES and RTCL_TEST_DOUBLE_BAND (CLI
+ * tests). */
 #ifndef RTCL_CHECKS_H
 #define RTCL_CHECKS_H
 
@@ -58,5 +59,14 @@ int checks_piece_fault(int device, int nth_piece);
 /* RTCL_TEST_RANK_DIES=R:N: MPI rank R (not 0) dies (SIGKILL) when it is
  * given its N-th piece, as a node that goes down. */
 int checks_rank_dies(int rank, int nth_piece);
+
+/* RTCL_TEST_CHECK_WRITES=1: one image over several devices or ranks
+ * (tiles.h) counts every pixel's writes on every device and fails the run
+ * unless each pixel was written once per launch of its band. */
+int checks_count_writes(void);
+
+/* RTCL_TEST_DOUBLE_BAND=1: several devices in one process render band 0 a
+ * second time on another device, which the write-count check must catch. */
+int checks_double_band(void);
 
 #endif

@@ -29,6 +29,7 @@ enum long_only_option {
 	OPT_FRAMES,
 	OPT_MPI,
 	OPT_ACCEL,
+	OPT_PIECE_ROWS,
 };
 
 static const struct option long_options[] = {
@@ -48,6 +49,7 @@ static const struct option long_options[] = {
 	{"split", required_argument, NULL, OPT_SPLIT},
 	{"frames", required_argument, NULL, OPT_FRAMES},
 	{"mpi", no_argument, NULL, OPT_MPI},
+	{"piece-rows", required_argument, NULL, OPT_PIECE_ROWS},
 	{"repeat", required_argument, NULL, 'r'},
 	{"stats", required_argument, NULL, OPT_STATS},
 	{"flops", required_argument, NULL, OPT_FLOPS},
@@ -115,6 +117,9 @@ static void print_help_after_kernels(FILE *out)
 		"                         out_0000.png.. (the frame number before the extension)\n"
 		"      --mpi              run under mpirun: rank 0 hands the pieces out to every\n"
 		"                         rank's devices and writes the outputs\n"
+		"      --piece-rows N     one image over several devices or ranks goes out in\n"
+		"                         row bands of N rows, each with all its samples\n"
+		"                         (default: about 32 bands per device, whole work-groups)\n"
 		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
@@ -373,6 +378,9 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return 0;
 	case OPT_ACCEL:
 		return parse_choice("--accel", arg, "none", "bvh", &o->accel, err, err_size);
+	case OPT_PIECE_ROWS:
+		return parse_bounded("--piece-rows", arg, 1, SCENE_MAX_IMAGE_SIDE, &o->piece_rows,
+				     err, err_size);
 	case OPT_LIST_DEVICES:
 		o->list_devices = 1;
 		return 0;
@@ -446,6 +454,34 @@ static void describe_bad_option(int c, int argc, char **argv, char *err, size_t 
 	}
 }
 
+/* One image over several devices or ranks (tiles.h): what does not apply. */
+static int check_several_devices(const struct options *o, char *err, size_t err_size)
+{
+	int several = o->mpi || (o->devices_given && (o->devices.all || o->devices.count > 1));
+
+	if (o->piece_rows && (!(o->devices_given || o->mpi) || o->frames_given)) {
+		snprintf(err, err_size,
+			 "--piece-rows cuts one image over several devices (--devices, --mpi); "
+			 "it does not apply to %s",
+			 o->frames_given ? "--frames, whose pieces are whole frames"
+					 : "one device");
+		return -1;
+	}
+	if (several && o->flops_path) {
+		snprintf(err, err_size,
+			 "--flops writes one device's NDRange of work-items; with several devices "
+			 "or --mpi use --work-map FILE.npy (per pixel) or one device");
+		return -1;
+	}
+	if (o->mpi && !o->frames_given && (o->repeat || o->work_map_path)) {
+		snprintf(err, err_size,
+			 "--mpi renders the image once and sends only its pixels to rank 0: "
+			 "-r/--repeat and --work-map need --devices in one process");
+		return -1;
+	}
+	return 0;
+}
+
 /* Rules between options, checked once all are read. */
 static int check_combination(const struct options *o, char *err, size_t err_size)
 {
@@ -480,6 +516,8 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 			 "--work-map an image file (not .npy, .exr, .pfm or .hdr)");
 		return -1;
 	}
+	if (check_several_devices(o, err, err_size))
+		return -1;
 	if (o->quiet && o->verbose) {
 		snprintf(err, err_size, "-q/--quiet and -v/--verbose contradict each other");
 		return -1;

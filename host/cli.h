@@ -30,8 +30,9 @@ struct options {
 	int split_static; /* --split static */
 	int frames[2];	  /* --frames A:B */
 	int frames_given;
-	int mpi;    /* --mpi: rank 0 hands out the pieces (mpi_render.h) */
-	int repeat; /* -r N; 0 when not given */
+	int mpi;	/* --mpi: rank 0 hands out the pieces (mpi_render.h) */
+	int piece_rows; /* --piece-rows N; 0: chosen (tiles.h) */
+	int repeat;	/* -r N; 0 when not given */
 	const char *stats_path;
 	const char *flops_path;	       /* --flops FILE.npy */
 	const char *work_map_path;     /* --work-map IMAGE */

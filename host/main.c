@@ -15,6 +15,7 @@
 #include "cli.h"
 #include "device.h"
 #include "devices.h"
+#include "devstats.h"
 #include "frames.h"
 #include "embedded.h"
 #include "interrupt.h"
@@ -23,6 +24,7 @@
 #include "render.h"
 #include "scene.h"
 #include "stats.h"
+#include "tiles.h"
 #include "timing.h"
 
 #define DEFAULT_SCENE "paper60.json"
@@ -120,26 +122,32 @@ static int render_on_device(struct run *run, struct device *dev, char *err, size
 	return failed ? -1 : 0;
 }
 
-/* One image on the device(s) the options name. */
-static int render_on_devices(struct run *run, char *err, size_t err_size)
-{
+/* The devices of one image: each device's share, for the summary. */
+struct image_devices {
 	struct device devs[DEVICES_MAX];
-	int count = 0, failed;
+	struct device_work work[DEVICES_MAX];
+	int count;
+};
+
+/* One image on the device(s) the options name; several share it in bands
+ * (tiles.h). The devices stay open for the summary (d->count of them). */
+static int render_on_devices(struct run *run, struct image_devices *d, char *err, size_t err_size)
+{
 	double lap = timing_now();
 
-	if (open_devices(run->opt, devs, &count, err, err_size))
+	if (open_devices(run->opt, d->devs, &d->count, err, err_size)) {
+		d->count = 0; /* nothing left open */
 		return -1;
-	run->device_ms = timing_lap_ms(&lap);
-	if (count == 1) {
-		failed = render_on_device(run, &devs[0], err, err_size);
-	} else {
-		snprintf(err, err_size,
-			 "--devices: one image on several devices needs the piece interface, "
-			 "not in this build yet; --frames A:B spreads an animation's frames");
-		failed = -1;
 	}
-	devices_close(devs, count);
-	return failed;
+	run->device_ms = timing_lap_ms(&lap);
+	if (d->count == 1)
+		return render_on_device(run, &d->devs[0], err, err_size);
+	record_device(run, &d->devs[0]);
+	int n = snprintf(run->device_name, sizeof(run->device_name), "%d devices:", d->count);
+	for (int k = 0; k < d->count && n > 0 && (size_t)n < sizeof(run->device_name); k++)
+		n += snprintf(run->device_name + n, sizeof(run->device_name) - (size_t)n, "%s %s",
+			      k ? "," : "", d->devs[k].name);
+	return tiles_render(run, d->devs, d->count, d->work, err, err_size);
 }
 
 /* --frames: every frame's image and the summary, or nothing. Returns the exit
@@ -190,13 +198,7 @@ static int render_mpi(struct run *run)
 		fprintf(stderr, "rtcl: %s\n", MPI_MISSING_MESSAGE);
 		return EXIT_FAILED;
 	}
-	if (!run->opt->frames_given) {
-		fprintf(stderr, "rtcl: --mpi: one image over several ranks needs the piece "
-				"interface, not in this build yet; --mpi --frames A:B spreads an "
-				"animation's frames\n");
-		return EXIT_FAILED;
-	}
-	return mpi_render_frames(run);
+	return run->opt->frames_given ? mpi_render_frames(run) : mpi_render_image(run);
 }
 
 /* Renders and writes the outputs; returns the exit status. */
@@ -213,21 +215,25 @@ static int render_and_write(struct run *run, char *err, size_t err_size)
 		fprintf(stderr, "rtcl: %s\n", err);
 		return checked == OUTPUTS_CLASH ? EXIT_USAGE : EXIT_FAILED;
 	}
-	if (run->settings.kernel ? render_on_devices(run, err, err_size)
-				 : render_on_cpu(run, err, err_size)) {
-		fprintf(stderr, "rtcl: %s\n", err);
-		return EXIT_FAILED;
+	static struct image_devices d;
+	int failed = run->settings.kernel ? render_on_devices(run, &d, err, err_size)
+					  : render_on_cpu(run, err, err_size);
+	if (!failed) {
+		run->write_start = timing_now();
+		failed = outputs_write(run, err, err_size);
 	}
-	run->write_start = timing_now();
-	if (outputs_write(run, err, err_size)) {
+	if (failed) {
 		fprintf(stderr, "rtcl: %s\n", err);
-		return EXIT_FAILED;
+	} else {
+		if (run->opt->verbose)
+			stats_print_times(run);
+		if (!run->opt->quiet)
+			stats_print_summary(run);
+		if (!run->opt->quiet && d.count > 1)
+			devstats_print(stdout, d.devs, NULL, d.work, d.count, "band");
 	}
-	if (run->opt->verbose)
-		stats_print_times(run);
-	if (!run->opt->quiet)
-		stats_print_summary(run);
-	return 0;
+	devices_close(d.devs, d.count);
+	return failed ? EXIT_FAILED : 0;
 }
 
 int main(int argc, char **argv)
@@ -260,6 +266,7 @@ int main(int argc, char **argv)
 	status = render_and_write(&run, err, sizeof(err));
 	render_result_free(&run.result);
 	render_result_free(&run.counted);
+	json_decref(run.multidevice);
 	scene_free(&scene);
 	return status;
 }

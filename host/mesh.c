@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/stat.h>
 
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
@@ -74,6 +75,7 @@ int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t re
 	const struct aiScene *sc;
 	size_t vertices, triangles;
 	int has_normals, ret = -1;
+	struct stat st;
 	FILE *probe;
 
 	memset(out, 0, sizeof(*out));
@@ -81,6 +83,13 @@ int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t re
 	probe = fopen(path, "rb");
 	if (!probe) {
 		snprintf(reason, reason_size, "%s", strerror(errno));
+		return -1;
+	}
+	/* A folder opens for reading here; say so rather than the importer's
+	 * "no suitable reader". */
+	if (fstat(fileno(probe), &st) == 0 && S_ISDIR(st.st_mode)) {
+		fclose(probe);
+		snprintf(reason, reason_size, "%s", strerror(EISDIR));
 		return -1;
 	}
 	fclose(probe);

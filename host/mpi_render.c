@@ -11,8 +11,11 @@
 #include "checks.h"
 #include "cli.h"
 #include "frames.h"
+#include "devstats.h"
 #include "interrupt.h"
+#include "outputs.h"
 #include "render.h"
+#include "tiles.h"
 #include "timing.h"
 
 #define ROOT 0
@@ -35,7 +38,11 @@ struct mpi_job {
 	struct device devs[DEVICES_MAX]; /* this rank's */
 	int count;
 	struct device_work work[DEVICES_MAX];
-	int taken; /* pieces this rank took (the test-only rank death) */
+	int taken;			/* pieces this rank took (the test-only rank death) */
+	int image;			/* one image in bands (tiles.h), not --frames */
+	int pieces;			/* frames, or bands */
+	struct tiles_job tiles;		/* image: this rank's devices and bands */
+	int device_failed[DEVICES_MAX]; /* image: a piece of this device failed */
 	pthread_mutex_t lock;
 
 	/* Rank 0: the dispenser over every rank's devices, and the outputs. */
@@ -49,11 +56,12 @@ struct mpi_job {
 	struct frames_output output;
 	struct device *all_devs;
 	struct device_work *all_work;
+	int *arrived; /* image: how often each band arrived */
 };
 
 static int piece_count(const struct mpi_job *j)
 {
-	return j->run->opt->frames[1] - j->run->opt->frames[0] + 1;
+	return j->pieces;
 }
 
 /* Rank 0: records the first failure; later ones are their consequences. */
@@ -103,7 +111,8 @@ static int take_piece(void *context, int device)
 	return piece;
 }
 
-/* Sends a frame's pixels to rank 0: the piece number, then the floats. */
+/* Sends a piece's pixels (a frame, or a band) to rank 0: the piece number,
+ * then the floats. */
 static int send_result(int piece, const float *rgb, size_t bytes, char *err, size_t err_size)
 {
 	char *message = bytes + sizeof(int) <= INT_MAX ? malloc(sizeof(int) + bytes) : NULL;
@@ -111,7 +120,7 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 
 	if (!message) {
 		snprintf(err, err_size,
-			 "cannot send a frame of %zu bytes to rank 0 (at most 2 GiB, and host "
+			 "cannot send a piece of %zu bytes to rank 0 (at most 2 GiB, and host "
 			 "memory for a copy)",
 			 bytes);
 		return -1;
@@ -122,7 +131,7 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 			  MPI_COMM_WORLD);
 	free(message);
 	if (status != MPI_SUCCESS) {
-		snprintf(err, err_size, "sending a frame to rank 0 failed (MPI error %d)", status);
+		snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)", status);
 		return -1;
 	}
 	return 0;
@@ -136,6 +145,8 @@ static int render_piece(void *context, int device, int piece, long long *pixels,
 	struct render_result result;
 	int failed;
 
+	if (j->image)
+		return tiles_render_band(&j->tiles, device, piece, pixels, err, err_size);
 	if (frames_render_frame(j->run, &j->devs[device], piece, &result, err, err_size))
 		return -1;
 	if (j->rank == ROOT)
@@ -152,7 +163,7 @@ static void piece_failed(void *context, int device, const char *message)
 {
 	struct mpi_job *j = context;
 
-	(void)device;
+	j->device_failed[device] = 1;
 	if (j->rank == ROOT)
 		record_failure(j, ROOT, message);
 	else
@@ -160,12 +171,70 @@ static void piece_failed(void *context, int device, const char *message)
 			 MPI_COMM_WORLD);
 }
 
-/* A device of a rank other than 0 is done: what it did, for the summary. */
+/* Image: opens the device's renderer once, before its first band. */
+static int open_device(void *context, int device, char *err, size_t err_size)
+{
+	struct mpi_job *j = context;
+
+	return tiles_open(&j->tiles, device, err, err_size);
+}
+
+/* Rank 0: band b's rows, rgb, into the image. */
+static void place_band(struct mpi_job *j, int band, const float *rgb)
+{
+	struct rt_piece p = tiles_band(&j->run->settings, j->tiles.rows, band, 0, 1);
+
+	pthread_mutex_lock(&j->lock);
+	j->arrived[band]++;
+	pthread_mutex_unlock(&j->lock);
+	memcpy(j->run->result.rgb + 3 * (size_t)p.y0 * p.width, rgb,
+	       image_float_bytes(p.width, p.height));
+}
+
+/* Image: the device is done: reads it back once (checking its write counts
+ * under check_writes) and places or sends rank 0 the bands it rendered. */
+static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
+{
+	struct tiles_job *t = &j->tiles;
+
+	if (tiles_collect(t, device, err, err_size) ||
+	    (t->settings->check_writes && tiles_check_device(t, device, err, err_size)))
+		return -1;
+	for (int b = 0; b < t->bands; b++) {
+		if (t->owner[b] != device)
+			continue;
+		struct rt_piece p = tiles_band(t->settings, t->rows, b, 0, 1);
+		const float *rows = t->dev[device].result.rgb + 3 * (size_t)p.y0 * p.width;
+		if (j->rank == ROOT)
+			place_band(j, b, rows);
+		else if (send_result(b, rows, image_float_bytes(p.width, p.height), err, err_size))
+			return -1;
+	}
+	return 0;
+}
+
+/* Image: the device's bands to rank 0, or the failure. */
+static void finish_bands(struct mpi_job *j, int device)
+{
+	char err[MESSAGE_SIZE], message[MESSAGE_SIZE + 600];
+	const struct device *d = &j->devs[device];
+
+	if (j->device_failed[device] || send_bands(j, device, err, sizeof(err)) == 0)
+		return;
+	snprintf(message, sizeof(message), "device %d:%d (%s): %s", d->platform_index,
+		 d->device_index, d->name, err);
+	piece_failed(j, device, message);
+}
+
+/* A device is done: its bands (image), then, on ranks other than 0, what it
+ * did, for the summary. */
 static void device_done(void *context, int device)
 {
 	struct mpi_job *j = context;
 	struct device_report r;
 
+	if (j->image)
+		finish_bands(j, device);
 	if (j->rank == ROOT)
 		return;
 	memset(&r, 0, sizeof(r));
@@ -189,28 +258,38 @@ static void serve_take(struct mpi_job *j, int source)
 	MPI_Send(&piece, 1, MPI_INT, source, TAG_GIVE + device, MPI_COMM_WORLD);
 }
 
-static void serve_result(struct mpi_job *j, const MPI_Status *status)
+/* The bytes of piece's pixels: a whole frame, or a band. */
+static size_t piece_bytes(const struct mpi_job *j, int piece)
 {
 	const struct render_settings *s = &j->run->settings;
+	struct rt_piece p;
+
+	if (!j->image)
+		return image_float_bytes(s->width, s->height);
+	p = tiles_band(s, j->tiles.rows, piece, 0, 1);
+	return image_float_bytes(p.width, p.height);
+}
+
+static void serve_result(struct mpi_job *j, const MPI_Status *status)
+{
 	char *message, err[MESSAGE_SIZE];
-	int bytes = 0, piece;
+	int bytes = 0, piece = -1;
 
 	MPI_Get_count(status, MPI_BYTE, &bytes);
 	message = malloc(bytes > 0 ? (size_t)bytes : 1);
 	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
 		 MPI_STATUS_IGNORE);
-	if (!message || (size_t)bytes != sizeof(int) + image_float_bytes(s->width, s->height)) {
-		record_failure(j, status->MPI_SOURCE, "a frame arrived incomplete");
-	} else {
+	if (message && (size_t)bytes >= sizeof(int))
 		memcpy(&piece, message, sizeof(int));
-		if (piece < 0 || piece >= piece_count(j))
-			record_failure(j, status->MPI_SOURCE,
-				       "a frame number out of range arrived");
-		else if (!j->failed && frames_stage_image(j->run, &j->output, piece,
-							  (const float *)(message + sizeof(int)),
-							  err, sizeof(err)))
-			record_failure(j, ROOT, err);
-	}
+	const float *rgb = (const float *)(message + sizeof(int));
+	if (piece < 0 || piece >= piece_count(j))
+		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
+	else if ((size_t)bytes != sizeof(int) + piece_bytes(j, piece))
+		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
+	else if (j->image)
+		place_band(j, piece, rgb);
+	else if (!j->failed && frames_stage_image(j->run, &j->output, piece, rgb, err, sizeof(err)))
+		record_failure(j, ROOT, err);
 	free(message);
 }
 
@@ -284,8 +363,11 @@ static int start_rank(struct mpi_job *j, char *err, size_t err_size)
 {
 	const struct options *opt = j->run->opt;
 
-	if (j->rank == ROOT && (frames_check_outputs(opt, err, err_size) ||
-				frames_output_open(&j->output, opt, err, err_size)))
+	if (j->rank == ROOT && !j->image &&
+	    (frames_check_outputs(opt, err, err_size) ||
+	     frames_output_open(&j->output, opt, err, err_size)))
+		return -1;
+	if (j->rank == ROOT && j->image && outputs_check(opt, err, err_size))
 		return -1;
 	if (opt->devices_given)
 		return devices_open(&opt->devices, j->devs, &j->count, err, err_size);
@@ -320,6 +402,30 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 	return 0;
 }
 
+/* The pieces, once every rank's device count is known: the frames, or the
+ * image's bands over all devices (total). */
+static int choose_pieces(struct mpi_job *j, int total)
+{
+	struct run *run = j->run;
+	const struct render_settings *s = &run->settings;
+	char err[MESSAGE_SIZE];
+
+	if (!j->image) {
+		j->pieces = run->opt->frames[1] - run->opt->frames[0] + 1;
+		return 0;
+	}
+	if (tiles_job_init(&j->tiles, run->scene, s,
+			   tiles_band_rows(s, run->opt->piece_rows, total), j->devs, j->count, err,
+			   sizeof(err)))
+		return -1;
+	j->pieces = j->tiles.bands;
+	if (j->rank != ROOT)
+		return 0;
+	j->arrived = calloc((size_t)j->pieces, sizeof(int));
+	run->result.rgb = malloc(image_float_bytes(s->width, s->height));
+	return j->arrived && run->result.rgb ? 0 : -1;
+}
+
 /* Every rank learns whether all started; the lowest rank that did not says
  * why. Returns 0 when all started. */
 static int agree_on_start(struct mpi_job *j, int failed, const char *err)
@@ -340,12 +446,70 @@ static int agree_on_start(struct mpi_job *j, int failed, const char *err)
 			lowest = r;
 	if (lowest == j->rank)
 		fprintf(stderr, "rtcl: rank %d: %s\n", j->rank, err);
-	if (lowest < 0 && j->rank == ROOT && plan_devices(j, counts)) {
+	int total = 0;
+	for (int r = 0; r < j->size; r++)
+		total += counts[r];
+	if (lowest < 0 &&
+	    (choose_pieces(j, total) || (j->rank == ROOT && plan_devices(j, counts)))) {
 		fprintf(stderr, "rtcl: out of host memory for the device plan\n");
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
 	free(counts);
 	return lowest < 0 ? 0 : -1;
+}
+
+/* Rank 0, image: every band arrived once, then the result the outputs and
+ * the summary read. Returns 0, or -1 with the failure recorded. */
+static int assemble_image(struct mpi_job *j, double wall_ms)
+{
+	struct run *run = j->run;
+	struct render_result *res = &run->result;
+	char message[256];
+
+	for (int b = 0; b < j->pieces; b++) {
+		if (j->arrived[b] != 1) {
+			snprintf(message, sizeof(message), "band %d of the image arrived %d times",
+				 b, j->arrived[b]);
+			record_failure(j, ROOT, message);
+			return -1;
+		}
+	}
+	res->kernel_ms = malloc(sizeof(double));
+	if (!res->kernel_ms) {
+		record_failure(j, ROOT, "out of host memory");
+		return -1;
+	}
+	res->kernel_ms[0] = res->kernel_ms_median = res->kernel_ms_min = res->kernel_ms_max =
+		wall_ms;
+	res->repeat = res->launches = 1;
+	res->passes = 1;
+	tiles_copy_facts(&j->tiles.dev[0].result, res);
+	snprintf(run->device_name, sizeof(run->device_name), "%d devices over %d ranks, first %s",
+		 j->total, j->size, j->devs[0].name);
+	run->multidevice =
+		devstats_json(j->all_devs, j->rank_of, j->all_work, j->total,
+			      run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC, "band");
+	if (run->multidevice) {
+		json_object_set_new(run->multidevice, "band_rows", json_integer(j->tiles.rows));
+		json_object_set_new(run->multidevice, "bands", json_integer(j->pieces));
+		json_object_set_new(run->multidevice, "ranks", json_integer(j->size));
+	}
+	return 0;
+}
+
+/* Rank 0, image: writes the outputs and prints the summary. */
+static int write_image(struct mpi_job *j, char *err, size_t err_size)
+{
+	struct run *run = j->run;
+
+	run->write_start = timing_now();
+	if (outputs_write(run, err, err_size))
+		return -1;
+	if (run->opt->quiet)
+		return 0;
+	stats_print_summary(run);
+	devstats_print(stdout, j->all_devs, j->rank_of, j->all_work, j->total, "band");
+	return 0;
 }
 
 /* Rank 0 after every device is done: the outputs, or the failure. Returns
@@ -358,7 +522,12 @@ static int finish_root(struct mpi_job *j, double wall_ms)
 		j->all_devs[k] = j->devs[k];
 		j->all_work[k] = j->work[k];
 	}
-	if (!j->failed) {
+	if (!j->failed && j->image) {
+		if (assemble_image(j, wall_ms) == 0 && write_image(j, err, sizeof(err)) == 0)
+			return 0;
+		if (!j->failed)
+			record_failure(j, ROOT, err);
+	} else if (!j->failed) {
 		struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total,
 					       wall_ms};
 		if (frames_commit(j->run, &j->output, &report, err, sizeof(err)) == 0)
@@ -375,6 +544,7 @@ static int render_all(struct mpi_job *j)
 	struct multidev_job job = {.piece_count = piece_count(j),
 				   .split =
 					   j->run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+				   .begin = j->image ? open_device : NULL,
 				   .render_piece = render_piece,
 				   .end = device_done,
 				   .take_piece = take_piece,
@@ -400,9 +570,11 @@ static int render_all(struct mpi_job *j)
 
 static void free_job(struct mpi_job *j)
 {
+	tiles_job_free(&j->tiles); /* the renderers, before their devices */
 	devices_close(j->devs, j->count);
-	if (j->rank == ROOT)
+	if (j->rank == ROOT && !j->image)
 		frames_output_close(&j->output, piece_count(j) + 1);
+	free(j->arrived);
 	free(j->first);
 	free(j->rank_of);
 	free(j->next_static);
@@ -417,7 +589,8 @@ int mpi_render_available(void)
 	return 1;
 }
 
-int mpi_render_frames(struct run *run)
+/* Either kind of job: frames, or one image in bands. */
+static int mpi_render(struct run *run, int image)
 {
 	static struct mpi_job j;
 	char err[MESSAGE_SIZE] = "";
@@ -431,6 +604,8 @@ int mpi_render_frames(struct run *run)
 	memset(&j, 0, sizeof(j));
 	pthread_mutex_init(&j.lock, NULL);
 	j.run = run;
+	j.image = image;
+	run->settings.check_writes |= image && checks_count_writes();
 	MPI_Comm_rank(MPI_COMM_WORLD, &j.rank);
 	MPI_Comm_size(MPI_COMM_WORLD, &j.size);
 	run->settings.progress = 0;
@@ -446,4 +621,14 @@ int mpi_render_frames(struct run *run)
 	free_job(&j);
 	MPI_Finalize();
 	return status;
+}
+
+int mpi_render_frames(struct run *run)
+{
+	return mpi_render(run, 0);
+}
+
+int mpi_render_image(struct run *run)
+{
+	return mpi_render(run, 1);
 }

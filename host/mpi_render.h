@@ -29,4 +29,10 @@ int mpi_render_available(void);
  * the exit status. */
 int mpi_render_frames(struct run *run);
 
+/* --mpi without --frames: one image in row bands (tiles.h) over every rank's
+ * devices; each rank reads its devices back once and sends rank 0 the bands
+ * they rendered; rank 0 assembles and writes the outputs. Returns the exit
+ * status, as mpi_render_frames. */
+int mpi_render_image(struct run *run);
+
 #endif

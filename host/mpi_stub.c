@@ -17,3 +17,8 @@ int mpi_render_frames(struct run *run)
 	fprintf(stderr, "rtcl: %s\n", MPI_MISSING_MESSAGE);
 	return EXIT_FAILED;
 }
+
+int mpi_render_image(struct run *run)
+{
+	return mpi_render_frames(run);
+}

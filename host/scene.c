@@ -81,7 +81,7 @@ static int read_header(struct loader *ld, json_t *doc)
 				   " is not supported (this rtcl reads versions 1 and 2)",
 				   n);
 	if (n < 1)
-		return loader_fail(ld, &version, "must be 1, got %" JSON_INTEGER_FORMAT, n);
+		return loader_fail(ld, &version, "must be 1 or 2, got %" JSON_INTEGER_FORMAT, n);
 	ld->version = (int)n;
 	/* Before unknown keys: a version 1 file with meshes gets told why. */
 	for (int i = 0; i < 2 && n == 1; i++) {

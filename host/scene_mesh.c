@@ -1,7 +1,8 @@
 /* The scene loader's version 2 (docs/SCENE.md, "Version 2: triangle meshes"):
  * "meshes", files placed with scale, rotate and translate, and the inline
- * "triangles". host/mesh.c reads the files; this file places the triangles,
- * gives them their normals and checks what SCENE.md asks. */
+ * "triangles". host/mesh.c reads the files, host/mesh_place.c computes the
+ * placement and the normals; this file reads the fields, puts the triangles
+ * in the scene and checks what SCENE.md asks. */
 #define _POSIX_C_SOURCE 200809L
 
 #include <limits.h>
@@ -11,6 +12,7 @@
 #include <string.h>
 
 #include "mesh.h"
+#include "mesh_place.h"
 #include "scene_loader.h"
 
 /* Triangle indices are ints on the device; far below INT_MAX so that the
@@ -32,98 +34,6 @@ static const char *one_line(const char *text, char buf[MESSAGE_TEXT_MAX])
 		i--;
 	buf[i] = '\0';
 	return buf;
-}
-
-/* The placement, scale then rotate then translate (SCENE.md): p' = R (s p) + t,
- * and for normals n' = R (n / s), the inverse transpose of R S. */
-struct placement {
-	double scale[3];
-	double rotation[3][3]; /* Rz Ry Rx */
-	double translate[3];
-	int mirrored; /* an odd number of negative scale parts */
-	int smooth;
-};
-
-/* cos and sin of `degrees`, exact at multiples of 90 (cos(pi/2) in double is
- * 6e-17, which would tilt an axis-aligned mesh). */
-static void cos_sin(double degrees, double *c, double *s)
-{
-	double quarter = degrees / 90.0;
-
-	if (quarter == floor(quarter) && fabs(quarter) < 1e15) {
-		static const double cosines[] = {1, 0, -1, 0};
-		long k = ((long)fmod(quarter, 4.0) + 4) % 4;
-
-		*c = cosines[k];
-		*s = cosines[(k + 3) % 4];
-		return;
-	}
-	*c = cos(degrees * M_PI / 180.0);
-	*s = sin(degrees * M_PI / 180.0);
-}
-
-static void multiply(const double a[3][3], const double b[3][3], double out[3][3])
-{
-	for (int i = 0; i < 3; i++)
-		for (int j = 0; j < 3; j++)
-			out[i][j] = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
-}
-
-/* R = Rz Ry Rx: about x first, then y, then z, all world axes. */
-static void rotation(const double degrees[3], double r[3][3])
-{
-	double cx, sx, cy, sy, cz, sz, zy[3][3];
-
-	cos_sin(degrees[0], &cx, &sx);
-	cos_sin(degrees[1], &cy, &sy);
-	cos_sin(degrees[2], &cz, &sz);
-	const double rx[3][3] = {{1, 0, 0}, {0, cx, -sx}, {0, sx, cx}};
-	const double ry[3][3] = {{cy, 0, sy}, {0, 1, 0}, {-sy, 0, cy}};
-	const double rz[3][3] = {{cz, -sz, 0}, {sz, cz, 0}, {0, 0, 1}};
-
-	multiply(rz, ry, zy);
-	multiply(zy, rx, r);
-}
-
-static void apply(const double m[3][3], const double v[3], double out[3])
-{
-	for (int i = 0; i < 3; i++)
-		out[i] = m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2];
-}
-
-static void cross(const double a[3], const double b[3], double out[3])
-{
-	out[0] = a[1] * b[2] - a[2] * b[1];
-	out[1] = a[2] * b[0] - a[0] * b[2];
-	out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
-/* Scales v to unit length; returns 0 (v untouched) for a zero or non-finite v. */
-static int unit(double v[3])
-{
-	double scaled[3], length;
-
-	if (!loader_scale_to_unit_max(v, scaled))
-		return 0;
-	length = loader_length3(scaled);
-	if (!isfinite(length) || length == 0)
-		return 0;
-	for (int i = 0; i < 3; i++)
-		v[i] = scaled[i] / length;
-	return 1;
-}
-
-/* The unit geometric normal of (v0, v1, v2); returns 0 for zero area. */
-static int geometric_normal(const double v[3][3], double n[3])
-{
-	double e1[3], e2[3];
-
-	for (int i = 0; i < 3; i++) {
-		e1[i] = v[1][i] - v[0][i];
-		e2[i] = v[2][i] - v[0][i];
-	}
-	cross(e1, e2, n);
-	return unit(n);
 }
 
 /* Makes room for `more` triangles in scene->triangles. */
@@ -150,84 +60,6 @@ static int reserve(struct loader *ld, const struct path *p, size_t more)
 	return 0;
 }
 
-/* Area-weighted vertex normals for a file without normals: each vertex gets
- * the sum of the (unnormalised, so area-weighted) geometric normals of the
- * triangles that touch its position. Formats such as OBJ and STL repeat a
- * vertex for each triangle it belongs to, so vertices are joined by position,
- * not by index. vn[3 * vertex_count] comes in zeroed. */
-struct by_position {
-	double p[3];
-	size_t index;
-};
-
-static int compare_positions(const void *a, const void *b)
-{
-	const double *p = ((const struct by_position *)a)->p,
-		     *q = ((const struct by_position *)b)->p;
-
-	for (int i = 0; i < 3; i++)
-		if (p[i] != q[i])
-			return p[i] < q[i] ? -1 : 1;
-	return 0;
-}
-
-static int area_weighted_normals(const struct mesh_data *mesh, const double *placed, int mirrored,
-				 double *vn)
-{
-	struct by_position *sorted = malloc((mesh->vertex_count + 1) * sizeof(*sorted));
-
-	if (!sorted)
-		return -1;
-	for (size_t t = 0; t < mesh->triangle_count; t++) {
-		const size_t *ix = mesh->indices + 3 * t;
-		double e1[3], e2[3], n[3];
-
-		for (int i = 0; i < 3; i++) {
-			e1[i] = placed[3 * ix[1] + i] - placed[3 * ix[0] + i];
-			e2[i] = placed[3 * ix[2] + i] - placed[3 * ix[0] + i];
-		}
-		cross(e1, e2, n);
-		for (int k = 0; k < 3; k++)
-			for (int i = 0; i < 3; i++)
-				vn[3 * ix[k] + i] += mirrored ? -n[i] : n[i];
-	}
-	for (size_t v = 0; v < mesh->vertex_count; v++) {
-		memcpy(sorted[v].p, placed + 3 * v, sizeof(sorted[v].p));
-		sorted[v].index = v;
-	}
-	qsort(sorted, mesh->vertex_count, sizeof(*sorted), compare_positions);
-	for (size_t first = 0, end; first < mesh->vertex_count; first = end) {
-		double sum[3] = {0, 0, 0};
-
-		for (end = first; end < mesh->vertex_count &&
-				  compare_positions(&sorted[first], &sorted[end]) == 0;
-		     end++)
-			for (int i = 0; i < 3; i++)
-				sum[i] += vn[3 * sorted[end].index + i];
-		unit(sum); /* a zero sum stays zero: the triangle's own normal is used */
-		for (size_t k = first; k < end; k++)
-			memcpy(vn + 3 * sorted[k].index, sum, sizeof(sum));
-	}
-	free(sorted);
-	return 0;
-}
-
-/* The file's vertex normals in world space, R (n / s); a zero or non-finite
- * one stays zero: the triangle's own normal is used there. */
-static void placed_file_normals(const struct mesh_data *mesh, const struct placement *pl,
-				double *vn)
-{
-	for (size_t v = 0; v < mesh->vertex_count; v++) {
-		double n[3];
-
-		for (int i = 0; i < 3; i++)
-			n[i] = mesh->normals[3 * v + i] / pl->scale[i];
-		apply(pl->rotation, n, vn + 3 * v);
-		if (!unit(vn + 3 * v))
-			memset(vn + 3 * v, 0, 3 * sizeof(double));
-	}
-}
-
 /* Places every vertex; refuses a non-finite one (from the file) and one that
  * placement puts beyond what float holds. */
 static int place_vertices(struct loader *ld, const struct path *p, const char *name,
@@ -237,16 +69,13 @@ static int place_vertices(struct loader *ld, const struct path *p, const char *n
 
 	for (size_t v = 0; v < mesh->vertex_count; v++) {
 		const double *in = mesh->positions + 3 * v;
-		double scaled[3], *out = placed + 3 * v;
+		double *out = placed + 3 * v;
 
 		if (!isfinite(in[0]) || !isfinite(in[1]) || !isfinite(in[2]))
 			return loader_fail(ld, p, "\"%s\": vertex %zu is not finite, got %s",
 					   one_line(name, text), v, loader_fmt_vec3(in, buf));
-		for (int i = 0; i < 3; i++)
-			scaled[i] = pl->scale[i] * in[i];
-		apply(pl->rotation, scaled, out);
+		place_point(pl, in, out);
 		for (int i = 0; i < 3; i++) {
-			out[i] += pl->translate[i];
 			if (!(fabs(out[i]) <= SCENE_MAX_MAGNITUDE))
 				return loader_fail(
 					ld, p,
@@ -275,7 +104,7 @@ static void append_triangles(struct scene *s, const struct mesh_data *mesh, cons
 		for (int k = 0; k < 3; k++)
 			memcpy(tri->v[k], placed + 3 * mesh->indices[3 * t + order[k]],
 			       sizeof(tri->v[k]));
-		if (!geometric_normal(tri->v, n)) {
+		if (!place_triangle_normal(tri->v, n)) {
 			s->skipped_triangles++;
 			continue;
 		}
@@ -340,8 +169,7 @@ static int read_placement(struct loader *ld, const struct path *item, json_t *ob
 		return loader_fail(ld, &smooth, "must be true or false, got %s",
 				   loader_type_name(v));
 	pl->smooth = !v || json_is_true(v);
-	pl->mirrored = (pl->scale[0] < 0) ^ (pl->scale[1] < 0) ^ (pl->scale[2] < 0);
-	rotation(degrees, pl->rotation);
+	place_set_rotation(pl, degrees);
 	return 0;
 }
 
@@ -375,8 +203,8 @@ static int place_mesh(struct loader *ld, const struct path *file, const char *na
 	    reserve(ld, file, mesh->triangle_count))
 		goto out_free;
 	if (vn && mesh->normals)
-		placed_file_normals(mesh, pl, vn);
-	else if (vn && area_weighted_normals(mesh, placed, pl->mirrored, vn)) {
+		place_file_normals(mesh, pl, vn);
+	else if (vn && place_area_weighted_normals(mesh, placed, pl->mirrored, vn)) {
 		loader_write_err(ld, "%s: out of memory for %zu vertices", ld->source,
 				 mesh->vertex_count);
 		goto out_free;
@@ -473,8 +301,14 @@ static int read_triangle(struct loader *ld, const struct path *item, json_t *obj
 		if (loader_check_vec3(ld, &vertex, json_array_get(v, k), ANY, tri->v[k]))
 			return -1;
 	}
-	if (!geometric_normal(tri->v, n))
-		return loader_fail(ld, &vertices, "the triangle has zero area");
+	if (!place_triangle_normal(tri->v, n)) {
+		char a[100], b[100], c[100];
+
+		return loader_fail(ld, &vertices,
+				   "must span a triangle of non-zero area, got %s, %s, %s",
+				   loader_fmt_vec3(tri->v[0], a), loader_fmt_vec3(tri->v[1], b),
+				   loader_fmt_vec3(tri->v[2], c));
+	}
 	for (int k = 0; k < 3; k++)
 		memcpy(tri->normal[k], n, sizeof(n));
 	tri->smooth = 0;

@@ -228,6 +228,8 @@ int stats_stage_run(struct staged_file *staged, const char *path, const struct r
 		add_device_figures(doc, run);
 		add_accel_figures(doc, run);
 	}
+	if (doc && run->multidevice)
+		json_object_set(doc, "multidevice", run->multidevice);
 	return stats_stage_document(staged, path, doc, err, err_size);
 }
 

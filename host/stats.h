@@ -40,6 +40,10 @@ struct run {
 	double device_ms;   /* platform and device set-up */
 	double counting_ms; /* the whole counting run, with --flops/--work-map */
 	double write_start; /* the outputs began to be written */
+
+	/* One image on several devices (tiles.h): devstats.h's "multidevice"
+	 * part of the --stats document; NULL otherwise. Owned by the run. */
+	struct json_t *multidevice;
 };
 
 void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flops, size_t items,

@@ -37,6 +37,12 @@ static const char triangle_json[] =
 	" \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
 	" \"triangles\": [{\"vertices\": [[-1, -1, 0], [1, -1, 0], [0, 1, 0]]}]}";
 
+/* One smooth triangle from a file, v0 = (0,0,0), v1 = (1,0,0), v2 = (0,1,0),
+ * with vertex normals n0 = (0,0,1), n1 = (0,0,-1), n2 = (0,0,1). */
+static const char smooth_json[] = "{\"format\": \"rtcl-scene\", \"version\": 2,"
+				  " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+				  " \"meshes\": [{\"file\": \"test/meshes/opposed_normals.obj\"}]}";
+
 /* Each test kernel writes the flops counted into out[0] and a result into
  * out[1] (as float bits) so the test can check it took the intended path. */
 static const char test_kernels[] =
@@ -69,6 +75,16 @@ static const char test_kernels[] =
 	"	bool hit = triangle_hit(&tr, 0, o.xyz, d.xyz, INFINITY, &t, &uv);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(hit ? t : -1.0f);\n"
+	"}\n"
+	"__kernel void count_smooth_normal(__global const uint4 *scene, __global ulong *out,"
+	"                                  float4 uv, float4 n_face)\n"
+	"{\n"
+	"	struct tracer tr;\n"
+	"	struct hit hit = {1.0f, -1, -1, 0, uv.x, uv.y};\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
+	"	float3 n = triangle_shading_normal(&tr, tr.triangle_shading, hit, n_face.xyz);\n"
+	"	out[0] = tr.flops;\n"
+	"	out[1] = as_uint(n.z);\n"
 	"}\n"
 	"__kernel void count_shading(__global const uint4 *scene, __global ulong *out,"
 	"                            float4 o, float4 d)\n"
@@ -305,6 +321,33 @@ Test(flops, ray_triangle_test)
 	/* Through (0.9,0.5,0): u = 0.575, v = 0.75, u + v > 1. */
 	cr_expect_eq(run_kernel(&f, "count_triangle", above_it, ahead, &t), 40);
 	cr_expect_eq(t, -1.0f);
+	teardown(&f);
+}
+
+/* The smooth shading normal at a triangle hit (RENDERING.md): w = 1 - u - v
+ * 2, w n0 + u n1 + v n2 three scalings 9 and two sums 6, its squared length
+ * 5: 22, where a zero sum stops (n_face is used); then 1/length (rsqrt) 1,
+ * the scaling 3 and the side test dot(n, n_face) 5: 31. */
+Test(flops, smooth_shading_normal)
+{
+	struct fixture f;
+	const float up[4] = {0, 0, 1, 0}, down[4] = {0, 0, -1, 0};
+	const float at_v0[4] = {0, 0, 0, 0}, inner[4] = {0.25f, 0.25f, 0, 0};
+	const float halfway_v0_v1[4] = {0.5f, 0, 0, 0};
+	float z;
+
+	setup_scene(&f, smooth_json, 0);
+	cr_assert_eq(f.scene.triangle_count, 1);
+	cr_assert_eq(f.scene.triangles[0].smooth, 1);
+	/* At v0: n = n0 = (0,0,1), turned to n_face = (0,0,-1). */
+	cr_expect_eq(run_kernel(&f, "count_smooth_normal", at_v0, down, &z), 31);
+	cr_expect_eq(z, -1.0f);
+	/* w = 0.5: 0.5 n0 + 0.25 n1 + 0.25 n2 = (0,0,0.5), normalised, kept. */
+	cr_expect_eq(run_kernel(&f, "count_smooth_normal", inner, up, &z), 31);
+	cr_expect_eq(z, 1.0f);
+	/* w = 0.5, u = 0.5: 0.5 n0 + 0.5 n1 = 0, so n_face itself. */
+	cr_expect_eq(run_kernel(&f, "count_smooth_normal", halfway_v0_v1, down, &z), 22);
+	cr_expect_eq(z, -1.0f);
 	teardown(&f);
 }
 

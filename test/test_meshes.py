@@ -85,3 +85,23 @@ def test_mesh_scene_renders_through_the_bvh_by_default(tmp_path):
     assert stats["total_flops"] < runs["none"][1]["total_flops"]
     assert runs["none"][1]["node_visits"] == 0
     assert (tmp_path / "default.ppm").read_bytes() == (tmp_path / "none.ppm").read_bytes()
+
+
+def test_bvh_counts_add_up_over_two_devices(tmp_path):
+    """One image in row bands over two PoCL devices (--devices) counts the same
+    flops and BVH node visits as one device, and --stats has the BVH's figures."""
+    runs = {}
+    for name, args, env in (("one", [], None),
+                            ("two", ["--devices", "0:0,0:1"], {"POCL_DEVICES": "pthread pthread"})):
+        result = subprocess.run([RTCL, "-s", str(MESH_SCENE), "--size", "48x32",
+                                 "-o", str(tmp_path / f"{name}.ppm"),
+                                 "--work-map", str(tmp_path / f"{name}.npy"),
+                                 "--stats", str(tmp_path / f"{name}.json"), *args],
+                                capture_output=True, text=True, cwd=ROOT, timeout=300,
+                                env={**os.environ, **(env or {})})
+        assert result.returncode == 0, result.stderr
+        runs[name] = json.loads((tmp_path / f"{name}.json").read_text())
+    assert runs["two"]["node_visits"] == runs["one"]["node_visits"] > 0
+    assert runs["two"]["total_flops"] == runs["one"]["total_flops"]
+    assert runs["two"]["bvh"]["nodes"] == runs["one"]["bvh"]["nodes"] > 0
+    assert (tmp_path / "two.ppm").read_bytes() == (tmp_path / "one.ppm").read_bytes()

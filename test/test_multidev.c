@@ -1,6 +1,6 @@
 /* The host-side pieces of issue 13 that need no device: the --devices
  * parser, the static split, the device-level efficiency, the orbit and the
- * frame names. */
+ * frame names, the bands of one image over several devices. */
 #include <criterion/criterion.h>
 
 #include <math.h>
@@ -10,6 +10,8 @@
 #include "files.h"
 #include "frames.h"
 #include "multidev.h"
+#include "render.h"
+#include "tiles.h"
 
 Test(multidev, devices_list_parses_entries_in_order)
 {
@@ -92,4 +94,77 @@ Test(multidev, frame_names_put_the_number_before_the_extension)
 	cr_assert_str_eq(name, "dir.d/out_12345");
 	cr_assert_eq(frames_output_name("a/.hidden.exr", 0, name), 0);
 	cr_assert_str_eq(name, "a/.hidden_0000.exr");
+}
+
+static struct render_settings band_settings(int width, int height, int samples)
+{
+	struct render_settings s;
+
+	memset(&s, 0, sizeof(s));
+	s.width = width;
+	s.height = height;
+	s.samples = samples;
+	s.workgroup[0] = s.workgroup[1] = 8;
+	return s;
+}
+
+Test(multidev, band_rows_default_to_whole_work_groups_and_several_bands_per_device)
+{
+	struct render_settings s = band_settings(800, 600, 1);
+
+	/* 600 / 64 = 9.4 -> 10 -> 16, a multiple of 8: 38 bands for 2 devices. */
+	cr_assert_eq(tiles_band_rows(&s, 0, 2), 16);
+	cr_assert_eq(tiles_band_rows(&s, 0, 1), 24); /* 18.75 -> 19 -> 24 */
+	cr_assert_eq(tiles_band_rows(&s, 7, 2), 7);  /* --piece-rows as given */
+	cr_assert_eq(tiles_band_rows(&s, 5000, 2), 600);
+	s.height = 5; /* never more than the image */
+	cr_assert_eq(tiles_band_rows(&s, 0, 4), 5);
+}
+
+Test(multidev, bands_cover_every_row_once_with_all_samples)
+{
+	struct render_settings s = band_settings(33, 50, 16);
+	int rows = 7, covered[50] = {0};
+
+	for (int b = 0; b < 8; b++) {
+		struct rt_piece p = tiles_band(&s, rows, b, 0, 16);
+		cr_assert_eq(p.x0, 0);
+		cr_assert_eq(p.width, 33);
+		cr_assert_eq(p.samples, 16);
+		cr_assert_eq(p.sample_end, 16);
+		cr_assert(p.height >= 1 && p.height <= rows);
+		for (int y = p.y0; y < p.y0 + p.height; y++)
+			covered[y]++;
+	}
+	cr_assert_eq(tiles_band(&s, rows, 7, 0, 16).height, 1); /* 50 = 7 * 7 + 1 */
+	for (int y = 0; y < 50; y++)
+		cr_assert_eq(covered[y], 1, "row %d", y);
+}
+
+Test(multidev, band_passes_keep_a_launch_near_the_pass_budget)
+{
+	struct render_settings s = band_settings(1024, 1024, 65536);
+	struct rt_piece band = tiles_band(&s, 64, 0, 0, 65536);
+
+	/* 64 Ki pixels: 2^22 / 2^16 = 64 samples per launch. */
+	cr_assert_eq(tiles_pass_samples(&s, &band), 64);
+	s.samples_per_pass = 5;
+	cr_assert_eq(tiles_pass_samples(&s, &band), 5);
+	s = band_settings(8, 8, 3);
+	band = tiles_band(&s, 8, 0, 0, 3);
+	cr_assert_eq(tiles_pass_samples(&s, &band), 3); /* never more than there are */
+}
+
+Test(multidev, write_count_check_names_the_first_pixel_off)
+{
+	uint32_t counts[12] = {1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1};
+	char err[256];
+
+	cr_assert_eq(tiles_check_counts(counts, 4, 3, 1, err, sizeof(err)), 0);
+	counts[6] = 2;
+	counts[9] = 0;
+	cr_assert_eq(tiles_check_counts(counts, 4, 3, 1, err, sizeof(err)), -1);
+	cr_assert_str_eq(err, "internal error: pixel (2, 1) of a band was written 2 times, not 1");
+	cr_assert_eq(tiles_check_counts(counts, 4, 3, 0, err, sizeof(err)), -1);
+	cr_assert(strstr(err, "pixel (0, 0)"), "%s", err);
 }

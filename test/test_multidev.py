@@ -117,6 +117,15 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--frames", "0:1000"], "at most 1000 frames"),
     (["--frames", "0:1", "-r", "2"], "--frames renders each frame once"),
     (["--frames", "0:1", "--flops", "x.npy"], "--frames renders each frame once"),
+    (["--devices", "0:0,0:1", "--piece-rows", "0"], "--piece-rows: expected"),
+    (["--devices", "0:0,0:1", "--piece-rows", "2x"], "--piece-rows: expected"),
+    (["--piece-rows", "4"], "--piece-rows cuts one image over several devices"),
+    (["--devices", "all", "--frames", "0:1", "--piece-rows", "4"],
+     "it does not apply to --frames"),
+    (["--devices", "0:0,0:1", "--flops", "x.npy"], "use --work-map FILE.npy (per pixel)"),
+    (["--mpi", "--flops", "x.npy"], "use --work-map FILE.npy (per pixel)"),
+    (["--mpi", "-r", "2"], "--mpi renders the image once"),
+    (["--mpi", "--work-map", "w.png"], "--mpi renders the image once"),
 ])
 def test_option_errors(tmp_path, args, message):
     result = run(*args, "-o", str(tmp_path / "x.png"))
@@ -219,19 +228,141 @@ def test_mpi_rank_that_dies_fails_the_run_with_no_output(tmp_path):
     assert os.listdir(tmp_path) == [], "a dead rank left files behind"
 
 
-def test_mpi_without_frames_or_without_mpi_says_what_to_do(tmp_path):
-    result = run("--mpi", "-o", str(tmp_path / "x.png"))
-    assert result.returncode == 1
-    assert ("--mpi: rtcl was built without MPI: install Open MPI" in result.stderr
-            or "--mpi --frames A:B" in result.stderr), result.stderr
-    assert os.listdir(tmp_path) == []
+def test_mpi_as_a_single_rank_renders_or_says_how_to_get_mpi(tmp_path):
+    result = run(*SMALL, "--mpi", "-o", str(tmp_path / "x.ppm"))
+    if "built without MPI" in result.stderr:
+        assert result.returncode == 1
+        assert os.listdir(tmp_path) == []
+    else:  # a singleton MPI process: rank 0 alone
+        assert result.returncode == 0, result.stderr
+        assert (tmp_path / "x.ppm").exists()
 
 
 def test_help_and_man_page_teach_the_options():
     help_text = run("--help").stdout
     man = (ROOT / "docs" / "rtcl.1").read_text()
     for option in ["--devices LIST|all", "--split dynamic|static", "--frames A:B", "--mpi",
-                   "out_0000.png"]:
+                   "out_0000.png", "--piece-rows N"]:
         assert option in help_text, option
-    for option in [r"\-\-devices", r"\-\-split", r"\-\-frames", r"\-\-mpi"]:
+    for option in [r"\-\-devices", r"\-\-split", r"\-\-frames", r"\-\-mpi",
+                   r"\-\-piece\-rows"]:
         assert option in man, option
+
+
+# ---- one image in row bands over several devices (tiles.h) -----------------
+
+CHECK = {"RTCL_TEST_CHECK_WRITES": "1"}  # every pixel written once, or the run fails
+KERNELS = ["serial", "naive", "cyclic", "dynamic", "persistent", "wavefront"]
+
+
+def image_run(directory, name, *args, env=None):
+    stats = directory / f"{name}.json"
+    result = run(*SMALL, "-o", str(directory / f"{name}.ppm"), "--stats", str(stats), *args,
+                 env=env)
+    assert result.returncode == 0, result.stderr
+    return result, json.loads(stats.read_text())
+
+
+@pytest.mark.parametrize("spp", ["1", "4"])
+@pytest.mark.parametrize("kernel", KERNELS)
+def test_bands_on_two_devices_match_one_device_byte_for_byte(tmp_path, kernel, spp):
+    common = ["-k", kernel, "--spp", spp]
+    image_run(tmp_path, "one", *common, "-p", "0", "-d", "0")
+    _, stats = image_run(tmp_path, "two", *common, "--devices", "0:0,0:1", "--piece-rows", "4",
+                         env=CHECK)
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    md = stats["multidevice"]
+    assert md["piece"] == "band" and md["bands"] == 6 and md["band_rows"] == 4
+    assert sum(d["pieces"] for d in md["devices"]) == 6
+    assert sum(d["pixels"] for d in md["devices"]) == 32 * 24
+
+
+def test_write_count_check_catches_a_band_written_twice(tmp_path):
+    # The hook's own check: a band rendered again on a second device (the
+    # test-only RTCL_TEST_DOUBLE_BAND) must fail the run, naming the pixel.
+    result = run(*SMALL, "--devices", "0:0,0:1", "-o", str(tmp_path / "x.ppm"),
+                 env={**CHECK, "RTCL_TEST_DOUBLE_BAND": "1"})
+    expect_failure(result, 1, "written 2 times, not 1", tmp_path)
+
+
+def test_bands_with_repeats_work_map_and_static_split(tmp_path):
+    image_run(tmp_path, "one", "--spp", "2", "-d", "0", "--work-map", str(tmp_path / "one.npy"))
+    result, stats = image_run(tmp_path, "two", "--spp", "2", "--devices", "all", "--split",
+                              "static", "-r", "3", "--work-map", str(tmp_path / "two.npy"),
+                              env=CHECK)
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    # Per-pixel flops assemble like the image.
+    assert (tmp_path / "one.npy").read_bytes() == (tmp_path / "two.npy").read_bytes()
+    assert stats["repeat"] == 3 and len(stats["kernel_ms_all"]) == 3
+    assert stats["multidevice"]["split"] == "static"
+    assert "median of 3" in result.stdout and "device-level efficiency" in result.stdout
+    assert result.stdout.count(" bands, ") + result.stdout.count(" band, ") == 2
+
+
+def test_dynamic_split_gives_a_slow_device_fewer_bands(tmp_path):
+    _, stats = image_run(tmp_path, "x", "--devices", "0:0,0:1", "--piece-rows", "2",
+                         env={"RTCL_TEST_SLOW_DEVICE": "1:300"})
+    pieces = [d["pieces"] for d in stats["multidevice"]["devices"]]
+    assert sum(pieces) == 12
+    assert pieces[1] < pieces[0], pieces
+
+
+def test_static_split_gives_a_slow_device_its_share_of_bands(tmp_path):
+    _, stats = image_run(tmp_path, "x", "--devices", "0:0,0:1", "--piece-rows", "2", "--split",
+                         "static", env={"RTCL_TEST_SLOW_DEVICE": "1:50"})
+    assert [d["pieces"] for d in stats["multidevice"]["devices"]] == [6, 6]
+
+
+def test_a_device_failing_on_a_band_writes_nothing(tmp_path):
+    result = run(*SMALL, "--devices", "0:0,0:1", "--piece-rows", "2", "-o",
+                 str(tmp_path / "x.png"), "--stats", str(tmp_path / "s.json"),
+                 "--work-map", str(tmp_path / "w.png"), env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
+    expect_failure(result, 1, "device 0:0 (", tmp_path)
+    assert "failed on its piece 2" in result.stderr
+
+
+@needs_mpi
+@pytest.mark.parametrize("spp", ["1", "4"])
+def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, spp):
+    image_run(tmp_path, "one", "--spp", spp, "-d", "0", "-k", "persistent")
+    result = mpi_run(*SMALL, "--spp", spp, "-k", "persistent", "--piece-rows", "3", "-o",
+                     str(tmp_path / "ranks.ppm"), "--stats", str(tmp_path / "s.json"),
+                     env=CHECK)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
+    assert md["bands"] == 8 and md["ranks"] == 3
+    assert sum(d["pieces"] for d in md["devices"]) == 8
+    assert sum(d["pixels"] for d in md["devices"]) == 32 * 24
+
+
+@needs_mpi
+def test_mpi_static_split_gives_every_rank_its_share_of_bands(tmp_path):
+    result = mpi_run(*SMALL, "--piece-rows", "2", "--split", "static", "-o",
+                     str(tmp_path / "x.ppm"), "--stats", str(tmp_path / "s.json"),
+                     env={"RTCL_TEST_SLOW_DEVICE": "0:50"})
+    assert result.returncode == 0, result.stderr
+    devices = json.loads((tmp_path / "s.json").read_text())["multidevice"]["devices"]
+    assert [d["pieces"] for d in devices] == [4, 4, 4]
+
+
+@needs_mpi
+def test_mpi_device_failing_on_a_band_writes_nothing(tmp_path):
+    result = mpi_run(*SMALL, "--piece-rows", "2", "-o", str(tmp_path / "x.ppm"),
+                     env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
+    assert result.returncode == 1, result.stderr
+    ours = [line for line in result.stderr.splitlines() if line.startswith("rtcl:")]
+    assert len(ours) == 1, result.stderr
+    assert re.match(r"rtcl: rank \d, device 0:0 \(.*\): the device failed on its piece 2", ours[0])
+    assert os.listdir(tmp_path) == []
+
+
+@needs_mpi
+def test_mpi_rank_that_dies_mid_image_fails_the_run_with_no_output(tmp_path):
+    result = mpi_run(*SMALL, "--piece-rows", "1", "-o", str(tmp_path / "x.ppm"), "--stats",
+                     str(tmp_path / "s.json"), env={"RTCL_TEST_RANK_DIES": "1:2"})
+    assert result.returncode != 0
+    assert "rank 1" in result.stderr and "signal 9" in result.stderr, result.stderr
+    assert "no output written" in result.stderr
+    assert os.listdir(tmp_path) == [], "a dead rank left files behind"

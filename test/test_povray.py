@@ -281,7 +281,7 @@ def test_malformed_json_names_line_and_column(tmp_path):
      'spheres[0].material: unknown material "gold"'),
     ({"spheres": [{"center": [0, 0, 0], "radius": -1}]}, "spheres[0].radius: must be > 0"),
     ({"spheres": [{"center": [0, 0, 0], "radus": 1}]}, 'spheres[0]: unknown key "radus"'),
-    ({"version": 3}, "version: must be 1 or 2"),
+    ({"version": 3}, "version: version 3 is not supported"),
     ({"version": 2, "triangles": [{"vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}]},
      "meshes and triangles (scene version 2) are not converted"),
 ])

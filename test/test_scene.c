@@ -320,7 +320,7 @@ static const struct {
 	{"{\"format\": \"rtcl-scene\"}", "t.json: version: required field is missing"},
 	{"{\"format\": \"rtcl-scene\", \"version\": 3, \"new_thing\": 1}",
 	 "t.json: version: version 3 is not supported (this rtcl reads versions 1 and 2)"},
-	{"{\"format\": \"rtcl-scene\", \"version\": 0}", "t.json: version: must be 1, got 0"},
+	{"{\"format\": \"rtcl-scene\", \"version\": 0}", "t.json: version: must be 1 or 2, got 0"},
 	{"{\"format\": \"rtcl-scene\", \"version\": 1.5}",
 	 "t.json: version: must be an integer, got 1.5"},
 	{"{\"format\": \"rtcl-scene\", \"version\": \"1\"}",
@@ -773,7 +773,8 @@ Test(scene_v2, zero_area_triangles_of_files_are_skipped_and_counted)
 	scene_free(&s);
 	/* An inline one is an error that names it. */
 	load_fails(SCENE2(", \"triangles\": [{\"vertices\": [[0, 0, 0], [1, 1, 1], [3, 3, 3]]}]"),
-		   "t.json: triangles[0].vertices: the triangle has zero area");
+		   "t.json: triangles[0].vertices: must span a triangle of non-zero area, "
+		   "got [0, 0, 0], [1, 1, 1], [3, 3, 3]");
 }
 
 /* Quads are triangulated; without normals in the file, smooth normals are
@@ -835,6 +836,31 @@ Test(scene_v2, mesh_paths_are_relative_to_the_scene_file)
 	cr_expect_eq(s.triangle_count, 320 + 12 + 2 + 1);
 	cr_expect_eq(s.skipped_triangles, 0);
 	scene_free(&s);
+}
+
+/* SCENE.md: an absolute path is used as it is, wherever the scene file is. */
+Test(scene_v2, absolute_mesh_paths_are_used_as_they_are)
+{
+	char *dir = temp_dir(), *mesh = realpath("test/meshes/tri.stl", NULL);
+	char path[256], json[1024], err[512] = "";
+	struct scene s;
+
+	cr_assert_not_null(mesh, "run from the repository root");
+	snprintf(json, sizeof(json), SCENE2(", \"meshes\": [{\"file\": \"%s\"}]"), mesh);
+	snprintf(path, sizeof(path), "%s/abs.json", dir);
+	write_file(path, json);
+	cr_assert_eq(scene_load_file(&s, path, err, sizeof(err)), 0, "%s", err);
+	cr_expect_eq(s.triangle_count, 1);
+	expect_vec3(s.triangles[0].v[1], 1, 0, 0);
+	scene_free(&s);
+	/* From a string (no folder of its own) too. */
+	load_ok(&s, json);
+	cr_expect_eq(s.triangle_count, 1);
+	scene_free(&s);
+	remove(path);
+	rmdir(dir);
+	free(dir);
+	free(mesh);
 }
 
 Test(scene_v2, version_1_refuses_meshes_and_reads_as_before)

@@ -1,11 +1,21 @@
 #!/usr/bin/env python3
-"""Multi-device and MPI benchmark (issue 13): the same animation on one device,
-on several devices in one process, and over MPI ranks; the wall time of each
-(median of --runs), each device's share and the device-level efficiency; and
-the overhead per piece (a tiny frame, whose render time is negligible).
+"""Multi-device and MPI benchmark (issue 13): the same job on one device, on
+several devices in one process, and over MPI ranks; the time of each (median of
+--runs), each device's share and the device-level efficiency; and the overhead
+per piece.
+
+One image (the default): the devices share it in row bands (--piece-rows); the
+table gives the image time (rtcl's kernel_ms: one device's kernel time, or the
+wall time of all bands over all devices) and the whole process's wall time;
+the overhead per band comes from the same image cut in few and in many bands
+(--scan-rows), and the scan shows which band size keeps it low.
 
     tools/multidevice_bench.py --single 1:0 --multi 1:0,0:0 [--mpi-np 2 --mpi-devices 0:0]
-        [--frames 1:16] [--size 1000x1000] [--runs 3] [--out docs/results/multidevice/NAME.md]
+        [--size 2000x2000] [--spp 16] [--scan-rows 8,32,128,500] [--runs 3]
+        [--out docs/results/multidevice/NAME.md]
+
+An animation (--frames A:B): whole frames are the pieces; the overhead per
+piece is a tiny frame's (render time negligible).
 
 --single and --multi are --devices lists (platform:device, see rtcl --list-devices);
 --mpi-np N adds `mpirun -np N rtcl --mpi --devices MPI_DEVICES` (each rank the
@@ -20,13 +30,86 @@ import statistics
 import subprocess
 import sys
 import tempfile
+import time
 
 
 def run(command, env, stats):
+    start = time.perf_counter()
     result = subprocess.run(command, capture_output=True, text=True, env=env, timeout=3600)
+    wall = (time.perf_counter() - start) * 1e3
     if result.returncode != 0:
         sys.exit(f"multidevice_bench: {' '.join(command)} failed:\n{result.stderr}")
-    return json.loads(pathlib.Path(stats).read_text())
+    doc = json.loads(pathlib.Path(stats).read_text())
+    doc["process_ms"] = wall
+    return doc
+
+
+def shares_of(doc):
+    md = doc.get("multidevice")
+    if not md:
+        return 1.0, "one device, whole image"
+    return md["device_efficiency"], ", ".join(
+        f"{d.get('rank', 0)}/{d['platform']}:{d['index']} {d['pieces']}" for d in md["devices"])
+
+
+def measure_image(label, command, env, runs, workdir):
+    docs = []
+    for i in range(runs):
+        stats = os.path.join(workdir, f"s{i}.json")
+        docs.append(run([*command, "--stats", stats, "-o", os.path.join(workdir, "i.ppm")],
+                        env, stats))
+    image_ms = statistics.median(d["kernel_ms"] for d in docs)
+    best = sorted(docs, key=lambda d: d["kernel_ms"])[len(docs) // 2]
+    efficiency, shares = shares_of(best)
+    return {"label": label, "image_ms": image_ms,
+            "process_ms": statistics.median(d["process_ms"] for d in docs),
+            "efficiency": efficiency, "shares": shares, "bands": best.get(
+                "multidevice", {}).get("bands", 1), "command": " ".join(command)}
+
+
+def image_main(args, env):
+    base = [args.rtcl, "-q", "-k", args.kernel, "--size", args.size, "--spp", str(args.spp)]
+    configs = [(f"one device {args.single}", [*base, "--devices", args.single]),
+               (f"--devices {args.multi} (dynamic)", [*base, "--devices", args.multi]),
+               (f"--devices {args.multi} --split static",
+                [*base, "--devices", args.multi, "--split", "static"])]
+    if args.mpi_np:
+        mpi = ["mpirun", "--oversubscribe", "-np", str(args.mpi_np)]
+        if args.mpi_env:
+            mpi += ["-x", args.mpi_env]
+        configs.append((f"mpirun -np {args.mpi_np}, each --devices {args.mpi_devices}",
+                        [*mpi, *base, "--mpi", "--devices", args.mpi_devices]))
+    rows, scan = [], []
+    with tempfile.TemporaryDirectory() as workdir:
+        for label, command in configs:
+            rows.append(measure_image(label, command, env, args.runs, workdir))
+            print(f"{label}: {rows[-1]['image_ms']:.1f} ms", file=sys.stderr)
+        for n in (int(x) for x in args.scan_rows.split(",") if x):
+            command = [*base, "--devices", args.multi, "--split", "static", "--piece-rows",
+                       str(n)]
+            scan.append(measure_image(f"--piece-rows {n}", command, env, args.runs, workdir))
+            print(f"--piece-rows {n}: {scan[-1]['image_ms']:.1f} ms", file=sys.stderr)
+    devices = len(args.multi.split(","))
+    lines = [f"# Multi-device: one {args.size} image at {args.spp} spp, kernel {args.kernel}, "
+             f"median of {args.runs}", "",
+             "| configuration | image ms | speed-up | process ms | device-level efficiency | "
+             "bands per device (rank/platform:device) |", "|---|---|---|---|---|---|"]
+    for r in rows:
+        lines.append(f"| {r['label']} | {r['image_ms']:.1f} | "
+                     f"{rows[0]['image_ms'] / r['image_ms']:.2f}x | {r['process_ms']:.0f} | "
+                     f"{100 * r['efficiency']:.1f}% | {r['shares']} |")
+    if len(scan) >= 2:
+        few, many = max(scan, key=lambda r: -r["bands"]), max(scan, key=lambda r: r["bands"])
+        per_band = ((many["image_ms"] - few["image_ms"]) * devices /
+                    max(1, many["bands"] - few["bands"]))
+        lines += ["", f"Band size on --devices {args.multi} --split static:", "",
+                  "| --piece-rows | bands | image ms | efficiency |", "|---|---|---|---|"]
+        lines += [f"| {r['label'].split()[-1]} | {r['bands']} | {r['image_ms']:.1f} | "
+                  f"{100 * r['efficiency']:.1f}% |" for r in scan]
+        lines += ["", f"Overhead per band (({many['bands']} bands − {few['bands']} bands) on "
+                  f"{devices} devices): {per_band:.2f} ms"]
+    lines += ["", "Commands:", ""] + [f"    {r['command']}" for r in rows]
+    return "\n".join(lines) + "\n"
 
 
 def measure(label, command, env, runs, workdir):
@@ -52,7 +135,11 @@ def main():
     parser.add_argument("--mpi-np", type=int, default=0)
     parser.add_argument("--mpi-devices", default="0:0")
     parser.add_argument("--mpi-env", default="", help="VAR=VALUE passed to every rank")
-    parser.add_argument("--frames", default="1:16")
+    parser.add_argument("--frames", default=None,
+                        help="an animation A:B instead of one image")
+    parser.add_argument("--spp", type=int, default=1)
+    parser.add_argument("--scan-rows", default="",
+                        help="band sizes (rows) to time on --multi, e.g. 8,32,128,600")
     parser.add_argument("--size", default="1000x1000")
     parser.add_argument("--kernel", default="dynamic")
     parser.add_argument("--runs", type=int, default=3)
@@ -60,6 +147,12 @@ def main():
     args = parser.parse_args()
 
     env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1"}
+    if not args.frames:
+        text = image_main(args, env)
+        print(text)
+        if args.out:
+            pathlib.Path(args.out).write_text(text)
+        return
     base = [args.rtcl, "-q", "-k", args.kernel, "--size", args.size, "--frames", args.frames]
     configs = [(f"one device {args.single}", [*base, "--devices", args.single]),
                (f"--devices {args.multi} (dynamic)", [*base, "--devices", args.multi]),

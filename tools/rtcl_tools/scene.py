@@ -1,14 +1,16 @@
 """The tools' scene validator: docs/SCENE.md (format versions 1 and 2) in Python.
 
-host/scene.c is the authority; this module mirrors it for the tools (povray.py
+host/scene.c is the authority; this module (with scene_check.py for the messages
+and the checks of values, as host/scene_check.c) mirrors it for the tools (povray.py
 reads scenes through it) and for the tests, rule for rule and in the same
 order, with the same "PATH: what is wrong" messages, so that every file rtcl
-refuses is refused here too (test/test_rtcl_tools.py checks that against
-test/bad_scenes/).  JSON syntax errors are "LINE:COLUMN: what" as in rtcl, in
-Python's wording.  One deliberate difference: a newer version says "must be 1
-or 2".  Version 2 (meshes, inline triangles) is read here before rtcl reads it;
-test/bad_scenes_v2/ holds its bad scenes until the C loader follows.  A mesh
-file is only checked to exist and be readable: parsing it is the importer's job.
+refuses is refused here too, with rtcl's message (test/test_rtcl_tools.py
+checks that against test/bad_scenes/).  Two deliberate differences: JSON
+syntax errors are "LINE:COLUMN: what" as in rtcl, in Python's wording; and a
+mesh file is only checked to exist and be readable (after the mesh's other
+fields, where rtcl reads it): parsing it is the importer's job, so a file
+without triangles or with a non-finite vertex passes here (RTCL_ONLY in
+test/test_rtcl_tools.py lists those bad scenes).
 
 load_scene(path) and read_scene(document, base_dir) return the scene with every
 default filled in (colours and vectors as tuples, plane normals normalised);
@@ -17,19 +19,18 @@ both raise SceneError.  base_dir is the folder that mesh files are relative to
 """
 
 import json
-import math
 import os
-import sys
 
+from .scene_check import (SceneError, Written, _escaped, check_keys, child, fail,
+                          format_vector, integer, length, number, optional,
+                          required, scale_to_unit_max, type_name, vec3)
 from .vector import normalize
 
-MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-18, 1e18   # SCENE.md: the device computes in float
 PARALLEL_SINE = 1e-9                         # camera.up "parallel" below this sine
 MAX_IMAGE_SIDE = 32768
 MAX_DEPTH = 64
 MAX_SAMPLES = 65536
 VERSIONS = (1, 2)
-NAME_MAX = 64                                # longer keys are cut in messages
 
 TOP_KEYS = ("format", "version", "image", "camera", "background", "ambient", "max_depth",
             "epsilon", "materials", "lights", "spheres", "planes")
@@ -44,172 +45,6 @@ MATERIAL_RANGES = (("ambient", "non-negative"), ("diffuse", "non-negative"),
                    ("reflect", "unit"), ("transmit", "unit"), ("ior", "positive"))
 
 
-class SceneError(ValueError):
-    """A scene that breaks a rule of SCENE.md; the message names the place."""
-
-
-# ---- messages ----------------------------------------------------------------------
-
-def _escaped(text, quoted=True):
-    """Returns text with control characters (and quotes) escaped, cut after NAME_MAX."""
-    cut = len(text) > NAME_MAX
-    out = []
-    for char in text[:NAME_MAX]:
-        if quoted and char in '"\\':
-            out.append("\\" + char)
-        elif char == "\n":
-            out.append("\\n")
-        elif char == "\t":
-            out.append("\\t")
-        elif ord(char) < 0x20 or ord(char) == 0x7f:
-            out.append("\\x%02x" % ord(char))
-        else:
-            out.append(char)
-    return "".join(out) + ("..." if cut else "")
-
-
-def child(path, key):
-    """Returns the path of key (a str) or index (an int) below path ('' = the document)."""
-    if isinstance(key, int):
-        return f"{path}[{key}]"
-    if not path:
-        return key
-    if key.isidentifier() and key.isascii():
-        return f"{path}.{key}"
-    return f'{path}["{_escaped(key)}"]'
-
-
-def fail(path, what):
-    raise SceneError(f"{path or '(top level)'}: {what}")
-
-
-def format_number(value):
-    """Returns the shortest %g text that reads back as value (rtcl's fmt_num)."""
-    for precision in range(6, 18):
-        text = "%.*g" % (precision, value)
-        if float(text) == value:
-            break
-    return text
-
-
-def format_vector(values):
-    return "[" + ", ".join(format_number(v) for v in values) + "]"
-
-
-def type_name(value):
-    if isinstance(value, bool) or value is None:
-        return {True: "true", False: "false", None: "null"}[value]
-    for kind, name in ((dict, "an object"), (list, "an array"), (str, "a string"),
-                       (int, "an integer"), (float, "a real number")):
-        if isinstance(value, kind):
-            return name
-    return "an unknown JSON value"
-
-
-# ---- values --------------------------------------------------------------------------
-
-def check_keys(value, path, allowed):
-    if not isinstance(value, dict):
-        fail(path, f"must be an object, got {type_name(value)}")
-    for key in value:
-        if key not in allowed:
-            fail(path, f'unknown key "{_escaped(key)}"')
-    return value
-
-
-def required(obj, key, path):
-    if key not in obj:
-        fail(child(path, key), "required field is missing")
-    return obj[key]
-
-
-class Written(float):
-    """A JSON number that keeps its text, to name a number that underflows."""
-
-    def __new__(cls, text):
-        number = super().__new__(cls, text)
-        number.text = text
-        return number
-
-
-def underflow_text(value):
-    """The text of a number written nonzero that reads as 0 or a denormal, as
-    rtcl quotes it; None for any other number."""
-    text = getattr(value, "text", None)
-    x = float(value)
-    if text is None or (x != 0 and abs(x) >= sys.float_info.min):
-        return None
-    if not any(c in "123456789" for c in text.lower().split("e")[0]):
-        return None             # written as zero: 0.0, 0e-9
-    return text if len(text) < 40 else f"a {len(text)}-character number"
-
-
-def number(value, path, kind="any"):
-    """Returns value as a float if it is a number in range kind (rtcl's check_number)."""
-    if isinstance(value, bool) or not isinstance(value, (int, float)):
-        fail(path, f"must be a number, got {type_name(value)}")
-    try:
-        x = float(value)
-    except OverflowError:
-        x = math.inf if value > 0 else -math.inf
-    if not math.isfinite(x):
-        fail(path, f"must be finite, got {format_number(x)}")
-    written = underflow_text(value) if kind in ("positive", "fov") else None
-    if written and kind == "positive":
-        fail(path, f"must be between 1e-18 and 1e+18 (rtcl computes in float), got {written}, "
-                   "which underflows to 0")
-    if written:
-        fail(path, f"must be > 0 and < 180, got {written}, which underflows to 0")
-    ranges = {"positive": (x > 0, "must be > 0"), "non-negative": (x >= 0, "must be >= 0"),
-              "unit": (0 <= x <= 1, "must be between 0 and 1"),
-              "fov": (0 < x < 180, "must be > 0 and < 180")}
-    if kind in ranges and not ranges[kind][0]:
-        fail(path, f"{ranges[kind][1]}, got {format_number(x)}")
-    if kind != "direction" and x != 0 and not MIN_MAGNITUDE <= abs(x) <= MAX_MAGNITUDE:
-        zero = "" if kind in ("positive", "fov") else "0 or "
-        scope = " in magnitude" if kind == "any" else ""
-        fail(path, f"must be {zero}between 1e-18 and 1e+18{scope} (rtcl computes in float), "
-                   f"got {format_number(x)}")
-    return x
-
-
-def integer(value, path, low, high):
-    """Returns value if it is a JSON integer (not 2.0) in low ... high."""
-    if isinstance(value, float):
-        text = format_number(value)
-        fail(path, f"must be an integer, got {text if set(text) & set('.eni') else text + '.0'}")
-    if isinstance(value, bool) or not isinstance(value, int):
-        fail(path, f"must be an integer, got {type_name(value)}")
-    if not low <= value <= high:
-        fail(path, f"must be between {low} and {high}, got {value}")
-    return value
-
-
-def vec3(value, path, kind="any"):
-    """Returns a vec3 (kind "any" or "direction") or a colour ("non-negative") as a tuple."""
-    if not isinstance(value, list):
-        fail(path, f"must be an array of 3 numbers, got {type_name(value)}")
-    if len(value) != 3:
-        fail(path, f"must be an array of 3 numbers, got {len(value)} "
-                   f"element{'' if len(value) == 1 else 's'}")
-    return tuple(number(part, child(path, i), kind) for i, part in enumerate(value))
-
-
-def optional(obj, key, path, read, default, *args):
-    """Returns read(obj[key], path.key, *args), or default when key is absent."""
-    return read(obj[key], child(path, key), *args) if key in obj else default
-
-
-def scale_to_unit_max(v):
-    """Returns v scaled so that its largest part has magnitude 1; None for zero."""
-    largest = max(abs(x) for x in v)
-    return None if largest == 0 else tuple(x / largest for x in v)
-
-
-def length(v):
-    return math.sqrt(sum(x * x for x in v))
-
-
 # ---- the scene -------------------------------------------------------------------------
 
 def read_header(doc):
@@ -222,12 +57,13 @@ def read_header(doc):
     if fmt != "rtcl-scene":
         fail("format", f'must be "rtcl-scene", got "{_escaped(fmt)}"')
     version = integer(required(doc, "version", ""), "version", -2**63, 2**63 - 1)
-    if version not in VERSIONS:
-        fail("version", f"must be 1 or 2, got {version}"
-                        + (" (this tool reads versions 1 and 2)" if version > 2 else ""))
-    for key in doc:
-        if key in VERSION_2_KEYS and version < 2:
-            fail(key, f"needs version 2, the file says version {version}")
+    if version > max(VERSIONS):
+        fail("version", f"version {version} is not supported (this rtcl reads versions 1 and 2)")
+    if version < min(VERSIONS):
+        fail("version", f"must be 1 or 2, got {version}")
+    for key in VERSION_2_KEYS:
+        if key in doc and version < 2:
+            fail(key, f'needs "version": 2 (the file says "version": {version})')
     check_keys(doc, "", TOP_KEYS + VERSION_2_KEYS)
     return version
 
@@ -343,7 +179,7 @@ def non_zero(value, path):
     """Returns value as a float if it is a number other than 0 (a mesh's scale)."""
     x = number(value, path)
     if x == 0:
-        fail(path, "must be non-zero, got 0")
+        fail(path, "must not be 0")
     return x
 
 
@@ -363,45 +199,62 @@ def boolean(value, path):
     return value
 
 
-def mesh_file(value, path, base_dir):
-    """Returns the path of a mesh file, after checking that it can be opened for reading."""
+def one_line(text):
+    """Returns a file name as rtcl quotes it (host/scene_mesh.c): control characters
+    become '?', cut after 299 bytes, without trailing '?' and spaces."""
+    raw = bytes(b if b >= 0x20 and b != 0x7f else 0x3f for b in text.encode("utf-8"))
+    return raw[:299].rstrip(b"? ").decode("utf-8", errors="replace")
+
+
+def mesh_name(value, path):
+    """Returns the file name of a mesh, a non-empty string."""
     if not isinstance(value, str):
         fail(path, f"must be a string, got {type_name(value)}")
     if not value:
-        fail(path, "must not be empty")
+        fail(path, 'must name a file, got ""')
+    return value
+
+
+def mesh_file(name, path, base_dir):
+    """Returns the path of a mesh file, after checking that it can be opened for
+    reading; relative to base_dir unless absolute (None: not looked up)."""
     if base_dir is None:
-        return value
+        return name
     # An absolute path stays as it is (os.path.join drops base_dir).
-    resolved = os.path.join(base_dir, value)
+    resolved = os.path.join(base_dir, name)
     try:
         with open(resolved, "rb"):
             pass
     except OSError as error:
-        fail(path, f'cannot read "{_escaped(value)}": {error.strerror}')
+        fail(path, f'cannot read "{one_line(name)}": {error.strerror}')
     return resolved
 
 
 def read_meshes(items, materials, base_dir):
+    """The meshes in rtcl's order: the file's name, the material and placement, and
+    only then the file itself."""
     meshes = []
     for i, value in enumerate(items):
         path = child("meshes", i)
         check_keys(value, path, MESH_KEYS)
-        meshes.append({
-            "file": mesh_file(required(value, "file", path), child(path, "file"), base_dir),
-            "material": material_of(value, path, materials),
-            "scale": optional(value, "scale", path, read_scale, (1.0, 1.0, 1.0)),
-            "rotate": optional(value, "rotate", path, vec3, (0.0, 0.0, 0.0)),
-            "translate": optional(value, "translate", path, vec3, (0.0, 0.0, 0.0)),
-            "smooth": optional(value, "smooth", path, boolean, True)})
+        where = child(path, "file")
+        name = mesh_name(required(value, "file", path), where)
+        mesh = {"material": material_of(value, path, materials),
+                "scale": optional(value, "scale", path, read_scale, (1.0, 1.0, 1.0)),
+                "rotate": optional(value, "rotate", path, vec3, (0.0, 0.0, 0.0)),
+                "translate": optional(value, "translate", path, vec3, (0.0, 0.0, 0.0)),
+                "smooth": optional(value, "smooth", path, boolean, True)}
+        mesh["file"] = mesh_file(name, where, base_dir)
+        meshes.append(mesh)
     return meshes
 
 
 def read_vertices(value, path):
     """Returns the three vertices of an inline triangle, which must span an area."""
     if not isinstance(value, list):
-        fail(path, f"must be an array of 3 points, got {type_name(value)}")
+        fail(path, f"must be an array of 3 vertices, got {type_name(value)}")
     if len(value) != 3:
-        fail(path, f"must be an array of 3 points, got {len(value)} "
+        fail(path, f"must be an array of 3 vertices, got {len(value)} "
                    f"element{'' if len(value) == 1 else 's'}")
     a, b, c = (vec3(point, child(path, i)) for i, point in enumerate(value))
     # Halved so that no difference overflows; only "exactly 0" matters here.

@@ -1,0 +1,102 @@
+/* One image over several devices (--devices with more than one, --mpi): the
+ * image cut into row bands, each band a piece (renderer.h) carrying every
+ * sample of its rows, handed out by multidev.h's dispenser. Each device opens
+ * its renderer once, renders the bands it is given into its own full-size
+ * buffers, reads them back once at the end; the host copies each band from
+ * the device that rendered it. A band's samples all run on one device, in
+ * order, so the image is byte-identical to a one-device render. */
+#ifndef RTCL_TILES_H
+#define RTCL_TILES_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "multidev.h"
+#include "renderer.h"
+#include "stats.h"
+
+/* Bands per device when --piece-rows is not given: many, since a band costs
+ * only a launch and its wait (0.01 to 0.05 ms on PoCL,
+ * docs/results/multidevice) while the last band a slow device takes can end
+ * after the fast one is done: with n devices a device k times slower than
+ * the fastest delays the end by at most k / (32 n) of the fast device's time
+ * for the image. */
+#define TILES_PER_DEVICE 32
+
+/* Rows per band: piece_rows when given (> 0), else about height / (32 ×
+ * devices) rounded up to a multiple of the work-group height. */
+int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices);
+
+/* Band `index` of bands of `rows` rows (the last may be shorter), samples
+ * [begin, end). */
+struct rt_piece tiles_band(const struct render_settings *s, int rows, int index, int begin,
+			   int end);
+
+/* Samples per launch for a band: settings->samples_per_pass, else about
+ * RENDER_PASS_PIXEL_SAMPLES over the band (render.h). */
+int tiles_pass_samples(const struct render_settings *s, const struct rt_piece *band);
+
+/* One device's renderer and what it read back. */
+struct tiles_device {
+	struct renderer renderer;
+	struct render_result result;
+	int open;
+	int collected; /* read back */
+};
+
+/* The bands of one image on devs[count] of this process. */
+struct tiles_job {
+	const struct render_settings *settings;
+	const struct scene *scene;
+	struct device *devs;
+	int count;
+	int rows, bands;
+	int *owner;   /* each band's device (index into devs) in the last frame */
+	int launches; /* per pixel per frame: the passes of its band */
+	struct tiles_device dev[DEVICES_MAX];
+};
+
+/* Returns 0, or -1 with one message in err (out of memory). */
+int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
+		   int rows, struct device *devs, int count, char *err, size_t err_size);
+
+/* Releases every renderer and what they read back. */
+void tiles_job_free(struct tiles_job *t);
+
+/* multidev callbacks' bodies: opens device k's renderer (once); renders band
+ * on device k and records it as k's. */
+int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size);
+int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, char *err,
+		      size_t err_size);
+
+/* Reads back device k's image (and counts), once. */
+int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size);
+
+/* Copies band's rows of from's image (and per-pixel flops when both hold
+ * them) into to. */
+void tiles_copy_band(const struct tiles_job *t, int band, const struct render_result *from,
+		     struct render_result *to);
+
+/* Checks write counts: every pixel of the image counted `expected` times
+ * (check_writes). Returns 0, or -1 with the first pixel that was not in err. */
+int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected, char *err,
+		       size_t err_size);
+
+/* The plan and build facts the summary shows (work-groups, NDRange, build
+ * options, set-up times), from one device's result: the first device's. */
+void tiles_copy_facts(const struct render_result *from, struct render_result *to);
+
+/* With check_writes, after one frame: device k's write counts are each
+ * band's launches in the bands it rendered and 0 elsewhere. Returns 0, or -1
+ * with the first pixel that was not in err. */
+int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
+
+/* One image of run on devs[count] (count > 1): with --flops/--work-map a
+ * counting run first, then the timed frames (-r: one warm-up, N timed, each
+ * the whole image over every device). Fills run->result, run->counted,
+ * run->flops and run->multidevice (the --stats part), and work. Returns 0, or
+ * -1 with one message in err. */
+int tiles_render(struct run *run, struct device *devs, int count, struct device_work *work,
+		 char *err, size_t err_size);
+
+#endif
