@@ -53,7 +53,7 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 {
 	float radius2 = sphere_radius2(sphere);
 
-	if (!(gap <= radius2) || (any_hit && best->sphere >= 0))
+	if (!(gap <= radius2) || (any_hit && (best->sphere >= 0 || best->triangle >= 0)))
 		return;
 	float3 oc = o - sphere.xyz;
 	float b = dot3(oc, d);
@@ -68,9 +68,14 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 		COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
 		t = near > 0.0f ? near : far;
 	}
-	if (t > 0.0f && t < *nearest) {
+	/* Equal distances go to the lower index, and a sphere beats a triangle,
+	 * as brute force's order (spheres by index, then triangles) gives, so
+	 * that the BVH's order of visits gives the same hits. */
+	if (t > 0.0f &&
+	    (t < *nearest || (t == *nearest && (best->triangle >= 0 || i < best->sphere)))) {
 		*nearest = t;
 		best->sphere = i;
+		best->triangle = -1;
 	}
 }
 
@@ -149,8 +154,44 @@ static void triangles_brute_force(struct tracer *tr, float3 o, float3 d, bool an
 	}
 }
 
+#ifdef RTCL_BVH
+/* Triangle i met in a BVH leaf, in whatever order the traversal reaches it:
+ * takes it as the nearest hit by the rule brute force's order gives
+ * (triangles_brute_force after the spheres, each replacing the hit only when
+ * strictly nearer), so that the image is the same: an equal distance goes to
+ * a sphere, else to the lower triangle index. With any_hit, once one hit is
+ * found, the rest are not looked at. */
+static void triangle_consider(struct tracer *tr, int i, float3 o, float3 d, bool any_hit,
+			      float *nearest, struct hit *best)
+{
+	float t;
+	float2 uv;
+
+	if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+		return;
+	/* No bound here: the tie needs t == *nearest, which the test's
+	 * strict t < t_max would drop. */
+	if (!triangle_hit(tr, i, o, d, INFINITY, &t, &uv))
+		return;
+	if (t < *nearest || (t == *nearest && best->sphere < 0 && i < best->triangle)) {
+		*nearest = t;
+		best->sphere = -1;
+		best->triangle = i;
+		best->u = uv.x;
+		best->v = uv.y;
+	}
+}
+#endif
+
 #if RT_SPHERE_GROUP != 4
 #error "intersect_scene tests spheres four at a time"
+#endif
+
+#ifdef RTCL_BVH
+/* cl/traverse.cl: the spheres' and triangles' part of intersect_scene through
+ * the BVH. */
+static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
+			  bool any_hit, float *nearest, struct hit *best);
 #endif
 
 /* Returns the nearest object on the ray with 0 < t < max_t; hit.t is 0 when
@@ -165,6 +206,9 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 	/* RT_SPHERE_GROUP spheres at a time, so that when the ray misses them
 	 * all, as it mostly does, they cost one branch. */
 	struct ray_frame frame = ray_frame(tr, o, d);
+#ifdef RTCL_BVH
+	bvh_intersect(tr, &frame, o, d, any_hit, &nearest, &best);
+#else
 	for (int i = 0; i < tr->scene->sphere_slots; i += RT_SPHERE_GROUP) {
 		float4 s0 = tr->spheres[i].center; /* one load: the centre and radius² */
 		float4 s1 = tr->spheres[i + 1].center;
@@ -189,6 +233,7 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 	}
 	if (!(any_hit && best.sphere >= 0))
 		triangles_brute_force(tr, o, d, any_hit, &nearest, &best);
+#endif
 	for (int i = 0;
 	     i < tr->scene->plane_count && !(any_hit && (best.sphere >= 0 || best.triangle >= 0));
 	     i++) {

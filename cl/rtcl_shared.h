@@ -113,7 +113,49 @@ struct rt_scene {
 	rt_uint total_bytes;			 /* the whole block, a multiple of 16 */
 	rt_uint triangle_offset, shading_offset; /* struct rt_triangle, rt_triangle_shading */
 	rt_int triangle_count;
+	/* The BVH over the bounded primitives, spheres and triangles
+	   (docs/bvh.md): bvh_node_count struct rt_bvh_node at bvh_node_offset,
+	   node 0 the root, and the primitive references (rt_uint, RT_PRIM_*)
+	   its leaves index at bvh_ref_offset. bvh_node_count is 0 with
+	   --accel none or with neither spheres nor triangles. The triangle
+	   fields took the header's last padding and these the next 16 bytes,
+	   so that the header stays a multiple of 16 (the arrays after it are
+	   read as float4). */
+	rt_uint bvh_node_offset, bvh_ref_offset;
+	rt_int bvh_node_count;
+	rt_int pad;
 };
+
+/* A BVH node of two children, both boxes in one 64-byte node so that one
+ * visit loads four 16-byte words and tests two boxes (docs/bvh.md says why
+ * two-wide). Child k's box is child[k].lo.xyz..child[k].hi.xyz, rounded
+ * outward; the w lanes, read through bvh_child_index and bvh_child_count,
+ * hold int bits: lo.w is the child node's index (an inner child) or its first
+ * primitive reference (a leaf), hi.w is 0 for an inner child and the leaf's
+ * reference count otherwise (0 with lo.w 0 too: an empty leaf, only beside a
+ * root's single primitive). */
+struct rt_bvh_box {
+	rt_vec4 lo, hi;
+};
+
+struct rt_bvh_node {
+	struct rt_bvh_box child[2];
+};
+
+/* A primitive reference: the kind in the top bit, the index into the kind's
+ * array below it. */
+#define RT_PRIM_KIND_SHIFT 31
+#define RT_PRIM_SPHERE 0u
+#define RT_PRIM_TRIANGLE 1u
+#define RT_PRIM_INDEX_MASK 0x7fffffffu
+
+/* The deepest BVH the builder makes (the root at depth 0), which sizes the
+ * tracer's traversal stack: each level leaves at most one child waiting. */
+#define RT_BVH_MAX_DEPTH 64
+
+/* Counts per launched work-item in the counting build: flops, rays and BVH
+ * node visits. */
+#define RT_ITEM_COUNTS 3
 
 /* A ray waiting in the wavefront kernel's queue. */
 struct rt_ray {
@@ -152,10 +194,15 @@ _Static_assert(offsetof(struct rt_plane, material) == 32, "rt_plane layout");
 _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_triangle) == 48, "rt_triangle layout");
 _Static_assert(sizeof(struct rt_triangle_shading) == 64, "rt_triangle_shading layout");
-_Static_assert(sizeof(struct rt_scene) == 160, "rt_scene layout");
+_Static_assert(sizeof(struct rt_scene) == 176, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, triangle_offset) == 148, "rt_scene layout");
+_Static_assert(offsetof(struct rt_scene, bvh_node_offset) == 160, "rt_scene layout");
+_Static_assert(sizeof(struct rt_scene) % 16 == 0,
+	       "rt_scene: the arrays after it stay 16-byte aligned");
+_Static_assert(sizeof(struct rt_bvh_node) == 64, "rt_bvh_node layout");
+_Static_assert(offsetof(struct rt_bvh_node, child[1].lo) == 32, "rt_bvh_node layout");
 #endif
 
 /* The scalars that share a 16-byte load with a vector, by name. They take the
@@ -195,6 +242,18 @@ static inline bool triangle_smooth(float4 normal)
 static inline float checker_size(float4 checker_color)
 {
 	return checker_color.w;
+}
+
+/* lo, hi: a struct rt_bvh_box's corners. The child's node index or first
+ * primitive reference, and its reference count (0: an inner node). */
+static inline int bvh_child_index(float4 lo)
+{
+	return as_int(lo.w);
+}
+
+static inline int bvh_child_count(float4 hi)
+{
+	return as_int(hi.w);
 }
 
 /* origin: struct rt_ray's origin lane */

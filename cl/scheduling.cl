@@ -1,7 +1,8 @@
 /* What the scheduling kernels share and nothing else uses: the scene block
  * loaded per work-group, the per-work-item counts, the global item index and
- * the chunk grid over the piece of the image being rendered (struct rt_piece). Part of the tracer: built after walk.cl, before the kernel
- * file (serial.cl, naive.cl, ...). */
+ * the chunk grid over the piece of the image being rendered (struct rt_piece).
+ * Part of the tracer: built after walk.cl, before the kernel file (serial.cl,
+ * naive.cl, ...). */
 
 /* Copies the scene block into the work-group's __local memory when the scene
  * lives there, and returns the scene every work-item reads. Every work-item of
@@ -24,8 +25,9 @@ static scene_ptr load_scene(__global const uint4 *scene_global, __local uint4 *s
 }
 
 /* Sets up the tracer of a single-pass kernel, whose counts buffer holds the
- * flops per pixel of the whole image, then the flops and rays per work-item
- * of this launch: the pixels' place does not depend on the launch's size. */
+ * flops per pixel of the whole image, then RT_ITEM_COUNTS per work-item of
+ * this launch (flops, rays, node visits): the pixels' place does not depend
+ * on the launch's size. */
 static void tracer_init_counts(struct tracer *tr, scene_ptr scene, __global ulong *counts)
 {
 	tracer_init(tr, scene, counts + (size_t)scene->width * scene->height, counts);
@@ -35,8 +37,9 @@ static void tracer_init_counts(struct tracer *tr, scene_ptr scene, __global ulon
 static void store_counts(struct tracer *tr, uint item)
 {
 #ifdef RTCL_COUNT_FLOPS
-	tr->item_counts[2 * item] = tr->flops;
-	tr->item_counts[2 * item + 1] = tr->rays;
+	tr->item_counts[RT_ITEM_COUNTS * item] = tr->flops;
+	tr->item_counts[RT_ITEM_COUNTS * item + 1] = tr->rays;
+	tr->item_counts[RT_ITEM_COUNTS * item + 2] = tr->node_visits;
 #else
 	(void)tr;
 	(void)item;

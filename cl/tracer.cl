@@ -1,11 +1,13 @@
 /* The tracer: what a pixel is (docs/RENDERING.md), written once and used by
  * every scheduling kernel. OpenCL C 1.2.
  *
- * The tracer is five files, built in this order before the kernel file
+ * The tracer is seven files, built in this order before the kernel file
  * (host/program.c lists them) and read best in the same order:
  *   tracer.cl      counting, the scene as the tracer sees it, vector helpers
  *   sample.cl      where a pixel's samples lie
  *   intersect.cl   the nearest (or any) hit over spheres, triangles and planes
+ *   traverse.cl    the same over the spheres and triangles through the BVH
+ *                  (RTCL_BVH)
  *   shade.cl       the base colour, lights and shadow rays, spawned rays
  *   walk.cl        ray_step, one ray by one intersection; the pixel's walk
  *   scheduling.cl  what the scheduling kernels share: scene loading, counts,
@@ -17,7 +19,10 @@
  *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack
  *   RTCL_SCENE_IN_LOCAL copy the scene into __local memory per work-group;
  *                       without it the tracer reads it from __global memory
- *   RTCL_COUNT_FLOPS    count floating-point operations and rays per work-item
+ *   RTCL_BVH            find sphere hits through the scene's BVH rather than
+ *                       by testing every sphere (--accel bvh)
+ *   RTCL_COUNT_FLOPS    count floating-point operations, rays and BVH node
+ *                       visits per work-item
  *   RTCL_COUNT_WRITES   count writes per pixel (tests only)
  *
  * Contraction into fused multiply-adds is off so that the same source gives the
@@ -49,9 +54,11 @@
 #ifdef RTCL_COUNT_FLOPS
 #define COUNT_FLOPS(tr, n) ((tr)->flops += (n))
 #define COUNT_RAY(tr) ((tr)->rays++)
+#define COUNT_NODE_VISIT(tr) ((tr)->node_visits++)
 #else
 #define COUNT_FLOPS(tr, n) ((void)0)
 #define COUNT_RAY(tr) ((void)0)
+#define COUNT_NODE_VISIT(tr) ((void)0)
 #endif
 
 /* What the operations written below cost, by RENDERING.md's rules: +, −, ×,
@@ -80,6 +87,12 @@
 #define FLOPS_TRIANGLE_U (1 + FLOPS_ADD3 + FLOPS_DOT3 + 1)
 #define FLOPS_TRIANGLE_V (FLOPS_CROSS3 + FLOPS_DOT3 + 1 + 1)
 #define FLOPS_TRIANGLE_T (FLOPS_DOT3 + 1)
+/* The BVH's per-ray set-up: 1/d, three divisions, and o/d, three products. */
+#define FLOPS_BOX_SETUP (3 + FLOPS_MUL3)
+/* box_hit, one box: six slab fmas, a min and a max per axis, the entry as
+ * the max of three and 0, the exit as the min of three and the nearest hit
+ * so far: 12 + 6 + 3 + 3 = 24. */
+#define FLOPS_BOX_TEST (6 * FLOPS_FMA + 6 + 3 + 3)
 
 typedef RTCL_SCENE_SPACE const struct rt_scene *scene_ptr;
 
@@ -109,11 +122,14 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_light *lights;
 	RTCL_SCENE_SPACE const struct rt_triangle *triangles;
 	RTCL_SCENE_SPACE const struct rt_triangle_shading *triangle_shading;
-	__global ulong *item_counts; /* flops and rays per work-item, when counting */
-	__global ulong *pixel_flops; /* flops spent on each pixel, when counting */
+	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
+	RTCL_SCENE_SPACE const uint *refs; /* the BVH leaves' primitives (RT_PRIM_*) */
+	__global ulong *item_counts;	   /* RT_ITEM_COUNTS per work-item, when counting */
+	__global ulong *pixel_flops;	   /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
 	ulong flops;
-	ulong rays; /* primary, secondary and shadow rays traced */
+	ulong rays;	   /* primary, secondary and shadow rays traced */
+	ulong node_visits; /* BVH nodes visited, every ray's */
 #endif
 };
 
@@ -167,7 +183,8 @@ static inline float component(float3 v, int axis)
 	return axis == 0 ? v.x : axis == 1 ? v.y : v.z;
 }
 
-/* Counts, when counting: item_counts per launched work-item (flops, rays),
+/* Counts, when counting: item_counts per launched work-item (RT_ITEM_COUNTS:
+ * flops, rays, BVH node visits),
  * row-major over the global NDRange; pixel_flops per pixel of the image, added
  * to by every piece and pass that traces the pixel. */
 static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item_counts,
@@ -185,11 +202,14 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 		(RTCL_SCENE_SPACE const struct rt_triangle *)(base + scene->triangle_offset);
 	tr->triangle_shading =
 		(RTCL_SCENE_SPACE const struct rt_triangle_shading *)(base + scene->shading_offset);
+	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh_node *)(base + scene->bvh_node_offset);
+	tr->refs = (RTCL_SCENE_SPACE const uint *)(base + scene->bvh_ref_offset);
 	tr->item_counts = item_counts;
 	tr->pixel_flops = pixel_flops;
 #ifdef RTCL_COUNT_FLOPS
 	tr->flops = 0;
 	tr->rays = 0;
+	tr->node_visits = 0;
 #endif
 }
 

@@ -28,6 +28,7 @@ enum long_only_option {
 	OPT_SPLIT,
 	OPT_FRAMES,
 	OPT_MPI,
+	OPT_ACCEL,
 	OPT_PIECE_ROWS,
 };
 
@@ -60,6 +61,7 @@ static const struct option long_options[] = {
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
 	{"version", no_argument, NULL, OPT_VERSION},
+	{"accel", required_argument, NULL, OPT_ACCEL},
 	{NULL, 0, NULL, 0},
 };
 
@@ -77,6 +79,9 @@ static void print_help_after_kernels(FILE *out)
 		"      --batch N          pixels a work-item of the persistent kernel fetches\n"
 		"                         at a time (default 1); the image's pixels plus N per\n"
 		"                         work-item must stay below 2^32\n"
+		"      --accel bvh|none   how a ray finds the spheres and triangles it hits:\n"
+		"                         through a BVH built on the host (default), or by\n"
+		"                         testing every one, the paper's brute force\n"
 		"\n"
 		"Scene and image:\n"
 		"  -s, --scene FILE       scene file (SCENE.md); default: the built-in paper60\n"
@@ -371,6 +376,8 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_MPI:
 		o->mpi = 1;
 		return 0;
+	case OPT_ACCEL:
+		return parse_choice("--accel", arg, "none", "bvh", &o->accel, err, err_size);
 	case OPT_PIECE_ROWS:
 		return parse_bounded("--piece-rows", arg, 1, SCENE_MAX_IMAGE_SIDE, &o->piece_rows,
 				     err, err_size);
@@ -530,6 +537,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	o->platform = o->device = -1;
 	o->repeat = 0; /* not given: one launch, no warm-up */
 	o->batch = 1;
+	o->accel = 1; /* bvh */
 
 	opterr = 0;
 	optind = 1;

@@ -39,6 +39,7 @@ struct options {
 	int work_map_log;	       /* --work-map-scale log */
 	const char *work_map_bar_path; /* --work-map-bar IMAGE */
 	int linear_encoding;	       /* --encoding linear: 8-bit files hold round(255 c) */
+	int accel;		       /* --accel: 1 bvh (ACCEL_BVH), 0 none */
 	int quiet, verbose;
 	int help, version;
 };

@@ -126,13 +126,25 @@ static void pack_triangle(struct rt_triangle *out, struct rt_triangle_shading *s
 	shading->n2 = vec4(in->normal[2], 0.0);
 }
 
+/* The BVH's nodes and references, after the triangles (none without a BVH). */
+static void pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh)
+{
+	if (!bvh || bvh->node_count == 0)
+		return;
+	header->bvh_node_count = bvh->node_count;
+	memcpy(block + header->bvh_node_offset, bvh->nodes,
+	       (size_t)bvh->node_count * sizeof(*bvh->nodes));
+	memcpy(block + header->bvh_ref_offset, bvh->refs,
+	       (size_t)bvh->ref_count * sizeof(*bvh->refs));
+}
+
 /* Where the arrays go in the block (byte offsets) and its size. */
 struct layout {
-	size_t material, sphere, plane, light, triangle, shading, total;
+	size_t material, sphere, plane, light, triangle, shading, node, ref, total;
 	int sphere_slots;
 };
 
-static struct layout layout_of(const struct scene *scene)
+static struct layout layout_of(const struct scene *scene, const struct bvh *bvh)
 {
 	struct layout l;
 
@@ -144,18 +156,21 @@ static struct layout layout_of(const struct scene *scene)
 	l.light = l.plane + (size_t)scene->plane_count * sizeof(struct rt_plane);
 	l.triangle = l.light + (size_t)scene->light_count * sizeof(struct rt_light);
 	l.shading = l.triangle + (size_t)scene->triangle_count * sizeof(struct rt_triangle);
-	l.total = l.shading + (size_t)scene->triangle_count * sizeof(struct rt_triangle_shading);
+	l.node = l.shading + (size_t)scene->triangle_count * sizeof(struct rt_triangle_shading);
+	l.ref = l.node + (bvh ? (size_t)bvh->node_count * sizeof(*bvh->nodes) : 0);
+	l.total = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
 	return l;
 }
 
-size_t devscene_bytes(const struct scene *scene)
+size_t devscene_bytes(const struct scene *scene, const struct bvh *bvh)
 {
-	return layout_of(scene).total;
+	return layout_of(scene, bvh).total;
 }
 
-void *devscene_pack(const struct scene *scene, int width, int height, int max_depth, size_t *bytes)
+void *devscene_pack(const struct scene *scene, const struct bvh *bvh, int width, int height,
+		    int max_depth, size_t *bytes)
 {
-	struct layout l = layout_of(scene);
+	struct layout l = layout_of(scene, bvh);
 	size_t material_offset = l.material, sphere_offset = l.sphere, plane_offset = l.plane;
 	size_t light_offset = l.light, total = l.total;
 	int sphere_slots = l.sphere_slots;
@@ -188,6 +203,9 @@ void *devscene_pack(const struct scene *scene, int width, int height, int max_de
 	header->triangle_offset = (rt_uint)l.triangle;
 	header->shading_offset = (rt_uint)l.shading;
 	header->triangle_count = scene->triangle_count;
+	header->bvh_node_offset = (rt_uint)l.node;
+	header->bvh_ref_offset = (rt_uint)l.ref;
+	pack_bvh(block, header, bvh);
 
 	struct rt_material *materials = (struct rt_material *)(block + material_offset);
 	for (int i = 0; i < scene->material_count; i++)

@@ -12,6 +12,9 @@
 
 /* Bytes of __local memory the kernels need besides the scene. */
 #define LOCAL_MEM_RESERVE 256
+/* The scene goes into __local memory when it takes at most 1/LOCAL_MEM_SHARE
+ * of it (launch_prepare_scene says why). */
+#define LOCAL_MEM_SHARE 3
 
 /* The most work-items one launch may have: the kernels index them with
  * 32-bit uints (launch.c says where). */
@@ -38,13 +41,16 @@ int launch_check_kernel(const struct device *dev, cl_kernel kernel,
 			const struct render_result *result, const char *name, char *err,
 			size_t err_size);
 
-/* Refuses a scene whose device block (devscene_bytes) is larger than one
- * buffer on dev may be, naming the size and the limit. */
-int launch_check_scene_fits(const struct device *dev, const struct scene *scene, char *err,
-			    size_t err_size);
+struct bvh;
 
-/* Packs the scene into *block (result->scene_bytes), allocates result->rgb
- * and decides whether the scene lives in __local memory. */
+/* Refuses a scene whose device block (devscene_bytes, with bvh or NULL) is
+ * larger than one buffer on dev may be, naming the size and the limit. */
+int launch_check_scene_fits(const struct device *dev, const struct scene *scene,
+			    const struct bvh *bvh, char *err, size_t err_size);
+
+/* Builds the BVH (--accel bvh), packs the scene into *block
+ * (result->scene_bytes), allocates result->rgb and decides whether the scene
+ * lives in __local memory. */
 int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			 const struct render_settings *settings, struct render_result *result,
 			 void **block, char *err, size_t err_size);

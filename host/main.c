@@ -59,6 +59,7 @@ static void choose_settings(struct run *run, const struct options *opt, const st
 	s->source_dir = getenv("RTCL_CL_DIR");
 	s->progress = !opt->quiet && isatty(STDERR_FILENO);
 	s->verbose = opt->verbose;
+	s->accel = opt->accel;
 	run->counting = opt->flops_path || opt->work_map_path;
 }
 
@@ -108,9 +109,11 @@ static int render_on_device(struct run *run, struct device *dev, char *err, size
 		counting.count_flops = 1;
 		failed = render(dev, run->scene, &counting, &run->counted, err, err_size);
 		run->counting_ms = timing_lap_ms(&lap);
-		if (!failed)
+		if (!failed) {
 			flop_summary_compute(&run->flops, run->counted.item_flops,
 					     run->counted.item_count, run->counted.total_rays);
+			run->flops.node_visits = run->counted.total_node_visits;
+		}
 	}
 	if (!failed)
 		failed = render(dev, run->scene, &run->settings, &run->result, err, err_size);

@@ -13,9 +13,9 @@
 
 /* The tracer's sources, in the order the compiler sees them; the kernel's own
  * cl/NAME.cl follows. */
-const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl", "sample.cl",
-					      "intersect.cl",  "shade.cl",  "walk.cl",
-					      "scheduling.cl"};
+const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl",    "sample.cl",
+					      "intersect.cl",  "traverse.cl",  "shade.cl",
+					      "walk.cl",       "scheduling.cl"};
 const int program_tracer_source_count =
 	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
 
@@ -148,7 +148,8 @@ static int load_sources(const char *dir, const char *kernel_name, struct sources
 
 /* rtcl's build options for the settings, then RTCL_BUILD_OPTIONS. */
 static int format_options(const struct device *dev, const struct render_settings *s,
-			  int scene_in_local, char *options, char *err, size_t err_size)
+			  int scene_in_local, int use_bvh, char *options, char *err,
+			  size_t err_size)
 {
 	const char *extra = getenv("RTCL_BUILD_OPTIONS");
 
@@ -158,9 +159,9 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s", s->max_depth,
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s", s->max_depth,
 		 s->batch > 0 ? s->batch : 1, scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
-		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
+		 use_bvh ? " -DRTCL_BVH" : "", s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
 		 extra ? extra : "");
@@ -198,7 +199,8 @@ static int build_from_source(struct device *dev, const struct render_settings *s
 }
 
 int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
-		  cl_program *program, char *options, int *cached, char *err, size_t err_size)
+		  int use_bvh, cl_program *program, char *options, int *cached, char *err,
+		  size_t err_size)
 {
 	struct progcache cache;
 	struct sources src;
@@ -206,7 +208,7 @@ int program_build(struct device *dev, const struct render_settings *s, int scene
 
 	*cached = 0;
 	if (load_sources(s->source_dir, s->kernel->name, &src, err, err_size) ||
-	    format_options(dev, s, scene_in_local, options, err, err_size))
+	    format_options(dev, s, scene_in_local, use_bvh, options, err, err_size))
 		goto out_free_sources;
 	progcache_init(&cache, dev, src.texts, src.count, options, s->verbose);
 	*program = progcache_load(&cache, dev);

@@ -25,6 +25,12 @@ struct kernel_info {
 	const struct renderer_ops *ops; /* singlepass_ops or wavefront_ops */
 };
 
+/* --accel: how the tracer finds a ray's hit among the spheres. */
+enum accel {
+	ACCEL_NONE, /* every sphere tested, the paper's brute force */
+	ACCEL_BVH,  /* a BVH built on the host (host/bvh.c, docs/bvh.md) */
+};
+
 struct render_settings {
 	const struct kernel_info *kernel; /* NULL: the CPU reference */
 	int workgroup[2];		  /* local size, e.g. 8x8 */
@@ -41,6 +47,7 @@ struct render_settings {
 				   surround it with guard zones (checks.h) */
 	int force_global_scene; /* read the scene from __global memory even if it
 				   would fit in __local memory */
+	int accel;		/* ACCEL_BVH or ACCEL_NONE (--accel) */
 	const char *source_dir; /* load cl/ sources from here instead of the
 				   embedded copies (development) */
 	int progress;		/* show progress on stderr */
@@ -79,6 +86,11 @@ struct render_result {
 	size_t item_count;
 	uint64_t *pixel_flops; /* per pixel, row-major */
 	uint64_t total_flops, total_rays;
+	uint64_t total_node_visits; /* BVH nodes visited by every ray */
+
+	/* The BVH, with ACCEL_BVH and a sphere or triangle (else bvh_nodes 0). */
+	int bvh_nodes, bvh_depth;
+	double bvh_sah_cost, bvh_build_ms;
 
 	/* With check_writes. */
 	uint32_t *write_counts; /* per pixel */

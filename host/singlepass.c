@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "../cl/rtcl_shared.h"
 #include "checks.h"
 #include "launch.h"
 #include "program.h"
@@ -31,11 +32,11 @@ struct launch_state {
 	cl_mem scene_buffer;
 	struct guarded_image image;
 	cl_mem work_counter; /* the next chunk or pixel to hand out */
-	cl_mem counts;	     /* flops per pixel, then flops and rays per work-item */
+	cl_mem counts;	     /* flops per pixel, then RT_ITEM_COUNTS per work-item */
 	cl_mem write_counts;
 	void *scene_block;
 	uint64_t *item_flops; /* per work-item of the plan, added over the launches */
-	uint64_t rays;
+	uint64_t rays, node_visits;
 };
 
 static void release_state(struct launch_state *st)
@@ -57,13 +58,14 @@ static void release_state(struct launch_state *st)
 		clReleaseProgram(st->program);
 }
 
-/* Bytes of the counts buffer: one per pixel (flops), then two per work-item
- * of the largest launch, the whole image's (flops, rays). */
+/* Bytes of the counts buffer: one per pixel (flops), then RT_ITEM_COUNTS per
+ * work-item of the largest launch, the whole image's (flops, rays, node
+ * visits). */
 static double counts_bytes(const struct render_settings *s, const struct render_result *res)
 {
 	double items = (double)res->global_size[0] * res->global_size[1];
 
-	return (items * 2 + (double)s->width * s->height) * sizeof(cl_ulong);
+	return (items * RT_ITEM_COUNTS + (double)s->width * s->height) * sizeof(cl_ulong);
 }
 
 /* Bytes of the per-pixel flops at the head of the counts buffer. */
@@ -145,16 +147,18 @@ static void piece_global_size(const struct render_settings *s, const struct rend
 static cl_int add_item_counts(struct device *dev, const struct render_settings *s,
 			      struct launch_state *st, size_t items)
 {
-	cl_ulong *counts = malloc(items * 2 * sizeof(cl_ulong));
+	cl_ulong *counts = malloc(items * RT_ITEM_COUNTS * sizeof(cl_ulong));
 	cl_int status;
 
 	if (!counts)
 		return CL_OUT_OF_HOST_MEMORY;
 	status = clEnqueueReadBuffer(dev->queue, st->counts, CL_TRUE, pixel_counts_bytes(s),
-				     items * 2 * sizeof(cl_ulong), counts, 0, NULL, NULL);
+				     items * RT_ITEM_COUNTS * sizeof(cl_ulong), counts, 0, NULL,
+				     NULL);
 	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
-		st->item_flops[i] += counts[2 * i];
-		st->rays += counts[2 * i + 1];
+		st->item_flops[i] += counts[RT_ITEM_COUNTS * i];
+		st->rays += counts[RT_ITEM_COUNTS * i + 1];
+		st->node_visits += counts[RT_ITEM_COUNTS * i + 2];
 	}
 	free(counts);
 	return status;
@@ -214,6 +218,7 @@ static cl_int read_counts(struct device *dev, const struct render_settings *s,
 	for (size_t i = 0; i < res->item_count; i++)
 		res->total_flops += res->item_flops[i];
 	res->total_rays = st->rays;
+	res->total_node_visits = st->node_visits;
 	return clEnqueueReadBuffer(dev->queue, st->counts, CL_TRUE, 0, pixel_counts_bytes(s),
 				   res->pixel_flops, 0, NULL, NULL);
 }

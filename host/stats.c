@@ -118,6 +118,24 @@ static void add_flop_figures(json_t *doc, const struct run *run)
 	json_object_set_new(doc, "gflops", json_real(f->total * 1e-6 / ms));
 	json_object_set_new(doc, "rays", json_integer((json_int_t)f->rays));
 	json_object_set_new(doc, "mrays_per_s", json_real(f->rays * 1e-3 / ms));
+	json_object_set_new(doc, "node_visits", json_integer((json_int_t)f->node_visits));
+	json_object_set_new(doc, "node_visits_per_ray",
+			    json_real(f->rays ? (double)f->node_visits / f->rays : 0.0));
+}
+
+/* --accel and, with a BVH, its size and build. */
+static void add_accel_figures(json_t *doc, const struct run *run)
+{
+	const struct render_result *r = &run->result;
+
+	json_object_set_new(doc, "accel",
+			    json_string(run->settings.accel == ACCEL_BVH ? "bvh" : "none"));
+	if (r->bvh_nodes == 0)
+		return;
+	json_object_set_new(doc, "bvh",
+			    json_pack("{s:i, s:i, s:f, s:f}", "nodes", r->bvh_nodes, "depth",
+				      r->bvh_depth, "sah_cost", r->bvh_sah_cost, "build_ms",
+				      r->bvh_build_ms));
 }
 
 /* The --stats document, without the figures added below. */
@@ -206,8 +224,10 @@ int stats_stage_run(struct staged_file *staged, const char *path, const struct r
 
 	if (doc && run->counting)
 		add_flop_figures(doc, run);
-	if (doc)
+	if (doc) {
 		add_device_figures(doc, run);
+		add_accel_figures(doc, run);
+	}
 	if (doc && run->multidevice)
 		json_object_set(doc, "multidevice", run->multidevice);
 	return stats_stage_document(staged, path, doc, err, err_size);
@@ -251,6 +271,10 @@ void stats_print_summary(const struct run *run)
 		       f->min, 100 * f->parallel_efficiency);
 		printf("rays:    %llu (primary, secondary and shadow), %.1f Mrays/s\n",
 		       (unsigned long long)f->rays, f->rays * 1e-3 / r->kernel_ms_median);
+		if (s->accel == ACCEL_BVH)
+			printf("nodes:   %llu BVH node visits, %.2f per ray\n",
+			       (unsigned long long)f->node_visits,
+			       f->rays ? (double)f->node_visits / f->rays : 0.0);
 	}
 	printf("output:  %s", run->opt->output);
 	if (run->opt->work_map_path)

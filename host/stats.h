@@ -16,6 +16,7 @@ struct flop_summary {
 	double mean, max, min;	    /* per launched work-item */
 	double parallel_efficiency; /* mean / max */
 	uint64_t rays;
+	uint64_t node_visits; /* BVH nodes visited by all rays (0: --accel none) */
 };
 
 /* What one run produced, for the summary, --stats and the outputs. */

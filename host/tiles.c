@@ -256,6 +256,7 @@ static int join_item_counts(const struct tiles_job *t, struct render_result *out
 		out->item_count += r->item_count;
 		out->total_flops += r->total_flops;
 		out->total_rays += r->total_rays;
+		out->total_node_visits += r->total_node_visits;
 	}
 	return 0;
 }
@@ -270,6 +271,10 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
 	memcpy(to->build_options, from->build_options, sizeof(to->build_options));
 	to->times.build = from->times.build;
 	to->times.scene = from->times.scene;
+	to->bvh_nodes = from->bvh_nodes;
+	to->bvh_depth = from->bvh_depth;
+	to->bvh_sah_cost = from->bvh_sah_cost;
+	to->bvh_build_ms = from->bvh_build_ms;
 }
 
 /* Reads every device back and assembles the image (and counts) in out. */
@@ -388,6 +393,7 @@ int tiles_render(struct run *run, struct device *devs, int count, struct device_
 		run->counting_ms = timing_lap_ms(&lap);
 		flop_summary_compute(&run->flops, run->counted.item_flops, run->counted.item_count,
 				     run->counted.total_rays);
+		run->flops.node_visits = run->counted.total_node_visits;
 	}
 	if (render_image(run, s, devs, count, work, &run->result, err, err_size))
 		return -1;

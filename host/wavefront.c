@@ -37,7 +37,7 @@ struct wavefront {
 	size_t bounce_local;  /* 1D work-group size of the bounce launches */
 	uint64_t *item_flops; /* every launch's work-items, appended */
 	size_t item_count, item_alloc;
-	uint64_t rays;
+	uint64_t rays, node_visits;
 };
 
 static void release_queues(struct wavefront *w)
@@ -92,10 +92,10 @@ static int create_queues(struct device *dev, const struct render_settings *s, st
 	}
 	size_t rounded = (w->capacity + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
 	w->item_capacity = rounded > w->item_capacity ? rounded : w->item_capacity;
-	w->item_counts = device_create_buffer(
-		dev, CL_MEM_READ_WRITE,
-		s->count_flops ? w->item_capacity * 2 * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES,
-		NULL, "per-work-item counts", err, err_size);
+	size_t count_bytes = w->item_capacity * RT_ITEM_COUNTS * sizeof(cl_ulong);
+	w->item_counts = device_create_buffer(dev, CL_MEM_READ_WRITE,
+					      s->count_flops ? count_bytes : UNUSED_BUFFER_BYTES,
+					      NULL, "per-work-item counts", err, err_size);
 	return w->item_counts ? 0 : -1;
 }
 
@@ -139,14 +139,16 @@ static cl_int append_counts(struct device *dev, struct wavefront *w, size_t item
 		w->item_flops = grown;
 		w->item_alloc = alloc;
 	}
-	cl_ulong *counts = malloc(items * 2 * sizeof(cl_ulong));
+	cl_ulong *counts = malloc(items * RT_ITEM_COUNTS * sizeof(cl_ulong));
 	if (!counts)
 		return CL_OUT_OF_HOST_MEMORY;
 	cl_int status = clEnqueueReadBuffer(dev->queue, w->item_counts, CL_TRUE, 0,
-					    items * 2 * sizeof(cl_ulong), counts, 0, NULL, NULL);
+					    items * RT_ITEM_COUNTS * sizeof(cl_ulong), counts, 0,
+					    NULL, NULL);
 	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
-		w->item_flops[w->item_count++] = counts[2 * i];
-		w->rays += counts[2 * i + 1];
+		w->item_flops[w->item_count++] = counts[RT_ITEM_COUNTS * i];
+		w->rays += counts[RT_ITEM_COUNTS * i + 1];
+		w->node_visits += counts[RT_ITEM_COUNTS * i + 2];
 	}
 	free(counts);
 	return status;
@@ -276,7 +278,7 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 	size_t local_bytes =
 		r->result->scene_in_local ? r->result->scene_bytes : UNUSED_BUFFER_BYTES;
 	size_t items_before = w->item_count;
-	uint64_t rays_before = w->rays;
+	uint64_t rays_before = w->rays, visits_before = w->node_visits;
 
 	for (;;) {
 		double attempt = 0;
@@ -296,6 +298,7 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 			w->capacity *= 2;
 			w->item_count = items_before;
 			w->rays = rays_before;
+			w->node_visits = visits_before;
 			if (create_queues(r->dev, r->settings, w, err, err_size))
 				return -1;
 			continue;
@@ -349,6 +352,7 @@ static int wavefront_read_back(struct renderer *r, char *err, size_t err_size)
 		for (size_t i = 0; i < res->item_count; i++)
 			res->total_flops += res->item_flops[i];
 		res->total_rays = w->rays;
+		res->total_node_visits = w->node_visits;
 	}
 	if (status == CL_SUCCESS)
 		status = checks_read(dev, s, &w->image, w->write_counts, res);

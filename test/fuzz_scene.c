@@ -34,11 +34,15 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 
 	if (scene_load_string(&scene, json, "fuzz.json", err, sizeof(err)) == 0) {
 		size_t bytes;
-		void *packed =
-			devscene_pack(&scene, scene.width, scene.height, scene.max_depth, &bytes);
+		struct bvh bvh;
+		if (bvh_build_scene(&scene, &bvh))
+			abort();
+		void *packed = devscene_pack(&scene, &bvh, scene.width, scene.height,
+					     scene.max_depth, &bytes);
 
 		if (!packed || devscene_problem(packed))
 			abort();
+		bvh_free(&bvh);
 		free(packed);
 		scene_free(&scene);
 	} else if (strlen(err) == 0 || strchr(err, '\n') || scene.source || scene.materials ||

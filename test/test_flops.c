@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "../cl/rtcl_shared.h"
+#include "bvh.h"
 #include "devscene.h"
 #include "device.h"
 #include "embedded.h"
@@ -53,6 +54,7 @@ static const char test_kernels[] =
 	"	struct hit hit = intersect_scene(&tr, o.xyz, d.xyz, INFINITY, false);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(hit.t);\n"
+	"	out[2] = tr.node_visits;\n"
 	"}\n"
 	"__kernel void count_plane(__global const uint4 *scene, __global ulong *out,"
 	"                          float4 o, float4 d)\n"
@@ -102,9 +104,12 @@ struct fixture {
 	struct scene scene;
 	cl_program program;
 	cl_mem scene_buffer, out;
+	cl_ulong node_visits; /* what count_sphere counted, by run_kernel */
 };
 
-static void setup_scene(struct fixture *f, const char *json)
+/* Builds the test kernels over the scene json, with its BVH and RTCL_BVH
+ * when bvh. */
+static void setup_scene(struct fixture *f, const char *json, int bvh)
 {
 	const char *sources[16];
 	int count = 0;
@@ -117,12 +122,18 @@ static void setup_scene(struct fixture *f, const char *json)
 	cr_assert_eq(device_open(&f->dev, -1, -1, err, sizeof(err)), 0, "%s", err);
 	cr_assert_eq(scene_load_string(&f->scene, json, "analytic", err, sizeof(err)), 0, "%s",
 		     err);
-	void *block = devscene_pack(&f->scene, 3, 3, 1, &bytes);
+	struct bvh tree;
+	cr_assert_eq(bvh_build_scene(&f->scene, &tree), 0);
+	void *block = devscene_pack(&f->scene, bvh ? &tree : NULL, 3, 3, 1, &bytes);
+	bvh_free(&tree);
 	f->program =
 		clCreateProgramWithSource(f->dev.context, (cl_uint)count, sources, NULL, &status);
 	cr_assert_eq(status, CL_SUCCESS);
-	status = clBuildProgram(f->program, 1, &f->dev.id,
-				"-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS", NULL, NULL);
+	status = clBuildProgram(
+		f->program, 1, &f->dev.id,
+		bvh ? "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS -DRTCL_BVH"
+		    : "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS",
+		NULL, NULL);
 	if (status != CL_SUCCESS) {
 		clGetProgramBuildInfo(f->program, f->dev.id, CL_PROGRAM_BUILD_LOG, sizeof(err), err,
 				      NULL);
@@ -138,7 +149,7 @@ static void setup_scene(struct fixture *f, const char *json)
 
 static void setup(struct fixture *f)
 {
-	setup_scene(f, analytic_json);
+	setup_scene(f, analytic_json, 0);
 }
 
 static void teardown(struct fixture *f)
@@ -158,7 +169,7 @@ static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4]
 	cl_int status;
 	cl_kernel kernel = clCreateKernel(f->program, name, &status);
 	size_t one = 1;
-	cl_ulong out[2];
+	cl_ulong out[3];
 	cl_float4 va = {{a[0], a[1], a[2], a[3]}}, vb = {{b[0], b[1], b[2], b[3]}};
 
 	cr_assert_eq(status, CL_SUCCESS, "clCreateKernel(%s): %s", name, cl_error_name(status));
@@ -172,6 +183,7 @@ static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4]
 				     NULL);
 	cr_assert_eq(status, CL_SUCCESS);
 	clReleaseKernel(kernel);
+	f->node_visits = out[2];
 	uint32_t bits = (uint32_t)out[1];
 	memcpy(result, &bits, sizeof(*result));
 	return out[0];
@@ -202,6 +214,34 @@ Test(flops, ray_sphere_test)
 	const float inside[4] = {0, 0, 0.5f, 0}, outward[4] = {0, 0, 1, 0};
 	cr_expect_eq(run_kernel(&f, "count_sphere", inside, outward, &t), 54);
 	cr_expect_float_eq(t, 0.5f, 1e-6f);
+	teardown(&f);
+}
+
+/* The BVH's part (RENDERING.md, "BVH traversal"): the analytic scene's one
+ * sphere is a root whose two children are the same leaf (host/bvh.c). */
+Test(flops, ray_box_test)
+{
+	struct fixture f;
+	const float eye[4] = {0, 0, 5, 0};
+	const float down_axis[4] = {0, 0, -1, 0}, up[4] = {0, 1, 0, 0};
+	float t;
+
+	setup_scene(&f, analytic_json, 1);
+	/* The frame 23; the box set-up, 1/d (3) and o/d (3): 6; the root's two
+	 * boxes, each six slab fmas (12), a min and a max per axis (6), the
+	 * entry's three maxes and the exit's three mins (6): 48, both hit.
+	 * The leaf, twice: the sphere hit as in ray_sphere_test (33) the first
+	 * time, the same again (33), which does not replace it. The plane,
+	 * parallel (5). 23 + 6 + 48 + 66 + 5 = 148, one node visit, t = 4. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, down_axis, &t), 148);
+	cr_expect_eq(f.node_visits, 1);
+	cr_expect_float_eq(t, 4.0f, 1e-6f);
+	/* Up the y axis, beside the box in z (the z slab's 0 · inf is NaN or
+	 * -inf, which the min and max pass over): 23 + 6 + 48, no leaf; the
+	 * plane behind (12). 89, t = 0. */
+	cr_expect_eq(run_kernel(&f, "count_sphere", eye, up, &t), 89);
+	cr_expect_eq(f.node_visits, 1);
+	cr_expect_eq(t, 0.0f);
 	teardown(&f);
 }
 
@@ -266,7 +306,7 @@ Test(flops, ray_triangle_test)
 	const float right_of_it[4] = {3, 0, 5, 0}, above_it[4] = {0.9f, 0.5f, 5, 0};
 	float t;
 
-	setup_scene(&f, triangle_json);
+	setup_scene(&f, triangle_json, 0);
 	cr_expect_eq(run_kernel(&f, "count_triangle", eye, ahead, &t), 46);
 	cr_expect_float_eq(t, 5.0f, 1e-6f);
 	/* From behind the eye's side, the plane is behind: all 46, no hit. */
@@ -296,7 +336,7 @@ Test(flops, smooth_shading_normal)
 	const float halfway_v0_v1[4] = {0.5f, 0, 0, 0};
 	float z;
 
-	setup_scene(&f, smooth_json);
+	setup_scene(&f, smooth_json, 0);
 	cr_assert_eq(f.scene.triangle_count, 1);
 	cr_assert_eq(f.scene.triangles[0].smooth, 1);
 	/* At v0: n = n0 = (0,0,1), turned to n_face = (0,0,-1). */
@@ -311,7 +351,7 @@ Test(flops, smooth_shading_normal)
 	teardown(&f);
 }
 
-static struct render_settings counting(const char *kernel, int wx, int wy, int max_depth)
+static struct render_settings counting(const char *kernel, int wx, int wy, int max_depth, int accel)
 {
 	struct render_settings s;
 
@@ -325,12 +365,14 @@ static struct render_settings counting(const char *kernel, int wx, int wy, int m
 	s.repeat = 1;
 	s.count_flops = 1;
 	s.check_writes = 1; /* guard zones: counting must not write out of bounds either */
+	s.accel = accel;
 	return s;
 }
 
-/* Every kernel counts the same total and the same work for each pixel; the
- * per-pixel counts add up to the per-work-item ones. */
-static void check_same_work(const char *path)
+/* Every kernel counts the same total and the same work for each pixel, and
+ * the same node visits; the per-pixel counts add up to the per-work-item
+ * ones. */
+static void check_same_work(const char *path, int accel)
 {
 	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
 					      "dynamic", "persistent", "wavefront"};
@@ -341,10 +383,14 @@ static void check_same_work(const char *path)
 
 	cr_assert_eq(device_open(&dev, -1, -1, err, sizeof(err)), 0, "%s", err);
 	cr_assert_eq(scene_load_file(&scene, path, err, sizeof(err)), 0, "%s", err);
-	struct render_settings s = counting("serial", 1, 1, scene.max_depth);
+	struct render_settings s = counting("serial", 1, 1, scene.max_depth, accel);
 	cr_assert_eq(render(&dev, &scene, &s, &want, err, sizeof(err)), 0, "%s", err);
 	cr_assert_gt(want.total_flops, 0);
 	cr_assert_gt(want.total_rays, pixels);
+	if (accel == ACCEL_BVH)
+		cr_assert_gt(want.total_node_visits, 0);
+	else
+		cr_assert_eq(want.total_node_visits, 0);
 	cr_assert_eq(want.item_count, 1);
 	cr_assert_eq(want.item_flops[0], want.total_flops);
 
@@ -352,7 +398,8 @@ static void check_same_work(const char *path)
 		for (int shape = 0; shape < 2; shape++) {
 			struct render_result got;
 			uint64_t pixel_sum = 0;
-			s = counting(kernels[k], shape ? 16 : 8, shape ? 4 : 8, scene.max_depth);
+			s = counting(kernels[k], shape ? 16 : 8, shape ? 4 : 8, scene.max_depth,
+				     accel);
 			cr_assert_eq(render(&dev, &scene, &s, &got, err, sizeof(err)), 0, "%s",
 				     err);
 			cr_expect_eq(got.total_flops, want.total_flops,
@@ -360,6 +407,8 @@ static void check_same_work(const char *path)
 				     (unsigned long long)got.total_flops,
 				     (unsigned long long)want.total_flops);
 			cr_expect_eq(got.total_rays, want.total_rays, "%s rays", kernels[k]);
+			cr_expect_eq(got.total_node_visits, want.total_node_visits,
+				     "%s node visits", kernels[k]);
 			cr_assert(got.guards_intact, "%s: wrote outside the image", kernels[k]);
 			for (size_t i = 0; i < pixels; i++) {
 				cr_assert_eq(got.pixel_flops[i], want.pixel_flops[i],
@@ -385,11 +434,21 @@ static void check_same_work(const char *path)
 
 Test(flops, kernels_count_the_same_work, .timeout = 300)
 {
-	check_same_work("scenes/two_balls.json");
+	check_same_work("scenes/two_balls.json", ACCEL_NONE);
+}
+
+Test(flops, kernels_count_the_same_work_bvh, .timeout = 300)
+{
+	check_same_work("scenes/two_balls.json", ACCEL_BVH);
 }
 
 /* Spheres, triangles (glass through closed meshes) and planes. */
 Test(flops, kernels_count_the_same_work_on_meshes, .timeout = 600)
 {
-	check_same_work("test/meshes/mesh_scene.json");
+	check_same_work("test/meshes/mesh_scene.json", ACCEL_NONE);
+}
+
+Test(flops, kernels_count_the_same_work_on_meshes_bvh, .timeout = 600)
+{
+	check_same_work("test/meshes/mesh_scene.json", ACCEL_BVH);
 }

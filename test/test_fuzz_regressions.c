@@ -54,7 +54,10 @@ static void load_cleanly(const char *path)
 
 	if (scene_load_string(&s, json, path, err, sizeof(err)) == 0) {
 		size_t bytes = 0;
-		void *packed = devscene_pack(&s, s.width, s.height, s.max_depth, &bytes);
+		struct bvh bvh;
+		cr_assert_eq(bvh_build_scene(&s, &bvh), 0, "%s: out of memory", path);
+		void *packed = devscene_pack(&s, &bvh, s.width, s.height, s.max_depth, &bytes);
+		bvh_free(&bvh);
 
 		cr_assert_not_null(packed, "%s: devscene_pack failed", path);
 		cr_expect_gt(bytes, 0);

@@ -48,6 +48,7 @@ static struct render_settings settings_for(const char *kernel, int width, int he
 	s.max_depth = max_depth;
 	s.repeat = 1;
 	s.check_writes = 1;
+	s.accel = ACCEL_BVH; /* rtcl's default; bvh_matches_brute_force checks none */
 	return s;
 }
 
@@ -288,15 +289,15 @@ Test(kernels, scene_larger_than_a_buffer_is_refused)
 	memset(&dev, 0, sizeof(dev));
 	snprintf(dev.name, sizeof(dev.name), "Tiny Device");
 	load(&scene, "test/meshes/mesh_scene.json");
-	dev.max_alloc_size = devscene_bytes(&scene);
-	cr_expect_eq(launch_check_scene_fits(&dev, &scene, err, sizeof(err)), 0, "%s", err);
+	dev.max_alloc_size = devscene_bytes(&scene, NULL);
+	cr_expect_eq(launch_check_scene_fits(&dev, &scene, NULL, err, sizeof(err)), 0, "%s", err);
 	dev.max_alloc_size--;
-	cr_assert_eq(launch_check_scene_fits(&dev, &scene, err, sizeof(err)), -1);
+	cr_assert_eq(launch_check_scene_fits(&dev, &scene, NULL, err, sizeof(err)), -1);
 	snprintf(want, sizeof(want),
 		 "test/meshes/mesh_scene.json: the scene (335 triangles) needs "
 		 "%zu bytes of device memory, more than the limit of %zu bytes in one buffer on "
 		 "Tiny Device (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
-		 devscene_bytes(&scene), devscene_bytes(&scene) - 1);
+		 devscene_bytes(&scene, NULL), devscene_bytes(&scene, NULL) - 1);
 	cr_expect_str_eq(err, want);
 	scene_free(&scene);
 }
@@ -345,6 +346,84 @@ Test(kernels, global_scene_matches_local, .timeout = 600)
 	free(global);
 	scene_free(&scene);
 	device_close(&dev);
+}
+
+/* --accel bvh gives brute force's image, byte for byte, in every kernel and
+ * with the scene (and so the BVH) in __local or __global memory: the same
+ * sphere test, ties to the lower index, boxes padded beyond rounding
+ * (docs/bvh.md). The wavefront adds a pixel's rays in no fixed order
+ * (atomics), so its image may differ from the stack walk's, with either
+ * --accel, by 1/255 at most (wavefront_matches_the_stack_walk). */
+static void check_bvh_matches_brute_force(const char *path, int width, int height)
+{
+	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
+					      "dynamic", "persistent", "wavefront"};
+	struct device dev;
+	struct scene scene;
+	char what[256];
+
+	open_device(&dev);
+	load(&scene, path);
+	struct render_settings s = settings_for("dynamic", width, height, 8, 8, scene.max_depth);
+	s.accel = ACCEL_NONE;
+	snprintf(what, sizeof(what), "%s --accel none", path);
+	unsigned char *want = render_checked(&dev, &scene, &s, what);
+	for (size_t k = 0; k < sizeof(kernels) / sizeof(kernels[0]); k++) {
+		for (int global = 0; global < 2; global++) {
+			s = settings_for(kernels[k], width, height, 8, 8, scene.max_depth);
+			s.force_global_scene = global;
+			snprintf(what, sizeof(what), "%s %s --accel bvh, scene in %s", path,
+				 kernels[k], global ? "__global" : "__local if it fits");
+			unsigned char *got = render_checked(&dev, &scene, &s, what);
+			if (s.kernel->multi_pass)
+				for (size_t i = 0; i < (size_t)width * height * 3; i++)
+					cr_assert_leq(abs(got[i] - want[i]), 1,
+						      "%s: byte %zu is %u, brute force %u", what, i,
+						      got[i], want[i]);
+			else
+				expect_same_image(want, got, width, height, what);
+			free(got);
+		}
+	}
+	free(want);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+Test(kernels, bvh_matches_brute_force_paper60, .timeout = 600)
+{
+	check_bvh_matches_brute_force("scenes/paper60.json", 97, 61);
+}
+
+Test(kernels, bvh_matches_brute_force_small_scenes, .timeout = 600)
+{
+	check_bvh_matches_brute_force("scenes/two_balls.json", 64, 48);
+	check_bvh_matches_brute_force("scenes/tir.json", 64, 48);
+	check_bvh_matches_brute_force("scenes/empty.json", 32, 24);
+	check_bvh_matches_brute_force("test/scenes/mirror_corridor.json", 24, 16);
+}
+
+/* 300 random balls (tools/genscene.py --balls 300 --seed 11): a deep tree. */
+Test(kernels, bvh_matches_brute_force_random300, .timeout = 600)
+{
+	check_bvh_matches_brute_force("test/scenes/random300.json", 160, 120);
+}
+
+/* Spheres and triangles in one hierarchy: the closed glass and mirror meshes
+ * (rays inside them, ties between a mesh's triangles along shared edges). */
+Test(kernels, bvh_matches_brute_force_meshes, .timeout = 900)
+{
+	check_bvh_matches_brute_force("test/meshes/mesh_scene.json", 96, 72);
+	check_bvh_matches_brute_force("scenes/glass_mesh.json", 80, 60);
+}
+
+/* Triangles flat in axis planes, a ray in the floor's plane and the middle
+ * row and column of pixels with exactly zero direction components, from an
+ * eye off 0 (the slab test's ∞ − ∞ case: traverse.cl, BOX_MIN_DIR), mirrored
+ * by the floor. */
+Test(kernels, bvh_matches_brute_force_flat_triangles, .timeout = 600)
+{
+	check_bvh_matches_brute_force("test/scenes/flat_triangles.json", 33, 25);
 }
 
 /* One diffuse sphere of radius 1 at the origin, C = (0.8, 0.6, 0.4), ka 0.5,

@@ -61,3 +61,47 @@ def test_shipped_mesh_scene_renders_with_its_models(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "rtcl: 333 triangles; 0 of area 0" in result.stderr
     assert out.stat().st_size > 40 * 30 * 3
+
+
+def test_mesh_scene_renders_through_the_bvh_by_default(tmp_path):
+    """Spheres and triangles in one hierarchy (docs/bvh.md): the default --accel bvh
+    builds it over the sphere and the 335 triangles, gives brute force's image, and
+    tests fewer triangles than brute force (fewer flops, some node visits)."""
+    runs = {}
+    for accel in ("none", None):
+        name = accel or "default"
+        args = ["--accel", accel] if accel else []
+        result = rtcl("-s", str(MESH_SCENE), "-o", str(tmp_path / f"{name}.ppm"),
+                      "--size", "24x16", "-v", "--stats", str(tmp_path / f"{name}.json"),
+                      "--flops", str(tmp_path / f"{name}.npy"), *args)
+        assert result.returncode == 0, result.stderr
+        runs[name] = (result, json.loads((tmp_path / f"{name}.json").read_text()))
+    result, stats = runs["default"]
+    assert stats["accel"] == "bvh"
+    assert "rtcl: BVH of 1 sphere and 335 triangles: " in result.stderr
+    # At most 8 primitives a leaf: at least 336 / 8 leaves, one node fewer.
+    assert stats["bvh"]["nodes"] >= 336 // 8 - 1
+    assert stats["node_visits"] > 0
+    assert stats["total_flops"] < runs["none"][1]["total_flops"]
+    assert runs["none"][1]["node_visits"] == 0
+    assert (tmp_path / "default.ppm").read_bytes() == (tmp_path / "none.ppm").read_bytes()
+
+
+def test_bvh_counts_add_up_over_two_devices(tmp_path):
+    """One image in row bands over two PoCL devices (--devices) counts the same
+    flops and BVH node visits as one device, and --stats has the BVH's figures."""
+    runs = {}
+    for name, args, env in (("one", [], None),
+                            ("two", ["--devices", "0:0,0:1"], {"POCL_DEVICES": "pthread pthread"})):
+        result = subprocess.run([RTCL, "-s", str(MESH_SCENE), "--size", "48x32",
+                                 "-o", str(tmp_path / f"{name}.ppm"),
+                                 "--work-map", str(tmp_path / f"{name}.npy"),
+                                 "--stats", str(tmp_path / f"{name}.json"), *args],
+                                capture_output=True, text=True, cwd=ROOT, timeout=300,
+                                env={**os.environ, **(env or {})})
+        assert result.returncode == 0, result.stderr
+        runs[name] = json.loads((tmp_path / f"{name}.json").read_text())
+    assert runs["two"]["node_visits"] == runs["one"]["node_visits"] > 0
+    assert runs["two"]["total_flops"] == runs["one"]["total_flops"]
+    assert runs["two"]["bvh"]["nodes"] == runs["one"]["bvh"]["nodes"] > 0
+    assert (tmp_path / "two.ppm").read_bytes() == (tmp_path / "one.ppm").read_bytes()

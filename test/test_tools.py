@@ -614,3 +614,5 @@ def test_experiments_quick_run_against_rtcl(tmp_path):
     assert len(totals) == 1, "every kernel must count the same total work"
     for kernel in kernels[1:]:
         assert 0.0 < runs[kernel]["parallel_efficiency"] <= 1.0
+    # Table 1 keeps the paper's brute force (issue 11 item 4).
+    assert {runs[kernel]["accel"] for kernel in kernels} == {"none"}

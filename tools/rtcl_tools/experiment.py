@@ -81,7 +81,10 @@ def run_experiment(arguments, temp_dir):
     """Runs every configuration and returns the list of Runs."""
     workgroups = QUICK_WORKGROUPS if arguments.quick else SWEEP_WORKGROUPS
     group_scales = QUICK_GROUP_SCALES if arguments.quick else SWEEP_GROUP_SCALES
-    settings = Settings(arguments.rtcl, common_options(arguments), arguments.repeat, temp_dir)
+    # --accel none: the paper's brute force, so that Table 1 stays comparable
+    # with the paper's (issue 11 item 4).
+    settings = Settings(arguments.rtcl, common_options(arguments) + ["--accel", "none"],
+                        arguments.repeat, temp_dir)
     progress = Progress(planned_run_count(arguments.no_serial, arguments.no_reference,
                                           arguments.no_sweep, workgroups, group_scales))
     runs = []

@@ -1,0 +1,134 @@
+/* BVH traversal (docs/bvh.md): the spheres' and triangles' part of
+ * intersect_scene through the one hierarchy the host built (host/bvh.c), when
+ * built with RTCL_BVH. Part of the tracer: built after intersect.cl, whose
+ * sphere and triangle tests it uses. Planes, unbounded, stay outside the
+ * hierarchy and are tested by intersect_scene as before. */
+#ifdef RTCL_BVH
+
+#if RT_BVH_MAX_DEPTH > 64
+#error "the traversal stack is sized by RT_BVH_MAX_DEPTH; keep it small"
+#endif
+
+/* The ray as the box test wants it: 1/d and o/d, so that a slab's distance
+ * along the ray is one fma, plane·(1/d) − o/d. A component of d below
+ * BOX_MIN_DIR in size is taken as BOX_MIN_DIR with its sign: a zero one would
+ * give an infinite 1/d, and with o off 0, ∞ − ∞ = NaN on one side of the slab
+ * and −∞ on the other, which fmin/fmax turn into a slab the ray never meets
+ * (a box straddling 0 dropped for a ray inside it). A finite 1/d of 2^64
+ * keeps the distances finite for any coordinate below 2^63 and moves such a
+ * ray by less than 2^−64 of its length, far inside the boxes' padding; a ray
+ * in a flat box's plane (a flat triangle's, before padding) is then inside
+ * the slab, as the triangle test needs. */
+#define BOX_MIN_DIR 0x1p-64f
+
+struct box_ray {
+	float3 inv_d, o_inv_d;
+};
+
+static struct box_ray box_ray(struct tracer *tr, float3 o, float3 d)
+{
+	struct box_ray r;
+	float3 dir = select(d, copysign((float3)BOX_MIN_DIR, d), fabs(d) < BOX_MIN_DIR);
+
+	/* The clamp is comparisons and a sign copy: 0 flops. */
+	r.inv_d = (float3)(1.0f / dir.x, 1.0f / dir.y, 1.0f / dir.z);
+	r.o_inv_d = o * r.inv_d;
+	COUNT_FLOPS(tr, FLOPS_BOX_SETUP);
+	return r;
+}
+
+/* Returns whether the ray meets the box lo..hi somewhere in [0, nearest], and
+ * where it enters it in *entry. The caller counts FLOPS_BOX_TEST. */
+static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float nearest,
+			   float *entry)
+{
+	float3 a = fma(lo.xyz, r->inv_d, -r->o_inv_d);
+	float3 b = fma(hi.xyz, r->inv_d, -r->o_inv_d);
+	float3 near = fmin(a, b), far = fmax(a, b);
+	float enter = fmax(fmax(near.x, near.y), fmax(near.z, 0.0f));
+	float leave = fmin(fmin(far.x, far.y), fmin(far.z, nearest));
+
+	*entry = enter;
+	return enter <= leave;
+}
+
+/* Tests a leaf's primitives: references [first, first + count); with
+ * any_hit, up to the first hit. */
+static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
+			   int first, int count, bool any_hit, float *nearest, struct hit *best)
+{
+	for (int k = first; k < first + count; k++) {
+		if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+			return;
+		uint ref = tr->refs[k];
+		int index = (int)(ref & RT_PRIM_INDEX_MASK);
+
+		if (ref >> RT_PRIM_KIND_SHIFT == RT_PRIM_TRIANGLE) {
+			triangle_consider(tr, index, o, d, any_hit, nearest, best);
+			continue;
+		}
+		float4 s = tr->spheres[index].center;
+		float gap = sphere_gap(s, frame);
+		COUNT_FLOPS(tr, FLOPS_SPHERE_GAP);
+		sphere_consider(tr, s, gap, o, d, index, any_hit, nearest, best);
+	}
+}
+
+/* A child waiting on the traversal stack: a node (count 0) or a leaf. */
+struct bvh_entry {
+	int index, count;
+};
+
+/* Depth first from the root, nearer child first (by where the ray enters the
+ * two boxes), the farther one waiting on a stack in private memory; boxes
+ * beyond the nearest hit found so far are skipped. With any_hit, stops at
+ * the first hit. The closest hit is that of brute force: the same sphere and
+ * triangle tests, ties decided as brute force's order decides them
+ * (sphere_consider, triangle_consider), and boxes padded so that every
+ * sphere or triangle a test hits is inside (host/bvh.c, BVH_SPHERE_PAD).
+ * Leaves wait on the stack like nodes, so that each iteration is one kind of
+ * step for the whole SIMD group: testing leaves inside the node step measured
+ * 4-7 % slower on an H100 (docs/bvh.md). */
+static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
+			  bool any_hit, float *nearest, struct hit *best)
+{
+	struct bvh_entry stack[RT_BVH_MAX_DEPTH];
+	struct bvh_entry at = {0, 0}; /* the root */
+	struct box_ray ray = box_ray(tr, o, d);
+	int waiting = 0;
+
+	for (;;) {
+		if (at.count > 0) {
+			leaf_intersect(tr, frame, o, d, at.index, at.count, any_hit, nearest, best);
+			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+				return;
+		} else {
+			RTCL_SCENE_SPACE const struct rt_bvh_node *node = &tr->nodes[at.index];
+			float4 lo0 = node->child[0].lo, hi0 = node->child[0].hi;
+			float4 lo1 = node->child[1].lo, hi1 = node->child[1].hi;
+			float t0, t1;
+			bool hit0 = box_hit(lo0, hi0, &ray, *nearest, &t0);
+			bool hit1 = box_hit(lo1, hi1, &ray, *nearest, &t1);
+
+			COUNT_NODE_VISIT(tr);
+			COUNT_FLOPS(tr, 2 * FLOPS_BOX_TEST);
+			struct bvh_entry c0 = {bvh_child_index(lo0), bvh_child_count(hi0)};
+			struct bvh_entry c1 = {bvh_child_index(lo1), bvh_child_count(hi1)};
+			if (hit0 && hit1) {
+				bool first0 = t0 <= t1;
+				stack[waiting++] = first0 ? c1 : c0;
+				at = first0 ? c0 : c1;
+				continue;
+			}
+			if (hit0 || hit1) {
+				at = hit0 ? c0 : c1;
+				continue;
+			}
+		}
+		if (waiting == 0)
+			return;
+		at = stack[--waiting];
+	}
+}
+
+#endif
