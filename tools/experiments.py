@@ -36,9 +36,16 @@ work-items of all its launches.  Under OUT/<device-slug>/ it writes
   results.json       every run's command and rtcl statistics.
 The per-work-item .npy files stay in a temporary folder, deleted at the end.
 
+--replot DIR runs no rtcl: it reads DIR/results.json and rewrites DIR/table1.md
+and DIR/speedup.png with the current report code (the best-of-sweep rows taken
+from the stored sweep runs, the table saying when and by which commit it was
+regenerated).  The histograms are kept as they are: results.json holds no
+per-work-item flops.  The other options are not read.
+
     tools/experiments.py -p 0 -d 0                 # the full 2000x2000 experiment
     tools/experiments.py --quick                   # 400x400, a smaller sweep
     make experiments DEVICE="-p 0 -d 0"            # the same through make
+    tools/experiments.py --replot docs/results/nvidia-h100-80gb-hbm3   # redraw only
 """
 
 import argparse
@@ -46,7 +53,7 @@ import pathlib
 import sys
 import tempfile
 
-from rtcl_tools.experiment import run_experiment, write_outputs
+from rtcl_tools.experiment import replot, run_experiment, write_outputs
 from rtcl_tools.flops import FlopsFileError
 from rtcl_tools.paper import DEFAULT_REPEAT, QUICK_SIZE
 from rtcl_tools.report import one_line
@@ -77,6 +84,10 @@ def parse_arguments(argv):
     parser.add_argument("--no-serial", action="store_true",
                         help="skip the serial kernel (slow on a GPU: one work-item); "
                              "the table then has no speedup over serial")
+    parser.add_argument("--replot", metavar="DIR",
+                        help="run no rtcl: rewrite DIR/table1.md and DIR/speedup.png from "
+                             "DIR/results.json with the current report code (the "
+                             "histograms are kept; other options are not read)")
     arguments = parser.parse_args(argv)
     if arguments.quick and arguments.size is None:
         arguments.size = QUICK_SIZE
@@ -88,6 +99,8 @@ def parse_arguments(argv):
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = pathlib.Path(sys.argv[0]).name
+    if arguments.replot is not None:
+        return replot_main(program, arguments.replot)
     with tempfile.TemporaryDirectory(prefix="rtcl-experiments-") as temp_name:
         temp_dir = pathlib.Path(temp_name)
         try:
@@ -98,6 +111,17 @@ def main(argv=None):
         except (OSError, ValueError, FlopsFileError) as error:
             return report_error(program, one_line(error))
     print(f"{program}: results in {out_dir}", file=sys.stderr)
+    return 0
+
+
+def replot_main(program, out_dir):
+    """--replot: redraws the report of out_dir; returns the exit status."""
+    try:
+        notes = replot(out_dir)
+    except (OSError, ValueError) as error:
+        return report_error(program, one_line(error))
+    for note in notes:
+        print(f"{program}: {note}", file=sys.stderr)
     return 0
 
 

@@ -13,7 +13,8 @@ from .paper import (GROUP_KERNELS, PAPER, PAPER_BATCH, PAPER_GEOMETRY, PARALLEL_
                     QUICK_GROUP_SCALES, QUICK_WORKGROUPS, SWEEP_GROUP_SCALES,
                     SWEEP_REPEAT, SWEEP_WORKGROUPS)
 from .report import device_slug, git_commit, utc_now
-from .runner import Progress, Settings, common_options, run_rtcl, scaled_groups
+from .runner import (REQUIRED_STATS, Progress, Run, Settings, common_options, run_rtcl,
+                     scaled_groups)
 
 
 def planned_run_count(no_serial, no_reference, no_sweep, workgroups, group_scales):
@@ -134,3 +135,112 @@ def load_checked_flops(path):
     for problem in flops.sidecar_mismatches(flops_file):
         print(f"warning: {path.name}.json: {problem}", file=sys.stderr)
     return flops_file
+
+
+# --replot: the report redrawn from a stored results.json, without running rtcl.
+RUN_ROLES = ("serial", "reference", "paper", "sweep", "best")
+KEPT_FIGURES = ("histograms.png", "histograms_best.png")  # need the .npy files
+
+
+def read_results(path):
+    """Returns the object stored in results.json at path; ValueError if unreadable."""
+    try:
+        text = path.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as error:
+        reason = getattr(error, "strerror", None) or "not UTF-8 text"
+        raise ValueError(f"{path}: cannot read: {reason}") from None
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError as error:
+        raise ValueError(f"{path}: not valid JSON: {error}") from None
+
+
+def stored_run(path, index, item):
+    """Returns the Run of the results.json entry runs[index]; ValueError if malformed."""
+    where = f"{path}: runs[{index}]"
+    if not isinstance(item, dict) or item.get("role") not in RUN_ROLES:
+        raise ValueError(f"{where}: expected an object with a role among {RUN_ROLES}")
+    stats = item.get("stats")
+    if not isinstance(item.get("kernel"), str) or not isinstance(item.get("command"), str) \
+            or not isinstance(stats, dict):
+        raise ValueError(f"{where}: expected a kernel, a command and stats")
+    missing = [key for key in REQUIRED_STATS if key not in stats]
+    if missing:
+        raise ValueError(f"{where}: stats lack {', '.join(missing)}")
+    kernel_ms = stats["kernel_ms"]
+    if isinstance(kernel_ms, bool) or not isinstance(kernel_ms, (int, float)) \
+            or not kernel_ms > 0:
+        raise ValueError(f"{where}: kernel_ms is not a positive number")
+    return Run(item["role"], item["kernel"], item.get("workgroup"), item.get("groups"),
+               item["command"], stats, batch=item.get("batch"))
+
+
+def load_results(path):
+    """Returns (meta, runs) of a results.json written by write_outputs; ValueError if not."""
+    data = read_results(path)
+    if not isinstance(data, dict) or not isinstance(data.get("meta"), dict) \
+            or not isinstance(data.get("runs"), list):
+        raise ValueError(f"{path}: expected an object with \"meta\" and \"runs\"")
+    meta = data["meta"]
+    if not isinstance(meta.get("date"), str) or not isinstance(meta.get("repeat"), int):
+        raise ValueError(f"{path}: meta: expected the date and repeat of the measurement")
+    runs = [stored_run(path, index, item) for index, item in enumerate(data["runs"])]
+    if not any(run.kernel != "reference" for run in runs):
+        raise ValueError(f"{path}: no run on an OpenCL device")
+    return meta, runs
+
+
+def best_rows_from_sweep(runs):
+    """Returns runs with every stored "best" row replaced by best_of_sweep of its sweep.
+
+    The old report re-timed the best geometry (issue 12); its row is dropped, and
+    the fastest sweep entry, with its own time, follows the kernel's last sweep run.
+    """
+    sweep_runs = [run for run in runs if run.role == "sweep"]
+    last = {run.kernel: run for run in sweep_runs}
+    rebuilt = []
+    for run in runs:
+        if run.role == "best":
+            continue
+        rebuilt.append(run)
+        if last.get(run.kernel) is run:
+            rebuilt.append(best_of_sweep([entry for entry in sweep_runs
+                                          if entry.kernel == run.kernel]))
+    return rebuilt
+
+
+def changed_best_geometries(old_runs, new_runs):
+    """Returns 'kernel WGxGROUPS (now ...)' for each best row whose geometry changed."""
+    def geometries(runs):
+        return {run.kernel: f"{run.stats['workgroup']} {run.stats['groups']}"
+                for run in runs if run.role == "best"}
+    old, new = geometries(old_runs), geometries(new_runs)
+    return [f"{kernel} {old[kernel]} (now {new[kernel]})"
+            for kernel in old if kernel in new and old[kernel] != new[kernel]]
+
+
+def replot(out_dir):
+    """Rewrites out_dir's table1.md and speedup.png from its results.json.
+
+    Runs no rtcl.  Returns the lines to print: which figures were kept as they
+    are (the histograms need the per-work-item .npy files, which are not stored).
+    Nothing is written when results.json is missing or malformed (ValueError).
+    """
+    out_dir = pathlib.Path(out_dir)
+    meta, stored = load_results(out_dir / "results.json")
+    runs = best_rows_from_sweep(stored)
+    meta = dict(meta, regenerated={"date": utc_now(), "commit": git_commit()})
+    text = table1.render_table1(runs, meta)
+    device = table1.device_run(runs).stats["device"]
+    plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", device)
+    files.write_text(out_dir / "table1.md", text)
+    notes = [f"rewrote {out_dir / 'table1.md'} and {out_dir / 'speedup.png'}"]
+    kept = [name for name in KEPT_FIGURES if (out_dir / name).exists()]
+    if kept:
+        notes.append(f"kept {', '.join(kept)} as they are (results.json holds no "
+                     "per-work-item flops)")
+    changed = changed_best_geometries(stored, runs)
+    if changed and "histograms_best.png" in kept:
+        notes.append("histograms_best.png shows the old best geometries: "
+                     + ", ".join(changed))
+    return notes

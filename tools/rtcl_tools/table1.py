@@ -99,6 +99,7 @@ def render_table1(runs, meta):
              f"max depth {stats['max_depth']}",
              f"- rtcl {stats.get('rtcl_version', '?')}, commit {meta.get('commit') or 'unknown'}, "
              f"{meta['date']}",
+             *regenerated_lines(meta),
              f"- times: median of {meta['repeat']} launches (sweep: {SWEEP_REPEAT}); the "
              "paper's are in seconds for 2000x2000 on the server Lincoln, ours in "
              "milliseconds",
@@ -118,6 +119,18 @@ def render_table1(runs, meta):
     lines += [run.command for run in runs if run.role != "best"]  # best: a sweep line
     lines += ["```", ""]
     return "\n".join(lines)
+
+
+def regenerated_lines(meta):
+    """Returns the header line of a table redrawn by experiments.py --replot, if it is one."""
+    again = meta.get("regenerated")
+    if not again:
+        return []
+    return [f"- regenerated on {again['date']} from the stored results.json (measured at "
+            f"commit {meta.get('commit') or 'unknown'}, {meta['date']}) by the report code "
+            f"of commit {again.get('commit') or 'unknown'} (`tools/experiments.py "
+            "--replot`), without running rtcl: best-of-sweep rows taken from the stored "
+            "sweep"]
 
 
 def best_of_sweep_lines(runs):
