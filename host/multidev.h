@@ -79,7 +79,10 @@ double multidev_efficiency(const struct device_work *work, int count);
  *    r / R): large pieces first, shrinking towards the end; never less than
  *    ADAPT_FLOOR_MS of its own time (launch overhead and a GPU's occupancy:
  *    on an H200 that is about 10 M pixel-samples), never less than a cell,
- *    never past the remaining work.
+ *    never past the remaining work, and never more than ADAPT_GROWTH times
+ *    the device's previous piece: a rate measured early (a first launch's
+ *    set-up, a fast device whose first large piece is still running) must
+ *    not hand a slow device a huge piece.
  *  - the tail rule: a device that is not the fastest still working never
  *    gets a piece it would finish after the others could have finished all
  *    the remaining work (their work in flight included) without it; its
@@ -92,6 +95,7 @@ double multidev_efficiency(const struct device_work *work, int count);
 #define ADAPT_PROBE_PIXEL_SAMPLES (1 << 20)
 #define ADAPT_FLOOR_MS 4.0
 #define ADAPT_GUIDE 2
+#define ADAPT_GROWTH 2
 
 /* What the sizing of one device's next piece sees. */
 struct adapt_view {
@@ -102,6 +106,7 @@ struct adapt_view {
 	double others_rate;    /* the sum of the other working devices' known rates */
 	double others_backlog; /* pixel-samples the others still have in flight */
 	int unknown;	       /* other working devices with no rate yet */
+	double last;	       /* this device's previous piece; 0: none */
 	int devices;	       /* working devices, this one included */
 	int fastest;	       /* no working device has a higher known rate */
 };
@@ -114,6 +119,7 @@ long long adapt_piece_cells(const struct adapt_view *v);
 struct adapt_device {
 	double done, busy_ms; /* pixel-samples rendered, in this much busy time */
 	double inflight;      /* pixel-samples of the piece it holds, 0: none */
+	double last;	      /* pixel-samples of its previous piece */
 	double start_ms;      /* when it took that piece */
 	int retired;	      /* the tail rule stopped it for this frame */
 };

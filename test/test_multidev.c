@@ -234,11 +234,12 @@ Test(multidev, adaptive_slow_device_never_holds_the_tail)
 }
 
 /* Simulated time: devices of the given rates (pixel-samples per ms) plus a
- * fixed cost per piece take pieces of a width x height x spp image as soon as
- * they are idle. Returns when the last piece is done; counts each pixel's
- * pieces in covered (when given) and each device's pieces. */
-static double simulate(int width, int height, int spp, const double *rate, int n,
-		       unsigned char *covered, int *pieces)
+ * fixed cost per piece (and first_ms more for device 0's first piece: a GPU's
+ * first launch) take pieces of a width x height x spp image as soon as they
+ * are idle. Returns when the last piece is done; counts each pixel's pieces
+ * in covered (when given) and each device's pieces. */
+static double simulate_first(int width, int height, int spp, const double *rate, int n,
+			     double first_ms, unsigned char *covered, int *pieces)
 {
 	struct adapt a;
 	double free_at[DEVICES_MAX], end = 0;
@@ -262,14 +263,21 @@ static double simulate(int width, int height, int spp, const double *rate, int n
 			left--;
 			continue;
 		}
-		pieces[k]++;
 		free_at[k] += 0.05 + (double)p.width * p.height * spp / rate[k];
+		free_at[k] += k == 0 && pieces[k] == 0 ? first_ms : 0;
+		pieces[k]++;
 		end = free_at[k] > end ? free_at[k] : end;
 		for (int y = p.y0; covered && y < p.y0 + p.height; y++)
 			for (int x = p.x0; x < p.x0 + p.width; x++)
 				covered[(size_t)y * width + x]++;
 	}
 	return end;
+}
+
+static double simulate(int width, int height, int spp, const double *rate, int n,
+		       unsigned char *covered, int *pieces)
+{
+	return simulate_first(width, height, spp, rate, n, 0, covered, pieces);
 }
 
 Test(multidev, adaptive_gpu_and_cpu_finish_no_later_than_the_gpu_alone)
@@ -291,6 +299,29 @@ Test(multidev, adaptive_gpu_and_cpu_finish_no_later_than_the_gpu_alone)
 		for (size_t i = 0; i < sizeof(covered); i++)
 			cr_assert_eq(covered[i], 1, "case %d: pixel %zu", r, i);
 	}
+}
+
+Test(multidev, adaptive_a_slow_first_launch_does_not_hand_the_cpu_a_huge_piece)
+{
+	/* The GPU's first launch takes 200 ms more (set-up on first use): its
+	 * probe makes it look slower than the CPU. Pieces grow at most
+	 * ADAPT_GROWTH-fold, so the CPU's stay small until the rates are
+	 * right (a wide image: a piece can take a whole cell row, 2.5 s of
+	 * the CPU without the cap). */
+	double gpu = 2000.0 * 2000 * 1024 / 1517, rates[2] = {gpu, gpu / 220};
+	int pieces[2];
+	double alone = simulate_first(4000, 1000, 1024, &gpu, 1, 200, NULL, pieces);
+	double both = simulate_first(4000, 1000, 1024, rates, 2, 200, NULL, pieces);
+
+	cr_assert(both <= alone, "%.1f ms with both, %.1f alone", both, alone);
+}
+
+Test(multidev, adaptive_pieces_grow_at_most_twofold)
+{
+	struct adapt_view v = view(1e9, 1e6, 1e4);
+
+	v.last = 3000;
+	cr_assert_eq(adapt_piece_cells(&v), ADAPT_GROWTH * 3);
 }
 
 Test(multidev, adaptive_equal_devices_share_the_image)
