@@ -17,7 +17,7 @@ struct dispenser {
 	int count; /* devices */
 	int next;  /* dynamic: the next piece to hand out */
 	int next_static[DEVICES_MAX], end_static[DEVICES_MAX];
-	int failed; /* a piece failed: hand out no more */
+	int failed;   /* a piece failed: hand out no more */
 	double start; /* timing_now() when the job started */
 };
 

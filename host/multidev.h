@@ -24,8 +24,8 @@ enum split { SPLIT_DYNAMIC, SPLIT_STATIC };
 struct device_work {
 	int pieces;
 	long long pixels;
-	double busy_ms;	 /* in the piece function, from taking a piece to done */
-	double setup_ms; /* in the begin function */
+	double busy_ms;	      /* in the piece function, from taking a piece to done */
+	double setup_ms;      /* in the begin function */
 	double finish_ms;     /* from the job's start to its last piece done */
 	double last_piece_ms; /* its last piece, from taking it to done */
 };

@@ -61,7 +61,8 @@ int tiles_piece_launches(const struct render_settings *s, const struct rt_piece 
  * work-items of the naive kernel's rounded-up NDRange. */
 static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
 {
-	adapt_init(&t->adapt, s->width, s->height, s->samples, s->workgroup[0] > 0 ? s->workgroup[0] : 8,
+	adapt_init(&t->adapt, s->width, s->height, s->samples,
+		   s->workgroup[0] > 0 ? s->workgroup[0] : 8,
 		   s->workgroup[1] > 0 ? s->workgroup[1] : 8, t->count);
 	t->piece_cap = t->adapt.cells_x * t->adapt.cells_y;
 	t->piece_count = 0;
@@ -207,7 +208,8 @@ void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_
 
 	for (int y = p->y0; y < p->y0 + p->height; y++) {
 		size_t first = (size_t)y * t->settings->width + p->x0;
-		memcpy(to->rgb + 3 * first, from->rgb + 3 * first, 3 * (size_t)p->width * sizeof(float));
+		memcpy(to->rgb + 3 * first, from->rgb + 3 * first,
+		       3 * (size_t)p->width * sizeof(float));
 		if (from->pixel_flops && to->pixel_flops)
 			memcpy(to->pixel_flops + first, from->pixel_flops + first,
 			       (size_t)p->width * sizeof(uint64_t));
@@ -283,8 +285,7 @@ static int take_piece(void *context, int k)
 /* Every pixel written once per launch of the piece that covered it in each
  * frame, over all devices together: the sum of the devices' counts against
  * what the pieces handed out add up to (check_writes). */
-static int check_summed_counts(const struct tiles_job *t, uint32_t *sum, char *err,
-			       size_t err_size)
+static int check_summed_counts(const struct tiles_job *t, uint32_t *sum, char *err, size_t err_size)
 {
 	const struct render_settings *s = t->settings;
 	size_t pixels = (size_t)s->width * s->height;
