@@ -1,6 +1,8 @@
 /* One image over several devices (--devices with more than one, --mpi): the
- * image cut into row bands, each band a piece (renderer.h) carrying every
- * sample of its rows, handed out by multidev.h's dispenser. Each device opens
+ * image cut into pieces (renderer.h), each carrying every sample of its
+ * pixels: with the dynamic split in one process, rectangles sized per device
+ * by multidev.h's adaptive dispenser; with --split static, --piece-rows or
+ * --mpi, row bands handed out by multidev.h's counter. Each device opens
  * its renderer once, renders the bands it is given into its own full-size
  * buffers, reads them back once at the end; the host copies each band from
  * the device that rendered it. A band's samples all run on one device, in
@@ -16,7 +18,7 @@
 #include "renderer.h"
 #include "stats.h"
 
-/* Bands per device when --piece-rows is not given: many, since a band costs
+/* Bands per device when bands are used and --piece-rows is not given: many, since a band costs
  * only a launch and its wait (0.01 to 0.05 ms on PoCL,
  * docs/results/multidevice) while the last band a slow device takes can end
  * after the fast one is done: with n devices a device k times slower than
