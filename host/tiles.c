@@ -162,8 +162,12 @@ int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, c
 	struct rt_piece whole;
 	int per_pass;
 
-	if (band < 0 || band >= t->piece_count) {
-		snprintf(err, err_size, "internal error: piece %d of %d", band, t->piece_count);
+	/* Adaptive: other threads add pieces meanwhile, under the lock; this
+	 * one's index was handed out already. */
+	int known = t->adaptive ? t->piece_cap : t->piece_count;
+
+	if (band < 0 || band >= known) {
+		snprintf(err, err_size, "internal error: piece %d of %d", band, known);
 		return -1;
 	}
 	whole = t->pieces[band];
