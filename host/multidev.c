@@ -231,8 +231,8 @@ long long adapt_piece_cells(const struct adapt_view *v)
 		return 0;
 	cells_left = ceil(v->remaining / v->unit);
 	size = v->rate > 0 ? guided_size(v) : probe_size(v);
-	if (v->last > 0)
-		size = min_d(size, ADAPT_GROWTH * v->last);
+	if (v->largest > 0)
+		size = min_d(size, ADAPT_GROWTH * v->largest);
 	if (v->rate > 0 && !v->fastest && v->others_rate > 0) {
 		/* The tail rule: done no later than the others could be
 		 * with all the rest. */
@@ -280,7 +280,7 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 	struct adapt_view v = {.total = (double)a->width * a->height * a->samples,
 			       .unit = (double)a->cell_w * a->cell_h * a->samples,
 			       .rate = rate_of(&a->dev[k]),
-			       .last = a->dev[k].last,
+			       .largest = a->dev[k].largest,
 			       .fastest = 1};
 
 	v.remaining = v.total - a->handed;
@@ -333,7 +333,7 @@ int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece)
 	if (d->inflight > 0) {
 		d->done += d->inflight;
 		d->busy_ms += now_ms - d->start_ms;
-		d->last = d->inflight;
+		d->largest = d->inflight > d->largest ? d->inflight : d->largest;
 		d->inflight = 0;
 	}
 	if (d->retired || a->next_cell >= (long long)a->cells_x * a->cells_y)

@@ -80,7 +80,8 @@ double multidev_efficiency(const struct device_work *work, int count);
  *    ADAPT_FLOOR_MS of its own time (launch overhead and a GPU's occupancy:
  *    on an H200 that is about 10 M pixel-samples), never less than a cell,
  *    never past the remaining work, and never more than ADAPT_GROWTH times
- *    the device's previous piece: a rate measured early (a first launch's
+ *    the device's largest piece so far (not its last: a piece cut short at
+ *    the end of a cell row must not stop the growth): a rate measured early (a first launch's
  *    set-up, a fast device whose first large piece is still running) must
  *    not hand a slow device a huge piece.
  *  - the tail rule: a device that is not the fastest still working never
@@ -106,7 +107,7 @@ struct adapt_view {
 	double others_rate;    /* the sum of the other working devices' known rates */
 	double others_backlog; /* pixel-samples the others still have in flight */
 	int unknown;	       /* other working devices with no rate yet */
-	double last;	       /* this device's previous piece; 0: none */
+	double largest;	       /* this device's largest piece so far; 0: none */
 	int devices;	       /* working devices, this one included */
 	int fastest;	       /* no working device has a higher known rate */
 };
@@ -119,7 +120,7 @@ long long adapt_piece_cells(const struct adapt_view *v);
 struct adapt_device {
 	double done, busy_ms; /* pixel-samples rendered, in this much busy time */
 	double inflight;      /* pixel-samples of the piece it holds, 0: none */
-	double last;	      /* pixel-samples of its previous piece */
+	double largest;	      /* pixel-samples of its largest piece so far */
 	double start_ms;      /* when it took that piece */
 	int retired;	      /* the tail rule stopped it for this frame */
 };
