@@ -121,12 +121,33 @@ static int env_pair(const char *name, long *k, long *n)
 	return *end == '\0' ? 0 : -1;
 }
 
-void checks_piece_delay(int device)
+/* "K:xF" in RTCL_TEST_SLOW_DEVICE: device K and the factor F; 0 when so. */
+static int slow_factor(long *k, double *factor)
+{
+	const char *value = getenv("RTCL_TEST_SLOW_DEVICE");
+	char *end;
+
+	if (!value)
+		return -1;
+	*k = strtol(value, &end, 10);
+	if (end == value || end[0] != ':' || end[1] != 'x')
+		return -1;
+	*factor = strtod(end + 2, &end);
+	return *end == '\0' && *factor >= 1 ? 0 : -1;
+}
+
+void checks_piece_delay(int device, double piece_ms)
 {
 	long k, ms;
+	double factor, wait_ms = 0;
 
-	if (env_pair("RTCL_TEST_SLOW_DEVICE", &k, &ms) == 0 && k == device && ms > 0) {
-		struct timespec wait = {ms / 1000, (ms % 1000) * 1000000L};
+	if (slow_factor(&k, &factor) == 0)
+		wait_ms = k == device ? (factor - 1) * piece_ms : 0;
+	else if (env_pair("RTCL_TEST_SLOW_DEVICE", &k, &ms) == 0 && k == device)
+		wait_ms = (double)ms;
+	if (wait_ms > 0) {
+		long long ns = (long long)(wait_ms * 1e6);
+		struct timespec wait = {(time_t)(ns / 1000000000), (long)(ns % 1000000000)};
 		nanosleep(&wait, NULL);
 	}
 }

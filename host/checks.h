@@ -49,8 +49,10 @@ int checks_device_fault_injected(void);
 
 /* RTCL_TEST_SLOW_DEVICE=K:MS: device K of a several-device job (multidev.h)
  * sleeps MS milliseconds after each piece, inside its busy time, as a
- * slower device would take longer. */
-void checks_piece_delay(int device);
+ * slower device would take longer. K:xF: it sleeps F - 1 times what the
+ * piece took (piece_ms), as a device F times slower would, whatever the
+ * piece's size (the adaptive dispenser's pieces differ in size). */
+void checks_piece_delay(int device, double piece_ms);
 
 /* RTCL_TEST_FAIL_DEVICE=K:N: device K's N-th piece fails, as a device that
  * fails mid-render does. */

@@ -31,6 +31,11 @@ json_t *devstats_json(const struct device *devs, const int *ranks, const struct 
 				  devs[k].platform_index, "index", devs[k].device_index, "pieces",
 				  work[k].pieces, "pixels", (json_int_t)work[k].pixels, "busy_ms",
 				  work[k].busy_ms, "setup_ms", work[k].setup_ms);
+		if (entry) {
+			json_object_set_new(entry, "finish_ms", json_real(work[k].finish_ms));
+			json_object_set_new(entry, "last_piece_ms",
+					    json_real(work[k].last_piece_ms));
+		}
 		if (entry && ranks)
 			json_object_set_new(entry, "rank", json_integer(ranks[k]));
 		json_array_append_new(list, entry);

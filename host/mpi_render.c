@@ -434,7 +434,7 @@ static int choose_pieces(struct mpi_job *j, int total)
 		return 0;
 	}
 	if (tiles_job_init(&j->tiles, run->scene, s,
-			   tiles_band_rows(s, run->opt->piece_rows, total), j->devs, j->count, err,
+			   tiles_band_rows(s, run->opt->piece_rows, total), 0, j->devs, j->count, err,
 			   sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;

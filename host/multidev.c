@@ -1,5 +1,6 @@
 #include "multidev.h"
 
+#include <math.h>
 #include <pthread.h>
 #include <stdio.h>
 #include <string.h>
@@ -16,7 +17,8 @@ struct dispenser {
 	int count; /* devices */
 	int next;  /* dynamic: the next piece to hand out */
 	int next_static[DEVICES_MAX], end_static[DEVICES_MAX];
-	int failed; /* a piece failed: hand out no more */
+	int failed;   /* a piece failed: hand out no more */
+	double start; /* timing_now() when the job started */
 };
 
 struct worker {
@@ -87,9 +89,10 @@ static void fail(struct worker *w)
 static int render_one(struct worker *w, int piece, long long *pixels)
 {
 	const struct multidev_job *job = w->dispenser->job;
+	double start = timing_now();
 	int ret = job->render_piece(job->context, w->index, piece, pixels, w->err, sizeof(w->err));
 
-	checks_piece_delay(w->index);
+	checks_piece_delay(w->index, (timing_now() - start) * 1e3);
 	if (ret == 0 && checks_piece_fault(w->index, w->work->pieces + 1)) {
 		snprintf(w->err, sizeof(w->err),
 			 "the device failed on its piece %d (RTCL_TEST_FAIL_DEVICE)",
@@ -103,7 +106,7 @@ static void *work_loop(void *arg)
 {
 	struct worker *w = arg;
 	const struct multidev_job *job = w->dispenser->job;
-	double lap = timing_now();
+	double lap = timing_now(), piece_ms;
 	int piece;
 
 	if (job->begin && job->begin(job->context, w->index, w->err, sizeof(w->err))) {
@@ -119,7 +122,10 @@ static void *work_loop(void *arg)
 		}
 		w->work->pieces++;
 		w->work->pixels += pixels;
-		w->work->busy_ms += timing_lap_ms(&lap);
+		piece_ms = timing_lap_ms(&lap);
+		w->work->busy_ms += piece_ms;
+		w->work->last_piece_ms = piece_ms;
+		w->work->finish_ms = (lap - w->dispenser->start) * 1e3;
 	}
 	if (job->end)
 		job->end(job->context, w->index);
@@ -132,6 +138,7 @@ static void init_dispenser(struct dispenser *d, const struct multidev_job *job, 
 	pthread_mutex_init(&d->lock, NULL);
 	d->job = job;
 	d->count = count;
+	d->start = timing_now();
 	for (int k = 0; k < count; k++) {
 		d->next_static[k] = multidev_static_first(k, count, job->piece_count);
 		d->end_static[k] = multidev_static_first(k + 1, count, job->piece_count);
@@ -189,4 +196,157 @@ double multidev_efficiency(const struct device_work *work, int count)
 		max = work[k].busy_ms > max ? work[k].busy_ms : max;
 	}
 	return max > 0 ? sum / count / max : 1.0;
+}
+
+/* ---- adaptive pieces (multidev.h) ----------------------------------------- */
+
+static double min_d(double a, double b)
+{
+	return a < b ? a : b;
+}
+
+/* A probe: small against the image and a device's share of it. */
+static double probe_size(const struct adapt_view *v)
+{
+	return min_d(ADAPT_PROBE_PIXEL_SAMPLES, v->total / (16.0 * v->devices));
+}
+
+/* Guided: 1/ADAPT_GUIDE of the device's share of what is left, not under
+ * ADAPT_FLOOR_MS of its time. A device still probing counts as fast as this
+ * one, so the first to know its rate does not take half the image. */
+static double guided_size(const struct adapt_view *v)
+{
+	double all = v->rate * (1 + v->unknown) + v->others_rate;
+	double share = (v->remaining + v->others_backlog) * v->rate / all;
+	double size = share / ADAPT_GUIDE;
+
+	return size > v->rate * ADAPT_FLOOR_MS ? size : v->rate * ADAPT_FLOOR_MS;
+}
+
+long long adapt_piece_cells(const struct adapt_view *v)
+{
+	double size, cells_left;
+
+	if (v->remaining <= 0 || v->unit <= 0)
+		return 0;
+	cells_left = ceil(v->remaining / v->unit);
+	size = v->rate > 0 ? guided_size(v) : probe_size(v);
+	if (v->largest > 0)
+		size = min_d(size, ADAPT_GROWTH * v->largest);
+	if (v->rate > 0 && !v->fastest && v->others_rate > 0) {
+		/* The tail rule: done no later than the others could be
+		 * with all the rest. */
+		double others_done_ms = (v->remaining + v->others_backlog) / v->others_rate;
+		size = min_d(size, v->rate * others_done_ms);
+		if (min_d(v->unit, v->remaining) > size)
+			return 0;
+	}
+	size = floor(size / v->unit);
+	return size < 1 ? 1 : size > cells_left ? (long long)cells_left : (long long)size;
+}
+
+void adapt_init(struct adapt *a, int width, int height, int samples, int cell_w, int cell_h,
+		int devices)
+{
+	memset(a, 0, sizeof(*a));
+	a->width = width;
+	a->height = height;
+	a->samples = samples > 0 ? samples : 1;
+	a->cell_w = cell_w > 0 ? cell_w : 1;
+	a->cell_h = cell_h > 0 ? cell_h : 1;
+	a->cells_x = (width + a->cell_w - 1) / a->cell_w;
+	a->cells_y = (height + a->cell_h - 1) / a->cell_h;
+	a->devices = devices;
+}
+
+void adapt_new_frame(struct adapt *a)
+{
+	a->next_cell = 0;
+	a->handed = 0;
+	for (int k = 0; k < a->devices; k++) {
+		a->dev[k].inflight = 0;
+		a->dev[k].retired = 0;
+	}
+}
+
+static double rate_of(const struct adapt_device *d)
+{
+	return d->busy_ms > 0 ? d->done / d->busy_ms : 0;
+}
+
+/* What device k sees at now_ms. */
+static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_ms)
+{
+	struct adapt_view v = {.total = (double)a->width * a->height * a->samples,
+			       .unit = (double)a->cell_w * a->cell_h * a->samples,
+			       .rate = rate_of(&a->dev[k]),
+			       .largest = a->dev[k].largest,
+			       .fastest = 1};
+
+	v.remaining = v.total - a->handed;
+	for (int j = 0; j < a->devices; j++) {
+		const struct adapt_device *d = &a->dev[j];
+		double r = rate_of(d);
+		if (d->retired)
+			continue;
+		v.devices++;
+		if (j == k)
+			continue;
+		v.others_rate += r;
+		v.unknown += r <= 0;
+		v.fastest &= r <= v.rate;
+		if (d->inflight > 0 && r > 0) /* what it has left of its piece */
+			v.others_backlog += fmax(0, d->inflight - r * (now_ms - d->start_ms));
+	}
+	return v;
+}
+
+/* The next `cells` cells from the cursor as a rectangle (fewer when the
+ * current cell row ends first); advances the cursor. */
+static struct rt_piece adapt_cut(struct adapt *a, long long cells)
+{
+	int col = (int)(a->next_cell % a->cells_x), row = (int)(a->next_cell / a->cells_x);
+	int rows = 1, cols = a->cells_x - col;
+	struct rt_piece p;
+
+	if (col == 0 && cells >= a->cells_x) {
+		rows = (int)min_d((double)(cells / a->cells_x), a->cells_y - row);
+	} else if (cells < cols) {
+		cols = (int)cells;
+	}
+	p.x0 = col * a->cell_w;
+	p.y0 = row * a->cell_h;
+	p.width = (int)min_d(cols * a->cell_w, a->width - p.x0);
+	p.height = (int)min_d(rows * a->cell_h, a->height - p.y0);
+	p.sample_begin = 0;
+	p.sample_end = p.samples = a->samples;
+	p.pad = 0;
+	a->next_cell += rows > 1 ? (long long)rows * a->cells_x : cols;
+	return p;
+}
+
+int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece)
+{
+	struct adapt_device *d = &a->dev[k];
+	long long cells;
+
+	if (d->inflight > 0) {
+		d->done += d->inflight;
+		d->busy_ms += now_ms - d->start_ms;
+		d->largest = d->inflight > d->largest ? d->inflight : d->largest;
+		d->inflight = 0;
+	}
+	if (d->retired || a->next_cell >= (long long)a->cells_x * a->cells_y)
+		return 0;
+	struct adapt_view v = adapt_view_of(a, k, now_ms);
+	cells = adapt_piece_cells(&v);
+	if (cells == 0) {
+		d->retired = 1;
+		return 0;
+	}
+	*piece = adapt_cut(a, cells);
+	d->inflight = (double)piece->width * piece->height * a->samples;
+	d->start_ms = now_ms;
+	a->handed += d->inflight;
+	return 1;
 }

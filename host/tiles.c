@@ -50,18 +50,30 @@ int tiles_pass_samples(const struct render_settings *s, const struct rt_piece *b
 	return per_pass < 1 ? 1 : per_pass > band->samples ? band->samples : (int)per_pass;
 }
 
-/* Launches that cover each pixel of band once per frame. */
-static int band_launches(const struct render_settings *s, int rows, int band)
+int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece)
 {
-	struct rt_piece p = tiles_band(s, rows, band, 0, 1);
-	int per_pass = tiles_pass_samples(s, &p);
+	int per_pass = tiles_pass_samples(s, piece);
 
-	return (p.samples + per_pass - 1) / per_pass;
+	return (piece->samples + per_pass - 1) / per_pass;
+}
+
+/* The adaptive dispenser's cells: one work-group, so a piece wastes no
+ * work-items of the naive kernel's rounded-up NDRange. */
+static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
+{
+	adapt_init(&t->adapt, s->width, s->height, s->samples,
+		   s->workgroup[0] > 0 ? s->workgroup[0] : 8,
+		   s->workgroup[1] > 0 ? s->workgroup[1] : 8, t->count);
+	t->piece_cap = t->adapt.cells_x * t->adapt.cells_y;
+	t->piece_count = 0;
 }
 
 int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
-		   int rows, struct device *devs, int count, char *err, size_t err_size)
+		   int rows, int adaptive, struct device *devs, int count, char *err,
+		   size_t err_size)
 {
+	size_t pixels = (size_t)s->width * s->height;
+
 	memset(t, 0, sizeof(*t));
 	t->settings = s;
 	t->scene = scene;
@@ -69,14 +81,38 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	t->count = count;
 	t->rows = rows;
 	t->bands = band_count(s->height, rows);
-	t->owner = malloc((size_t)t->bands * sizeof(int));
-	if (!t->owner) {
-		snprintf(err, err_size, "out of host memory for %d bands", t->bands);
+	t->adaptive = adaptive;
+	t->piece_cap = t->piece_count = t->bands;
+	if (adaptive)
+		init_adaptive(t, s);
+	pthread_mutex_init(&t->lock, NULL);
+	t->pieces = malloc((size_t)t->piece_cap * sizeof(*t->pieces));
+	t->owner = malloc((size_t)t->piece_cap * sizeof(int));
+	t->expected = s->check_writes ? calloc(pixels, sizeof(uint32_t)) : NULL;
+	if (!t->pieces || !t->owner || (s->check_writes && !t->expected)) {
+		snprintf(err, err_size, "out of host memory for %d pieces", t->piece_cap);
 		return -1;
 	}
-	for (int b = 0; b < t->bands; b++)
+	for (int b = 0; b < t->piece_count; b++) {
+		t->pieces[b] = tiles_band(s, rows, b, 0, s->samples > 0 ? s->samples : 1);
 		t->owner[b] = -1;
+	}
 	return 0;
+}
+
+int tiles_take_piece(struct tiles_job *t, int k)
+{
+	int index = -1;
+	struct rt_piece piece;
+
+	pthread_mutex_lock(&t->lock);
+	if (t->piece_count < t->piece_cap && adapt_take(&t->adapt, k, timing_now() * 1e3, &piece)) {
+		index = t->piece_count++;
+		t->pieces[index] = piece;
+		t->owner[index] = k;
+	}
+	pthread_mutex_unlock(&t->lock);
+	return index;
 }
 
 void tiles_job_free(struct tiles_job *t)
@@ -88,7 +124,12 @@ void tiles_job_free(struct tiles_job *t)
 		t->dev[k].open = 0;
 	}
 	free(t->owner);
+	free(t->pieces);
+	free(t->expected);
 	t->owner = NULL;
+	t->pieces = NULL;
+	t->expected = NULL;
+	pthread_mutex_destroy(&t->lock);
 }
 
 int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
@@ -104,19 +145,35 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 	return 0;
 }
 
+/* Adds piece's launches to the expected write counts (check_writes). */
+static void expect_writes(struct tiles_job *t, const struct rt_piece *p, int sign)
+{
+	int launches = tiles_piece_launches(t->settings, p) * sign;
+
+	for (int y = p->y0; t->expected && y < p->y0 + p->height; y++)
+		for (int x = p->x0; x < p->x0 + p->width; x++)
+			t->expected[(size_t)y * t->settings->width + x] += launches;
+}
+
 int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, char *err,
 		      size_t err_size)
 {
 	const struct render_settings *s = t->settings;
-	struct rt_piece whole = tiles_band(s, t->rows, band, 0, s->samples > 0 ? s->samples : 1);
-	int per_pass = tiles_pass_samples(s, &whole);
+	struct rt_piece whole;
+	int per_pass;
 
-	if (band < 0 || band >= t->bands) {
-		snprintf(err, err_size, "internal error: band %d of %d", band, t->bands);
+	/* Adaptive: other threads add pieces meanwhile, under the lock; this
+	 * one's index was handed out already. */
+	int known = t->adaptive ? t->piece_cap : t->piece_count;
+
+	if (band < 0 || band >= known) {
+		snprintf(err, err_size, "internal error: piece %d of %d", band, known);
 		return -1;
 	}
-	/* Every sample of the band on this device, in order: the running sums
-	 * stay in its buffer. */
+	whole = t->pieces[band];
+	per_pass = tiles_pass_samples(s, &whole);
+	/* Every sample of the piece on this device, in order: the running
+	 * sums stay in its buffer. */
 	for (int begin = 0; begin < whole.samples; begin += per_pass) {
 		struct rt_piece piece = whole;
 		struct piece_result out;
@@ -126,7 +183,8 @@ int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, c
 		if (renderer_piece(&t->dev[k].renderer, &piece, &out, err, err_size))
 			return -1;
 	}
-	t->owner[band] = k; /* bands are distinct: no two threads write one */
+	t->owner[band] = k; /* pieces are distinct: no two threads write one */
+	expect_writes(t, &whole, 1);
 	*pixels = (long long)whole.width * whole.height;
 	return 0;
 }
@@ -147,17 +205,19 @@ int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size)
 	return 0;
 }
 
-void tiles_copy_band(const struct tiles_job *t, int band, const struct render_result *from,
-		     struct render_result *to)
+void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_result *from,
+		      struct render_result *to)
 {
-	const struct render_settings *s = t->settings;
-	struct rt_piece p = tiles_band(s, t->rows, band, 0, 1);
-	size_t first = (size_t)p.y0 * s->width, pixels = (size_t)p.height * s->width;
+	const struct rt_piece *p = &t->pieces[piece];
 
-	memcpy(to->rgb + 3 * first, from->rgb + 3 * first, 3 * pixels * sizeof(float));
-	if (from->pixel_flops && to->pixel_flops)
-		memcpy(to->pixel_flops + first, from->pixel_flops + first,
-		       pixels * sizeof(uint64_t));
+	for (int y = p->y0; y < p->y0 + p->height; y++) {
+		size_t first = (size_t)y * t->settings->width + p->x0;
+		memcpy(to->rgb + 3 * first, from->rgb + 3 * first,
+		       3 * (size_t)p->width * sizeof(float));
+		if (from->pixel_flops && to->pixel_flops)
+			memcpy(to->pixel_flops + first, from->pixel_flops + first,
+			       (size_t)p->width * sizeof(uint64_t));
+	}
 }
 
 int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected, char *err,
@@ -175,8 +235,9 @@ int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t e
 	return 0;
 }
 
-/* RTCL_TEST_DOUBLE_BAND=1 (checks.h): band 0 rendered once more by another
- * device, as a dispenser that handed it out twice would. */
+/* RTCL_TEST_DOUBLE_BAND=1 (checks.h): piece 0 rendered once more by another
+ * device, as a dispenser that handed it out twice would (unknowingly: not
+ * in the expected counts). */
 static int double_band(struct tiles_job *t, char *err, size_t err_size)
 {
 	int owner = t->owner[0];
@@ -186,6 +247,7 @@ static int double_band(struct tiles_job *t, char *err, size_t err_size)
 		return 0;
 	if (tiles_render_band(t, (owner + 1) % t->count, 0, &pixels, err, err_size))
 		return -1;
+	expect_writes(t, &t->pieces[0], -1);
 	t->owner[0] = owner;
 	return 0;
 }
@@ -195,12 +257,13 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	const struct render_settings *s = t->settings;
 	const uint32_t *counts = t->dev[k].result.write_counts;
 
-	for (int b = 0; counts && b < t->bands; b++) {
-		struct rt_piece p = tiles_band(s, t->rows, b, 0, 1);
-		uint32_t expected = t->owner[b] == k ? (uint32_t)band_launches(s, t->rows, b) : 0;
-		if (tiles_check_counts(counts + (size_t)p.y0 * s->width, s->width, p.height,
-				       expected, err, err_size))
-			return -1;
+	for (int b = 0; counts && b < t->piece_count; b++) {
+		const struct rt_piece *p = &t->pieces[b];
+		uint32_t expected = t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p) : 0;
+		for (int y = p->y0; y < p->y0 + p->height; y++)
+			if (tiles_check_counts(counts + (size_t)y * s->width + p->x0, p->width, 1,
+					       expected, err, err_size))
+				return -1;
 	}
 	return 0;
 }
@@ -218,10 +281,15 @@ static int render_band(void *context, int k, int band, long long *pixels, char *
 	return tiles_render_band(context, k, band, pixels, err, err_size);
 }
 
-/* Every pixel written once per launch of its band per frame over all devices
- * together: the sum of the devices' counts (check_writes). */
-static int check_summed_counts(const struct tiles_job *t, int frames, uint32_t *sum, char *err,
-			       size_t err_size)
+static int take_piece(void *context, int k)
+{
+	return tiles_take_piece(context, k);
+}
+
+/* Every pixel written once per launch of the piece that covered it in each
+ * frame, over all devices together: the sum of the devices' counts against
+ * what the pieces handed out add up to (check_writes). */
+static int check_summed_counts(const struct tiles_job *t, uint32_t *sum, char *err, size_t err_size)
 {
 	const struct render_settings *s = t->settings;
 	size_t pixels = (size_t)s->width * s->height;
@@ -229,12 +297,18 @@ static int check_summed_counts(const struct tiles_job *t, int frames, uint32_t *
 	for (int k = 0; k < t->count; k++)
 		for (size_t i = 0; i < pixels; i++)
 			sum[i] += t->dev[k].result.write_counts[i];
-	for (int b = 0; b < t->bands; b++) {
-		struct rt_piece p = tiles_band(s, t->rows, b, 0, 1);
-		uint32_t expected = (uint32_t)(frames * band_launches(s, t->rows, b));
-		if (tiles_check_counts(sum + (size_t)p.y0 * s->width, s->width, p.height, expected,
-				       err, err_size))
-			return -1;
+	for (size_t i = 0; i < pixels; i++) {
+		if (sum[i] == t->expected[i] && sum[i] > 0)
+			continue;
+		if (t->expected[i] == 0)
+			snprintf(err, err_size, "internal error: pixel (%d, %d) is in no piece",
+				 (int)(i % s->width), (int)(i / s->width));
+		else
+			snprintf(err, err_size,
+				 "internal error: pixel (%d, %d) of a band was written %u times, "
+				 "not %u",
+				 (int)(i % s->width), (int)(i / s->width), sum[i], t->expected[i]);
+		return -1;
 	}
 	return 0;
 }
@@ -278,8 +352,7 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
 }
 
 /* Reads every device back and assembles the image (and counts) in out. */
-static int assemble(struct tiles_job *t, int frames, struct render_result *out, char *err,
-		    size_t err_size)
+static int assemble(struct tiles_job *t, struct render_result *out, char *err, size_t err_size)
 {
 	const struct render_settings *s = t->settings;
 	size_t pixels = (size_t)s->width * s->height;
@@ -296,16 +369,15 @@ static int assemble(struct tiles_job *t, int frames, struct render_result *out, 
 	for (int k = 0; k < t->count; k++)
 		if (tiles_collect(t, k, err, err_size))
 			return -1;
-	for (int b = 0; b < t->bands; b++)
-		tiles_copy_band(t, b, &t->dev[t->owner[b]].result, out);
+	for (int b = 0; b < t->piece_count; b++)
+		tiles_copy_piece(t, b, &t->dev[t->owner[b]].result, out);
 	if (s->count_flops && join_item_counts(t, out)) {
 		snprintf(err, err_size, "out of host memory for the flop counts");
 		return -1;
 	}
 	out->guards_intact = 1;
 	tiles_copy_facts(&t->dev[0].result, out);
-	return s->check_writes ? check_summed_counts(t, frames, out->write_counts, err, err_size)
-			       : 0;
+	return s->check_writes ? check_summed_counts(t, out->write_counts, err, err_size) : 0;
 }
 
 /* Opens every device's renderer, each in its own thread (build and upload
@@ -330,16 +402,28 @@ static int render_frames(struct tiles_job *t, int split_static, struct device_wo
 	struct multidev_job job = {.piece_count = t->bands,
 				   .split = split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
 				   .render_piece = render_band,
+				   .take_piece = t->adaptive ? take_piece : NULL,
 				   .context = t};
 	int frames = launch_begin_timing(t->settings, out, err, err_size);
 
 	for (int f = 0; f < frames; f++) {
 		double start = timing_now();
+		if (t->adaptive) {
+			adapt_new_frame(&t->adapt);
+			t->piece_count = 0;
+		}
 		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
 			return -1;
 		launch_record_frame(out, f, frames, (timing_now() - start) * 1e3);
 	}
 	return frames;
+}
+
+/* The adaptive dispenser unless --split static or --piece-rows (a fixed
+ * band height) asks for bands. */
+static int tiles_adaptive(const struct run *run)
+{
+	return !run->opt->split_static && run->opt->piece_rows <= 0;
 }
 
 /* One image with settings s on devs[count] into out. */
@@ -352,7 +436,8 @@ static int render_image(const struct run *run, const struct render_settings *s, 
 	int rows = tiles_band_rows(s, run->opt->piece_rows, count), frames;
 
 	memset(out, 0, sizeof(*out));
-	if (tiles_job_init(&t, run->scene, s, rows, devs, count, err, err_size))
+	if (tiles_job_init(&t, run->scene, s, rows, tiles_adaptive(run), devs, count, err,
+			   err_size))
 		return -1;
 	if (open_all(&t, setup, err, err_size))
 		goto out_free;
@@ -361,8 +446,8 @@ static int render_image(const struct run *run, const struct render_settings *s, 
 	if (frames < 0 || launch_end_timing(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
-	out->passes = band_launches(s, rows, 0);
-	if (assemble(&t, frames, out, err, err_size))
+	out->passes = tiles_piece_launches(s, &t.pieces[0]);
+	if (assemble(&t, out, err, err_size))
 		goto out_free;
 	out->times.read_back = timing_lap_ms(&lap);
 	for (int k = 0; k < count; k++)
@@ -397,10 +482,10 @@ int tiles_render(struct run *run, struct device *devs, int count, struct device_
 	}
 	if (render_image(run, s, devs, count, work, &run->result, err, err_size))
 		return -1;
-	run->multidevice =
-		devstats_json(devs, NULL, work, count,
-			      run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC, "band");
-	if (run->multidevice) {
+	run->multidevice = devstats_json(devs, NULL, work, count,
+					 run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+					 tiles_adaptive(run) ? "rectangle" : "band");
+	if (run->multidevice && !tiles_adaptive(run)) {
 		json_object_set_new(run->multidevice, "band_rows", json_integer(rows));
 		json_object_set_new(run->multidevice, "bands",
 				    json_integer(band_count(s->height, rows)));

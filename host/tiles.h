@@ -1,6 +1,8 @@
 /* One image over several devices (--devices with more than one, --mpi): the
- * image cut into row bands, each band a piece (renderer.h) carrying every
- * sample of its rows, handed out by multidev.h's dispenser. Each device opens
+ * image cut into pieces (renderer.h), each carrying every sample of its
+ * pixels: with the dynamic split in one process, rectangles sized per device
+ * by multidev.h's adaptive dispenser; with --split static, --piece-rows or
+ * --mpi, row bands handed out by multidev.h's counter. Each device opens
  * its renderer once, renders the bands it is given into its own full-size
  * buffers, reads them back once at the end; the host copies each band from
  * the device that rendered it. A band's samples all run on one device, in
@@ -8,6 +10,7 @@
 #ifndef RTCL_TILES_H
 #define RTCL_TILES_H
 
+#include <pthread.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -15,7 +18,7 @@
 #include "renderer.h"
 #include "stats.h"
 
-/* Bands per device when --piece-rows is not given: many, since a band costs
+/* Bands per device when bands are used and --piece-rows is not given: many, since a band costs
  * only a launch and its wait (0.01 to 0.05 ms on PoCL,
  * docs/results/multidevice) while the last band a slow device takes can end
  * after the fast one is done: with n devices a device k times slower than
@@ -44,21 +47,34 @@ struct tiles_device {
 	int collected; /* read back */
 };
 
-/* The bands of one image on devs[count] of this process. */
+/* The pieces of one image on devs[count] of this process: the bands of
+ * `rows` rows, or (adaptive) the rectangles multidev.h's adaptive dispenser
+ * cuts each frame. */
 struct tiles_job {
 	const struct render_settings *settings;
 	const struct scene *scene;
 	struct device *devs;
 	int count;
 	int rows, bands;
-	int *owner;   /* each band's device (index into devs) in the last frame */
-	int launches; /* per pixel per frame: the passes of its band */
+	int adaptive;		 /* pieces from `adapt`, not bands */
+	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
+	int *owner;		 /* each piece's device (index into devs) */
+	int piece_count, piece_cap;
+	uint32_t *expected; /* check_writes: each pixel's launches so far, all frames */
+	struct adapt adapt;
+	pthread_mutex_t lock; /* adaptive: adapt, pieces, piece_count */
 	struct tiles_device dev[DEVICES_MAX];
 };
 
-/* Returns 0, or -1 with one message in err (out of memory). */
+/* Returns 0, or -1 with one message in err (out of memory). With adaptive,
+ * rows is ignored and the pieces are cut per frame. */
 int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
-		   int rows, struct device *devs, int count, char *err, size_t err_size);
+		   int rows, int adaptive, struct device *devs, int count, char *err,
+		   size_t err_size);
+
+/* Adaptive: the next piece for device k (its previous one done), added to
+ * the job's pieces; returns its index, or -1 when there is none for k. */
+int tiles_take_piece(struct tiles_job *t, int k);
 
 /* Releases every renderer and what they read back. */
 void tiles_job_free(struct tiles_job *t);
@@ -69,13 +85,16 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size);
 int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, char *err,
 		      size_t err_size);
 
+/* Launches that cover each pixel of piece once (its samples in passes). */
+int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece);
+
 /* Reads back device k's image (and counts), once. */
 int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size);
 
-/* Copies band's rows of from's image (and per-pixel flops when both hold
+/* Copies piece's pixels of from's image (and per-pixel flops when both hold
  * them) into to. */
-void tiles_copy_band(const struct tiles_job *t, int band, const struct render_result *from,
-		     struct render_result *to);
+void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_result *from,
+		      struct render_result *to);
 
 /* Checks write counts: every pixel of the image counted `expected` times
  * (check_writes). Returns 0, or -1 with the first pixel that was not in err. */
@@ -87,7 +106,7 @@ int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t e
 void tiles_copy_facts(const struct render_result *from, struct render_result *to);
 
 /* With check_writes, after one frame: device k's write counts are each
- * band's launches in the bands it rendered and 0 elsewhere. Returns 0, or -1
+ * piece's launches in the pieces it rendered and 0 elsewhere. Returns 0, or -1
  * with the first pixel that was not in err. */
 int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
 

@@ -214,3 +214,171 @@ Test(multidev, write_count_check_names_the_first_pixel_off)
 	cr_assert_eq(tiles_check_counts(counts, 4, 3, 0, err, sizeof(err)), -1);
 	cr_assert(strstr(err, "pixel (0, 0)"), "%s", err);
 }
+
+/* ---- the adaptive dispenser (multidev.h) --------------------------------- */
+
+static struct adapt_view view(double remaining, double rate, double others_rate)
+{
+	struct adapt_view v = {.remaining = remaining,
+			       .total = 1e9,
+			       .unit = 1000,
+			       .rate = rate,
+			       .others_rate = others_rate,
+			       .devices = 2,
+			       .fastest = rate >= others_rate};
+	return v;
+}
+
+Test(multidev, adaptive_probe_comes_first_and_is_small)
+{
+	struct adapt_view v = view(1e9, 0, 0);
+
+	/* No rate yet: a probe of ADAPT_PROBE_PIXEL_SAMPLES, not a share. */
+	cr_assert_eq(adapt_piece_cells(&v), ADAPT_PROBE_PIXEL_SAMPLES / 1000);
+	v.total = v.remaining = 64000; /* a small image: 1/32 of it */
+	cr_assert_eq(adapt_piece_cells(&v), 2);
+	v.total = v.remaining = 100; /* less than a cell: one cell, never none */
+	cr_assert_eq(adapt_piece_cells(&v), 1);
+}
+
+Test(multidev, adaptive_pieces_follow_the_rate_and_shrink_towards_the_end)
+{
+	struct adapt_view fast = view(1e9, 1e6, 1e4), slow = view(1e9, 1e4, 1e6);
+	long long last = 1LL << 62;
+
+	/* Half the device's share of what is left: rate / (sum of rates). */
+	cr_assert_eq(adapt_piece_cells(&fast), (long long)(1e9 * 1e6 / 1.01e6 / 2 / 1000));
+	cr_assert_eq(adapt_piece_cells(&slow), (long long)(1e9 * 1e4 / 1.01e6 / 2 / 1000));
+	for (double left = 1e9; left >= 1000; left /= 3) {
+		fast.remaining = left;
+		long long cells = adapt_piece_cells(&fast);
+		cr_assert(cells <= last && cells >= 1);
+		cr_assert(cells * 1000 <= left + 999, "never past the remaining work");
+		last = cells;
+	}
+	fast.remaining = 1e6; /* floor: ADAPT_FLOOR_MS of its own time */
+	cr_assert_eq(adapt_piece_cells(&fast), (long long)(1e6 / 1000));
+	fast.remaining = 2.5e9;
+	fast.unknown = 1; /* a device still probing counts as fast as this one */
+	cr_assert_eq(adapt_piece_cells(&fast), (long long)(2.5e9 / 2.01 / 2 / 1000));
+}
+
+Test(multidev, adaptive_slow_device_never_holds_the_tail)
+{
+	struct adapt_view slow = view(1e6, 1e3, 1e6);
+
+	/* The others finish 1e6 in 1 ms; one cell takes the slow device 1 ms:
+	 * it fits exactly, its floor of ADAPT_FLOOR_MS (4 cells) does not. */
+	cr_assert_eq(adapt_piece_cells(&slow), 1);
+	slow.remaining = 5e5; /* others done in 0.5 ms: no cell fits */
+	cr_assert_eq(adapt_piece_cells(&slow), 0);
+	slow.fastest = 1; /* the fastest never retires: ADAPT_FLOOR_MS of its time */
+	cr_assert_eq(adapt_piece_cells(&slow), (long long)(1e3 * ADAPT_FLOOR_MS / 1000));
+	slow.fastest = 0;
+	slow.others_backlog = 1e6; /* the others still busy 1 ms: one cell fits */
+	cr_assert_eq(adapt_piece_cells(&slow), 1);
+}
+
+/* Simulated time: devices of the given rates (pixel-samples per ms) plus a
+ * fixed cost per piece (and first_ms more for device 0's first piece: a GPU's
+ * first launch) take pieces of a width x height x spp image as soon as they
+ * are idle. Returns when the last piece is done; counts each pixel's pieces
+ * in covered (when given) and each device's pieces. */
+static double simulate_first(int width, int height, int spp, const double *rate, int n,
+			     double first_ms, unsigned char *covered, int *pieces)
+{
+	struct adapt a;
+	double free_at[DEVICES_MAX], end = 0;
+	int active[DEVICES_MAX], left = n;
+	struct rt_piece p;
+
+	adapt_init(&a, width, height, spp, 8, 8, n);
+	adapt_new_frame(&a);
+	for (int k = 0; k < n; k++) {
+		free_at[k] = 0;
+		active[k] = 1;
+		pieces[k] = 0;
+	}
+	while (left > 0) {
+		int k = -1;
+		for (int j = 0; j < n; j++)
+			if (active[j] && (k < 0 || free_at[j] < free_at[k]))
+				k = j;
+		if (!adapt_take(&a, k, free_at[k], &p)) {
+			active[k] = 0;
+			left--;
+			continue;
+		}
+		free_at[k] += 0.05 + (double)p.width * p.height * spp / rate[k];
+		free_at[k] += k == 0 && pieces[k] == 0 ? first_ms : 0;
+		pieces[k]++;
+		end = free_at[k] > end ? free_at[k] : end;
+		for (int y = p.y0; covered && y < p.y0 + p.height; y++)
+			for (int x = p.x0; x < p.x0 + p.width; x++)
+				covered[(size_t)y * width + x]++;
+	}
+	return end;
+}
+
+static double simulate(int width, int height, int spp, const double *rate, int n,
+		       unsigned char *covered, int *pieces)
+{
+	return simulate_first(width, height, spp, rate, n, 0, covered, pieces);
+}
+
+Test(multidev, adaptive_gpu_and_cpu_finish_no_later_than_the_gpu_alone)
+{
+	/* The H200 run (docs/results/h200-batch1): GPU 2000x2000 x 1024 spp
+	 * in 1517 ms, the CPU 220 times slower; and a CPU 50 times slower. */
+	double gpu = 2000.0 * 2000 * 1024 / 1517;
+	double rates[][2] = {{gpu, gpu / 220}, {gpu, gpu / 50}, {gpu / 220, gpu}};
+	static unsigned char covered[2000 * 2000];
+	int pieces[2], alone_pieces[2];
+	double alone = simulate(2000, 2000, 1024, &gpu, 1, NULL, alone_pieces);
+
+	/* Few launches alone: pieces grow to whole cell rows (21 here). */
+	cr_assert(alone_pieces[0] <= 40, "%d pieces", alone_pieces[0]);
+
+	for (int r = 0; r < 3; r++) {
+		memset(covered, 0, sizeof(covered));
+		double both = simulate(2000, 2000, 1024, rates[r], 2, covered, pieces);
+		int slow = rates[r][0] < rates[r][1] ? 0 : 1;
+		cr_assert(both <= alone, "case %d: %.1f ms with both, %.1f alone", r, both, alone);
+		cr_assert(pieces[slow] >= 1 && pieces[slow] < pieces[1 - slow], "case %d", r);
+		for (size_t i = 0; i < sizeof(covered); i++)
+			cr_assert_eq(covered[i], 1, "case %d: pixel %zu", r, i);
+	}
+}
+
+Test(multidev, adaptive_a_slow_first_launch_does_not_hand_the_cpu_a_huge_piece)
+{
+	/* The GPU's first launch takes 200 ms more (set-up on first use): its
+	 * probe makes it look slower than the CPU. Pieces grow at most
+	 * ADAPT_GROWTH-fold, so the CPU's stay small until the rates are
+	 * right (a wide image: a piece can take a whole cell row, 2.5 s of
+	 * the CPU without the cap). */
+	double gpu = 2000.0 * 2000 * 1024 / 1517, rates[2] = {gpu, gpu / 220};
+	int pieces[2];
+	double alone = simulate_first(4000, 1000, 1024, &gpu, 1, 200, NULL, pieces);
+	double both = simulate_first(4000, 1000, 1024, rates, 2, 200, NULL, pieces);
+
+	cr_assert(both <= alone, "%.1f ms with both, %.1f alone", both, alone);
+}
+
+Test(multidev, adaptive_pieces_grow_at_most_twice_the_largest_so_far)
+{
+	struct adapt_view v = view(1e9, 1e6, 1e4);
+
+	v.largest = 3000;
+	cr_assert_eq(adapt_piece_cells(&v), ADAPT_GROWTH * 3);
+}
+
+Test(multidev, adaptive_equal_devices_share_the_image)
+{
+	double rates[2] = {1e5, 1e5};
+	int pieces[2];
+	double one = simulate(640, 480, 64, rates, 1, NULL, pieces);
+	double two = simulate(640, 480, 64, rates, 2, NULL, pieces);
+
+	cr_assert(two < 0.55 * one, "%.1f ms on two, %.1f on one", two, one);
+}

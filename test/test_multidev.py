@@ -395,3 +395,59 @@ def test_mpi_rank_that_dies_mid_image_fails_the_run_with_no_output(tmp_path, kil
     if kill == "term_then_kill":
         assert "no output written" in result.stderr
     assert os.listdir(tmp_path) == [], "a dead rank left files behind"
+
+
+# ---- adaptive pieces: the default for one image over several devices --------
+
+MEDIUM = ["--size", "96x64"]
+
+
+@pytest.mark.parametrize("kernel", KERNELS)
+def test_adaptive_rectangles_match_one_device_byte_for_byte(tmp_path, kernel):
+    common = [*MEDIUM, "-k", kernel, "--spp", "4"]
+    image_run(tmp_path, "one", *common, "-p", "0", "-d", "0")
+    # The slow device makes the pieces differ in size and shape (probe,
+    # guided, partial cell rows): every pixel still written once (CHECK).
+    _, stats = image_run(tmp_path, "two", *common, "--devices", "0:0,0:1",
+                         env={**CHECK, "RTCL_TEST_SLOW_DEVICE": "1:x4"})
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    md = stats["multidevice"]
+    assert md["piece"] == "rectangle" and md["split"] == "dynamic"
+    assert "bands" not in md
+    assert sum(d["pixels"] for d in md["devices"]) == 96 * 64
+    assert all(d["pieces"] >= 1 for d in md["devices"])
+
+
+def test_adaptive_repeats_and_work_map_match_one_device(tmp_path):
+    image_run(tmp_path, "one", *MEDIUM, "--spp", "2", "-d", "0", "--work-map",
+              str(tmp_path / "one.npy"))
+    _, stats = image_run(tmp_path, "two", *MEDIUM, "--spp", "2", "--devices", "all", "-r", "3",
+                         "--work-map", str(tmp_path / "two.npy"), env=CHECK)
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    assert (tmp_path / "one.npy").read_bytes() == (tmp_path / "two.npy").read_bytes()
+    assert stats["multidevice"]["piece"] == "rectangle"
+
+
+def test_adaptive_fifty_times_slower_device_takes_a_small_share(tmp_path):
+    # RTCL_TEST_SLOW_DEVICE=1:x50: device 1 takes 50 times as long for each
+    # piece as it really did. It gets a small probe, then the tail rule
+    # retires it: a few pieces and a small share, the fast device the rest
+    # (the makespan bound itself is the unit test
+    # multidev/adaptive_gpu_and_cpu_finish_no_later_than_the_gpu_alone).
+    _, stats = image_run(tmp_path, "x", "--size", "128x96", "--spp", "4", "--devices",
+                         "0:0,0:1", env={**CHECK, "RTCL_TEST_SLOW_DEVICE": "1:x50"})
+    fast, slow = stats["multidevice"]["devices"]
+    assert fast["pixels"] + slow["pixels"] == 128 * 96
+    assert 1 <= slow["pieces"] <= 3, (fast, slow)
+    assert fast["pieces"] > slow["pieces"], (fast, slow)
+    assert slow["pixels"] <= 0.1 * 128 * 96, (fast, slow)
+    # The slow device's last piece began before the fast one was done.
+    assert slow["finish_ms"] - slow["last_piece_ms"] <= fast["finish_ms"] + 1
+
+
+def test_piece_rows_keeps_fixed_bands(tmp_path):
+    _, stats = image_run(tmp_path, "x", *MEDIUM, "--devices", "0:0,0:1", "--piece-rows", "8",
+                         env=CHECK)
+    md = stats["multidevice"]
+    assert md["piece"] == "band" and md["bands"] == 8 and md["band_rows"] == 8
+    assert sum(d["pieces"] for d in md["devices"]) == 8
