@@ -230,7 +230,10 @@ static int render_and_write(struct run *run, char *err, size_t err_size)
 		if (!run->opt->quiet)
 			stats_print_summary(run);
 		if (!run->opt->quiet && d.count > 1)
-			devstats_print(stdout, d.devs, NULL, d.work, d.count, "band");
+			devstats_print(stdout, d.devs, NULL, d.work, d.count,
+				       run->opt->split_static || run->opt->piece_rows > 0
+					       ? "band"
+					       : "piece");
 	}
 	devices_close(d.devs, d.count);
 	return failed ? EXIT_FAILED : 0;

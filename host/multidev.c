@@ -233,6 +233,8 @@ long long adapt_piece_cells(const struct adapt_view *v)
 	size = v->rate > 0 ? guided_size(v) : probe_size(v);
 	if (v->largest > 0)
 		size = min_d(size, ADAPT_GROWTH * v->largest);
+	if (size < v->min_size)
+		size = v->min_size;
 	if (v->rate > 0 && !v->fastest && v->others_rate > 0) {
 		/* The tail rule: done no later than the others could be
 		 * with all the rest. */
@@ -283,6 +285,8 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 			       .largest = a->dev[k].largest,
 			       .fastest = 1};
 
+	v.min_size = a->dev[k].min_pixels * a->samples;
+
 	v.remaining = v.total - a->handed;
 	for (int j = 0; j < a->devices; j++) {
 		const struct adapt_device *d = &a->dev[j];
@@ -323,6 +327,11 @@ static struct rt_piece adapt_cut(struct adapt *a, long long cells)
 	p.pad = 0;
 	a->next_cell += rows > 1 ? (long long)rows * a->cells_x : cols;
 	return p;
+}
+
+void adapt_set_min_pixels(struct adapt *a, int k, double pixels)
+{
+	a->dev[k].min_pixels = pixels;
 }
 
 int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece)

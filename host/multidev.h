@@ -110,6 +110,8 @@ struct adapt_view {
 	double largest;	       /* this device's largest piece so far; 0: none */
 	int devices;	       /* working devices, this one included */
 	int fastest;	       /* no working device has a higher known rate */
+	double min_size;       /* pixel-samples of the smallest piece that keeps
+				  this device busy (adapt_set_min_pixels); 0: none */
 };
 
 /* Pure: the size of the device's next piece in cells (>= 1 and no more
@@ -117,12 +119,14 @@ struct adapt_view {
  * tail rule). */
 long long adapt_piece_cells(const struct adapt_view *v);
 
+
 struct adapt_device {
 	double done, busy_ms; /* pixel-samples rendered, in this much busy time */
 	double inflight;      /* pixel-samples of the piece it holds, 0: none */
 	double largest;	      /* pixel-samples of its largest piece so far */
 	double start_ms;      /* when it took that piece */
 	int retired;	      /* the tail rule stopped it for this frame */
+	double min_pixels;    /* the pixels one launch keeps in flight on it */
 };
 
 struct adapt {
@@ -137,6 +141,13 @@ void adapt_init(struct adapt *a, int width, int height, int samples, int cell_w,
 
 /* A new frame of the same image: every cell again, the rates kept. */
 void adapt_new_frame(struct adapt *a);
+
+/* Sets the pixels device k keeps in flight in one launch: its pieces (the
+ * probe too) are at least that large, unless the tail rule shrinks them.
+ * Measured on an H200 (docs/results/h200-batch3): GPU pieces of ~100 k
+ * pixels at 1024 spp left the 132 SMs half idle, and the GPU beside PoCL ran
+ * 2.7x slower than alone. */
+void adapt_set_min_pixels(struct adapt *a, int k, double pixels);
 
 /* Device k, idle at now_ms (the piece it held, if any, done), asks for its
  * next piece. Returns 1 with *piece (all samples), or 0: none for k. Not

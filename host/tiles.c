@@ -142,6 +142,18 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 			  err_size))
 		return -1;
 	d->open = 1;
+	if (t->adaptive) {
+		/* One launch's worth of pixels in flight: a GPU keeps about 2048
+		 * work-items per compute unit resident (NVIDIA's SMs), a CPU one
+		 * work-group per compute unit. */
+		const struct device *dev = &t->devs[k];
+		double group = (double)d->result.local_size[0] * d->result.local_size[1];
+		double pixels = dev->is_gpu ? 2048.0 * dev->compute_units
+					    : (group > 0 ? group : 64) * dev->compute_units;
+		pthread_mutex_lock(&t->lock);
+		adapt_set_min_pixels(&t->adapt, k, pixels);
+		pthread_mutex_unlock(&t->lock);
+	}
 	return 0;
 }
 

@@ -241,6 +241,21 @@ Test(multidev, adaptive_probe_comes_first_and_is_small)
 	cr_assert_eq(adapt_piece_cells(&v), 1);
 }
 
+Test(multidev, adaptive_pieces_keep_a_device_busy_unless_the_tail_rule_stops_them)
+{
+	struct adapt_view probe = view(1e9, 0, 0), slow = view(1e9, 1e4, 1e6);
+
+	/* A GPU's probe and pieces hold at least one launch's worth of pixels. */
+	probe.min_size = 5e7;
+	cr_assert_eq(adapt_piece_cells(&probe), (long long)(5e7 / 1000));
+	probe.remaining = 2e4; /* never past the remaining work */
+	cr_assert_eq(adapt_piece_cells(&probe), 20);
+	/* The tail rule still shrinks a slow device's piece below it. */
+	slow.min_size = 5e7;
+	slow.remaining = 1e6;
+	cr_assert_lt(adapt_piece_cells(&slow) * 1000, 5e7);
+}
+
 Test(multidev, adaptive_pieces_follow_the_rate_and_shrink_towards_the_end)
 {
 	struct adapt_view fast = view(1e9, 1e6, 1e4), slow = view(1e9, 1e4, 1e6);
