@@ -266,9 +266,9 @@ struct frames_context {
 	struct frames_output *output;
 };
 
-/* A multidev render_piece: frame first + piece, rendered whole and staged. */
-static int render_piece(void *context, int device, int piece, long long *pixels, char *err,
-			size_t err_size)
+/* A multidev render_frame_piece: frame first + piece, rendered whole and staged. */
+static int render_frame_piece(void *context, int device, int piece, long long *pixels, char *err,
+			      size_t err_size)
 {
 	const struct frames_context *c = context;
 	const struct render_settings *s = &c->run->settings;
@@ -290,7 +290,7 @@ int frames_render(struct run *run, struct device *devs, int count, char *err, si
 	struct frames_context c = {run, devs, &output};
 	struct multidev_job job = {.piece_count = n,
 				   .split = run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
-				   .render_piece = render_piece,
+				   .render_piece = render_frame_piece,
 				   .context = &c};
 
 	if (frames_output_open(&output, run->opt, err, err_size))

@@ -93,7 +93,7 @@ static int central_take(struct mpi_job *j, int g)
 
 /* ---- the devices' threads, on every rank -------------------------------- */
 
-static int take_piece(void *context, int device)
+static int take_rank_piece(void *context, int device)
 {
 	struct mpi_job *j = context;
 	int piece;
@@ -148,8 +148,8 @@ static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_
 	return failed;
 }
 
-static int render_piece(void *context, int device, int piece, long long *pixels, char *err,
-			size_t err_size)
+static int render_rank_piece(void *context, int device, int piece, long long *pixels, char *err,
+			     size_t err_size)
 {
 	struct mpi_job *j = context;
 	const struct render_settings *s = &j->run->settings;
@@ -185,7 +185,7 @@ static void piece_failed(void *context, int device, const char *message)
 }
 
 /* Image: opens the device's renderer once, before its first band. */
-static int open_device(void *context, int device, char *err, size_t err_size)
+static int open_rank_device(void *context, int device, char *err, size_t err_size)
 {
 	struct mpi_job *j = context;
 
@@ -434,8 +434,8 @@ static int choose_pieces(struct mpi_job *j, int total)
 		return 0;
 	}
 	if (tiles_job_init(&j->tiles, run->scene, s,
-			   tiles_band_rows(s, run->opt->piece_rows, total), 0, j->devs, j->count, err,
-			   sizeof(err)))
+			   tiles_band_rows(s, run->opt->piece_rows, total), 0, j->devs, j->count,
+			   err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
 	if (j->rank != ROOT)
@@ -573,10 +573,10 @@ static int render_all(struct mpi_job *j)
 	struct multidev_job job = {.piece_count = piece_count(j),
 				   .split =
 					   j->run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
-				   .begin = j->image ? open_device : NULL,
-				   .render_piece = render_piece,
+				   .begin = j->image ? open_rank_device : NULL,
+				   .render_piece = render_rank_piece,
 				   .end = device_done,
-				   .take_piece = take_piece,
+				   .take_piece = take_rank_piece,
 				   .failed = piece_failed,
 				   .context = j};
 	char err[MESSAGE_SIZE];

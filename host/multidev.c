@@ -36,7 +36,7 @@ int multidev_static_first(int k, int n, int count)
 }
 
 /* The next piece for device k, or -1 when there is none left for it. */
-static int take_piece(struct dispenser *d, int k)
+static int dispenser_take(struct dispenser *d, int k)
 {
 	int piece = -1;
 
@@ -114,7 +114,7 @@ static void *work_loop(void *arg)
 		return NULL;
 	}
 	w->work->setup_ms = timing_lap_ms(&lap);
-	while ((piece = take_piece(w->dispenser, w->index)) >= 0) {
+	while ((piece = dispenser_take(w->dispenser, w->index)) >= 0) {
 		long long pixels = 0;
 		if (render_one(w, piece, &pixels)) {
 			fail(w);

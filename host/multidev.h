@@ -119,7 +119,6 @@ struct adapt_view {
  * tail rule). */
 long long adapt_piece_cells(const struct adapt_view *v);
 
-
 struct adapt_device {
 	double done, busy_ms; /* pixel-samples rendered, in this much busy time */
 	double inflight;      /* pixel-samples of the piece it holds, 0: none */

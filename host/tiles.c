@@ -282,7 +282,7 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 
 /* ---- one image on several devices of this process ----------------------- */
 
-static int open_device(void *context, int k, char *err, size_t err_size)
+static int open_tile_device(void *context, int k, char *err, size_t err_size)
 {
 	return tiles_open(context, k, err, err_size);
 }
@@ -293,7 +293,7 @@ static int render_band(void *context, int k, int band, long long *pixels, char *
 	return tiles_render_band(context, k, band, pixels, err, err_size);
 }
 
-static int take_piece(void *context, int k)
+static int take_tile_piece(void *context, int k)
 {
 	return tiles_take_piece(context, k);
 }
@@ -398,7 +398,7 @@ static int open_all(struct tiles_job *t, struct device_work *setup, char *err, s
 {
 	struct multidev_job job = {.piece_count = 0,
 				   .split = SPLIT_STATIC,
-				   .begin = open_device,
+				   .begin = open_tile_device,
 				   .render_piece = render_band,
 				   .context = t};
 
@@ -408,13 +408,13 @@ static int open_all(struct tiles_job *t, struct device_work *setup, char *err, s
 /* The frames (a warm-up and -r N timed ones, or one), each every band over
  * every device; each frame's wall time recorded in out. Returns the frames
  * rendered, or -1. */
-static int render_frames(struct tiles_job *t, int split_static, struct device_work *work,
-			 struct render_result *out, char *err, size_t err_size)
+static int render_tile_frames(struct tiles_job *t, int split_static, struct device_work *work,
+			      struct render_result *out, char *err, size_t err_size)
 {
 	struct multidev_job job = {.piece_count = t->bands,
 				   .split = split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
 				   .render_piece = render_band,
-				   .take_piece = t->adaptive ? take_piece : NULL,
+				   .take_piece = t->adaptive ? take_tile_piece : NULL,
 				   .context = t};
 	int frames = launch_begin_timing(t->settings, out, err, err_size);
 
@@ -454,7 +454,7 @@ static int render_image(const struct run *run, const struct render_settings *s, 
 	if (open_all(&t, setup, err, err_size))
 		goto out_free;
 	double lap = timing_now();
-	frames = render_frames(&t, run->opt->split_static, work, out, err, err_size);
+	frames = render_tile_frames(&t, run->opt->split_static, work, out, err, err_size);
 	if (frames < 0 || launch_end_timing(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);

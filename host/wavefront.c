@@ -99,9 +99,9 @@ static int create_queues(struct device *dev, const struct render_settings *s, st
 	return w->item_counts ? 0 : -1;
 }
 
-static int create_buffers(struct device *dev, const struct render_settings *s,
-			  struct render_result *res, struct wavefront *w, void *scene_block,
-			  char *err, size_t err_size)
+static int create_wavefront_buffers(struct device *dev, const struct render_settings *s,
+				    struct render_result *res, struct wavefront *w,
+				    void *scene_block, char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
 	size_t flops_bytes = s->count_flops ? pixels * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES;
@@ -154,8 +154,8 @@ static cl_int append_counts(struct device *dev, struct wavefront *w, size_t item
 	return status;
 }
 
-static cl_int set_args(cl_kernel kernel, const void *const *values, const size_t *sizes,
-		       cl_uint count)
+static cl_int set_kernel_args(cl_kernel kernel, const void *const *values, const size_t *sizes,
+			      cl_uint count)
 {
 	cl_int status = CL_SUCCESS;
 
@@ -166,8 +166,8 @@ static cl_int set_args(cl_kernel kernel, const void *const *values, const size_t
 
 /* The NDRange of the per-pixel launches over piece: its rectangle rounded up
  * to whole work-groups, as the naive kernel covers it. */
-static void piece_global_size(const struct render_result *res, const struct rt_piece *piece,
-			      size_t global[2])
+static void wavefront_global_size(const struct render_result *res, const struct rt_piece *piece,
+				  size_t global[2])
 {
 	for (int d = 0; d < 2; d++) {
 		size_t extent = (size_t)(d ? piece->height : piece->width);
@@ -191,9 +191,9 @@ static cl_int launch_primary(struct renderer *r, struct wavefront *w, size_t loc
 	cl_int status = clEnqueueFillBuffer(dev->queue, w->overflow, &zero, sizeof(zero), 0,
 					    sizeof(zero), 0, NULL, NULL);
 
-	piece_global_size(r->result, piece, global);
+	wavefront_global_size(r->result, piece, global);
 	if (status == CL_SUCCESS)
-		status = set_args(w->start, args, sizes, 8);
+		status = set_kernel_args(w->start, args, sizes, 8);
 	if (status == CL_SUCCESS)
 		status = launch_run(dev, r->settings, w->start, 2, global, r->result->local_size,
 				    r->label, ms, &call);
@@ -221,9 +221,9 @@ static cl_int launch_accumulate(struct renderer *r, struct wavefront *w, size_t 
 	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem), sizeof(cl_mem),
 				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),
 				sizeof(*piece), sizeof(cl_uint)};
-	cl_int status = set_args(w->accumulate, args, sizes, 10);
+	cl_int status = set_kernel_args(w->accumulate, args, sizes, 10);
 
-	piece_global_size(r->result, piece, global);
+	wavefront_global_size(r->result, piece, global);
 	if (status == CL_SUCCESS)
 		status = launch_run(r->dev, r->settings, w->accumulate, 2, global,
 				    r->result->local_size, r->label, ms, &call);
@@ -253,7 +253,7 @@ static cl_int launch_bounce(struct device *dev, const struct render_settings *s,
 					    sizeof(zero), 0, NULL, NULL);
 
 	if (status == CL_SUCCESS)
-		status = set_args(w->bounce, args, sizes, 11);
+		status = set_kernel_args(w->bounce, args, sizes, 11);
 	if (status == CL_SUCCESS)
 		status = launch_run(dev, s, w->bounce, 1, &global, &w->bounce_local, label, ms,
 				    &call);
@@ -366,8 +366,8 @@ static int wavefront_read_back(struct renderer *r, char *err, size_t err_size)
 
 /* Zeroes the per-pixel counts and, with check_writes, poisons the image:
  * the pieces add to what the buffers hold. */
-static int clear_buffers(struct device *dev, const struct render_settings *s, struct wavefront *w,
-			 char *err, size_t err_size)
+static int clear_wavefront_buffers(struct device *dev, const struct render_settings *s,
+				   struct wavefront *w, char *err, size_t err_size)
 {
 	cl_ulong zero = 0;
 	cl_int status = checks_poison(dev, s, &w->image, w->write_counts);
@@ -409,8 +409,9 @@ static int wavefront_open(struct renderer *r, const struct scene *scene, char *e
 		w->bounce ? program_create_kernel(w->program, "wavefront_accumulate", err, err_size)
 			  : NULL;
 	double lap = timing_now();
-	if (!w->accumulate || create_buffers(r->dev, s, res, w, w->scene_block, err, err_size) ||
-	    clear_buffers(r->dev, s, w, err, err_size))
+	if (!w->accumulate ||
+	    create_wavefront_buffers(r->dev, s, res, w, w->scene_block, err, err_size) ||
+	    clear_wavefront_buffers(r->dev, s, w, err, err_size))
 		return -1;
 	res->times.scene += timing_lap_ms(&lap);
 	return 0;
