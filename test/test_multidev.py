@@ -172,6 +172,13 @@ needs_mpi = pytest.mark.skipif(
     or not built_with_mpi(), reason="rtcl built without MPI, or no mpirun")
 
 
+def own_messages(stderr):
+    """rtcl's messages under mpirun, less the other ranks' "interrupted" lines: a
+    failing rank makes mpirun end the others, which may say so."""
+    return [line for line in stderr.splitlines() if line.startswith("rtcl:")
+            and not line.startswith("rtcl: interrupted; no output written")]
+
+
 def mpi_run(*args, env=None):
     return subprocess.run([*MPIRUN, RTCL, "--mpi", *args], capture_output=True, text=True,
                           cwd=ROOT, timeout=300, env={**os.environ, **MPI_ENV, **(env or {})})
@@ -212,7 +219,7 @@ def test_mpi_device_failure_on_a_rank_writes_nothing(tmp_path):
     result = mpi_run(*SMALL, "--frames", "0:8", "-o", str(tmp_path / "f.ppm"),
                      env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
     assert result.returncode == 1, result.stderr
-    ours = [line for line in result.stderr.splitlines() if line.startswith("rtcl:")]
+    ours = own_messages(result.stderr)
     assert len(ours) == 1, result.stderr
     assert re.match(r"rtcl: rank \d, device 0:0 \(.*\): the device failed on its piece 2", ours[0])
     assert os.listdir(tmp_path) == []
@@ -244,9 +251,7 @@ def test_mpi_frames_that_do_not_fit_in_rank_0s_memory_are_refused(tmp_path):
     result = mpi_run("--size", "16384x16384", "--frames", "0:999", "-o",
                      str(tmp_path / "f.ppm"))
     assert result.returncode == 1, result.stderr
-    # Rank 0's exit status makes mpirun end the others, which may say so.
-    ours = [line for line in result.stderr.splitlines() if line.startswith("rtcl:")
-            and not line.startswith("rtcl: interrupted; no output written")]
+    ours = own_messages(result.stderr)
     assert len(ours) == 1, result.stderr
     assert re.match(r"rtcl: rank 0: --frames: under --mpi, rank 0 keeps every frame in host "
                     r"memory .*: 1000 frames of 16384x16384 need 3000\.0 GiB \(12 bytes a "
@@ -378,7 +383,7 @@ def test_mpi_device_failing_on_a_band_writes_nothing(tmp_path):
     result = mpi_run(*SMALL, "--piece-rows", "2", "-o", str(tmp_path / "x.ppm"),
                      env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
     assert result.returncode == 1, result.stderr
-    ours = [line for line in result.stderr.splitlines() if line.startswith("rtcl:")]
+    ours = own_messages(result.stderr)
     assert len(ours) == 1, result.stderr
     assert re.match(r"rtcl: rank \d, device 0:0 \(.*\): the device failed on its piece 2", ours[0])
     assert os.listdir(tmp_path) == []
