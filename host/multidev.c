@@ -259,11 +259,13 @@ void adapt_init(struct adapt *a, int width, int height, int samples, int cell_w,
 	a->cells_x = (width + a->cell_w - 1) / a->cell_w;
 	a->cells_y = (height + a->cell_h - 1) / a->cell_h;
 	a->devices = devices;
+	a->end_cell = (long long)a->cells_x * a->cells_y;
 }
 
 void adapt_new_frame(struct adapt *a)
 {
 	a->next_cell = 0;
+	a->end_cell = (long long)a->cells_x * a->cells_y;
 	a->handed = 0;
 	for (int k = 0; k < a->devices; k++) {
 		a->dev[k].inflight = 0;
@@ -305,19 +307,11 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 	return v;
 }
 
-/* The next `cells` cells from the cursor as a rectangle (fewer when the
- * current cell row ends first); advances the cursor. */
-static struct rt_piece adapt_cut(struct adapt *a, long long cells)
+/* A rectangle of cells: columns [col, col + cols) of rows [row, row + rows). */
+static struct rt_piece cell_rect(const struct adapt *a, int col, int row, int cols, int rows)
 {
-	int col = (int)(a->next_cell % a->cells_x), row = (int)(a->next_cell / a->cells_x);
-	int rows = 1, cols = a->cells_x - col;
 	struct rt_piece p;
 
-	if (col == 0 && cells >= a->cells_x) {
-		rows = (int)min_d((double)(cells / a->cells_x), a->cells_y - row);
-	} else if (cells < cols) {
-		cols = (int)cells;
-	}
 	p.x0 = col * a->cell_w;
 	p.y0 = row * a->cell_h;
 	p.width = (int)min_d(cols * a->cell_w, a->width - p.x0);
@@ -325,8 +319,55 @@ static struct rt_piece adapt_cut(struct adapt *a, long long cells)
 	p.sample_begin = 0;
 	p.sample_end = p.samples = a->samples;
 	p.pad = 0;
-	a->next_cell += rows > 1 ? (long long)rows * a->cells_x : cols;
 	return p;
+}
+
+/* The next `cells` cells from the front cursor as a rectangle: whole rows
+ * when it stands at a row's start, else the rest of its row (fewer cells
+ * when the row or the cells not yet handed out end first). */
+static struct rt_piece cut_front(struct adapt *a, long long cells)
+{
+	long long left = a->end_cell - a->next_cell;
+	int col = (int)(a->next_cell % a->cells_x), row = (int)(a->next_cell / a->cells_x);
+	long long rows = min_d((double)cells, (double)left) / a->cells_x;
+
+	if (col == 0 && rows >= 1) {
+		a->next_cell += rows * a->cells_x;
+		return cell_rect(a, 0, row, a->cells_x, (int)rows);
+	}
+	int cols = (int)min_d(min_d((double)cells, (double)left), a->cells_x - col);
+	a->next_cell += cols;
+	return cell_rect(a, col, row, cols, 1);
+}
+
+/* The last `cells` cells before the back cursor, the same way from the end. */
+static struct rt_piece cut_back(struct adapt *a, long long cells)
+{
+	long long left = a->end_cell - a->next_cell;
+	int col_end = (int)(a->end_cell % a->cells_x), row_end = (int)(a->end_cell / a->cells_x);
+	long long rows = min_d((double)cells, (double)left) / a->cells_x;
+
+	if (col_end == 0 && rows >= 1) {
+		a->end_cell -= rows * a->cells_x;
+		return cell_rect(a, 0, row_end - (int)rows, a->cells_x, (int)rows);
+	}
+	if (col_end == 0) { /* the row above the cursor, from its end */
+		col_end = a->cells_x;
+		row_end--;
+	}
+	int cols = (int)min_d(min_d((double)cells, (double)left), col_end);
+	a->end_cell -= cols;
+	return cell_rect(a, col_end - cols, row_end, cols, 1);
+}
+
+/* Whether device k takes its pieces from the image's end: it keeps fewer
+ * pixels in flight than another device. */
+static int takes_from_back(const struct adapt *a, int k)
+{
+	for (int j = 0; j < a->devices; j++)
+		if (a->dev[j].min_pixels > a->dev[k].min_pixels)
+			return 1;
+	return 0;
 }
 
 void adapt_set_min_pixels(struct adapt *a, int k, double pixels)
@@ -345,7 +386,7 @@ int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece)
 		d->largest = d->inflight > d->largest ? d->inflight : d->largest;
 		d->inflight = 0;
 	}
-	if (d->retired || a->next_cell >= (long long)a->cells_x * a->cells_y)
+	if (d->retired || a->next_cell >= a->end_cell)
 		return 0;
 	struct adapt_view v = adapt_view_of(a, k, now_ms);
 	cells = adapt_piece_cells(&v);
@@ -353,7 +394,7 @@ int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece)
 		d->retired = 1;
 		return 0;
 	}
-	*piece = adapt_cut(a, cells);
+	*piece = takes_from_back(a, k) ? cut_back(a, cells) : cut_front(a, cells);
 	d->inflight = (double)piece->width * piece->height * a->samples;
 	d->start_ms = now_ms;
 	a->handed += d->inflight;

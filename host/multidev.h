@@ -131,6 +131,7 @@ struct adapt_device {
 struct adapt {
 	int width, height, samples, cell_w, cell_h, cells_x, cells_y, devices;
 	long long next_cell; /* the first cell not yet handed out, in scan order */
+	long long end_cell;  /* one past the last cell not yet handed out */
 	double handed;	     /* pixel-samples handed out this frame */
 	struct adapt_device dev[DEVICES_MAX];
 };
@@ -149,7 +150,11 @@ void adapt_new_frame(struct adapt *a);
 void adapt_set_min_pixels(struct adapt *a, int k, double pixels);
 
 /* Device k, idle at now_ms (the piece it held, if any, done), asks for its
- * next piece. Returns 1 with *piece (all samples), or 0: none for k. Not
+ * next piece. The devices that keep the most pixels in flight (the GPUs)
+ * take their pieces from the image's start, the others from its end, so
+ * that a GPU's pieces are whole cell rows rather than the rest of a row a
+ * CPU's small piece began (docs/results/h200-batch3: those thin pieces left
+ * the GPU 3x slower beside a CPU). Returns 1 with *piece (all samples), or 0: none for k. Not
  * thread-safe: the caller holds a lock. */
 int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece);
 

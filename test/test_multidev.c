@@ -365,6 +365,45 @@ Test(multidev, adaptive_gpu_and_cpu_finish_no_later_than_the_gpu_alone)
 	}
 }
 
+Test(multidev, adaptive_gpu_pieces_are_whole_rows_from_the_start_cpu_pieces_from_the_end)
+{
+	/* A GPU keeps 132 x 2048 pixels in flight, a CPU 16 x 64; the CPU's
+	 * small pieces come from the image's end, so the GPU's stay whole cell
+	 * rows (thin rest-of-a-row pieces left the H200 3x slower), and the two
+	 * cursors meet without a gap or an overlap on an image of odd size. */
+	int width = 2003, height = 1001, spp = 64, pieces[2] = {0, 0}, thin_gpu = 0;
+	double rate[2] = {2.7e6, 2.7e6 / 220}, free_at[2] = {0, 0};
+	static unsigned char covered[2003 * 1001];
+	int active[2] = {1, 1}, left = 2;
+	struct adapt a;
+	struct rt_piece p;
+
+	memset(covered, 0, sizeof(covered));
+	adapt_init(&a, width, height, spp, 8, 8, 2);
+	adapt_new_frame(&a);
+	adapt_set_min_pixels(&a, 0, 132.0 * 2048);
+	adapt_set_min_pixels(&a, 1, 16.0 * 64);
+	while (left > 0) {
+		int k = active[0] && (!active[1] || free_at[0] <= free_at[1]) ? 0 : 1;
+		if (!adapt_take(&a, k, free_at[k], &p)) {
+			active[k] = 0;
+			left--;
+			continue;
+		}
+		free_at[k] += 0.05 + (double)p.width * p.height * spp / rate[k];
+		pieces[k]++;
+		thin_gpu += k == 0 && p.width != width;
+		cr_assert(k == 0 || p.y0 + p.height > height / 2, "CPU piece at row %d", p.y0);
+		for (int y = p.y0; y < p.y0 + p.height; y++)
+			for (int x = p.x0; x < p.x0 + p.width; x++)
+				covered[(size_t)y * width + x]++;
+	}
+	cr_assert(pieces[1] >= 1, "the CPU took no piece");
+	cr_assert_leq(thin_gpu, 1, "%d GPU pieces narrower than the image", thin_gpu);
+	for (size_t i = 0; i < sizeof(covered); i++)
+		cr_assert_eq(covered[i], 1, "pixel %zu", i);
+}
+
 Test(multidev, adaptive_a_slow_first_launch_does_not_hand_the_cpu_a_huge_piece)
 {
 	/* The GPU's first launch takes 200 ms more (set-up on first use): its
