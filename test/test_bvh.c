@@ -89,7 +89,8 @@ static struct bvh check_mixed_tree(const struct bvh_prim *prims, int n, int sphe
 	int *node_seen = calloc((size_t)(n ? n : 1), sizeof(int));
 
 	cr_assert(work && seen && node_seen);
-	memcpy(work, prims, (size_t)n * sizeof(*work));
+	if (n > 0) /* memcpy from NULL is undefined even for 0 bytes */
+		memcpy(work, prims, (size_t)n * sizeof(*work));
 	cr_assert_eq(bvh_build(work, n, &bvh), 0);
 	cr_assert_eq(bvh.ref_count, n);
 	if (n == 0) {
