@@ -67,8 +67,9 @@ def measure_image(label, command, env, runs, workdir):
                 "multidevice", {}).get("bands", 1), "command": " ".join(command)}
 
 
-def image_main(args, env):
-    base = [args.rtcl, "-q", "-k", args.kernel, "--size", args.size, "--spp", str(args.spp)]
+def configurations(args, base):
+    """(label, command) for one device, several devices (dynamic and static) and,
+    with --mpi-np, mpirun: the runs both modes compare."""
     configs = [(f"one device {args.single}", [*base, "--devices", args.single]),
                (f"--devices {args.multi} (dynamic)", [*base, "--devices", args.multi]),
                (f"--devices {args.multi} --split static",
@@ -79,6 +80,12 @@ def image_main(args, env):
             mpi += ["-x", args.mpi_env]
         configs.append((f"mpirun -np {args.mpi_np}, each --devices {args.mpi_devices}",
                         [*mpi, *base, "--mpi", "--devices", args.mpi_devices]))
+    return configs
+
+
+def image_main(args, env):
+    base = [args.rtcl, "-q", "-k", args.kernel, "--size", args.size, "--spp", str(args.spp)]
+    configs = configurations(args, base)
     rows, scan = [], []
     with tempfile.TemporaryDirectory() as workdir:
         for label, command in configs:
@@ -154,16 +161,7 @@ def main():
             pathlib.Path(args.out).write_text(text)
         return
     base = [args.rtcl, "-q", "-k", args.kernel, "--size", args.size, "--frames", args.frames]
-    configs = [(f"one device {args.single}", [*base, "--devices", args.single]),
-               (f"--devices {args.multi} (dynamic)", [*base, "--devices", args.multi]),
-               (f"--devices {args.multi} --split static",
-                [*base, "--devices", args.multi, "--split", "static"])]
-    if args.mpi_np:
-        mpi = ["mpirun", "--oversubscribe", "-np", str(args.mpi_np)]
-        if args.mpi_env:
-            mpi += ["-x", args.mpi_env]
-        configs.append((f"mpirun -np {args.mpi_np}, each --devices {args.mpi_devices}",
-                        [*mpi, *base, "--mpi", "--devices", args.mpi_devices]))
+    configs = configurations(args, base)
     rows = []
     with tempfile.TemporaryDirectory() as workdir:
         for label, command in configs:
