@@ -8,11 +8,12 @@ void devstats_print(FILE *out, const struct device *devs, const int *ranks,
 		if (ranks)
 			snprintf(rank, sizeof(rank), "rank %d, ", ranks[k]);
 		fprintf(out,
-			"device %d: %s%d:%d %s: %d %s%s, %lld pixels, busy %.1f ms (set-up %.1f "
-			"ms)\n",
+			"device %d: %s%d:%d %s: %d %s%s, %lld pixels, busy %.1f ms (kernels %.1f "
+			"ms in %d launch%s; set-up %.1f ms)\n",
 			k, rank, devs[k].platform_index, devs[k].device_index, devs[k].name,
 			work[k].pieces, noun, work[k].pieces == 1 ? "" : "s", work[k].pixels,
-			work[k].busy_ms, work[k].setup_ms);
+			work[k].busy_ms, work[k].kernel_ms, work[k].launches,
+			work[k].launches == 1 ? "" : "es", work[k].setup_ms);
 	}
 	fprintf(out, "devices: %d, device-level efficiency %.1f%% (mean busy / max busy)\n", count,
 		100 * multidev_efficiency(work, count));
@@ -35,6 +36,8 @@ json_t *devstats_json(const struct device *devs, const int *ranks, const struct 
 			json_object_set_new(entry, "finish_ms", json_real(work[k].finish_ms));
 			json_object_set_new(entry, "last_piece_ms",
 					    json_real(work[k].last_piece_ms));
+			json_object_set_new(entry, "kernel_ms", json_real(work[k].kernel_ms));
+			json_object_set_new(entry, "launches", json_integer(work[k].launches));
 		}
 		if (entry && ranks)
 			json_object_set_new(entry, "rank", json_integer(ranks[k]));

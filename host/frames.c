@@ -129,6 +129,14 @@ int frames_render_frame(const struct run *run, struct device *dev, int piece,
 	return render(dev, &scene, &run->settings, result, err, err_size);
 }
 
+struct piece_work frames_piece_work(const struct render_settings *s,
+				    const struct render_result *result)
+{
+	return (struct piece_work){(long long)s->width * s->height,
+				   result->kernel_ms_median * result->repeat,
+				   result->passes * result->repeat};
+}
+
 int frames_stage_image(const struct run *run, struct frames_output *o, int piece, const float *rgb,
 		       char *err, size_t err_size)
 {
@@ -267,7 +275,8 @@ struct frames_context {
 };
 
 /* A multidev render_frame_piece: frame first + piece, rendered whole and staged. */
-static int render_frame_piece(void *context, int device, int piece, long long *pixels, char *err,
+static int render_frame_piece(void *context, int device, int piece, struct piece_work *done,
+			      char *err,
 			      size_t err_size)
 {
 	const struct frames_context *c = context;
@@ -277,8 +286,8 @@ static int render_frame_piece(void *context, int device, int piece, long long *p
 	if (frames_render_frame(c->run, &c->devs[device], piece, &result, err, err_size))
 		return -1;
 	int failed = frames_stage_image(c->run, c->output, piece, result.rgb, err, err_size);
+	*done = frames_piece_work(s, &result);
 	render_result_free(&result);
-	*pixels = (long long)s->width * s->height;
 	return failed ? -1 : 0;
 }
 

@@ -45,6 +45,10 @@ int frames_output_open(struct frames_output *o, const struct options *opt, char 
  * frames, and frees. */
 void frames_output_close(struct frames_output *o, int staged_count);
 
+/* What a frame rendered by frames_render_frame took, as a multidev piece. */
+struct piece_work frames_piece_work(const struct render_settings *s,
+				    const struct render_result *result);
+
 /* Renders frame first + piece on dev (settings as for one image). */
 int frames_render_frame(const struct run *run, struct device *dev, int piece,
 			struct render_result *result, char *err, size_t err_size);

@@ -148,7 +148,8 @@ static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_
 	return failed;
 }
 
-static int render_rank_piece(void *context, int device, int piece, long long *pixels, char *err,
+static int render_rank_piece(void *context, int device, int piece, struct piece_work *done,
+			      char *err,
 			     size_t err_size)
 {
 	struct mpi_job *j = context;
@@ -157,7 +158,7 @@ static int render_rank_piece(void *context, int device, int piece, long long *pi
 	int failed;
 
 	if (j->image)
-		return tiles_render_band(&j->tiles, device, piece, pixels, err, err_size);
+		return tiles_render_band(&j->tiles, device, piece, done, err, err_size);
 	if (frames_render_frame(j->run, &j->devs[device], piece, &result, err, err_size))
 		return -1;
 	if (j->rank == ROOT) {
@@ -167,8 +168,8 @@ static int render_rank_piece(void *context, int device, int piece, long long *pi
 		failed = send_result(piece, result.rgb, image_float_bytes(s->width, s->height), err,
 				     err_size);
 	}
+	*done = frames_piece_work(s, &result);
 	render_result_free(&result);
-	*pixels = (long long)s->width * s->height;
 	return failed ? -1 : 0;
 }
 

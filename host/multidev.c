@@ -86,11 +86,11 @@ static void fail(struct worker *w)
 }
 
 /* One piece, with the test-only delay and fault (checks.h) around it. */
-static int render_one(struct worker *w, int piece, long long *pixels)
+static int render_one(struct worker *w, int piece, struct piece_work *done)
 {
 	const struct multidev_job *job = w->dispenser->job;
 	double start = timing_now();
-	int ret = job->render_piece(job->context, w->index, piece, pixels, w->err, sizeof(w->err));
+	int ret = job->render_piece(job->context, w->index, piece, done, w->err, sizeof(w->err));
 
 	checks_piece_delay(w->index, (timing_now() - start) * 1e3);
 	if (ret == 0 && checks_piece_fault(w->index, w->work->pieces + 1)) {
@@ -115,13 +115,15 @@ static void *work_loop(void *arg)
 	}
 	w->work->setup_ms = timing_lap_ms(&lap);
 	while ((piece = dispenser_take(w->dispenser, w->index)) >= 0) {
-		long long pixels = 0;
-		if (render_one(w, piece, &pixels)) {
+		struct piece_work done = {0};
+		if (render_one(w, piece, &done)) {
 			fail(w);
 			break;
 		}
 		w->work->pieces++;
-		w->work->pixels += pixels;
+		w->work->pixels += done.pixels;
+		w->work->kernel_ms += done.kernel_ms;
+		w->work->launches += done.launches;
 		piece_ms = timing_lap_ms(&lap);
 		w->work->busy_ms += piece_ms;
 		w->work->last_piece_ms = piece_ms;

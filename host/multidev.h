@@ -20,11 +20,21 @@
 
 enum split { SPLIT_DYNAMIC, SPLIT_STATIC };
 
+/* What one piece took: the render_piece callback fills it. */
+struct piece_work {
+	long long pixels; /* the pixels it wrote */
+	double kernel_ms; /* its launches' profiled time on the device */
+	int launches;
+};
+
 /* What one device did. */
 struct device_work {
 	int pieces;
 	long long pixels;
 	double busy_ms;	      /* in the piece function, from taking a piece to done */
+	double kernel_ms;     /* of busy_ms, the device's kernels (profiling events): the
+				 rest is the host's (launching, waiting, reading back) */
+	int launches;
 	double setup_ms;      /* in the begin function */
 	double finish_ms;     /* from the job's start to its last piece done */
 	double last_piece_ms; /* its last piece, from taking it to done */
@@ -38,9 +48,9 @@ struct multidev_job {
 	enum split split;
 	/* Optional: once per device before its first piece (build, buffers). */
 	int (*begin)(void *context, int device, char *err, size_t err_size);
-	/* Renders piece `piece`, adding the pixels it wrote to *pixels. */
-	int (*render_piece)(void *context, int device, int piece, long long *pixels, char *err,
-			    size_t err_size);
+	/* Renders piece `piece`, filling *done (zeroed by the caller). */
+	int (*render_piece)(void *context, int device, int piece, struct piece_work *done,
+			    char *err, size_t err_size);
 	/* Optional: once per device after its last piece, also after a failure
 	 * (releases what begin made). */
 	void (*end)(void *context, int device);

@@ -167,7 +167,7 @@ static void expect_writes(struct tiles_job *t, const struct rt_piece *p, int sig
 			t->expected[(size_t)y * t->settings->width + x] += launches;
 }
 
-int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, char *err,
+int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
 		      size_t err_size)
 {
 	const struct render_settings *s = t->settings;
@@ -194,10 +194,12 @@ int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, c
 			whole.samples - begin > per_pass ? begin + per_pass : whole.samples;
 		if (renderer_piece(&t->dev[k].renderer, &piece, &out, err, err_size))
 			return -1;
+		done->kernel_ms += out.kernel_ms;
+		done->launches += out.launches;
 	}
 	t->owner[band] = k; /* pieces are distinct: no two threads write one */
 	expect_writes(t, &whole, 1);
-	*pixels = (long long)whole.width * whole.height;
+	done->pixels += (long long)whole.width * whole.height;
 	return 0;
 }
 
@@ -253,7 +255,7 @@ int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t e
 static int double_band(struct tiles_job *t, char *err, size_t err_size)
 {
 	int owner = t->owner[0];
-	long long pixels;
+	struct piece_work pixels = {0};
 
 	if (!checks_double_band())
 		return 0;
@@ -287,10 +289,10 @@ static int open_tile_device(void *context, int k, char *err, size_t err_size)
 	return tiles_open(context, k, err, err_size);
 }
 
-static int render_band(void *context, int k, int band, long long *pixels, char *err,
+static int render_band(void *context, int k, int band, struct piece_work *done, char *err,
 		       size_t err_size)
 {
-	return tiles_render_band(context, k, band, pixels, err, err_size);
+	return tiles_render_band(context, k, band, done, err, err_size);
 }
 
 static int take_tile_piece(void *context, int k)

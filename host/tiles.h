@@ -82,7 +82,7 @@ void tiles_job_free(struct tiles_job *t);
 /* multidev callbacks' bodies: opens device k's renderer (once); renders band
  * on device k and records it as k's. */
 int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size);
-int tiles_render_band(struct tiles_job *t, int k, int band, long long *pixels, char *err,
+int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
 		      size_t err_size);
 
 /* Launches that cover each pixel of piece once (its samples in passes). */

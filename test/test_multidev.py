@@ -313,6 +313,10 @@ def test_bands_on_two_devices_match_one_device_byte_for_byte(tmp_path, kernel, s
     assert md["piece"] == "band" and md["bands"] == 6 and md["band_rows"] == 4
     assert sum(d["pieces"] for d in md["devices"]) == 6
     assert sum(d["pixels"] for d in md["devices"]) == 32 * 24
+    for d in md["devices"]:  # the kernels' share of the busy time
+        assert d["launches"] >= d["pieces"]
+        assert (d["kernel_ms"] > 0) == (d["pieces"] > 0)
+        assert d["kernel_ms"] <= d["busy_ms"]
 
 
 def test_write_count_check_catches_a_band_written_twice(tmp_path):
