@@ -120,7 +120,9 @@ static void print_help_after_kernels(FILE *out)
 		"      --piece-rows N     one image over several devices or ranks goes out in\n"
 		"                         row bands of N rows, each with all its samples\n"
 		"                         (default: rectangles sized per device from its speed;\n"
-		"                         --split static and --mpi: about 32 bands per device)\n"
+		"                         --split static and --mpi: about 32 bands per device);\n"
+		"                         with one device (--devices P:D) it measures what\n"
+		"                         bands of N rows cost that device\n"
 		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
@@ -462,10 +464,10 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 
 	if (o->piece_rows && (!(o->devices_given || o->mpi) || o->frames_given)) {
 		snprintf(err, err_size,
-			 "--piece-rows cuts one image over several devices (--devices, --mpi); "
-			 "it does not apply to %s",
+			 "--piece-rows cuts one image into bands for the devices of --devices or "
+			 "--mpi (one device too: --devices P:D); it does not apply to %s",
 			 o->frames_given ? "--frames, whose pieces are whole frames"
-					 : "one device");
+					 : "a render without them");
 		return -1;
 	}
 	if (several && o->flops_path) {

@@ -129,6 +129,13 @@ struct image_devices {
 	int count;
 };
 
+/* Whether the image is cut into pieces (tiles.h): over several devices, or
+ * into --piece-rows bands on one (which measures what pieces cost a device). */
+static int in_pieces(const struct options *opt, int device_count)
+{
+	return device_count > 1 || opt->piece_rows > 0;
+}
+
 /* One image on the device(s) the options name; several share it in bands
  * (tiles.h). The devices stay open for the summary (d->count of them). */
 static int render_on_devices(struct run *run, struct image_devices *d, char *err, size_t err_size)
@@ -140,7 +147,7 @@ static int render_on_devices(struct run *run, struct image_devices *d, char *err
 		return -1;
 	}
 	run->device_ms = timing_lap_ms(&lap);
-	if (d->count == 1)
+	if (!in_pieces(run->opt, d->count))
 		return render_on_device(run, &d->devs[0], err, err_size);
 	record_device(run, &d->devs[0]);
 	int n = snprintf(run->device_name, sizeof(run->device_name), "%d devices:", d->count);
@@ -229,7 +236,7 @@ static int render_and_write(struct run *run, char *err, size_t err_size)
 			stats_print_times(run);
 		if (!run->opt->quiet)
 			stats_print_summary(run);
-		if (!run->opt->quiet && d.count > 1)
+		if (!run->opt->quiet && d.count > 0 && in_pieces(run->opt, d.count))
 			devstats_print(stdout, d.devs, NULL, d.work, d.count,
 				       run->opt->split_static || run->opt->piece_rows > 0
 					       ? "band"

@@ -119,7 +119,7 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--frames", "0:1", "--flops", "x.npy"], "--frames renders each frame once"),
     (["--devices", "0:0,0:1", "--piece-rows", "0"], "--piece-rows: expected"),
     (["--devices", "0:0,0:1", "--piece-rows", "2x"], "--piece-rows: expected"),
-    (["--piece-rows", "4"], "--piece-rows cuts one image over several devices"),
+    (["--piece-rows", "4"], "--piece-rows cuts one image into bands for the devices of"),
     (["--devices", "all", "--frames", "0:1", "--piece-rows", "4"],
      "it does not apply to --frames"),
     (["--devices", "0:0,0:1", "--flops", "x.npy"], "use --work-map FILE.npy (per pixel)"),
@@ -317,6 +317,20 @@ def test_bands_on_two_devices_match_one_device_byte_for_byte(tmp_path, kernel, s
         assert d["launches"] >= d["pieces"]
         assert (d["kernel_ms"] > 0) == (d["pieces"] > 0)
         assert d["kernel_ms"] <= d["busy_ms"]
+
+
+def test_bands_on_one_device_match_its_whole_image(tmp_path):
+    # --devices P:D --piece-rows N renders one device's image in bands (what
+    # pieces of N rows cost it), byte-identical to its whole-image render.
+    image_run(tmp_path, "one", "--spp", "3", "-d", "0")
+    _, stats = image_run(tmp_path, "bands", "--spp", "3", "--devices", "0:0", "--piece-rows",
+                         "5", env=CHECK)
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "bands.ppm").read_bytes()
+    md = stats["multidevice"]
+    assert md["piece"] == "band" and md["bands"] == 5 and md["band_rows"] == 5
+    [device] = md["devices"]
+    assert device["pieces"] == 5 and device["pixels"] == 32 * 24
+    assert md["device_efficiency"] == 1.0
 
 
 def test_write_count_check_catches_a_band_written_twice(tmp_path):
