@@ -231,7 +231,7 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 				break;
 		}
 	}
-	if (!(any_hit && best.sphere >= 0))
+	if (SCENE_HAS_TRIANGLES && !(any_hit && best.sphere >= 0))
 		triangles_brute_force(tr, o, d, any_hit, &nearest, &best);
 #endif
 	for (int i = 0;

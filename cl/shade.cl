@@ -68,7 +68,7 @@ static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, struct sh
 		sh->m = &tr->materials[s->material];
 		sh->base = sh->m->color.xyz;
 		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_MUL3);
-	} else if (hit.triangle >= 0) {
+	} else if (SCENE_HAS_TRIANGLES && hit.triangle >= 0) {
 		normal = tr->triangle_shading[hit.triangle].normal.xyz;
 		sh->m = &tr->materials[triangle_material(tr->triangles[hit.triangle].v0)];
 		sh->base = sh->m->color.xyz;
@@ -95,7 +95,7 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	sh->n_face = sh->inside ? -normal : normal;
 	sh->n = sh->n_face;
 	COUNT_FLOPS(tr, FLOPS_DOT3);
-	if (hit.triangle >= 0 && triangle_smooth(tr->triangle_shading[hit.triangle].normal))
+	if (SCENE_HAS_TRIANGLES && hit.triangle >= 0 && triangle_smooth(tr->triangle_shading[hit.triangle].normal))
 		sh->n = triangle_shading_normal(tr, &tr->triangle_shading[hit.triangle], hit,
 						sh->n_face);
 

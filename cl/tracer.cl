@@ -43,6 +43,16 @@
 #define RTCL_SCENE_SPACE __global
 #endif
 
+/* The host builds scenes without triangles with RTCL_NO_TRIANGLES: leaving
+ * the triangle code out frees registers (on an H100 the sphere scenes spilled
+ * 140 bytes with it, docs/performance.md). Nothing else changes: without
+ * triangles that code never runs. */
+#ifdef RTCL_NO_TRIANGLES
+#define SCENE_HAS_TRIANGLES false
+#else
+#define SCENE_HAS_TRIANGLES true
+#endif
+
 /* Depth-first walk of the ray tree: a ray at depth d spawns at most two at
  * depth d+1, one of which is traced next, so at most one ray waits per level
  * 1..max_depth. */

@@ -63,7 +63,7 @@ static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, flo
 		uint ref = tr->refs[k];
 		int index = (int)(ref & RT_PRIM_INDEX_MASK);
 
-		if (ref >> RT_PRIM_KIND_SHIFT == RT_PRIM_TRIANGLE) {
+		if (SCENE_HAS_TRIANGLES && ref >> RT_PRIM_KIND_SHIFT == RT_PRIM_TRIANGLE) {
 			triangle_consider(tr, index, o, d, any_hit, nearest, best);
 			continue;
 		}

@@ -351,8 +351,10 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	    launch_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);
-	if (program_build(dev, s, res->scene_in_local, res->bvh_nodes > 0, program,
-			  res->build_options, &res->build_cached, err, err_size))
+	struct program_features features = {res->scene_in_local, res->bvh_nodes > 0,
+					    scene->triangle_count > 0};
+	if (program_build(dev, s, &features, program, res->build_options, &res->build_cached, err,
+			  err_size))
 		return -1;
 	res->times.build = timing_lap_ms(&lap);
 	return 0;

@@ -148,7 +148,7 @@ static int load_sources(const char *dir, const char *kernel_name, struct sources
 
 /* rtcl's build options for the settings, then RTCL_BUILD_OPTIONS. */
 static int format_options(const struct device *dev, const struct render_settings *s,
-			  int scene_in_local, int use_bvh, char *options, char *err,
+			  const struct program_features *f, char *options, char *err,
 			  size_t err_size)
 {
 	const char *extra = getenv("RTCL_BUILD_OPTIONS");
@@ -159,9 +159,10 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s", s->max_depth,
-		 s->batch > 0 ? s->batch : 1, scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
-		 use_bvh ? " -DRTCL_BVH" : "", s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s", s->max_depth,
+		 s->batch > 0 ? s->batch : 1, f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "",
+		 f->use_bvh ? " -DRTCL_BVH" : "", f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
+		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
 		 extra ? extra : "");
@@ -198,9 +199,9 @@ static int build_from_source(struct device *dev, const struct render_settings *s
 	return 0;
 }
 
-int program_build(struct device *dev, const struct render_settings *s, int scene_in_local,
-		  int use_bvh, cl_program *program, char *options, int *cached, char *err,
-		  size_t err_size)
+int program_build(struct device *dev, const struct render_settings *s,
+		  const struct program_features *features, cl_program *program, char *options,
+		  int *cached, char *err, size_t err_size)
 {
 	struct progcache cache;
 	struct sources src;
@@ -208,7 +209,7 @@ int program_build(struct device *dev, const struct render_settings *s, int scene
 
 	*cached = 0;
 	if (load_sources(s->source_dir, s->kernel->name, &src, err, err_size) ||
-	    format_options(dev, s, scene_in_local, use_bvh, options, err, err_size))
+	    format_options(dev, s, features, options, err, err_size))
 		goto out_free_sources;
 	progcache_init(&cache, dev, src.texts, src.count, options, s->verbose);
 	*program = progcache_load(&cache, dev);

@@ -9,18 +9,23 @@
 extern const char *const program_tracer_sources[];
 extern const int program_tracer_source_count;
 
+/* What of the scene a program is built for. */
+struct program_features {
+	int scene_in_local; /* the scene block in __local memory */
+	int use_bvh;	    /* traverse the scene's BVH (else test every primitive) */
+	int has_triangles;  /* without, the triangle code is left out */
+};
+
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads
  * the program binary that rtcl's cache (progcache.h) holds for them (then
- * *cached is 1), with the scene in __local memory when scene_in_local,
- * traversing the scene's BVH when use_bvh (else testing every sphere and
- * triangle), and writes the
+ * *cached is 1), for the scene's features, and writes the
  * options used to options[BUILD_OPTIONS_SIZE]. With settings->verbose the
  * compiler's messages go to stderr; RTCL_BUILD_OPTIONS adds options and
  * RTCL_DUMP_BINARY=FILE writes the built binary. Returns 0, or -1 with one
  * message in err (for a failed build, the build log and the options). */
-int program_build(struct device *dev, const struct render_settings *settings, int scene_in_local,
-		  int use_bvh, cl_program *program, char *options, int *cached, char *err,
-		  size_t err_size);
+int program_build(struct device *dev, const struct render_settings *settings,
+		  const struct program_features *features, cl_program *program, char *options,
+		  int *cached, char *err, size_t err_size);
 
 /* clCreateKernel with one message naming the kernel on failure; NULL then. */
 cl_kernel program_create_kernel(cl_program program, const char *name, char *err, size_t err_size);

@@ -132,6 +132,10 @@ void tiles_job_free(struct tiles_job *t)
 	pthread_mutex_destroy(&t->lock);
 }
 
+#ifndef GPU_PIECE_WAVES
+#define GPU_PIECE_WAVES 1
+#endif
+
 int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 {
 	struct tiles_device *d = &t->dev[k];
@@ -148,7 +152,7 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 		 * work-group per compute unit. */
 		const struct device *dev = &t->devs[k];
 		double group = (double)d->result.local_size[0] * d->result.local_size[1];
-		double pixels = dev->is_gpu ? 2048.0 * dev->compute_units
+		double pixels = dev->is_gpu ? GPU_PIECE_WAVES * 2048.0 * dev->compute_units
 					    : (group > 0 ? group : 64) * dev->compute_units;
 		pthread_mutex_lock(&t->lock);
 		adapt_set_min_pixels(&t->adapt, k, pixels);

@@ -406,6 +406,15 @@ def test_accel_bvh_is_the_default_and_matches_none(tmp_path):
     assert images["bvh"] == images["none"] == images["default"]
 
 
+@pytest.mark.parametrize("scene, triangles", [("paper60.json", False),
+                                              ("glass_mesh.json", True)])
+def test_triangle_code_is_built_only_for_scenes_with_triangles(tmp_path, scene, triangles):
+    """A scene without triangles is built with -DRTCL_NO_TRIANGLES (fewer
+    registers); one with triangles without it."""
+    _, stats = stats_of(tmp_path, *SMALL, "-s", str(ROOT / "scenes" / scene))
+    assert ("-DRTCL_NO_TRIANGLES" not in stats["build_options"]) == triangles
+
+
 def test_million_spheres_render_from_global_memory(tmp_path):
     """A scene far larger than __local memory is read from __global memory."""
     scene = tmp_path / "million.json"
