@@ -152,11 +152,10 @@ void adapt_init(struct adapt *a, int width, int height, int samples, int cell_w,
 /* A new frame of the same image: every cell again, the rates kept. */
 void adapt_new_frame(struct adapt *a);
 
-/* Sets the pixels device k keeps in flight in one launch: its pieces (the
- * probe too) are at least that large, unless the tail rule shrinks them.
- * Measured on an H200 (docs/results/h200-batch3): GPU pieces of ~100 k
- * pixels at 1024 spp left the 132 SMs half idle, and the GPU beside PoCL ran
- * 2.7x slower than alone. */
+/* Sets device k's smallest piece in pixels: its pieces (the probe too) are
+ * at least that large, unless the tail rule shrinks them or the image ends.
+ * tiles.c sets it from what the device keeps in flight (TILES_GPU_LAUNCHES:
+ * small pieces leave a GPU idle at each launch's end). */
 void adapt_set_min_pixels(struct adapt *a, int k, double pixels);
 
 /* Device k, idle at now_ms (the piece it held, if any, done), asks for its

@@ -57,13 +57,40 @@ int tiles_piece_launches(const struct render_settings *s, const struct rt_piece 
 	return (piece->samples + per_pass - 1) / per_pass;
 }
 
+/* The work-items a device keeps in flight: a GPU about 2048 per compute
+ * unit (NVIDIA's SMs), a CPU one work-group per compute unit. */
+static double resident_items(const struct device *dev, int group)
+{
+	return dev->is_gpu ? 2048.0 * dev->compute_units : (double)group * dev->compute_units;
+}
+
+/* Each device's smallest piece: TILES_GPU_LAUNCHES times what it keeps in
+ * flight for a GPU (one launch's worth for a CPU), but not more than its
+ * share of the image by that measure, so that several GPUs all get work. */
+static void set_min_pieces(struct tiles_job *t, int group)
+{
+	double pixels = (double)t->settings->width * t->settings->height, all = 0;
+
+	for (int k = 0; k < t->count; k++)
+		all += resident_items(&t->devs[k], group);
+	for (int k = 0; k < t->count; k++) {
+		double resident = resident_items(&t->devs[k], group);
+		double launches = t->devs[k].is_gpu ? TILES_GPU_LAUNCHES : 1;
+		double share = pixels * resident / all;
+		adapt_set_min_pixels(&t->adapt, k,
+				     launches * resident < share ? launches * resident : share);
+	}
+}
+
 /* The adaptive dispenser's cells: one work-group, so a piece wastes no
  * work-items of the naive kernel's rounded-up NDRange. */
 static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
 {
-	adapt_init(&t->adapt, s->width, s->height, s->samples,
-		   s->workgroup[0] > 0 ? s->workgroup[0] : 8,
-		   s->workgroup[1] > 0 ? s->workgroup[1] : 8, t->count);
+	int cell_w = s->workgroup[0] > 0 ? s->workgroup[0] : 8;
+	int cell_h = s->workgroup[1] > 0 ? s->workgroup[1] : 8;
+
+	adapt_init(&t->adapt, s->width, s->height, s->samples, cell_w, cell_h, t->count);
+	set_min_pieces(t, cell_w * cell_h);
 	t->piece_cap = t->adapt.cells_x * t->adapt.cells_y;
 	t->piece_count = 0;
 }
@@ -132,10 +159,6 @@ void tiles_job_free(struct tiles_job *t)
 	pthread_mutex_destroy(&t->lock);
 }
 
-#ifndef GPU_PIECE_WAVES
-#define GPU_PIECE_WAVES 1
-#endif
-
 int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 {
 	struct tiles_device *d = &t->dev[k];
@@ -146,18 +169,6 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 			  err_size))
 		return -1;
 	d->open = 1;
-	if (t->adaptive) {
-		/* One launch's worth of pixels in flight: a GPU keeps about 2048
-		 * work-items per compute unit resident (NVIDIA's SMs), a CPU one
-		 * work-group per compute unit. */
-		const struct device *dev = &t->devs[k];
-		double group = (double)d->result.local_size[0] * d->result.local_size[1];
-		double pixels = dev->is_gpu ? GPU_PIECE_WAVES * 2048.0 * dev->compute_units
-					    : (group > 0 ? group : 64) * dev->compute_units;
-		pthread_mutex_lock(&t->lock);
-		adapt_set_min_pixels(&t->adapt, k, pixels);
-		pthread_mutex_unlock(&t->lock);
-	}
 	return 0;
 }
 

@@ -26,6 +26,15 @@
  * for the image. */
 #define TILES_PER_DEVICE 32
 
+/* A GPU's smallest adaptive piece, in launches' worth of the work-items it
+ * keeps in flight. A launch ends with its slowest work-item, and a pixel
+ * behind glass takes ~0.2 ms alone, so small pieces leave a GPU idle: on an
+ * H100 at 1024 spp, 2000x2000 in bands of 100, 250, 500, 1000 and 2000 rows
+ * took 2.7, 1.7, 1.3, 1.2 and 1.0 times the whole image's kernel time
+ * (docs/results/h100-batch6). 16 lets one GPU keep a 2000x2000 image whole
+ * beside a CPU; several GPUs split it (set_min_pieces caps it at a share). */
+#define TILES_GPU_LAUNCHES 16
+
 /* Rows per band: piece_rows when given (> 0), else about height / (32 ×
  * devices) rounded up to a multiple of the work-group height. */
 int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices);

@@ -167,6 +167,42 @@ Test(multidev, band_rows_default_to_whole_work_groups_and_several_bands_per_devi
 	cr_assert_eq(tiles_band_rows(&s, 0, 4), 5);
 }
 
+/* The smallest adaptive piece tiles_job_init gives each of devs. */
+static void min_pieces(const struct device *devs, int count, int width, int height,
+		       double *out)
+{
+	struct render_settings s = band_settings(width, height, 1024);
+	struct tiles_job t;
+	char err[256];
+
+	cr_assert_eq(tiles_job_init(&t, NULL, &s, 8, 1, (struct device *)devs, count, err,
+				    sizeof(err)),
+		     0, "%s", err);
+	for (int k = 0; k < count; k++)
+		out[k] = t.adapt.dev[k].min_pixels;
+	tiles_job_free(&t);
+}
+
+Test(multidev, adaptive_gpu_pieces_are_many_launches_but_at_most_a_share)
+{
+	struct device gpu = {.is_gpu = 1, .compute_units = 132};
+	struct device cpu = {.is_gpu = 0, .compute_units = 16};
+	double resident = 2048.0 * 132, min[3];
+
+	/* Beside a CPU, a GPU's smallest piece is TILES_GPU_LAUNCHES launches'
+	 * worth, or its share of a small image; a CPU's, one work-group per
+	 * compute unit. */
+	min_pieces((struct device[]){gpu, cpu}, 2, 4000, 4000, min);
+	cr_assert_float_eq(min[0], TILES_GPU_LAUNCHES * resident, 1e-6);
+	cr_assert_float_eq(min[1], 16.0 * 64, 1e-6);
+	min_pieces((struct device[]){gpu, cpu}, 2, 2000, 2000, min);
+	cr_assert_float_eq(min[0], 4e6 * resident / (resident + 1024), 1e-3);
+	/* Equal GPUs: a third of the image each at most, so all three work. */
+	min_pieces((struct device[]){gpu, gpu, gpu}, 3, 2000, 2000, min);
+	for (int k = 0; k < 3; k++)
+		cr_assert_float_eq(min[k], 4e6 / 3, 1e-3);
+}
+
 Test(multidev, bands_cover_every_row_once_with_all_samples)
 {
 	struct render_settings s = band_settings(33, 50, 16);
