@@ -103,6 +103,7 @@ def test_table1_states_accel_scene_size_and_depth():
     heading, accel = heading_and_accel(table1.render_table1(runs, meta))
     assert heading.endswith("rtcl on Fake GPU (NVIDIA CUDA), --accel bvh, scene lake-10")
     assert accel.startswith("- acceleration: `--accel bvh`: rays traverse a BVH")
+    assert "CPU reference" not in accel      # no reference run in these
     assert "- scene: /data/lake-10.json, 400x300, max depth 7" in \
         table1.render_table1(runs, meta)
 
@@ -322,7 +323,7 @@ def test_bvh_study_folder_meta_and_table(bvh_study):
     assert all("--accel bvh" in run["command"] for run in results["runs"])
     heading, accel = heading_and_accel((folder / "table1.md").read_text())
     assert heading.endswith(", --accel bvh, scene paper60")
-    assert "`--accel bvh`" in accel
+    assert "`--accel bvh`" in accel and "the CPU reference has no BVH" in accel
     assert sorted(path.name for path in folder.iterdir()) == \
         sorted(["results.json", "table1.md", *FIGURES])
     assert "figures skipped" not in stderr

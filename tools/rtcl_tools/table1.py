@@ -101,7 +101,10 @@ def study_suffix(runs, meta):
 
 def accel_line(runs, meta):
     accel = study_accel(runs, meta)
-    return f"- acceleration: `--accel {accel}`: {ACCEL_TEXT.get(accel, accel)}"
+    line = f"- acceleration: `--accel {accel}`: {ACCEL_TEXT.get(accel, accel)}"
+    if accel != "none" and any(run.kernel == "reference" for run in runs):
+        line += "; the CPU reference has no BVH: it tests every object"
+    return line
 
 
 def total_work_line(runs):
