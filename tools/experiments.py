@@ -26,24 +26,38 @@ Every run is one `rtcl --flops --stats` call: rtcl counts flops in one launch an
 times others without counting.  For the wavefront, rtcl counts every launch of the
 frame (the primary-ray launch, then one per bounce) and writes their work-items
 one after the other; its parallel efficiency and its histogram cover the
-work-items of all its launches.  Under OUT/<device-slug>/ it writes
+work-items of all its launches.
+
+Every run uses `--accel none` (the paper's brute force, so that Table 1 stays
+comparable with the paper's) unless --accel bvh asks for the study of divergent
+BVH traversal (issue 11 item 8); --scene FILE runs it on another scene.  It writes
+under OUT/<device-slug>/ for the paper's study (--accel none, built-in scene), else
+under OUT/<device-slug>-<accel>-<scene stem>/ (e.g. nvidia-h200-bvh-paper60,
+nvidia-h200-bvh-lake-10):
+  results.json       every run's command and rtcl statistics, the study's accel,
+                     scene, size and depth, and each run's histogram of flops per
+                     work-item (50 bins, mean, max, min): all the figures need;
   table1.md          Table 1, ours beside the paper's, with the commands used;
   speedup.png        Figure 6: speedup per implementation, a panel per baseline
                      (ours over the serial kernel, ours over the CPU reference,
                      the paper's over its CPU program), log axes from 1;
   histograms.png     Figure 7: flops per work-item, paper(-like) geometries;
-  histograms_best.png  the same for the sweep's best geometries (with the sweep);
-  results.json       every run's command and rtcl statistics.
-The per-work-item .npy files stay in a temporary folder, deleted at the end.
+  histograms_best.png  the same for the sweep's best geometries (with the sweep).
+The per-work-item .npy files (tens of MB each) are deleted as soon as their
+histogram is in memory.  The figures need matplotlib: without it (or with
+--no-plots) results.json and table1.md are written, one line on stderr says so,
+and `tools/experiments.py --replot DIR` on a machine with matplotlib draws them.
 
---replot DIR runs no rtcl: it reads DIR/results.json and rewrites DIR/table1.md
-and DIR/speedup.png with the current report code (the best-of-sweep rows taken
-from the stored sweep runs, the table saying when and by which commit it was
-regenerated).  The histograms are kept as they are: results.json holds no
-per-work-item flops.  The other options are not read.
+--replot DIR runs no rtcl: it reads DIR/results.json and rewrites DIR/table1.md and
+every figure with the current report code (the best-of-sweep rows taken from the
+stored sweep runs, the table saying when and by which commit it was regenerated).
+A results.json written before it stored histograms leaves histograms*.png as they
+are.  Of the other options only --no-plots is read.
 
     tools/experiments.py -p 0 -d 0                 # the full 2000x2000 experiment
     tools/experiments.py --quick                   # 400x400, a smaller sweep
+    tools/experiments.py -p 0 -d 0 --accel bvh     # the study with the BVH
+    tools/experiments.py -p 0 -d 0 --accel bvh -s lake/lake-10.json --no-plots
     make experiments DEVICE="-p 0 -d 0"            # the same through make
     tools/experiments.py --replot docs/results/nvidia-h100-80gb-hbm3   # redraw only
 """
@@ -63,11 +77,23 @@ from rtcl_tools.usage import report_error
 
 def parse_arguments(argv):
     parser = argparse.ArgumentParser(
-        description="Run the paper's experiment (Table 1, Figures 6 and 7) with rtcl.")
+        description="Run the paper's experiment (Table 1, Figures 6 and 7) with rtcl.",
+        epilog="Results: OUT/<device-slug>/ for the paper's study (--accel none on the "
+               "built-in scene), else OUT/<device-slug>-<accel>-<scene stem>/, e.g. "
+               "docs/results/nvidia-h200-bvh-paper60.  See the module docstring "
+               "(tools/experiments.py) for what each file holds.")
     parser.add_argument("--rtcl", default="./rtcl", help="the rtcl program (default %(default)s)")
     parser.add_argument("-p", "--platform", type=int, help="OpenCL platform index")
     parser.add_argument("-d", "--device", type=int, help="device index within the platform")
-    parser.add_argument("--scene", help="scene file (default: rtcl's built-in paper60)")
+    parser.add_argument("-s", "--scene", metavar="FILE",
+                        help="scene file (default: rtcl's built-in paper60); its stem "
+                             "names the results folder, e.g. lake-10 for "
+                             "tools/genbench.py lake's lake-10.json")
+    parser.add_argument("--accel", choices=("none", "bvh"), default="none",
+                        help="how rays find what they hit, passed to every rtcl run: "
+                             "none (default) tests every object, the paper's brute force, "
+                             "so Table 1 compares with the paper's; bvh traverses rtcl's "
+                             "BVH, the study of divergent traversal (issue 11 item 8)")
     parser.add_argument("--size", help=f"image size WxH (default: the scene's; "
                                        f"{QUICK_SIZE} with --quick)")
     parser.add_argument("--depth", type=int, help="maximum ray depth (default: the scene's)")
@@ -77,17 +103,24 @@ def parse_arguments(argv):
     parser.add_argument("--quick", action="store_true",
                         help=f"--size {QUICK_SIZE} and a smaller sweep (smoke tests)")
     parser.add_argument("--out", default="docs/results",
-                        help="results folder; a sub-folder per device (default %(default)s)")
+                        help="results folder; a sub-folder per device, accel and scene "
+                             "(default %(default)s)")
     parser.add_argument("--no-sweep", action="store_true", help="only the paper's geometries")
     parser.add_argument("--no-reference", action="store_true",
                         help="skip the CPU reference run")
     parser.add_argument("--no-serial", action="store_true",
                         help="skip the serial kernel (slow on a GPU: one work-item); "
                              "the table then has no speedup over serial")
+    parser.add_argument("--no-plots", action="store_true",
+                        help="draw no figure: write results.json and table1.md only "
+                             "(as when matplotlib is missing); --replot DIR draws the "
+                             "figures later from results.json, on a machine with "
+                             "matplotlib")
     parser.add_argument("--replot", metavar="DIR",
-                        help="run no rtcl: rewrite DIR/table1.md and DIR/speedup.png from "
-                             "DIR/results.json with the current report code (the "
-                             "histograms are kept; other options are not read)")
+                        help="run no rtcl: rewrite DIR/table1.md and the figures from "
+                             "DIR/results.json with the current report code (histograms "
+                             "only where results.json stores them; other options than "
+                             "--no-plots are not read)")
     arguments = parser.parse_args(argv)
     if arguments.quick and arguments.size is None:
         arguments.size = QUICK_SIZE
@@ -100,24 +133,26 @@ def main(argv=None):
     arguments = parse_arguments(argv)
     program = pathlib.Path(sys.argv[0]).name
     if arguments.replot is not None:
-        return replot_main(program, arguments.replot)
+        return replot_main(program, arguments.replot, arguments.no_plots)
     with tempfile.TemporaryDirectory(prefix="rtcl-experiments-") as temp_name:
         temp_dir = pathlib.Path(temp_name)
         try:
             runs = run_experiment(arguments, temp_dir)
-            out_dir = write_outputs(runs, arguments)
+            out_dir, notes = write_outputs(runs, arguments)
         except RtclFailed as error:
             return report_error(program, error)
         except (OSError, ValueError, FlopsFileError) as error:
             return report_error(program, one_line(error))
+    for note in notes:
+        print(f"{program}: {note}", file=sys.stderr)
     print(f"{program}: results in {out_dir}", file=sys.stderr)
     return 0
 
 
-def replot_main(program, out_dir):
+def replot_main(program, out_dir, no_plots):
     """--replot: redraws the report of out_dir; returns the exit status."""
     try:
-        notes = replot(out_dir)
+        notes = replot(out_dir, no_plots)
     except (OSError, ValueError) as error:
         return report_error(program, one_line(error))
     for note in notes:

@@ -6,6 +6,7 @@
     report       number formats, markdown tables, CSV, device folder names
     paper        the 2009 paper's figures and geometries
     flops        rtcl --flops files and parallel efficiency (numpy)
+    histogram    Figure 7's histogram of a flops file, as results.json stores it
     plots        every matplotlib figure (matplotlib is imported only there)
     experiment, table1                      tools/experiments.py
     bench_plan, peak, bench_run, bench_report, bench_options, scaling   tools/bench.py

@@ -6,13 +6,15 @@ tools/experiments.py is its command line (and its docstring the description).
 import dataclasses
 import json
 import pathlib
+import re
 import sys
 
 from . import files, flops, plots, table1
+from .histogram import histogram_from_json, histogram_of
 from .paper import (GROUP_KERNELS, PAPER, PAPER_BATCH, PAPER_GEOMETRY, PARALLEL_KERNELS,
                     QUICK_GROUP_SCALES, QUICK_WORKGROUPS, SWEEP_GROUP_SCALES,
                     SWEEP_REPEAT, SWEEP_WORKGROUPS)
-from .report import device_slug, git_commit, utc_now
+from .report import device_slug, git_commit, scene_stem, utc_now
 from .runner import (REQUIRED_STATS, Progress, Run, Settings, common_options, run_rtcl,
                      scaled_groups)
 
@@ -50,8 +52,8 @@ def best_of_sweep(sweep):
 def sweep_kernel(settings, progress, kernel, workgroups, group_scales):
     """Returns the sweep runs of one kernel, the best geometry's last."""
     batch = PAPER_BATCH.get(kernel)
-    runs = [run_rtcl(settings, progress, "sweep", kernel, workgroup, repeat=SWEEP_REPEAT,
-                     batch=batch)
+    runs = [measure(settings, progress, "sweep", kernel, workgroup, repeat=SWEEP_REPEAT,
+                    batch=batch)
             for workgroup in workgroups]
     if kernel in GROUP_KERNELS:
         fastest = select_best(runs)
@@ -64,69 +66,140 @@ def sweep_kernel(settings, progress, kernel, workgroups, group_scales):
                 progress.skip()
                 continue
             tried.add(groups)
-            runs.append(run_rtcl(settings, progress, "sweep", kernel, fastest.workgroup,
-                                 groups, repeat=SWEEP_REPEAT, batch=batch))
+            runs.append(measure(settings, progress, "sweep", kernel, fastest.workgroup,
+                                groups, repeat=SWEEP_REPEAT, batch=batch))
     return runs
 
 
-def remove_flops_files(runs, keep=None):
-    """Deletes the .npy files (and sidecars) of runs that no figure needs."""
-    for run in runs:
-        if run.flops_path and run.flops_path != keep:
+def measure(settings, progress, role, kernel, *args, **options):
+    """Runs rtcl once (runner.run_rtcl) and returns the Run with the histogram of its
+    flops file (Figure 7's data), the file itself deleted: tens of MB each, they
+    would fill the temporary folder over a sweep, and results.json keeps what the
+    figures need."""
+    run = run_rtcl(settings, progress, role, kernel, *args, **options)
+    if run.flops_path:
+        try:
+            run.histogram = histogram_of(load_checked_flops(run.flops_path))
+        finally:
             for path in (run.flops_path, flops.sidecar_path(run.flops_path)):
                 path.unlink(missing_ok=True)
             run.flops_path = None
+    return run
 
 
 def run_experiment(arguments, temp_dir):
     """Runs every configuration and returns the list of Runs."""
     workgroups = QUICK_WORKGROUPS if arguments.quick else SWEEP_WORKGROUPS
     group_scales = QUICK_GROUP_SCALES if arguments.quick else SWEEP_GROUP_SCALES
-    # --accel none: the paper's brute force, so that Table 1 stays comparable
-    # with the paper's (issue 11 item 4).
-    settings = Settings(arguments.rtcl, common_options(arguments) + ["--accel", "none"],
+    # --accel none (the default): the paper's brute force, so that Table 1 stays
+    # comparable with the paper's (issue 11 item 4); bvh: issue 11 item 8's study.
+    settings = Settings(arguments.rtcl, common_options(arguments) + ["--accel", arguments.accel],
                         arguments.repeat, temp_dir)
     progress = Progress(planned_run_count(arguments.no_serial, arguments.no_reference,
                                           arguments.no_sweep, workgroups, group_scales))
     runs = []
     if not arguments.no_serial:
-        runs.append(run_rtcl(settings, progress, "serial", "serial", repeat=1))
-        remove_flops_files(runs)
+        runs.append(measure(settings, progress, "serial", "serial", repeat=1))
     if not arguments.no_reference:
-        runs.append(run_rtcl(settings, progress, "reference", "reference", repeat=1,
-                             flops=False))
+        runs.append(measure(settings, progress, "reference", "reference", repeat=1,
+                            flops=False))
     for kernel in PARALLEL_KERNELS:
         workgroup, groups = PAPER_GEOMETRY[kernel]
-        runs.append(run_rtcl(settings, progress, "paper", kernel, workgroup, groups,
-                             batch=PAPER_BATCH.get(kernel)))
+        runs.append(measure(settings, progress, "paper", kernel, workgroup, groups,
+                            batch=PAPER_BATCH.get(kernel)))
     if not arguments.no_sweep:
         for kernel in PARALLEL_KERNELS:
             sweep = sweep_kernel(settings, progress, kernel, workgroups, group_scales)
-            best = best_of_sweep(sweep)
-            remove_flops_files(sweep, keep=best.flops_path)  # best's: histograms_best.png
             runs += sweep
-            runs.append(best)
+            runs.append(best_of_sweep(sweep))   # its histogram: histograms_best.png
     return runs
 
 
+def results_folder(out, device_name, accel="none", scene=None):
+    """Returns the folder of one study's results under out.
+
+    OUT/<device-slug> for the paper's study (--accel none on the built-in scene), the
+    folder name of every result made before --accel; OUT/<device-slug>-<accel>-<scene
+    stem> otherwise, e.g. docs/results/nvidia-h200-bvh-paper60 or ...-bvh-lake-10.
+    """
+    folder = device_slug(device_name)
+    if accel != "none" or scene is not None:
+        folder += f"-{accel}-{scene_stem(scene)}"
+    return pathlib.Path(out) / folder
+
+
+def study_meta(arguments, stats):
+    """Returns results.json's meta: when and how the study was measured."""
+    return {"commit": git_commit(), "repeat": arguments.repeat, "date": utc_now(),
+            "accel": arguments.accel, "scene": stats["scene"],
+            "scene_stem": scene_stem(arguments.scene),
+            "size": f"{stats['width']}x{stats['height']}", "depth": stats["max_depth"]}
+
+
+FIGURES = ("speedup.png", "histograms.png", "histograms_best.png")
+
+
 def write_outputs(runs, arguments):
-    """Writes table1.md, speedup.png, histograms and results.json; returns the folder."""
+    """Writes results.json, table1.md and (unless --no-plots or without matplotlib) the
+    figures; returns (the folder, notes to print).  A figure this run does not draw
+    is removed from the folder, lest it stand beside results it does not show."""
     stats = table1.device_run(runs).stats
-    out_dir = pathlib.Path(arguments.out) / device_slug(stats["device"])
+    out_dir = results_folder(arguments.out, stats["device"], arguments.accel, arguments.scene)
     out_dir.mkdir(parents=True, exist_ok=True)
-    meta = {"commit": git_commit(), "repeat": arguments.repeat,
-            "date": utc_now()}
-    files.write_text(out_dir / "table1.md", table1.render_table1(runs, meta))
-    plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", stats["device"])
-    for role, name in (("paper", "histograms.png"), ("best", "histograms_best.png")):
-        flops_files = [load_checked_flops(run.flops_path) for run in runs
-                       if run.role == role and run.flops_path]
-        if flops_files:
-            title = f"Flops per work-item (Figure 7), {role} geometries: {stats['device']}"
-            plots.plot_flops_histograms(flops_files, out_dir / name, log=True, title=title)
+    meta = study_meta(arguments, stats)
     results = {"meta": meta, "paper": PAPER, "runs": [run.to_json() for run in runs]}
-    files.write_text(out_dir / "results.json", json.dumps(results, indent=2) + "\n")
-    return out_dir
+    files.write_text(out_dir / "results.json", compact_number_lists(
+        json.dumps(results, indent=2)) + "\n")
+    files.write_text(out_dir / "table1.md", table1.render_table1(runs, meta))
+    drawn, notes = draw_figures(out_dir, runs, meta, arguments.no_plots)
+    for name in FIGURES:
+        if name not in drawn:
+            (out_dir / name).unlink(missing_ok=True)
+    return out_dir, notes
+
+
+def compact_number_lists(text):
+    """Returns json.dumps(..., indent=2) text with every list of numbers on one line:
+    the histograms' bins stay a line each, not a line a number."""
+    number = r"-?[0-9][0-9.eE+-]*"
+    # Only a newline after '[' and ',' (never inside a JSON string, where it is \n).
+    pattern = re.compile(rf"\[\n\s*({number}(?:,\n\s*{number})*)\n\s*\]")
+    return pattern.sub(lambda match: "[" + ", ".join(match.group(1).replace(",", " ").split())
+                       + "]", text)
+
+
+def figure_context(runs, meta):
+    """Returns what the figures' titles name: the device, and the acceleration and
+    scene where they are not the paper's (brute force on the built-in scene)."""
+    return table1.device_run(runs).stats["device"] + table1.study_suffix(runs, meta)
+
+
+def skipped_figures_note(out_dir, why):
+    """Returns the one line saying the figures were not drawn and how to draw them."""
+    return (f"figures skipped ({why}); `tools/experiments.py --replot {out_dir}` on a "
+            "machine with matplotlib draws them from results.json")
+
+
+def draw_figures(out_dir, runs, meta, no_plots=False):
+    """Draws speedup.png and the histograms that runs hold data for.
+
+    Returns (names drawn, notes): with no_plots, or without matplotlib, nothing is
+    drawn and the note says how to draw the figures later.
+    """
+    missing = "--no-plots" if no_plots else plots.matplotlib_missing()
+    if missing:
+        why = missing if no_plots else f"matplotlib cannot be imported: {missing}"
+        return [], [skipped_figures_note(out_dir, why)]
+    context = figure_context(runs, meta)
+    plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", context)
+    drawn = ["speedup.png"]
+    for role, name in (("paper", "histograms.png"), ("best", "histograms_best.png")):
+        histograms = [run.histogram for run in runs if run.role == role and run.histogram]
+        if histograms:
+            title = f"Flops per work-item (Figure 7), {role} geometries: {context}"
+            plots.plot_flops_histograms(histograms, out_dir / name, log=True, title=title)
+            drawn.append(name)
+    return drawn, []
 
 
 def load_checked_flops(path):
@@ -139,7 +212,8 @@ def load_checked_flops(path):
 
 # --replot: the report redrawn from a stored results.json, without running rtcl.
 RUN_ROLES = ("serial", "reference", "paper", "sweep", "best")
-KEPT_FIGURES = ("histograms.png", "histograms_best.png")  # need the .npy files
+# Older results.json files hold no histograms: these figures are then kept.
+KEPT_FIGURES = ("histograms.png", "histograms_best.png")
 
 
 def read_results(path):
@@ -171,8 +245,11 @@ def stored_run(path, index, item):
     if isinstance(kernel_ms, bool) or not isinstance(kernel_ms, (int, float)) \
             or not kernel_ms > 0:
         raise ValueError(f"{where}: kernel_ms is not a positive number")
+    histogram = item.get("flops_histogram")   # absent before results.json kept them
+    if histogram is not None:
+        histogram = histogram_from_json(histogram, f"{where}: flops_histogram")
     return Run(item["role"], item["kernel"], item.get("workgroup"), item.get("groups"),
-               item["command"], stats, batch=item.get("batch"))
+               item["command"], stats, batch=item.get("batch"), histogram=histogram)
 
 
 def load_results(path):
@@ -219,23 +296,27 @@ def changed_best_geometries(old_runs, new_runs):
             for kernel in old if kernel in new and old[kernel] != new[kernel]]
 
 
-def replot(out_dir):
-    """Rewrites out_dir's table1.md and speedup.png from its results.json.
+def replot(out_dir, no_plots=False):
+    """Rewrites out_dir's table1.md and figures from its results.json.
 
-    Runs no rtcl.  Returns the lines to print: which figures were kept as they
-    are (the histograms need the per-work-item .npy files, which are not stored).
-    Nothing is written when results.json is missing or malformed (ValueError).
+    Runs no rtcl.  Histograms are redrawn from the histograms that results.json
+    stores; one written before it stored them leaves histograms*.png as they are.
+    Without matplotlib (or with no_plots) only table1.md is rewritten.  Returns the
+    lines to print: what was rewritten, kept or skipped.  Nothing is written when
+    results.json is missing or malformed (ValueError).
     """
     out_dir = pathlib.Path(out_dir)
     meta, stored = load_results(out_dir / "results.json")
     runs = best_rows_from_sweep(stored)
     meta = dict(meta, regenerated={"date": utc_now(), "commit": git_commit()})
     text = table1.render_table1(runs, meta)
-    device = table1.device_run(runs).stats["device"]
-    plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", device)
+    drawn, notes = draw_figures(out_dir, runs, meta, no_plots)
     files.write_text(out_dir / "table1.md", text)
-    notes = [f"rewrote {out_dir / 'table1.md'} and {out_dir / 'speedup.png'}"]
-    kept = [name for name in KEPT_FIGURES if (out_dir / name).exists()]
+    notes.insert(0, "rewrote " + ", ".join(str(out_dir / name)
+                                           for name in ["table1.md", *drawn]))
+    if not drawn:
+        return notes
+    kept = [name for name in KEPT_FIGURES if name not in drawn and (out_dir / name).exists()]
     if kept:
         notes.append(f"kept {', '.join(kept)} as they are (results.json holds no "
                      "per-work-item flops)")

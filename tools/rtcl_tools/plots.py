@@ -6,13 +6,19 @@ other parts (and every --help) work without it.
 
 import math
 
-import numpy as np
-
 from . import files
-from .flops import flop_unit, output_format
+from .flops import output_format
+from .histogram import DEFAULT_BINS, Histogram, bin_edges, histogram_of
 from .report import format_number
 
-DEFAULT_BINS = 50
+
+def matplotlib_missing():
+    """Returns why matplotlib cannot be imported (one line), or None when it can."""
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError as error:
+        return str(error) or "no module named 'matplotlib'"
+    return None
 
 
 def pyplot():
@@ -27,9 +33,11 @@ def draw_histograms(figure, flops_files, *, overlay=False, log=False,
                     bins=DEFAULT_BINS, title=None):
     """Draws one histogram per file onto figure, or all on one axes with overlay.
 
-    Each subplot gets its own range and flop unit: the paper-geometry kernels give
-    their work-items 1 to ~100 pixels each, so a shared axis would flatten some of
-    them into one bar.  Overlaid histograms share the unit and the bin edges.
+    flops_files: flops.FlopsFile objects, or (without overlay) histogram.Histogram
+    objects, as results.json stores them.  Each subplot gets its own range and flop
+    unit: the paper-geometry kernels give their work-items 1 to ~100 pixels each, so
+    a shared axis would flatten some of them into one bar.  Overlaid histograms
+    share the unit and the bin edges.
     """
     if overlay:
         axes = figure.add_subplot(1, 1, 1)
@@ -40,8 +48,8 @@ def draw_histograms(figure, flops_files, *, overlay=False, log=False,
         rows = math.ceil(len(flops_files) / columns)
         axes_list = [figure.add_subplot(rows, columns, i + 1)
                      for i in range(len(flops_files))]
-        for axes, flops_file in zip(axes_list, flops_files):
-            _draw_one(axes, flops_file, bins)
+        for axes, item in zip(axes_list, flops_files):
+            _draw_one(axes, item if isinstance(item, Histogram) else histogram_of(item, bins))
     for axes in axes_list:
         axes.set_ylabel("work-items")
         if log:
@@ -51,27 +59,25 @@ def draw_histograms(figure, flops_files, *, overlay=False, log=False,
         figure.suptitle(title)
 
 
-def _bin_edges(largest_count, bins):
-    """Returns (edges in the unit, divisor, unit name) for counts up to largest_count."""
-    divisor, unit = flop_unit(largest_count)
-    return np.linspace(0.0, max(largest_count, 1) / divisor, bins + 1), divisor, unit
+def _draw_one(axes, histogram):
+    """Draws one Histogram with dashed mean and dotted max markers.
 
-
-def _draw_one(axes, flops_file, bins):
-    """Draws one file's histogram with dashed mean and dotted max markers."""
-    edges, divisor, unit = _bin_edges(int(flops_file.counts.max()), bins)
-    values = flops_file.counts.ravel() / divisor
-    axes.hist(values, bins=edges, color="tab:blue")
-    axes.axvline(values.mean(), color="tab:orange", linestyle="--", label="mean")
-    axes.axvline(values.max(), color="tab:red", linestyle=":", label="max")
-    axes.set_title(flops_file.label(), fontsize="medium")
-    axes.set_xlabel(f"flops per work-item ({unit})")
+    Each bin's count is drawn as the weight of its left edge: the same bars that
+    axes.hist of the per-work-item values over these edges draws.
+    """
+    edges = histogram.edges
+    axes.hist(edges[:-1], bins=edges, weights=histogram.counts, color="tab:blue")
+    divisor = histogram.divisor
+    axes.axvline(histogram.mean / divisor, color="tab:orange", linestyle="--", label="mean")
+    axes.axvline(histogram.max / divisor, color="tab:red", linestyle=":", label="max")
+    axes.set_title(histogram.label, fontsize="medium")
+    axes.set_xlabel(f"flops per work-item ({histogram.unit})")
 
 
 def _draw_overlay(axes, flops_files, bins):
     """Draws every file's histogram as an outline over shared bins."""
     largest = max(int(flops_file.counts.max()) for flops_file in flops_files)
-    edges, divisor, unit = _bin_edges(largest, bins)
+    edges, divisor, unit = bin_edges(largest, bins)
     for flops_file in flops_files:
         axes.hist(flops_file.counts.ravel() / divisor, bins=edges, histtype="step",
                   linewidth=1.5, label=flops_file.label())
@@ -80,7 +86,7 @@ def _draw_overlay(axes, flops_files, bins):
 
 def plot_flops_histograms(flops_files, out_path, *, overlay=False, log=False,
                           bins=DEFAULT_BINS, title=None):
-    """Plots the histograms of flops_files (FlopsFile list) into out_path."""
+    """Plots the histograms of flops_files (FlopsFile or Histogram list) into out_path."""
     output_format(out_path)  # fail before drawing anything
     count = len(flops_files)
     if overlay:

@@ -67,6 +67,21 @@ def device_slug(device_name):
     return slug[:64].rstrip("-") or "unknown-device"
 
 
+BUILT_IN_SCENE = "paper60"
+
+
+def scene_stem(scene):
+    """Returns the name a results folder gives a scene: its file's stem ('lake-10' for
+    /tmp/lake/lake-10.json), 'paper60' for None (rtcl's built-in scene) or for the
+    name rtcl's --stats gives that scene ('paper60.json (built-in)').  Characters other
+    than letters, digits, '.', '_' and '-' become '-'."""
+    if not scene:
+        return BUILT_IN_SCENE
+    name = re.sub(r"\s*\(built-in\)$", "", str(scene))
+    stem = pathlib.PurePath(name).stem
+    return re.sub(r"[^A-Za-z0-9._-]+", "-", stem).strip("-") or "scene"
+
+
 def _git(*arguments):
     """Returns the output of git in the rtcl checkout; CalledProcessError or OSError."""
     return subprocess.run(["git", *arguments], cwd=ROOT, capture_output=True, text=True,

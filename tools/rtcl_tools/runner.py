@@ -59,11 +59,15 @@ class Run:
     stats: dict
     flops_path: pathlib.Path | None = None
     batch: int | None = None  # --batch, for the persistent kernel
+    histogram: object = None  # histogram.Histogram of its --flops file, if it had one
 
     def to_json(self):
-        return {"role": self.role, "kernel": self.kernel, "workgroup": self.workgroup,
+        item = {"role": self.role, "kernel": self.kernel, "workgroup": self.workgroup,
                 "groups": self.groups, "batch": self.batch, "command": self.command,
                 "stats": self.stats}
+        if self.histogram is not None:
+            item["flops_histogram"] = self.histogram.to_json()
+        return item
 
 
 @dataclasses.dataclass

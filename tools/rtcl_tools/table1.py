@@ -1,7 +1,7 @@
 """Table 1 of the 2009 paper, ours beside the paper's, and Figure 6's speedups."""
 
 from .paper import PAPER, PARALLEL_KERNELS, SWEEP_REPEAT
-from .report import format_number, format_percent, markdown_table
+from .report import BUILT_IN_SCENE, format_number, format_percent, markdown_table, scene_stem
 
 TABLE_COLUMNS = ("Implementation", "work-group", "groups / threads", "time ms (median)",
                  "paper time", "GFLOP/s", "paper GFLOP/s", "parallel efficiency",
@@ -77,6 +77,36 @@ def device_run(runs):
     return next(run for run in runs if run.kernel != "reference")
 
 
+# How rays find what they hit, per --accel (the header's acceleration line).
+ACCEL_TEXT = {"none": "every ray tests every sphere and triangle, the paper's brute force",
+              "bvh": "rays traverse a BVH built on the host (issue 11 item 8: does the "
+                     "paper's ranking hold when traversal diverges?)"}
+
+
+def study_accel(runs, meta):
+    """Returns the study's --accel: meta's, else the one rtcl's --stats name, else
+    'none' (results.json files made before rtcl had a BVH: brute force)."""
+    return meta.get("accel") or device_run(runs).stats.get("accel") or "none"
+
+
+def study_suffix(runs, meta):
+    """Returns ', --accel bvh, scene lake-10' for a study other than the paper's
+    (--accel none on the built-in scene), '' for the paper's."""
+    accel = study_accel(runs, meta)
+    stem = meta.get("scene_stem") or scene_stem(device_run(runs).stats["scene"])
+    if accel == "none" and stem == BUILT_IN_SCENE:
+        return ""
+    return f", --accel {accel}, scene {stem}"
+
+
+def accel_line(runs, meta):
+    accel = study_accel(runs, meta)
+    line = f"- acceleration: `--accel {accel}`: {ACCEL_TEXT.get(accel, accel)}"
+    if accel != "none" and any(run.kernel == "reference" for run in runs):
+        line += "; the CPU reference has no BVH: it tests every object"
+    return line
+
+
 def total_work_line(runs):
     """Returns a sentence saying whether every kernel counted the same total flops."""
     totals = {run.stats["gflop"] for run in runs if run.stats.get("gflop") is not None}
@@ -92,11 +122,12 @@ def render_table1(runs, meta):
     """Returns table1.md: header, Table 1, the sweep and the commands used."""
     stats = device_run(runs).stats
     serial_ms, reference_ms = baseline_ms(runs, "serial"), baseline_ms(runs, "reference")
-    lines = ["# Table 1 reproduced: rtcl on " + stats["device"], "",
+    lines = ["# Table 1 reproduced: rtcl on " + stats["device"] + study_suffix(runs, meta), "",
              f"- device: {stats['device']} ({stats.get('device_version', '')})",
              f"- driver: {stats.get('driver', '')}",
              f"- scene: {stats['scene']}, {stats['width']}x{stats['height']}, "
              f"max depth {stats['max_depth']}",
+             accel_line(runs, meta),
              f"- rtcl {stats.get('rtcl_version', '?')}, commit {meta.get('commit') or 'unknown'}, "
              f"{meta['date']}",
              *regenerated_lines(meta),
