@@ -197,7 +197,23 @@ static int launch_build_bvh(const struct scene *scene, struct render_result *res
 	res->bvh_nodes = bvh->node_count;
 	res->bvh_depth = bvh->depth;
 	res->bvh_sah_cost = bvh->sah_cost;
+	res->bvh_bytes = (size_t)bvh->node_count * sizeof(*bvh->nodes) +
+			 (size_t)bvh->ref_count * sizeof(*bvh->refs);
 	return 0;
+}
+
+/* Device bytes per triangle (issue 11's budget: 64): the whole scene block
+ * over the triangles, and the BVH's share of it. */
+static void launch_print_triangle_bytes(const struct scene *scene, const struct render_result *res)
+{
+	double n = scene->triangle_count;
+
+	fprintf(stderr,
+		"rtcl: device scene block %zu bytes for %d triangles: %.1f bytes per triangle "
+		"(%zu triangle data, %.1f BVH)\n",
+		res->scene_bytes, scene->triangle_count, res->scene_bytes / n,
+		sizeof(struct rt_triangle) + sizeof(struct rt_triangle_shading),
+		res->bvh_bytes / n);
 }
 
 int launch_prepare_scene(struct device *dev, const struct scene *scene,
@@ -244,6 +260,8 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			scene->sphere_count, scene->sphere_count == 1 ? "" : "s",
 			scene->triangle_count, scene->triangle_count == 1 ? "" : "s",
 			res->bvh_nodes, res->bvh_depth, res->bvh_sah_cost, res->bvh_build_ms);
+	if (s->verbose && scene->triangle_count)
+		launch_print_triangle_bytes(scene, res);
 	if (s->verbose)
 		fprintf(stderr, "rtcl: scene is %zu bytes; %s\n", res->scene_bytes,
 			res->scene_in_local

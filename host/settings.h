@@ -91,6 +91,7 @@ struct render_result {
 	/* The BVH, with ACCEL_BVH and a sphere or triangle (else bvh_nodes 0). */
 	int bvh_nodes, bvh_depth;
 	double bvh_sah_cost, bvh_build_ms;
+	size_t bvh_bytes; /* its nodes and references in the scene block */
 
 	/* With check_writes. */
 	uint32_t *write_counts; /* per pixel */

@@ -130,12 +130,19 @@ static void add_accel_figures(json_t *doc, const struct run *run)
 
 	json_object_set_new(doc, "accel",
 			    json_string(run->settings.accel == ACCEL_BVH ? "bvh" : "none"));
+	/* The device's scene block (none for the CPU reference), and per
+	 * triangle, the figure issue 11 budgets. */
+	if (r->scene_bytes)
+		json_object_set_new(doc, "scene_bytes", json_integer((json_int_t)r->scene_bytes));
+	if (r->scene_bytes && run->scene->triangle_count)
+		json_object_set_new(doc, "bytes_per_triangle",
+				    json_real((double)r->scene_bytes / run->scene->triangle_count));
 	if (r->bvh_nodes == 0)
 		return;
 	json_object_set_new(doc, "bvh",
-			    json_pack("{s:i, s:i, s:f, s:f}", "nodes", r->bvh_nodes, "depth",
+			    json_pack("{s:i, s:i, s:f, s:f, s:I}", "nodes", r->bvh_nodes, "depth",
 				      r->bvh_depth, "sah_cost", r->bvh_sah_cost, "build_ms",
-				      r->bvh_build_ms));
+				      r->bvh_build_ms, "bytes", (json_int_t)r->bvh_bytes));
 }
 
 /* The --stats document, without the figures added below. */

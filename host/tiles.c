@@ -378,6 +378,7 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
 	to->bvh_depth = from->bvh_depth;
 	to->bvh_sah_cost = from->bvh_sah_cost;
 	to->bvh_build_ms = from->bvh_build_ms;
+	to->bvh_bytes = from->bvh_bytes;
 }
 
 /* Reads every device back and assembles the image (and counts) in out. */

@@ -105,3 +105,50 @@ def test_bvh_counts_add_up_over_two_devices(tmp_path):
     assert runs["two"]["total_flops"] == runs["one"]["total_flops"]
     assert runs["two"]["bvh"]["nodes"] == runs["one"]["bvh"]["nodes"] > 0
     assert (tmp_path / "two.ppm").read_bytes() == (tmp_path / "one.ppm").read_bytes()
+
+
+def grid_mesh_scene(tmp_path, squares=8):
+    """A triangle-only scene: a squares x squares grid of 2 triangles each, one light."""
+    import sys
+    sys.path.insert(0, str(ROOT / "tools"))
+    import numpy as np
+    from rtcl_tools import ply
+    k = squares + 1
+    y, x = np.mgrid[0:k, 0:k]
+    vertices = np.stack([x.ravel(), y.ravel(), 0 * x.ravel()], -1).astype(float) / squares
+    a = (y[:-1, :-1] * k + x[:-1, :-1]).ravel()
+    faces = np.concatenate([np.stack([a, a + 1, a + k], -1), np.stack([a + 1, a + k + 1, a + k], -1)])
+    ply.write(tmp_path / "grid.ply", vertices, faces)
+    scene = tmp_path / "grid.json"
+    scene.write_text(json.dumps({
+        "format": "rtcl-scene", "version": 2,
+        "camera": {"eye": [0.5, 0.5, -3], "look_at": [0.5, 0.5, 0]},
+        "lights": [{"position": [0, 0, -5]}],
+        "meshes": [{"file": "grid.ply", "smooth": False}]}))
+    return scene, 2 * squares * squares
+
+
+def test_device_bytes_per_triangle_add_up(tmp_path):
+    """--stats' scene_bytes is the device block, bytes_per_triangle that over the
+    triangles, bvh.bytes its 64-byte nodes and 4-byte references; -v prints the same;
+    --accel none's block is the same less the BVH."""
+    scene, n = grid_mesh_scene(tmp_path)
+    runs = {}
+    for accel in ("bvh", "none"):
+        result = rtcl("-s", str(scene), "-o", str(tmp_path / f"{accel}.ppm"), "--size", "16x16",
+                      "-v", "--accel", accel, "--stats", str(tmp_path / f"{accel}.json"))
+        assert result.returncode == 0, result.stderr
+        runs[accel] = (result.stderr, json.loads((tmp_path / f"{accel}.json").read_text()))
+    stderr, stats = runs["bvh"]
+    total, bvh = stats["scene_bytes"], stats["bvh"]
+    assert stats["bytes_per_triangle"] == total / n
+    assert bvh["bytes"] == 64 * bvh["nodes"] + 4 * n
+    # the triangles' 48 bytes of geometry and 64 of shading, the BVH, and a
+    # header, one material and one light of less than 1 KiB
+    assert 0 < total - (112 * n + bvh["bytes"]) < 1024
+    assert runs["none"][1]["scene_bytes"] == total - bvh["bytes"]  # 4 n a multiple of 16
+    assert "bvh" not in runs["none"][1]
+    assert (f"rtcl: device scene block {total} bytes for {n} triangles: "
+            f"{total / n:.1f} bytes per triangle (112 triangle data, {bvh['bytes'] / n:.1f} BVH)"
+            in stderr)
+    assert f"built in {bvh['build_ms']:.3f} ms" in stderr

@@ -24,7 +24,7 @@ import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tools"))
-from rtcl_tools import ppm  # noqa: E402
+from rtcl_tools import ply, ppm  # noqa: E402
 TOOL = ROOT / "tools" / "povray.py"
 SCENES = ROOT / "scenes"
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
@@ -247,6 +247,89 @@ def test_nested_transparent_sphere_gets_product_of_iors():
     assert iors == pytest.approx([2.4, 2.4 * 0.4167, 2.4 * 0.4167, 2.4 * 0.4167, 1.5])
 
 
+def uv_ball_scene(tmp_path, **mesh):
+    """A version 2 scene: a UV sphere mesh (its seam's vertices duplicated, so
+    smooth normals must be summed over equal positions), one inline triangle
+    and one mesh triangle of area 0, which rtcl skips."""
+    nu, nv = 12, 8
+    theta = np.pi * np.arange(nv + 1) / nv
+    phi = 2 * np.pi * np.arange(nu + 1) / nu
+    t, p = np.meshgrid(theta, phi, indexing="ij")
+    verts = np.stack([np.sin(t) * np.cos(p), np.cos(t), np.sin(t) * np.sin(p)], -1)
+    verts[:, nu] = verts[:, 0]  # the seam: the same positions (sin 2 pi is not 0)
+    verts = verts.reshape(-1, 3)
+    faces = []
+    for j in range(nv):
+        for i in range(nu):
+            a = j * (nu + 1) + i
+            faces += [[a, a + 1, a + nu + 1], [a + 1, a + nu + 2, a + nu + 1]]  # outward
+    faces.append([0, 0, 1])  # area 0
+    ply.write(tmp_path / "ball.ply", verts, np.array(faces))
+    placed = {"file": "ball.ply", "material": "red", **mesh}
+    return write_scene(tmp_path, version=2, lights=[{"position": [-5, 5, -5]}],
+                       camera={"eye": [0, 1, -5], "look_at": [0, 0, 0]},
+                       materials={"red": {"color": [0.9, 0.2, 0.2], "specular": 0.5,
+                                          "shininess": 20}},
+                       planes=[{"point": [0, -1.2, 0], "normal": [0, 1, 0]}],
+                       meshes=[placed],
+                       triangles=[{"vertices": [[-2, -1, 1], [-1, -1, 1], [-1.5, 0.5, 1]]}])
+
+
+def rtcl_triangle_count(scene, tmp_path):
+    """How many triangles rtcl keeps (its -v line), or None without rtcl."""
+    if not os.access(RTCL, os.X_OK):
+        return None
+    done = subprocess.run([RTCL, "-s", str(scene), "--size", "8x8", "-o",
+                           str(tmp_path / "count.ppm"), "-v"],
+                          capture_output=True, text=True, timeout=600)
+    assert done.returncode == 0, done.stderr
+    return int(re.search(r"rtcl: (\d+) triangles;", done.stderr).group(1))
+
+
+def test_mesh_becomes_placed_mirrored_mesh2(tmp_path):
+    scene = uv_ball_scene(tmp_path, smooth=False, translate=[0.5, 0, 0])
+    text = sdl("-s", scene)
+    m = re.search(r"^mesh2 \{  // (\d+) triangles\n  vertex_vectors \{ (\d+),\n(.*?)\n  \}\n"
+                  r"  face_indices \{ (\d+),", text, re.M | re.S)
+    assert m, text
+    kept = int(m.group(1))
+    # the poles' triangles of area 0 and the extra one dropped, as rtcl drops them
+    assert kept == int(m.group(4)) < 12 * 8 * 2
+    expected = rtcl_triangle_count(scene, tmp_path)
+    if expected is not None:
+        assert kept + 1 == expected  # rtcl's count includes the inline triangle
+    vertices = [tuple(float(c) for c in v) for v in re.findall(VEC, m.group(3))]
+    assert len(vertices) == int(m.group(2)) <= 13 * 9
+    xs = [-v[0] for v in vertices]  # mirrored back into rtcl's x
+    assert min(xs) == pytest.approx(-0.5) and max(xs) == pytest.approx(1.5)
+    assert "normal_vectors" not in text
+    tri = re.search(r"^triangle \{ (%s), (%s), (%s)" % (VEC, VEC, VEC), text, re.M)
+    assert [float(tri.group(i)) for i in (2, 6, 10)] == [2, 1, 1.5]  # x mirrored
+
+
+def test_smooth_mesh_has_one_normal_per_position(tmp_path):
+    text = sdl("-s", uv_ball_scene(tmp_path))
+    m = re.search(r"normal_vectors \{ (\d+),\n(.*?)\n  \}", text, re.S)
+    assert m and int(m.group(1)) == 13 * 9  # every vertex's, no triangle's own needed
+    normals = np.array([[float(c) for c in v] for v in re.findall(VEC, m.group(2))])
+    assert np.linalg.norm(normals, axis=1) == pytest.approx(np.ones(len(normals)))
+    # the seam's duplicated vertices (i = 0 and i = 12 of each ring) share one normal
+    rings = normals.reshape(9, 13, 3)
+    assert rings[:, 0] == pytest.approx(rings[:, 12])
+    # on a ball the area-weighted normal points out from the centre (mirrored x)
+    equator = rings[4, :12] * [-1, 1, 1]
+    angles = 2 * np.pi * np.arange(12) / 12
+    assert equator == pytest.approx(np.stack([np.cos(angles), 0 * angles, np.sin(angles)], -1),
+                                    abs=1e-6)  # float vertices
+
+
+@pytest.mark.parametrize("mesh", [{}, {"scale": [1, 1, -1], "rotate": [10, 30, 0]}])
+def test_mesh_render_matches_rtcl(tmp_path, mesh):
+    pov, ref = render_both(tmp_path, uv_ball_scene(tmp_path, **mesh), "96x72")
+    same = (np.abs(pov - ref).max(axis=2) <= 2).mean()
+    assert same > 0.99  # measured 99.87 % at 128x96 with the mirroring scale
+
+
 def test_output_file_equals_stdout(tmp_path):
     out = tmp_path / "s.pov"
     done = run_tool("-s", "scenes/two_balls.json", "--size", "64x48", "-o", out)
@@ -282,8 +365,8 @@ def test_malformed_json_names_line_and_column(tmp_path):
     ({"spheres": [{"center": [0, 0, 0], "radius": -1}]}, "spheres[0].radius: must be > 0"),
     ({"spheres": [{"center": [0, 0, 0], "radus": 1}]}, 'spheres[0]: unknown key "radus"'),
     ({"version": 3}, "version: version 3 is not supported"),
-    ({"version": 2, "triangles": [{"vertices": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]}]},
-     "meshes and triangles (scene version 2) are not converted"),
+    ({"version": 2, "meshes": [{"file": "scene.json"}]},
+     "only the binary PLY meshes tools/genbench.py writes are converted"),
 ])
 def test_bad_scene_one_line(tmp_path, overrides, fragment):
     out = tmp_path / "s.pov"

@@ -105,7 +105,12 @@ What still differs:
    level; rtcl counts the depth.  Overlapping (not nested) transparent objects,
    or a sphere straddling a transparent plane, refract differently.
 8. POV-Ray ignores objects farther than 1e7 (MAX_DISTANCE); rtcl allows 1e18.
-9. Version 2's meshes and triangles are not converted yet: such a scene is refused.
+9. Version 2 (rtcl_tools/povray_mesh.py): a mesh becomes a mesh2, placed and
+   with its smooth normals computed here as rtcl does; an inline triangle a
+   triangle.  Only the binary PLY meshes tools/genbench.py writes are read (any
+   other mesh file is refused).  A transparent mesh gets inside_vector (rtcl
+   takes every mesh as closed) and no shadow clone: its shadow is POV-Ray's
+   filtered one, where rtcl's is opaque.
 """
 
 import argparse
@@ -114,6 +119,7 @@ import shutil
 import sys
 
 from rtcl_tools import files
+from rtcl_tools.povray_mesh import MeshError
 from rtcl_tools.povray_run import RunError, povray_version, render, summary
 from rtcl_tools.povray_sdl import opaque_warnings, to_sdl
 from rtcl_tools.scene import SceneError, load_scene
@@ -191,15 +197,15 @@ def main(argv=None):
         message = e.strerror if isinstance(e, OSError) else e
         print("%s: %s: %s" % (PROG, args.scene, message), file=sys.stderr)
         return 1
-    if scene["meshes"] or scene["triangles"]:
-        print("%s: %s: meshes and triangles (scene version 2) are not converted to POV-Ray yet"
-              % (PROG, args.scene), file=sys.stderr)
-        return 1
     size = args.size or scene["size"]
     depth = scene["max_depth"] if args.depth is None else args.depth
-    text = to_sdl(scene, size, depth, os.path.relpath(args.scene, ROOT)
-                  if os.path.abspath(args.scene).startswith(ROOT + os.sep) else args.scene,
-                  shadow_clones=not args.transparent_shadows)
+    try:
+        text = to_sdl(scene, size, depth, os.path.relpath(args.scene, ROOT)
+                      if os.path.abspath(args.scene).startswith(ROOT + os.sep) else args.scene,
+                      shadow_clones=not args.transparent_shadows)
+    except MeshError as e:
+        print("%s: %s: %s" % (PROG, args.scene, e), file=sys.stderr)
+        return 1
     dropped = opaque_warnings(scene)
     if dropped:
         print("%s: warning: %d object(s) with transmit 1: POV-Ray shows no ambient or diffuse"

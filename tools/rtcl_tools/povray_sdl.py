@@ -5,6 +5,7 @@ tools/povray.py's docstring says how the scene maps and what still differs.
 
 import math
 
+from .povray_mesh import mesh_sdl, triangle_sdl
 from .vector import cross, dot, normalize, scale, sub
 
 CHECKER_BIG = 1e9            # scale of the checker's dropped axis
@@ -161,12 +162,30 @@ def to_sdl(scene, size, depth, source="", shadow_clones=True):
         if m["transmit"] > 0 and shadow_clones:
             for offset in (CLONE_SHIFT, -CLONE_SHIFT):
                 w("plane { %s, %s%s" % (vec(n), num(d + offset), CLONE))
+    for mesh in scene.get("meshes", []):
+        text = mesh_sdl(mesh, *surface(mesh["material"]))
+        if text:
+            w(text)
+    for triangle in scene.get("triangles", []):
+        text = triangle_sdl(triangle, *surface(triangle["material"]), vec, mirror)
+        if text:
+            w(text)
     return "\n".join(out) + "\n"
+
+
+def surface(m):
+    """A mesh's or triangle's texture and interior ("" when opaque); no
+    shadow clone: a transparent mesh's shadow is POV-Ray's filtered one."""
+    texture = "texture { %s\n    %s }" % (pigment(m, None, None, None), finish(m))
+    interior = "interior { ior %s }" % num(m["ior"]) if m["transmit"] > 0 else ""
+    return texture, interior
 
 
 def opaque_warnings(scene):
     """Materials whose ambient/diffuse POV-Ray cannot show (kt = 1)."""
-    count = sum(1 for o in scene["spheres"] + scene["planes"]
+    objects = scene["spheres"] + scene["planes"] + scene.get("meshes", []) + scene.get(
+        "triangles", [])
+    count = sum(1 for o in objects
                 if o["material"]["transmit"] >= 1
                 and (o["material"]["ambient"] > 0 or o["material"]["diffuse"] > 0))
     return count
