@@ -237,6 +237,8 @@ long long adapt_piece_cells(const struct adapt_view *v)
 		size = min_d(size, ADAPT_GROWTH * v->largest);
 	if (size < v->min_size)
 		size = v->min_size;
+	if (v->rate > 0 && v->front_unknown)
+		return 0;
 	if (v->rate > 0 && !v->fastest && v->others_rate > 0) {
 		/* The tail rule: done no later than the others could be
 		 * with all the rest. */
@@ -302,6 +304,7 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 			continue;
 		v.others_rate += r;
 		v.unknown += r <= 0;
+		v.front_unknown |= r <= 0 && d->min_pixels > a->dev[k].min_pixels;
 		v.fastest &= r <= v.rate;
 		if (d->inflight > 0 && r > 0) /* what it has left of its piece */
 			v.others_backlog += fmax(0, d->inflight - r * (now_ms - d->start_ms));

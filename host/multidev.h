@@ -99,7 +99,11 @@ double multidev_efficiency(const struct device_work *work, int count);
  *    the remaining work (their work in flight included) without it; its
  *    piece shrinks to what it can finish by then, and when not even one cell
  *    fits it retires for this frame. The fastest device never retires, so
- *    every cell is handed out.
+ *    every cell is handed out. Until every device that keeps more pixels
+ *    in flight (a GPU, whose first piece may be most of the image) has a
+ *    rate, a device with a rate gets nothing more: nothing tells when the
+ *    GPU will be done, and a CPU piece of a second or more would hold the
+ *    end (docs/results/h100-batch6).
  * Rates persist over the frames of one job (-r N), so later frames need no
  * probe. Times are the caller's (ms), so the policy runs in simulated time
  * in the unit tests. */
@@ -122,6 +126,8 @@ struct adapt_view {
 	int fastest;	       /* no working device has a higher known rate */
 	double min_size;       /* pixel-samples of the smallest piece that keeps
 				  this device busy (adapt_set_min_pixels); 0: none */
+	int front_unknown;     /* a working device that keeps more pixels in flight
+				  (a GPU beside this CPU) has no rate yet */
 };
 
 /* Pure: the size of the device's next piece in cells (>= 1 and no more

@@ -381,3 +381,12 @@ def test_bvh_study_replot_without_matplotlib_rewrites_the_table(bvh_study, tmp_p
     assert "figures skipped (matplotlib cannot be imported" in result.stderr
     for name in FIGURES:    # left as they were
         assert (folder / name).read_bytes() == (pristine / name).read_bytes()
+
+
+def test_rtcl_commit_names_the_commit_of_a_copied_tree(monkeypatch):
+    """A GPU machine's copy has a stale git HEAD: RTCL_COMMIT names the real one."""
+    from rtcl_tools import report
+    monkeypatch.setenv("RTCL_COMMIT", "deff42a")
+    assert report.git_commit() == "deff42a"
+    monkeypatch.delenv("RTCL_COMMIT")
+    assert report.git_commit() != "deff42a"

@@ -440,6 +440,31 @@ Test(multidev, adaptive_gpu_pieces_are_whole_rows_from_the_start_cpu_pieces_from
 		cr_assert_eq(covered[i], 1, "pixel %zu", i);
 }
 
+Test(multidev, adaptive_cpu_waits_for_no_gpu_whose_rate_is_unknown)
+{
+	/* The GPU's first piece is most of the image and says nothing of its
+	 * rate until done: the CPU, its probe done, takes no second piece (on
+	 * an H100 such pieces held the end 90-300 ms past the GPU). */
+	struct adapt a;
+	struct rt_piece gpu, cpu;
+
+	adapt_init(&a, 2000, 2000, 1024, 8, 8, 2);
+	adapt_new_frame(&a);
+	adapt_set_min_pixels(&a, 0, 3.98e6); /* its share beside the CPU (tiles.c) */
+	adapt_set_min_pixels(&a, 1, 16.0 * 64);
+	cr_assert(adapt_take(&a, 0, 0, &gpu));
+	cr_assert(adapt_take(&a, 1, 0, &cpu));
+	cr_assert_gt(gpu.width * gpu.height, 3900000, "%d pixels", gpu.width * gpu.height);
+	cr_assert_eq(adapt_take(&a, 1, 150, &cpu), 0, "a second CPU piece");
+	/* The view alone: the same device with every rate known may go on. */
+	struct adapt_view v = {.remaining = 1e9, .total = 4e9, .unit = 64 * 1024.0, .rate = 7e3,
+			       .others_rate = 4e6, .devices = 2, .others_backlog = 1e9,
+			       .front_unknown = 1};
+	cr_assert_eq(adapt_piece_cells(&v), 0);
+	v.front_unknown = 0;
+	cr_assert_gt(adapt_piece_cells(&v), 0);
+}
+
 Test(multidev, adaptive_a_slow_first_launch_does_not_hand_the_cpu_a_huge_piece)
 {
 	/* The GPU's first launch takes 200 ms more (set-up on first use): its

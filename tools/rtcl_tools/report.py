@@ -4,6 +4,7 @@ import csv
 import datetime
 import io
 import math
+import os
 import pathlib
 import re
 import subprocess
@@ -89,7 +90,11 @@ def _git(*arguments):
 
 
 def git_commit():
-    """Returns the short commit of the rtcl checkout ('-dirty' if modified), or None."""
+    """Returns the short commit of the rtcl checkout ('-dirty' if modified), or None.
+    RTCL_COMMIT, when set, is returned instead: a copy of the tree whose git
+    HEAD is stale (a GPU machine's) names the commit it was made from."""
+    if os.environ.get("RTCL_COMMIT"):
+        return os.environ["RTCL_COMMIT"]
     try:
         commit = _git("rev-parse", "--short", "HEAD")
         changes = _git("status", "--porcelain", "--untracked-files=no")
