@@ -237,13 +237,15 @@ long long adapt_piece_cells(const struct adapt_view *v)
 		size = min_d(size, ADAPT_GROWTH * v->largest);
 	if (size < v->min_size)
 		size = v->min_size;
+	if (v->remaining - size < v->min_size) /* no rest smaller than its smallest piece */
+		size = v->remaining;
 	if (v->rate > 0 && v->front_unknown)
 		return 0;
 	if (v->rate > 0 && !v->fastest && v->others_rate > 0) {
 		/* The tail rule: done no later than the others could be
-		 * with all the rest. */
+		 * with all the rest, with a margin for the pixels' costs. */
 		double others_done_ms = (v->remaining + v->others_backlog) / v->others_rate;
-		size = min_d(size, v->rate * others_done_ms);
+		size = min_d(size, ADAPT_TAIL_MARGIN * v->rate * others_done_ms);
 		if (min_d(v->unit, v->remaining) > size)
 			return 0;
 	}

@@ -89,7 +89,10 @@ double multidev_efficiency(const struct device_work *work, int count);
  *    r / R): large pieces first, shrinking towards the end; never less than
  *    ADAPT_FLOOR_MS of its own time (launch overhead and a GPU's occupancy:
  *    on an H200 that is about 10 M pixel-samples), never less than a cell,
- *    never past the remaining work, and never more than ADAPT_GROWTH times
+ *    never past the remaining work, never leaving a rest smaller than the
+ *    device's smallest piece (it takes that rest too: a GPU given a few
+ *    leftover rows at 1024 spp spent 80 ms on them, latency-bound), and
+ *    never more than ADAPT_GROWTH times
  *    the device's largest piece so far (not its last: a piece cut short at
  *    the end of a cell row must not stop the growth): a rate measured early (a first launch's
  *    set-up, a fast device whose first large piece is still running) must
@@ -111,6 +114,11 @@ double multidev_efficiency(const struct device_work *work, int count);
 #define ADAPT_FLOOR_MS 4.0
 #define ADAPT_GUIDE 2
 #define ADAPT_GROWTH 2
+/* The tail rule plans a slow device's piece to end by this fraction of the
+ * time the others need: its rate was measured on other pixels, and on an
+ * H100's Xeon the image's end cost 1.5 times what its probe had
+ * (docs/results/h100-batch6). */
+#define ADAPT_TAIL_MARGIN 0.5
 
 /* What the sizing of one device's next piece sees. */
 struct adapt_view {

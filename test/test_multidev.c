@@ -316,12 +316,14 @@ Test(multidev, adaptive_pieces_follow_the_rate_and_shrink_towards_the_end)
 
 Test(multidev, adaptive_slow_device_never_holds_the_tail)
 {
-	struct adapt_view slow = view(1e6, 1e3, 1e6);
+	struct adapt_view slow = view(2e6, 1e3, 1e6);
 
-	/* The others finish 1e6 in 1 ms; one cell takes the slow device 1 ms:
-	 * it fits exactly, its floor of ADAPT_FLOOR_MS (4 cells) does not. */
+	/* The others finish 2e6 in 2 ms, the slow device plans to be done by
+	 * ADAPT_TAIL_MARGIN of that, 1 ms; one cell takes it 1 ms: it fits
+	 * exactly, its floor of ADAPT_FLOOR_MS (4 cells) does not. */
+	cr_assert_eq(ADAPT_TAIL_MARGIN, 0.5);
 	cr_assert_eq(adapt_piece_cells(&slow), 1);
-	slow.remaining = 5e5; /* others done in 0.5 ms: no cell fits */
+	slow.remaining = 1e6; /* planned end 0.5 ms: no cell fits */
 	cr_assert_eq(adapt_piece_cells(&slow), 0);
 	slow.fastest = 1; /* the fastest never retires: ADAPT_FLOOR_MS of its time */
 	cr_assert_eq(adapt_piece_cells(&slow), (long long)(1e3 * ADAPT_FLOOR_MS / 1000));
@@ -450,11 +452,11 @@ Test(multidev, adaptive_cpu_waits_for_no_gpu_whose_rate_is_unknown)
 
 	adapt_init(&a, 2000, 2000, 1024, 8, 8, 2);
 	adapt_new_frame(&a);
-	adapt_set_min_pixels(&a, 0, 3.98e6); /* its share beside the CPU (tiles.c) */
+	adapt_set_min_pixels(&a, 0, 2e6); /* as beside another GPU (tiles.c) */
 	adapt_set_min_pixels(&a, 1, 16.0 * 64);
 	cr_assert(adapt_take(&a, 0, 0, &gpu));
 	cr_assert(adapt_take(&a, 1, 0, &cpu));
-	cr_assert_gt(gpu.width * gpu.height, 3900000, "%d pixels", gpu.width * gpu.height);
+	cr_assert_eq(gpu.width * gpu.height, 2000000);
 	cr_assert_eq(adapt_take(&a, 1, 150, &cpu), 0, "a second CPU piece");
 	/* The view alone: the same device with every rate known may go on. */
 	struct adapt_view v = {.remaining = 1e9, .total = 4e9, .unit = 64 * 1024.0, .rate = 7e3,
@@ -463,6 +465,18 @@ Test(multidev, adaptive_cpu_waits_for_no_gpu_whose_rate_is_unknown)
 	cr_assert_eq(adapt_piece_cells(&v), 0);
 	v.front_unknown = 0;
 	cr_assert_gt(adapt_piece_cells(&v), 0);
+}
+
+Test(multidev, adaptive_piece_leaves_no_rest_smaller_than_its_smallest)
+{
+	/* A GPU whose smallest piece is 1e9 pixel-samples, 1.05e9 left: a rest
+	 * of 0.05e9 would cost it a latency-bound piece, so it takes all. */
+	struct adapt_view v = {.remaining = 1.05e9, .total = 1.05e9, .unit = 1000, .devices = 2,
+			       .min_size = 1e9, .fastest = 1};
+
+	cr_assert_eq(adapt_piece_cells(&v), 1050000);
+	v.remaining = 2.5e9; /* a rest of at least its smallest piece stays */
+	cr_assert_eq(adapt_piece_cells(&v), 1000000);
 }
 
 Test(multidev, adaptive_a_slow_first_launch_does_not_hand_the_cpu_a_huge_piece)
