@@ -258,7 +258,36 @@ def test_without_figures_results_and_table_are_written(tmp_path, fake_rtcl, how)
 
 # ---- --replot of the results.json files committed before histograms were kept -------------
 
-COMMITTED = sorted((ROOT / "docs" / "results").glob("*/results.json"))
+def committed_results(new_format):
+    """The committed results.json files, those with meta['accel'] (made since
+    --accel) or those without (made before histograms were kept)."""
+    found = []
+    for path in sorted((ROOT / "docs" / "results").glob("*/results.json")):
+        if ("accel" in json.loads(path.read_text())["meta"]) == new_format:
+            found.append(path)
+    return found
+
+
+COMMITTED = committed_results(new_format=False)
+COMMITTED_NEW = committed_results(new_format=True)
+
+
+@pytest.mark.parametrize("results", COMMITTED_NEW, ids=lambda path: path.parent.name)
+def test_replot_of_a_committed_new_results_json_draws_every_figure(tmp_path, failing_rtcl,
+                                                                   results):
+    folder = tmp_path / results.parent.name
+    shutil.copytree(results.parent, folder)
+    for png in folder.glob("*.png"):
+        png.unlink()
+    (folder / "table1.md").unlink()
+    result = run_tool("--rtcl", failing_rtcl, "--replot", folder)
+    assert result.returncode == 0, result.stderr
+    assert not (tmp_path / "rtcl-ran").exists()
+    meta = json.loads(results.read_text())["meta"]
+    heading, _ = heading_and_accel((folder / "table1.md").read_text())
+    assert f"--accel {meta['accel']}" in heading
+    for name in ("speedup.png", "histograms.png"):
+        assert (folder / name).read_bytes().startswith(PNG_SIGNATURE)
 
 
 @pytest.mark.parametrize("results", COMMITTED, ids=lambda path: path.parent.name)
@@ -280,9 +309,9 @@ def test_replot_of_a_committed_old_results_json(tmp_path, failing_rtcl, results)
     assert "kept histograms.png" in result.stderr
 
 
-def test_committed_old_results_exist():
-    """The test above must have something to replot."""
-    assert len(COMMITTED) >= 2
+def test_committed_old_and_new_results_exist():
+    """The tests above must have something to replot."""
+    assert len(COMMITTED) >= 2 and len(COMMITTED_NEW) >= 4
 
 
 # ---- one --quick --accel bvh run of the real rtcl ----------------------------------------
