@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "checks.h"
 #include "cli.h"
@@ -91,6 +92,64 @@ static int central_take(struct mpi_job *j, int g)
 	return piece;
 }
 
+/* ---- waiting without spinning --------------------------------------------
+ *
+ * Open MPI's blocking calls poll at full speed while they wait, each taking
+ * a core that the ranks' PoCL devices render on. These wait in naps that
+ * grow from MPI_NAP_MIN_NS to MPI_NAP_MAX_NS: a message waits at most about
+ * a millisecond, against pieces of tens of milliseconds or more. */
+#define MPI_NAP_MIN_NS 20000L
+#define MPI_NAP_MAX_NS 1000000L
+
+static void nap(long *ns)
+{
+	struct timespec t = {0, *ns};
+
+	nanosleep(&t, NULL);
+	*ns = *ns * 2 < MPI_NAP_MAX_NS ? *ns * 2 : MPI_NAP_MAX_NS;
+}
+
+/* MPI_Probe for any message, in naps. */
+static int wait_probe(MPI_Status *status)
+{
+	long ns = MPI_NAP_MIN_NS;
+
+	for (;;) {
+		int arrived = 0;
+		if (MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &arrived, status) !=
+		    MPI_SUCCESS)
+			return -1;
+		if (arrived)
+			return 0;
+		nap(&ns);
+	}
+}
+
+/* MPI_Wait, in naps. */
+static int wait_request(MPI_Request *request)
+{
+	long ns = MPI_NAP_MIN_NS;
+
+	for (;;) {
+		int done = 0;
+		if (MPI_Test(request, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS)
+			return -1;
+		if (done)
+			return 0;
+		nap(&ns);
+	}
+}
+
+/* MPI_Recv of count ints from rank 0, in naps. */
+static int wait_recv_ints(int *data, int count, int tag)
+{
+	MPI_Request request;
+
+	if (MPI_Irecv(data, count, MPI_INT, ROOT, tag, MPI_COMM_WORLD, &request) != MPI_SUCCESS)
+		return -1;
+	return wait_request(&request);
+}
+
 /* ---- the devices' threads, on every rank -------------------------------- */
 
 static int take_rank_piece(void *context, int device)
@@ -101,8 +160,7 @@ static int take_rank_piece(void *context, int device)
 	if (j->rank == ROOT)
 		return central_take(j, device);
 	if (MPI_Send(&device, 1, MPI_INT, ROOT, TAG_TAKE, MPI_COMM_WORLD) != MPI_SUCCESS ||
-	    MPI_Recv(&piece, 1, MPI_INT, ROOT, TAG_GIVE + device, MPI_COMM_WORLD,
-		     MPI_STATUS_IGNORE) != MPI_SUCCESS)
+	    wait_recv_ints(&piece, 1, TAG_GIVE + device))
 		return -1;
 	pthread_mutex_lock(&j->lock);
 	int taken = piece >= 0 ? ++j->taken : j->taken;
@@ -352,8 +410,7 @@ static void *serve(void *context)
 
 	while (remaining > 0) {
 		MPI_Status status;
-		if (MPI_Probe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &status) !=
-		    MPI_SUCCESS) {
+		if (wait_probe(&status)) {
 			record_failure(j, ROOT, "waiting for the other ranks failed");
 			MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 		}
@@ -595,7 +652,11 @@ static int render_all(struct mpi_job *j)
 		j->wall_ms = (timing_now() - start) * 1e3;
 		status = finish_root(j);
 	}
-	MPI_Bcast(&status, 1, MPI_INT, ROOT, MPI_COMM_WORLD);
+	/* The other ranks wait here while rank 0's own devices finish. */
+	MPI_Request request;
+	if (MPI_Ibcast(&status, 1, MPI_INT, ROOT, MPI_COMM_WORLD, &request) != MPI_SUCCESS ||
+	    wait_request(&request))
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	return status;
 }
 

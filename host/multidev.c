@@ -276,6 +276,7 @@ void adapt_new_frame(struct adapt *a)
 	for (int k = 0; k < a->devices; k++) {
 		a->dev[k].inflight = 0;
 		a->dev[k].retired = 0;
+		a->dev[k].asked = 0;
 	}
 }
 
@@ -377,6 +378,14 @@ static int takes_from_back(const struct adapt *a, int k)
 	return 0;
 }
 
+int adapt_fronts_asked(const struct adapt *a, int k)
+{
+	for (int j = 0; j < a->devices; j++)
+		if (a->dev[j].min_pixels > a->dev[k].min_pixels && !a->dev[j].asked)
+			return 0;
+	return 1;
+}
+
 void adapt_set_min_pixels(struct adapt *a, int k, double pixels)
 {
 	a->dev[k].min_pixels = pixels;
@@ -387,6 +396,7 @@ int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece)
 	struct adapt_device *d = &a->dev[k];
 	long long cells;
 
+	d->asked = 1;
 	if (d->inflight > 0) {
 		d->done += d->inflight;
 		d->busy_ms += now_ms - d->start_ms;

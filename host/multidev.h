@@ -149,6 +149,7 @@ struct adapt_device {
 	double largest;	      /* pixel-samples of its largest piece so far */
 	double start_ms;      /* when it took that piece */
 	int retired;	      /* the tail rule stopped it for this frame */
+	int asked;	      /* it has asked for a piece this frame */
 	double min_pixels;    /* the pixels one launch keeps in flight on it */
 };
 
@@ -171,6 +172,13 @@ void adapt_new_frame(struct adapt *a);
  * tiles.c sets it from what the device keeps in flight (TILES_GPU_LAUNCHES:
  * small pieces leave a GPU idle at each launch's end). */
 void adapt_set_min_pixels(struct adapt *a, int k, double pixels);
+
+/* Whether every device that keeps more pixels in flight than device k has
+ * asked for a piece this frame. A CPU waits for that (tiles.c) before its
+ * first piece: taking its probe first from the image's end would leave a
+ * GPU the thin rest of the last cell row as an extra, latency-bound piece
+ * (about 80 ms on an H100 at 1024 spp). */
+int adapt_fronts_asked(const struct adapt *a, int k);
 
 /* Device k, idle at now_ms (the piece it held, if any, done), asks for its
  * next piece. The devices that keep the most pixels in flight (the GPUs)

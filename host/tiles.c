@@ -4,6 +4,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <time.h>
 
 #include "checks.h"
 #include "devstats.h"
@@ -113,6 +114,7 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	if (adaptive)
 		init_adaptive(t, s);
 	pthread_mutex_init(&t->lock, NULL);
+	pthread_cond_init(&t->asked, NULL);
 	t->pieces = malloc((size_t)t->piece_cap * sizeof(*t->pieces));
 	t->owner = malloc((size_t)t->piece_cap * sizeof(int));
 	t->expected = s->check_writes ? calloc(pixels, sizeof(uint32_t)) : NULL;
@@ -127,17 +129,36 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	return 0;
 }
 
+/* Under t->lock: waits, at most TILES_FRONT_WAIT_MS, until the devices that
+ * keep more pixels in flight than k have asked for their first piece of the
+ * frame (adapt_fronts_asked). Their threads start with k's, so the wait is
+ * short; the limit covers a thread that never asks (a failed job). */
+static void wait_for_fronts(struct tiles_job *t, int k)
+{
+	struct timespec until;
+
+	clock_gettime(CLOCK_REALTIME, &until);
+	until.tv_nsec += TILES_FRONT_WAIT_MS * 1000000L;
+	until.tv_sec += until.tv_nsec / 1000000000L;
+	until.tv_nsec %= 1000000000L;
+	while (!adapt_fronts_asked(&t->adapt, k))
+		if (pthread_cond_timedwait(&t->asked, &t->lock, &until) != 0)
+			break;
+}
+
 int tiles_take_piece(struct tiles_job *t, int k)
 {
 	int index = -1;
 	struct rt_piece piece;
 
 	pthread_mutex_lock(&t->lock);
+	wait_for_fronts(t, k);
 	if (t->piece_count < t->piece_cap && adapt_take(&t->adapt, k, timing_now() * 1e3, &piece)) {
 		index = t->piece_count++;
 		t->pieces[index] = piece;
 		t->owner[index] = k;
 	}
+	pthread_cond_broadcast(&t->asked);
 	pthread_mutex_unlock(&t->lock);
 	return index;
 }
@@ -157,6 +178,7 @@ void tiles_job_free(struct tiles_job *t)
 	t->pieces = NULL;
 	t->expected = NULL;
 	pthread_mutex_destroy(&t->lock);
+	pthread_cond_destroy(&t->asked);
 }
 
 int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)

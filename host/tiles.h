@@ -35,6 +35,11 @@
  * beside a CPU; several GPUs split it (set_min_pieces caps it at a share). */
 #define TILES_GPU_LAUNCHES 16
 
+/* How long a CPU waits for the GPUs beside it to ask for their first piece
+ * of a frame (tiles_take_piece): their threads start together, so this is
+ * only a bound. */
+#define TILES_FRONT_WAIT_MS 200
+
 /* Rows per band: piece_rows when given (> 0), else about height / (32 ×
  * devices) rounded up to a multiple of the work-group height. */
 int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices);
@@ -72,6 +77,7 @@ struct tiles_job {
 	uint32_t *expected; /* check_writes: each pixel's launches so far, all frames */
 	struct adapt adapt;
 	pthread_mutex_t lock; /* adaptive: adapt, pieces, piece_count */
+	pthread_cond_t asked; /* adaptive: a device asked for its first piece */
 	struct tiles_device dev[DEVICES_MAX];
 };
 

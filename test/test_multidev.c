@@ -454,10 +454,16 @@ Test(multidev, adaptive_cpu_waits_for_no_gpu_whose_rate_is_unknown)
 	adapt_new_frame(&a);
 	adapt_set_min_pixels(&a, 0, 2e6); /* as beside another GPU (tiles.c) */
 	adapt_set_min_pixels(&a, 1, 16.0 * 64);
+	/* The CPU waits for the GPU's first request; the GPU waits for none. */
+	cr_assert_not(adapt_fronts_asked(&a, 1));
+	cr_assert(adapt_fronts_asked(&a, 0));
 	cr_assert(adapt_take(&a, 0, 0, &gpu));
+	cr_assert(adapt_fronts_asked(&a, 1));
 	cr_assert(adapt_take(&a, 1, 0, &cpu));
 	cr_assert_eq(gpu.width * gpu.height, 2000000);
 	cr_assert_eq(adapt_take(&a, 1, 150, &cpu), 0, "a second CPU piece");
+	adapt_new_frame(&a); /* each frame the GPU asks first again */
+	cr_assert_not(adapt_fronts_asked(&a, 1));
 	/* The view alone: the same device with every rate known may go on. */
 	struct adapt_view v = {.remaining = 1e9, .total = 4e9, .unit = 64 * 1024.0, .rate = 7e3,
 			       .others_rate = 4e6, .devices = 2, .others_backlog = 1e9,
