@@ -2,7 +2,6 @@
 
 #include <stdio.h>
 #include <stdlib.h>
-#include <unistd.h>
 #include <string.h>
 
 /* Parses one "P:D" entry of len characters. */
@@ -88,28 +87,6 @@ static int expand_all(struct device_list *expanded, char *err, size_t err_size)
 	return 0;
 }
 
-/* Several devices in one process: PoCL's CPU device starts a worker thread
- * per core and takes every core, which starves the host threads that feed
- * the other devices (and a GPU's driver threads): on the H200 node the GPU
- * ran 4.4 times slower beside PoCL (docs/results/multidevice). Leave one core
- * free by capping PoCL's threads at cores - 1 through POCL_MAX_PTHREAD_COUNT,
- * which PoCL reads once, when its platform is first touched: so before any
- * device is opened, when the device types are not known yet. (PoCL 5 also
- * offers sub-devices by counts, but one must then be made and used in place
- * of the opened device in device.c, and whether its pthread driver then
- * runs fewer threads is not verified here.) Never over the user's own
- * setting; other platforms do not read it. */
-static void reserve_a_core(const struct device_list *list)
-{
-	long cores = sysconf(_SC_NPROCESSORS_ONLN);
-	char value[32];
-
-	if ((list->all || list->count > 1) && cores > 1 && !getenv("POCL_MAX_PTHREAD_COUNT")) {
-		snprintf(value, sizeof(value), "%ld", cores - 1);
-		setenv("POCL_MAX_PTHREAD_COUNT", value, 0);
-	}
-}
-
 int devices_open(const struct device_list *list, struct device *devs, int *count, char *err,
 		 size_t err_size)
 {
@@ -117,7 +94,6 @@ int devices_open(const struct device_list *list, struct device *devs, int *count
 	char why[1024];
 
 	*count = 0;
-	reserve_a_core(list);
 	if (list->all && expand_all(&expanded, err, err_size))
 		return -1;
 	for (int i = 0; i < expanded.count; i++) {
