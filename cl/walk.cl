@@ -213,6 +213,15 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 	struct ray_job waiting[RAY_STACK_SIZE];
 	int pixel = y * tr->scene->width + x;
 	ulong flops_before = tracer_flops(tr);
+#ifdef RTCL_ONE_SAMPLE
+	/* One sample per pixel (the host builds --spp 1 with RTCL_ONE_SAMPLE):
+	 * what the loop below does for it, the centre stored as it is, with no
+	 * sum or sample index live across the trace (fewer registers). */
+	walk_start(tr, &w, x, y, (float2)(0.5f));
+	while (!walk_step(tr, &w, waiting))
+		;
+	vstore3(w.color, pixel, image);
+#else
 	/* The sum so far is in the image, unless this pass starts the pixel. */
 	float3 sum = piece->sample_begin > 0 ? vload3(pixel, image) : (float3)(0.0f);
 
@@ -223,6 +232,7 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 		sum = sample_add(tr, sum, w.color, k);
 	}
 	vstore3(sample_finish(tr, sum, piece), pixel, image);
+#endif
 	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
 	count_write(write_counts, pixel);
 }

@@ -415,6 +415,14 @@ def test_triangle_code_is_built_only_for_scenes_with_triangles(tmp_path, scene, 
     assert ("-DRTCL_NO_TRIANGLES" not in stats["build_options"]) == triangles
 
 
+@pytest.mark.parametrize("spp, one_sample", [("1", True), ("2", False)])
+def test_one_sample_code_is_built_only_for_one_sample_per_pixel(tmp_path, spp, one_sample):
+    """--spp 1 is built with -DRTCL_ONE_SAMPLE (no sample loop: fewer
+    registers); more samples without it."""
+    _, stats = stats_of(tmp_path, *SMALL, "--spp", spp)
+    assert ("-DRTCL_ONE_SAMPLE" in stats["build_options"]) == one_sample
+
+
 def test_million_spheres_render_from_global_memory(tmp_path):
     """A scene far larger than __local memory is read from __global memory."""
     scene = tmp_path / "million.json"
