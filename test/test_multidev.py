@@ -210,19 +210,28 @@ def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
     assert result.stdout.count("rank ") == 3
 
 
+# The pieces of the MPI tests below: 9 frames, or one image in 12 bands of 2
+# rows, with the pieces each of the 3 ranks' devices gets under --split static.
+MPI_PIECES = {"frames": (["--frames", "0:8"], "f.ppm", 3),
+              "bands": (["--piece-rows", "2"], "x.ppm", 4)}
+
+
 @needs_mpi
-def test_mpi_static_split_gives_every_rank_its_share(tmp_path):
-    result = mpi_run(*SMALL, "--frames", "0:8", "--split", "static", "-o",
-                     str(tmp_path / "f.ppm"), "--stats", str(tmp_path / "s.json"),
-                     env={"RTCL_TEST_SLOW_DEVICE": "0:50"})
+@pytest.mark.parametrize("mode", MPI_PIECES)
+def test_mpi_static_split_gives_every_rank_its_share(tmp_path, mode):
+    pieces, output, share = MPI_PIECES[mode]
+    result = mpi_run(*SMALL, *pieces, "--split", "static", "-o", str(tmp_path / output),
+                     "--stats", str(tmp_path / "s.json"), env={"RTCL_TEST_SLOW_DEVICE": "0:50"})
     assert result.returncode == 0, result.stderr
     devices = json.loads((tmp_path / "s.json").read_text())["multidevice"]["devices"]
-    assert [d["pieces"] for d in devices] == [3, 3, 3]
+    assert [d["pieces"] for d in devices] == [share] * 3
 
 
 @needs_mpi
-def test_mpi_device_failure_on_a_rank_writes_nothing(tmp_path):
-    result = mpi_run(*SMALL, "--frames", "0:8", "-o", str(tmp_path / "f.ppm"),
+@pytest.mark.parametrize("mode", MPI_PIECES)
+def test_mpi_device_failure_on_a_rank_writes_nothing(tmp_path, mode):
+    pieces, output, _ = MPI_PIECES[mode]
+    result = mpi_run(*SMALL, *pieces, "-o", str(tmp_path / output),
                      env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
     assert result.returncode == 1, result.stderr
     ours = own_messages(result.stderr)
@@ -391,27 +400,6 @@ def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, s
     assert md["bands"] == 8 and md["ranks"] == 3
     assert sum(d["pieces"] for d in md["devices"]) == 8
     assert sum(d["pixels"] for d in md["devices"]) == 32 * 24
-
-
-@needs_mpi
-def test_mpi_static_split_gives_every_rank_its_share_of_bands(tmp_path):
-    result = mpi_run(*SMALL, "--piece-rows", "2", "--split", "static", "-o",
-                     str(tmp_path / "x.ppm"), "--stats", str(tmp_path / "s.json"),
-                     env={"RTCL_TEST_SLOW_DEVICE": "0:50"})
-    assert result.returncode == 0, result.stderr
-    devices = json.loads((tmp_path / "s.json").read_text())["multidevice"]["devices"]
-    assert [d["pieces"] for d in devices] == [4, 4, 4]
-
-
-@needs_mpi
-def test_mpi_device_failing_on_a_band_writes_nothing(tmp_path):
-    result = mpi_run(*SMALL, "--piece-rows", "2", "-o", str(tmp_path / "x.ppm"),
-                     env={"RTCL_TEST_FAIL_DEVICE": "0:2"})
-    assert result.returncode == 1, result.stderr
-    ours = own_messages(result.stderr)
-    assert len(ours) == 1, result.stderr
-    assert re.match(r"rtcl: rank \d, device 0:0 \(.*\): the device failed on its piece 2", ours[0])
-    assert os.listdir(tmp_path) == []
 
 
 @needs_mpi

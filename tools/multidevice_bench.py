@@ -52,12 +52,18 @@ def shares_of(doc):
         f"{d.get('rank', 0)}/{d['platform']}:{d['index']} {d['pieces']}" for d in md["devices"])
 
 
-def measure_image(label, command, env, runs, workdir):
+def run_repeated(command, env, runs, workdir, output):
+    """The --stats documents of `runs` runs of command, writing output."""
     docs = []
     for i in range(runs):
         stats = os.path.join(workdir, f"s{i}.json")
-        docs.append(run([*command, "--stats", stats, "-o", os.path.join(workdir, "i.ppm")],
+        docs.append(run([*command, "--stats", stats, "-o", os.path.join(workdir, output)],
                         env, stats))
+    return docs
+
+
+def measure_image(label, command, env, runs, workdir):
+    docs = run_repeated(command, env, runs, workdir, "i.ppm")
     image_ms = statistics.median(d["kernel_ms"] for d in docs)
     best = sorted(docs, key=lambda d: d["kernel_ms"])[len(docs) // 2]
     efficiency, shares = shares_of(best)
@@ -120,18 +126,11 @@ def image_main(args, env):
 
 
 def measure(label, command, env, runs, workdir):
-    docs = []
-    for i in range(runs):
-        stats = os.path.join(workdir, f"s{i}.json")
-        docs.append(run([*command, "--stats", stats, "-o", os.path.join(workdir, "f.ppm")],
-                        env, stats))
+    docs = run_repeated(command, env, runs, workdir, "f.ppm")
     best = sorted(docs, key=lambda d: d["wall_ms"])[len(docs) // 2]
-    md = best["multidevice"]
-    shares = ", ".join(f"{d.get('rank', 0)}/{d['platform']}:{d['index']} {d['pieces']}"
-                       for d in md["devices"])
+    efficiency, shares = shares_of(best)
     return {"label": label, "wall_ms": statistics.median(d["wall_ms"] for d in docs),
-            "efficiency": md["device_efficiency"], "shares": shares,
-            "command": " ".join(command)}
+            "efficiency": efficiency, "shares": shares, "command": " ".join(command)}
 
 
 def main():
