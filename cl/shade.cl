@@ -95,7 +95,8 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	sh->n_face = sh->inside ? -normal : normal;
 	sh->n = sh->n_face;
 	COUNT_FLOPS(tr, FLOPS_DOT3);
-	if (SCENE_HAS_TRIANGLES && hit.triangle >= 0 && triangle_smooth(tr->triangle_shading[hit.triangle].normal))
+	if (SCENE_HAS_TRIANGLES && hit.triangle >= 0 &&
+	    triangle_smooth(tr->triangle_shading[hit.triangle].normal))
 		sh->n = triangle_shading_normal(tr, &tr->triangle_shading[hit.triangle], hit,
 						sh->n_face);
 

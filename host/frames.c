@@ -276,8 +276,7 @@ struct frames_context {
 
 /* A multidev render_frame_piece: frame first + piece, rendered whole and staged. */
 static int render_frame_piece(void *context, int device, int piece, struct piece_work *done,
-			      char *err,
-			      size_t err_size)
+			      char *err, size_t err_size)
 {
 	const struct frames_context *c = context;
 	const struct render_settings *s = &c->run->settings;

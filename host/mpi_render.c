@@ -207,8 +207,7 @@ static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_
 }
 
 static int render_rank_piece(void *context, int device, int piece, struct piece_work *done,
-			      char *err,
-			     size_t err_size)
+			     char *err, size_t err_size)
 {
 	struct mpi_job *j = context;
 	const struct render_settings *s = &j->run->settings;

@@ -31,9 +31,9 @@ struct piece_work {
 struct device_work {
 	int pieces;
 	long long pixels;
-	double busy_ms;	      /* in the piece function, from taking a piece to done */
-	double kernel_ms;     /* of busy_ms, the device's kernels (profiling events): the
-				 rest is the host's (launching, waiting, reading back) */
+	double busy_ms;	  /* in the piece function, from taking a piece to done */
+	double kernel_ms; /* of busy_ms, the device's kernels (profiling events): the
+			     rest is the host's (launching, waiting, reading back) */
 	int launches;
 	double setup_ms;      /* in the begin function */
 	double finish_ms;     /* from the job's start to its last piece done */

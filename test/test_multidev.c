@@ -168,16 +168,15 @@ Test(multidev, band_rows_default_to_whole_work_groups_and_several_bands_per_devi
 }
 
 /* The smallest adaptive piece tiles_job_init gives each of devs. */
-static void min_pieces(const struct device *devs, int count, int width, int height,
-		       double *out)
+static void min_pieces(const struct device *devs, int count, int width, int height, double *out)
 {
 	struct render_settings s = band_settings(width, height, 1024);
 	struct tiles_job t;
 	char err[256];
 
-	cr_assert_eq(tiles_job_init(&t, NULL, &s, 8, 1, (struct device *)devs, count, err,
-				    sizeof(err)),
-		     0, "%s", err);
+	cr_assert_eq(
+		tiles_job_init(&t, NULL, &s, 8, 1, (struct device *)devs, count, err, sizeof(err)),
+		0, "%s", err);
 	for (int k = 0; k < count; k++)
 		out[k] = t.adapt.dev[k].min_pixels;
 	tiles_job_free(&t);
@@ -465,8 +464,13 @@ Test(multidev, adaptive_cpu_waits_for_no_gpu_whose_rate_is_unknown)
 	adapt_new_frame(&a); /* each frame the GPU asks first again */
 	cr_assert_not(adapt_fronts_asked(&a, 1));
 	/* The view alone: the same device with every rate known may go on. */
-	struct adapt_view v = {.remaining = 1e9, .total = 4e9, .unit = 64 * 1024.0, .rate = 7e3,
-			       .others_rate = 4e6, .devices = 2, .others_backlog = 1e9,
+	struct adapt_view v = {.remaining = 1e9,
+			       .total = 4e9,
+			       .unit = 64 * 1024.0,
+			       .rate = 7e3,
+			       .others_rate = 4e6,
+			       .devices = 2,
+			       .others_backlog = 1e9,
 			       .front_unknown = 1};
 	cr_assert_eq(adapt_piece_cells(&v), 0);
 	v.front_unknown = 0;
@@ -477,8 +481,12 @@ Test(multidev, adaptive_piece_leaves_no_rest_smaller_than_its_smallest)
 {
 	/* A GPU whose smallest piece is 1e9 pixel-samples, 1.05e9 left: a rest
 	 * of 0.05e9 would cost it a latency-bound piece, so it takes all. */
-	struct adapt_view v = {.remaining = 1.05e9, .total = 1.05e9, .unit = 1000, .devices = 2,
-			       .min_size = 1e9, .fastest = 1};
+	struct adapt_view v = {.remaining = 1.05e9,
+			       .total = 1.05e9,
+			       .unit = 1000,
+			       .devices = 2,
+			       .min_size = 1e9,
+			       .fastest = 1};
 
 	cr_assert_eq(adapt_piece_cells(&v), 1050000);
 	v.remaining = 2.5e9; /* a rest of at least its smallest piece stays */
