@@ -86,7 +86,7 @@ MPI_MODULE := $(BUILD)/mpi_stub.o
 endif
 
 # Every host module but main; tests link them too.
-HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devscene.o scene.o scene_check.o \
+HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devmesh.o devscene.o scene.o scene_check.o \
 	scene_literal.o scene_material.o scene_mesh.o mesh.o mesh_place.o timing.o files.o \
 	interrupt.o checks.o program.o progcache.o launch.o singlepass.o wavefront.o render.o \
 	stats.o devices.o multidev.o devstats.o frames.o tiles.o \
@@ -176,11 +176,11 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # bookkeeping the file module keeps.
 FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c \
 	host/scene_mesh.c host/mesh.c host/mesh_place.c host/files.c host/interrupt.c host/devscene.c \
-	host/bvh.c
+	host/devmesh.c host/bvh.c
 
 $(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h $(FUZZ_SOURCES) host/scene.h \
 		host/scene_loader.h host/mesh.h host/mesh_place.h host/files.h host/devscene.h \
-		host/bvh.h cl/rtcl_shared.h
+		host/devmesh.h host/bvh.h cl/rtcl_shared.h
 	mkdir -p $(FUZZ_DIR)
 	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson $(ASSIMP_LIBS) -lm
 

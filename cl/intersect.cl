@@ -105,8 +105,10 @@ static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt
 static bool triangle_hit(struct tracer *tr, int i, float3 o, float3 d, float t_max, float *t,
 			 float2 *uv)
 {
-	RTCL_SCENE_SPACE const struct rt_triangle *tri = &tr->triangles[i];
-	float3 e1 = tri->e1.xyz, e2 = tri->e2.xyz;
+	uint4 index = tr->triangles[i].index;
+	float3 v0 = tr->vertices[index.x].position.xyz;
+	float3 e1 = tr->vertices[index.y].position.xyz - v0;
+	float3 e2 = tr->vertices[index.z].position.xyz - v0;
 	float3 p = cross3(d, e2);
 	float det = dot3(e1, p);
 
@@ -114,7 +116,7 @@ static bool triangle_hit(struct tracer *tr, int i, float3 o, float3 d, float t_m
 	if (det == 0.0f)
 		return false;
 	float inv_det = 1.0f / det;
-	float3 s = o - tri->v0.xyz;
+	float3 s = o - v0;
 	float u = dot3(s, p) * inv_det;
 	COUNT_FLOPS(tr, FLOPS_TRIANGLE_U);
 	if (u < 0.0f || u > 1.0f)

@@ -2,13 +2,13 @@
  * both by the C host and by OpenCL C (docs/STYLE.md rule 2).
  *
  * The device scene is one contiguous block: a struct rt_scene header, then the
- * material, sphere, plane, light, triangle and triangle-shading arrays at the
+ * material, sphere, plane, light, triangle and vertex arrays at the
  * byte offsets the header gives. Every struct is a whole number of 16-byte units so that the block
  * can be copied into __local memory as uint4 words. Vectors are float4 on both sides (cl_float4 on
  * the host) with w unused, except where a scalar shares the 16-byte load of the vector beside it: a
  * sphere's centre carries radius² (one load feeds the sphere test), a plane's normal its offset, a
- * triangle's first vertex its material, a triangle's geometric normal whether
- * it is smooth, a material's colour ka, a queued ray's origin its weight, and the camera
+ * triangle's vertex indices its material and whether it is smooth, a
+ * material's colour ka, a queued ray's origin its weight, and the camera
  * vectors the half-extents and epsilon. Fields of their own would cost the
  * walk extra loads (tried: four more scalar loads in each walk kernel's NVPTX
  * code from clang, where the w lanes come with 16-byte loads made anyway). The
@@ -25,6 +25,7 @@ typedef float4 rt_vec4;
 typedef float rt_float;
 typedef int rt_int;
 typedef uint rt_uint;
+typedef uint4 rt_uvec4;
 #else
 #ifndef CL_TARGET_OPENCL_VERSION
 #define CL_TARGET_OPENCL_VERSION 120
@@ -34,6 +35,7 @@ typedef cl_float4 rt_vec4;
 typedef cl_float rt_float;
 typedef cl_int rt_int;
 typedef cl_uint rt_uint;
+typedef cl_uint4 rt_uvec4;
 #endif
 
 struct rt_material {
@@ -78,22 +80,27 @@ struct rt_light {
 	rt_vec4 color;
 };
 
-/* What the ray-triangle test reads (Moller-Trumbore: the first vertex and the
- * two edges from it), three 16-byte loads per triangle. The edges are
- * computed in double on the host and rounded once. */
+/* A triangle: the indices of its three vertices in the vertex array and, in
+ * w, its material index with RT_TRIANGLE_SMOOTH set when its shading normal
+ * is interpolated from the vertices' (triangle_material, triangle_smooth).
+ * One 16-byte load, then one per vertex: each vertex is stored once for all
+ * the triangles that share it, which keeps a mesh within 64 device bytes per
+ * triangle with its BVH (docs/bvh.md, "Triangle storage"). */
 struct rt_triangle {
-	rt_vec4 v0; /* w: the material index, its int bits (triangle_material) */
-	rt_vec4 e1; /* v1 − v0 */
-	rt_vec4 e2; /* v2 − v0 */
+	rt_uvec4 index;
 };
 
-/* What only the hit reads, in an array of its own so that the test's loads
- * stay dense: triangle i's shading is element i. */
-struct rt_triangle_shading {
-	rt_vec4 normal;	    /* the unit geometric normal, normalize(e1 × e2) computed in
-			       double; w: 1 when the shading normal is interpolated from
-			       n0, n1, n2, 0 when it is this normal (triangle_smooth) */
-	rt_vec4 n0, n1, n2; /* unit shading normals at v0, v1, v2 */
+#define RT_TRIANGLE_SMOOTH 0x80000000u
+
+/* A vertex's position (w unused), what the triangle test reads; and in an
+ * array of its own, read only at a smooth triangle's hit, its unit shading
+ * normal (0 at vertices of flat triangles). Vertex i's normal is element i. */
+struct rt_vertex {
+	rt_vec4 position;
+};
+
+struct rt_vertex_normal {
+	rt_vec4 normal;
 };
 
 struct rt_scene {
@@ -111,7 +118,7 @@ struct rt_scene {
 	/* Byte offsets of the arrays from the start of this header. */
 	rt_uint material_offset, sphere_offset, plane_offset, light_offset;
 	rt_uint total_bytes;			 /* the whole block, a multiple of 16 */
-	rt_uint triangle_offset, shading_offset; /* struct rt_triangle, rt_triangle_shading */
+	rt_uint triangle_offset, vertex_offset;	 /* struct rt_triangle, rt_vertex */
 	rt_int triangle_count;
 	/* The BVH over the bounded primitives, spheres and triangles
 	   (docs/bvh.md): bvh_node_count struct rt_bvh_node at bvh_node_offset,
@@ -123,7 +130,7 @@ struct rt_scene {
 	   read as float4). */
 	rt_uint bvh_node_offset, bvh_ref_offset;
 	rt_int bvh_node_count;
-	rt_int pad;
+	rt_uint normal_offset; /* struct rt_vertex_normal, one per vertex */
 };
 
 /* A BVH node of two children, both boxes in one 64-byte node so that one
@@ -192,8 +199,9 @@ _Static_assert(offsetof(struct rt_sphere, material) == 24, "rt_sphere layout");
 _Static_assert(sizeof(struct rt_plane) == 48, "rt_plane layout");
 _Static_assert(offsetof(struct rt_plane, material) == 32, "rt_plane layout");
 _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
-_Static_assert(sizeof(struct rt_triangle) == 48, "rt_triangle layout");
-_Static_assert(sizeof(struct rt_triangle_shading) == 64, "rt_triangle_shading layout");
+_Static_assert(sizeof(struct rt_triangle) == 16, "rt_triangle layout");
+_Static_assert(sizeof(struct rt_vertex) == 16, "rt_vertex layout");
+_Static_assert(sizeof(struct rt_vertex_normal) == 16, "rt_vertex_normal layout");
 _Static_assert(sizeof(struct rt_scene) == 176, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");
@@ -226,16 +234,15 @@ static inline float material_ambient(float4 color)
 	return color.w;
 }
 
-/* v0: struct rt_triangle's first-vertex lane */
-static inline int triangle_material(float4 v0)
+/* index: struct rt_triangle's material lane */
+static inline int triangle_material(uint4 index)
 {
-	return as_int(v0.w);
+	return (int)(index.w & ~RT_TRIANGLE_SMOOTH);
 }
 
-/* normal: struct rt_triangle_shading's geometric-normal lane */
-static inline bool triangle_smooth(float4 normal)
+static inline bool triangle_smooth(uint4 index)
 {
-	return normal.w != 0.0f;
+	return (index.w & RT_TRIANGLE_SMOOTH) != 0;
 }
 
 /* checker_color: struct rt_plane's checker lane */

@@ -40,12 +40,12 @@ struct shading {
  * at the hit's barycentric (u, v) from the vertex normals, normalised and
  * turned to the side of n_face (the geometric normal facing the ray); n_face
  * itself where the interpolation gives the zero vector. */
-static float3 triangle_shading_normal(struct tracer *tr,
-				      RTCL_SCENE_SPACE const struct rt_triangle_shading *ts,
-				      struct hit hit, float3 n_face)
+static float3 triangle_shading_normal(struct tracer *tr, uint4 index, struct hit hit,
+				      float3 n_face)
 {
 	float w = 1.0f - hit.u - hit.v;
-	float3 n = w * ts->n0.xyz + hit.u * ts->n1.xyz + hit.v * ts->n2.xyz;
+	float3 n = w * tr->normals[index.x].normal.xyz + hit.u * tr->normals[index.y].normal.xyz +
+		   hit.v * tr->normals[index.z].normal.xyz;
 	float length2 = dot3(n, n);
 	/* w (2), three scalings and two sums, the squared length */
 	COUNT_FLOPS(tr, 2 + 3 * FLOPS_MUL3 + 2 * FLOPS_ADD3 + FLOPS_DOT3);
@@ -56,9 +56,31 @@ static float3 triangle_shading_normal(struct tracer *tr,
 	return dot3(n, n_face) < 0.0f ? -n : n;
 }
 
+/* A triangle's unit geometric normal, normalize(e1 × e2) (RENDERING.md step
+ * 2) from the vertices as the triangle test reads them. The cross product is
+ * first scaled by its largest component, since its squared length could
+ * overflow or underflow in float for coordinates near 1e18 or tiny edges.
+ * Where it is 0 in float (a sliver whose vertices rounded to a line), the
+ * triangle faces the ray: -d. */
+static float3 triangle_normal(struct tracer *tr, uint4 index, float3 d)
+{
+	float3 v0 = tr->vertices[index.x].position.xyz;
+	float3 n = cross3(tr->vertices[index.y].position.xyz - v0,
+			  tr->vertices[index.z].position.xyz - v0);
+	float largest = fmax(fmax(fabs(n.x), fabs(n.y)), fabs(n.z));
+
+	COUNT_FLOPS(tr, FLOPS_TRIANGLE_CROSS);
+	if (largest == 0.0f)
+		return -d;
+	n = n * (1.0f / largest);
+	COUNT_FLOPS(tr, 1 + FLOPS_MUL3 + FLOPS_NORMALIZE3);
+	return n * rsqrt(dot3(n, n));
+}
+
 /* The geometric normal at the hit (step 2), the material and base colour
  * (step 3). A triangle's shading normal is left to shading_begin. */
-static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, struct shading *sh)
+static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, float3 d,
+			  struct shading *sh)
 {
 	float3 normal;
 
@@ -69,8 +91,9 @@ static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, struct sh
 		sh->base = sh->m->color.xyz;
 		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_MUL3);
 	} else if (SCENE_HAS_TRIANGLES && hit.triangle >= 0) {
-		normal = tr->triangle_shading[hit.triangle].normal.xyz;
-		sh->m = &tr->materials[triangle_material(tr->triangles[hit.triangle].v0)];
+		uint4 index = tr->triangles[hit.triangle].index;
+		normal = triangle_normal(tr, index, d);
+		sh->m = &tr->materials[triangle_material(index)];
 		sh->base = sh->m->color.xyz;
 	} else {
 		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
@@ -90,15 +113,16 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 
 	sh->p = ray->origin + hit.t * ray->dir;
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3);
-	float3 normal = hit_surface(tr, hit, sh->p, sh);
+	float3 normal = hit_surface(tr, hit, sh->p, ray->dir, sh);
 	sh->inside = dot3(normal, ray->dir) > 0.0f;
 	sh->n_face = sh->inside ? -normal : normal;
 	sh->n = sh->n_face;
 	COUNT_FLOPS(tr, FLOPS_DOT3);
-	if (SCENE_HAS_TRIANGLES && hit.triangle >= 0 &&
-	    triangle_smooth(tr->triangle_shading[hit.triangle].normal))
-		sh->n = triangle_shading_normal(tr, &tr->triangle_shading[hit.triangle], hit,
-						sh->n_face);
+	if (SCENE_HAS_TRIANGLES && hit.triangle >= 0) {
+		uint4 index = tr->triangles[hit.triangle].index;
+		if (triangle_smooth(index))
+			sh->n = triangle_shading_normal(tr, index, hit, sh->n_face);
+	}
 
 	sh->color = material_ambient(sh->m->color) * sh->base * scene->ambient.xyz;
 	sh->shadow_origin = sh->p + scene_epsilon(scene) * sh->n_face;

@@ -90,13 +90,17 @@
 /* cross3: per component a product and an fma, 9. */
 #define FLOPS_CROSS3 (3 * (1 + FLOPS_FMA))
 /* triangle_hit (Moller-Trumbore) in stages, each counted when reached:
- * p = d × e2 and det = e1·p, 14; then 1/det, s = o − v0, u = (s·p)/det, 10
- * more; then q = s × e1, v = (d·q)/det and u + v, 16 more; then
- * t = (e2·q)/det, 6 more: a ray that reaches t costs 46. */
-#define FLOPS_TRIANGLE_DET (FLOPS_CROSS3 + FLOPS_DOT3)
+ * e1 = v1 − v0, e2 = v2 − v0, p = d × e2 and det = e1·p, 20; then 1/det,
+ * s = o − v0, u = (s·p)/det, 10 more; then q = s × e1, v = (d·q)/det and
+ * u + v, 16 more; then t = (e2·q)/det, 6 more: a ray that reaches t costs 52. */
+#define FLOPS_TRIANGLE_DET (2 * FLOPS_ADD3 + FLOPS_CROSS3 + FLOPS_DOT3)
 #define FLOPS_TRIANGLE_U (1 + FLOPS_ADD3 + FLOPS_DOT3 + 1)
 #define FLOPS_TRIANGLE_V (FLOPS_CROSS3 + FLOPS_DOT3 + 1 + 1)
 #define FLOPS_TRIANGLE_T (FLOPS_DOT3 + 1)
+/* triangle_normal: the edges (6), their cross product (9) and its largest
+ * component in size (2 maxima), 17; then, unless that is 0, the scaling by
+ * its reciprocal (1 + 3) and the normalisation (9), 13 more: 30. */
+#define FLOPS_TRIANGLE_CROSS (2 * FLOPS_ADD3 + FLOPS_CROSS3 + 2)
 /* The BVH's per-ray set-up: 1/d, three divisions, and o/d, three products. */
 #define FLOPS_BOX_SETUP (3 + FLOPS_MUL3)
 /* box_hit, one box: six slab fmas, a min and a max per axis, the entry as
@@ -131,7 +135,8 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_plane *planes;
 	RTCL_SCENE_SPACE const struct rt_light *lights;
 	RTCL_SCENE_SPACE const struct rt_triangle *triangles;
-	RTCL_SCENE_SPACE const struct rt_triangle_shading *triangle_shading;
+	RTCL_SCENE_SPACE const struct rt_vertex *vertices;
+	RTCL_SCENE_SPACE const struct rt_vertex_normal *normals;
 	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
 	RTCL_SCENE_SPACE const uint *refs; /* the BVH leaves' primitives (RT_PRIM_*) */
 	__global ulong *item_counts;	   /* RT_ITEM_COUNTS per work-item, when counting */
@@ -210,8 +215,9 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 	tr->lights = (RTCL_SCENE_SPACE const struct rt_light *)(base + scene->light_offset);
 	tr->triangles =
 		(RTCL_SCENE_SPACE const struct rt_triangle *)(base + scene->triangle_offset);
-	tr->triangle_shading =
-		(RTCL_SCENE_SPACE const struct rt_triangle_shading *)(base + scene->shading_offset);
+	tr->vertices = (RTCL_SCENE_SPACE const struct rt_vertex *)(base + scene->vertex_offset);
+	tr->normals =
+		(RTCL_SCENE_SPACE const struct rt_vertex_normal *)(base + scene->normal_offset);
 	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh_node *)(base + scene->bvh_node_offset);
 	tr->refs = (RTCL_SCENE_SPACE const uint *)(base + scene->bvh_ref_offset);
 	tr->item_counts = item_counts;

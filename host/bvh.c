@@ -293,18 +293,17 @@ void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *
  * differently, and the pad keeps every ray the triangle test takes inside the
  * box. It also gives an axis-aligned (flat) triangle a box of some thickness,
  * so that the slab test never meets a zero-width slab. The vertices are the
- * device's: v0 as float, v0 + e1 and v0 + e2 with the edges as the packer
- * rounds them (host/devscene.c), which the triangle test works with. */
+ * device's, rounded to float (host/devmesh.c); the triangle test takes the
+ * edges between them in float, which the pad also covers. */
 void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim *out)
 {
 	double v[3][3], scale = 0.0;
 
 	for (int k = 0; k < 3; k++) {
-		v[0][k] = (float)tri->v[0][k];
-		v[1][k] = v[0][k] + (float)(tri->v[1][k] - tri->v[0][k]);
-		v[2][k] = v[0][k] + (float)(tri->v[2][k] - tri->v[0][k]);
-		for (int j = 0; j < 3; j++)
+		for (int j = 0; j < 3; j++) {
+			v[j][k] = (float)tri->v[j][k];
 			scale = fmax(scale, fabs(v[j][k]));
+		}
 	}
 	double pad = BVH_SPHERE_PAD * scale;
 	for (int k = 0; k < 3; k++) {

@@ -98,34 +98,6 @@ static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
 	out->checker_t_axis = drop == 2 ? 1 : 2;
 }
 
-/* The material index rides in v0's w lane as its int bits (triangle_material). */
-static void pack_triangle(struct rt_triangle *out, struct rt_triangle_shading *shading,
-			  const struct scene_triangle *in)
-{
-	double e1[3], e2[3], n[3];
-	rt_int material = in->material;
-
-	for (int i = 0; i < 3; i++) {
-		e1[i] = in->v[1][i] - in->v[0][i];
-		e2[i] = in->v[2][i] - in->v[0][i];
-	}
-	out->v0 = vec4(in->v[0], 0.0);
-	memcpy(&out->v0.s[3], &material, sizeof(material));
-	out->e1 = vec4(e1, 0.0);
-	out->e2 = vec4(e2, 0.0);
-	/* The loader made sure the area is not 0; scaled first so that the cross
-	 * product of large edges cannot overflow. */
-	double m = fmax(fmax(fabs(e1[0]), fabs(e1[1])), fmax(fabs(e1[2]), 1e-300));
-	for (int i = 0; i < 3; i++)
-		e1[i] /= m;
-	cross(e1, e2, n);
-	normalize(n);
-	shading->normal = vec4(n, in->smooth ? 1.0 : 0.0); /* triangle_smooth */
-	shading->n0 = vec4(in->normal[0], 0.0);
-	shading->n1 = vec4(in->normal[1], 0.0);
-	shading->n2 = vec4(in->normal[2], 0.0);
-}
-
 /* The BVH's nodes and references, after the triangles (none without a BVH). */
 static void pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh)
 {
@@ -140,11 +112,12 @@ static void pack_bvh(unsigned char *block, struct rt_scene *header, const struct
 
 /* Where the arrays go in the block (byte offsets) and its size. */
 struct layout {
-	size_t material, sphere, plane, light, triangle, shading, node, ref, total;
+	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, total;
 	int sphere_slots;
 };
 
-static struct layout layout_of(const struct scene *scene, const struct bvh *bvh)
+static struct layout layout_of(const struct scene *scene, const struct devmesh *mesh,
+			       const struct bvh *bvh)
 {
 	struct layout l;
 
@@ -155,22 +128,23 @@ static struct layout layout_of(const struct scene *scene, const struct bvh *bvh)
 	l.plane = l.sphere + (size_t)l.sphere_slots * sizeof(struct rt_sphere);
 	l.light = l.plane + (size_t)scene->plane_count * sizeof(struct rt_plane);
 	l.triangle = l.light + (size_t)scene->light_count * sizeof(struct rt_light);
-	l.shading = l.triangle + (size_t)scene->triangle_count * sizeof(struct rt_triangle);
-	l.node = l.shading + (size_t)scene->triangle_count * sizeof(struct rt_triangle_shading);
+	l.vertex = l.triangle + (size_t)scene->triangle_count * sizeof(struct rt_triangle);
+	l.normal = l.vertex + (size_t)mesh->vertex_count * sizeof(struct rt_vertex);
+	l.node = l.normal + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal);
 	l.ref = l.node + (bvh ? (size_t)bvh->node_count * sizeof(*bvh->nodes) : 0);
 	l.total = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
 	return l;
 }
 
-size_t devscene_bytes(const struct scene *scene, const struct bvh *bvh)
+size_t devscene_bytes(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh)
 {
-	return layout_of(scene, bvh).total;
+	return layout_of(scene, mesh, bvh).total;
 }
 
-void *devscene_pack(const struct scene *scene, const struct bvh *bvh, int width, int height,
-		    int max_depth, size_t *bytes)
+void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh,
+		    int width, int height, int max_depth, size_t *bytes)
 {
-	struct layout l = layout_of(scene, bvh);
+	struct layout l = layout_of(scene, mesh, bvh);
 	size_t material_offset = l.material, sphere_offset = l.sphere, plane_offset = l.plane;
 	size_t light_offset = l.light, total = l.total;
 	int sphere_slots = l.sphere_slots;
@@ -201,7 +175,8 @@ void *devscene_pack(const struct scene *scene, const struct bvh *bvh, int width,
 	header->light_offset = (rt_uint)light_offset;
 	header->total_bytes = (rt_uint)total;
 	header->triangle_offset = (rt_uint)l.triangle;
-	header->shading_offset = (rt_uint)l.shading;
+	header->vertex_offset = (rt_uint)l.vertex;
+	header->normal_offset = (rt_uint)l.normal;
 	header->triangle_count = scene->triangle_count;
 	header->bvh_node_offset = (rt_uint)l.node;
 	header->bvh_ref_offset = (rt_uint)l.ref;
@@ -228,10 +203,12 @@ void *devscene_pack(const struct scene *scene, const struct bvh *bvh, int width,
 		lights[i].color = vec4(scene->lights[i].color, 0.0);
 	}
 
-	struct rt_triangle *triangles = (struct rt_triangle *)(block + l.triangle);
-	struct rt_triangle_shading *shading = (struct rt_triangle_shading *)(block + l.shading);
-	for (int i = 0; i < scene->triangle_count; i++)
-		pack_triangle(&triangles[i], &shading[i], &scene->triangles[i]);
+	memcpy(block + l.triangle, mesh->triangles,
+	       (size_t)scene->triangle_count * sizeof(struct rt_triangle));
+	memcpy(block + l.vertex, mesh->vertices,
+	       (size_t)mesh->vertex_count * sizeof(struct rt_vertex));
+	memcpy(block + l.normal, mesh->normals,
+	       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal));
 
 	*bytes = total;
 	return block;

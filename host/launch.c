@@ -161,9 +161,10 @@ int launch_check_kernel(const struct device *dev, cl_kernel kernel, const struct
 }
 
 int launch_check_scene_fits(const struct device *dev, const struct scene *scene,
-			    const struct bvh *bvh, char *err, size_t err_size)
+			    const struct devmesh *mesh, const struct bvh *bvh, char *err,
+			    size_t err_size)
 {
-	size_t bytes = devscene_bytes(scene, bvh);
+	size_t bytes = devscene_bytes(scene, mesh, bvh);
 	/* One buffer holds the whole block, whose offsets are 32-bit. */
 	unsigned long long limit = dev->max_alloc_size < DEVSCENE_MAX_BYTES
 					   ? (unsigned long long)dev->max_alloc_size
@@ -203,41 +204,69 @@ static int launch_build_bvh(const struct scene *scene, struct render_result *res
 }
 
 /* Device bytes per triangle (issue 11's budget: 64): the whole scene block
- * over the triangles, and the BVH's share of it. */
+ * over the triangles, and the shares of the triangles, their vertices and the
+ * BVH. */
 static void launch_print_triangle_bytes(const struct scene *scene, const struct render_result *res)
 {
 	double n = scene->triangle_count;
+	size_t vertex_bytes = sizeof(struct rt_vertex) + sizeof(struct rt_vertex_normal);
 
 	fprintf(stderr,
 		"rtcl: device scene block %zu bytes for %d triangles: %.1f bytes per triangle "
-		"(%zu triangle data, %.1f BVH)\n",
+		"(%zu triangle, %.1f vertices (%d), %.1f BVH)\n",
 		res->scene_bytes, scene->triangle_count, res->scene_bytes / n,
-		sizeof(struct rt_triangle) + sizeof(struct rt_triangle_shading),
+		sizeof(struct rt_triangle), res->vertex_count * vertex_bytes / n, res->vertex_count,
 		res->bvh_bytes / n);
+}
+
+/* The scene's triangles indexed (devmesh) and its BVH (with use_bvh), checked
+ * to fit on dev and packed into *block. */
+static int launch_pack_scene(struct device *dev, const struct scene *scene,
+			     const struct render_settings *s, int use_bvh,
+			     struct render_result *res, void **block, char *err, size_t err_size)
+{
+	struct bvh bvh = {0};
+	struct devmesh mesh;
+	int ret = -1;
+
+	if (devmesh_build(scene, &mesh)) {
+		snprintf(err, err_size, "out of host memory for the %d triangles' vertices",
+			 scene->triangle_count);
+		return -1;
+	}
+	res->vertex_count = mesh.vertex_count;
+	if (use_bvh && launch_build_bvh(scene, res, &bvh, err, err_size))
+		goto free_mesh;
+	if (launch_check_scene_fits(dev, scene, &mesh, use_bvh ? &bvh : NULL, err, err_size))
+		goto free_bvh;
+	*block = devscene_pack(scene, &mesh, use_bvh ? &bvh : NULL, s->width, s->height,
+			       s->max_depth, &res->scene_bytes);
+	if (!*block)
+		snprintf(err, err_size, "out of host memory for the scene's %zu bytes",
+			 devscene_bytes(scene, &mesh, use_bvh ? &bvh : NULL));
+	else
+		ret = 0;
+free_bvh:
+	bvh_free(&bvh);
+free_mesh:
+	devmesh_free(&mesh);
+	return ret;
 }
 
 int launch_prepare_scene(struct device *dev, const struct scene *scene,
 			 const struct render_settings *s, struct render_result *res, void **block,
 			 char *err, size_t err_size)
 {
-	struct bvh bvh = {0};
 	int use_bvh =
 		s->accel == ACCEL_BVH && (scene->sphere_count > 0 || scene->triangle_count > 0);
 
 	*block = NULL;
-	if (use_bvh && launch_build_bvh(scene, res, &bvh, err, err_size))
+	if (launch_pack_scene(dev, scene, s, use_bvh, res, block, err, err_size))
 		return -1;
-	if (launch_check_scene_fits(dev, scene, use_bvh ? &bvh : NULL, err, err_size)) {
-		bvh_free(&bvh);
-		return -1;
-	}
-	*block = devscene_pack(scene, use_bvh ? &bvh : NULL, s->width, s->height, s->max_depth,
-			       &res->scene_bytes);
-	bvh_free(&bvh);
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
-	if (!*block || !res->rgb) {
-		snprintf(err, err_size, "out of host memory for a %dx%d image and the scene",
-			 s->width, s->height);
+	if (!res->rgb) {
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
+			 s->height);
 		return -1;
 	}
 	/* A third at most: every work-group holds its own copy, and a larger

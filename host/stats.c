@@ -134,9 +134,11 @@ static void add_accel_figures(json_t *doc, const struct run *run)
 	 * triangle, the figure issue 11 budgets. */
 	if (r->scene_bytes)
 		json_object_set_new(doc, "scene_bytes", json_integer((json_int_t)r->scene_bytes));
-	if (r->scene_bytes && run->scene->triangle_count)
+	if (r->scene_bytes && run->scene->triangle_count) {
 		json_object_set_new(doc, "bytes_per_triangle",
 				    json_real((double)r->scene_bytes / run->scene->triangle_count));
+		json_object_set_new(doc, "vertices", json_integer(r->vertex_count));
+	}
 	if (r->bvh_nodes == 0)
 		return;
 	json_object_set_new(doc, "bvh",

@@ -20,6 +20,31 @@ static int float_positive(float x)
 	return isfinite(x) && x > 0;
 }
 
+/* The triangles: vertices and normals finite, each index within the vertex
+ * array (between vertex_offset and normal_offset) and each material one
+ * the scene has. */
+static const char *triangles_problem(const void *packed)
+{
+	const unsigned char *block = packed;
+	const struct rt_scene *h = packed;
+	const struct rt_triangle *t = (const void *)(block + h->triangle_offset);
+	const struct rt_vertex *v = (const void *)(block + h->vertex_offset);
+	const struct rt_vertex_normal *n = (const void *)(block + h->normal_offset);
+	rt_uint vertices = (h->normal_offset - h->vertex_offset) / sizeof(*v);
+
+	for (rt_uint i = 0; i < vertices; i++)
+		if (!vec4_finite(v[i].position) || !vec4_finite(n[i].normal))
+			return "vertex or normal not finite";
+	for (int i = 0; i < h->triangle_count; i++) {
+		for (int k = 0; k < 3; k++)
+			if (t[i].index.s[k] >= vertices)
+				return "triangle vertex index out of range";
+		if ((int)(t[i].index.s[3] & ~RT_TRIANGLE_SMOOTH) >= h->material_count)
+			return "triangle material out of range";
+	}
+	return NULL;
+}
+
 /* Returns NULL when the packed scene is usable, else what is wrong. */
 static const char *devscene_problem(const void *packed)
 {
@@ -64,7 +89,7 @@ static const char *devscene_problem(const void *packed)
 	for (int i = 0; i < h->light_count; i++)
 		if (!vec4_finite(l[i].position) || !vec4_finite(l[i].color))
 			return "light not finite";
-	return NULL;
+	return triangles_problem(packed);
 }
 
 #endif

@@ -35,14 +35,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (scene_load_string(&scene, json, "fuzz.json", err, sizeof(err)) == 0) {
 		size_t bytes;
 		struct bvh bvh;
-		if (bvh_build_scene(&scene, &bvh))
+		struct devmesh mesh;
+		if (bvh_build_scene(&scene, &bvh) || devmesh_build(&scene, &mesh))
 			abort();
-		void *packed = devscene_pack(&scene, &bvh, scene.width, scene.height,
+		void *packed = devscene_pack(&scene, &mesh, &bvh, scene.width, scene.height,
 					     scene.max_depth, &bytes);
 
 		if (!packed || devscene_problem(packed))
 			abort();
 		bvh_free(&bvh);
+		devmesh_free(&mesh);
 		free(packed);
 		scene_free(&scene);
 	} else if (strlen(err) == 0 || strchr(err, '\n') || scene.source || scene.materials ||

@@ -37,6 +37,13 @@ static const char triangle_json[] =
 	" \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
 	" \"triangles\": [{\"vertices\": [[-1, -1, 0], [1, -1, 0], [0, 1, 0]]}]}";
 
+/* A sliver: area 5e-11 in double, but 2 + 1e-10 rounds to 2 in float, where
+ * its vertices lie on a line and e1 x e2 is 0. */
+static const char sliver_json[] =
+	"{\"format\": \"rtcl-scene\", \"version\": 2,"
+	" \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+	" \"triangles\": [{\"vertices\": [[0, 0, 0], [1, 1, 0], [2, 2.0000000001, 0]]}]}";
+
 /* One smooth triangle from a file, v0 = (0,0,0), v1 = (1,0,0), v2 = (0,1,0),
  * with vertex normals n0 = (0,0,1), n1 = (0,0,-1), n2 = (0,0,1). */
 static const char smooth_json[] = "{\"format\": \"rtcl-scene\", \"version\": 2,"
@@ -76,13 +83,22 @@ static const char test_kernels[] =
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(hit ? t : -1.0f);\n"
 	"}\n"
+	"__kernel void count_triangle_normal(__global const uint4 *scene, __global ulong *out,"
+	"                                    float4 unused, float4 d)\n"
+	"{\n"
+	"	struct tracer tr;\n"
+	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
+	"	float3 n = triangle_normal(&tr, tr.triangles[0].index, d.xyz);\n"
+	"	out[0] = tr.flops;\n"
+	"	out[1] = as_uint(n.x + 2.0f * n.y + 4.0f * n.z);\n"
+	"}\n"
 	"__kernel void count_smooth_normal(__global const uint4 *scene, __global ulong *out,"
 	"                                  float4 uv, float4 n_face)\n"
 	"{\n"
 	"	struct tracer tr;\n"
 	"	struct hit hit = {1.0f, -1, -1, 0, uv.x, uv.y};\n"
 	"	tracer_init(&tr, (scene_ptr)scene, out, out);\n"
-	"	float3 n = triangle_shading_normal(&tr, tr.triangle_shading, hit, n_face.xyz);\n"
+	"	float3 n = triangle_shading_normal(&tr, tr.triangles[0].index, hit, n_face.xyz);\n"
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(n.z);\n"
 	"}\n"
@@ -123,9 +139,12 @@ static void setup_scene(struct fixture *f, const char *json, int bvh)
 	cr_assert_eq(scene_load_string(&f->scene, json, "analytic", err, sizeof(err)), 0, "%s",
 		     err);
 	struct bvh tree;
+	struct devmesh mesh;
 	cr_assert_eq(bvh_build_scene(&f->scene, &tree), 0);
-	void *block = devscene_pack(&f->scene, bvh ? &tree : NULL, 3, 3, 1, &bytes);
+	cr_assert_eq(devmesh_build(&f->scene, &mesh), 0);
+	void *block = devscene_pack(&f->scene, &mesh, bvh ? &tree : NULL, 3, 3, 1, &bytes);
 	bvh_free(&tree);
+	devmesh_free(&mesh);
 	f->program =
 		clCreateProgramWithSource(f->dev.context, (cl_uint)count, sources, NULL, &status);
 	cr_assert_eq(status, CL_SUCCESS);
@@ -293,11 +312,12 @@ Test(flops, shading_evaluation)
 	teardown(&f);
 }
 
-/* triangle_hit by stage (RENDERING.md): det = e1.(d x e2), a cross product
- * 9 and a dot product 5: 14, where a ray parallel to the triangle stops;
- * 1/det 1, s = o - v0 3, u = (s.p)/det 5 + 1: 24, where u outside [0, 1]
- * stops; q = s x e1 9, v = (d.q)/det 5 + 1, u + v 1: 40, where v < 0 or
- * u + v > 1 stops; t = (e2.q)/det 5 + 1: 46. */
+/* triangle_hit by stage (RENDERING.md): the edges e1 = v1 - v0 and
+ * e2 = v2 - v0 3 + 3, det = e1.(d x e2), a cross product 9 and a dot
+ * product 5: 20, where a ray parallel to the triangle stops; 1/det 1,
+ * s = o - v0 3, u = (s.p)/det 5 + 1: 30, where u outside [0, 1] stops;
+ * q = s x e1 9, v = (d.q)/det 5 + 1, u + v 1: 46, where v < 0 or u + v > 1
+ * stops; t = (e2.q)/det 5 + 1: 52. */
 Test(flops, ray_triangle_test)
 {
 	struct fixture f;
@@ -307,20 +327,44 @@ Test(flops, ray_triangle_test)
 	float t;
 
 	setup_scene(&f, triangle_json, 0);
-	cr_expect_eq(run_kernel(&f, "count_triangle", eye, ahead, &t), 46);
+	cr_expect_eq(run_kernel(&f, "count_triangle", eye, ahead, &t), 52);
 	cr_expect_float_eq(t, 5.0f, 1e-6f);
-	/* From behind the eye's side, the plane is behind: all 46, no hit. */
-	cr_expect_eq(run_kernel(&f, "count_triangle", eye, behind, &t), 46);
+	/* From behind the eye's side, the plane is behind: all 52, no hit. */
+	cr_expect_eq(run_kernel(&f, "count_triangle", eye, behind, &t), 52);
 	cr_expect_eq(t, -1.0f);
 	/* d x e2 = (0,0,2), e1.(0,0,2) = 0. */
-	cr_expect_eq(run_kernel(&f, "count_triangle", eye, parallel, &t), 14);
+	cr_expect_eq(run_kernel(&f, "count_triangle", eye, parallel, &t), 20);
 	cr_expect_eq(t, -1.0f);
 	/* Through (3,0,0): s = (4,1,5), p = (2,-1,0), det 4, u = 7/4. */
-	cr_expect_eq(run_kernel(&f, "count_triangle", right_of_it, ahead, &t), 24);
+	cr_expect_eq(run_kernel(&f, "count_triangle", right_of_it, ahead, &t), 30);
 	cr_expect_eq(t, -1.0f);
 	/* Through (0.9,0.5,0): u = 0.575, v = 0.75, u + v > 1. */
-	cr_expect_eq(run_kernel(&f, "count_triangle", above_it, ahead, &t), 40);
+	cr_expect_eq(run_kernel(&f, "count_triangle", above_it, ahead, &t), 46);
 	cr_expect_eq(t, -1.0f);
+	teardown(&f);
+}
+
+/* The geometric normal at a triangle hit (RENDERING.md): the edges 3 + 3,
+ * their cross product 9, its largest component in size (2 maxima): 17,
+ * where a cross product of 0 stops (the triangle faces the ray: -d); then
+ * 1/largest 1, the scaling 3 and the normalisation 9: 30. The kernel returns
+ * n.x + 2 n.y + 4 n.z, to tell the normals apart. */
+Test(flops, triangle_geometric_normal)
+{
+	struct fixture f;
+	const float none[4] = {0, 0, 0, 0}, d[4] = {0.6f, 0, -0.8f, 0};
+	float code;
+
+	/* e1 = (2,0,0), e2 = (1,2,0): e1 x e2 = (0,0,4), so n = (0,0,1). */
+	setup_scene(&f, triangle_json, 0);
+	cr_expect_eq(run_kernel(&f, "count_triangle_normal", none, d, &code), 30);
+	cr_expect_eq(code, 4.0f);
+	teardown(&f);
+
+	setup_scene(&f, sliver_json, 0);
+	cr_assert_eq(f.scene.triangle_count, 1);
+	cr_expect_eq(run_kernel(&f, "count_triangle_normal", none, d, &code), 17);
+	cr_expect_float_eq(code, -0.6f + 4.0f * 0.8f, 1e-6f);
 	teardown(&f);
 }
 

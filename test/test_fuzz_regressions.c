@@ -55,9 +55,13 @@ static void load_cleanly(const char *path)
 	if (scene_load_string(&s, json, path, err, sizeof(err)) == 0) {
 		size_t bytes = 0;
 		struct bvh bvh;
+		struct devmesh mesh;
 		cr_assert_eq(bvh_build_scene(&s, &bvh), 0, "%s: out of memory", path);
-		void *packed = devscene_pack(&s, &bvh, s.width, s.height, s.max_depth, &bytes);
+		cr_assert_eq(devmesh_build(&s, &mesh), 0, "%s: out of memory", path);
+		void *packed =
+			devscene_pack(&s, &mesh, &bvh, s.width, s.height, s.max_depth, &bytes);
 		bvh_free(&bvh);
+		devmesh_free(&mesh);
 
 		cr_assert_not_null(packed, "%s: devscene_pack failed", path);
 		cr_expect_gt(bytes, 0);

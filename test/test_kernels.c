@@ -288,16 +288,21 @@ Test(kernels, scene_larger_than_a_buffer_is_refused)
 
 	memset(&dev, 0, sizeof(dev));
 	snprintf(dev.name, sizeof(dev.name), "Tiny Device");
+	struct devmesh mesh;
 	load(&scene, "test/meshes/mesh_scene.json");
-	dev.max_alloc_size = devscene_bytes(&scene, NULL);
-	cr_expect_eq(launch_check_scene_fits(&dev, &scene, NULL, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(devmesh_build(&scene, &mesh), 0);
+	size_t bytes = devscene_bytes(&scene, &mesh, NULL);
+	dev.max_alloc_size = bytes;
+	cr_expect_eq(launch_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), 0, "%s",
+		     err);
 	dev.max_alloc_size--;
-	cr_assert_eq(launch_check_scene_fits(&dev, &scene, NULL, err, sizeof(err)), -1);
+	cr_assert_eq(launch_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), -1);
+	devmesh_free(&mesh);
 	snprintf(want, sizeof(want),
 		 "test/meshes/mesh_scene.json: the scene (335 triangles) needs "
 		 "%zu bytes of device memory, more than the limit of %zu bytes in one buffer on "
 		 "Tiny Device (CL_DEVICE_MAX_MEM_ALLOC_SIZE)",
-		 devscene_bytes(&scene, NULL), devscene_bytes(&scene, NULL) - 1);
+		 bytes, bytes - 1);
 	cr_expect_str_eq(err, want);
 	scene_free(&scene);
 }

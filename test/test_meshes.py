@@ -130,8 +130,9 @@ def grid_mesh_scene(tmp_path, squares=8):
 
 def test_device_bytes_per_triangle_add_up(tmp_path):
     """--stats' scene_bytes is the device block, bytes_per_triangle that over the
-    triangles, bvh.bytes its 64-byte nodes and 4-byte references; -v prints the same;
-    --accel none's block is the same less the BVH."""
+    triangles, vertices the distinct ones (the grid's corners, each stored once),
+    bvh.bytes its 64-byte nodes and 4-byte references; -v prints the same; --accel
+    none's block is the same less the BVH. Within issue 11's 64 bytes per triangle."""
     scene, n = grid_mesh_scene(tmp_path)
     runs = {}
     for accel in ("bvh", "none"):
@@ -140,15 +141,18 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
         assert result.returncode == 0, result.stderr
         runs[accel] = (result.stderr, json.loads((tmp_path / f"{accel}.json").read_text()))
     stderr, stats = runs["bvh"]
-    total, bvh = stats["scene_bytes"], stats["bvh"]
+    total, bvh, vertices = stats["scene_bytes"], stats["bvh"], stats["vertices"]
     assert stats["bytes_per_triangle"] == total / n
+    assert vertices == 9 * 9  # the 8x8 grid's corners
     assert bvh["bytes"] == 64 * bvh["nodes"] + 4 * n
-    # the triangles' 48 bytes of geometry and 64 of shading, the BVH, and a
-    # header, one material and one light of less than 1 KiB
-    assert 0 < total - (112 * n + bvh["bytes"]) < 1024
+    # 16 bytes a triangle (its vertex indices and material), 32 a vertex (its
+    # position and normal), the BVH, and a header, one material and one light
+    # of less than 1 KiB
+    assert 0 < total - (16 * n + 32 * vertices + bvh["bytes"]) < 1024
+    assert stats["bytes_per_triangle"] <= 64
     assert runs["none"][1]["scene_bytes"] == total - bvh["bytes"]  # 4 n a multiple of 16
     assert "bvh" not in runs["none"][1]
     assert (f"rtcl: device scene block {total} bytes for {n} triangles: "
-            f"{total / n:.1f} bytes per triangle (112 triangle data, {bvh['bytes'] / n:.1f} BVH)"
-            in stderr)
+            f"{total / n:.1f} bytes per triangle (16 triangle, {32 * vertices / n:.1f} "
+            f"vertices ({vertices}), {bvh['bytes'] / n:.1f} BVH)" in stderr)
     assert f"built in {bvh['build_ms']:.3f} ms" in stderr
