@@ -203,12 +203,14 @@ void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const
 		lights[i].color = vec4(scene->lights[i].color, 0.0);
 	}
 
-	memcpy(block + l.triangle, mesh->triangles,
-	       (size_t)scene->triangle_count * sizeof(struct rt_triangle));
-	memcpy(block + l.vertex, mesh->vertices,
-	       (size_t)mesh->vertex_count * sizeof(struct rt_vertex));
-	memcpy(block + l.normal, mesh->normals,
-	       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal));
+	if (scene->triangle_count > 0) { /* else the arrays are NULL, which memcpy may not take */
+		memcpy(block + l.triangle, mesh->triangles,
+		       (size_t)scene->triangle_count * sizeof(struct rt_triangle));
+		memcpy(block + l.vertex, mesh->vertices,
+		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex));
+		memcpy(block + l.normal, mesh->normals,
+		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal));
+	}
 
 	*bytes = total;
 	return block;

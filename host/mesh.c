@@ -5,6 +5,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 
 #include <assimp/cimport.h>
@@ -70,17 +71,44 @@ static void gather(const struct aiScene *sc, struct mesh_data *out)
 	}
 }
 
-int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
+static int has_ply_extension(const char *path)
 {
-	const struct aiScene *sc;
-	size_t vertices, triangles;
-	int has_normals, ret = -1;
-	struct stat st;
-	FILE *probe;
+	size_t n = strlen(path);
 
-	memset(out, 0, sizeof(*out));
-	/* The importer's word for a missing file is vague; the system's is not. */
-	probe = fopen(path, "rb");
+	return n >= 4 && strcasecmp(path + n - 4, ".ply") == 0;
+}
+
+/* Whether the file at path, open at its start in f, is a PLY file (named
+ * .ply and starting "ply", or whose first line is "ply") whose header never
+ * ends: Assimp 5.2's PLY reader loops forever on one (found by
+ * test/fuzz_mesh.c), so such a file is refused before it. */
+static int ply_header_unterminated(const char *path, FILE *f)
+{
+	char *line = NULL;
+	size_t capacity = 0;
+	ssize_t n = getline(&line, &capacity, f);
+	int unterminated = 0;
+	int magic_line = n >= 4 && (line[3] == '\n' || line[3] == '\r');
+
+	if (n >= 3 && memcmp(line, "ply", 3) == 0 && (magic_line || has_ply_extension(path))) {
+		unterminated = 1;
+		while ((n = getline(&line, &capacity, f)) >= 0)
+			if (strncmp(line, "end_header", 10) == 0) {
+				unterminated = 0;
+				break;
+			}
+	}
+	free(line);
+	return unterminated;
+}
+
+/* What the importer would say vaguely or not at all: a missing file, a
+ * folder, a PLY header without its end. 0 when the file may go to Assimp. */
+static int probe_file(const char *path, char *reason, size_t reason_size)
+{
+	struct stat st;
+	FILE *probe = fopen(path, "rb");
+
 	if (!probe) {
 		snprintf(reason, reason_size, "%s", strerror(errno));
 		return -1;
@@ -92,7 +120,25 @@ int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t re
 		snprintf(reason, reason_size, "%s", strerror(EISDIR));
 		return -1;
 	}
+	if (ply_header_unterminated(path, probe)) {
+		fclose(probe);
+		snprintf(reason, reason_size,
+			 "its PLY header has no end_header line (a truncated or broken file)");
+		return -1;
+	}
 	fclose(probe);
+	return 0;
+}
+
+int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
+{
+	const struct aiScene *sc;
+	size_t vertices, triangles;
+	int has_normals, ret = -1;
+
+	memset(out, 0, sizeof(*out));
+	if (probe_file(path, reason, reason_size))
+		return -1;
 	sc = aiImportFile(path, IMPORT_FLAGS);
 	if (!sc) {
 		snprintf(reason, reason_size, "%s", aiGetErrorString());

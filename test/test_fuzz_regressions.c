@@ -1,5 +1,6 @@
 /* Replays the scene fuzzer's findings and its minimized corpus
- * (test/fuzz_scene.c, `make fuzz`).
+ * (test/fuzz_scene.c, `make fuzz`), and the mesh fuzzer's findings
+ * (test/fuzz_mesh.c, test/fuzz_mesh_regressions/).
  *
  * Every file in test/fuzz_regressions/ (inputs that once crashed, leaked,
  * hung or hit undefined behaviour) and test/fuzz_corpus/ (small inputs that
@@ -46,9 +47,10 @@ static char *read_all(const char *path)
 	return buf;
 }
 
-static void load_cleanly(const char *path)
+/* Loads the scene document json (named path in the messages) as the
+ * fuzzers do. */
+static void check_load(const char *path, const char *json)
 {
-	char *json = read_all(path);
 	char err[512] = "";
 	struct scene s;
 
@@ -78,11 +80,33 @@ static void load_cleanly(const char *path)
 		cr_expect_null(s.planes, "%s: refused scene holds memory", path);
 		cr_expect_null(s.lights, "%s: refused scene holds memory", path);
 	}
+}
+
+static void load_cleanly(const char *path)
+{
+	char *json = read_all(path);
+
+	check_load(path, json);
 	free(json);
 }
 
-/* Loads every regular file in `dir_name`; returns how many. */
-static int load_folder(const char *dir_name)
+/* A mesh file, placed by a scene as test/fuzz_mesh.c places its inputs. */
+static void load_mesh_cleanly(const char *path)
+{
+	char *full = realpath(path, NULL), json[2048];
+
+	cr_assert_not_null(full, "%s: no such file", path);
+	snprintf(json, sizeof(json),
+		 "{\"format\": \"rtcl-scene\", \"version\": 2,"
+		 " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+		 " \"meshes\": [{\"file\": \"%s\"}]}",
+		 full);
+	check_load(path, json);
+	free(full);
+}
+
+/* Loads every regular file in `dir_name` with load; returns how many. */
+static int load_folder(const char *dir_name, void (*load)(const char *path))
 {
 	DIR *dir = opendir(dir_name);
 	struct dirent *entry;
@@ -95,7 +119,7 @@ static int load_folder(const char *dir_name)
 		if (entry->d_name[0] == '.' || strcmp(entry->d_name, "README.md") == 0)
 			continue;
 		snprintf(path, sizeof(path), "%s/%s", dir_name, entry->d_name);
-		load_cleanly(path);
+		load(path);
 		loaded++;
 	}
 	closedir(dir);
@@ -104,14 +128,24 @@ static int load_folder(const char *dir_name)
 
 Test(fuzz, regressions_load_cleanly)
 {
-	int n = load_folder("test/fuzz_regressions");
+	int n = load_folder("test/fuzz_regressions", load_cleanly);
 
 	cr_expect_geq(n, 1, "no inputs in test/fuzz_regressions");
 }
 
 Test(fuzz, corpus_loads_cleanly)
 {
-	int n = load_folder("test/fuzz_corpus");
+	int n = load_folder("test/fuzz_corpus", load_cleanly);
 
 	cr_expect_geq(n, 20, "only %d inputs in test/fuzz_corpus", n);
+}
+
+/* The mesh fuzzer's findings (test/fuzz_mesh.c): a PLY header without
+ * end_header, on which Assimp loops, and a mesh whose triangles all have
+ * area 0, which once packed a NULL array. */
+Test(fuzz, mesh_regressions_load_cleanly)
+{
+	int n = load_folder("test/fuzz_mesh_regressions", load_mesh_cleanly);
+
+	cr_expect_geq(n, 2, "only %d inputs in test/fuzz_mesh_regressions", n);
 }

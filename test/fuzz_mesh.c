@@ -1,0 +1,88 @@
+/* libFuzzer target for mesh files (issue 11): malformed OBJ and PLY inputs
+ * through the scene loader, Assimp's import, the placement and the device
+ * packing (host/scene_mesh.c, host/mesh.c, host/devmesh.c, host/devscene.c).
+ *
+ * Each input is a mesh file: PLY when it starts with "ply", else OBJ (Assimp
+ * picks its reader by the extension). It is written to a private folder and
+ * placed by a scene that names it. The scene must be accepted or refused
+ * with one message, never crash, leak, hang or hit undefined behaviour in
+ * rtcl's code; an accepted scene is packed with its BVH, as a render would,
+ * and the device layout must hold only usable numbers (devscene_check.h).
+ *
+ *   make fuzz-mesh FUZZ_SECONDS=600   # build/fuzz/fuzz_mesh, seeded from
+ *                                     # test/meshes/ and the regressions
+ * Findings in rtcl's code go to test/fuzz_mesh_regressions/ (replayed by
+ * `make test`), inputs Assimp itself dies on to test/fuzz_mesh_known/. */
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+#include "devscene.h"
+#include "devscene_check.h"
+#include "scene.h"
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+
+/* The folder for the input's file, made once per process. */
+static const char *fuzz_dir(void)
+{
+	static char dir[] = "/tmp/rtcl-fuzz-mesh-XXXXXX";
+	static int made;
+
+	if (!made && !mkdtemp(dir))
+		abort();
+	made = 1;
+	return dir;
+}
+
+static void write_input(const char *path, const uint8_t *data, size_t size)
+{
+	FILE *f = fopen(path, "wb");
+
+	if (!f || fwrite(data, 1, size, f) != size || fclose(f) != 0)
+		abort();
+}
+
+/* Packs an accepted scene as a render would; aborts unless the layout holds
+ * only usable numbers. */
+static void pack_and_check(const struct scene *scene)
+{
+	struct bvh bvh;
+	struct devmesh mesh;
+	size_t bytes;
+
+	if (bvh_build_scene(scene, &bvh) || devmesh_build(scene, &mesh))
+		abort();
+	void *packed = devscene_pack(scene, &mesh, &bvh, 4, 4, 2, &bytes);
+	if (!packed || devscene_problem(packed))
+		abort();
+	free(packed);
+	devmesh_free(&mesh);
+	bvh_free(&bvh);
+}
+
+int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
+{
+	char path[64], json[256], err[512];
+	struct scene scene;
+	int ply = size >= 3 && memcmp(data, "ply", 3) == 0;
+
+	snprintf(path, sizeof(path), "%s/mesh.%s", fuzz_dir(), ply ? "ply" : "obj");
+	write_input(path, data, size);
+	snprintf(json, sizeof(json),
+		 "{\"format\": \"rtcl-scene\", \"version\": 2,"
+		 " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+		 " \"meshes\": [{\"file\": \"%s\"}]}",
+		 path);
+	if (scene_load_string(&scene, json, "fuzz.json", err, sizeof(err)) == 0) {
+		pack_and_check(&scene);
+		scene_free(&scene);
+	} else if (strlen(err) == 0 || strchr(err, '\n')) {
+		/* The contract (scene.h): on failure, one line of message. */
+		abort();
+	}
+	unlink(path);
+	return 0;
+}
