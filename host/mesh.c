@@ -1,4 +1,5 @@
-/* Mesh files through the Open Asset Import Library's C API (see mesh.h). */
+/* Mesh files through the Open Asset Import Library's C API (see mesh.h);
+ * host/mesh_isolate.c runs this in a process of its own. */
 #include "mesh.h"
 
 #include <errno.h>
@@ -36,8 +37,10 @@ static void count(const struct aiScene *sc, size_t *vertices, size_t *triangles,
 	}
 }
 
-/* Appends the triangle meshes of sc to out, which has room for them. */
-static void gather(const struct aiScene *sc, struct mesh_data *out)
+/* Appends the triangle meshes of sc to out, which has room for them.
+ * Returns -1, with why in reason, for a face that names a vertex its mesh
+ * does not have (Assimp does not check: found by test/fuzz_mesh.c). */
+static int gather(const struct aiScene *sc, struct mesh_data *out, char *reason, size_t reason_size)
 {
 	for (unsigned m = 0; m < sc->mNumMeshes; m++) {
 		const struct aiMesh *mesh = sc->mMeshes[m];
@@ -63,12 +66,20 @@ static void gather(const struct aiScene *sc, struct mesh_data *out)
 
 			if (face->mNumIndices != 3)
 				continue; /* cannot happen after Triangulate; never trust it */
-			for (int k = 0; k < 3; k++)
+			for (int k = 0; k < 3; k++) {
+				if (face->mIndices[k] >= mesh->mNumVertices) {
+					snprintf(reason, reason_size,
+						 "face %u names vertex %u, but its mesh has %u", f,
+						 face->mIndices[k], mesh->mNumVertices);
+					return -1;
+				}
 				out->indices[3 * out->triangle_count + k] =
 					base + face->mIndices[k];
+			}
 			out->triangle_count++;
 		}
 	}
+	return 0;
 }
 
 static int has_ply_extension(const char *path)
@@ -80,8 +91,9 @@ static int has_ply_extension(const char *path)
 
 /* Whether the file at path, open at its start in f, is a PLY file (named
  * .ply and starting "ply", or whose first line is "ply") whose header never
- * ends: Assimp 5.2's PLY reader loops forever on one (found by
- * test/fuzz_mesh.c), so such a file is refused before it. */
+ * ends in a line "end_header" (trailing blanks allowed): Assimp 5.2's PLY
+ * reader loops forever on one (found by test/fuzz_mesh.c), so such a file is
+ * refused before it. */
 static int ply_header_unterminated(const char *path, FILE *f)
 {
 	char *line = NULL;
@@ -93,7 +105,8 @@ static int ply_header_unterminated(const char *path, FILE *f)
 	if (n >= 3 && memcmp(line, "ply", 3) == 0 && (magic_line || has_ply_extension(path))) {
 		unterminated = 1;
 		while ((n = getline(&line, &capacity, f)) >= 0)
-			if (strncmp(line, "end_header", 10) == 0) {
+			if (strncmp(line, "end_header", 10) == 0 &&
+			    strspn(line + 10, " \t\r\n") == strlen(line + 10)) {
 				unterminated = 0;
 				break;
 			}
@@ -130,7 +143,7 @@ static int probe_file(const char *path, char *reason, size_t reason_size)
 	return 0;
 }
 
-int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
+int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
 {
 	const struct aiScene *sc;
 	size_t vertices, triangles;
@@ -153,7 +166,10 @@ int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t re
 		mesh_data_free(out);
 		goto out_release_scene;
 	}
-	gather(sc, out);
+	if (gather(sc, out, reason, reason_size)) {
+		mesh_data_free(out);
+		goto out_release_scene;
+	}
 	ret = 0;
 out_release_scene:
 	aiReleaseImport(sc);
