@@ -71,18 +71,15 @@ static double resident_items(const struct device *dev, int group)
 static void set_min_pieces(struct tiles_job *t, int group)
 {
 	double pixels = (double)t->settings->width * t->settings->height, all = 0;
-	int gpus = 0;
 
-	for (int k = 0; k < t->count; k++) {
+	for (int k = 0; k < t->count; k++)
 		all += resident_items(&t->devs[k], group);
-		gpus += t->devs[k].is_gpu;
-	}
 	for (int k = 0; k < t->count; k++) {
 		double resident = resident_items(&t->devs[k], group);
 		double launches = t->devs[k].is_gpu ? TILES_GPU_LAUNCHES : 1;
 		double share = pixels * resident / all;
-		double cap = gpus > 1 && t->devs[k].is_gpu ? share / TILES_GPU_SHARE_PIECES : share;
-		adapt_set_min_pixels(&t->adapt, k, launches * resident < cap ? launches * resident : cap);
+		adapt_set_min_pixels(&t->adapt, k,
+				     launches * resident < share ? launches * resident : share);
 	}
 }
 

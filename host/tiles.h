@@ -35,13 +35,6 @@
  * beside a CPU; several GPUs split it (set_min_pieces caps it at a share). */
 #define TILES_GPU_LAUNCHES 16
 
-/* With several GPUs, a GPU's smallest piece is at most this fraction of its
- * share, so that the one that finishes first takes over the rest: capped at
- * the whole share, two H200s each took half the default scene as one piece,
- * and the half with the table took 677 ms against 402 (1.26-1.35x one GPU;
- * docs/results/multidevice). */
-#define TILES_GPU_SHARE_PIECES 8
-
 /* How long a CPU waits for the GPUs beside it to ask for their first piece
  * of a frame (tiles_take_piece): their threads start together, so this is
  * only a bound. */
