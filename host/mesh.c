@@ -1,5 +1,4 @@
-/* Mesh files through the Open Asset Import Library's C API (see mesh.h);
- * host/mesh_isolate.c runs this in a process of its own. */
+/* Mesh files through the Open Asset Import Library's C API (see mesh.h). */
 #include "mesh.h"
 
 #include <errno.h>
@@ -143,7 +142,7 @@ static int probe_file(const char *path, char *reason, size_t reason_size)
 	return 0;
 }
 
-int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
+int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
 {
 	const struct aiScene *sc;
 	size_t vertices, triangles;

@@ -16,13 +16,8 @@ struct mesh_data {
 
 /* Reads `path`. Returns 0 (triangle_count may be 0: points and lines are
  * left out), or -1 with why in reason[reason_size] (the importer's words,
- * or the system's for a file that cannot be opened). The import runs in a
- * child process (host/mesh_isolate.c): Assimp aborts on some malformed
- * files, and that becomes a reason here instead of the end of rtcl. */
+ * or the system's for a file that cannot be opened). */
 int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size);
-
-/* The same in this process (host/mesh.c), which mesh_import's child runs. */
-int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size);
 
 void mesh_data_free(struct mesh_data *mesh);
 

@@ -11,7 +11,8 @@
  *
  *   make fuzz-mesh FUZZ_SECONDS=600   # build/fuzz/fuzz_mesh, seeded from
  *                                     # test/meshes/ and the regressions
- * Findings go to test/fuzz_mesh_regressions/ (replayed by `make test`). */
+ * Findings in rtcl's code go to test/fuzz_mesh_regressions/ (replayed by
+ * `make test`), inputs Assimp itself dies on to test/fuzz_mesh_known/. */
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
