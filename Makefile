@@ -43,11 +43,13 @@ CFLAGS ?= -O2 -g
 CFLAGS += -std=c11 $(WARNINGS) -pthread
 CXXFLAGS ?= -O2 -g
 CXXFLAGS += -std=c++17 $(WARNINGS)
-# Mesh files (docs/SCENE.md version 2) through the Open Asset Import Library.
+# Mesh files (docs/SCENE.md version 2) through the Open Asset Import Library,
+# which only the mesh import helper rtcl-meshread links (host/mesh.h says why).
 # Expanded when used, like OIIO_LIBS below.
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
-LDLIBS = -lOpenCL -ljansson $(ASSIMP_LIBS) -lz -lm -pthread
+LDLIBS = -lOpenCL -ljansson -lz -lm -pthread
+MESHREAD := $(BUILD)/rtcl-meshread
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -88,7 +90,8 @@ endif
 
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devmesh.o devscene.o scene.o scene_check.o \
-	scene_literal.o scene_material.o scene_mesh.o mesh.o mesh_place.o timing.o files.o \
+	scene_literal.o scene_material.o scene_mesh.o mesh_spawn.o libdir.o mesh_place.o timing.o \
+	files.o \
 	interrupt.o checks.o program.o progcache.o launch.o singlepass.o wavefront.o render.o \
 	stats.o devices.o multidev.o devstats.o frames.o tiles.o \
 	outputs.o \
@@ -102,10 +105,15 @@ UNIT_TESTS := $(wildcard test/test_*.c)
 .PHONY: all deps render test experiments bench bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
 all: $(BIN)
 
-$(BIN): $(BUILD)/main.o $(HOST_OBJS) $(OIIO_MODULE)
+$(BIN): $(BUILD)/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
 
-$(BUILD)/image_dl.o: CPPFLAGS += -DRTCL_MODULE_DIR='"$(abspath $(BUILD))"'
+# The mesh import helper: Assimp in a process of its own.
+$(MESHREAD): $(BUILD)/meshread.o $(BUILD)/mesh.o $(BUILD)/mesh_spawn.o $(BUILD)/libdir.o
+	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -lstdc++
+
+# Where the companion files (rtcl-oiio.so, rtcl-meshread) are in a build tree.
+$(BUILD)/libdir.o: CPPFLAGS += -DRTCL_MODULE_DIR='"$(abspath $(BUILD))"'
 
 $(BUILD)/rtcl-oiio.so: host/image_oiio.cpp host/image_encode.c | $(BUILD)
 	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -c -o $(BUILD)/image_encode.pic.o host/image_encode.c
@@ -130,7 +138,7 @@ $(BUILD)/%.o: host/%.cpp | $(BUILD)
 $(BUILD)/test/%.o: test/%.c | $(BUILD)/test
 	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -c -o $@ $<
 
-$(BUILD)/unit_tests: $(UNIT_TESTS:test/%.c=$(BUILD)/test/%.o) $(HOST_OBJS) $(OIIO_MODULE)
+$(BUILD)/unit_tests: $(UNIT_TESTS:test/%.c=$(BUILD)/test/%.o) $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS) -lcriterion
 
 $(BUILD) $(BUILD)/test:
@@ -174,26 +182,33 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 	-fno-omit-frame-pointer -std=c11 $(WARNINGS) -Ihost -Icl -D_DEFAULT_SOURCE
 
 # The scene loader and what it calls: its parts, the file reader, the interrupt
-# bookkeeping the file module keeps.
+# bookkeeping the file module keeps, and the side of the mesh import that
+# starts the helper; the helper (build/fuzz/rtcl-meshread) is built with the
+# same sanitizers, and its reports fail the run (host/mesh.h).
 FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c \
-	host/scene_mesh.c host/mesh.c host/mesh_place.c host/files.c \
+	host/scene_mesh.c host/mesh_spawn.c host/libdir.c host/mesh_place.c host/files.c \
 	host/interrupt.c host/devscene.c \
 	host/devmesh.c host/bvh.c
+FUZZ_HEADERS := test/devscene_check.h host/scene.h host/scene_loader.h host/mesh.h \
+	host/mesh_place.h host/files.h host/devscene.h host/devmesh.h host/bvh.h host/libdir.h \
+	cl/rtcl_shared.h
+FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
-$(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c test/devscene_check.h $(FUZZ_SOURCES) host/scene.h \
-		host/scene_loader.h host/mesh.h host/mesh_place.h host/files.h host/devscene.h \
-		host/devmesh.h host/bvh.h cl/rtcl_shared.h
+$(FUZZ_DIR)/rtcl-meshread: host/meshread.c host/mesh.c host/mesh_spawn.c host/libdir.c host/mesh.h
 	mkdir -p $(FUZZ_DIR)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) -ljansson $(ASSIMP_LIBS) -lm
+	$(FUZZ_CC) $(filter-out -fsanitize=fuzzer%,$(FUZZ_FLAGS)) -fsanitize=address,undefined \
+		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -lstdc++
+
+$(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c $(FUZZ_SOURCES) $(FUZZ_HEADERS) $(FUZZ_DIR)/rtcl-meshread
+	$(FUZZ_CC) $(FUZZ_FLAGS) $(FUZZ_MODULE_DIR) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) \
+		-ljansson -lm
 
 # The same for mesh files (test/fuzz_mesh.c): malformed OBJ and PLY through
-# Assimp, the placement and the packing, seeded from the committed meshes.
-# Assimp's own leaks on its error paths are suppressed (test/lsan-assimp.supp),
-# which needs full stacks through the uninstrumented library.
-$(FUZZ_DIR)/fuzz_mesh: test/fuzz_mesh.c test/devscene_check.h $(FUZZ_SOURCES) host/scene.h \
-		host/devscene.h host/devmesh.h host/bvh.h cl/rtcl_shared.h
-	mkdir -p $(FUZZ_DIR)
-	$(FUZZ_CC) $(FUZZ_FLAGS) -pthread -o $@ test/fuzz_mesh.c $(FUZZ_SOURCES) -ljansson $(ASSIMP_LIBS) -lm
+# the helper (Assimp), the placement and the packing, seeded from the
+# committed meshes and the earlier findings.
+$(FUZZ_DIR)/fuzz_mesh: test/fuzz_mesh.c $(FUZZ_SOURCES) $(FUZZ_HEADERS) $(FUZZ_DIR)/rtcl-meshread
+	$(FUZZ_CC) $(FUZZ_FLAGS) $(FUZZ_MODULE_DIR) -pthread -o $@ test/fuzz_mesh.c $(FUZZ_SOURCES) \
+		-ljansson -lm
 
 fuzz: $(FUZZ_DIR)/fuzz_scene
 	mkdir -p $(FUZZ_DIR)/corpus $(FUZZ_DIR)/artifacts
@@ -203,14 +218,11 @@ fuzz: $(FUZZ_DIR)/fuzz_scene
 		-rss_limit_mb=2048 -dict=test/fuzz_scene.dict -print_final_stats=1 \
 		-artifact_prefix=$(FUZZ_DIR)/artifacts/ $(FUZZ_DIR)/corpus
 
-# Not part of `make fuzz` (nor CI): it reaches inputs on which Assimp 5.2
-# itself aborts (test/fuzz_mesh_known/). Its findings in rtcl's code are in
-# test/fuzz_mesh_regressions/, replayed by `make test`.
+# Findings go to test/fuzz_mesh_regressions/, replayed by `make test`.
 fuzz-mesh: $(FUZZ_DIR)/fuzz_mesh
 	mkdir -p $(FUZZ_DIR)/mesh_corpus $(FUZZ_DIR)/artifacts
 	cp $(filter-out %.md,$(wildcard test/meshes/*.obj test/meshes/*.ply scenes/models/icosphere.obj \
 		test/fuzz_mesh_regressions/*)) $(FUZZ_DIR)/mesh_corpus/
-	ASAN_OPTIONS=fast_unwind_on_malloc=0 LSAN_OPTIONS=suppressions=test/lsan-assimp.supp \
 	$(FUZZ_DIR)/fuzz_mesh -max_total_time=$(FUZZ_SECONDS) -max_len=16384 -timeout=10 \
 		-rss_limit_mb=2048 -print_final_stats=1 \
 		-artifact_prefix=$(FUZZ_DIR)/artifacts/mesh- $(FUZZ_DIR)/mesh_corpus
@@ -239,10 +251,12 @@ SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
 SCENE_MODELS := $(wildcard scenes/models/*)
 
 install: $(BIN)
-	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools
+	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(LIBDIR) $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools
 	$(INSTALL) -m 755 $(BIN) $(BINDIR)/rtcl
-	$(if $(OIIO_MODULE),$(INSTALL) -d $(LIBDIR) && $(INSTALL) -m 644 $(OIIO_MODULE) $(LIBDIR))
-	sed 's|/usr/local/share/rtcl|$(PREFIX)/share/rtcl|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
+	$(INSTALL) -m 755 $(MESHREAD) $(LIBDIR)
+	$(if $(OIIO_MODULE),$(INSTALL) -m 644 $(OIIO_MODULE) $(LIBDIR))
+	sed -e 's|/usr/local/share/rtcl|$(PREFIX)/share/rtcl|g' -e 's|/usr/local/lib/rtcl|$(PREFIX)/lib/rtcl|g' \
+		docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
 	$(INSTALL) -d $(DATADIR)/scenes/models
@@ -261,7 +275,7 @@ install: $(BIN)
 # if nothing else is left in it; bin, share/man and PREFIX stay.
 uninstall:
 	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
-	rm -f $(LIBDIR)/rtcl-oiio.so
+	rm -f $(LIBDIR)/rtcl-oiio.so $(LIBDIR)/rtcl-meshread
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
 	rm -f $(addprefix $(DATADIR)/scenes/models/,$(notdir $(SCENE_MODELS)))
 	rm -f $(addprefix $(DATADIR)/tools/,$(notdir $(TOOL_SCRIPTS)))

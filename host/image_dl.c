@@ -4,7 +4,7 @@
  * relocation took about 0.2 s of every rtcl run, and 30-40 ms more of PoCL's
  * device set-up, whatever the output: .ppm, .pfm and .png, which rtcl writes
  * itself, now never load it. The module is looked for beside the installed
- * program (BINDIR/../lib/rtcl/) and then in the build folder. */
+ * program (BINDIR/../lib/rtcl/) and then in the build folder (libdir.h). */
 #include <dlfcn.h>
 #include <limits.h>
 #include <stdlib.h>
@@ -12,6 +12,7 @@
 #include <unistd.h>
 
 #include "image_backend.h"
+#include "libdir.h"
 
 #define MODULE_NAME "rtcl-oiio.so"
 
@@ -26,41 +27,22 @@ static struct {
 	check_format_fn check_format;
 	encode_fn encode;
 	verify_fn verify;
-	char error[512]; /* why it did not load */
+	char error[PATH_MAX + 128]; /* why it did not load */
 } module;
-
-/* PATH of the installed module, from where this program lies. */
-static int installed_path(char *path, size_t size)
-{
-	char exe[PATH_MAX];
-	ssize_t n = readlink("/proc/self/exe", exe, sizeof(exe) - 1);
-	char *slash;
-
-	if (n <= 0)
-		return -1;
-	exe[n] = '\0';
-	slash = strrchr(exe, '/');
-	if (!slash)
-		return -1;
-	*slash = '\0';
-	return snprintf(path, size, "%s/../lib/rtcl/" MODULE_NAME, exe) < (int)size ? 0 : -1;
-}
 
 static void *open_module(void)
 {
-	char path[PATH_MAX + 32];
+	char path[PATH_MAX + 64];
 	void *handle = NULL;
 
-	if (installed_path(path, sizeof(path)) == 0 && access(path, F_OK) == 0)
-		handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
-	if (!handle && access(RTCL_MODULE_DIR "/" MODULE_NAME, F_OK) == 0)
-		handle = dlopen(RTCL_MODULE_DIR "/" MODULE_NAME, RTLD_NOW | RTLD_LOCAL);
+	if (libdir_find(MODULE_NAME, path, sizeof(path))) {
+		snprintf(module.error, sizeof(module.error), "%s", path);
+		return NULL;
+	}
+	handle = dlopen(path, RTLD_NOW | RTLD_LOCAL);
 	if (!handle) {
 		const char *why = dlerror();
-		snprintf(module.error, sizeof(module.error), "%s",
-			 why ? why
-			     : MODULE_NAME " is neither in ../lib/rtcl beside rtcl nor in "
-					   "the build folder " RTCL_MODULE_DIR);
+		snprintf(module.error, sizeof(module.error), "%s", why ? why : path);
 	}
 	return handle;
 }

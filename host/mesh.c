@@ -1,12 +1,10 @@
-/* Mesh files through the Open Asset Import Library's C API (see mesh.h). */
+/* Mesh files through the Open Asset Import Library's C API, in the helper
+ * program rtcl-meshread (see mesh.h). */
 #include "mesh.h"
 
-#include <errno.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
-#include <strings.h>
-#include <sys/stat.h>
 
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
@@ -81,76 +79,13 @@ static int gather(const struct aiScene *sc, struct mesh_data *out, char *reason,
 	return 0;
 }
 
-static int has_ply_extension(const char *path)
-{
-	size_t n = strlen(path);
-
-	return n >= 4 && strcasecmp(path + n - 4, ".ply") == 0;
-}
-
-/* Whether the file at path, open at its start in f, is a PLY file (named
- * .ply and starting "ply", or whose first line is "ply") whose header never
- * ends in a line "end_header" (trailing blanks allowed): Assimp 5.2's PLY
- * reader loops forever on one (found by test/fuzz_mesh.c), so such a file is
- * refused before it. */
-static int ply_header_unterminated(const char *path, FILE *f)
-{
-	char *line = NULL;
-	size_t capacity = 0;
-	ssize_t n = getline(&line, &capacity, f);
-	int unterminated = 0;
-	int magic_line = n >= 4 && (line[3] == '\n' || line[3] == '\r');
-
-	if (n >= 3 && memcmp(line, "ply", 3) == 0 && (magic_line || has_ply_extension(path))) {
-		unterminated = 1;
-		while ((n = getline(&line, &capacity, f)) >= 0)
-			if (strncmp(line, "end_header", 10) == 0 &&
-			    strspn(line + 10, " \t\r\n") == strlen(line + 10)) {
-				unterminated = 0;
-				break;
-			}
-	}
-	free(line);
-	return unterminated;
-}
-
-/* What the importer would say vaguely or not at all: a missing file, a
- * folder, a PLY header without its end. 0 when the file may go to Assimp. */
-static int probe_file(const char *path, char *reason, size_t reason_size)
-{
-	struct stat st;
-	FILE *probe = fopen(path, "rb");
-
-	if (!probe) {
-		snprintf(reason, reason_size, "%s", strerror(errno));
-		return -1;
-	}
-	/* A folder opens for reading here; say so rather than the importer's
-	 * "no suitable reader". */
-	if (fstat(fileno(probe), &st) == 0 && S_ISDIR(st.st_mode)) {
-		fclose(probe);
-		snprintf(reason, reason_size, "%s", strerror(EISDIR));
-		return -1;
-	}
-	if (ply_header_unterminated(path, probe)) {
-		fclose(probe);
-		snprintf(reason, reason_size,
-			 "its PLY header has no end_header line (a truncated or broken file)");
-		return -1;
-	}
-	fclose(probe);
-	return 0;
-}
-
-int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
+int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
 {
 	const struct aiScene *sc;
 	size_t vertices, triangles;
 	int has_normals, ret = -1;
 
 	memset(out, 0, sizeof(*out));
-	if (probe_file(path, reason, reason_size))
-		return -1;
 	sc = aiImportFile(path, IMPORT_FLAGS);
 	if (!sc) {
 		snprintf(reason, reason_size, "%s", aiGetErrorString());
@@ -173,12 +108,4 @@ int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t re
 out_release_scene:
 	aiReleaseImport(sc);
 	return ret;
-}
-
-void mesh_data_free(struct mesh_data *mesh)
-{
-	free(mesh->positions);
-	free(mesh->normals);
-	free(mesh->indices);
-	memset(mesh, 0, sizeof(*mesh));
 }

@@ -1,6 +1,6 @@
 /* The scene loader's version 2 (docs/SCENE.md, "Version 2: triangle meshes"):
  * "meshes", files placed with scale, rotate and translate, and the inline
- * "triangles". host/mesh.c reads the files, host/mesh_place.c computes the
+ * "triangles". mesh_import (host/mesh.h) reads the files, host/mesh_place.c computes the
  * placement and the normals; this file reads the fields, puts the triangles
  * in the scene and checks what SCENE.md asks. */
 #define _POSIX_C_SOURCE 200809L

@@ -12,11 +12,13 @@
  * test/fuzz_corpus/; test_fuzz_regressions.c replays both in `make test`.
  */
 #include <stdint.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "devscene.h"
 #include "devscene_check.h"
+#include "mesh.h"
 #include "scene.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
@@ -51,6 +53,10 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		   scene.spheres || scene.planes || scene.lights) {
 		/* The contract (scene.h): on failure one line of message, and
 		 * nothing left to release. */
+		abort();
+	} else if (mesh_importer_failures() > 0) {
+		/* The helper's sanitizers caught something (host/mesh.h). */
+		fprintf(stderr, "%s\n", err);
 		abort();
 	}
 	free(json);

@@ -73,6 +73,7 @@ def expected_files():
             | {f"{share}/tools/{path.name}" for path in tools}
             | {f"{share}/tools/rtcl_tools/{path.name}"
                for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")}
+            | {f"{PREFIX}/lib/rtcl/rtcl-meshread"}
             | ({f"{PREFIX}/lib/rtcl/rtcl-oiio.so"} if has_oiio() else set()))
 
 
@@ -125,6 +126,28 @@ def test_installed_rtcl_runs_and_renders(installed, tmp_path):
                                        "balls.ppm"], tmp_path)
     assert render.returncode == 0, render.stderr
     assert (tmp_path / "balls.ppm").is_file()
+
+
+def test_installed_rtcl_reads_meshes_through_the_installed_helper(tmp_path):
+    """The mesh import helper is looked for in PREFIX/lib/rtcl first: an
+    installed helper that fails is the one whose failure rtcl reports, and the
+    installed one reads the shipped mesh scene."""
+    destdir = tmp_path / "destdir"
+    install(destdir)
+    scene = destdir / PREFIX / "share/rtcl/scenes/glass_mesh.json"
+    render = run_installed(destdir, ["rtcl", "-q", "-s", str(scene), "--size", "8x8", "-o",
+                                     "mesh.ppm"], tmp_path)
+    assert render.returncode == 0, render.stderr
+    assert is_ppm_8x8(tmp_path / "mesh.ppm")
+    helper = destdir / PREFIX / "lib/rtcl/rtcl-meshread"
+    helper.unlink()
+    helper.write_text("#!/bin/sh\nexit 3\n")
+    helper.chmod(0o755)
+    render = run_installed(destdir, ["rtcl", "-q", "-s", str(scene), "--size", "8x8", "-o",
+                                     "broken.ppm"], tmp_path)
+    assert render.returncode == 1
+    assert "the mesh importer failed (exit status 3)" in render.stderr
+    assert not (tmp_path / "broken.ppm").exists()
 
 
 @pytest.mark.parametrize("command", sorted(TOOL_COMMANDS))
@@ -259,7 +282,7 @@ def test_man_page_environment_covers_help_and_output_dates():
               for match in re.findall(r"^\.BI ([A-Z_]+)= ", line)}
     assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "RTCL_CACHE",
                        "POCL_CACHE_DIR"}
-    assert in_man == in_help | {"SOURCE_DATE_EPOCH", "XDG_CACHE_HOME"}
+    assert in_man == in_help | {"SOURCE_DATE_EPOCH", "XDG_CACHE_HOME", "RTCL_MESHREAD"}
 
 
 def test_man_page_names_the_version():

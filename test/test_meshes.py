@@ -156,3 +156,96 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
             f"{total / n:.1f} bytes per triangle (16 triangle, {32 * vertices / n:.1f} "
             f"vertices ({vertices}), {bvh['bytes'] / n:.1f} BVH)" in stderr)
     assert f"built in {bvh['build_ms']:.3f} ms" in stderr
+
+
+# ---- the mesh import helper (host/mesh.h): Assimp in a process of its own ----
+
+def quad_scene(tmp_path):
+    scene = tmp_path / "s.json"
+    scene.write_text(json.dumps({
+        "format": "rtcl-scene", "version": 2,
+        "camera": {"eye": [0, 0, -5], "look_at": [0, 0, 0]},
+        "meshes": [{"file": str(ROOT / "test" / "meshes" / "quad.ply")}]}))
+    return scene
+
+
+def render_with_helper(tmp_path, helper):
+    """Renders quad_scene with RTCL_MESHREAD=helper; the output must not appear."""
+    scene, out = quad_scene(tmp_path), tmp_path / "o.png"
+    result = subprocess.run([RTCL, "-s", str(scene), "-o", str(out), "--size", "8x6"],
+                            capture_output=True, text=True, cwd=ROOT, timeout=300,
+                            env={**os.environ, "RTCL_MESHREAD": str(helper)})
+    assert result.returncode == 1
+    assert not out.exists()
+    prefix = f'{scene}: meshes[0].file: cannot read "{ROOT}/test/meshes/quad.ply": '
+    assert result.stderr.startswith(prefix), result.stderr
+    assert result.stderr.count("\n") == 1
+    return result.stderr[len(prefix):-1]
+
+
+def write_helper(tmp_path, body):
+    helper = tmp_path / "helper.sh"
+    helper.write_text("#!/bin/sh\n" + body + "\n")
+    helper.chmod(0o755)
+    return helper
+
+
+def test_the_helper_named_in_the_environment_is_the_one_run(tmp_path):
+    """RTCL_MESHREAD names the helper: the quad renders through the built one
+    named there, and through none when the name is wrong."""
+    built = pathlib.Path(RTCL).resolve().parent
+    helper = next(p for p in (built / "rtcl-meshread", built / "build" / "rtcl-meshread")
+                  if p.exists())
+    scene = quad_scene(tmp_path)
+    result = subprocess.run([RTCL, "-s", str(scene), "-o", str(tmp_path / "o.ppm"),
+                             "--size", "8x6"], capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "RTCL_MESHREAD": str(helper)})
+    assert result.returncode == 0, result.stderr
+    missing = tmp_path / "no-such-helper"
+    assert render_with_helper(tmp_path, missing) == (
+        f"the mesh importer failed: cannot run {missing}: No such file or directory")
+
+
+def test_a_helper_that_fails_is_reported_with_what_it_said(tmp_path):
+    helper = write_helper(tmp_path, "echo 'cannot load libassimp.so.5' >&2; exit 127")
+    assert render_with_helper(tmp_path, helper) == (
+        "the mesh importer failed (exit status 127): cannot load libassimp.so.5")
+
+
+def test_a_helper_that_answers_nothing_is_reported(tmp_path):
+    helper = write_helper(tmp_path, "exit 0")
+    assert render_with_helper(tmp_path, helper) == (
+        "the mesh importer failed: it ended without an answer")
+
+
+def test_a_helper_that_answers_nonsense_is_reported(tmp_path):
+    helper = write_helper(tmp_path, "head -c 64 /dev/zero")
+    assert render_with_helper(tmp_path, helper) == (
+        "the mesh importer failed: its answer makes no sense")
+
+
+def test_a_helper_killed_by_a_signal_blames_the_file(tmp_path):
+    """A crash inside the importer (Assimp's abort() on a malformed file) is the
+    file's fault; what the helper printed first says where."""
+    helper = write_helper(tmp_path, "echo 'ai_assert failure in X.cpp(1): n > 0' >&2; "
+                                    "kill -SEGV $$")
+    assert render_with_helper(tmp_path, helper) == (
+        "the importer (Assimp) crashed on it (Segmentation fault: ai_assert failure in "
+        "X.cpp(1): n > 0); the file is malformed")
+
+
+def test_a_sanitizer_report_in_the_helper_is_rtcls_failure(tmp_path):
+    helper = write_helper(tmp_path, "echo '=================' >&2; "
+                                    "echo '==1==ERROR: AddressSanitizer: heap-buffer-overflow' >&2; "
+                                    "kill -ABRT $$")
+    assert render_with_helper(tmp_path, helper) == (
+        "the mesh importer failed: ==1==ERROR: AddressSanitizer: heap-buffer-overflow")
+
+
+def test_the_helper_refuses_to_write_binary_to_a_terminal_or_without_a_file():
+    built = pathlib.Path(RTCL).resolve().parent
+    helper = next(p for p in (built / "rtcl-meshread", built / "build" / "rtcl-meshread")
+                  if p.exists())
+    result = subprocess.run([str(helper)], capture_output=True, text=True, timeout=60)
+    assert result.returncode == 2
+    assert "rtcl's mesh import helper" in result.stderr

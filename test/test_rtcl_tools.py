@@ -20,7 +20,8 @@ GOOD_SCENES = sorted((ROOT / "scenes").glob("*.json")) \
 # it, a vertex not finite or placed beyond float, a file the importer cannot parse):
 # the validator only checks that a mesh file exists and can be read (see scene.py).
 RTCL_ONLY = {"mesh_file_unreadable", "mesh_no_triangles", "mesh_vertex_not_finite",
-             "mesh_vertex_beyond_float", "mesh_ply_no_end_header"}
+             "mesh_vertex_beyond_float", "mesh_ply_no_end_header",
+             "mesh_importer_crashes"}
 
 
 # ---- files: the atomic writer -------------------------------------------------------

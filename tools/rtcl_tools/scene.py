@@ -18,8 +18,10 @@ both raise SceneError.  base_dir is the folder that mesh files are relative to
 (load_scene passes the scene file's); None skips the check that they exist.
 """
 
+import errno
 import json
 import os
+import stat
 
 from .scene_check import (SceneError, Written, _escaped, check_keys, child, fail,
                           format_vector, integer, length, number, optional,
@@ -216,17 +218,26 @@ def mesh_name(value, path):
 
 
 def mesh_file(name, path, base_dir):
-    """Returns the path of a mesh file, after checking that it can be opened for
-    reading; relative to base_dir unless absolute (None: not looked up)."""
+    """Returns the path of a mesh file, after checking that it is a regular file
+    that can be opened for reading, as rtcl does; relative to base_dir unless
+    absolute (None: not looked up)."""
     if base_dir is None:
         return name
     # An absolute path stays as it is (os.path.join drops base_dir).
     resolved = os.path.join(base_dir, name)
     try:
-        with open(resolved, "rb"):
-            pass
+        # O_NONBLOCK: a FIFO must not hang the open (rtcl refuses it too).
+        fd = os.open(resolved, os.O_RDONLY | os.O_NONBLOCK)
+        try:
+            mode = os.fstat(fd).st_mode
+        finally:
+            os.close(fd)
     except OSError as error:
         fail(path, f'cannot read "{one_line(name)}": {error.strerror}')
+    if stat.S_ISDIR(mode):
+        fail(path, f'cannot read "{one_line(name)}": {os.strerror(errno.EISDIR)}')
+    if not stat.S_ISREG(mode):
+        fail(path, f'cannot read "{one_line(name)}": not a regular file')
     return resolved
 
 
