@@ -44,6 +44,17 @@ static float sphere_gap(float4 sphere, const struct ray_frame *f)
 	return fma(y, y, x * x);
 }
 
+/* Device sphere i's index in the scene: with a BVH the device's spheres are
+ * in leaf order (host/devscene.c); brute force keeps the scene's order. */
+static inline int scene_order(struct tracer *tr, int i)
+{
+#ifdef RTCL_BVH
+	return tr->spheres[i].scene_index;
+#else
+	return i;
+#endif
+}
+
 /* Where sphere_gap found the ray within the sphere's radius (gap <= radius²):
  * takes sphere i as the nearest hit if it meets the ray at some 0 < t <
  * *nearest, with t the smallest such root (the far one when the origin is
@@ -68,11 +79,15 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 		COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
 		t = near > 0.0f ? near : far;
 	}
-	/* Equal distances go to the lower index, and a sphere beats a triangle,
-	 * as brute force's order (spheres by index, then triangles) gives, so
-	 * that the BVH's order of visits gives the same hits. */
+	/* Equal distances go to the lower index in the scene, and a sphere
+	 * beats a triangle, as brute force's order (spheres by index, then
+	 * triangles) gives, so that the BVH's order of visits and of the
+	 * device's spheres (leaf order, host/devscene.c) gives the same hits. */
 	if (t > 0.0f &&
-	    (t < *nearest || (t == *nearest && (best->triangle >= 0 || i < best->sphere)))) {
+	    (t < *nearest ||
+	     (t == *nearest &&
+	      (best->triangle >= 0 ||
+	       (best->sphere >= 0 && scene_order(tr, i) < scene_order(tr, best->sphere)))))) {
 		*nearest = t;
 		best->sphere = i;
 		best->triangle = -1;

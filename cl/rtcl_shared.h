@@ -61,7 +61,9 @@ struct rt_sphere {
 	rt_float radius;
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
-	rt_int pad;
+	rt_int scene_index; /* its index in the scene: with a BVH the spheres are
+			       in leaf order (host/devscene.c), and equal
+			       distances go to the lower scene index */
 };
 
 struct rt_plane {
@@ -140,7 +142,9 @@ struct rt_scene {
  * hold int bits: lo.w is the child node's index (an inner child) or its first
  * primitive reference (a leaf), hi.w is 0 for an inner child and the leaf's
  * reference count otherwise (0 with lo.w 0 too: an empty leaf, only beside a
- * root's single primitive). */
+ * root's single primitive). On the device a leaf of spheres only has
+ * RT_LEAF_SPHERES in its count, and lo.w is its first sphere: the spheres
+ * are in leaf order there (host/devscene.c). */
 struct rt_bvh_box {
 	rt_vec4 lo, hi;
 };
@@ -148,6 +152,10 @@ struct rt_bvh_box {
 struct rt_bvh_node {
 	struct rt_bvh_box child[2];
 };
+
+/* A device leaf of spheres only: the count's flag (see struct rt_bvh_box). */
+#define RT_LEAF_SPHERES 0x40000000
+#define RT_LEAF_COUNT_MASK 0x3fffffff
 
 /* A primitive reference: the kind in the top bit, the index into the kind's
  * array below it. */

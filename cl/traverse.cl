@@ -52,11 +52,24 @@ static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float 
 	return enter <= leave;
 }
 
-/* Tests a leaf's primitives: references [first, first + count); with
- * any_hit, up to the first hit. */
+/* Tests a leaf's primitives: spheres [first, first + count) of a leaf of
+ * spheres (RT_LEAF_SPHERES, no reference to read), else references [first,
+ * first + count); with any_hit, up to the first hit. */
 static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
 			   int first, int count, bool any_hit, float *nearest, struct hit *best)
 {
+	if (count & RT_LEAF_SPHERES) {
+		int end = first + (count & RT_LEAF_COUNT_MASK);
+		for (int i = first; i < end; i++) {
+			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+				return;
+			float4 s = tr->spheres[i].center;
+			float gap = sphere_gap(s, frame);
+			COUNT_FLOPS(tr, FLOPS_SPHERE_GAP);
+			sphere_consider(tr, s, gap, o, d, i, any_hit, nearest, best);
+		}
+		return;
+	}
 	for (int k = first; k < first + count; k++) {
 		if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
 			return;

@@ -70,12 +70,13 @@ static void pack_material(struct rt_material *out, const struct scene_material *
 	out->inv_ior = (float)(1.0 / in->ior);
 }
 
-static void pack_sphere(struct rt_sphere *out, const struct scene_sphere *in)
+static void pack_sphere(struct rt_sphere *out, const struct scene_sphere *in, int scene_index)
 {
 	out->center = vec4(in->center, in->radius * in->radius); /* sphere_radius2 */
 	out->radius = (float)in->radius;
 	out->inv_radius = (float)(1.0 / in->radius);
 	out->material = in->material;
+	out->scene_index = scene_index;
 }
 
 static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
@@ -98,16 +99,83 @@ static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
 	out->checker_t_axis = drop == 2 ? 1 : 2;
 }
 
-/* The BVH's nodes and references, after the triangles (none without a BVH). */
-static void pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh)
+static int is_sphere_ref(uint32_t ref)
 {
-	if (!bvh || bvh->node_count == 0)
+	return ref >> RT_PRIM_KIND_SHIFT == RT_PRIM_SPHERE;
+}
+
+/* With a BVH the spheres go to the device in leaf order: the k-th sphere
+ * reference of bvh->refs is device sphere k (order[k] gives its scene index),
+ * so a leaf of spheres only names a range of the sphere array and the
+ * traversal reads no reference on the way to a sphere test (RT_LEAF_SPHERES).
+ * Returns order (sphere_count entries, malloc'd; identity without a BVH), or
+ * NULL when out of memory. */
+static int *sphere_order(const struct scene *scene, const struct bvh *bvh)
+{
+	int *order = malloc((size_t)(scene->sphere_count ? scene->sphere_count : 1) * sizeof(int));
+	int k = 0;
+
+	if (!order)
+		return NULL;
+	if (!bvh || bvh->node_count == 0) {
+		for (int i = 0; i < scene->sphere_count; i++)
+			order[i] = i;
+		return order;
+	}
+	for (int r = 0; r < bvh->ref_count; r++)
+		if (is_sphere_ref(bvh->refs[r]))
+			order[k++] = (int)(bvh->refs[r] & RT_PRIM_INDEX_MASK);
+	return order;
+}
+
+/* A leaf child whose references are all spheres becomes a range of the
+ * sphere array: its first device sphere, and its count with
+ * RT_LEAF_SPHERES. spheres_before[r]: sphere references before r. */
+static void leaf_to_sphere_range(struct rt_bvh_box *child, const struct bvh *bvh,
+				 const int *spheres_before)
+{
+	int32_t first, count;
+
+	memcpy(&first, &child->lo.s[3], sizeof(first));
+	memcpy(&count, &child->hi.s[3], sizeof(count));
+	if (count <= 0)
 		return;
+	for (int r = first; r < first + count; r++)
+		if (!is_sphere_ref(bvh->refs[r]))
+			return;
+	first = spheres_before[first];
+	count |= RT_LEAF_SPHERES;
+	memcpy(&child->lo.s[3], &first, sizeof(first));
+	memcpy(&child->hi.s[3], &count, sizeof(count));
+}
+
+/* The BVH's nodes and references, after the triangles (none without a BVH),
+ * with the spheres in leaf order (sphere_order): sphere references name
+ * device spheres, leaves of spheres are ranges. Returns 0, or -1 when out of
+ * memory. */
+static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh)
+{
+	struct rt_bvh_node *nodes = (struct rt_bvh_node *)(block + header->bvh_node_offset);
+	uint32_t *refs = (uint32_t *)(block + header->bvh_ref_offset);
+	int *spheres_before, k = 0;
+
+	if (!bvh || bvh->node_count == 0)
+		return 0;
+	spheres_before = malloc((size_t)bvh->ref_count * sizeof(int));
+	if (!spheres_before)
+		return -1;
 	header->bvh_node_count = bvh->node_count;
-	memcpy(block + header->bvh_node_offset, bvh->nodes,
-	       (size_t)bvh->node_count * sizeof(*bvh->nodes));
-	memcpy(block + header->bvh_ref_offset, bvh->refs,
-	       (size_t)bvh->ref_count * sizeof(*bvh->refs));
+	for (int r = 0; r < bvh->ref_count; r++) {
+		spheres_before[r] = k;
+		refs[r] = is_sphere_ref(bvh->refs[r]) ? (RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT) | k++
+						      : bvh->refs[r];
+	}
+	memcpy(nodes, bvh->nodes, (size_t)bvh->node_count * sizeof(*bvh->nodes));
+	for (int n = 0; n < bvh->node_count; n++)
+		for (int c = 0; c < 2; c++)
+			leaf_to_sphere_range(&nodes[n].child[c], bvh, spheres_before);
+	free(spheres_before);
+	return 0;
 }
 
 /* Where the arrays go in the block (byte offsets) and its size. */
@@ -180,7 +248,12 @@ void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const
 	header->triangle_count = scene->triangle_count;
 	header->bvh_node_offset = (rt_uint)l.node;
 	header->bvh_ref_offset = (rt_uint)l.ref;
-	pack_bvh(block, header, bvh);
+	int *order = sphere_order(scene, bvh);
+	if (!order || pack_bvh(block, header, bvh)) {
+		free(order);
+		free(block);
+		return NULL;
+	}
 
 	struct rt_material *materials = (struct rt_material *)(block + material_offset);
 	for (int i = 0; i < scene->material_count; i++)
@@ -188,7 +261,8 @@ void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const
 
 	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
 	for (int i = 0; i < scene->sphere_count; i++)
-		pack_sphere(&spheres[i], &scene->spheres[i]);
+		pack_sphere(&spheres[i], &scene->spheres[order[i]], order[i]);
+	free(order);
 	/* The padding: radius² -1, which no squared distance is below. */
 	for (int i = scene->sphere_count; i < sphere_slots; i++)
 		spheres[i].center.s[3] = -1.0f;
