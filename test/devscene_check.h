@@ -7,6 +7,8 @@
 #define RTCL_TEST_DEVSCENE_CHECK_H
 
 #include <math.h>
+#include <stdlib.h>
+#include <string.h>
 
 #include "../cl/rtcl_shared.h"
 
@@ -42,6 +44,67 @@ static const char *triangles_problem(const void *packed)
 		if ((int)(t[i].index.s[3] & ~RT_TRIANGLE_SMOOTH) >= h->material_count)
 			return "triangle material out of range";
 	}
+	return NULL;
+}
+
+/* A leaf's references name primitives the scene has. */
+static const char *refs_problem(const struct rt_scene *h, const rt_uint *refs, int first, int count)
+{
+	for (int r = first; r < first + count; r++) {
+		int index = (int)(refs[r] & RT_PRIM_INDEX_MASK);
+		if (refs[r] >> RT_PRIM_KIND_SHIFT == RT_PRIM_SPHERE ? index >= h->sphere_count
+								     : index >= h->triangle_count)
+			return "BVH reference out of range";
+	}
+	return NULL;
+}
+
+/* The BVH: every child a later node, a range of spheres (RT_LEAF_SPHERES) or
+ * of references within their arrays, naming primitives the scene has; the
+ * spheres' scene indices (leaf order, host/devscene.c) each scene index once. */
+static const char *bvh_problem(const void *packed)
+{
+	const unsigned char *block = packed;
+	const struct rt_scene *h = packed;
+	const struct rt_bvh_node *nodes = (const void *)(block + h->bvh_node_offset);
+	const struct rt_sphere *s = (const void *)(block + h->sphere_offset);
+	const rt_uint *refs = (const void *)(block + h->bvh_ref_offset);
+	int ref_slots = (int)((h->total_bytes - h->bvh_ref_offset) / sizeof(rt_uint));
+	int seen_all = 1;
+	char *seen = calloc((size_t)h->sphere_count + 1, 1);
+
+	for (int i = 0; seen && i < h->sphere_count; i++) {
+		int k = s[i].scene_index;
+		if (k < 0 || k >= h->sphere_count || seen[k])
+			seen_all = 0;
+		else
+			seen[k] = 1;
+	}
+	free(seen);
+	if (!seen_all)
+		return "sphere scene indices not a permutation";
+	for (int n = 0; n < h->bvh_node_count; n++)
+		for (int c = 0; c < 2; c++) {
+			int index, count;
+			memcpy(&index, &nodes[n].child[c].lo.s[3], sizeof(index));
+			memcpy(&count, &nodes[n].child[c].hi.s[3], sizeof(count));
+			int leaf_count = count & RT_LEAF_COUNT_MASK;
+			if (count == 0 && index == 0 && n == 0)
+				continue; /* an empty leaf beside a single primitive */
+			if (count == 0 && (index <= n || index >= h->bvh_node_count))
+				return "BVH child node out of range";
+			if (count < 0 || index < 0)
+				return "BVH child negative";
+			if ((count & RT_LEAF_SPHERES) && index + leaf_count > h->sphere_count)
+				return "BVH sphere leaf out of range";
+			if (count > 0 && !(count & RT_LEAF_SPHERES)) {
+				if (index + count > ref_slots)
+					return "BVH leaf references out of range";
+				const char *problem = refs_problem(h, refs, index, count);
+				if (problem)
+					return problem;
+			}
+		}
 	return NULL;
 }
 
@@ -89,7 +152,8 @@ static const char *devscene_problem(const void *packed)
 	for (int i = 0; i < h->light_count; i++)
 		if (!vec4_finite(l[i].position) || !vec4_finite(l[i].color))
 			return "light not finite";
-	return triangles_problem(packed);
+	const char *problem = triangles_problem(packed);
+	return problem ? problem : bvh_problem(packed);
 }
 
 #endif
