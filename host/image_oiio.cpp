@@ -25,7 +25,7 @@ const char *const format_hint = "use .png, .exr, .tif, .jpg, .hdr, .ppm, .pfm, .
 
 // OIIO's messages may span lines and name the temporary file; make them one
 // line about the file the user asked for.
-std::string one_line(std::string message, const char *tmp_path, const char *path)
+std::string oiio_error_line(std::string message, const char *tmp_path, const char *path)
 {
 	const std::string tmp = tmp_path;
 	size_t at;
@@ -137,7 +137,7 @@ int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb,
 
 	if (!out) {
 		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
-				one_line(OIIO::geterror(), tmp_path, path).c_str());
+				oiio_error_line(OIIO::geterror(), tmp_path, path).c_str());
 		return -1;
 	}
 	// The few writers without proxy support (SGI, ICO, FITS, RLA, HEIF in
@@ -164,7 +164,7 @@ int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb,
 
 	if (!out->open(tmp_path, spec)) {
 		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
-				one_line(out->geterror(), tmp_path, path).c_str());
+				oiio_error_line(out->geterror(), tmp_path, path).c_str());
 		return -1;
 	}
 
@@ -187,7 +187,7 @@ int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb,
 	}
 	if (!written || !closed) {
 		image_set_error(err, err_size, "%s: OpenImageIO: %s", path,
-				one_line(out->geterror(), tmp_path, path).c_str());
+				oiio_error_line(out->geterror(), tmp_path, path).c_str());
 		return -1;
 	}
 	return 0;
