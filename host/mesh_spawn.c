@@ -285,7 +285,12 @@ static int probe_file(const char *path, char *reason, size_t reason_size)
 		snprintf(reason, reason_size, "%s", strerror(errno));
 		return -1;
 	}
-	if (fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+	if (fstat(fd, &st) != 0) {
+		snprintf(reason, reason_size, "%s", strerror(errno));
+		close(fd);
+		return -1;
+	}
+	if (!S_ISREG(st.st_mode)) {
 		snprintf(reason, reason_size, "%s",
 			 S_ISDIR(st.st_mode) ? strerror(EISDIR) : "not a regular file");
 		close(fd);
