@@ -255,8 +255,7 @@ install: $(BIN)
 	$(INSTALL) -m 755 $(BIN) $(BINDIR)/rtcl
 	$(INSTALL) -m 755 $(MESHREAD) $(LIBDIR)
 	$(if $(OIIO_MODULE),$(INSTALL) -m 644 $(OIIO_MODULE) $(LIBDIR))
-	sed -e 's|/usr/local/share/rtcl|$(PREFIX)/share/rtcl|g' -e 's|/usr/local/lib/rtcl|$(PREFIX)/lib/rtcl|g' \
-		docs/rtcl.1 > $(MAN1DIR)/rtcl.1
+	sed -e 's|/usr/local/|$(PREFIX)/|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
 	$(INSTALL) -d $(DATADIR)/scenes/models
