@@ -7,6 +7,7 @@ the tool commands run from any folder, and that `make uninstall` removes exactly
 what install wrote. Nothing is written outside the temporary DESTDIR.
 """
 
+import json
 import os
 import pathlib
 import re
@@ -289,3 +290,234 @@ def test_man_page_names_the_version():
     version = subprocess.run([RTCL, "--version"], capture_output=True, text=True).stdout.strip()
     title = next(line for line in MAN_PAGE.read_text().splitlines() if line.startswith(".TH "))
     assert f'"{version}"' in title
+
+
+# The man page's FILES section against what make install writes.
+
+def man_files_entries(page_text):
+    """FILES as (path, body) pairs: the .I path after each .TP and the lines up
+    to the next .TP, the body in plain words."""
+    lines = page_text.split("\n.SH FILES\n", 1)[1].split("\n.SH ", 1)[0].splitlines()
+    entries, path, body = [], None, []
+    for line in lines + [".TP"]:
+        if line.startswith(".TP"):
+            if path is not None:
+                entries.append((path, body))
+            path, body = None, []
+        elif path is None and line.startswith(".I "):
+            path = line[3:].strip()
+        else:
+            body.append(line)
+    return entries
+
+
+def bold_file_names(body):
+    """The file and command names an entry sets in bold (.B, .BR, .RB words),
+    less options and environment variables."""
+    names = set()
+    for line in body:
+        if not re.match(r"\.(B|BR|RB) ", line):
+            continue
+        for word in re.split(r"[\s,()]+", roff_text(line.split(" ", 1)[1]).replace('"', " ")):
+            word = word.rstrip(".:;")
+            if re.fullmatch(r"[A-Za-z][\w.-]*", word) and not re.fullmatch(r"[A-Z_]+", word):
+                names.add(word)
+    return names
+
+
+def test_man_page_files_section_lists_exactly_what_install_writes(installed):
+    """Every installed file lies under a path FILES names; every folder FILES
+    names holds exactly the files and folders its entry names (the tools'
+    Python front-ends apart: FILES names their folder); and everything it names
+    is installed (rtcl-oiio.so only in a build with OpenImageIO)."""
+    page = (installed / PREFIX / "share/man/man1/rtcl.1").read_text()
+    entries = man_files_entries(page)
+    assert entries, "no FILES entries"
+    installed_paths = sorted("/" + name for name in files_under(installed))
+    listed = [path for path, _ in entries if not path.startswith("~")]
+    for path in listed:
+        assert (installed / path.lstrip("/")).exists(), \
+            f"FILES names {path}, which make install did not write"
+    unlisted = [path for path in installed_paths
+                if not any(path == entry or (entry.endswith("/") and path.startswith(entry))
+                           for entry in listed)]
+    assert unlisted == [], "installed but under no path in the man page's FILES"
+    tools_folder = f"/{PREFIX}/share/rtcl/tools/"
+    for path, body in entries:
+        if not path.endswith("/") or path.startswith("~"):
+            continue
+        named = bold_file_names(body)
+        folder = installed / path.lstrip("/")
+        present = {child.name for child in folder.iterdir()}
+        missing = named - present - ({"rtcl-oiio.so"} if not has_oiio() else set())
+        assert missing == set(), f"FILES names these in {path}, not installed"
+        if path == tools_folder:
+            continue
+        # A subfolder with an entry of its own need not be named in its parent's.
+        own_entries = {pathlib.PurePosixPath(entry).name for entry in listed
+                       if entry.startswith(path) and entry != path}
+        unnamed = present - named - own_entries
+        assert unnamed == set(), f"installed in {path} but not named in its FILES entry"
+
+
+def test_man_page_files_names_every_installed_tool_command(installed):
+    commands = {path.name for path in (installed / PREFIX / "bin").iterdir()} - {"rtcl"}
+    assert len(commands) >= 10
+    text = roff_text((installed / PREFIX / "share/man/man1/rtcl.1").read_text())
+    files = text.split("\n.SH FILES\n", 1)[1].split("\n.SH ", 1)[0]
+    in_files = set(re.findall(r"\brtcl-[a-z][a-z-]*[a-z]\b(?!\.)", files))
+    assert in_files - {"rtcl-meshread"} == commands
+
+
+# The 8-bit encoding: what rtcl does, and what the docs a newcomer reads say.
+
+USER_DOCS = ["README.md", "docs/GUIDE.md", "docs/SCENE.md", "docs/RENDERING.md", "docs/rtcl.1"]
+
+
+def srgb_byte(c):
+    encoded = 12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055
+    return int(255 * encoded + 0.5)
+
+
+def first_pixel(tmp_path, *options):
+    out = tmp_path / "pixel.ppm"
+    result = subprocess.run([RTCL, "-q", "-s", str(ROOT / "scenes/empty.json"), "--size", "2x2",
+                             "-o", str(out), *options], capture_output=True, text=True,
+                            timeout=300)
+    assert result.returncode == 0, result.stderr
+    data = out.read_bytes()
+    return tuple(data[data.index(b"\n255\n") + 5:][:3])
+
+
+def doc_paragraphs(name):
+    """A document's paragraphs in plain words: blank-line separated in
+    Markdown; in the man page, split at .PP, .TP, .SH and .SS, macros dropped."""
+    text = (ROOT / name).read_text()
+    if not name.endswith(".1"):
+        return [part for part in re.split(r"\n\s*\n", text) if part.strip()]
+    paragraphs = [[]]
+    for line in text.splitlines():
+        if re.match(r"\.(PP|TP|SH|SS)\b", line):
+            paragraphs.append([])
+        elif not line.startswith(".\\\""):
+            paragraphs[-1].append(roff_text(re.sub(r"^\.[A-Z]{1,2} ", "", line)))
+    return [" ".join(lines) for lines in paragraphs if lines]
+
+
+def test_default_8bit_encoding_is_the_one_help_and_the_docs_state(tmp_path):
+    """empty.json's background (0.3, 0.5, 0.8), rendered to PPM: the default
+    bytes are the sRGB encoding, --encoding linear's are round(255 c); --help
+    calls sRGB the default; and every paragraph of the user docs that gives an
+    8-bit formula names the sRGB default and the linear option, and each of
+    them says that sRGB is the default."""
+    background = (0.3, 0.5, 0.8)
+    srgb = tuple(srgb_byte(c) for c in background)
+    linear = tuple(int(255 * c + 0.5) for c in background)
+    assert first_pixel(tmp_path) == srgb
+    assert first_pixel(tmp_path, "--encoding", "linear") == linear
+    help_entry = help_text().split("--encoding", 1)[1].split("\n  -", 1)[0]
+    assert re.search(r"sRGB curve\s+\(default\)", help_entry), help_entry
+    for name in USER_DOCS:
+        paragraphs = doc_paragraphs(name)
+        for paragraph in paragraphs:
+            if "round(255" in paragraph:
+                for word in ("sRGB", "default", "linear"):
+                    assert word in paragraph, f"{name}: an 8-bit formula without {word!r}:\n" \
+                        + paragraph
+        assert any("sRGB" in p and "default" in p for p in paragraphs), \
+            f"{name} does not say that 8-bit output is sRGB-encoded by default"
+
+
+# The README's and the guide's commands and links.
+
+def code_lines(name):
+    """The lines of a Markdown file's code: indented four spaces or fenced."""
+    lines, fenced = [], False
+    for line in (ROOT / name).read_text().splitlines():
+        if line.startswith("```"):
+            fenced = not fenced
+        elif fenced or line.startswith("    "):
+            lines.append(line.strip())
+    return lines
+
+
+def rtcl_commands(name):
+    """The rtcl command lines in a file's code, comments dropped."""
+    commands = []
+    for line in code_lines(name):
+        match = re.search(r"(?:^|\s)(?:\./)?rtcl(\s.*|$)", line.split(" #", 1)[0])
+        if match and not line.startswith(("bin/", "lib/", "share/")):
+            commands.append(match.group(1).strip())
+    return commands
+
+
+@pytest.mark.parametrize("name", ["README.md", "docs/GUIDE.md"])
+def test_documented_commands_use_only_options_rtcl_has(name):
+    defined = help_defined_options(help_text())
+    commands = rtcl_commands(name)
+    assert len(commands) >= 8
+    used = {option for command in commands for option in mentioned_options(command)}
+    assert used - defined == set(), f"{name} uses options that rtcl --help does not list"
+
+
+def readme_scenes():
+    """The README's first scene, and the same with its second step merged in."""
+    blocks = re.findall(r"```json\n(.*?)```", (ROOT / "README.md").read_text(), re.S)
+    first = json.loads(blocks[0])
+    second = {**first, **json.loads("{" + blocks[1].strip().rstrip(",") + "}"), "version": 2}
+    return first, second
+
+
+def test_readme_first_scene_renders_as_written(tmp_path):
+    """Both steps of the README's first scene render (the mesh path is relative
+    to the source folder, where the README saves first.json), and a misspelt
+    key gets the message the README quotes."""
+    (tmp_path / "scenes").symlink_to(ROOT / "scenes")
+    readme = (ROOT / "README.md").read_text()
+    assert "./rtcl -s first.json -o first.png" in readme
+    for step, scene in enumerate(readme_scenes()):
+        (tmp_path / "first.json").write_text(json.dumps(scene))
+        render = subprocess.run([RTCL, "-q", "-s", "first.json", "--size", "16x12", "-o",
+                                 f"step{step}.ppm"], cwd=tmp_path, capture_output=True,
+                                text=True, timeout=300)
+        assert render.returncode == 0, render.stderr
+    typo = readme_scenes()[0]
+    typo["spheres"][0]["radus"] = typo["spheres"][0].pop("radius")
+    (tmp_path / "first.json").write_text(json.dumps(typo))
+    refused = subprocess.run([RTCL, "-s", "first.json", "-o", "typo.ppm"], cwd=tmp_path,
+                             capture_output=True, text=True, timeout=60)
+    assert refused.returncode == 1
+    quoted = re.search(r"\(`(first\.json: [^`]*)`\)", readme).group(1)
+    assert quoted in refused.stderr
+
+
+DOCS_WITH_LINKS = ["README.md", "scenes/README.md", *sorted(
+    str(path.relative_to(ROOT)) for path in [*(ROOT / "docs").glob("*.md"),
+                                             *(ROOT / "docs/results").glob("*.md")])]
+
+
+def heading_anchors(path):
+    """GitHub's anchors for a Markdown file's headings."""
+    anchors = set()
+    for line in path.read_text().splitlines():
+        match = re.match(r"#+ (.*)", line)
+        if match:
+            words = re.sub(r"[^\w\- ]", "", match.group(1).strip().lower())
+            anchors.add(words.replace(" ", "-"))
+    return anchors
+
+
+@pytest.mark.parametrize("name", DOCS_WITH_LINKS)
+def test_documentation_links_resolve(name):
+    source = ROOT / name
+    broken = []
+    for target in re.findall(r"\]\(([^)\s]+)\)", source.read_text()):
+        if re.match(r"[a-z]+:", target):
+            continue
+        file_part, _, anchor = target.partition("#")
+        path = (source.parent / file_part).resolve() if file_part else source
+        if not path.exists():
+            broken.append(target)
+        elif anchor and path.suffix == ".md" and anchor not in heading_anchors(path):
+            broken.append(target)
+    assert broken == [], f"{name}: links to nothing"
