@@ -161,31 +161,37 @@ Test(kernels, identical_empty, .timeout = 600)
 	check_kernels_identical("scenes/empty.json");
 }
 
-/* The image of `kernel` at max_depth (< 0: the scene's) against the
- * double-precision reference: PSNR >= 40 dB and at most 0.1% of the pixels
- * off by more than 2/255. */
-static void check_kernel_against_reference_spp(const char *path, const char *kernel, int width,
-					       int height, int max_depth, int samples)
+/* The double-precision reference of `scene` at max_depth and `samples`,
+ * checked finite; `what` names it in failures. */
+static float *reference_checked(const struct scene *scene, int width, int height, int max_depth,
+				int samples, const char *what)
 {
-	struct device dev;
-	struct scene scene;
 	size_t pixels = (size_t)width * height;
-	char what[256];
-
-	open_device(&dev);
-	load(&scene, path);
-	if (max_depth < 0)
-		max_depth = scene.max_depth;
-	snprintf(what, sizeof(what), "%s %s depth %d spp %d", path, kernel, max_depth, samples);
 	float *want = malloc(pixels * 3 * sizeof(float));
+
 	cr_assert_not_null(want);
-	cr_assert_eq(reference_render_samples(&scene, width, height, max_depth, samples, want), 0);
+	cr_assert_eq(reference_render_samples(scene, width, height, max_depth, samples, want), 0);
 	for (size_t i = 0; i < pixels * 3; i++)
 		cr_assert(isfinite(want[i]), "%s: the reference gave %g at pixel (%zu, %zu)", what,
 			  (double)want[i], i / 3 % width, i / 3 / width);
+	return want;
+}
+
+/* The image of `kernel` against the reference image `want` (rendered with the
+ * same depth and samples): PSNR >= 40 dB and at most 0.1% of the pixels off by
+ * more than 2/255. */
+static void expect_kernel_near_reference(struct device *dev, const struct scene *scene,
+					 const char *path, const char *kernel, int width,
+					 int height, int max_depth, int samples,
+					 const float *want)
+{
+	size_t pixels = (size_t)width * height;
+	char what[256];
+
+	snprintf(what, sizeof(what), "%s %s depth %d spp %d", path, kernel, max_depth, samples);
 	struct render_settings s = settings_for(kernel, width, height, 8, 8, max_depth);
 	s.samples = samples;
-	unsigned char *got = render_checked(&dev, &scene, &s, what);
+	unsigned char *got = render_checked(dev, scene, &s, what);
 
 	double squared = 0;
 	size_t off = 0;
@@ -208,31 +214,53 @@ static void check_kernel_against_reference_spp(const char *path, const char *ker
 	cr_expect_leq(off_percent, 0.1, "%s: %.4f%% of pixels off by more than 2/255", what,
 		      off_percent);
 	free(got);
+}
+
+/* Each of `kernels` at max_depth (< 0: the scene's) and `samples` against the
+ * reference, which is rendered once for all of them. */
+static void check_kernels_against_reference_spp(const char *path, const char *const *kernels,
+						size_t kernel_count, int width, int height,
+						int max_depth, int samples)
+{
+	struct device dev;
+	struct scene scene;
+	char what[256];
+
+	open_device(&dev);
+	load(&scene, path);
+	if (max_depth < 0)
+		max_depth = scene.max_depth;
+	snprintf(what, sizeof(what), "%s depth %d spp %d", path, max_depth, samples);
+	float *want = reference_checked(&scene, width, height, max_depth, samples, what);
+	for (size_t k = 0; k < kernel_count; k++)
+		expect_kernel_near_reference(&dev, &scene, path, kernels[k], width, height,
+					     max_depth, samples, want);
 	free(want);
 	scene_free(&scene);
 	device_close(&dev);
 }
 
-static void check_kernel_against_reference(const char *path, const char *kernel, int width,
-					   int height, int max_depth)
+static void check_kernel_against_reference_spp(const char *path, const char *kernel, int width,
+					       int height, int max_depth, int samples)
 {
-	check_kernel_against_reference_spp(path, kernel, width, height, max_depth, 1);
+	check_kernels_against_reference_spp(path, &kernel, 1, width, height, max_depth, samples);
 }
 
 static void check_against_reference(const char *path, int width, int height)
 {
-	check_kernel_against_reference(path, "dynamic", width, height, -1);
+	check_kernel_against_reference_spp(path, "dynamic", width, height, -1, 1);
 }
 
 /* Every kernel at max_depth 64, the deepest SCENE.md allows, on images small
  * enough for the ray trees (glass spawns two rays a bounce): the reference
- * once returned inf there (its directions drifted from unit length). */
+ * once returned inf there (its directions drifted from unit length). The
+ * reference is rendered once and compared with each kernel. */
 static void check_every_kernel_at_depth_64(const char *path, int width, int height)
 {
 	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
 					      "dynamic", "persistent", "wavefront"};
-	for (size_t k = 0; k < sizeof(kernels) / sizeof(kernels[0]); k++)
-		check_kernel_against_reference(path, kernels[k], width, height, 64);
+	check_kernels_against_reference_spp(path, kernels, sizeof(kernels) / sizeof(kernels[0]),
+					    width, height, 64, 1);
 }
 
 Test(kernels, depth_64_matches_reference_two_balls, .timeout = 600)
