@@ -316,8 +316,8 @@ def replot(out_dir, no_plots=False):
     results.json is missing or malformed (ValueError).
     """
     out_dir = pathlib.Path(out_dir)
-    meta, stored = load_results(out_dir / "results.json")
     files.check_not_tracked([out_dir / name for name in ("table1.md", *FIGURES)])
+    meta, stored = load_results(out_dir / "results.json")
     runs = best_rows_from_sweep(stored)
     meta = dict(meta, regenerated={"date": utc_now(), "commit": git_commit()})
     text = table1.render_table1(runs, meta)

@@ -1,7 +1,8 @@
 """The tools' third-party modules: a missing one is one line, not a traceback.
 
-A command module calls require() before it imports what needs numpy or
-matplotlib, e.g. require("numpy", "matplotlib") in rtcl-flops-hist.
+A command module calls require() before it imports what needs numpy (at its
+top), or in its main() before it draws with matplotlib (so that --help works
+without it), e.g. require("matplotlib") in rtcl-flops-hist.
 """
 
 import importlib
@@ -35,8 +36,8 @@ def requirement_message(program, missing):
 def require(*names):
     """Exits with status 1 and one line on stderr when a module of names is missing.
 
-    Called at the top of a command module (the program's own code, not library
-    code), so that the command's first import of the module never fails."""
+    Called by a command module (the program's own code, never library code),
+    before the first import or use of the module."""
     missing = missing_modules(*names)
     if missing:
         print(requirement_message(program_name(), missing), file=sys.stderr)

@@ -23,7 +23,7 @@ import sys
 
 from ..requirements import require
 
-require("numpy", "matplotlib")
+require("numpy")  # the flops files; matplotlib once the options are read (--help needs none)
 
 from .. import files  # noqa: E402
 from ..flops import (FlopsFileError, load_flops, output_format,  # noqa: E402
@@ -57,6 +57,7 @@ def parse_arguments(argv):
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()
+    require("matplotlib")
     try:
         with files.committed_files_allowed(arguments.update_committed):
             draw(program, arguments)
