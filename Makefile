@@ -26,7 +26,8 @@
 # Variables: OIIO=0|1, MPI=0|1 (default: 1 when Open MPI's ompi-c is installed), BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
 # has numpy, matplotlib and pytest from `make deps`; the installed tools run with it), SAN=1 (sanitizers),
 # FUZZ_SECONDS (default 60), FUZZ_CC (default clang), PREFIX (default /usr/local),
-# DESTDIR (staging root for packaging, default empty).
+# DESTDIR (staging root for packaging, default empty), DEVICE, BENCH and OUT (experiments,
+# bench, results: the device options, more bench options, the results folder).
 
 OIIO ?= 1
 CC ?= gcc

@@ -8,7 +8,6 @@ proves that).  --update-committed is the one way through.  Also: the tools find
 the rtcl installed beside them before the one on PATH, and default to a new
 rtcl-results/ folder.
 """
-import os
 import pathlib
 import subprocess
 import sys
