@@ -8,20 +8,26 @@
 #   make fuzz         libFuzzer on the scene loader for FUZZ_SECONDS (needs clang)
 #   make fuzz-mesh    the same on mesh files (OBJ, PLY) through Assimp
 #   make valgrind     memcheck on full renders (test/valgrind.sh)
-#   make experiments  the paper's Table 1 and Figures 6-7 (DEVICE="-p N -d M")
+#   make experiments  the paper's Table 1 and Figures 6-7 (DEVICE="-p N -d M"), into a
+#                     new folder rtcl-results/<device>-<date-time> (OUT=DIR: there)
 #   make bench        every kernel over work-group shapes, group counts and batches
-#                     (DEVICE="-p N -d M", BENCH="more tools/bench.py options")
+#                     (DEVICE="-p N -d M", BENCH="more tools/bench.py options"), the same
+#   make results      regenerate the committed docs/results/<device> deliberately:
+#                     experiments and bench with --update-committed (the only way a
+#                     tool replaces a file tracked by git; review with git diff)
 #   make bench-scenes the benchmark scenes (SPD balls, tetra, mount, random balls,
 #                     assimp-testmodels, the 2 M-triangle lake) in build/bench-scenes/
 #   make install      the built rtcl, its man page, the tools (as rtcl-genscene,
 #                     rtcl-bench, ...) and the scenes under DESTDIR/PREFIX
+#                     (the tools alone, into any Python: pip install ./tools)
 #   make uninstall    remove exactly what install put there
 #   make clean
 #
 # Variables: OIIO=0|1, MPI=0|1 (default: 1 when Open MPI's ompi-c is installed), BUILD (object folder), BIN (the program), CC, CXX, PYTHON (default /usr/bin/python3, Debian's, which
 # has numpy, matplotlib and pytest from `make deps`; the installed tools run with it), SAN=1 (sanitizers),
 # FUZZ_SECONDS (default 60), FUZZ_CC (default clang), PREFIX (default /usr/local),
-# DESTDIR (staging root for packaging, default empty).
+# DESTDIR (staging root for packaging, default empty), DEVICE, BENCH and OUT (experiments,
+# bench, results: the device options, more bench options, the results folder).
 
 OIIO ?= 1
 CC ?= gcc
@@ -102,7 +108,7 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test experiments bench bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
+.PHONY: all deps render test experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
 all: $(BIN)
 
 $(BIN): $(BUILD)/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
@@ -157,15 +163,25 @@ test: $(BIN) $(BUILD)/unit_tests
 	RTCL=$(abspath $(BIN)) $(PYTHON) -m pytest -q test
 
 # The paper's experiment (Table 1, Figures 6-7) on one device, e.g.
-# make experiments DEVICE="-p 1 -d 0"; results under docs/results/<device>/.
+# make experiments DEVICE="-p 1 -d 0"; results in a new folder
+# rtcl-results/<device>-<date-time>, or in OUT=DIR.
+OUT_OPTION = $(if $(OUT),-o $(OUT))
 experiments: $(BIN)
-	$(PYTHON) tools/experiments.py --rtcl ./$(BIN) $(DEVICE)
+	$(PYTHON) tools/experiments.py --rtcl ./$(BIN) $(DEVICE) $(OUT_OPTION)
 
 # The benchmark (issue 4): every kernel x work-group shapes x group counts x
 # batches, median of 10 launches each, e.g. make bench DEVICE="-p 1 -d 0"
-# BENCH="--scaling"; results in docs/results/<device>/bench.md and bench.csv.
+# BENCH="--scaling"; bench.md and bench.csv in a new folder
+# rtcl-results/<device>-<date-time>, or in OUT=DIR.
 bench: $(BIN)
-	$(PYTHON) tools/bench.py --rtcl ./$(BIN) $(DEVICE) $(BENCH)
+	$(PYTHON) tools/bench.py --rtcl ./$(BIN) $(DEVICE) $(BENCH) $(OUT_OPTION)
+
+# The committed results of one device, regenerated on purpose: the only target
+# that replaces files tracked by git (docs/results/<device>/: results.json,
+# table1.md, the figures, bench.md, bench.csv); git diff shows what changed.
+results: $(BIN)
+	$(PYTHON) tools/experiments.py --rtcl ./$(BIN) $(DEVICE) --update-committed
+	$(PYTHON) tools/bench.py --rtcl ./$(BIN) $(DEVICE) $(BENCH) --update-committed
 
 # The benchmark scenes (docs/benchmark-scenes.md), generated, never committed.
 BENCH_SCENES ?= build/bench-scenes
@@ -231,9 +247,11 @@ fuzz-mesh: $(FUZZ_DIR)/fuzz_mesh
 valgrind: $(BIN)
 	bash test/valgrind.sh $(BIN)
 
-# Install: the program, its man page, the scenes, and the tools with one
-# wrapper command each (tools/NAME.py runs as rtcl-NAME, _ as -; the wrapper is
-# tools/build/tool_wrapper.sh.in); the man page names the files under PREFIX.
+# Install: the program, its man page, the scenes, and the tools: the package
+# rtcl_tools in share/rtcl/tools and one command per tools/NAME.py, rtcl-NAME
+# (_ as -), which runs the rtcl_tools.commands module that tools/NAME.py imports
+# (tools/build/tool_wrapper.py.in; pip install ./tools makes the same commands);
+# the man page names the files under PREFIX.
 # install depends on the binary, so an up-to-date one is copied as built,
 # never rebuilt with other flags.
 PREFIX ?= /usr/local
@@ -245,13 +263,15 @@ LIBDIR := $(DESTDIR)$(PREFIX)/lib/rtcl
 DATADIR := $(DESTDIR)$(PREFIX)/share/rtcl
 TOOL_SCRIPTS := $(wildcard tools/*.py)
 TOOL_MODULES := $(wildcard tools/rtcl_tools/*.py)
+TOOL_COMMAND_MODULES := $(wildcard tools/rtcl_tools/commands/*.py)
 TOOL_COMMANDS := $(addprefix rtcl-,$(subst _,-,$(basename $(notdir $(TOOL_SCRIPTS)))))
 SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
 # The mesh files the version 2 scenes place, relative to them.
 SCENE_MODELS := $(wildcard scenes/models/*)
 
 install: $(BIN)
-	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(LIBDIR) $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools
+	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(LIBDIR) $(DATADIR)/scenes \
+		$(DATADIR)/tools/rtcl_tools/commands
 	$(INSTALL) -m 755 $(BIN) $(BINDIR)/rtcl
 	$(INSTALL) -m 755 $(MESHREAD) $(LIBDIR)
 	$(if $(OIIO_MODULE),$(INSTALL) -m 644 $(OIIO_MODULE) $(LIBDIR))
@@ -260,12 +280,14 @@ install: $(BIN)
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
 	$(INSTALL) -d $(DATADIR)/scenes/models
 	$(INSTALL) -m 644 $(SCENE_MODELS) $(DATADIR)/scenes/models
-	$(INSTALL) -m 755 $(TOOL_SCRIPTS) $(DATADIR)/tools
 	$(INSTALL) -m 644 $(TOOL_MODULES) $(DATADIR)/tools/rtcl_tools
-	for script in $(notdir $(TOOL_SCRIPTS)); do \
+	$(INSTALL) -m 644 $(TOOL_COMMAND_MODULES) $(DATADIR)/tools/rtcl_tools/commands
+	for script in $(TOOL_SCRIPTS); do \
 		command=rtcl-$$(basename $$script .py | tr _ -); \
-		sed -e "s|@COMMAND@|$$command|g" -e "s|@SCRIPT@|$$script|g" \
-			-e "s|@PYTHON@|$(PYTHON)|g" tools/build/tool_wrapper.sh.in \
+		module=$$(sed -n 's/^from rtcl_tools\.commands\.\([a-z_]*\) import main$$/\1/p' $$script); \
+		[ -n "$$module" ] || { echo "$$script: no rtcl_tools.commands module" >&2; exit 1; }; \
+		sed -e "s|@COMMAND@|$$command|g" -e "s|@MODULE@|$$module|g" \
+			-e "s|@PYTHON@|$(PYTHON)|g" tools/build/tool_wrapper.py.in \
 			> $(BINDIR)/$$command && chmod 755 $(BINDIR)/$$command || exit 1; \
 	done
 
@@ -277,10 +299,12 @@ uninstall:
 	rm -f $(LIBDIR)/rtcl-oiio.so $(LIBDIR)/rtcl-meshread
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
 	rm -f $(addprefix $(DATADIR)/scenes/models/,$(notdir $(SCENE_MODELS)))
-	rm -f $(addprefix $(DATADIR)/tools/,$(notdir $(TOOL_SCRIPTS)))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
-	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__
-	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools \
+	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/commands/,$(notdir $(TOOL_COMMAND_MODULES)))
+	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__ \
+		$(DATADIR)/tools/rtcl_tools/commands/__pycache__
+	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools/commands \
+			$(DATADIR)/tools/rtcl_tools \
 			$(DATADIR)/tools $(DATADIR) $(LIBDIR); do \
 		if [ -d $$dir ] && [ -z "$$(ls -A $$dir)" ]; then rmdir $$dir; fi; \
 	done

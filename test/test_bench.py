@@ -1,6 +1,7 @@
-"""Tests of tools/bench.py and its rtcl_tools modules: the pure parts (plan, peaks, fits, table) with fake data,
+"""Tests of tools/bench.py (rtcl-bench) and its rtcl_tools modules: the pure parts (plan, peaks, fits, table) with fake data,
 then end-to-end runs of `bench.py --quick` against the real ./rtcl (or $RTCL) on
-tiny images, and its refusals (one stderr line, exit 2, nothing written)."""
+tiny images, where it writes (-o DIR, else a new rtcl-results/ folder), and its
+refusals (one stderr line, exit 2, nothing written)."""
 import csv
 import os
 import pathlib
@@ -16,15 +17,15 @@ TOOLS = ROOT / "tools"
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 sys.path.insert(0, str(TOOLS))
 
-from rtcl_tools import bench_plan, bench_report, files, scaling, usage  # noqa: E402
+from rtcl_tools import bench_plan, bench_report, files, scaling  # noqa: E402
 from rtcl_tools import peak as fp32_peak  # noqa: E402
 
 H100 = "NVIDIA H100 80GB HBM3 (NVIDIA CUDA)"
 
 
-def run_bench(*args):
+def run_bench(*args, cwd=ROOT):
     return subprocess.run([sys.executable, str(TOOLS / "bench.py"), *map(str, args)],
-                          capture_output=True, text=True, cwd=ROOT, timeout=600)
+                          capture_output=True, text=True, cwd=cwd, timeout=600)
 
 
 def needs_rtcl():
@@ -112,17 +113,19 @@ def peak_arguments(peak_gflops=None, fma_units=None):
     return types.SimpleNamespace(peak_gflops=peak_gflops, fma_units=fma_units)
 
 
-def test_find_peak_asks_for_what_it_cannot_tell():
+def test_find_peak_says_what_it_cannot_tell_and_leaves_the_peak_unknown():
     pocl = {"device": "pthread-znver4-AMD EPYC (Portable Computing Language)",
             "compute_units": 2, "max_clock_mhz": 2600}
-    with pytest.raises(usage.UsageError, match="--fma-units"):
-        fp32_peak.find_peak(pocl, peak_arguments(), cpuinfo("avx2 fma avx512f"))
+    unknown = fp32_peak.find_peak(pocl, peak_arguments(), cpuinfo("avx2 fma avx512f"))
+    assert unknown.gflops is None
+    assert unknown.formula.startswith("unknown") and "--fma-units" in unknown.formula
     assert fp32_peak.find_peak(pocl, peak_arguments(fma_units=1),
                            cpuinfo("avx2 fma avx512f")).gflops == pytest.approx(166.4)
     given = fp32_peak.find_peak(pocl, peak_arguments(peak_gflops=123.0), {})
     assert given.gflops == 123.0 and "given" in given.formula
-    with pytest.raises(usage.UsageError, match="--peak-gflops"):
-        fp32_peak.find_peak({"device": "Mystery GPU", "compute_units": 8}, peak_arguments(), {})
+    mystery = fp32_peak.find_peak({"device": "Mystery GPU", "compute_units": 8},
+                                  peak_arguments(), {})
+    assert mystery.gflops is None and "--peak-gflops" in mystery.formula
     h100 = fp32_peak.find_peak({"device": H100, "compute_units": 132}, peak_arguments(), {})
     assert h100.gflops == pytest.approx(66908.16)
 
@@ -217,7 +220,7 @@ def test_quick_bench_and_scaling_against_rtcl(tmp_path):
                        "--peak-gflops", "50", "--out", out, "--scaling",
                        "--scaling-sizes", "16x16,24x24,32x32", "--scaling-spheres", "60,120")
     assert result.returncode == 0, result.stderr
-    (device_dir,) = out.iterdir()
+    device_dir = out     # -o DIR: the files go into DIR itself
     assert sorted(p.name for p in device_dir.iterdir()) == \
         ["bench.csv", "bench.md", "scaling.csv", "scaling.md"]
 
@@ -299,7 +302,7 @@ def test_scaling_alone_uses_the_given_configuration(tmp_path):
                        "--scaling-config", "naive:16x8", "--scaling-sizes", "8x8,16x16",
                        "--scaling-spheres", "60", "--peak-gflops", "50", "--out", tmp_path)
     assert result.returncode == 0, result.stderr
-    (device_dir,) = tmp_path.iterdir()
+    device_dir = tmp_path
     assert sorted(p.name for p in device_dir.iterdir()) == ["scaling.csv", "scaling.md"]
     assert "`naive -w 16x8` (given by --scaling-config)" in (device_dir / "scaling.md").read_text()
     assert [p["status"] for p in read_csv(device_dir / "scaling.csv")] == ["ok", "ok"]
@@ -317,6 +320,7 @@ def test_scaling_alone_uses_the_given_configuration(tmp_path):
     (["--paper-only", "--batches", "2"], "takes no --batches"),
     (["--no-sweep"], "nothing to run"),
     (["--quick", "--scaling", "--scaling-config", "dynamic:8x8:huge"], "expected WxH"),
+    (["--quick", "--update-committed"], "takes no --out"),
 ])
 def test_bad_options_are_one_line_and_exit_2(tmp_path, args, fragment):
     result = run_bench("--rtcl", RTCL, *args, "--out", tmp_path / "out")
@@ -327,17 +331,25 @@ def test_bad_options_are_one_line_and_exit_2(tmp_path, args, fragment):
     assert not (tmp_path / "out").exists()
 
 
-def test_a_cpu_without_peak_options_is_refused_before_any_run(tmp_path):
+def test_a_device_of_unknown_peak_is_benchmarked_into_a_new_folder(tmp_path):
+    """PoCL without --fma-units: its peak is unknown, the benchmark runs all the same
+    (the % of peak column empty), into rtcl-results/<device>-<date-time> of the
+    current folder when no -o is given."""
     needs_rtcl()
     probe = subprocess.run([RTCL, "--list-devices"], capture_output=True, text=True)
     if "Portable Computing Language" not in probe.stdout.split("\n")[0]:
         pytest.skip("the first platform is not PoCL")
-    result = run_bench("--rtcl", RTCL, "-p", "0", "-d", "0", "--quick", "--out",
-                       tmp_path / "out")
-    assert result.returncode == 2
-    (line,) = result.stderr.strip().splitlines()
-    assert "--fma-units" in line and "--peak-gflops" in line
-    assert not (tmp_path / "out").exists()
+    result = run_bench("--rtcl", RTCL, "-p", "0", "-d", "0", "--quick", "--size", "16x16",
+                       "--kernels", "naive", "--workgroups", "8x8", "-r", "1", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "FP32 peak: unknown" in result.stderr
+    (folder,) = (tmp_path / "rtcl-results").iterdir()
+    assert re.fullmatch(r"pocl-.+-\d{8}-\d{6}", folder.name)
+    assert sorted(p.name for p in folder.iterdir()) == ["bench.csv", "bench.md"]
+    assert "FP32 peak: unknown" in (folder / "bench.md").read_text()
+    rows = read_csv(folder / "bench.csv")
+    assert rows and all(row["peak_percent"] == "" for row in rows)
+    assert any(row["status"] == "ok" and float(row["gflops"]) > 0 for row in rows)
 
 
 def test_failing_rtcl_writes_nothing(tmp_path):

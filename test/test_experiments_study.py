@@ -11,6 +11,7 @@ the tests that read its output (a module-scoped fixture).
 import json
 import os
 import pathlib
+import re
 import shutil
 import subprocess
 import sys
@@ -202,10 +203,10 @@ def fake_rtcl(tmp_path):
 
 def test_accel_and_scene_reach_every_rtcl_call_and_name_the_folder(tmp_path, fake_rtcl):
     result = run_tool("--rtcl", fake_rtcl, "--quick", "--no-sweep", "--accel", "bvh",
-                      "--scene", "somewhere/lake-10.json", "--out", tmp_path / "out")
+                      "--scene", "somewhere/lake-10.json", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    (folder,) = (tmp_path / "out").iterdir()
-    assert folder.name == "fake-gpu-bvh-lake-10"
+    (folder,) = (tmp_path / "rtcl-results").iterdir()   # no --out: a new folder there
+    assert re.fullmatch(r"fake-gpu-bvh-lake-10-\d{8}-\d{6}", folder.name)
     calls = (fake_rtcl.parent / "calls").read_text().splitlines()
     assert len(calls) == 7
     assert all("--accel bvh" in call and "-s somewhere/lake-10.json" in call
@@ -220,10 +221,11 @@ def test_accel_and_scene_reach_every_rtcl_call_and_name_the_folder(tmp_path, fak
 
 def test_default_accel_is_none_in_the_device_folder(tmp_path, fake_rtcl):
     result = run_tool("--rtcl", fake_rtcl, "--quick", "--no-sweep", "--no-serial",
-                      "--no-reference", "--out", tmp_path / "out")
+                      "--no-reference", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
-    (folder,) = (tmp_path / "out").iterdir()
-    assert folder.name == "fake-gpu"
+    (folder,) = (tmp_path / "rtcl-results").iterdir()
+    assert re.fullmatch(r"fake-gpu-\d{8}-\d{6}", folder.name)
+    assert f"results in rtcl-results/{folder.name}" in result.stderr
     calls = (fake_rtcl.parent / "calls").read_text().splitlines()
     assert calls and all("--accel none" in call for call in calls)
     meta = json.loads((folder / "results.json").read_text())["meta"]
@@ -235,7 +237,7 @@ def test_default_accel_is_none_in_the_device_folder(tmp_path, fake_rtcl):
 @pytest.mark.parametrize("how", ["matplotlib missing", "--no-plots"])
 def test_without_figures_results_and_table_are_written(tmp_path, fake_rtcl, how):
     out = tmp_path / "out"
-    stale = out / "fake-gpu-bvh-paper60" / "speedup.png"    # a previous run's figure
+    stale = out / "speedup.png"    # a previous run's figure (untracked: removed)
     stale.parent.mkdir(parents=True)
     stale.write_bytes(b"old")
     options = ["--no-plots"] if how == "--no-plots" else []
@@ -333,9 +335,9 @@ def bvh_study(tmp_path_factory):
         pytest.skip(reason)
     out = tmp_path_factory.mktemp("study")
     result = run_tool("--rtcl", RTCL, "--quick", "--accel", "bvh", "--size", "40x32",
-                      "--repeat", "1", "--out", out / "results")
+                      "--repeat", "1", cwd=out)
     assert result.returncode == 0, result.stderr
-    (folder,) = (out / "results").iterdir()
+    (folder,) = (out / "rtcl-results").iterdir()
     pristine = out / "pristine"
     shutil.copytree(folder, pristine)
     return folder, json.loads((folder / "results.json").read_text()), result.stderr, pristine
@@ -344,7 +346,8 @@ def bvh_study(tmp_path_factory):
 def test_bvh_study_folder_meta_and_table(bvh_study):
     folder, results, stderr, _ = bvh_study
     device = results["runs"][0]["stats"]["device"]
-    assert folder.name == report.device_slug(device) + "-bvh-paper60"
+    assert re.fullmatch(re.escape(report.device_slug(device)) + r"-bvh-paper60-\d{8}-\d{6}",
+                        folder.name)
     meta = results["meta"]
     assert (meta["accel"], meta["scene"], meta["scene_stem"], meta["size"], meta["depth"]) \
         == ("bvh", "paper60.json (built-in)", "paper60", "40x32", 5)

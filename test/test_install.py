@@ -21,8 +21,9 @@ RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 MAN_PAGE = ROOT / "docs" / "rtcl.1"
 PREFIX = "usr"
 # The commands the README and the man page name; one per tools/*.py.
-TOOL_COMMANDS = {"rtcl-bench", "rtcl-experiments", "rtcl-flops-hist", "rtcl-genbench",
-                 "rtcl-genscene", "rtcl-povray", "rtcl-ppmdiff", "rtcl-time-to-image"}
+TOOL_COMMANDS = {"rtcl-bench", "rtcl-bench-spp", "rtcl-experiments", "rtcl-flops-hist",
+                 "rtcl-genbench", "rtcl-genscene", "rtcl-imgdiff", "rtcl-multidevice-bench",
+                 "rtcl-povray", "rtcl-ppmdiff", "rtcl-time-to-image"}
 MAN_SECTIONS = ["NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "ENVIRONMENT", "FILES",
                 "EXIT STATUS", "EXAMPLES", "SEE ALSO"]
 LONG_OPTION = re.compile(r"(?<![\w-])--[a-z][a-z-]*")
@@ -71,9 +72,10 @@ def expected_files():
             | {f"{share}/scenes/{path.name}" for path in (ROOT / "scenes").glob("*.json")}
             | {f"{share}/scenes/models/{path.name}"
                for path in (ROOT / "scenes" / "models").glob("*")}
-            | {f"{share}/tools/{path.name}" for path in tools}
             | {f"{share}/tools/rtcl_tools/{path.name}"
                for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")}
+            | {f"{share}/tools/rtcl_tools/commands/{path.name}"
+               for path in (ROOT / "tools" / "rtcl_tools" / "commands").glob("*.py")}
             | {f"{PREFIX}/lib/rtcl/rtcl-meshread"}
             | ({f"{PREFIX}/lib/rtcl/rtcl-oiio.so"} if has_oiio() else set()))
 
@@ -151,12 +153,32 @@ def test_installed_rtcl_reads_meshes_through_the_installed_helper(tmp_path):
     assert not (tmp_path / "broken.ppm").exists()
 
 
+def test_one_command_per_tool_script():
+    scripts = {"rtcl-" + path.stem.replace("_", "-") for path in (ROOT / "tools").glob("*.py")}
+    assert scripts == TOOL_COMMANDS
+
+
 @pytest.mark.parametrize("command", sorted(TOOL_COMMANDS))
 def test_installed_tool_commands_run_from_any_folder(installed, tmp_path, command):
     result = run_installed(installed, [command, "--help"], tmp_path)
     assert result.returncode == 0, result.stderr
-    assert result.stdout.strip()
+    assert result.stdout.startswith(f"usage: {command} "), result.stdout[:200]
     assert not list(installed.rglob("__pycache__")), "a tool left __pycache__ when run"
+
+
+def test_installed_experiments_runs_the_installed_rtcl_outside_the_source_tree(installed,
+                                                                                tmp_path):
+    """Not ./rtcl of the current folder, and not one on PATH: the rtcl beside it,
+    run by its absolute path; the results go to a new rtcl-results/ folder."""
+    command = installed / PREFIX / "bin" / "rtcl-experiments"
+    result = subprocess.run([str(command), "--quick", "--size", "16x16", "--no-sweep",
+                             "--no-serial", "--no-reference", "--no-plots", "-r", "1"],
+                            cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "PATH": "/usr/bin:/bin"})
+    assert result.returncode == 0, result.stderr
+    (folder,) = (tmp_path / "rtcl-results").iterdir()
+    results = (folder / "results.json").read_text()
+    assert f'"{installed / PREFIX / "bin" / "rtcl"} -k naive' in results
 
 
 def test_installed_genscene_output_renders_with_installed_rtcl(installed, tmp_path):
@@ -365,7 +387,7 @@ def test_man_page_files_names_every_installed_tool_command(installed):
     assert len(commands) >= 10
     text = roff_text((installed / PREFIX / "share/man/man1/rtcl.1").read_text())
     files = text.split("\n.SH FILES\n", 1)[1].split("\n.SH ", 1)[0]
-    in_files = set(re.findall(r"\brtcl-[a-z][a-z-]*[a-z]\b(?!\.)", files))
+    in_files = set(re.findall(r"\brtcl-[a-z][a-z-]*[a-z]\b(?![./])", files))
     assert in_files - {"rtcl-meshread"} == commands
 
 

@@ -188,14 +188,55 @@ def test_validator_refuses_numbers_the_device_cannot_hold():
 
 # ---- every tool starts without matplotlib -----------------------------------------------
 
-@pytest.mark.parametrize("tool", ["bench.py", "experiments.py", "flops_hist.py", "genscene.py",
-                                  "povray.py"])
+def blocking(tmp_path, *modules):
+    """Returns an environment in which importing any of modules raises ImportError."""
+    for module in modules:
+        blocker = tmp_path / "blockers" / module
+        blocker.mkdir(parents=True)
+        (blocker / "__init__.py").write_text(f"raise ImportError('{module} is blocked')\n")
+    return dict(os.environ, PYTHONPATH=str(tmp_path / "blockers"))
+
+
+@pytest.mark.parametrize("tool", sorted(path.name for path in (ROOT / "tools").glob("*.py")))
 def test_help_needs_no_matplotlib(tmp_path, tool):
-    blocker = tmp_path / "matplotlib"
-    blocker.mkdir()
-    (blocker / "__init__.py").write_text("raise ImportError('matplotlib is blocked')\n")
-    env = dict(os.environ, PYTHONPATH=str(tmp_path))
     result = subprocess.run([sys.executable, str(ROOT / "tools" / tool), "--help"],
-                            capture_output=True, text=True, cwd=tmp_path, env=env, timeout=60)
+                            capture_output=True, text=True, cwd=tmp_path,
+                            env=blocking(tmp_path, "matplotlib"), timeout=60)
     assert result.returncode == 0, result.stderr
-    assert "usage:" in result.stdout
+    assert result.stdout.startswith(f"usage: {tool} ")
+
+
+@pytest.mark.parametrize("tool, module, args", [
+    ("flops_hist.py", "matplotlib", ["x.npy"]),
+    ("experiments.py", "numpy", ["--quick"]),
+    ("genbench.py", "numpy", ["balls", "-o", "out"]),
+])
+def test_a_missing_module_is_one_line_saying_how_to_install_it(tmp_path, tool, module, args):
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / tool), *args],
+                            capture_output=True, text=True, cwd=tmp_path,
+                            env=blocking(tmp_path, module), timeout=60)
+    assert result.returncode == 1
+    assert result.stderr == (f"{tool}: needs {module} (pip install {module}, or apt-get "
+                             f"install python3-{module})\n")
+    assert list(tmp_path.iterdir()) == [tmp_path / "blockers"]
+
+
+# ---- one option style across the tools -------------------------------------------------
+
+SHORT_FOR = {"--out": "-o", "--output": "-o", "--platform": "-p", "--device": "-d",
+             "--scene": "-s", "--repeat": "-r", "--kernel": "-k"}
+
+
+@pytest.mark.parametrize("tool", sorted(path.name for path in (ROOT / "tools").glob("*.py")))
+def test_the_same_meaning_has_the_same_short_option(tool):
+    args = ["balls", "--help"] if tool == "genbench.py" else ["--help"]
+    result = subprocess.run([sys.executable, str(ROOT / "tools" / tool), *args],
+                            capture_output=True, text=True, timeout=60)
+    assert result.returncode == 0, result.stderr
+    option_lines = [line.strip() for line in result.stdout.splitlines()
+                    if line.strip().startswith("-")]
+    for line in option_lines:
+        names = re.findall(r"(?<![\w-])(--?[a-z][a-z-]*)", line.split("  ")[0])
+        for long, short in SHORT_FOR.items():
+            if long in names:
+                assert short in names, f"{tool}: {line}"

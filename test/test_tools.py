@@ -551,7 +551,7 @@ def test_experiments_best_rows_keep_their_sweep_time_when_a_rerun_would_differ(t
     result = run_tool("experiments.py", "--rtcl", fake, "--quick", "--no-reference",
                       "--out", tmp_path / "out")
     assert result.returncode == 0, result.stderr
-    (device_dir,) = (tmp_path / "out").iterdir()
+    device_dir = tmp_path / "out"     # -o DIR: the files go into DIR itself
     table = (device_dir / "table1.md").read_text()
     rows = table_rows(table)
     sweep = markdown_section_rows(table, "## Sweep")
@@ -597,7 +597,7 @@ def test_experiments_quick_run_against_rtcl(tmp_path):
     assert result.returncode == 0, result.stderr
     assert "[1/7] serial" in result.stderr and "[7/7] wavefront -w 8x8" in result.stderr
     assert "[6/7] persistent -w 8x8 --groups 10x10 --batch 1" in result.stderr
-    (device_dir,) = tmp_path.iterdir()
+    device_dir = tmp_path
     assert (device_dir / "speedup.png").read_bytes().startswith(PNG_SIGNATURE)
     assert (device_dir / "histograms.png").read_bytes().startswith(PNG_SIGNATURE)
     assert not list(device_dir.glob("*.npy"))

@@ -1,6 +1,12 @@
-"""rtcl_tools: what the scripts in tools/ share; each script is a thin front-end.
+"""rtcl_tools: rtcl's Python tools; commands/NAME.py is the command rtcl-NAME.
 
-    files        the one atomic writer (text, figures, copies, all-or-nothing sets)
+    commands     one module per command, main(argv) each: installed as rtcl-NAME by
+                 pip install ./tools (tools/pyproject.toml) and make install, run
+                 from a checkout as tools/NAME.py (a thin wrapper)
+    files        the one atomic writer (text, figures, copies, all-or-nothing sets),
+                 which never replaces a file tracked by git (--update-committed)
+    locations    where the tools find rtcl and the results folders
+    requirements a missing numpy or matplotlib as one line
     scene        the scene validator (docs/SCENE.md, mirroring host/scene.c)
     runner       running rtcl: RtclFailed, Run, Settings, progress lines
     report       number formats, markdown tables, CSV, device folder names
@@ -13,8 +19,8 @@
     usage        option checks and "PROGRAM: error: MESSAGE" reports
     povray_sdl, povray_run                  tools/povray.py
     genscene, vector                        tools/genscene.py
-    ppm                                     tools/ppmdiff.py
+    images, ppm                             tools/imgdiff.py (and ppmdiff.py)
 
-The scripts import this package from their own folder, which Python puts first
+tools/NAME.py imports this package from its own folder, which Python puts first
 on sys.path when it runs `python3 tools/NAME.py` from any directory.
 """

@@ -1,11 +1,12 @@
-"""tools/bench.py's options: defaults filled in and every one checked (UsageError)."""
+"""rtcl-bench's (tools/bench.py's) options: defaults filled in and every one checked (UsageError)."""
 
 import math
 
 from .bench_plan import (BATCHES, DEFAULT_REPEAT, GROUP_SCALES, KERNELS, MIN_REPEAT, QUICK,
                          WORKGROUPS)
 from .scaling import SCALING_SIZES, SCALING_SPHERES, parse_scaling_config
-from .usage import Parser, UsageError, check_pair, check_positive_int, split_list
+from .usage import (Parser, UsageError, add_update_committed, check_pair, check_positive_int,
+                    split_list)
 
 
 def check_kernel(option, text):
@@ -28,23 +29,31 @@ def check_scale(option, text):
 
 def parse_arguments(argv):
     parser = Parser(description="Benchmark every rtcl kernel over work-group shapes, group "
-                                "counts and batches on one device (bench.csv, bench.md).")
-    parser.add_argument("--rtcl", default="./rtcl", help="the rtcl program (default %(default)s)")
+                                "counts and batches on one device (bench.csv, bench.md).",
+                    epilog="Results: -o DIR, by default a new folder "
+                           "rtcl-results/<device-slug>-<date-time>.  Files tracked by git "
+                           "are never replaced: --update-committed (make results) "
+                           "regenerates docs/results/<device-slug>.")
+    parser.add_argument("--rtcl", metavar="PROGRAM",
+                        help="the rtcl program (default: the rtcl installed beside this "
+                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
     parser.add_argument("-p", "--platform", type=int, help="OpenCL platform index")
     parser.add_argument("-d", "--device", type=int, help="device index within the platform")
-    parser.add_argument("--scene", help="scene file (default: rtcl's built-in paper60)")
+    parser.add_argument("-s", "--scene", metavar="FILE", help="scene file (default: rtcl's built-in paper60)")
     parser.add_argument("--size", help="image size WxH (default: the scene's; "
                                        f"{QUICK['size']} with --quick)")
     parser.add_argument("--depth", type=int, help="maximum ray depth (default: the scene's)")
-    parser.add_argument("--repeat", "-r", type=int,
+    parser.add_argument("-r", "--repeat", type=int,
                         help=f"timed launches per configuration (default {DEFAULT_REPEAT}; "
                              f"at least {MIN_REPEAT} unless --quick, whose default is "
                              f"{QUICK['repeat']})")
     parser.add_argument("--quick", action="store_true",
                         help=f"a smoke run: --size {QUICK['size']}, a smaller sweep, fewer "
                              "launches allowed, small scaling sizes")
-    parser.add_argument("--out", default="docs/results",
-                        help="results folder; a sub-folder per device (default %(default)s)")
+    parser.add_argument("-o", "--out", metavar="DIR",
+                        help="the folder to write into (default: a new folder "
+                             "rtcl-results/<device-slug>-<YYYYmmdd-HHMMSS>)")
+    add_update_committed(parser, "docs/results/<device-slug> of the source tree")
     parser.add_argument("--kernels", help=f"comma-separated (default {','.join(KERNELS)})")
     parser.add_argument("--workgroups", help=f"work-group shapes (default "
                                              f"{','.join(WORKGROUPS)})")
@@ -62,8 +71,8 @@ def parse_arguments(argv):
     parser.add_argument("--no-sweep", action="store_true",
                         help="no sweep (with --scaling: only the scaling runs)")
     parser.add_argument("--peak-gflops", type=float,
-                        help="the device's FP32 peak in GFLOP/s (needed where bench.py "
-                             "cannot compute it)")
+                        help="the device's FP32 peak in GFLOP/s (without it, and where "
+                             "the peak is not known, the %% of peak column stays empty)")
     parser.add_argument("--fma-units", type=int,
                         help="FMA units per CPU core, for a CPU's FP32 peak")
     parser.add_argument("--scaling", action="store_true",
@@ -123,6 +132,9 @@ def check_arguments(a):
         raise UsageError(f"--peak-gflops {a.peak_gflops:g}: expected a positive number")
     if a.fma_units is not None and a.fma_units < 1:
         raise UsageError(f"--fma-units {a.fma_units}: expected a positive integer")
+    if a.update_committed and a.out is not None:
+        raise UsageError("--update-committed writes into docs/results/<device-slug>: it "
+                         "takes no --out")
     if a.no_sweep and not a.scaling:
         raise UsageError("--no-sweep without --scaling leaves nothing to run")
     if a.no_sweep and (a.paper_only or a.serial):

@@ -1,6 +1,7 @@
 """The paper's experiment run with rtcl: every paper geometry, a sweep, the outputs.
 
-tools/experiments.py is its command line (and its docstring the description).
+commands/experiments.py (rtcl-experiments, tools/experiments.py) is its command line,
+and its docstring the description.
 """
 
 import dataclasses
@@ -17,6 +18,7 @@ from .paper import (GROUP_KERNELS, PAPER, PAPER_BATCH, PAPER_GEOMETRY, PARALLEL_
 from .report import device_slug, git_commit, scene_stem, utc_now
 from .runner import (REQUIRED_STATS, Progress, Run, Settings, common_options, run_rtcl,
                      scaled_groups)
+from .usage import command_name
 
 
 def planned_run_count(no_serial, no_reference, no_sweep, workgroups, group_scales):
@@ -115,17 +117,22 @@ def run_experiment(arguments, temp_dir):
     return runs
 
 
-def results_folder(out, device_name, accel="none", scene=None):
-    """Returns the folder of one study's results under out.
+def study_folder(device_name, accel="none", scene=None):
+    """Returns the name of one study's results folder.
 
-    OUT/<device-slug> for the paper's study (--accel none on the built-in scene), the
-    folder name of every result made before --accel; OUT/<device-slug>-<accel>-<scene
-    stem> otherwise, e.g. docs/results/nvidia-h200-bvh-paper60 or ...-bvh-lake-10.
+    <device-slug> for the paper's study (--accel none on the built-in scene), the
+    folder name of every result made before --accel; <device-slug>-<accel>-<scene
+    stem> otherwise, e.g. nvidia-h200-bvh-paper60 or ...-bvh-lake-10.
     """
     folder = device_slug(device_name)
     if accel != "none" or scene is not None:
         folder += f"-{accel}-{scene_stem(scene)}"
-    return pathlib.Path(out) / folder
+    return folder
+
+
+def results_folder(out, device_name, accel="none", scene=None):
+    """Returns out/<study folder> (study_folder), e.g. docs/results/pocl-amd-epyc."""
+    return pathlib.Path(out) / study_folder(device_name, accel, scene)
 
 
 def study_meta(arguments, stats):
@@ -139,13 +146,16 @@ def study_meta(arguments, stats):
 FIGURES = ("speedup.png", "histograms.png", "histograms_best.png")
 
 
-def write_outputs(runs, arguments):
+def write_outputs(runs, arguments, folder_for):
     """Writes results.json, table1.md and (unless --no-plots or without matplotlib) the
-    figures; returns (the folder, notes to print).  A figure this run does not draw
-    is removed from the folder, lest it stand beside results it does not show."""
+    figures into folder_for(the device's stats), a folder; returns (the folder, notes
+    to print).  A figure this run does not draw is removed from the folder, lest it
+    stand beside results it does not show.  Nothing is written when a file it would
+    replace or remove is tracked by git (files.TrackedFileError)."""
     stats = table1.device_run(runs).stats
-    out_dir = results_folder(arguments.out, stats["device"], arguments.accel, arguments.scene)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    out_dir = folder_for(stats)
+    files.check_not_tracked([out_dir / name for name in ("results.json", "table1.md",
+                                                         *FIGURES)])
     meta = study_meta(arguments, stats)
     results = {"meta": meta, "paper": PAPER, "runs": [run.to_json() for run in runs]}
     files.write_text(out_dir / "results.json", compact_number_lists(
@@ -154,7 +164,7 @@ def write_outputs(runs, arguments):
     drawn, notes = draw_figures(out_dir, runs, meta, arguments.no_plots)
     for name in FIGURES:
         if name not in drawn:
-            (out_dir / name).unlink(missing_ok=True)
+            files.remove(out_dir / name)
     return out_dir, notes
 
 
@@ -176,7 +186,7 @@ def figure_context(runs, meta):
 
 def skipped_figures_note(out_dir, why):
     """Returns the one line saying the figures were not drawn and how to draw them."""
-    return (f"figures skipped ({why}); `tools/experiments.py --replot {out_dir}` on a "
+    return (f"figures skipped ({why}); `{command_name()} --replot {out_dir}` on a "
             "machine with matplotlib draws them from results.json")
 
 
@@ -306,6 +316,7 @@ def replot(out_dir, no_plots=False):
     results.json is missing or malformed (ValueError).
     """
     out_dir = pathlib.Path(out_dir)
+    files.check_not_tracked([out_dir / name for name in ("table1.md", *FIGURES)])
     meta, stored = load_results(out_dir / "results.json")
     runs = best_rows_from_sweep(stored)
     meta = dict(meta, regenerated={"date": utc_now(), "commit": git_commit()})

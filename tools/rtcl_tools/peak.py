@@ -1,10 +1,12 @@
-"""The FP32 peak of the benchmarked device: a GPU from a table, a CPU from its flags."""
+"""The FP32 peak of the benchmarked device: a GPU from a table, a CPU from its flags.
+
+A peak that cannot be found is no reason to refuse a benchmark: it only fills the
+"% of FP32 peak" column, which then stays empty, the table saying why.
+"""
 
 import dataclasses
 import pathlib
 import re
-
-from .usage import UsageError
 
 # GPUs whose FP32 peak is known: (pattern on the device name, part, FP32 lanes per
 # compute unit, boost clock in GHz).  Matched in order: the first that matches.
@@ -85,7 +87,7 @@ def cpu_peak(stats, cpuinfo, fma_units):
 
 
 def find_peak(stats, arguments, cpuinfo):
-    """Returns the Peak for the device of stats; UsageError when it needs an option."""
+    """Returns the Peak for the device of stats; its gflops None when unknown."""
     if arguments.peak_gflops:
         return Peak(arguments.peak_gflops,
                     f"given on the command line: --peak-gflops {arguments.peak_gflops:g}")
@@ -102,8 +104,9 @@ def find_peak(stats, arguments, cpuinfo):
         if peak:
             return peak
         if simd_lanes(cpuinfo.get("flags", "")) and not arguments.fma_units:
-            raise UsageError(f"the FP32 peak of {device} needs the FMA units per core, which "
-                             "the CPU flags do not tell: give --fma-units N (1 for AMD Zen 4, "
-                             "2 for most Intel Xeon Gold/Platinum) or --peak-gflops X")
-    raise UsageError(f"the FP32 peak of {device} is not in bench.py's table: give "
-                     "--peak-gflops X")
+            return Peak(None, f"unknown: the FP32 peak of {device} needs the FMA units per "
+                              "core, which the CPU flags do not tell (--fma-units N: 1 for "
+                              "AMD Zen 4, 2 for most Intel Xeon Gold/Platinum; or "
+                              "--peak-gflops X)")
+    return Peak(None, f"unknown: {device} is not in the built-in table (--peak-gflops X "
+                      "gives it)")

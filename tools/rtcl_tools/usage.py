@@ -2,8 +2,31 @@
 status 2) and error reports in the form 'PROGRAM: error: MESSAGE'."""
 
 import argparse
+import os
 import re
 import sys
+
+
+def program_name():
+    """Returns the running command's name as its user typed it: rtcl-bench when
+    installed, bench.py when run as tools/bench.py (argparse's prog as well)."""
+    return os.path.basename(sys.argv[0]) or "rtcl-tools"
+
+
+def command_name():
+    """Returns how to type the running command again: tools/NAME.py from a checkout,
+    else its installed name."""
+    name = program_name()
+    return f"tools/{name}" if name.endswith(".py") else name
+
+
+def add_update_committed(parser, default_folder=None):
+    """Adds --update-committed: the one way to replace files tracked by git, which
+    every writer refuses otherwise (rtcl_tools.files)."""
+    where = (f"; the default folder becomes {default_folder}" if default_folder else "")
+    parser.add_argument("--update-committed", action="store_true",
+                        help="regenerate committed results deliberately: allow replacing "
+                             f"files tracked by git, refused otherwise{where}")
 
 
 class UsageError(Exception):
@@ -45,6 +68,13 @@ def parse_size(text):
     if not (1 <= w <= 32768 and 1 <= h <= 32768):
         raise argparse.ArgumentTypeError("width and height must be 1 ... 32768, got %r" % text)
     return w, h
+
+
+def os_error_message(error):
+    """Returns an OSError as 'FILE: REASON' (or its own message when it names no file)."""
+    if error.filename is not None and error.strerror:
+        return f"{error.filename}: {error.strerror}"
+    return " ".join(str(error).split())
 
 
 def report_error(program, message, status=1):

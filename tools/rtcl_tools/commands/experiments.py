@@ -1,0 +1,207 @@
+"""Run the 2009 paper's experiment (section 5, Table 1, Figures 6 and 7) with rtcl.
+
+On one OpenCL device, runs
+  - serial:  one work-item renders every pixel (the paper's 90.56 s baseline);
+  - naive:   16x10 work-groups, one work-item per pixel;
+  - cyclic:  8x8 work-groups, 25x25 groups (the paper's 10x10 grid of chunks);
+  - dynamic: 8x8 work-groups, 10x10 groups fetching 8x8 chunks;
+  - persistent (beyond the paper, docs/wavefront.md): the dynamic kernel's
+    geometry, 8x8 work-groups and 10x10 groups, each work-item fetching one pixel
+    at a time (--batch 1);
+  - wavefront (beyond the paper): 8x8 work-groups for the primary-ray launch
+    (the bounce launches are 1D, 64 work-items a group); the wavefront honours
+    only -w, not --groups or --batch;
+  - the CPU reference, once: a native single-core baseline (skip: --no-reference);
+  - unless --no-sweep, a small sweep of every parallel kernel: every work-group
+    shape of SWEEP_WORKGROUPS at rtcl's default group count, then, for cyclic,
+    dynamic and persistent, the fastest shape with the group count scaled up to
+    4x and with the paper-like group count (-r 3 per sweep run).  Each kernel's
+    fastest sweep entry is its "best of sweep" row, with that entry's own time:
+    it is not run again, so that no re-timing can make it slower than another
+    entry of the sweep.
+The paper measured neither persistent nor wavefront (its section 3.4 proposed
+such schemes and judged them impossible on a GPU), so their paper cells are empty.
+Every run is one `rtcl --flops --stats` call: rtcl counts flops in one launch and
+times others without counting.  For the wavefront, rtcl counts every launch of the
+frame (the primary-ray launch, then one per bounce) and writes their work-items
+one after the other; its parallel efficiency and its histogram cover the
+work-items of all its launches.
+
+Every run uses `--accel none` (the paper's brute force, so that Table 1 stays
+comparable with the paper's) unless --accel bvh asks for the study of divergent
+BVH traversal (issue 11 item 8); --scene FILE runs it on another scene.  The study
+is named <device-slug> for the paper's study (--accel none, built-in scene), else
+<device-slug>-<accel>-<scene stem> (e.g. nvidia-h200-bvh-paper60,
+nvidia-h200-bvh-lake-10).  It writes into -o/--out DIR; by default into a new folder
+rtcl-results/<study>-<YYYYmmdd-HHMMSS> under the current folder.  No file tracked
+by git is ever replaced or removed, unless --update-committed asks to regenerate
+the committed results: the folder is then docs/results/<study> of the source tree
+(`make results` does that):
+  results.json       every run's command and rtcl statistics, the study's accel,
+                     scene, size and depth, and each run's histogram of flops per
+                     work-item (50 bins, mean, max, min): all the figures need;
+  table1.md          Table 1, ours beside the paper's, with the commands used;
+  speedup.png        Figure 6: speedup per implementation, a panel per baseline
+                     (ours over the serial kernel, ours over the CPU reference,
+                     the paper's over its CPU program), log axes from 1;
+  histograms.png     Figure 7: flops per work-item, paper(-like) geometries;
+  histograms_best.png  the same for the sweep's best geometries (with the sweep).
+The per-work-item .npy files (tens of MB each) are deleted as soon as their
+histogram is in memory.  The figures need matplotlib: without it (or with
+--no-plots) results.json and table1.md are written, one line on stderr says so,
+and `rtcl-experiments --replot DIR` on a machine with matplotlib draws them.
+
+--replot DIR runs no rtcl: it reads DIR/results.json and rewrites DIR/table1.md and
+every figure with the current report code (the best-of-sweep rows taken from the
+stored sweep runs, the table saying when and by which commit it was regenerated).
+A results.json written before it stored histograms leaves histograms*.png as they
+are.  Of the other options only --no-plots and --update-committed (needed to
+redraw committed results) are read.
+
+    rtcl-experiments -p 0 -d 0                 # the full 2000x2000 experiment
+    rtcl-experiments --quick -o quick          # 400x400, a smaller sweep, into quick/
+    rtcl-experiments -p 0 -d 0 --accel bvh     # the study with the BVH
+    rtcl-experiments -p 0 -d 0 --accel bvh -s lake/lake-10.json --no-plots
+    make experiments DEVICE="-p 0 -d 0"        # the same through make
+    make results DEVICE="-p 0 -d 0"            # regenerate docs/results/<device>
+    rtcl-experiments --replot docs/results/nvidia-h100-80gb-hbm3 --update-committed
+(tools/experiments.py in a checkout is the same command.)
+"""
+
+import argparse
+import pathlib
+import sys
+import tempfile
+
+from ..requirements import require
+
+require("numpy")  # the flops files; matplotlib is optional (see above)
+
+from .. import files, locations  # noqa: E402
+from ..experiment import (FIGURES, replot, results_folder, run_experiment,  # noqa: E402
+                          study_folder, write_outputs)
+from ..flops import FlopsFileError  # noqa: E402
+from ..paper import DEFAULT_REPEAT, QUICK_SIZE  # noqa: E402
+from ..report import one_line  # noqa: E402
+from ..runner import RtclFailed  # noqa: E402
+from ..usage import add_update_committed, program_name, report_error  # noqa: E402
+
+
+def parse_arguments(argv):
+    parser = argparse.ArgumentParser(
+        description="Run the paper's experiment (Table 1, Figures 6 and 7) with rtcl.",
+        epilog="Results: -o DIR, by default a new folder rtcl-results/<study>-<date-time>, "
+               "the study <device-slug> for the paper's (--accel none on the built-in "
+               "scene), else <device-slug>-<accel>-<scene stem>, e.g. "
+               "nvidia-h200-bvh-paper60.  Files tracked by git are never replaced: "
+               "--update-committed (make results) regenerates docs/results/<study>.  See "
+               "rtcl_tools/commands/experiments.py for what each file holds.")
+    parser.add_argument("--rtcl", metavar="PROGRAM",
+                        help="the rtcl program (default: the rtcl installed beside this "
+                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    parser.add_argument("-p", "--platform", type=int, help="OpenCL platform index")
+    parser.add_argument("-d", "--device", type=int, help="device index within the platform")
+    parser.add_argument("-s", "--scene", metavar="FILE",
+                        help="scene file (default: rtcl's built-in paper60); its stem "
+                             "names the results folder, e.g. lake-10 for "
+                             "tools/genbench.py lake's lake-10.json")
+    parser.add_argument("--accel", choices=("none", "bvh"), default="none",
+                        help="how rays find what they hit, passed to every rtcl run: "
+                             "none (default) tests every object, the paper's brute force, "
+                             "so Table 1 compares with the paper's; bvh traverses rtcl's "
+                             "BVH, the study of divergent traversal (issue 11 item 8)")
+    parser.add_argument("--size", help=f"image size WxH (default: the scene's; "
+                                       f"{QUICK_SIZE} with --quick)")
+    parser.add_argument("--depth", type=int, help="maximum ray depth (default: the scene's)")
+    parser.add_argument("-r", "--repeat", type=int, default=DEFAULT_REPEAT,
+                        help="timed launches per run (default %(default)s; the serial "
+                             "kernel and the reference run once)")
+    parser.add_argument("--quick", action="store_true",
+                        help=f"--size {QUICK_SIZE} and a smaller sweep (smoke tests)")
+    parser.add_argument("-o", "--out", metavar="DIR",
+                        help="the folder to write into (default: a new folder "
+                             "rtcl-results/<study>-<YYYYmmdd-HHMMSS>)")
+    add_update_committed(parser, "docs/results/<study> of the source tree")
+    parser.add_argument("--no-sweep", action="store_true", help="only the paper's geometries")
+    parser.add_argument("--no-reference", action="store_true",
+                        help="skip the CPU reference run")
+    parser.add_argument("--no-serial", action="store_true",
+                        help="skip the serial kernel (slow on a GPU: one work-item); "
+                             "the table then has no speedup over serial")
+    parser.add_argument("--no-plots", action="store_true",
+                        help="draw no figure: write results.json and table1.md only "
+                             "(as when matplotlib is missing); --replot DIR draws the "
+                             "figures later from results.json, on a machine with "
+                             "matplotlib")
+    parser.add_argument("--replot", metavar="DIR",
+                        help="run no rtcl: rewrite DIR/table1.md and the figures from "
+                             "DIR/results.json with the current report code (histograms "
+                             "only where results.json stores them; other options than "
+                             "--no-plots are not read)")
+    arguments = parser.parse_args(argv)
+    if arguments.update_committed and arguments.out is not None:
+        parser.error("--update-committed writes into docs/results/<study>: it takes no --out")
+    if arguments.quick and arguments.size is None:
+        arguments.size = QUICK_SIZE
+    if arguments.repeat < 1:
+        parser.error("--repeat must be at least 1")
+    return arguments
+
+
+def output_folder(arguments, stats):
+    """Returns the folder to write into, made if missing: --out, docs/results/<study>
+    with --update-committed, else a new rtcl-results/<study>-<date-time>."""
+    study = study_folder(stats["device"], arguments.accel, arguments.scene)
+    if arguments.update_committed:
+        folder = results_folder(locations.committed_results(), stats["device"],
+                                arguments.accel, arguments.scene)
+    elif arguments.out is not None:
+        folder = pathlib.Path(arguments.out)
+    else:
+        return locations.new_results_folder(study)
+    folder.mkdir(parents=True, exist_ok=True)
+    return folder
+
+
+def main(argv=None):
+    arguments = parse_arguments(argv)
+    program = program_name()
+    with files.committed_files_allowed(arguments.update_committed):
+        if arguments.replot is not None:
+            return replot_main(program, arguments.replot, arguments.no_plots)
+        return experiment_main(program, arguments)
+
+
+def experiment_main(program, arguments):
+    """Runs the experiment and writes its results; returns the exit status."""
+    with tempfile.TemporaryDirectory(prefix="rtcl-experiments-") as temp_name:
+        temp_dir = pathlib.Path(temp_name)
+        try:
+            if arguments.out is not None:   # refused before hours of runs, not after
+                out = pathlib.Path(arguments.out)
+                files.check_not_tracked([out / name for name in
+                                         ("results.json", "table1.md", *FIGURES)])
+            arguments.rtcl = locations.find_rtcl(arguments.rtcl)
+            runs = run_experiment(arguments, temp_dir)
+            out_dir, notes = write_outputs(runs, arguments,
+                                           lambda stats: output_folder(arguments, stats))
+        except RtclFailed as error:
+            return report_error(program, error)
+        except (OSError, ValueError, FlopsFileError, locations.NotFound) as error:
+            return report_error(program, one_line(error))
+    for note in notes:
+        print(f"{program}: {note}", file=sys.stderr)
+    print(f"{program}: results in {out_dir}", file=sys.stderr)
+    return 0
+
+
+def replot_main(program, out_dir, no_plots):
+    """--replot: redraws the report of out_dir; returns the exit status."""
+    try:
+        notes = replot(out_dir, no_plots)
+    except (OSError, ValueError, locations.NotFound) as error:
+        return report_error(program, one_line(error))
+    for note in notes:
+        print(f"{program}: {note}", file=sys.stderr)
+    return 0
+

@@ -1,0 +1,79 @@
+"""Plot the distribution of flops per work-item: Figure 7 of the 2009 paper.
+
+Reads the per-work-item flop counts that `rtcl --flops FILE.npy` writes (dtype
+'<u8', shape (global_height, global_width), one count per launched work-item,
+0 for work-items given no pixel) and, when present, the sidecar FILE.npy.json
+that names the kernel and geometry.  Each file gets one histogram (or one curve
+of a shared plot with --overlay) titled with its kernel, work-group shape, group
+count and parallel efficiency = mean / max flops per launched work-item
+(docs/RENDERING.md), computed from the counts and cross-checked against the
+sidecar.
+
+    rtcl-flops-hist naive.npy cyclic.npy dynamic.npy -o fig7.png --log
+    rtcl-flops-hist run.npy --overlay --bins 100 -o run.svg
+
+A file that is missing, unreadable or not a 2-D '<u8' array is an error: one line
+on stderr, exit status 1, and no output file; so is an output file tracked by git
+(unless --update-committed).  The output is written to a temporary file and
+renamed, so it is never left half-written.  Needs numpy and matplotlib.
+"""
+
+import argparse
+import sys
+
+from ..requirements import require
+
+require("numpy")  # the flops files; matplotlib once the options are read (--help needs none)
+
+from .. import files  # noqa: E402
+from ..flops import (FlopsFileError, load_flops, output_format,  # noqa: E402
+                     sidecar_mismatches, sidecar_path)
+from ..plots import DEFAULT_BINS, plot_flops_histograms  # noqa: E402
+from ..report import one_line  # noqa: E402
+from ..usage import add_update_committed, program_name, report_error  # noqa: E402
+
+
+def parse_arguments(argv):
+    parser = argparse.ArgumentParser(
+        description="Plot the distribution of flops per work-item (the paper's "
+                    "Figure 7) from rtcl --flops files.")
+    parser.add_argument("files", nargs="+", metavar="FILE.npy",
+                        help="per-work-item flop counts written by rtcl --flops")
+    parser.add_argument("-o", "--output", "--out", default="flops_hist.png",
+                        help="image to write: .png, .svg or .pdf (default %(default)s)")
+    parser.add_argument("--log", action="store_true", help="log-scale work-item counts")
+    parser.add_argument("--overlay", action="store_true",
+                        help="draw every file on one plot instead of one subplot each")
+    parser.add_argument("--bins", type=int, default=DEFAULT_BINS,
+                        help="histogram bins (default %(default)s)")
+    parser.add_argument("--title", help="title over the whole figure")
+    add_update_committed(parser)
+    arguments = parser.parse_args(argv)
+    if arguments.bins < 1:
+        parser.error("--bins must be at least 1")
+    return arguments
+
+
+def main(argv=None):
+    arguments = parse_arguments(argv)
+    program = program_name()
+    require("matplotlib")
+    try:
+        with files.committed_files_allowed(arguments.update_committed):
+            draw(program, arguments)
+    except (FlopsFileError, ValueError, OSError) as error:
+        return report_error(program, one_line(error))
+    return 0
+
+
+def draw(program, arguments):
+    """Reads the flops files and writes the figure."""
+    output_format(arguments.output)
+    files.check_not_tracked([arguments.output])
+    flops_files = [load_flops(path) for path in arguments.files]
+    for flops_file in flops_files:
+        for problem in sidecar_mismatches(flops_file):
+            print(f"{program}: warning: {sidecar_path(flops_file.path)}: {problem}",
+                  file=sys.stderr)
+    plot_flops_histograms(flops_files, arguments.output, overlay=arguments.overlay,
+                          log=arguments.log, bins=arguments.bins, title=arguments.title)
