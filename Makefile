@@ -3,7 +3,8 @@
 #   make              build ./rtcl (OIIO=0: without OpenImageIO, .ppm/.pfm/.png only)
 #   make deps         install the dependencies (Debian/Ubuntu, uses apt-get)
 #   make render       build and render the default scene to render.png
-#   make test         unit, kernel (PoCL), command-line and tools tests
+#   make test         unit, kernel (PoCL), command-line and tools tests (<= 3 min)
+#   make test-long    the long tests make test leaves out; make check: both
 #   make test SAN=1   the same suite, host side built with ASan+UBSan in build-san/
 #   make fuzz         libFuzzer on the scene loader for FUZZ_SECONDS (needs clang)
 #   make fuzz-mesh    the same on mesh files (OBJ, PLY) through Assimp
@@ -108,7 +109,7 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
+.PHONY: all deps render test test-long check experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
 all: $(BIN)
 
 $(BIN): $(BUILD)/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
@@ -156,11 +157,33 @@ deps:
 render: rtcl
 	./rtcl
 
-# Criterion first (unit and kernel tests), then pytest (command line and
-# tools); pytest's summary line closes the output.
+# The tests: Criterion first (unit and kernel tests), then pytest (command
+# line and tools), each on every core (--jobs, pytest-xdist's -n); pytest's
+# summary line closes the output, after the time the whole target took.
+#   make test       the quick suite: at most 3 minutes on 2 cores from a fresh
+#                   clone with cold program caches
+#   make test-long  what the quick suite leaves out: Criterion suites named
+#                   *_slow and pytest's `slow` marker (long renders, the tools
+#                   run end to end, figure redraws, interrupt sweeps)
+#   make check      both
+# PoCL compiles a program once more for every work-group size it is launched
+# with; the quick suite turns that off (POCL_WORK_GROUP_SPECIALIZATION=0), which
+# halves its cold-cache time with the same images. make test-long keeps PoCL's
+# default, so the specialised programs users get are tested too.
+TEST_JOBS ?= $(shell nproc)
+TEST_START := $(shell date +%s.%N)
+QUICK_TEST_ENV := POCL_WORK_GROUP_SPECIALIZATION=0
+PYTEST = RTCL=$(abspath $(BIN)) RTCL_TEST_START=$(TEST_START) $(PYTHON) -m pytest -q -n $(TEST_JOBS)
+
 test: $(BIN) $(BUILD)/unit_tests
-	$(BUILD)/unit_tests --jobs 2
-	RTCL=$(abspath $(BIN)) $(PYTHON) -m pytest -q test
+	$(QUICK_TEST_ENV) $(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '!(*_slow)/*'
+	$(QUICK_TEST_ENV) RTCL_TEST_WHAT="make test" $(PYTEST) -m "not slow" test
+
+test-long: $(BIN) $(BUILD)/unit_tests
+	$(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '*_slow/*'
+	RTCL_TEST_WHAT="make test-long" $(PYTEST) -m slow test
+
+check: test test-long
 
 # The paper's experiment (Table 1, Figures 6-7) on one device, e.g.
 # make experiments DEVICE="-p 1 -d 0"; results in a new folder

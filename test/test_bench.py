@@ -212,6 +212,7 @@ def read_csv(path):
         return list(csv.DictReader(stream))
 
 
+@pytest.mark.slow
 def test_quick_bench_and_scaling_against_rtcl(tmp_path):
     needs_rtcl()
     out = tmp_path / "out"

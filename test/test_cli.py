@@ -423,6 +423,7 @@ def test_one_sample_code_is_built_only_for_one_sample_per_pixel(tmp_path, spp, o
     assert ("-DRTCL_ONE_SAMPLE" in stats["build_options"]) == one_sample
 
 
+@pytest.mark.slow
 def test_million_spheres_render_from_global_memory(tmp_path):
     """A scene far larger than __local memory is read from __global memory."""
     scene = tmp_path / "million.json"
@@ -550,14 +551,23 @@ def test_build_options_variable_is_added_and_reported(tmp_path):
     assert out.read_bytes().split(b"\n", 3)[3] == plain.read_bytes().split(b"\n", 3)[3]
 
 
+LONGEST_BUILD_OPTIONS = "-DX" + "Y" * 253  # 256 characters
+
+
+@pytest.mark.slow
+def test_longest_build_options_variable_is_taken_with_every_other_option(tmp_path):
+    # Two programs that no other test builds (8 s with cold caches).
+    out = tmp_path / "x.ppm"
+    result = run_with_env({"RTCL_BUILD_OPTIONS": LONGEST_BUILD_OPTIONS}, *SMALL, "-o", str(out),
+                          "--flops", str(tmp_path / "f.npy"))
+    assert result.returncode == 0, result.stderr
+    assert out.exists()
+
+
 def test_build_options_variable_too_long_is_refused(tmp_path):
     out = tmp_path / "x.ppm"
-    longest = "-DX" + "Y" * 253  # 256 characters: still taken, with every other option
-    result = run_with_env({"RTCL_BUILD_OPTIONS": longest}, *SMALL, "-o", str(out), "--flops",
-                          str(tmp_path / "f.npy"))
-    assert result.returncode == 0, result.stderr
-    out.unlink()
-    result = run_with_env({"RTCL_BUILD_OPTIONS": longest + "Z"}, *SMALL, "-o", str(out))
+    result = run_with_env({"RTCL_BUILD_OPTIONS": LONGEST_BUILD_OPTIONS + "Z"}, *SMALL, "-o",
+                          str(out))
     assert result.returncode == 1
     assert result.stderr.strip().splitlines() == [
         "rtcl: RTCL_BUILD_OPTIONS is too long (at most 256 characters)"]

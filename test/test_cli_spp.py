@@ -91,6 +91,7 @@ def test_one_sample_is_the_default_image_and_more_change_it(tmp_path):
     assert four != default
 
 
+@pytest.mark.slow
 def test_every_kernel_gives_the_same_antialiased_image(tmp_path):
     _, want = stats_of(tmp_path, *SMALL, "-k", "serial", "--spp", "4")
     for kernel in ["naive", "cyclic", "dynamic", "persistent", "reference", "wavefront"]:

@@ -270,8 +270,15 @@ def committed_results(new_format):
     return found
 
 
-COMMITTED = committed_results(new_format=False)
-COMMITTED_NEW = committed_results(new_format=True)
+def first_quick(paths):
+    """Redrawing every committed folder takes a minute: the first folder is
+    redrawn by make test, the others by make test-long."""
+    return [pytest.param(path, marks=() if i == 0 else pytest.mark.slow)
+            for i, path in enumerate(paths)]
+
+
+COMMITTED = first_quick(committed_results(new_format=False))
+COMMITTED_NEW = first_quick(committed_results(new_format=True))
 
 
 @pytest.mark.parametrize("results", COMMITTED_NEW, ids=lambda path: path.parent.name)
@@ -343,6 +350,7 @@ def bvh_study(tmp_path_factory):
     return folder, json.loads((folder / "results.json").read_text()), result.stderr, pristine
 
 
+@pytest.mark.slow
 def test_bvh_study_folder_meta_and_table(bvh_study):
     folder, results, stderr, _ = bvh_study
     device = results["runs"][0]["stats"]["device"]
@@ -361,6 +369,7 @@ def test_bvh_study_folder_meta_and_table(bvh_study):
     assert "figures skipped" not in stderr
 
 
+@pytest.mark.slow
 def test_bvh_study_keeps_every_runs_histogram_small(bvh_study):
     folder, results, _, _ = bvh_study
     assert (folder / "results.json").stat().st_size < 200_000
@@ -384,6 +393,7 @@ def test_bvh_study_keeps_every_runs_histogram_small(bvh_study):
     assert best and all(run["flops_histogram"] for run in best)
 
 
+@pytest.mark.slow
 def test_bvh_study_replot_redraws_every_figure_from_results_json(bvh_study, tmp_path,
                                                                   failing_rtcl):
     _, _, _, pristine = bvh_study
@@ -402,6 +412,7 @@ def test_bvh_study_replot_redraws_every_figure_from_results_json(bvh_study, tmp_
     assert "kept" not in result.stderr
 
 
+@pytest.mark.slow
 def test_bvh_study_replot_without_matplotlib_rewrites_the_table(bvh_study, tmp_path):
     _, _, _, pristine = bvh_study
     folder = tmp_path / "copy"

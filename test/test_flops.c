@@ -481,13 +481,13 @@ Test(flops, kernels_count_the_same_work, .timeout = 300)
 	check_same_work("scenes/two_balls.json", ACCEL_NONE);
 }
 
-Test(flops, kernels_count_the_same_work_bvh, .timeout = 300)
+Test(flops_slow, kernels_count_the_same_work_bvh, .timeout = 300)
 {
 	check_same_work("scenes/two_balls.json", ACCEL_BVH);
 }
 
 /* Spheres, triangles (glass through closed meshes) and planes. */
-Test(flops, kernels_count_the_same_work_on_meshes, .timeout = 600)
+Test(flops_slow, kernels_count_the_same_work_on_meshes, .timeout = 600)
 {
 	check_same_work("test/meshes/mesh_scene.json", ACCEL_NONE);
 }

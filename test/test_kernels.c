@@ -301,7 +301,7 @@ Test(kernels, matches_reference_mesh_scene, .timeout = 600)
 	check_against_reference("test/meshes/mesh_scene.json", 160, 120);
 }
 
-Test(kernels, depth_64_matches_reference_mesh_scene, .timeout = 600)
+Test(kernels_slow, depth_64_matches_reference_mesh_scene, .timeout = 600)
 {
 	check_every_kernel_at_depth_64("test/meshes/mesh_scene.json", 8, 6);
 }
@@ -428,7 +428,7 @@ Test(kernels, bvh_matches_brute_force_paper60, .timeout = 600)
 	check_bvh_matches_brute_force("scenes/paper60.json", 97, 61);
 }
 
-Test(kernels, bvh_matches_brute_force_small_scenes, .timeout = 600)
+Test(kernels_slow, bvh_matches_brute_force_small_scenes, .timeout = 600)
 {
 	check_bvh_matches_brute_force("scenes/two_balls.json", 64, 48);
 	check_bvh_matches_brute_force("scenes/tir.json", 64, 48);
@@ -464,7 +464,7 @@ Test(kernels, bvh_matches_brute_force_meshes, .timeout = 900)
  * row and column of pixels with exactly zero direction components, from an
  * eye off 0 (the slab test's ∞ − ∞ case: traverse.cl, BOX_MIN_DIR), mirrored
  * by the floor. */
-Test(kernels, bvh_matches_brute_force_flat_triangles, .timeout = 600)
+Test(kernels_slow, bvh_matches_brute_force_flat_triangles, .timeout = 600)
 {
 	check_bvh_matches_brute_force("test/scenes/flat_triangles.json", 33, 25);
 }

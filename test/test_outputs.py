@@ -67,6 +67,7 @@ def start_and_signal(tmp_path, when, signal_number):
 
 
 @needs_oiio
+@pytest.mark.slow
 def test_interrupts_while_writing_leave_the_old_files_or_all_new_ones(tmp_path):
     expected = tmp_path / "expected"
     expected.mkdir()

@@ -588,6 +588,7 @@ def rtcl_supports_flops():
     return None
 
 
+@pytest.mark.slow
 def test_experiments_quick_run_against_rtcl(tmp_path):
     reason = rtcl_supports_flops()
     if reason:
