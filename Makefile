@@ -92,7 +92,7 @@ endif
 HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devmesh.o devscene.o scene.o scene_check.o \
 	scene_literal.o scene_material.o scene_mesh.o mesh_spawn.o libdir.o mesh_place.o timing.o \
 	files.o \
-	interrupt.o checks.o program.o progcache.o launch.o singlepass.o wavefront.o render.o \
+	interrupt.o checks.o program.o progcache.o progress.o launch.o singlepass.o wavefront.o render.o \
 	stats.o devices.o multidev.o devstats.o frames.o tiles.o \
 	outputs.o \
 	workmap.o image_common.o image_encode.o image_png.o reference.o embedded.o) \

@@ -21,6 +21,7 @@
 #include "interrupt.h"
 #include "mpi_render.h"
 #include "outputs.h"
+#include "progress.h"
 #include "render.h"
 #include "scene.h"
 #include "stats.h"
@@ -36,6 +37,15 @@ static int load_scene(const struct options *opt, struct scene *scene, char *err,
 		return scene_load_file(scene, opt->scene_path, err, err_size);
 	return scene_load_string(scene, embedded_file(DEFAULT_SCENE), DEFAULT_SCENE " (built-in)",
 				 err, err_size);
+}
+
+/* Whether the progress line is shown: on a terminal, unless -q. Under
+ * mpirun a rank's stderr is a pipe even when mpirun's is a terminal, which
+ * the rank's stdout (a pseudo-terminal then) tells; other ranks than 0 turn
+ * it off (mpi_render.c). */
+static int shows_progress(const struct options *opt)
+{
+	return !opt->quiet && (isatty(STDERR_FILENO) || (opt->mpi && isatty(STDOUT_FILENO)));
 }
 
 /* The render settings: the options, else the scene's own values. */
@@ -57,7 +67,7 @@ static void choose_settings(struct run *run, const struct options *opt, const st
 	s->warm_up = opt->repeat > 0;
 	s->batch = opt->batch;
 	s->source_dir = getenv("RTCL_CL_DIR");
-	s->progress = !opt->quiet && isatty(STDERR_FILENO);
+	s->progress = 1; /* one image on one device: render() runs the line */
 	s->verbose = opt->verbose;
 	s->accel = opt->accel;
 	run->counting = opt->flops_path || opt->work_map_path;
@@ -259,8 +269,9 @@ int main(int argc, char **argv)
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_USAGE;
 	}
+	progress_init(shows_progress(&opt));
 	/* Before the OpenCL runtime starts threads of its own. */
-	if (interrupt_setup(!opt.quiet && isatty(STDERR_FILENO), err, sizeof(err))) {
+	if (interrupt_setup(progress_enabled(), err, sizeof(err))) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_FAILED;
 	}
