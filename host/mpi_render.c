@@ -470,9 +470,11 @@ static int start_rank(struct mpi_job *j, char *err, size_t err_size)
 	if (j->rank == ROOT && j->image && outputs_check(opt, err, err_size))
 		return -1;
 	if (opt->devices_given)
-		return devices_open(&opt->devices, j->devs, &j->count, err, err_size);
+		return devices_open(&opt->devices, opt->device_kind, j->devs, &j->count, err,
+				    err_size);
 	j->count = 1;
-	if (device_open(&j->devs[0], opt->platform, opt->device, err, err_size) == 0)
+	if (device_open_kind(&j->devs[0], opt->platform, opt->device, opt->device_kind, err,
+			     err_size) == 0)
 		return 0;
 	j->count = 0;
 	return -1;
