@@ -78,3 +78,19 @@ def test_frames_show_the_frame_and_its_share(tmp_path):
     text = "\n".join(lines)
     assert re.search(r"rendering \(dynamic, frame 1 of 2: \d+%\): \d+% done", text), text
     assert re.search(r"rendering \(dynamic, frame 2 of 2: \d+%\): \d+% done", text), text
+
+
+def test_progress_changes_neither_image_nor_flop_counts(tmp_path):
+    """With the line on, serial, naive and cyclic count their chunks done
+    (RTCL_PROGRESS): the pixels and the counted flops stay the same."""
+    for kernel in ("serial", "naive", "cyclic"):
+        off, on = tmp_path / f"off_{kernel}", tmp_path / f"on_{kernel}"
+        args = ["-k", kernel, "--size", "40x30", "--spp", "2"]
+        plain = subprocess.run([RTCL, *args, "-o", f"{off}.ppm", "--flops", f"{off}.npy"],
+                               cwd=ROOT, capture_output=True, text=True, timeout=120)
+        assert plain.returncode == 0 and plain.stderr == "", plain.stderr
+        result, lines = on_terminal(*args, "-v", "-o", f"{on}.ppm", "--flops", f"{on}.npy")
+        assert result.returncode == 0
+        assert any("-DRTCL_PROGRESS" in line for line in lines), lines
+        assert Path(f"{off}.ppm").read_bytes() == Path(f"{on}.ppm").read_bytes(), kernel
+        assert Path(f"{off}.npy").read_bytes() == Path(f"{on}.npy").read_bytes(), kernel
