@@ -97,9 +97,9 @@ endif
 
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devmesh.o devscene.o scene.o scene_check.o \
-	scene_literal.o scene_material.o scene_mesh.o mesh_spawn.o libdir.o mesh_place.o timing.o \
+	scene_literal.o scene_material.o scene_mesh.o mesh_spawn.o libdir.o mesh_place.o timing.o suggest.o \
 	files.o \
-	interrupt.o checks.o program.o progcache.o launch.o singlepass.o wavefront.o render.o \
+	interrupt.o checks.o program.o progcache.o progress.o launch.o singlepass.o wavefront.o render.o \
 	stats.o devices.o multidev.o devstats.o frames.o tiles.o \
 	outputs.o \
 	workmap.o image_common.o image_encode.o image_png.o reference.o embedded.o) \
@@ -224,7 +224,7 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # bookkeeping the file module keeps, and the side of the mesh import that
 # starts the helper; the helper (build/fuzz/rtcl-meshread) is built with the
 # same sanitizers, and its reports fail the run (host/mesh.h).
-FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c \
+FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c host/suggest.c \
 	host/scene_mesh.c host/mesh_spawn.c host/libdir.c host/mesh_place.c host/files.c \
 	host/interrupt.c host/devscene.c \
 	host/devmesh.c host/bvh.c

@@ -2,21 +2,23 @@
  * work-group's shape; with GX×GY work-groups, chunk (cx, cy) goes to group
  * (cx mod GX, cy mod GY). With 8×8 work-groups and 25×25 groups on a 2000×2000
  * image, each group traces an 8×8 chunk in every cell of a 10×10 grid: the
- * paper's geometry. The assignment is fixed, so work_counter is unused. */
+ * paper's geometry. The assignment is fixed: work_counter only counts the
+ * chunks done for the progress line. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *work_counter, __global ulong *counts,
 		     __global uint *write_counts, struct rt_piece piece)
 {
 	struct tracer tr;
 
-	(void)work_counter;
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
 	struct chunk_grid grid = chunk_grid(&piece);
 
 	for (uint cy = get_group_id(1); cy < grid.down; cy += get_num_groups(1))
-		for (uint cx = get_group_id(0); cx < grid.across; cx += get_num_groups(0))
+		for (uint cx = get_group_id(0); cx < grid.across; cx += get_num_groups(0)) {
 			render_pixel_if_inside(
 				&tr, &piece, image, write_counts,
 				chunk_pixel(&grid, cx, cy, get_local_id(0), get_local_id(1)));
+			progress_chunk_done(work_counter, grid.chunk_w * grid.chunk_h);
+		}
 	store_counts(&tr, global_item());
 }

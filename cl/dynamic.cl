@@ -7,7 +7,9 @@
  * version that left the loop from the middle of its body, after the barriers
  * (with flop counting on it wrote past the image at 61x47, and it hung with
  * POCL_WORK_GROUP_METHOD=loops). The host resets next_chunk_counter, the
- * number of the next chunk to hand out, to 0 before every launch. */
+ * number of the next chunk to hand out, to 0 before every launch; it is the
+ * work counter's word RT_COUNTER_NEXT, which the host also reads for the
+ * progress line (the chunks handed out). */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *next_chunk_counter,
 		     __global ulong *counts, __global uint *write_counts, struct rt_piece piece)

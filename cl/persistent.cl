@@ -11,7 +11,8 @@
  * the same time trace neighbouring pixels. Numbers that fall outside the image
  * (partial chunks at the right and bottom edges) are skipped. The host resets
  * next_pixel_counter, the number of the next pixel to hand out, to 0 before
- * every launch. */
+ * every launch; it is the work counter's word RT_COUNTER_NEXT, which the host
+ * also reads for the progress line (the pixels handed out). */
 #ifndef RTCL_BATCH
 #define RTCL_BATCH 1
 #endif

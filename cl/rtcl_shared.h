@@ -172,6 +172,16 @@ struct rt_bvh_node {
  * node visits. */
 #define RT_ITEM_COUNTS 3
 
+/* The single-pass kernels' work counter: RT_COUNTER_WORDS uints that the
+ * host zeroes before every launch. Word RT_COUNTER_NEXT hands out work (the
+ * next chunk of dynamic, the next pixel of persistent); word RT_COUNTER_DONE
+ * counts, in a build with RTCL_PROGRESS, the pixels of whole chunks that
+ * serial, naive and cyclic have done, one atomic_add per chunk. The host
+ * reads both while a launch runs, for the progress line (host/launch.h). */
+#define RT_COUNTER_NEXT 0
+#define RT_COUNTER_DONE 1
+#define RT_COUNTER_WORDS 2
+
 /* A ray waiting in the wavefront kernel's queue. */
 struct rt_ray {
 	rt_vec4 origin; /* w: weight, the product of kr/kt along the path

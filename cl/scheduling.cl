@@ -46,6 +46,22 @@ static void store_counts(struct tracer *tr, uint item)
 #endif
 }
 
+/* With RTCL_PROGRESS (a progress line on the host's terminal): adds a
+ * finished chunk's pixels to the work counter's RT_COUNTER_DONE word, which
+ * the host reads during the launch. One atomic per chunk, from the group's
+ * first work-item, so that counting costs next to nothing against tracing
+ * the chunk; nothing without RTCL_PROGRESS. */
+static inline void progress_chunk_done(__global uint *work_counter, uint pixels)
+{
+#ifdef RTCL_PROGRESS
+	if (get_local_id(0) == 0 && get_local_id(1) == 0)
+		atomic_add(work_counter + RT_COUNTER_DONE, pixels);
+#else
+	(void)work_counter;
+	(void)pixels;
+#endif
+}
+
 /* Returns this work-item's index, row-major over the global NDRange: where
  * it stores its counts. */
 static inline uint global_item(void)

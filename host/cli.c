@@ -8,6 +8,7 @@
 #include "frames.h"
 #include "render.h"
 #include "scene.h"
+#include "suggest.h"
 #include "workmap.h"
 
 enum long_only_option {
@@ -44,6 +45,7 @@ static const struct option long_options[] = {
 	{"spp", required_argument, NULL, OPT_SPP},
 	{"platform", required_argument, NULL, 'p'},
 	{"device", required_argument, NULL, 'd'},
+	{"type", required_argument, NULL, 't'},
 	{"list-devices", no_argument, NULL, OPT_LIST_DEVICES},
 	{"devices", required_argument, NULL, OPT_DEVICES},
 	{"split", required_argument, NULL, OPT_SPLIT},
@@ -84,7 +86,8 @@ static void print_help_after_kernels(FILE *out)
 		"                         testing every one, the paper's brute force\n"
 		"\n"
 		"Scene and image:\n"
-		"  -s, --scene FILE       scene file (SCENE.md); default: the built-in paper60\n"
+		"  -s, --scene FILE       scene file (SCENE.md), the same as giving it as SCENE;\n"
+		"                         default: the built-in paper60\n"
 		"  -o, --output FILE      image file, format from the extension (default "
 		"render.png)\n"
 		"      --size WxH         image size, overriding the scene's (1..%d each)\n"
@@ -103,6 +106,10 @@ static void print_help_after_kernels(FILE *out)
 		"  -d, --device N         device index within the platform (default: its first "
 		"GPU,\n"
 		"                         else its first device)\n"
+		"  -t, --type gpu|cpu|all the kind of device: the first GPU or CPU (of -p's\n"
+		"                         platform, if given); with -p/-d or --devices, those\n"
+		"                         must be of that kind (--devices all: those that are);\n"
+		"                         all (default): the first GPU, else the first device\n"
 		"      --list-devices     list platforms and devices with their indices, and exit\n"
 		"\n"
 		"Several devices and animations:\n"
@@ -146,8 +153,10 @@ static void print_help_after_kernels(FILE *out)
 		"                         middle and max, and the unit \"flops per pixel\"\n"
 		"\n"
 		"Other:\n"
-		"  -q, --quiet            print nothing but errors\n"
-		"  -v, --verbose          say more: build options, where the scene lives\n"
+		"  -q, --quiet            print nothing but errors (on a terminal, rtcl otherwise\n"
+		"                         shows on stderr the share done and the time left)\n"
+		"  -v, --verbose          say more: the scene's bounds, build options, where the\n"
+		"                         scene lives\n"
 		"  -h, --help             show this help and exit\n"
 		"      --version          show the version and exit\n"
 		"\n"
@@ -163,23 +172,24 @@ static void print_help_after_kernels(FILE *out)
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES,
-		FRAMES_MAX);
+		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX);
 }
 
 void cli_print_help(FILE *out)
 {
 	fprintf(out,
-		"Usage: rtcl [OPTION]...\n"
+		"Usage: rtcl [OPTION]... [SCENE]\n"
 		"Ray-trace a scene with OpenCL, scheduling pixels over work-items with one of\n"
-		"several kernels, and write the image.\n"
+		"several kernels, and write the image. SCENE is a scene file (SCENE.md), as\n"
+		"with -s; without one, the built-in 60-ball scene.\n"
 		"\n"
 		"Examples:\n"
 		"  rtcl                                  the built-in 60-ball scene, dynamic "
 		"kernel\n"
+		"  rtcl scenes/two_balls.json -o balls.exr --size 800x600\n"
 		"  rtcl -k cyclic -w 8x8 --groups 25x25  the paper's cyclic geometry\n"
-		"  rtcl -s scenes/two_balls.json -o balls.exr --size 800x600\n"
 		"  rtcl -k naive -r 10 --stats run.json  median of 10 timed launches, as JSON\n"
+		"  rtcl -t cpu -v                        on the first CPU device, saying more\n"
 		"\n"
 		"Scheduling:\n"
 		"  -k, --kernel NAME      which work-item traces which pixel (default dynamic):\n");
@@ -325,6 +335,22 @@ static int parse_frames(const char *text, int frames[2], char *err, size_t err_s
 	return 0;
 }
 
+/* -t/--type gpu|cpu|all, as the Khronos OpenCL SDK samples take it. */
+static int parse_device_kind(const char *text, enum device_kind *kind, char *err, size_t err_size)
+{
+	if (strcmp(text, "gpu") == 0)
+		*kind = DEVICE_KIND_GPU;
+	else if (strcmp(text, "cpu") == 0)
+		*kind = DEVICE_KIND_CPU;
+	else if (strcmp(text, "all") == 0)
+		*kind = DEVICE_KIND_ANY;
+	else {
+		snprintf(err, err_size, "-t/--type: expected gpu, cpu or all, got \"%s\"", text);
+		return -1;
+	}
+	return 0;
+}
+
 static int apply_option(int c, const char *arg, struct options *o, char *err, size_t err_size)
 {
 	switch (c) {
@@ -351,6 +377,8 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return parse_bounded("-p/--platform", arg, 0, 1000, &o->platform, err, err_size);
 	case 'd':
 		return parse_bounded("-d/--device", arg, 0, 1000, &o->device, err, err_size);
+	case 't':
+		return parse_device_kind(arg, &o->device_kind, err, err_size);
 	case 'r':
 		return parse_bounded("-r/--repeat", arg, 1, 100000, &o->repeat, err, err_size);
 	case OPT_STATS:
@@ -426,6 +454,21 @@ static const struct option *find_long_option(const char *arg, int *matches)
 	return found;
 }
 
+/* Appends the long option nearest to the unknown name[len] to err. */
+static void suggest_option(const char *name, int len, char *err, size_t err_size)
+{
+	enum { COUNT = sizeof(long_options) / sizeof(long_options[0]) - 1 };
+	const char *names[COUNT];
+	char word[SUGGEST_MAX_LENGTH + 1];
+
+	if (len > SUGGEST_MAX_LENGTH)
+		return;
+	snprintf(word, sizeof(word), "%.*s", len, name);
+	for (int i = 0; i < COUNT; i++)
+		names[i] = long_options[i].name;
+	suggest_append(err, err_size, word, names, COUNT, "--");
+}
+
 /* Describes the option getopt_long refused ('?') or found without its value
  * (':'). It reports a long option given a value it does not take as its
  * short form ("--quiet=1" as optopt 'q'), and does not advance optind
@@ -447,6 +490,8 @@ static void describe_bad_option(int c, int argc, char **argv, char *err, size_t 
 	} else if (is_long && optopt == 0) {
 		snprintf(err, err_size, "%s option %.*s (see --help)",
 			 matches > 1 ? "ambiguous" : "unknown", name_len, arg);
+		if (matches == 0)
+			suggest_option(arg + 2, name_len - 2, err, err_size);
 	} else if (optopt > 0 && optopt < OPT_GROUPS) {
 		snprintf(err, err_size,
 			 c == ':' ? "-%c needs a value (see --help)"
@@ -528,6 +573,24 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 	return 0;
 }
 
+/* The scene as the one argument after the options (getopt_long moves the
+ * arguments behind them): rtcl scene.json works as rtcl -s scene.json. */
+static int take_scene_argument(int count, char **args, struct options *o, char *err,
+			       size_t err_size)
+{
+	if (count == 0)
+		return 0;
+	if (count > 1 || o->scene_path) {
+		snprintf(err, err_size,
+			 "two scenes given, \"%s\" and \"%s\": give one, as the argument or with "
+			 "-s/--scene",
+			 o->scene_path ? o->scene_path : args[0],
+			 o->scene_path ? args[0] : args[1]);
+		return -1;
+	}
+	return take_file_name("the scene argument", args[0], &o->scene_path, err, err_size);
+}
+
 int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_size)
 {
 	int c;
@@ -544,7 +607,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 
 	opterr = 0;
 	optind = 1;
-	while ((c = getopt_long(argc, argv, ":k:w:s:o:p:d:r:qvh", long_options, NULL)) != -1) {
+	while ((c = getopt_long(argc, argv, ":k:w:s:o:p:d:t:r:qvh", long_options, NULL)) != -1) {
 		if (c == '?' || c == ':') {
 			describe_bad_option(c, argc, argv, err, err_size);
 			return -1;
@@ -552,10 +615,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 		if (apply_option(c, optarg, o, err, err_size))
 			return -1;
 	}
-	if (optind < argc) {
-		snprintf(err, err_size, "unexpected argument \"%s\" (options only; see --help)",
-			 argv[optind]);
+	if (take_scene_argument(argc - optind, argv + optind, o, err, err_size))
 		return -1;
-	}
 	return check_combination(o, err, err_size);
 }

@@ -18,12 +18,13 @@ struct options {
 	int workgroup[2];	/* -w WxH */
 	int groups[2];		/* --groups GXxGY; 0x0 when not given */
 	int batch;		/* --batch N for the persistent kernel */
-	const char *scene_path; /* NULL: the built-in paper60 scene */
+	const char *scene_path; /* -s or the argument; NULL: the built-in paper60 scene */
 	const char *output;
-	int size[2];	      /* --size WxH; 0x0 when not given */
-	int depth;	      /* --depth N; -1 when not given */
-	int spp;	      /* --spp N; 0 when not given */
-	int platform, device; /* -p, -d; -1 when not given */
+	int size[2];		      /* --size WxH; 0x0 when not given */
+	int depth;		      /* --depth N; -1 when not given */
+	int spp;		      /* --spp N; 0 when not given */
+	int platform, device;	      /* -p, -d; -1 when not given */
+	enum device_kind device_kind; /* -t/--type gpu|cpu|all */
 	int list_devices;
 	struct device_list devices; /* --devices LIST|all */
 	int devices_given;

@@ -127,9 +127,34 @@ static int index_in_platform(cl_platform_id platform, cl_device_id device)
 	return 0;
 }
 
-/* Picks the platform and device per device_open's rules. */
-static int choose_device(struct device *dev, int platform_index, int device_index, char *err,
-			 size_t err_size)
+/* "GPU" or "CPU": what -t/--type names. */
+static const char *kind_name(enum device_kind kind)
+{
+	return kind == DEVICE_KIND_GPU ? "GPU" : "CPU";
+}
+
+/* Checks that the device -p/-d chose is of the kind -t asks for. */
+static int check_kind(const struct device *dev, enum device_kind kind, char *err, size_t err_size)
+{
+	cl_device_type type = 0;
+	char name[256] = "";
+
+	if (kind == DEVICE_KIND_ANY)
+		return 0;
+	clGetDeviceInfo(dev->id, CL_DEVICE_TYPE, sizeof(type), &type, NULL);
+	if ((type & (kind == DEVICE_KIND_GPU ? CL_DEVICE_TYPE_GPU : CL_DEVICE_TYPE_CPU)) != 0)
+		return 0;
+	clGetDeviceInfo(dev->id, CL_DEVICE_NAME, sizeof(name), name, NULL);
+	snprintf(err, err_size,
+		 "-t/--type %s: device %d:%d (%s) is not a %s; --list-devices shows what there is",
+		 kind == DEVICE_KIND_GPU ? "gpu" : "cpu", dev->platform_index, dev->device_index,
+		 name, kind_name(kind));
+	return -1;
+}
+
+/* Picks the platform and device per device_open_kind's rules. */
+static int choose_device(struct device *dev, int platform_index, int device_index,
+			 enum device_kind kind, char *err, size_t err_size)
 {
 	cl_platform_id platforms[MAX_PLATFORMS];
 	cl_device_id devices[MAX_DEVICES];
@@ -159,12 +184,18 @@ static int choose_device(struct device *dev, int platform_index, int device_inde
 		dev->id = devices[device_index];
 		dev->platform_index = p;
 		dev->device_index = device_index;
-		return 0;
+		return check_kind(dev, kind, err, err_size);
 	}
 
-	/* First GPU, else first device, of the given platform or of any. */
+	/* First GPU, else first device, of the given platform or of any; with
+	 * a kind, its first device only. */
 	cl_device_type types[2] = {CL_DEVICE_TYPE_GPU, CL_DEVICE_TYPE_ALL};
-	for (int t = 0; t < 2; t++) {
+	int type_count = 2;
+	if (kind != DEVICE_KIND_ANY) {
+		types[0] = kind == DEVICE_KIND_GPU ? CL_DEVICE_TYPE_GPU : CL_DEVICE_TYPE_CPU;
+		type_count = 1;
+	}
+	for (int t = 0; t < type_count; t++) {
 		for (cl_uint p = 0; p < platform_count; p++) {
 			if (platform_index >= 0 && (int)p != platform_index)
 				continue;
@@ -177,7 +208,14 @@ static int choose_device(struct device *dev, int platform_index, int device_inde
 			}
 		}
 	}
-	if (platform_index >= 0)
+	if (kind != DEVICE_KIND_ANY && platform_index >= 0)
+		snprintf(err, err_size,
+			 "no %s found on platform %d; --list-devices shows what there is",
+			 kind_name(kind), platform_index);
+	else if (kind != DEVICE_KIND_ANY)
+		snprintf(err, err_size, "no %s found; --list-devices shows what there is",
+			 kind_name(kind));
+	else if (platform_index >= 0)
 		snprintf(err, err_size, "platform %d has no devices", platform_index);
 	else
 		snprintf(err, err_size, "no OpenCL device found on any platform");
@@ -231,10 +269,16 @@ static void query_info(struct device *dev)
 int device_open(struct device *dev, int platform_index, int device_index, char *err,
 		size_t err_size)
 {
+	return device_open_kind(dev, platform_index, device_index, DEVICE_KIND_ANY, err, err_size);
+}
+
+int device_open_kind(struct device *dev, int platform_index, int device_index,
+		     enum device_kind kind, char *err, size_t err_size)
+{
 	cl_int status;
 
 	memset(dev, 0, sizeof(*dev));
-	if (choose_device(dev, platform_index, device_index, err, err_size))
+	if (choose_device(dev, platform_index, device_index, kind, err, err_size))
 		return -1;
 	query_info(dev);
 

@@ -36,6 +36,16 @@ struct device {
 int device_open(struct device *dev, int platform_index, int device_index, char *err,
 		size_t err_size);
 
+/* -t/--type: the kind of device asked for (all: any). */
+enum device_kind { DEVICE_KIND_ANY, DEVICE_KIND_GPU, DEVICE_KIND_CPU };
+
+/* device_open for a kind: without -p/-d the first device of that kind (of
+ * the platform, when given); with them, the device they name, which must be
+ * of that kind. Returns 0, or -1 with one message in err ("no GPU found;
+ * --list-devices shows what there is"). */
+int device_open_kind(struct device *dev, int platform_index, int device_index,
+		     enum device_kind kind, char *err, size_t err_size);
+
 void device_close(struct device *dev);
 
 /* Checks that a buffer of `bytes` fits the device (one allocation of at most

@@ -87,8 +87,14 @@ static int expand_all(struct device_list *expanded, char *err, size_t err_size)
 	return 0;
 }
 
-int devices_open(const struct device_list *list, struct device *devs, int *count, char *err,
-		 size_t err_size)
+/* Whether dev is of the kind (device_find_all finds only GPUs and CPUs). */
+static int is_kind(const struct device *dev, enum device_kind kind)
+{
+	return kind == DEVICE_KIND_ANY || (kind == DEVICE_KIND_GPU) == (dev->is_gpu != 0);
+}
+
+int devices_open(const struct device_list *list, enum device_kind kind, struct device *devs,
+		 int *count, char *err, size_t err_size)
 {
 	struct device_list expanded = *list;
 	char why[1024];
@@ -98,15 +104,26 @@ int devices_open(const struct device_list *list, struct device *devs, int *count
 		return -1;
 	for (int i = 0; i < expanded.count; i++) {
 		const struct device_spec *spec = &expanded.specs[i];
-		if (device_open(&devs[i], spec->platform, spec->device, why, sizeof(why))) {
+		struct device *dev = &devs[*count];
+		/* `all` with -t keeps the devices of that kind. */
+		if (device_open_kind(dev, spec->platform, spec->device,
+				     list->all ? DEVICE_KIND_ANY : kind, why, sizeof(why))) {
 			snprintf(err, err_size, "--devices %d:%d: %s", spec->platform, spec->device,
 				 why);
-			devices_close(devs, i);
+			devices_close(devs, *count);
+			*count = 0;
 			return -1;
 		}
-		*count = i + 1;
+		if (is_kind(dev, kind))
+			(*count)++;
+		else
+			device_close(dev);
 	}
-	return 0;
+	if (*count > 0)
+		return 0;
+	snprintf(err, err_size, "--devices all: no %s found; --list-devices shows what there is",
+		 kind == DEVICE_KIND_GPU ? "GPU" : "CPU");
+	return -1;
 }
 
 void devices_close(struct device *devs, int count)

@@ -28,11 +28,12 @@ struct device_list {
 int devices_parse(const char *text, struct device_list *list, char *err, size_t err_size);
 
 /* Opens every device the list names, in its order (for `all`: platform by
- * platform, GPUs and CPUs in their index order), into devs[DEVICES_MAX];
+ * platform, GPUs and CPUs in their index order; with a kind (-t), those of
+ * that kind, and each listed device must be of it), into devs[DEVICES_MAX];
  * *count says how many. Returns 0, or -1 with one message in err naming the
  * entry and what exists, with nothing left open. */
-int devices_open(const struct device_list *list, struct device *devs, int *count, char *err,
-		 size_t err_size);
+int devices_open(const struct device_list *list, enum device_kind kind, struct device *devs,
+		 int *count, char *err, size_t err_size);
 
 void devices_close(struct device *devs, int count);
 

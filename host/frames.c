@@ -8,6 +8,8 @@
 #include "devstats.h"
 #include "image.h"
 #include "interrupt.h"
+#include "launch.h"
+#include "progress.h"
 #include "outputs.h"
 #include "render.h"
 #include "timing.h"
@@ -271,19 +273,41 @@ int frames_write_held(const struct run *run, struct frames_output *o, const stru
 struct frames_context {
 	const struct run *run;
 	struct device *devs;
+	int count;
 	struct frames_output *output;
+	int done; /* frames rendered, for the progress line */
 };
+
+/* Names the frame under way on the progress line: with one device "frame k
+ * of N" with the frame's own share; with several, whose frames run side by
+ * side, how many are done. */
+static void show_frame(struct frames_context *c, int piece, int finished)
+{
+	char step[48];
+	int n = frame_count(c->run->opt);
+
+	if (c->count == 1 && !finished) {
+		snprintf(step, sizeof(step), "frame %d of %d", piece + 1, n);
+		progress_step(step, launch_image_work(&c->run->settings));
+	} else if (c->count > 1 && finished) {
+		snprintf(step, sizeof(step), "%d of %d frames done",
+			 __atomic_add_fetch(&c->done, 1, __ATOMIC_RELAXED), n);
+		progress_step(step, 0);
+	}
+}
 
 /* A multidev render_frame_piece: frame first + piece, rendered whole and staged. */
 static int render_frame_piece(void *context, int device, int piece, struct piece_work *done,
 			      char *err, size_t err_size)
 {
-	const struct frames_context *c = context;
+	struct frames_context *c = context;
 	const struct render_settings *s = &c->run->settings;
 	struct render_result result;
 
+	show_frame(c, piece, 0);
 	if (frames_render_frame(c->run, &c->devs[device], piece, &result, err, err_size))
 		return -1;
+	show_frame(c, piece, 1);
 	int failed = frames_stage_image(c->run, c->output, piece, result.rgb, err, err_size);
 	*done = frames_piece_work(s, &result);
 	render_result_free(&result);
@@ -295,7 +319,7 @@ int frames_render(struct run *run, struct device *devs, int count, char *err, si
 	int n = frame_count(run->opt);
 	struct device_work work[DEVICES_MAX];
 	struct frames_output output;
-	struct frames_context c = {run, devs, &output};
+	struct frames_context c = {run, devs, count, &output, 0};
 	struct multidev_job job = {.piece_count = n,
 				   .split = run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
 				   .render_piece = render_frame_piece,
@@ -303,14 +327,20 @@ int frames_render(struct run *run, struct device *devs, int count, char *err, si
 
 	if (frames_output_open(&output, run->opt, err, err_size))
 		return -1;
-	run->settings.progress = 0; /* several threads: no one progress line */
+	/* One line for every frame: render() only adds to it. */
+	run->settings.progress = 0;
+	char devices[32];
+	snprintf(devices, sizeof(devices), "%d devices", count);
+	launch_progress_begin(&run->settings, n, count > 1 ? devices : NULL);
 	double start = timing_now();
-	if (multidev_run(&job, devs, count, work, err, err_size)) {
+	int failed = multidev_run(&job, devs, count, work, err, err_size);
+	progress_end();
+	if (failed) {
 		frames_output_close(&output, n);
 		return -1;
 	}
 	struct frames_report report = {devs, NULL, work, count, (timing_now() - start) * 1e3};
-	int failed = frames_commit(run, &output, &report, err, err_size);
+	failed = frames_commit(run, &output, &report, err, err_size);
 	frames_output_close(&output, n + 1);
 	return failed ? -1 : 0;
 }

@@ -9,10 +9,8 @@
 
 #include "devscene.h"
 #include "program.h"
+#include "progress.h"
 #include "timing.h"
-
-/* How often a waiting launch redraws its progress line. */
-#define PROGRESS_TICK_NS (100 * 1000 * 1000)
 
 void launch_default_groups(const struct device *dev, const struct render_settings *s, int groups[2])
 {
@@ -331,14 +329,160 @@ int launch_end_timing(struct render_result *res, char *err, size_t err_size)
 				&res->kernel_ms_min, &res->kernel_ms_max, err, err_size);
 }
 
-/* Waits for the launch, showing the elapsed time on stderr when asked. */
-static cl_int wait_for(cl_event event, const char *label, int progress)
+void launch_progress_begin(const struct render_settings *s, int frames, const char *devices)
 {
-	if (!progress)
+	char what[64];
+
+	snprintf(what, sizeof(what), "%s (%s%s%s)", s->count_flops ? "counting flops" : "rendering",
+		 s->kernel->name, devices ? ", " : "", devices ? devices : "");
+	progress_begin(what, frames * launch_image_work(s));
+}
+
+void launch_progress_frame(const struct render_settings *s, const struct render_result *res,
+			   int frame, int frames)
+{
+	char step[48];
+	int timed = frame - (frames - res->repeat); /* -1: the warm-up */
+
+	if (frames == 1)
+		return;
+	if (timed < 0)
+		snprintf(step, sizeof(step), "warm-up launch");
+	else
+		snprintf(step, sizeof(step), "timed launch %d of %d", timed + 1, res->repeat);
+	progress_step(step, launch_image_work(s));
+}
+
+double launch_image_work(const struct render_settings *s)
+{
+	return (double)s->width * s->height * (s->samples > 0 ? s->samples : 1);
+}
+
+/* Whether dev shares the host's memory (a CPU device). */
+static int host_unified(const struct device *dev)
+{
+	cl_bool unified = CL_FALSE;
+
+	if (clGetDeviceInfo(dev->id, CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof(unified), &unified,
+			    NULL) != CL_SUCCESS)
+		return 0;
+	return unified == CL_TRUE;
+}
+
+int launch_create_counter(struct device *dev, int watched, struct work_counter *c, char *err,
+			  size_t err_size)
+{
+	size_t bytes = RT_COUNTER_WORDS * sizeof(cl_uint);
+	int in_place = watched && host_unified(dev);
+	cl_int status = CL_SUCCESS;
+
+	memset(c, 0, sizeof(*c));
+	c->queue = dev->queue;
+	c->watched = watched;
+	c->buffer = device_create_buffer(dev,
+					 CL_MEM_READ_WRITE | (in_place ? CL_MEM_ALLOC_HOST_PTR : 0),
+					 bytes, NULL, "work counter", err, err_size);
+	if (!c->buffer)
+		return -1;
+	if (in_place)
+		c->mapped = clEnqueueMapBuffer(dev->queue, c->buffer, CL_TRUE, CL_MAP_READ, 0,
+					       bytes, 0, NULL, NULL, &status);
+	else if (watched)
+		c->side_queue = clCreateCommandQueue(dev->context, dev->id, 0, &status);
+	if (status == CL_SUCCESS)
+		return 0;
+	snprintf(err, err_size, "%s failed for the work counter on %s: %s",
+		 in_place ? "clEnqueueMapBuffer" : "clCreateCommandQueue", dev->name,
+		 cl_error_name(status));
+	return -1;
+}
+
+/* Waits for the read in flight, if any. */
+static void finish_reading(struct work_counter *c)
+{
+	if (!c->reading)
+		return;
+	clWaitForEvents(1, &c->reading);
+	clReleaseEvent(c->reading);
+	c->reading = NULL;
+}
+
+cl_int launch_reset_counter(struct work_counter *c)
+{
+	cl_uint zero = 0;
+
+	finish_reading(c);
+	if (c->reset)
+		clReleaseEvent(c->reset);
+	c->reset = NULL;
+	memset(c->copy, 0, sizeof(c->copy));
+	return clEnqueueFillBuffer(c->queue, c->buffer, &zero, sizeof(zero), 0, sizeof(c->copy), 0,
+				   NULL, c->watched ? &c->reset : NULL);
+}
+
+void launch_release_counter(struct work_counter *c)
+{
+	finish_reading(c);
+	if (c->reset)
+		clReleaseEvent(c->reset);
+	if (c->mapped) {
+		clEnqueueUnmapMemObject(c->queue, c->buffer, c->mapped, 0, NULL, NULL);
+		clFinish(c->queue);
+	}
+	if (c->side_queue)
+		clReleaseCommandQueue(c->side_queue);
+	if (c->buffer)
+		clReleaseMemObject(c->buffer);
+	memset(c, 0, sizeof(*c));
+}
+
+/* The counter's word as last seen: in place, or from the last finished
+ * read, starting the next. */
+static cl_uint read_counter(struct work_counter *c, int word)
+{
+	cl_int state = CL_QUEUED;
+
+	if (c->mapped) {
+		/* Before the zeroing has run the words are the last launch's. */
+		if (clGetEventInfo(c->reset, CL_EVENT_COMMAND_EXECUTION_STATUS, sizeof(state),
+				   &state, NULL) != CL_SUCCESS ||
+		    state != CL_COMPLETE)
+			return 0;
+		return __atomic_load_n(&c->mapped[word], __ATOMIC_RELAXED);
+	}
+	if (c->reading &&
+	    clGetEventInfo(c->reading, CL_EVENT_COMMAND_EXECUTION_STATUS, sizeof(state), &state,
+			   NULL) == CL_SUCCESS &&
+	    state <= CL_COMPLETE) {
+		clReleaseEvent(c->reading); /* done, or failed: a later read tries again */
+		c->reading = NULL;
+	}
+	if (!c->reading &&
+	    clEnqueueReadBuffer(c->side_queue, c->buffer, CL_FALSE, 0, sizeof(c->copy), c->copy,
+				c->reset ? 1 : 0, c->reset ? &c->reset : NULL,
+				&c->reading) == CL_SUCCESS)
+		clFlush(c->side_queue);
+	return c->copy[word];
+}
+
+/* Shows how far the launch is: its share of the work from the counter. */
+static void show_share(const struct launch_watch *w)
+{
+	if (!w || !w->counter || !w->counter->watched)
+		return;
+	double count = read_counter(w->counter, w->word) * w->pixels_per_count;
+	double share = count < w->pixels ? count / w->pixels : 1;
+	progress_partial(w->slot, share * w->work);
+}
+
+/* Waits for the launch; with the progress line on, redraws it every tick
+ * with the share the watch reads. */
+static cl_int wait_for(cl_event event, const struct launch_watch *watch)
+{
+	if (!progress_enabled())
 		return clWaitForEvents(1, &event);
 
-	double start = timing_now();
-	struct timespec tick = {0, PROGRESS_TICK_NS};
+	struct timespec tick = {0, PROGRESS_TICK_MS * 1000000L};
 	cl_int state = CL_QUEUED;
 	for (;;) {
 		cl_int status = clGetEventInfo(event, CL_EVENT_COMMAND_EXECUTION_STATUS,
@@ -347,16 +491,18 @@ static cl_int wait_for(cl_event event, const char *label, int progress)
 			return status;
 		if (state == CL_COMPLETE || state < 0)
 			break;
-		fprintf(stderr, "\r%s: %.1f s", label, timing_now() - start);
+		show_share(watch);
+		progress_draw();
 		nanosleep(&tick, NULL);
 	}
-	fprintf(stderr, "\r%*s\r", 79, ""); /* the longest label with its time */
+	if (watch && watch->counter)
+		finish_reading(watch->counter);
 	return state < 0 ? state : clWaitForEvents(1, &event);
 }
 
-cl_int launch_run(struct device *dev, const struct render_settings *s, cl_kernel kernel,
-		  cl_uint dims, const size_t *global, const size_t *local, const char *label,
-		  double *ms, const char **call)
+cl_int launch_run(struct device *dev, cl_kernel kernel, cl_uint dims, const size_t *global,
+		  const size_t *local, const struct launch_watch *watch, double *ms,
+		  const char **call)
 {
 	cl_event event;
 	cl_ulong start = 0, end = 0;
@@ -371,7 +517,7 @@ cl_int launch_run(struct device *dev, const struct render_settings *s, cl_kernel
 	status = clFlush(dev->queue);
 	if (status == CL_SUCCESS) {
 		*call = "waiting for the kernel";
-		status = wait_for(event, label, s->progress);
+		status = wait_for(event, watch);
 	}
 	if (status == CL_SUCCESS) {
 		*call = "clGetEventProfilingInfo";

@@ -4,6 +4,7 @@
 #ifndef RTCL_LAUNCH_H
 #define RTCL_LAUNCH_H
 
+#include "../cl/rtcl_shared.h"
 #include "settings.h"
 
 /* Bytes of a buffer or __local argument that a kernel takes but does not
@@ -77,10 +78,64 @@ void launch_record_frame(struct render_result *result, int frame, int frames, do
 /* Sets the median, min and max of the recorded frames. */
 int launch_end_timing(struct render_result *result, char *err, size_t err_size);
 
-/* Enqueues one launch, waits for it (showing progress when asked) and adds its
- * profiled time to *ms. On failure *call names what failed. */
-cl_int launch_run(struct device *dev, const struct render_settings *settings, cl_kernel kernel,
-		  cl_uint dims, const size_t *global, const size_t *local, const char *label,
-		  double *ms, const char **call);
+/* Starts the progress line (progress.h) of `frames` frames of the whole
+ * image: "rendering (KERNEL)", or "counting flops (KERNEL)" for a counting
+ * run, with `devices` ("3 devices") after the kernel when not NULL. */
+void launch_progress_begin(const struct render_settings *settings, int frames, const char *devices);
+
+/* Names frame `frame` of `frames` on the progress line: "warm-up launch" or
+ * "timed launch k of N" (-r), nothing for a single frame. */
+void launch_progress_frame(const struct render_settings *settings,
+			   const struct render_result *result, int frame, int frames);
+
+/* Pixel samples of the whole image: a frame's work on the progress line. */
+double launch_image_work(const struct render_settings *settings);
+
+/* The single-pass kernels' work counter (cl/rtcl_shared.h, RT_COUNTER_*)
+ * and, with the progress line on, the host's view of it while a launch
+ * runs. A device that shares the host's memory (CL_DEVICE_HOST_UNIFIED_MEMORY,
+ * a CPU) has it mapped once and read in place: PoCL runs another queue's
+ * read only once every work-group of the running kernel is taken, so a read
+ * would wait for the launch's end. On other devices (a discrete GPU) a
+ * non-blocking read on a second in-order queue copies it while the kernel
+ * runs, at most once per PROGRESS_TICK_MS: 8 bytes, next to nothing. */
+struct work_counter {
+	cl_mem buffer;
+	cl_command_queue queue;		/* the device's, which zeroes it */
+	int watched;			/* read during launches */
+	cl_uint *mapped;		/* unified memory: the words in place */
+	cl_command_queue side_queue;	/* else: the reads' queue */
+	cl_event reset;			/* the last zeroing, which reads wait for */
+	cl_event reading;		/* the read in flight, or NULL */
+	cl_uint copy[RT_COUNTER_WORDS]; /* what the last finished read brought */
+};
+
+/* Creates c's buffer on dev, watched (readable during launches) or not.
+ * Returns 0, or -1 with one message in err. */
+int launch_create_counter(struct device *dev, int watched, struct work_counter *c, char *err,
+			  size_t err_size);
+
+/* Zeroes the counter before a launch. */
+cl_int launch_reset_counter(struct work_counter *c);
+
+void launch_release_counter(struct work_counter *c);
+
+/* What a waiting launch shows on the progress line: how far its work
+ * counter is, as a share of its work. */
+struct launch_watch {
+	struct work_counter *counter; /* NULL: nothing to read during the launch */
+	int word;		      /* RT_COUNTER_NEXT or RT_COUNTER_DONE */
+	double pixels_per_count;      /* a chunk's pixels when the word counts chunks */
+	double pixels;		      /* the count when done: the pixels of whole chunks */
+	double work;		      /* the launch's pixel samples */
+	const void *slot;	      /* its device, for progress_partial */
+};
+
+/* Enqueues one launch, waits for it (drawing the progress line, with the
+ * share that watch reads when not NULL) and adds its profiled time to *ms.
+ * On failure *call names what failed. */
+cl_int launch_run(struct device *dev, cl_kernel kernel, cl_uint dims, const size_t *global,
+		  const size_t *local, const struct launch_watch *watch, double *ms,
+		  const char **call);
 
 #endif

@@ -21,6 +21,7 @@
 #include "interrupt.h"
 #include "mpi_render.h"
 #include "outputs.h"
+#include "progress.h"
 #include "render.h"
 #include "scene.h"
 #include "stats.h"
@@ -36,6 +37,37 @@ static int load_scene(const struct options *opt, struct scene *scene, char *err,
 		return scene_load_file(scene, opt->scene_path, err, err_size);
 	return scene_load_string(scene, embedded_file(DEFAULT_SCENE), DEFAULT_SCENE " (built-in)",
 				 err, err_size);
+}
+
+/* -v: the world-space box of the scene's finite objects; planes are
+ * infinite and only counted. */
+static void print_scene_bounds(const struct scene *scene)
+{
+	double lo[3], hi[3];
+	char planes[64] = "";
+
+	if (scene->plane_count)
+		snprintf(planes, sizeof(planes), "; %d plane%s, infinite, not in the box",
+			 scene->plane_count, scene->plane_count == 1 ? "" : "s");
+	if (!scene_bounds(scene, lo, hi)) {
+		fprintf(stderr, "rtcl: scene bounds: no sphere or triangle%s\n", planes);
+		return;
+	}
+	fprintf(stderr,
+		"rtcl: scene bounds of %d sphere%s and %d triangle%s: (%g, %g, %g) to (%g, %g, "
+		"%g)%s\n",
+		scene->sphere_count, scene->sphere_count == 1 ? "" : "s", scene->triangle_count,
+		scene->triangle_count == 1 ? "" : "s", lo[0], lo[1], lo[2], hi[0], hi[1], hi[2],
+		planes);
+}
+
+/* Whether the progress line is shown: on a terminal, unless -q. Under
+ * mpirun a rank's stderr is a pipe even when mpirun's is a terminal, which
+ * the rank's stdout (a pseudo-terminal then) tells; other ranks than 0 turn
+ * it off (mpi_render.c). */
+static int shows_progress(const struct options *opt)
+{
+	return !opt->quiet && (isatty(STDERR_FILENO) || (opt->mpi && isatty(STDOUT_FILENO)));
 }
 
 /* The render settings: the options, else the scene's own values. */
@@ -57,7 +89,7 @@ static void choose_settings(struct run *run, const struct options *opt, const st
 	s->warm_up = opt->repeat > 0;
 	s->batch = opt->batch;
 	s->source_dir = getenv("RTCL_CL_DIR");
-	s->progress = !opt->quiet && isatty(STDERR_FILENO);
+	s->progress = 1; /* one image on one device: render() runs the line */
 	s->verbose = opt->verbose;
 	s->accel = opt->accel;
 	run->counting = opt->flops_path || opt->work_map_path;
@@ -87,9 +119,10 @@ static int open_devices(const struct options *opt, struct device *devs, int *cou
 			size_t err_size)
 {
 	if (opt->devices_given)
-		return devices_open(&opt->devices, devs, count, err, err_size);
+		return devices_open(&opt->devices, opt->device_kind, devs, count, err, err_size);
 	*count = 1;
-	return device_open(&devs[0], opt->platform, opt->device, err, err_size);
+	return device_open_kind(&devs[0], opt->platform, opt->device, opt->device_kind, err,
+				err_size);
 }
 
 /* With --flops or --work-map, a separate counting run first; then the timed
@@ -259,8 +292,9 @@ int main(int argc, char **argv)
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_USAGE;
 	}
+	progress_init(shows_progress(&opt));
 	/* Before the OpenCL runtime starts threads of its own. */
-	if (interrupt_setup(!opt.quiet && isatty(STDERR_FILENO), err, sizeof(err))) {
+	if (interrupt_setup(progress_enabled(), err, sizeof(err))) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_FAILED;
 	}
@@ -271,6 +305,8 @@ int main(int argc, char **argv)
 		fprintf(stderr, "%s\n", err);
 		return EXIT_FAILED;
 	}
+	if (opt.verbose)
+		print_scene_bounds(&scene);
 	choose_settings(&run, &opt, &scene);
 	run.start = start;
 	status = render_and_write(&run, err, sizeof(err));

@@ -14,6 +14,8 @@
 #include "frames.h"
 #include "devstats.h"
 #include "interrupt.h"
+#include "launch.h"
+#include "progress.h"
 #include "outputs.h"
 #include "render.h"
 #include "tiles.h"
@@ -52,6 +54,7 @@ struct mpi_job {
 	int total;    /* devices over every rank */
 	int next;     /* dynamic split: the next piece */
 	int *next_static, *end_static;
+	int *current; /* the piece each other rank's device renders, or -1 */
 	int failed;
 	char message[MESSAGE_SIZE];
 	struct frames_output output;
@@ -320,13 +323,34 @@ static void device_done(void *context, int device)
 
 /* ---- rank 0's server: the other ranks' requests, pixels and reports ----- */
 
+/* The pixel samples of piece: a whole frame, or a band. */
+static double piece_work(const struct mpi_job *j, int piece)
+{
+	const struct render_settings *s = &j->run->settings;
+
+	if (!j->image)
+		return launch_image_work(s);
+	struct rt_piece p = tiles_band(s, j->tiles.rows, piece, 0, 1);
+	return (double)p.width * p.height * p.samples;
+}
+
+/* A device of another rank asks for a piece: its previous one is done,
+ * which the progress line counts (rank 0's own devices add theirs as they
+ * render). */
 static void serve_take(struct mpi_job *j, int source)
 {
 	int device, piece;
 
 	MPI_Recv(&device, 1, MPI_INT, source, TAG_TAKE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
-	piece = device >= 0 && device < j->total ? central_take(j, j->first[source] + device) : -1;
+	int g = device >= 0 && device < j->total ? j->first[source] + device : -1;
+	piece = g >= 0 ? central_take(j, g) : -1;
 	MPI_Send(&piece, 1, MPI_INT, source, TAG_GIVE + device, MPI_COMM_WORLD);
+	if (g < 0)
+		return;
+	if (j->current[g] >= 0)
+		progress_add(NULL, piece_work(j, j->current[g]));
+	j->current[g] = piece;
+	progress_draw();
 }
 
 /* The bytes of piece's pixels: a whole frame, or a band. */
@@ -446,9 +470,11 @@ static int start_rank(struct mpi_job *j, char *err, size_t err_size)
 	if (j->rank == ROOT && j->image && outputs_check(opt, err, err_size))
 		return -1;
 	if (opt->devices_given)
-		return devices_open(&opt->devices, j->devs, &j->count, err, err_size);
+		return devices_open(&opt->devices, opt->device_kind, j->devs, &j->count, err,
+				    err_size);
 	j->count = 1;
-	if (device_open(&j->devs[0], opt->platform, opt->device, err, err_size) == 0)
+	if (device_open_kind(&j->devs[0], opt->platform, opt->device, opt->device_kind, err,
+			     err_size) == 0)
 		return 0;
 	j->count = 0;
 	return -1;
@@ -466,8 +492,12 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 	j->end_static = calloc((size_t)j->total, sizeof(int));
 	j->all_devs = calloc((size_t)j->total, sizeof(struct device));
 	j->all_work = calloc((size_t)j->total, sizeof(struct device_work));
-	if (!j->rank_of || !j->next_static || !j->end_static || !j->all_devs || !j->all_work)
+	j->current = malloc((size_t)j->total * sizeof(int));
+	if (!j->rank_of || !j->next_static || !j->end_static || !j->all_devs || !j->all_work ||
+	    !j->current)
 		return -1;
+	for (int g = 0; g < j->total; g++)
+		j->current[g] = -1;
 	for (int r = 0; r < j->size; r++)
 		for (int g = j->first[r]; g < j->first[r + 1]; g++)
 			j->rank_of[g] = r;
@@ -641,6 +671,11 @@ static int render_all(struct mpi_job *j)
 	int status = 0;
 	double start = timing_now();
 
+	if (j->rank == ROOT) {
+		char ranks[32];
+		snprintf(ranks, sizeof(ranks), "%d rank%s", j->size, j->size == 1 ? "" : "s");
+		launch_progress_begin(&j->run->settings, j->image ? 1 : piece_count(j), ranks);
+	}
 	if (j->rank == ROOT && pthread_create(&server, NULL, serve, j) != 0) {
 		fprintf(stderr, "rtcl: cannot start rank 0's server thread\n");
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
@@ -648,6 +683,7 @@ static int render_all(struct mpi_job *j)
 	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
+		progress_end();
 		j->wall_ms = (timing_now() - start) * 1e3;
 		status = finish_root(j);
 	}
@@ -670,6 +706,7 @@ static void free_job(struct mpi_job *j)
 	free(j->rank_of);
 	free(j->next_static);
 	free(j->end_static);
+	free(j->current);
 	free(j->all_devs);
 	free(j->all_work);
 	pthread_mutex_destroy(&j->lock);
@@ -699,7 +736,10 @@ static int mpi_render(struct run *run, int image)
 	run->settings.check_writes |= image && checks_count_writes();
 	MPI_Comm_rank(MPI_COMM_WORLD, &j.rank);
 	MPI_Comm_size(MPI_COMM_WORLD, &j.size);
+	/* Rank 0 shows the line for every rank; render() only adds to it. */
 	run->settings.progress = 0;
+	if (j.rank != ROOT)
+		progress_init(0);
 	interrupt_set_outcome("no output written (under --mpi, mpirun ends every rank when one "
 			      "dies or is interrupted: see its report)");
 	if (provided < MPI_THREAD_MULTIPLE) {

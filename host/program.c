@@ -10,6 +10,7 @@
 #include "embedded.h"
 #include "files.h"
 #include "progcache.h"
+#include "progress.h"
 
 /* The tracer's sources, in the order the compiler sees them; the kernel's own
  * cl/NAME.cl follows. */
@@ -159,13 +160,15 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "", f->use_bvh ? " -DRTCL_BVH" : "",
 		 f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
 		 s->samples > 1 ? "" : " -DRTCL_ONE_SAMPLE",
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
+		 /* The chunks done, for the progress line (cl/scheduling.cl). */
+		 progress_enabled() && !s->kernel->multi_pass ? " -DRTCL_PROGRESS" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
 		 extra ? extra : "");
 	return 0;

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "launch.h"
+#include "progress.h"
 #include "reference.h"
 #include "renderer.h"
 #include "singlepass.h"
@@ -16,19 +17,19 @@
 #include "wavefront.h"
 
 const struct kernel_info render_kernels[] = {
-	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0, 0,
+	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0, 0, 0,
 	 &singlepass_ops},
-	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0, 0, 0,
+	{"naive", "one work-item per pixel, a 2D NDRange over the image", 0, 0, 0, 0, 0,
 	 &singlepass_ops},
 	{"cyclic", "persistent work-groups, chunk (cx,cy) to group (cx mod GX, cy mod GY)", 1, 0, 0,
-	 0, &singlepass_ops},
+	 0, 0, &singlepass_ops},
 	{"dynamic", "persistent work-groups fetch chunks from a global atomic counter", 1, 0, 0, 0,
-	 &singlepass_ops},
+	 1, &singlepass_ops},
 	{"persistent",
 	 "persistent work-groups whose work-items each fetch --batch pixels, no barrier", 1, 0, 0,
-	 1, &singlepass_ops},
+	 1, 1, &singlepass_ops},
 	{"wavefront", "one launch per bounce over a queue of live rays: paths split in pieces", 0,
-	 0, 1, 0, &wavefront_ops},
+	 0, 1, 0, 0, &wavefront_ops},
 };
 const int render_kernel_count = sizeof(render_kernels) / sizeof(render_kernels[0]);
 
@@ -50,7 +51,6 @@ int renderer_open(struct renderer *r, struct device *dev, const struct scene *sc
 	r->dev = dev;
 	r->settings = s;
 	r->result = res;
-	snprintf(r->label, sizeof(r->label), "rendering (%s)", s->kernel->name);
 	if (r->ops->open(r, scene, err, err_size) == 0)
 		return 0;
 	r->ops->close(r);
@@ -73,7 +73,11 @@ int renderer_piece(struct renderer *r, const struct rt_piece *p, struct piece_re
 			 p->samples, s->width, s->height, samples);
 		return -1;
 	}
-	return r->ops->piece(r, p, out, err, err_size);
+	if (r->ops->piece(r, p, out, err, err_size))
+		return -1;
+	progress_add(r->dev, (double)p->width * p->height * (p->sample_end - p->sample_begin));
+	progress_draw();
+	return 0;
 }
 
 int renderer_read_back(struct renderer *r, char *err, size_t err_size)
@@ -105,36 +109,13 @@ int render_pass_samples(const struct render_settings *s)
 	return per_pass < 1 ? 1 : per_pass > samples ? samples : (int)per_pass;
 }
 
-/* Sets the progress line the launches show: the frame, the share of its
- * samples done and, once a pass is done, the time left at the pace so far. */
-static void set_progress(struct renderer *r, int frame, int frames, int done, int samples,
-			 double elapsed)
-{
-	char left[48] = "";
-	int n = 0;
-
-	if (done > 0)
-		snprintf(left, sizeof(left), ", about %.0f s left",
-			 elapsed / done * (samples - done));
-	if (frames > 1)
-		n = snprintf(r->label, sizeof(r->label), "rendering (%s, frame %d of %d",
-			     r->settings->kernel->name, frame + 1, frames);
-	else
-		n = snprintf(r->label, sizeof(r->label), "rendering (%s",
-			     r->settings->kernel->name);
-	snprintf(r->label + n, sizeof(r->label) - (size_t)n, ", %d%%%s)", 100 * done / samples,
-		 left);
-}
-
 /* Renders one frame as passes over the whole image, each a range of the
  * samples, and sets *ms to the sum of their kernel times. */
-static int render_frame(struct renderer *r, int frame, int frames, double *ms, char *err,
-			size_t err_size)
+static int render_frame(struct renderer *r, double *ms, char *err, size_t err_size)
 {
 	const struct render_settings *s = r->settings;
 	int samples = s->samples > 0 ? s->samples : 1;
 	int per_pass = render_pass_samples(s);
-	double start = timing_now();
 
 	*ms = 0;
 	for (int begin = 0; begin < samples; begin += per_pass) {
@@ -142,7 +123,6 @@ static int render_frame(struct renderer *r, int frame, int frames, double *ms, c
 		struct rt_piece piece = renderer_whole_image(s, begin, end);
 		struct piece_result out;
 
-		set_progress(r, frame, frames, begin, samples, timing_now() - start);
 		if (renderer_piece(r, &piece, &out, err, err_size))
 			return -1;
 		*ms += out.kernel_ms;
@@ -163,12 +143,18 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	if (frames < 0)
 		goto out_close;
 	res->passes = (samples + per_pass - 1) / per_pass;
+	if (s->progress)
+		launch_progress_begin(s, frames, NULL);
 	for (int frame = 0; frame < frames; frame++) {
 		double ms;
-		if (render_frame(&r, frame, frames, &ms, err, err_size))
+		if (s->progress)
+			launch_progress_frame(s, res, frame, frames);
+		if (render_frame(&r, &ms, err, err_size))
 			goto out_close;
 		launch_record_frame(res, frame, frames, ms);
 	}
+	if (s->progress)
+		progress_end();
 	if (launch_end_timing(res, err, err_size))
 		goto out_close;
 	res->times.kernels = timing_lap_ms(&lap);
@@ -181,6 +167,8 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 out_close:
 	renderer_close(&r);
 out_free:
+	if (s->progress)
+		progress_end();
 	render_result_free(res);
 	return -1;
 }

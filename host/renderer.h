@@ -39,7 +39,6 @@ struct renderer {
 	struct render_result *result; /* the plan, scene and build facts; read_back
 					 fills the image and counts */
 	void *state;		      /* the renderer's own, behind ops */
-	char label[128];	      /* what the progress line shows during a launch */
 };
 
 /* The functions a family of kernels provides (kernel_info.ops). Each returns
@@ -60,7 +59,8 @@ int renderer_open(struct renderer *r, struct device *dev, const struct scene *sc
 		  size_t err_size);
 
 /* Renders piece, which must lie inside the image with
- * 0 <= sample_begin < sample_end <= samples = settings->samples; sets *out. */
+ * 0 <= sample_begin < sample_end <= samples = settings->samples; sets *out
+ * and adds its pixel samples to the progress line (progress.h). */
 int renderer_piece(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
 		   char *err, size_t err_size);
 

@@ -416,3 +416,29 @@ void scene_free(struct scene *scene)
 	free(scene->triangles);
 	memset(scene, 0, sizeof(*scene));
 }
+
+/* Widens lo..hi to hold p ± r. */
+static void grow_box(double lo[3], double hi[3], const double p[3], double r)
+{
+	for (int a = 0; a < 3; a++) {
+		lo[a] = p[a] - r < lo[a] ? p[a] - r : lo[a];
+		hi[a] = p[a] + r > hi[a] ? p[a] + r : hi[a];
+	}
+}
+
+int scene_bounds(const struct scene *scene, double lo[3], double hi[3])
+{
+	double box_lo[3] = {HUGE_VAL, HUGE_VAL, HUGE_VAL};
+	double box_hi[3] = {-HUGE_VAL, -HUGE_VAL, -HUGE_VAL};
+
+	for (int i = 0; i < scene->sphere_count; i++)
+		grow_box(box_lo, box_hi, scene->spheres[i].center, scene->spheres[i].radius);
+	for (int i = 0; i < scene->triangle_count; i++)
+		for (int k = 0; k < 3; k++)
+			grow_box(box_lo, box_hi, scene->triangles[i].v[k], 0);
+	if (scene->sphere_count + scene->triangle_count == 0)
+		return 0;
+	memcpy(lo, box_lo, sizeof(box_lo));
+	memcpy(hi, box_hi, sizeof(box_hi));
+	return scene->sphere_count + scene->triangle_count;
+}

@@ -106,6 +106,11 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 
 void scene_free(struct scene *scene);
 
+/* Sets lo and hi to the world-space axis-aligned box of the scene's finite
+ * objects, the spheres and triangles (planes are infinite), and returns how
+ * many there are; with none, lo and hi are left as they were. */
+int scene_bounds(const struct scene *scene, double lo[3], double hi[3]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "scene_loader.h"
+#include "suggest.h"
 
 /* A growing string that never overflows; `len` keeps counting past `size`
  * so truncation is harmless. */
@@ -199,8 +200,12 @@ int loader_check_keys(struct loader *ld, const struct path *p, json_t *obj,
 
 		while (*a && strcmp(*a, key) != 0)
 			a++;
-		if (!*a)
-			return loader_fail_quoted(ld, p, "unknown key ", key);
+		if (!*a) {
+			loader_fail_quoted(ld, p, "unknown key ", key);
+			suggest_append(ld->err, ld->err_size, key, allowed, (size_t)(a - allowed),
+				       "");
+			return -1;
+		}
 	}
 	return 0;
 }

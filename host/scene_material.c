@@ -1,8 +1,10 @@
 /* The scene loader's materials (docs/SCENE.md, "Material"): the named ones,
  * and an object's reference to one by name or inline. */
 #include <jansson.h>
+#include <stdlib.h>
 
 #include "scene_loader.h"
+#include "suggest.h"
 
 const struct scene_material loader_default_material = {
 	.color = {1, 1, 1},
@@ -36,6 +38,26 @@ static int read_material_fields(struct loader *ld, const struct path *p, json_t 
 	return 0;
 }
 
+/* "unknown material "NAME"", with the nearest named material suggested. */
+static int fail_unknown_material(struct loader *ld, const struct path *p, const char *name)
+{
+	size_t count = json_object_size(ld->name_index), n = 0;
+	const char **names = malloc((count ? count : 1) * sizeof(*names));
+	const char *key;
+	json_t *value;
+
+	loader_fail_quoted(ld, p, "unknown material ", name);
+	if (!names)
+		return -1; /* the message without a suggestion */
+	json_object_foreach(ld->name_index, key, value)
+	{
+		names[n++] = key;
+	}
+	suggest_append(ld->err, ld->err_size, name, names, n, "");
+	free(names);
+	return -1;
+}
+
 int loader_read_material_ref(struct loader *ld, const struct path *p, json_t *obj, int *index)
 {
 	struct path field = child_key(p, "material");
@@ -51,8 +73,7 @@ int loader_read_material_ref(struct loader *ld, const struct path *p, json_t *ob
 		json_t *named = json_object_get(ld->name_index, json_string_value(v));
 
 		if (!named)
-			return loader_fail_quoted(ld, &field, "unknown material ",
-						  json_string_value(v));
+			return fail_unknown_material(ld, &field, json_string_value(v));
 		*index = (int)json_integer_value(named);
 		return 0;
 	}

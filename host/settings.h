@@ -22,6 +22,8 @@ struct kernel_info {
 	int single_item;		/* one work-item renders everything: -w does not apply */
 	int multi_pass;			/* several launches per frame (wavefront) */
 	int pixel_counter;		/* its work counter counts pixels, --batch at a time */
+	int counts_handed_out;		/* the progress line reads the work handed out
+					   (RT_COUNTER_NEXT), not the chunks done */
 	const struct renderer_ops *ops; /* singlepass_ops or wavefront_ops */
 };
 
@@ -50,7 +52,8 @@ struct render_settings {
 	int accel;		/* ACCEL_BVH or ACCEL_NONE (--accel) */
 	const char *source_dir; /* load cl/ sources from here instead of the
 				   embedded copies (development) */
-	int progress;		/* show progress on stderr */
+	int progress;		/* render() runs the progress line (progress.h) itself;
+				   else its caller does, and render() adds to it */
 	int verbose;
 };
 

@@ -11,6 +11,7 @@
 #include "checks.h"
 #include "launch.h"
 #include "program.h"
+#include "progress.h"
 #include "timing.h"
 
 /* The arguments of every single-pass kernel, in order. */
@@ -31,8 +32,8 @@ struct launch_state {
 	cl_kernel kernel;
 	cl_mem scene_buffer;
 	struct guarded_image image;
-	cl_mem work_counter; /* the next chunk or pixel to hand out */
-	cl_mem counts;	     /* flops per pixel, then RT_ITEM_COUNTS per work-item */
+	struct work_counter work_counter; /* cl/rtcl_shared.h, RT_COUNTER_* */
+	cl_mem counts;			  /* flops per pixel, then RT_ITEM_COUNTS per work-item */
 	cl_mem write_counts;
 	void *scene_block;
 	uint64_t *item_flops; /* per work-item of the plan, added over the launches */
@@ -47,8 +48,7 @@ static void release_state(struct launch_state *st)
 		clReleaseMemObject(st->write_counts);
 	if (st->counts)
 		clReleaseMemObject(st->counts);
-	if (st->work_counter)
-		clReleaseMemObject(st->work_counter);
+	launch_release_counter(&st->work_counter);
 	checks_release_image(&st->image);
 	if (st->scene_buffer)
 		clReleaseMemObject(st->scene_buffer);
@@ -78,8 +78,10 @@ static int set_args(const struct launch_state *st, const struct render_result *r
 		    size_t err_size)
 {
 	const cl_mem *buffers[RENDER_ARGS] = {
-		[ARG_SCENE] = &st->scene_buffer,	[ARG_IMAGE] = &st->image.image,
-		[ARG_WORK_COUNTER] = &st->work_counter, [ARG_COUNTS] = &st->counts,
+		[ARG_SCENE] = &st->scene_buffer,
+		[ARG_IMAGE] = &st->image.image,
+		[ARG_WORK_COUNTER] = &st->work_counter.buffer,
+		[ARG_COUNTS] = &st->counts,
 		[ARG_WRITE_COUNTS] = &st->write_counts,
 	};
 
@@ -111,9 +113,7 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 				     scene_block, "scene", err, err_size);
 	if (!st->scene_buffer || checks_create_image(dev, s, &st->image, err, err_size))
 		return -1;
-	st->work_counter = device_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
-						"chunk counter", err, err_size);
-	if (!st->work_counter)
+	if (launch_create_counter(dev, progress_enabled(), &st->work_counter, err, err_size))
 		return -1;
 	res->item_count = res->global_size[0] * res->global_size[1];
 	st->counts = device_create_buffer(dev, CL_MEM_READ_WRITE,
@@ -164,6 +164,30 @@ static cl_int add_item_counts(struct device *dev, const struct render_settings *
 	return status;
 }
 
+/* What the progress line reads of a launch over piece: the pixels its work
+ * counter reaches when done, those of the piece's whole chunks (1x1 for
+ * serial), counted as handed out (dynamic in chunks, persistent in pixels)
+ * or as done (the others, with RTCL_PROGRESS). */
+static struct launch_watch piece_watch(const struct renderer *r, const struct rt_piece *piece)
+{
+	const struct kernel_info *k = r->settings->kernel;
+	struct launch_state *st = r->state;
+	const size_t *local = r->result->local_size;
+	double chunk_pixels = (double)local[0] * local[1];
+	double chunks = (double)((piece->width + local[0] - 1) / local[0]) *
+			(double)((piece->height + local[1] - 1) / local[1]);
+
+	return (struct launch_watch){
+		.counter = &st->work_counter,
+		.word = k->counts_handed_out ? RT_COUNTER_NEXT : RT_COUNTER_DONE,
+		.pixels_per_count = k->counts_handed_out && !k->pixel_counter ? chunk_pixels : 1,
+		.pixels = chunks * chunk_pixels,
+		.work = (double)piece->width * piece->height *
+			(piece->sample_end - piece->sample_begin),
+		.slot = r->dev,
+	};
+}
+
 /* Renders a piece with one launch; the host resets the work counter first. */
 static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 			    struct piece_result *out, char *err, size_t err_size)
@@ -173,9 +197,8 @@ static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 	struct launch_state *st = r->state;
 	const char *call = "clEnqueueFillBuffer";
 	size_t global[2];
-	cl_uint zero = 0;
-	cl_int status = clEnqueueFillBuffer(dev->queue, st->work_counter, &zero, sizeof(zero), 0,
-					    sizeof(zero), 0, NULL, NULL);
+	struct launch_watch watch = piece_watch(r, piece);
+	cl_int status = launch_reset_counter(&st->work_counter);
 
 	piece_global_size(s, r->result, piece, global);
 	out->kernel_ms = 0;
@@ -185,7 +208,7 @@ static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 		status = clSetKernelArg(st->kernel, ARG_PIECE, sizeof(*piece), piece);
 	}
 	if (status == CL_SUCCESS)
-		status = launch_run(dev, s, st->kernel, 2, global, r->result->local_size, r->label,
+		status = launch_run(dev, st->kernel, 2, global, r->result->local_size, &watch,
 				    &out->kernel_ms, &call);
 	if (status == CL_SUCCESS && checks_device_fault_injected()) {
 		call = "waiting for the kernel";

@@ -9,6 +9,7 @@
 #include "checks.h"
 #include "devstats.h"
 #include "launch.h"
+#include "progress.h"
 #include "render.h"
 #include "timing.h"
 
@@ -457,9 +458,14 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 				   .take_piece = t->adaptive ? take_tile_piece : NULL,
 				   .context = t};
 	int frames = launch_begin_timing(t->settings, out, err, err_size);
+	char devices[32];
 
+	snprintf(devices, sizeof(devices), "%d device%s", t->count, t->count == 1 ? "" : "s");
+	if (frames > 0)
+		launch_progress_begin(t->settings, frames, devices);
 	for (int f = 0; f < frames; f++) {
 		double start = timing_now();
+		launch_progress_frame(t->settings, out, f, frames);
 		if (t->adaptive) {
 			adapt_new_frame(&t->adapt);
 			t->piece_count = 0;
@@ -495,6 +501,7 @@ static int render_image(const struct run *run, const struct render_settings *s, 
 		goto out_free;
 	double lap = timing_now();
 	frames = render_tile_frames(&t, run->opt->split_static, work, out, err, err_size);
+	progress_end();
 	if (frames < 0 || launch_end_timing(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
@@ -519,7 +526,6 @@ int tiles_render(struct run *run, struct device *devs, int count, struct device_
 	struct render_settings *s = &run->settings;
 	int rows = tiles_band_rows(s, run->opt->piece_rows, count);
 
-	s->progress = 0; /* several threads: no one progress line */
 	s->check_writes |= checks_count_writes();
 	if (run->counting) {
 		struct render_settings counting = *s;

@@ -19,6 +19,7 @@
 #include "launch.h"
 #include "renderer.h"
 #include "program.h"
+#include "progress.h"
 #include "timing.h"
 #include "wavefront.h"
 
@@ -195,8 +196,8 @@ static cl_int launch_primary(struct renderer *r, struct wavefront *w, size_t loc
 	if (status == CL_SUCCESS)
 		status = set_kernel_args(w->start, args, sizes, 8);
 	if (status == CL_SUCCESS)
-		status = launch_run(dev, r->settings, w->start, 2, global, r->result->local_size,
-				    r->label, ms, &call);
+		status = launch_run(dev, w->start, 2, global, r->result->local_size, NULL, ms,
+				    &call);
 	if (status == CL_SUCCESS && r->settings->count_flops)
 		status = append_counts(dev, w, global[0] * global[1]);
 	return status;
@@ -225,8 +226,8 @@ static cl_int launch_accumulate(struct renderer *r, struct wavefront *w, size_t 
 
 	wavefront_global_size(r->result, piece, global);
 	if (status == CL_SUCCESS)
-		status = launch_run(r->dev, r->settings, w->accumulate, 2, global,
-				    r->result->local_size, r->label, ms, &call);
+		status = launch_run(r->dev, w->accumulate, 2, global, r->result->local_size, NULL,
+				    ms, &call);
 	if (status == CL_SUCCESS && r->settings->count_flops)
 		status = append_counts(r->dev, w, global[0] * global[1]);
 	return status;
@@ -236,7 +237,7 @@ static cl_int launch_accumulate(struct renderer *r, struct wavefront *w, size_t 
  * FRAME_OVERFLOWED, or an OpenCL error. */
 static cl_int launch_bounce(struct device *dev, const struct render_settings *s,
 			    struct wavefront *w, size_t local_bytes, int bounce, cl_uint *queued,
-			    double *ms, const char *label)
+			    double *ms)
 {
 	cl_mem in = w->queues[bounce % 2], out = w->queues[(bounce + 1) % 2];
 	size_t global = (*queued + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
@@ -255,8 +256,7 @@ static cl_int launch_bounce(struct device *dev, const struct render_settings *s,
 	if (status == CL_SUCCESS)
 		status = set_kernel_args(w->bounce, args, sizes, 11);
 	if (status == CL_SUCCESS)
-		status = launch_run(dev, s, w->bounce, 1, &global, &w->bounce_local, label, ms,
-				    &call);
+		status = launch_run(dev, w->bounce, 1, &global, &w->bounce_local, NULL, ms, &call);
 	if (status == CL_SUCCESS && s->count_flops)
 		status = append_counts(dev, w, global);
 	if (status == CL_SUCCESS)
@@ -288,7 +288,7 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 
 		for (; status == CL_SUCCESS && queued > 0; bounce++)
 			status = launch_bounce(r->dev, r->settings, w, local_bytes, bounce, &queued,
-					       &attempt, r->label);
+					       &attempt);
 		if (status == FRAME_OVERFLOWED) {
 			if (r->settings->verbose)
 				fprintf(stderr,
@@ -319,12 +319,20 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 static int wavefront_piece(struct renderer *r, const struct rt_piece *piece,
 			   struct piece_result *out, char *err, size_t err_size)
 {
+	double pixels = (double)piece->width * piece->height;
+
 	out->kernel_ms = 0;
 	out->launches = 0;
-	for (int k = piece->sample_begin; k < piece->sample_end; k++)
+	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
 		if (trace_sample(r, r->state, piece, (cl_uint)k, &out->kernel_ms, &out->launches,
 				 err, err_size))
 			return -1;
+		/* The progress line moves a sample at a time: a sample's
+		 * launches follow a queue whose length the host learns only
+		 * bounce by bounce. */
+		progress_partial(r->dev, (k + 1 - piece->sample_begin) * pixels);
+		progress_draw();
+	}
 	return 0;
 }
 

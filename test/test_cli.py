@@ -210,7 +210,13 @@ def test_output_formats_from_extension(tmp_path, ext, magic):
     (["--bogus"], 2, "unknown option --bogus (see --help)"),
     (["-x"], 2, "unknown option -x (see --help)"),
     (["-k"], 2, "-k needs a value (see --help)"),
-    (["extra"], 2, 'unexpected argument "extra"'),
+    (["a.json", "b.json"], 2,
+     'two scenes given, "a.json" and "b.json": give one, as the argument or with -s/--scene'),
+    (["-s", "a.json", "b.json"], 2, 'two scenes given, "a.json" and "b.json"'),
+    (["--sze", "8x8"], 2, 'unknown option --sze (see --help); did you mean "--size"?'),
+    (["--kernl", "naive"], 2, 'unknown option --kernl (see --help); did you mean "--kernel"?'),
+    (["-t", "tpu"], 2, '-t/--type: expected gpu, cpu or all, got "tpu"'),
+    (["-t"], 2, "-t needs a value (see --help)"),
     (["-q", "-v"], 2, "-q/--quiet and -v/--verbose contradict each other"),
     (["-p", "99"], 1, "platform 99 does not exist"),
     (["-d", "99"], 1, "device 99 does not exist on platform 0"),
@@ -221,6 +227,77 @@ def test_bad_option(tmp_path, args, status, message):
     result = rtcl("-o", str(tmp_path / "out.png"), *args)
     expect_failure(result, status, message, tmp_path)
     assert result.stderr.startswith("rtcl: ")
+
+
+def test_bogus_option_gets_no_suggestion(tmp_path):
+    result = rtcl("-o", str(tmp_path / "out.png"), "--bogus")
+    expect_failure(result, 2, "unknown option --bogus (see --help)", tmp_path)
+    assert "did you mean" not in result.stderr
+
+
+# ---- the scene as the argument, -t/--type, -v's bounds ------------------------
+
+def test_scene_as_the_argument_is_the_scene_of_s(tmp_path):
+    given = rtcl("scenes/two_balls.json", *SMALL, "-o", str(tmp_path / "a.ppm"))
+    assert given.returncode == 0, given.stderr
+    assert "two_balls.json" in given.stdout
+    with_s = rtcl("-s", "scenes/two_balls.json", *SMALL, "-o", str(tmp_path / "b.ppm"))
+    assert with_s.returncode == 0, with_s.stderr
+    assert (tmp_path / "a.ppm").read_bytes() == (tmp_path / "b.ppm").read_bytes()
+    # Before the options too.
+    before = rtcl(*SMALL, "-o", str(tmp_path / "c.ppm"), "scenes/two_balls.json")
+    assert before.returncode == 0, before.stderr
+    assert (tmp_path / "c.ppm").read_bytes() == (tmp_path / "a.ppm").read_bytes()
+
+
+def test_scene_argument_that_does_not_exist_is_a_scene_error(tmp_path):
+    result = rtcl("no_such_scene.json", "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 1, "no_such_scene.json", tmp_path)
+
+
+def has_gpu():
+    listed = rtcl("--list-devices")
+    return "(GPU" in listed.stdout
+
+
+def test_type_cpu_renders_on_a_cpu(tmp_path):
+    if "(CPU" not in rtcl("--list-devices").stdout:
+        pytest.skip("no CPU device")
+    result = rtcl("-t", "cpu", "-v", *SMALL, "-o", str(tmp_path / "x.ppm"))
+    assert result.returncode == 0, result.stderr
+    assert re.search(r"rtcl: platform \d+, device \d+: ", result.stderr)
+    assert rtcl("-t", "all", *SMALL, "-o", str(tmp_path / "y.ppm")).returncode == 0
+
+
+@pytest.mark.parametrize("args,message", [
+    ([], "no GPU found; --list-devices shows what there is"),
+    (["-p", "0"], "no GPU found on platform 0; --list-devices shows what there is"),
+    (["-p", "0", "-d", "0"], "-t/--type gpu: device 0:0 ("),
+    (["--devices", "all"], "--devices all: no GPU found; --list-devices shows what there is"),
+    (["--devices", "0:0"], "--devices 0:0: -t/--type gpu: device 0:0 ("),
+])
+def test_type_gpu_without_a_gpu_is_one_clear_error(tmp_path, args, message):
+    if has_gpu():
+        pytest.skip("this machine has a GPU")
+    result = rtcl("-t", "gpu", *args, *SMALL, "-o", str(tmp_path / "x.png"))
+    expect_failure(result, 1, message, tmp_path)
+
+
+def test_verbose_prints_the_scene_bounds(tmp_path):
+    result = rtcl("-v", "-s", "scenes/two_balls.json", *SMALL, "-o", str(tmp_path / "x.ppm"))
+    assert result.returncode == 0, result.stderr
+    with open(ROOT / "scenes" / "two_balls.json") as f:
+        scene = json.load(f)
+    spheres = scene["spheres"]
+    lo = [min(s["center"][a] - s["radius"] for s in spheres) for a in range(3)]
+    hi = [max(s["center"][a] + s["radius"] for s in spheres) for a in range(3)]
+    line = next(l for l in result.stderr.splitlines() if "scene bounds" in l)
+    numbers = [float(x) for x in re.findall(r"-?[\d.]+(?:e-?\d+)?", line.split(":", 2)[2])]
+    assert numbers[:6] == pytest.approx(lo + hi, rel=1e-5), line
+    planes = len(scene.get("planes", []))
+    assert (f"{planes} plane" in line and "infinite" in line) == (planes > 0), line
+    empty = rtcl("-v", "-s", "scenes/empty.json", *SMALL, "-o", str(tmp_path / "y.ppm"))
+    assert "rtcl: scene bounds: no sphere or triangle" in empty.stderr
 
 
 def test_flop_count_buffer_too_large(tmp_path):

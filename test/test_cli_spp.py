@@ -5,6 +5,7 @@ progress line only on a terminal."""
 import json
 import os
 import pty
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -131,4 +132,5 @@ def test_progress_shows_the_share_done_on_a_terminal(tmp_path):
         pass
     os.close(controller)
     assert result.returncode == 0
-    assert b"rendering (dynamic, 50%, about " in shown, shown
+    # Two passes; the share moves within each (test_progress.py).
+    assert re.search(rb"rendering \(dynamic\): [1-9]\d?% done", shown), shown

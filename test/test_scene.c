@@ -325,7 +325,7 @@ static const struct {
 	 "t.json: version: must be an integer, got 1.5"},
 	{"{\"format\": \"rtcl-scene\", \"version\": \"1\"}",
 	 "t.json: version: must be an integer, got a string"},
-	{SCENE(", \"spheers\": []"), "t.json: (top level): unknown key \"spheers\""},
+	{SCENE(", \"spheers\": []"), "t.json: (top level): unknown key \"spheers\"; did you mean \"spheres\"?"},
 	{SCENE(", \"a\\nb\": []"), "t.json: (top level): unknown key \"a\\nb\""},
 	/* Image. */
 	{SCENE(", \"image\": [640, 480]"), "t.json: image: must be an object, got an array"},
@@ -365,7 +365,7 @@ static const struct {
 	{"{" HEADER "\"camera\": {\"eye\": [0, 0, 0], \"look_at\": [1, 0, 0], \"up\": [0, 0, 0]}}",
 	 "t.json: camera.up: must be non-zero"},
 	{"{" HEADER "\"camera\": {\"eye\": [0, 0, 0], \"look_at\": [1, 0, 0], \"fob\": 40}}",
-	 "t.json: camera: unknown key \"fob\""},
+	 "t.json: camera: unknown key \"fob\"; did you mean \"fov\"?"},
 	/* vec3 and colours. */
 	{"{" HEADER "\"camera\": {\"eye\": [0, 0], \"look_at\": [1, 0, 0]}}",
 	 "t.json: camera.eye: must be an array of 3 numbers, got 2 elements"},
@@ -393,7 +393,7 @@ static const struct {
 	{SCENE(", \"materials\": {\"glass\": 1}"),
 	 "t.json: materials.glass: must be an object, got an integer"},
 	{SCENE(", \"materials\": {\"glass\": {\"colour\": [1, 1, 1]}}"),
-	 "t.json: materials.glass: unknown key \"colour\""},
+	 "t.json: materials.glass: unknown key \"colour\"; did you mean \"color\"?"},
 	{SCENE(", \"materials\": {\"glass\": {\"reflect\": 1.5}}"),
 	 "t.json: materials.glass.reflect: must be between 0 and 1, got 1.5"},
 	{SCENE(", \"materials\": {\"glass\": {\"reflect\": 1.0000001}}"),
@@ -418,7 +418,7 @@ static const struct {
 	       "{\"center\": [0, 0, 0], \"radius\": 1, \"material\": \"glass\"},"
 	       "{\"center\": [0, 0, 0], \"radius\": 1},"
 	       "{\"center\": [0, 0, 0], \"radius\": 1, \"material\": \"glas\"}]"),
-	 "t.json: spheres[2].material: unknown material \"glas\""},
+	 "t.json: spheres[2].material: unknown material \"glas\"; did you mean \"glass\"?"},
 	{SCENE(", \"planes\": [{\"point\": [0, 0, 0], \"normal\": [0, 1, 0], \"material\": "
 	       "\"floor\"}]"),
 	 "t.json: planes[0].material: unknown material \"floor\""},
@@ -437,7 +437,7 @@ static const struct {
 	 "t.json: lights[0]: unknown key \"intensity\""},
 	/* Spheres. */
 	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0], \"radus\": 1}]"),
-	 "t.json: spheres[0]: unknown key \"radus\""},
+	 "t.json: spheres[0]: unknown key \"radus\"; did you mean \"radius\"?"},
 	{SCENE(", \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1}, {\"center\": [0, 0, 0], "
 	       "\"radius\": 1}, {\"center\": [0, 0, 0], \"radius\": 1}, {\"center\": [0, 0, 0], "
 	       "\"radius\": -1}]"),
@@ -527,7 +527,7 @@ static const struct {
 	 "t.json: planes[0].checker: must be an object, got true"},
 	{SCENE(", \"planes\": [{\"point\": [0, 0, 0], \"normal\": [0, 1, 0], \"checker\": "
 	       "{\"size\": 1, \"color\": [0, 0, 0], \"colour2\": [1, 1, 1]}}]"),
-	 "t.json: planes[0].checker: unknown key \"colour2\""},
+	 "t.json: planes[0].checker: unknown key \"colour2\"; did you mean \"color\"?"},
 };
 
 Test(scene, every_error_rule_has_its_message)
@@ -571,7 +571,7 @@ Test(scene, leading_byte_order_mark_is_skipped)
 Test(scene, unknown_key_wins_over_missing_field)
 {
 	load_fails(SCENE(", \"spheres\": [{\"centre\": [0, 0, 0], \"radius\": 1}]"),
-		   "t.json: spheres[0]: unknown key \"centre\"");
+		   "t.json: spheres[0]: unknown key \"centre\"; did you mean \"center\"?");
 }
 
 Test(scene, message_is_truncated_safely)
