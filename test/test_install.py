@@ -496,10 +496,10 @@ def test_readme_first_scene_renders_as_written(tmp_path):
     key gets the message the README quotes."""
     (tmp_path / "scenes").symlink_to(ROOT / "scenes")
     readme = (ROOT / "README.md").read_text()
-    assert "./rtcl -s first.json -o first.png" in readme
+    assert "./rtcl first.json -o first.png" in readme
     for step, scene in enumerate(readme_scenes()):
         (tmp_path / "first.json").write_text(json.dumps(scene))
-        render = subprocess.run([RTCL, "-q", "-s", "first.json", "--size", "16x12", "-o",
+        render = subprocess.run([RTCL, "-q", "first.json", "--size", "16x12", "-o",
                                  f"step{step}.ppm"], cwd=tmp_path, capture_output=True,
                                 text=True, timeout=300)
         assert render.returncode == 0, render.stderr

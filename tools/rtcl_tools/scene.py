@@ -23,7 +23,7 @@ import json
 import os
 import stat
 
-from .scene_check import (SceneError, Written, _escaped, check_keys, child, fail,
+from .scene_check import (SceneError, Written, _escaped, check_keys, child, did_you_mean, fail,
                           format_vector, integer, length, number, optional,
                           required, scale_to_unit_max, type_name, vec3)
 from .vector import normalize
@@ -123,7 +123,7 @@ def material_of(obj, path, materials):
     value, where = obj["material"], child(path, "material")
     if isinstance(value, str):
         if value not in materials:
-            fail(where, f'unknown material "{_escaped(value)}"')
+            fail(where, f'unknown material "{_escaped(value)}"' + did_you_mean(value, materials))
         return materials[value]
     if not isinstance(value, dict):
         fail(where, f"must be a material name or an object, got {type_name(value)}")

@@ -7,6 +7,7 @@ import sys
 
 MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-18, 1e18   # SCENE.md: the device computes in float
 NAME_MAX = 64                                # longer keys are cut in messages
+SUGGEST_MAX_LENGTH = 64                      # host/suggest.h
 
 
 class SceneError(ValueError):
@@ -73,12 +74,41 @@ def type_name(value):
 
 # ---- values --------------------------------------------------------------------------
 
+def distance(a, b):
+    """The Damerau-Levenshtein distance (adjacent swaps count one), as
+    host/suggest.c computes it (which gives up on words over 64 characters)."""
+    if len(a) > SUGGEST_MAX_LENGTH or len(b) > SUGGEST_MAX_LENGTH:
+        return math.inf
+    rows = [list(range(len(b) + 1))]
+    for i in range(1, len(a) + 1):
+        row = [i] + [0] * len(b)
+        for j in range(1, len(b) + 1):
+            up = rows[-1]
+            row[j] = min(up[j] + 1, row[j - 1] + 1, up[j - 1] + (a[i - 1] != b[j - 1]))
+            if i > 1 and j > 1 and a[i - 1] == b[j - 2] and a[i - 2] == b[j - 1]:
+                row[j] = min(row[j], rows[-2][j - 2] + 1)
+        rows.append(row)
+    return rows[-1][-1]
+
+
+def did_you_mean(word, names):
+    """'; did you mean "NAME"?' for the nearest of names within host/suggest.c's
+    limit (one edit up to five characters, two from six), else ''."""
+    limit = min(max(len(word) // 3, 1), 2)
+    best = None
+    for name in names:
+        d = distance(word, name)
+        if 0 < d <= limit and (best is None or d < best[0]):
+            best = (d, name)
+    return f'; did you mean "{best[1]}"?' if best else ""
+
+
 def check_keys(value, path, allowed):
     if not isinstance(value, dict):
         fail(path, f"must be an object, got {type_name(value)}")
     for key in value:
         if key not in allowed:
-            fail(path, f'unknown key "{_escaped(key)}"')
+            fail(path, f'unknown key "{_escaped(key)}"' + did_you_mean(key, allowed))
     return value
 
 
