@@ -147,6 +147,12 @@ static int load_sources(const char *dir, const char *kernel_name, struct sources
 	return 0;
 }
 
+int program_counts_progress(const struct render_settings *s)
+{
+	return progress_enabled() && !s->warm_up && !s->kernel->multi_pass &&
+	       !s->kernel->counts_handed_out;
+}
+
 /* rtcl's build options for the settings, then RTCL_BUILD_OPTIONS. */
 static int format_options(const struct device *dev, const struct render_settings *s,
 			  const struct program_features *f, char *options, char *err,
@@ -168,7 +174,7 @@ static int format_options(const struct device *dev, const struct render_settings
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 /* The chunks done, for the progress line (cl/scheduling.cl). */
-		 progress_enabled() && !s->kernel->multi_pass ? " -DRTCL_PROGRESS" : "",
+		 program_counts_progress(s) ? " -DRTCL_PROGRESS" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",
 		 extra ? extra : "");
 	return 0;

@@ -27,6 +27,15 @@ int program_build(struct device *dev, const struct render_settings *settings,
 		  const struct program_features *features, cl_program *program, char *options,
 		  int *cached, char *err, size_t err_size);
 
+/* Whether the program counts the pixels it has done for the progress line
+ * (-DRTCL_PROGRESS, one atomic per chunk in serial, naive and cyclic): only
+ * while the line is shown, and never for timed launches (-r), which must
+ * run the program that is timed off a terminal too (docs/results/h100-batch6,
+ * run 23: up to 3 % on naive and 9 % on cyclic at one sample on the H100).
+ * Dynamic and persistent need no count: their work counter says how far
+ * they are. */
+int program_counts_progress(const struct render_settings *settings);
+
 /* clCreateKernel with one message naming the kernel on failure; NULL then. */
 cl_kernel program_create_kernel(cl_program program, const char *name, char *err, size_t err_size);
 

@@ -167,7 +167,7 @@ static cl_int add_item_counts(struct device *dev, const struct render_settings *
 /* What the progress line reads of a launch over piece: the pixels its work
  * counter reaches when done, those of the piece's whole chunks (1x1 for
  * serial), counted as handed out (dynamic in chunks, persistent in pixels)
- * or as done (the others, with RTCL_PROGRESS). */
+ * or as done (the others, with RTCL_PROGRESS; program_counts_progress). */
 static struct launch_watch piece_watch(const struct renderer *r, const struct rt_piece *piece)
 {
 	const struct kernel_info *k = r->settings->kernel;
@@ -177,8 +177,12 @@ static struct launch_watch piece_watch(const struct renderer *r, const struct rt
 	double chunks = (double)((piece->width + local[0] - 1) / local[0]) *
 			(double)((piece->height + local[1] - 1) / local[1]);
 
+	/* A timed launch of serial, naive or cyclic counts nothing: the line
+	 * then moves launch by launch. */
+	int counted = k->counts_handed_out || program_counts_progress(r->settings);
+
 	return (struct launch_watch){
-		.counter = &st->work_counter,
+		.counter = counted ? &st->work_counter : NULL,
 		.word = k->counts_handed_out ? RT_COUNTER_NEXT : RT_COUNTER_DONE,
 		.pixels_per_count = k->counts_handed_out && !k->pixel_counter ? chunk_pixels : 1,
 		.pixels = chunks * chunk_pixels,
