@@ -46,11 +46,11 @@ static void store_counts(struct tracer *tr, uint item)
 #endif
 }
 
-/* With RTCL_PROGRESS (a progress line on the host's terminal): adds a
- * finished chunk's pixels to the work counter's RT_COUNTER_DONE word, which
- * the host reads during the launch. One atomic per chunk, from the group's
- * first work-item, so that counting costs next to nothing against tracing
- * the chunk; nothing without RTCL_PROGRESS. */
+/* With RTCL_PROGRESS (a progress line on the host's terminal): adds the
+ * pixels of finished chunks to the work counter's RT_COUNTER_DONE word, which
+ * the host reads during the launch. At most one atomic per chunk, from the
+ * group's first work-item, so that counting costs next to nothing against
+ * tracing; nothing without RTCL_PROGRESS. */
 static inline void progress_chunk_done(__global uint *work_counter, uint pixels)
 {
 #ifdef RTCL_PROGRESS
