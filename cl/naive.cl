@@ -1,8 +1,7 @@
 /* naive: one work-item per pixel over a 2D NDRange whose global size is the
  * piece's rectangle rounded up to whole work-groups; work-items outside it
  * only help copy the scene. Nothing is handed out at run time: work_counter
- * only counts the groups done for the progress line, one group in
- * PROGRESS_GROUP_SAMPLE for them all. */
+ * only counts the groups done for the progress line. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *work_counter, __global ulong *counts,
 		     __global uint *write_counts, struct rt_piece piece)
@@ -13,12 +12,6 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	render_pixel_if_inside(&tr, &piece, image, write_counts,
 			       (int2)(piece.x0 + (int)get_global_id(0),
 				      piece.y0 + (int)get_global_id(1)));
-	/* One group in PROGRESS_GROUP_SAMPLE counts for itself and the ones
-	 * before it: one atomic a group cost 2 % at one sample on the H100
-	 * (batch 25). The count stays at or under the pixels done. */
-	uint group = get_group_id(1) * get_num_groups(0) + get_group_id(0);
-	if (group % PROGRESS_GROUP_SAMPLE == PROGRESS_GROUP_SAMPLE - 1)
-		progress_chunk_done(work_counter, PROGRESS_GROUP_SAMPLE * get_local_size(0) *
-							  get_local_size(1));
+	progress_chunk_done(work_counter, get_local_size(0) * get_local_size(1));
 	store_counts(&tr, global_item());
 }

@@ -51,9 +51,6 @@ static void store_counts(struct tracer *tr, uint item)
  * the host reads during the launch. At most one atomic per chunk, from the
  * group's first work-item, so that counting costs next to nothing against
  * tracing; nothing without RTCL_PROGRESS. */
-/* naive counts one work-group in this many (cl/naive.cl). */
-#define PROGRESS_GROUP_SAMPLE 16
-
 static inline void progress_chunk_done(__global uint *work_counter, uint pixels)
 {
 #ifdef RTCL_PROGRESS
