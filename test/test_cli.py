@@ -424,6 +424,7 @@ def test_flops_file_and_figures(tmp_path):
     assert (magic, width, height) == ("P6", 24, 16)  # the render's size; the bar: --work-map-bar
 
 
+@pytest.mark.slow  # Criterion's flops::kernels_count_the_same_work checks the same per kernel
 def test_same_flops_whatever_the_kernel(tmp_path):
     totals = set()
     for kernel in ["serial", "naive", "dynamic", "persistent", "wavefront"]:
