@@ -4,7 +4,6 @@ image of old, every kernel's antialiased image byte-identical, passes, and the
 progress line only on a terminal."""
 import json
 import os
-import pty
 import re
 import subprocess
 import sys
@@ -15,6 +14,8 @@ import pytest
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT / "tools"))
 from rtcl_tools import ppm  # noqa: E402
+
+import terminal  # noqa: E402
 
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 SMALL = ["--size", "24x16"]
@@ -118,19 +119,8 @@ def test_long_render_runs_in_passes_without_progress_off_a_terminal(tmp_path):
 
 
 def test_progress_shows_the_share_done_on_a_terminal(tmp_path):
-    controller, terminal = pty.openpty()
-    try:
-        result = subprocess.run([RTCL, *PASSES, "-o", str(tmp_path / "x.ppm")], cwd=ROOT,
-                                stdout=subprocess.PIPE, stderr=terminal, timeout=300)
-    finally:
-        os.close(terminal)
-    shown = b""
-    try:
-        while chunk := os.read(controller, 65536):
-            shown += chunk
-    except OSError:  # the terminal's other end is closed: all read
-        pass
-    os.close(controller)
+    result, shown = terminal.on_terminal([RTCL, *PASSES, "-o", str(tmp_path / "x.ppm")], ROOT,
+                                         timeout=300)
     assert result.returncode == 0
     # Two passes; the share moves within each (test_progress.py).
     assert re.search(rb"rendering \(dynamic\): [1-9]\d?% done", shown), shown

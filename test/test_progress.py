@@ -3,10 +3,11 @@ names the warm-up and the timed launches of -r and the frames of --frames;
 off a terminal, or with -q, nothing is printed. Runs under a pseudo-terminal
 on PoCL at sizes that take a few seconds."""
 import os
-import pty
 import re
 import subprocess
 from pathlib import Path
+
+import terminal
 
 ROOT = Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
@@ -19,19 +20,7 @@ ONE_PASS = ["--size", "200x150", "--spp", "64"]
 def on_terminal(*args):
     """Runs rtcl with stderr on a pseudo-terminal; returns (result, the
     lines drawn on it, each redraw after a carriage return)."""
-    controller, terminal = pty.openpty()
-    try:
-        result = subprocess.run([RTCL, *args], cwd=ROOT, stdout=subprocess.PIPE,
-                                stderr=terminal, text=True, timeout=120)
-    finally:
-        os.close(terminal)
-    shown = b""
-    try:
-        while chunk := os.read(controller, 65536):
-            shown += chunk
-    except OSError:  # the other end is closed: all read
-        pass
-    os.close(controller)
+    result, shown = terminal.on_terminal([RTCL, *args], ROOT)
     return result, [line.strip() for line in shown.decode().split("\r") if line.strip()]
 
 
