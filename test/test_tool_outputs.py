@@ -79,6 +79,8 @@ WRITERS = [
     ("povray.py", "x.pov", ["-s", str(ROOT / "scenes" / "two_balls.json"),
                             "-o", "{repo}/x.pov"]),
     ("flops_hist.py", "fig.png", ["{npy}", "-o", "{repo}/fig.png"]),
+    ("peer_compare.py", "p/compare.md", ["/nonexistent-peer", "--rtcl", "{rtcl}",
+                                         "-o", "{repo}/p"]),
 ]
 
 
@@ -186,3 +188,15 @@ def test_update_committed_outside_a_checkout_is_one_line(monkeypatch, tmp_path):
     monkeypatch.setattr(locations, "SOURCE_ROOT", tmp_path)
     with pytest.raises(locations.NotFound, match="source tree"):
         locations.committed_results()
+
+
+def test_peer_compare_names_a_folder_that_is_not_the_peers(tmp_path, marking_rtcl):
+    (tmp_path / "peer").mkdir()
+    (tmp_path / "peer" / "side.cpp").write_text("")
+    result = run_tool("peer_compare.py", tmp_path / "peer", "--rtcl", marking_rtcl, "-o",
+                      tmp_path / "out", cwd=tmp_path)
+    assert result.returncode == 1
+    assert result.stderr.strip().splitlines() == [
+        f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no "
+        "tiny_bvh.h, tiny_ocl.h, ply2bin.py"]
+    assert not (tmp_path / "rtcl-ran").exists()

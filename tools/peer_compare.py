@@ -1,0 +1,8 @@
+#!/usr/bin/env python3
+"""rtcl-peer-compare run from the source tree: rtcl_tools/commands/peer_compare.py says what it does."""
+import sys
+
+from rtcl_tools.commands.peer_compare import main
+
+if __name__ == "__main__":
+    sys.exit(main())

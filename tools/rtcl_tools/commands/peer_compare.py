@@ -1,0 +1,265 @@
+"""rtcl's traversal against a peer's on the same primary rays (issue 26).
+
+The peer is TinyBVH's OpenCL harness (a folder holding side.cpp, its .cl files,
+tiny_bvh.h, tiny_ocl.h and ply2bin.py, given as PEER): its `side` program traces
+one primary ray per pixel with rtcl's pinhole camera through each of TinyBVH's
+GPU kernels. For every mesh this tool
+
+  1. makes the mesh with rtcl-genbench (--meshes: SPD tetra and mount at a size,
+     the lake) or takes a PLY file (--ply), and turns it into the peer's .bin
+     with the peer's ply2bin.py, so that both trace the same floats;
+  2. writes an rtcl scene of that mesh alone, at identity placement, with
+     the scene's camera, max_depth 0 and no lights: primary rays only;
+  3. times rtcl's kernels (--kernels, -r N: the median of the OpenCL
+     profiling events of N launches) and the peer's kernels (--variants, N
+     passes, its median), on the same image size;
+  4. writes compare.md (both sides, rays per second and the ratio of rtcl's
+     fastest kernel to the peer's fastest: above 1, rtcl is faster) and
+     compare.csv, and keeps every raw output under raw/.
+
+It runs where the GPU is (NVIDIA's OpenCL; the peer's kernels do not build on
+PoCL) and needs g++ and the OpenCL headers there to build `side`. It writes to
+-o/--out DIR, by default a new folder rtcl-results/peer-<YYYYmmdd-HHMMSS>; a
+file tracked by git is replaced only with --update-committed.
+
+    rtcl-peer-compare ../shared/bench/tinybvh --meshes tetra:8,mount:9,lake -r 10
+    rtcl-peer-compare PEER --ply bunny.ply --size 1000x1000
+"""
+import argparse
+import json
+import math
+import pathlib
+import re
+import statistics
+import subprocess
+import sys
+
+from .. import files, locations
+from . import genbench
+from ..report import git_commit, markdown_table, one_line, to_csv, utc_now
+from ..usage import (UsageError, add_update_committed, check_positive_int, parse_size,
+                     program_name, report_error)
+
+DEFAULT_MESHES = "tetra:8,mount:8,mount:9,lake"
+PEER_SOURCES = ("side.cpp", "tiny_bvh.h", "tiny_ocl.h", "ply2bin.py")
+CSV_COLUMNS = ("mesh", "triangles", "side", "kernel", "median_ms", "min_ms", "grays_per_s")
+
+
+class Failure(Exception):
+    """A step that failed, in one line."""
+
+
+def parse_arguments(argv):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0],
+                                     formatter_class=argparse.RawDescriptionHelpFormatter,
+                                     epilog=__doc__.split("\n\n", 1)[1])
+    parser.add_argument("peer", metavar="PEER", type=pathlib.Path,
+                        help="the peer's folder (TinyBVH's harness: side.cpp, *.cl, ply2bin.py)")
+    parser.add_argument("--meshes", default=DEFAULT_MESHES,
+                        help="genbench meshes, comma-separated: tetra:N, mount:N, lake "
+                             f"(default {DEFAULT_MESHES}; '' for none)")
+    parser.add_argument("--ply", action="append", default=[], type=pathlib.Path,
+                        metavar="FILE", help="a PLY mesh to compare too (repeatable); "
+                        "its camera frames its bounding box")
+    parser.add_argument("--size", default=(2000, 2000), type=parse_size,
+                        help="image size WxH (default 2000x2000)")
+    parser.add_argument("-r", "--repeat", default="10",
+                        help="timed launches of each kernel (default 10)")
+    parser.add_argument("-k", "--kernels", default="persistent,dynamic",
+                        help="rtcl kernels (default persistent,dynamic)")
+    parser.add_argument("--variants", default="aA",
+                        help="the peer's kernels: letters of side.cpp (default aA: "
+                             "BVH_GPU built HQ and SAH)")
+    parser.add_argument("--rtcl", metavar="PROGRAM",
+                        help="the rtcl program (default: the rtcl installed beside this "
+                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    parser.add_argument("-p", "--platform", help="rtcl's OpenCL platform (default: NVIDIA's)")
+    parser.add_argument("-o", "--out", type=pathlib.Path, metavar="DIR",
+                        help="results folder (default: a new rtcl-results/peer-<time>)")
+    add_update_committed(parser)
+    return parser.parse_args(sys.argv[1:] if argv is None else argv)
+
+
+def run(command, log, cwd=None):
+    """Runs command, keeping its output in log; returns stdout, or Failure."""
+    result = subprocess.run([str(part) for part in command], cwd=cwd, capture_output=True,
+                            text=True)
+    files.write_text(log, f"$ {' '.join(map(str, command))}\n{result.stdout}{result.stderr}")
+    if result.returncode != 0:
+        last = (result.stderr.strip() or result.stdout.strip() or "no message").splitlines()[-1]
+        raise Failure(f"{pathlib.Path(str(command[0])).name} failed ({log}): {last}")
+    return result.stdout
+
+
+def build_peer(peer, out):
+    missing = [name for name in PEER_SOURCES if not (peer / name).is_file()]
+    if missing:
+        raise Failure(f"{peer} is not the peer's folder: no {', '.join(missing)}")
+    folder = out / "peer"
+    folder.mkdir(parents=True, exist_ok=True)
+    for source in peer.glob("*.cl"):
+        files.copy_file(source, folder / source.name)
+    run(["g++", "-O3", "-march=x86-64-v3", "-std=c++20", "-I/usr/include/CL",
+         peer / "side.cpp", "-o", folder / "side", "-lOpenCL", "-lpthread"],
+        out / "raw" / "build-side.txt")
+    return folder
+
+
+def nvidia_platform(rtcl, out):
+    listing = run([rtcl, "--list-devices"], out / "raw" / "devices.txt")
+    for line in listing.splitlines():
+        match = re.match(r"Platform #?(\d+):.*NVIDIA", line)
+        if match:
+            return match.group(1)
+    raise Failure("no NVIDIA platform in rtcl --list-devices: give -p N")
+
+
+def genbench_mesh(spec, out):
+    """(name, PLY path, scene dict) of a genbench mesh spec: tetra:N, mount:N, lake."""
+    kind, _, size = spec.partition(":")
+    if kind not in ("tetra", "mount", "lake") or (kind != "lake") != bool(size):
+        raise Failure(f"--meshes: {spec!r} is not tetra:N, mount:N or lake")
+    folder = out / "meshes" / spec.replace(":", "-")
+    if genbench.main([kind, "--triangles", "ply", "-o", str(folder)] +
+                     (["--size", size] if size else [])) != 0:
+        raise Failure(f"rtcl-genbench could not make {spec}")
+    (scene_path,) = folder.glob("*.json")
+    scene = json.loads(scene_path.read_text())
+    (mesh,) = scene["meshes"]
+    return spec.replace(":", "-"), folder / mesh["file"], scene
+
+
+def framing_scene(ply, bin_path):
+    """A scene that frames the mesh of bin_path (the .bin of ply) from its box."""
+    import numpy as np  # only --ply needs it here; genbench and ply2bin need it anyway
+
+    data = np.fromfile(bin_path, dtype="<f4", offset=4).reshape(-1, 4)[:, :3]
+    low, high = data.min(axis=0), data.max(axis=0)
+    centre, radius = (low + high) / 2, float(np.linalg.norm(high - low)) / 2 or 1.0
+    distance = radius / math.tan(math.radians(45) / 2)
+    eye = centre + distance * np.array([0.5, 0.4, 1.0]) / np.linalg.norm([0.5, 0.4, 1.0])
+    return {"format": "rtcl-scene", "version": 2,
+            "camera": {"eye": [float(v) for v in eye], "look_at": [float(v) for v in centre],
+                       "fov": 45},
+            "meshes": [{"file": str(ply.resolve())}]}
+
+
+def primary_scene(scene, ply, width, height):
+    """The mesh alone at identity placement: primary rays only."""
+    mesh = dict(scene["meshes"][0])
+    for key in ("scale", "rotate", "translate"):
+        if key in mesh:
+            raise Failure(f"{ply}: the scene places its mesh with {key!r}: the peer "
+                          "would trace other floats")
+    mesh["file"] = str(ply.resolve())
+    kept = {key: scene[key] for key in ("format", "camera", "background", "materials")
+            if key in scene}
+    return {**kept, "version": 2, "image": {"width": width, "height": height},
+            "max_depth": 0, "lights": [], "meshes": [mesh]}
+
+
+def time_rtcl(rtcl, platform, scene_path, kernel, repeat, out, name):
+    stats = out / "raw" / f"rtcl-{name}-{kernel}.json"
+    run([rtcl, "-q", "-p", platform, "-k", kernel, "-r", repeat, scene_path,
+         "-o", out / "raw" / f"rtcl-{name}-{kernel}.ppm", "--stats", stats],
+        out / "raw" / f"rtcl-{name}-{kernel}.txt")
+    figures = json.loads(stats.read_text())
+    times = figures["kernel_ms_all"]
+    return statistics.median(times), min(times), figures
+
+
+PEER_LINE = re.compile(r"^(.+?)\s+build\s+([\d.]+) ms\s+trace median ([\d.]+) ms\s+min ([\d.]+) ms")
+
+
+def time_peer(side_folder, bin_path, scene, width, height, repeat, variants, out, name):
+    camera = scene["camera"]
+    up = camera.get("up", [0, 1, 0])
+    output = run([side_folder / "side", bin_path.resolve(), width, height, *camera["eye"],
+                  *camera["look_at"], camera.get("fov", 45), repeat, variants, *up],
+                 out / "raw" / f"peer-{name}.txt", cwd=side_folder)
+    rows = []
+    for line in output.splitlines():
+        match = PEER_LINE.match(line)
+        if match:
+            rows.append((match.group(1).strip(), float(match.group(3)), float(match.group(4)),
+                         float(match.group(2))))
+    if not rows:
+        raise Failure(f"the peer printed no timing ({out / 'raw' / f'peer-{name}.txt'})")
+    triangles = int(re.search(r"triangles (\d+)", output).group(1))
+    return triangles, rows
+
+
+def compare(args, rtcl, out):
+    width, height = args.size
+    repeat = str(check_positive_int("-r/--repeat", args.repeat))
+    side_folder = build_peer(args.peer, out)
+    platform = args.platform or nvidia_platform(rtcl, out)
+    meshes = [genbench_mesh(spec, out) for spec in args.meshes.split(",") if spec]
+    for ply in args.ply:
+        if not ply.is_file():
+            raise Failure(f"--ply {ply}: no such file")
+    table, csv_rows = [], []
+    for name, ply, scene in meshes + [(ply.stem, ply, None) for ply in args.ply]:
+        bin_path = out / "meshes" / f"{name}.bin"
+        run([sys.executable, args.peer / "ply2bin.py", ply, bin_path],
+            out / "raw" / f"ply2bin-{name}.txt")
+        if scene is None:
+            scene = framing_scene(ply, bin_path)
+        scene_path = out / "meshes" / f"{name}-primary.json"
+        files.write_text(scene_path, json.dumps(primary_scene(scene, ply, width, height),
+                                                indent=1))
+        triangles, peer_rows = time_peer(side_folder, bin_path, scene, width, height, repeat,
+                                         args.variants, out, name)
+        rtcl_rows = []
+        for kernel in args.kernels.split(","):
+            median, low, figures = time_rtcl(rtcl, platform, scene_path, kernel, repeat, out,
+                                             name)
+            rtcl_rows.append((kernel, median, low, figures))
+        rays = width * height
+        best_rtcl = min(rtcl_rows, key=lambda row: row[1])
+        best_peer = min(peer_rows, key=lambda row: row[1])
+        for kernel, median, low, _ in rtcl_rows:
+            csv_rows.append((name, triangles, "rtcl", kernel, median, low, rays / median * 1e-6))
+        for variant, median, low, _ in peer_rows:
+            csv_rows.append((name, triangles, "peer", variant, median, low, rays / median * 1e-6))
+        figures = best_rtcl[3]
+        table.append((name, f"{triangles:,}", f"{best_rtcl[0]} {best_rtcl[1]:.3f}",
+                      f"{rays / best_rtcl[1] * 1e-6:.2f}",
+                      f"{best_peer[0]} {best_peer[1]:.3f}", f"{rays / best_peer[1] * 1e-6:.2f}",
+                      f"{best_peer[1] / best_rtcl[1]:.2f}x",
+                      f"{figures.get('bytes_per_triangle', 0):.1f}",
+                      f"{figures['bvh']['build_ms']:.0f}", f"{best_peer[3]:.0f}"))
+        print(f"{name}: rtcl {best_rtcl[0]} {best_rtcl[1]:.3f} ms, peer {best_peer[0]} "
+              f"{best_peer[1]:.3f} ms: {best_peer[1] / best_rtcl[1]:.2f}x", flush=True)
+    device = json.loads(next((out / "raw").glob("rtcl-*.json")).read_text())["device"]
+    header = ("mesh", "triangles", "rtcl fastest (ms)", "rtcl G rays/s", "peer fastest (ms)",
+              "peer G rays/s", "rtcl / peer", "rtcl bytes/tri", "rtcl build ms",
+              "peer build ms")
+    report = (f"# rtcl against the peer on primary rays\n\n{device}, {width}x{height}, one "
+              f"primary ray per pixel, median of {repeat} launches (OpenCL profiling "
+              f"events) on each side; rtcl {git_commit() or 'commit unknown'}, {utc_now()}.\n"
+              f"Peer: {args.peer}. rtcl / peer above 1: rtcl is faster.\n\n"
+              + markdown_table(header, table) + "\n")
+    files.write_text(out / "compare.md", report)
+    files.write_text(out / "compare.csv", to_csv(CSV_COLUMNS, csv_rows))
+    print(report)
+
+
+def main(argv=None):
+    args = parse_arguments(argv)
+    program = program_name()
+    try:
+        with files.committed_files_allowed(args.update_committed):
+            out = args.out or locations.new_results_folder("peer")
+            files.check_not_tracked([out / "compare.md", out / "compare.csv"])
+            rtcl = locations.find_rtcl(args.rtcl)
+            (out / "raw").mkdir(parents=True, exist_ok=True)
+            compare(args, rtcl, out)
+    except (Failure, locations.NotFound, UsageError, OSError) as error:
+        return report_error(program, one_line(error))
+    print(f"{program}: results in {out}", file=sys.stderr)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
