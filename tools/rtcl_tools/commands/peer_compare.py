@@ -120,8 +120,9 @@ def genbench_mesh(spec, out):
     if kind not in ("tetra", "mount", "lake") or (kind != "lake") != bool(size):
         raise Failure(f"--meshes: {spec!r} is not tetra:N, mount:N or lake")
     folder = out / "meshes" / spec.replace(":", "-")
-    if genbench.main([kind, "--triangles", "ply", "-o", str(folder)] +
-                     (["--size", size] if size else [])) != 0:
+    # The lake's triangles are always in a PLY; tetra and mount keep small ones inline.
+    options = ["--size", size, "--triangles", "ply"] if size else []
+    if genbench.main([kind, "-o", str(folder), *options]) != 0:
         raise Failure(f"rtcl-genbench could not make {spec}")
     (scene_path,) = folder.glob("*.json")
     scene = json.loads(scene_path.read_text())
