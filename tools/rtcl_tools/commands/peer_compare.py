@@ -220,9 +220,11 @@ def compare(args, rtcl, out):
         best_rtcl = min(rtcl_rows, key=lambda row: row[1])
         best_peer = min(peer_rows, key=lambda row: row[1])
         for kernel, median, low, _ in rtcl_rows:
-            csv_rows.append((name, triangles, "rtcl", kernel, median, low, rays / median * 1e-6))
+            csv_rows.append(dict(zip(CSV_COLUMNS, (name, triangles, "rtcl", kernel, median, low,
+                                                   rays / median * 1e-6))))
         for variant, median, low, _ in peer_rows:
-            csv_rows.append((name, triangles, "peer", variant, median, low, rays / median * 1e-6))
+            csv_rows.append(dict(zip(CSV_COLUMNS, (name, triangles, "peer", variant, median, low,
+                                                   rays / median * 1e-6))))
         figures = best_rtcl[3]
         table.append((name, f"{triangles:,}", f"{best_rtcl[0]} {best_rtcl[1]:.3f}",
                       f"{rays / best_rtcl[1] * 1e-6:.2f}",
