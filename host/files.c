@@ -648,22 +648,24 @@ const char *files_extension(const char *path)
 	return dot && dot != base ? dot : "";
 }
 
-/* The directory exists, is one, and takes a name this long. */
-static int check_directory(const char *path, const char *dir, char *err, size_t err_size)
+/* The directory exists, is one, and takes a name this long (name: the
+ * path as the user gave it, for messages). */
+static int check_directory(const char *name, const char *path, const char *dir, char *err,
+			   size_t err_size)
 {
 	struct stat st;
 	long name_max;
 
 	if (stat(dir, &st) != 0) {
 		if (errno == ENOENT)
-			snprintf(err, err_size, "%s: directory \"%s\" does not exist", path, dir);
+			snprintf(err, err_size, "%s: directory \"%s\" does not exist", name, dir);
 		else
-			snprintf(err, err_size, "%s: directory \"%s\": %s", path, dir,
+			snprintf(err, err_size, "%s: directory \"%s\": %s", name, dir,
 				 strerror(errno));
 		return -1;
 	}
 	if (!S_ISDIR(st.st_mode)) {
-		snprintf(err, err_size, "%s: \"%s\" is not a directory", path, dir);
+		snprintf(err, err_size, "%s: \"%s\" is not a directory", name, dir);
 		return -1;
 	}
 	name_max = pathconf(dir, _PC_NAME_MAX);
@@ -671,7 +673,7 @@ static int check_directory(const char *path, const char *dir, char *err, size_t 
 		snprintf(err, err_size,
 			 "%s: the file name is %zu characters long, more than the %ld this file "
 			 "system allows",
-			 path, strlen(files_base_name(path)), name_max);
+			 name, strlen(files_base_name(path)), name_max);
 		return -1;
 	}
 	return 0;
@@ -680,7 +682,8 @@ static int check_directory(const char *path, const char *dir, char *err, size_t 
 /* An existing target is replaced only if the user could overwrite it, as cp
  * would, and if the rename will be allowed (a sticky directory lets only the
  * file's or the directory's owner replace it). */
-static int check_replaceable(const char *path, const char *dir, char *err, size_t err_size)
+static int check_replaceable(const char *name, const char *path, const char *dir, char *err,
+			     size_t err_size)
 {
 	struct stat st, dir_st;
 	uid_t me = geteuid();
@@ -689,14 +692,14 @@ static int check_replaceable(const char *path, const char *dir, char *err, size_
 		return 0; /* nothing to replace */
 	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
 		snprintf(err, err_size,
-			 "%s: exists and is not a regular file; refusing to replace it", path);
+			 "%s: exists and is not a regular file; refusing to replace it", name);
 		return -1;
 	}
 	if (access(path, W_OK) != 0 && errno != ENOENT) {
 		snprintf(err, err_size,
 			 "%s: exists and you cannot write it (%s); rtcl replaces only a file you "
 			 "could overwrite: remove it or choose another name",
-			 path, strerror(errno));
+			 name, strerror(errno));
 		return -1;
 	}
 	if (lstat(path, &st) == 0 && stat(dir, &dir_st) == 0 && (dir_st.st_mode & S_ISVTX) &&
@@ -704,7 +707,7 @@ static int check_replaceable(const char *path, const char *dir, char *err, size_
 		snprintf(err, err_size,
 			 "%s: belongs to another user in the sticky directory \"%s\", so it "
 			 "cannot be replaced: choose another name",
-			 path, dir);
+			 name, dir);
 		return -1;
 	}
 	return 0;
@@ -723,8 +726,8 @@ int files_check_writable(const char *path, char *err, size_t err_size)
 	/* A symbolic link is checked where it leads: that file is replaced. */
 	if (resolve_target(path, resolved, err, err_size) ||
 	    directory_of(resolved, dir, err, err_size) ||
-	    check_directory(resolved, dir, err, err_size) ||
-	    check_replaceable(resolved, dir, err, err_size))
+	    check_directory(path, resolved, dir, err, err_size) ||
+	    check_replaceable(path, resolved, dir, err, err_size))
 		return -1;
 	/* What the write will do: create a file beside the target. */
 	fd = files_stage(&trial, path, err, err_size);
