@@ -172,6 +172,25 @@ def test_a_failed_rename_puts_back_the_outputs_already_replaced(tmp_path):
     assert listing(tmp_path) == ["out.png", "s.json"]  # new.npy and its sidecar are gone
 
 
+def test_a_bind_mounted_target_replaces_nothing(tmp_path):
+    (tmp_path / "out.png").write_bytes(PREVIOUS)
+    (tmp_path / "mounted").write_bytes(PREVIOUS)
+    (tmp_path / "s.json").write_bytes(b"")
+    if shutil.which("mount") is None or subprocess.run(
+            ["mount", "--bind", str(tmp_path / "mounted"), str(tmp_path / "s.json")],
+            capture_output=True).returncode != 0:
+        pytest.skip("cannot bind-mount a file here (needs root)")
+    try:
+        result = rtcl(*SMALL, "-o", "out.png", "--stats", "s.json", cwd=tmp_path)
+    finally:
+        subprocess.run(["umount", str(tmp_path / "s.json")])
+    assert (tmp_path / "out.png").read_bytes() == PREVIOUS
+    assert (tmp_path / "mounted").read_bytes() == PREVIOUS
+    expect_refused(result, 1, "s.json: cannot replace: Device or resource busy; no output was "
+                   "replaced")
+    assert listing(tmp_path) == ["mounted", "out.png", "s.json"]
+
+
 def test_a_failed_rename_leaves_every_frame_old(tmp_path):
     for f in (1, 2, 3):
         (tmp_path / f"f_000{f}.png").write_bytes(PREVIOUS)
