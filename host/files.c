@@ -225,8 +225,11 @@ static void clear_stale_stage(int dir_fd, const char *name)
 	struct dirent *entry;
 	struct stat st;
 
-	if (!stage) {
-		if (fd >= 0)
+	/* Only one's own: another user's is none of this run's business. */
+	if (!stage || fstat(fd, &st) != 0 || st.st_uid != geteuid()) {
+		if (stage)
+			closedir(stage);
+		else if (fd >= 0)
 			close(fd);
 		return;
 	}

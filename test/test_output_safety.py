@@ -293,10 +293,32 @@ def test_the_staged_frames_of_a_killed_run_are_removed_by_the_next(tmp_path):
     assert listing(tmp_path) == ["other.png"]
 
 
+def stage_folder(folder, pid):
+    host = os.uname().nodename.replace("-", "_").replace("/", "_")
+    return folder / f".rtcl-stage-{host}-{pid}"
+
+
+def test_the_old_file_of_a_run_killed_while_committing_is_put_back(tmp_path):
+    gone = subprocess.Popen(["true"])
+    gone.wait()  # its pid names a process that is gone
+    # Killed between moving the old x.png aside and renaming the new one in
+    # (where the file system has no hard links), and after replacing y.png.
+    stage = stage_folder(tmp_path, gone.pid)
+    stage.mkdir()
+    (stage / "old-x.png").write_bytes(PREVIOUS)
+    (stage / "new-x.png-abcdef.png").write_bytes(b"new")
+    (stage / "old-y.png").write_bytes(PREVIOUS)
+    (tmp_path / "y.png").write_bytes(b"new")
+    result = rtcl(*SMALL, "-o", "other.png", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert listing(tmp_path) == ["other.png", "x.png", "y.png"]
+    assert (tmp_path / "x.png").read_bytes() == PREVIOUS
+    assert (tmp_path / "y.png").read_bytes() == b"new"
+
+
 def test_a_staging_folder_of_a_live_run_is_left_alone(tmp_path):
     # A run that lives on (this test's own process), on this host.
-    host = os.uname().nodename.replace("-", "_").replace("/", "_")
-    live = tmp_path / f".rtcl-stage-{host}-{os.getpid()}"
+    live = stage_folder(tmp_path, os.getpid())
     live.mkdir()
     (live / "new-x.png-abcdef.png").write_bytes(b"being written")
     result = rtcl(*SMALL, "-o", "other.png", cwd=tmp_path)
