@@ -358,11 +358,12 @@ static int resolve_target(const char *target, char *path, char *err, size_t err_
 	if (realpath(target, path))
 		return 0;
 	if (errno == ENOENT)
-		snprintf(err, err_size,
-			 "%s: is a symbolic link to a file that does not exist; rtcl writes through "
-			 "a link only to an existing file, as cp does: create the file or remove "
-			 "the link",
-			 target);
+		snprintf(
+			err, err_size,
+			"%s: is a symbolic link to a file that does not exist; rtcl writes through "
+			"a link only to an existing file, as cp does: create the file or remove "
+			"the link",
+			target);
 	else
 		snprintf(err, err_size, "%s: cannot follow the symbolic link: %s", target,
 			 strerror(errno));
@@ -479,9 +480,10 @@ static int keep_old(const struct staged_file *f, struct old_file *old, char *err
 		return -1;
 	}
 	if (!S_ISREG(st.st_mode)) {
-		snprintf(err, err_size, "%s: is no longer a regular file (%s), so it cannot be "
-			 "replaced", f->target, S_ISDIR(st.st_mode) ? "now a directory" : "replaced "
-			 "during the render");
+		const char *now = S_ISDIR(st.st_mode) ? "now a directory" : "replaced meanwhile";
+		snprintf(err, err_size,
+			 "%s: is no longer a regular file (%s), so it cannot be replaced",
+			 f->target, now);
 		return -1;
 	}
 	backup_name(f, old->backup);
@@ -532,7 +534,7 @@ static int commit(struct staged_file *files, struct old_file *old, int count, ch
 	for (; done < count; done++) {
 		struct staged_file *f = &files[done];
 		int failed = rename_failure_at == done + 1 ? (errno = EIO, 1)
-							  : rename(f->temp, f->path) != 0;
+							   : rename(f->temp, f->path) != 0;
 		if (failed) {
 			snprintf(err, err_size, "%s: cannot replace: %s", f->target,
 				 strerror(errno));

@@ -108,8 +108,7 @@ int outputs_same_file(const char *a, const char *b)
 }
 
 /* Which output, for a message: "--stats x.json", "frame 3's image f_0003.png". */
-static void describe(const struct output *out, int frame, const char *name, char *text,
-		     size_t size)
+static void describe(const struct output *out, int frame, const char *name, char *text, size_t size)
 {
 	if (out)
 		snprintf(text, size, "%s %s", out->option, out->path);
@@ -146,8 +145,8 @@ static int check_not_input(const struct scene *scene, const struct stat *inputs,
 static int check_clashes(const struct options *opt, const struct scene *scene,
 			 const struct output *out, int n, char *err, size_t err_size)
 {
-	struct stat *inputs = calloc(scene->input_count > 0 ? (size_t)scene->input_count : 1,
-				     sizeof(*inputs));
+	struct stat *inputs =
+		calloc(scene->input_count > 0 ? (size_t)scene->input_count : 1, sizeof(*inputs));
 	char name[PATH_MAX], a[PATH_MAX + 64], b[PATH_MAX + 64];
 	int ret = 0;
 
@@ -198,8 +197,7 @@ static int check_clashes(const struct options *opt, const struct scene *scene,
 	return ret;
 }
 
-int outputs_check(const struct options *opt, const struct scene *scene, char *err,
-		  size_t err_size)
+int outputs_check(const struct options *opt, const struct scene *scene, char *err, size_t err_size)
 {
 	struct output out[MAX_OUTPUTS];
 	char sidecar[SIDECAR_PATH_SIZE];

@@ -19,8 +19,7 @@
  * that the outputs name distinct files, that none is a file the scene was
  * read from (scene->inputs, compared by identity), and that each can be
  * written. Returns 0, OUTPUTS_CLASH, or -1 with one message in err. */
-int outputs_check(const struct options *opt, const struct scene *scene, char *err,
-		  size_t err_size);
+int outputs_check(const struct options *opt, const struct scene *scene, char *err, size_t err_size);
 
 /* Whether two paths name one file (through links and "./"). */
 int outputs_same_file(const char *a, const char *b);

@@ -123,8 +123,7 @@ int program_stage_dump(struct staged_file *file, char *err, size_t err_size)
 
 	pthread_mutex_lock(&dumped.lock);
 	if (program_dump_path() && dumped.data)
-		ret = files_stage_with(file, program_dump_path(), write_binary, NULL, err,
-				       err_size)
+		ret = files_stage_with(file, program_dump_path(), write_binary, NULL, err, err_size)
 			      ? -1
 			      : 1;
 	pthread_mutex_unlock(&dumped.lock);

@@ -404,7 +404,8 @@ int scene_load_file(struct scene *scene, const char *path, char *err, size_t err
 		free(buf);
 	}
 	if (ret == 0) {
-		struct loader ld = {.source = path, .err = err, .err_size = err_size, .scene = scene};
+		struct loader ld = {
+			.source = path, .err = err, .err_size = err_size, .scene = scene};
 		char *copy = strdup(path);
 
 		if (!copy)

@@ -205,11 +205,11 @@ def test_a_failed_rename_leaves_every_frame_old(tmp_path):
 def test_a_target_that_became_a_folder_during_the_render_replaces_nothing(tmp_path):
     for f in (1, 2, 3):
         (tmp_path / f"f_000{f}.png").write_bytes(PREVIOUS)
-    # Each frame takes 1.5 s more; frame 2 is replaced by a folder once it
+    # Each frame takes 0.8 s more; frame 2 is replaced by a folder once it
     # is staged, while frame 3 renders.
     process = subprocess.Popen([RTCL, *SMALL, "--frames", "1:3", "-o", "f.png"], cwd=tmp_path,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:1500"})
+                               env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:800"})
     wait_for(lambda: staged(tmp_path, "f_0002.png"), process)
     (tmp_path / "f_0002.png").unlink()
     (tmp_path / "f_0002.png").mkdir()
@@ -235,11 +235,11 @@ def test_an_immutable_target_replaces_nothing(tmp_path):
     subprocess.run(["chattr", "-i", stats], check=True)
     try:
         # The check before the render would refuse it: the flag is set once
-        # frame 1 is staged, while frame 2 renders (1.5 s more).
+        # frame 1 is staged, while frame 2 renders (0.8 s more).
         process = subprocess.Popen([RTCL, *SMALL, "--frames", "1:2", "-o", "f.png", "--stats",
                                     "s.json"], cwd=tmp_path, stdout=subprocess.PIPE,
                                    stderr=subprocess.PIPE, text=True,
-                                   env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:1500"})
+                                   env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:800"})
         wait_for(lambda: staged(tmp_path, "f_0001.png"), process)
         subprocess.run(["chattr", "+i", stats], check=True)
         _, stderr = process.communicate(timeout=60)
@@ -259,7 +259,7 @@ def test_an_interrupt_leaves_the_dump_binary_target_untouched(tmp_path):
     (tmp_path / "out.png").write_bytes(PREVIOUS)
     process = subprocess.Popen([RTCL, *SMALL, "--frames", "1:2", "-o", "f.png"], cwd=tmp_path,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
-                               env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:1500",
+                               env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:800",
                                     "RTCL_DUMP_BINARY": "out.png"})
     wait_for(lambda: staged(tmp_path, "f_0001.png"), process)  # the program was built
     process.send_signal(signal.SIGINT)
