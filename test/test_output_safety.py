@@ -2,7 +2,9 @@
 replaces every target or none; the RTCL_DUMP_BINARY program is an output like
 the others; a killed run's staged files are removed by the next run; a
 symbolic link is written through. Every test here failed on commit 2831c66
-(before the staging folders and the all-or-nothing commit) and passes since.
+(before the staging folders and the all-or-nothing commit) and passes since,
+but two that guard the new design: a live run's staging folder is left alone,
+and the RTCL_DUMP_BINARY program is committed with an animation's frames.
 """
 import os
 import pathlib
