@@ -183,3 +183,15 @@ int checks_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");
 }
+
+int checks_rename_fault(void)
+{
+	const char *value = getenv("RTCL_TEST_FAIL_RENAME");
+	char *end;
+	long n;
+
+	if (!value)
+		return 0;
+	n = strtol(value, &end, 10);
+	return end != value && *end == '\0' && n > 0 && n < 1000000 ? (int)n : 0;
+}

@@ -1,9 +1,17 @@
 /* Files: reading a whole input file (scenes, kernel sources), and writing
- * outputs through a temporary file in the same directory that is renamed over
- * the target once complete ("staged", then "committed"), so that a failure
- * or an interrupt leaves neither a partial nor a temporary file, and the
- * target as it was. Several staged files are committed together, so that a
- * run's outputs are replaced all or none (interrupt.h). */
+ * outputs through a temporary file that is renamed over the target once
+ * complete ("staged", then "committed"), so that a failure or an interrupt
+ * leaves neither a partial nor a temporary file, and the target as it was.
+ * Several staged files are committed together, all or none (interrupt.h).
+ *
+ * The temporary files live in one staging folder per output folder and run,
+ * DIR/.rtcl-stage-HOST-PID, removed when the run ends. A run killed outright
+ * (SIGKILL) cannot remove it; the next run that writes into DIR on the same
+ * host removes it once process PID is gone.
+ *
+ * A target that is a symbolic link is written through, as cp does: the file
+ * the link leads to is replaced and the link kept. A link that leads nowhere
+ * is refused (cp refuses to write through a dangling link too). */
 #ifndef RTCL_FILES_H
 #define RTCL_FILES_H
 
@@ -23,21 +31,31 @@
 int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 	       size_t *out_len, char *err, size_t err_size);
 
-/* An output written to a temporary file beside its target. */
+/* An output written to a temporary file in its folder's staging folder. */
 struct staged_file {
-	const char *target; /* kept by reference */
+	const char *target;  /* as named by the user, kept by reference */
+	char path[PATH_MAX]; /* the file replaced: target, or where its link leads */
 	char temp[PATH_MAX]; /* "" once committed or discarded */
+	int stage;	     /* its staging folder (files.c) */
 };
 
-/* Creates the temporary file for target (DIR/.NAME.tmp-PID-XXXXXX.EXT, the
- * extension kept) and returns its descriptor, open for writing; or -1 with
- * one message in err. An interrupt from now on removes it. */
+/* Creates the temporary file for target (DIR/.rtcl-stage-HOST-PID/
+ * new-NAME-XXXXXX.EXT, the extension kept) and returns its descriptor, open
+ * for writing; or -1 with one message in err. An interrupt from now on
+ * removes it. */
 int files_stage(struct staged_file *file, const char *target, char *err, size_t err_size);
 
-/* Renames each staged file over its target, all inside one interrupt_hold():
- * an interrupt waits until every rename is done. Returns 0, or -1 with one
- * message in err when a rename failed (the rest are discarded). */
+/* Replaces every target by its staged file, or none: inside one
+ * interrupt_hold() (an interrupt waits until it is done), it checks that each
+ * target is still a regular file, keeps each old target under a second name
+ * in the staging folder, renames the new files in, and removes the old ones;
+ * a rename that fails puts every old file back. Returns 0, or -1 with one
+ * message in err (the staged files are discarded either way). */
 int files_commit(struct staged_file *files, int count, char *err, size_t err_size);
+
+/* For tests (checks.h, RTCL_TEST_FAIL_RENAME): the nth rename of a new file
+ * over its target in a commit (from 1) fails with EIO; 0: none does. */
+void files_inject_rename_failure(int nth);
 
 /* Removes a staged file that will not be committed. */
 void files_discard(struct staged_file *file);
@@ -67,8 +85,9 @@ const char *files_extension(const char *path);
 /* Checks before any work what writing path will need: its directory exists
  * and a file can be created there, its name is not too long, and an existing
  * path is a regular file that the user could overwrite and may replace (not
- * another user's in a sticky directory). Returns 0, or -1 with one message in
- * err. */
+ * another user's in a sticky directory); a symbolic link is checked where it
+ * leads, and one that leads nowhere is refused. Returns 0, or -1 with one
+ * message in err. */
 int files_check_writable(const char *path, char *err, size_t err_size);
 
 #endif

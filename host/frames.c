@@ -9,8 +9,8 @@
 #include "image.h"
 #include "interrupt.h"
 #include "launch.h"
+#include "program.h"
 #include "progress.h"
-#include "outputs.h"
 #include "render.h"
 #include "timing.h"
 
@@ -72,13 +72,6 @@ int frames_check_outputs(const struct options *opt, char *err, size_t err_size)
 				 opt->output);
 			return -1;
 		}
-		if (opt->stats_path && outputs_same_file(opt->stats_path, name)) {
-			snprintf(err, err_size,
-				 "--stats %s and frame %d's image %s name the same file: give each "
-				 "output a file of its own",
-				 opt->stats_path, f, name);
-			return -1;
-		}
 		if (image_check_writable(name, err, err_size))
 			return -1;
 	}
@@ -93,11 +86,11 @@ int frames_output_open(struct frames_output *o, const struct options *opt, char 
 	int n = frame_count(opt);
 
 	o->names = calloc((size_t)n, PATH_MAX);
-	o->staged = calloc((size_t)n + 1, sizeof(struct staged_file));
+	o->staged = calloc((size_t)n + FRAMES_EXTRA_FILES, sizeof(struct staged_file));
 	o->held = calloc((size_t)n, sizeof(float *));
 	o->count = n;
 	if (!o->names || !o->staged || !o->held) {
-		frames_output_close(o, 0);
+		frames_output_close(o);
 		snprintf(err, err_size, "out of host memory for %d frames", n);
 		return -1;
 	}
@@ -106,9 +99,9 @@ int frames_output_open(struct frames_output *o, const struct options *opt, char 
 	return 0;
 }
 
-void frames_output_close(struct frames_output *o, int staged_count)
+void frames_output_close(struct frames_output *o)
 {
-	for (int i = 0; o->staged && i < staged_count; i++)
+	for (int i = 0; o->staged && i < o->count + FRAMES_EXTRA_FILES; i++)
 		files_discard(&o->staged[i]);
 	for (int i = 0; o->held && i < o->count; i++)
 		free(o->held[i]);
@@ -200,6 +193,10 @@ int frames_commit(const struct run *run, struct frames_output *o, const struct f
 			return -1;
 		n++;
 	}
+	int dumped = program_stage_dump(&o->staged[n], err, err_size);
+	if (dumped < 0)
+		return -1;
+	n += dumped;
 	interrupt_hold();
 	int ret = files_commit(o->staged, n, err, err_size);
 	if (ret == 0)
@@ -336,11 +333,11 @@ int frames_render(struct run *run, struct device *devs, int count, char *err, si
 	int failed = multidev_run(&job, devs, count, work, err, err_size);
 	progress_end();
 	if (failed) {
-		frames_output_close(&output, n);
+		frames_output_close(&output);
 		return -1;
 	}
 	struct frames_report report = {devs, NULL, work, count, (timing_now() - start) * 1e3};
 	failed = frames_commit(run, &output, &report, err, err_size);
-	frames_output_close(&output, n + 1);
+	frames_output_close(&output);
 	return failed ? -1 : 0;
 }

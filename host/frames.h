@@ -25,12 +25,16 @@ void frames_orbit(const struct scene_camera *camera, int frame, int first, int l
  * Returns 0, or -1 when it does not fit in name[PATH_MAX]. */
 int frames_output_name(const char *path, int frame, char *name);
 
-/* Checks before any work that every frame's image can be written and that
- * --stats names none of them. Returns 0, or -1 with one message in err. */
+/* Checks before any work that every frame's image and the --stats document
+ * can be written (outputs_check checks first that no two outputs, and no
+ * output and input, name one file). Returns 0, or -1 with one message in
+ * err. */
 int frames_check_outputs(const struct options *opt, char *err, size_t err_size);
 
 /* The frames' image names, their staged files (one per frame, then the
- * --stats document), and under --mpi the frames held in memory. */
+ * --stats document and RTCL_DUMP_BINARY's program), and under --mpi the
+ * frames held in memory. */
+#define FRAMES_EXTRA_FILES 2
 struct frames_output {
 	char (*names)[PATH_MAX];
 	struct staged_file *staged;
@@ -41,9 +45,8 @@ struct frames_output {
 int frames_output_open(struct frames_output *o, const struct options *opt, char *err,
 		       size_t err_size);
 
-/* Discards the first staged_count staged files still held, frees the held
- * frames, and frees. */
-void frames_output_close(struct frames_output *o, int staged_count);
+/* Discards the staged files still held, frees the held frames, and frees. */
+void frames_output_close(struct frames_output *o);
 
 /* What a frame rendered by frames_render_frame took, as a multidev piece. */
 struct piece_work frames_piece_work(const struct render_settings *s,

@@ -37,6 +37,10 @@ static void leave(int signal_number)
 	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
 		if (tracked[i])
 			unlink(tracked[i]);
+	/* Then the staging folders they were in (files.h), empty now. */
+	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
+		if (tracked[i])
+			rmdir(tracked[i]);
 	/* dprintf, not stdio: the main thread may hold stderr's lock. */
 	dprintf(STDERR_FILENO, "%srtcl: interrupted; %s\n", progress_on_stderr ? "\n" : "",
 		outcome);

@@ -24,9 +24,10 @@ int interrupt_setup(int progress_line, char *err, size_t err_size);
 void interrupt_hold(void);
 void interrupt_release(void);
 
-/* Under interrupt_hold(): removes path if a signal comes before
- * interrupt_untrack(path). At most INTERRUPT_MAX_TRACKED paths, each kept by
- * reference (the caller keeps the string alive). Returns 0, or -1 when full. */
+/* Under interrupt_hold(): removes path (a file, or a folder emptied of the
+ * tracked files) if a signal comes before interrupt_untrack(path). At most
+ * INTERRUPT_MAX_TRACKED paths, each kept by reference (the caller keeps the
+ * string alive). Returns 0, or -1 when full. */
 #define INTERRUPT_MAX_TRACKED 1024 /* room for every frame of an animation */
 int interrupt_track(const char *path);
 void interrupt_untrack(const char *path);

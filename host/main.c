@@ -12,12 +12,14 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "checks.h"
 #include "cli.h"
 #include "device.h"
 #include "devices.h"
 #include "devstats.h"
 #include "frames.h"
 #include "embedded.h"
+#include "files.h"
 #include "interrupt.h"
 #include "mpi_render.h"
 #include "outputs.h"
@@ -197,8 +199,7 @@ static int render_frames(struct run *run, char *err, size_t err_size)
 	struct device devs[DEVICES_MAX];
 	int count = 0, failed;
 
-	if (frames_check_outputs(run->opt, err, err_size) ||
-	    open_devices(run->opt, devs, &count, err, err_size)) {
+	if (open_devices(run->opt, devs, &count, err, err_size)) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_FAILED;
 	}
@@ -247,14 +248,14 @@ static int render_and_write(struct run *run, char *err, size_t err_size)
 	int checked;
 
 	if (run->opt->mpi)
-		return render_mpi(run);
-	if (run->opt->frames_given)
-		return render_frames(run, err, err_size);
-	checked = outputs_check(run->opt, err, err_size);
+		return render_mpi(run); /* rank 0 checks the outputs */
+	checked = outputs_check(run->opt, run->scene, err, err_size);
 	if (checked) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return checked == OUTPUTS_CLASH ? EXIT_USAGE : EXIT_FAILED;
 	}
+	if (run->opt->frames_given)
+		return render_frames(run, err, err_size);
 	static struct image_devices d;
 	int failed = run->settings.kernel ? render_on_devices(run, &d, err, err_size)
 					  : render_on_cpu(run, err, err_size);
@@ -293,6 +294,7 @@ int main(int argc, char **argv)
 		return EXIT_USAGE;
 	}
 	progress_init(shows_progress(&opt));
+	files_inject_rename_failure(checks_rename_fault());
 	/* Before the OpenCL runtime starts threads of its own. */
 	if (interrupt_setup(progress_enabled(), err, sizeof(err))) {
 		fprintf(stderr, "rtcl: %s\n", err);

@@ -457,17 +457,18 @@ static void *serve(void *context)
 
 /* ---- start, run, finish -------------------------------------------------- */
 
-/* Opens this rank's devices; rank 0 first checks and prepares the outputs. */
+/* Opens this rank's devices; rank 0 first checks and prepares the outputs.
+ * Returns 0, OUTPUTS_CLASH, or -1 with one message in err. */
 static int start_rank(struct mpi_job *j, char *err, size_t err_size)
 {
 	const struct options *opt = j->run->opt;
+	int checked = j->rank == ROOT ? outputs_check(opt, j->run->scene, err, err_size) : 0;
 
+	if (checked)
+		return checked;
 	if (j->rank == ROOT && !j->image &&
-	    (frames_check_outputs(opt, err, err_size) ||
-	     frames_check_memory(opt, &j->run->settings, err, err_size) ||
+	    (frames_check_memory(opt, &j->run->settings, err, err_size) ||
 	     frames_output_open(&j->output, opt, err, err_size)))
-		return -1;
-	if (j->rank == ROOT && j->image && outputs_check(opt, err, err_size))
 		return -1;
 	if (opt->devices_given)
 		return devices_open(&opt->devices, opt->device_kind, j->devs, &j->count, err,
@@ -533,10 +534,11 @@ static int choose_pieces(struct mpi_job *j, int total)
 }
 
 /* Every rank learns whether all started; the lowest rank that did not says
- * why. Returns 0 when all started. */
+ * why. failed: 0, -1, or OUTPUTS_CLASH (a usage error). Returns 0 when all
+ * started, else the exit status of the lowest rank's failure. */
 static int agree_on_start(struct mpi_job *j, int failed, const char *err)
 {
-	int mine = failed ? -1 : j->count, lowest = -1;
+	int mine = failed == OUTPUTS_CLASH ? -2 : failed ? -1 : j->count, lowest = -1;
 	int *counts = malloc((size_t)j->size * sizeof(int));
 
 	if (!counts ||
@@ -560,8 +562,9 @@ static int agree_on_start(struct mpi_job *j, int failed, const char *err)
 		fprintf(stderr, "rtcl: out of host memory for the device plan\n");
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
+	int status = lowest < 0 ? 0 : counts[lowest] == -2 ? EXIT_USAGE : EXIT_FAILED;
 	free(counts);
-	return lowest < 0 ? 0 : -1;
+	return status;
 }
 
 /* Rank 0, image: every band arrived once, then the result the outputs and
@@ -700,7 +703,7 @@ static void free_job(struct mpi_job *j)
 	tiles_job_free(&j->tiles); /* the renderers, before their devices */
 	devices_close(j->devs, j->count);
 	if (j->rank == ROOT && !j->image)
-		frames_output_close(&j->output, piece_count(j) + 1);
+		frames_output_close(&j->output);
 	free(j->arrived);
 	free(j->first);
 	free(j->rank_of);
@@ -746,8 +749,10 @@ static int mpi_render(struct run *run, int image)
 		snprintf(err, sizeof(err),
 			 "--mpi: this MPI library does not give threads MPI_THREAD_MULTIPLE");
 		agree_on_start(&j, 1, err);
-	} else if (agree_on_start(&j, start_rank(&j, err, sizeof(err)), err) == 0) {
-		status = render_all(&j);
+	} else {
+		status = agree_on_start(&j, start_rank(&j, err, sizeof(err)), err);
+		if (status == 0)
+			status = render_all(&j);
 	}
 	/* Rank 0 writes once every rank has finalised. A rank that dies makes
 	 * Open MPI's daemon send the others SIGCONT, SIGTERM after

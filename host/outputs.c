@@ -9,8 +9,10 @@
 #include <sys/stat.h>
 
 #include "files.h"
+#include "frames.h"
 #include "image.h"
 #include "interrupt.h"
+#include "program.h"
 #include "workmap.h"
 
 /* Room for a path and the ".json" of the --flops sidecar. */
@@ -18,8 +20,8 @@
 /* A resolved directory, a slash and a file name. */
 #define CANONICAL_SIZE (2 * PATH_MAX)
 /* The image, the work map and its bar, the flops and their sidecar, the
- * stats. */
-#define MAX_OUTPUTS 6
+ * stats, RTCL_DUMP_BINARY. */
+#define MAX_OUTPUTS 7
 
 /* One output file of the run, and the option that named it. */
 struct output {
@@ -50,12 +52,14 @@ static int stage_work_map(struct staged_file *staged, const struct run *run, cha
 	}
 }
 
-/* Lists the outputs the options ask for, the sidecar written into sidecar. */
+/* Lists the outputs the options ask for besides an animation's frames
+ * (frames_output_name names those), the sidecar written into sidecar. */
 static int list_outputs(const struct options *opt, char *sidecar, struct output *out)
 {
 	int n = 0;
 
-	out[n++] = (struct output){"-o/--output", opt->output};
+	if (!opt->frames_given)
+		out[n++] = (struct output){"-o/--output", opt->output};
 	if (opt->work_map_path)
 		out[n++] = (struct output){"--work-map", opt->work_map_path};
 	if (opt->work_map_bar_path)
@@ -67,6 +71,8 @@ static int list_outputs(const struct options *opt, char *sidecar, struct output 
 	}
 	if (opt->stats_path)
 		out[n++] = (struct output){"--stats", opt->stats_path};
+	if (program_dump_path())
+		out[n++] = (struct output){"RTCL_DUMP_BINARY", program_dump_path()};
 	return n;
 }
 
@@ -101,23 +107,111 @@ int outputs_same_file(const char *a, const char *b)
 	       sa.st_ino == sb.st_ino;
 }
 
-int outputs_check(const struct options *opt, char *err, size_t err_size)
+/* Which output, for a message: "--stats x.json", "frame 3's image f_0003.png". */
+static void describe(const struct output *out, int frame, const char *name, char *text, size_t size)
+{
+	if (out)
+		snprintf(text, size, "%s %s", out->option, out->path);
+	else
+		snprintf(text, size, "frame %d's image %s", frame, name);
+}
+
+/* Refuses an output that is one of the files the scene was read from (by
+ * identity: a hard link, a symbolic link or "./" count). */
+static int check_not_input(const struct scene *scene, const struct stat *inputs,
+			   const struct output *out, int frame, const char *name, char *err,
+			   size_t err_size)
+{
+	struct stat st;
+	char what[PATH_MAX + 64];
+
+	if (stat(name, &st) != 0)
+		return 0; /* not there yet: not an input */
+	for (int i = 0; i < scene->input_count; i++) {
+		if (inputs[i].st_nlink == 0 || inputs[i].st_dev != st.st_dev ||
+		    inputs[i].st_ino != st.st_ino)
+			continue;
+		describe(out, frame, name, what, sizeof(what));
+		snprintf(err, err_size,
+			 "%s names the %s %s: rtcl does not replace a file the run reads; give "
+			 "the output another name",
+			 what, scene->inputs[i].kind, scene->inputs[i].path);
+		return OUTPUTS_CLASH;
+	}
+	return 0;
+}
+
+/* Two outputs that name one file; and outputs that name an input. */
+static int check_clashes(const struct options *opt, const struct scene *scene,
+			 const struct output *out, int n, char *err, size_t err_size)
+{
+	struct stat *inputs =
+		calloc(scene->input_count > 0 ? (size_t)scene->input_count : 1, sizeof(*inputs));
+	char name[PATH_MAX], a[PATH_MAX + 64], b[PATH_MAX + 64];
+	int ret = 0;
+
+	if (!inputs) {
+		snprintf(err, err_size, "out of host memory to check the outputs");
+		return -1;
+	}
+	for (int i = 0; i < scene->input_count; i++)
+		if (stat(scene->inputs[i].path, &inputs[i]) != 0)
+			inputs[i].st_nlink = 0; /* gone: nothing to protect */
+	for (int i = 0; i < n && !ret; i++) {
+		for (int j = 0; j < i && !ret; j++) {
+			if (!outputs_same_file(out[i].path, out[j].path))
+				continue;
+			describe(&out[j], 0, NULL, a, sizeof(a));
+			describe(&out[i], 0, NULL, b, sizeof(b));
+			snprintf(err, err_size,
+				 "%s and %s name the same file: give each output a file of its own",
+				 a, b);
+			ret = OUTPUTS_CLASH;
+		}
+		if (!ret)
+			ret = check_not_input(scene, inputs, &out[i], 0, out[i].path, err,
+					      err_size);
+	}
+	/* The frames' names differ from one another by construction. */
+	for (int f = opt->frames[0]; opt->frames_given && f <= opt->frames[1] && !ret; f++) {
+		if (frames_output_name(opt->output, f, name)) {
+			snprintf(err, err_size, "-o/--output: %s: the frame names are too long",
+				 opt->output);
+			ret = -1;
+			break;
+		}
+		for (int i = 0; i < n && !ret; i++) {
+			if (!outputs_same_file(out[i].path, name))
+				continue;
+			describe(&out[i], 0, NULL, a, sizeof(a));
+			describe(NULL, f, name, b, sizeof(b));
+			snprintf(err, err_size,
+				 "%s and %s name the same file: give each output a file of its own",
+				 a, b);
+			ret = OUTPUTS_CLASH;
+		}
+		if (!ret)
+			ret = check_not_input(scene, inputs, NULL, f, name, err, err_size);
+	}
+	free(inputs);
+	return ret;
+}
+
+int outputs_check(const struct options *opt, const struct scene *scene, char *err, size_t err_size)
 {
 	struct output out[MAX_OUTPUTS];
 	char sidecar[SIDECAR_PATH_SIZE];
 	int n = list_outputs(opt, sidecar, out);
+	int clash = check_clashes(opt, scene, out, n, err, err_size);
 
-	for (int i = 0; i < n; i++) {
-		for (int j = 0; j < i; j++) {
-			if (outputs_same_file(out[i].path, out[j].path)) {
-				snprintf(err, err_size,
-					 "%s %s and %s %s name the same file: give each output "
-					 "a file of its own",
-					 out[j].option, out[j].path, out[i].option, out[i].path);
-				return OUTPUTS_CLASH;
-			}
-		}
-	}
+	if (clash)
+		return clash;
+	if (opt->frames_given)
+		return frames_check_outputs(opt, err, err_size) ||
+				       (program_dump_path() &&
+					files_check_writable(program_dump_path(), err, err_size))
+			       ? -1
+			       : 0;
 	if (image_check_writable(opt->output, err, err_size))
 		return -1;
 	if (opt->work_map_path &&
@@ -165,7 +259,10 @@ static int stage_all(const struct run *run, char *sidecar, struct staged_file *s
 	}
 	if (opt->stats_path && stats_stage_run(&staged[n++], opt->stats_path, run, err, err_size))
 		goto out_discard;
-	return n;
+	int dumped = program_stage_dump(&staged[n], err, err_size);
+	if (dumped < 0)
+		goto out_discard;
+	return n + dumped;
 
 out_discard:
 	while (n > 0)

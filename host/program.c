@@ -3,6 +3,7 @@
  * RTCL_DUMP_BINARY. */
 #include "program.h"
 
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -60,26 +61,30 @@ static void print_build_log(cl_program program, const struct device *dev)
 		fprintf(stderr, "rtcl: build log:\n%s\n", log);
 }
 
-struct bytes {
-	const unsigned char *data;
+/* The binary of the last program built, kept for RTCL_DUMP_BINARY until the
+ * outputs are committed (the devices' threads build side by side). */
+static struct {
+	pthread_mutex_t lock;
+	unsigned char *data;
 	size_t size;
-};
+} dumped = {PTHREAD_MUTEX_INITIALIZER, NULL, 0};
 
-static int write_bytes(FILE *file, const void *context)
-{
-	const struct bytes *b = context;
-
-	return fwrite(b->data, 1, b->size, file) == b->size ? 0 : -1;
-}
-
-/* RTCL_DUMP_BINARY=FILE: writes the built program's binary (PTX on NVIDIA's
- * OpenCL) to FILE, for reading what the compiler made of the tracer. */
-static int dump_binary(cl_program program, char *err, size_t err_size)
+const char *program_dump_path(void)
 {
 	const char *path = getenv("RTCL_DUMP_BINARY");
+
+	return path && *path ? path : NULL;
+}
+
+/* RTCL_DUMP_BINARY=FILE: keeps the built program's binary (PTX on NVIDIA's
+ * OpenCL), for reading what the compiler made of the tracer. It is written
+ * with the other outputs (program_stage_dump), not now: a debug output
+ * follows the same rules as the others. */
+static int keep_binary(cl_program program, char *err, size_t err_size)
+{
 	size_t size = 0;
 
-	if (!path || !*path)
+	if (!program_dump_path())
 		return 0;
 	if (clGetProgramInfo(program, CL_PROGRAM_BINARY_SIZES, sizeof(size), &size, NULL) !=
 		    CL_SUCCESS ||
@@ -92,16 +97,36 @@ static int dump_binary(cl_program program, char *err, size_t err_size)
 		snprintf(err, err_size, "out of memory for a %zu-byte program binary", size);
 		return -1;
 	}
-	struct bytes contents = {binary, size};
-	int ret;
 	if (clGetProgramInfo(program, CL_PROGRAM_BINARIES, sizeof(binary), &binary, NULL) !=
 	    CL_SUCCESS) {
 		snprintf(err, err_size, "RTCL_DUMP_BINARY: cannot read the program binary");
-		ret = -1;
-	} else {
-		ret = files_write(path, write_bytes, &contents, err, err_size);
+		free(binary);
+		return -1;
 	}
-	free(binary);
+	pthread_mutex_lock(&dumped.lock);
+	free(dumped.data);
+	dumped.data = binary;
+	dumped.size = size;
+	pthread_mutex_unlock(&dumped.lock);
+	return 0;
+}
+
+static int write_binary(FILE *file, const void *unused)
+{
+	(void)unused;
+	return fwrite(dumped.data, 1, dumped.size, file) == dumped.size ? 0 : -1;
+}
+
+int program_stage_dump(struct staged_file *file, char *err, size_t err_size)
+{
+	int ret = 0;
+
+	pthread_mutex_lock(&dumped.lock);
+	if (program_dump_path() && dumped.data)
+		ret = files_stage_with(file, program_dump_path(), write_binary, NULL, err, err_size)
+			      ? -1
+			      : 1;
+	pthread_mutex_unlock(&dumped.lock);
 	return ret;
 }
 
@@ -231,7 +256,7 @@ int program_build(struct device *dev, const struct render_settings *s,
 			goto out_free_sources;
 		progcache_save(&cache, *program);
 	}
-	ret = dump_binary(*program, err, err_size);
+	ret = keep_binary(*program, err, err_size);
 
 out_free_sources:
 	free_sources(&src);

@@ -2,6 +2,7 @@
 #ifndef RTCL_PROGRAM_H
 #define RTCL_PROGRAM_H
 
+#include "files.h"
 #include "settings.h"
 
 /* The tracer's sources in cl/, in the order they are built (the kernel's
@@ -21,11 +22,21 @@ struct program_features {
  * *cached is 1), for the scene's features, and writes the
  * options used to options[BUILD_OPTIONS_SIZE]. With settings->verbose the
  * compiler's messages go to stderr; RTCL_BUILD_OPTIONS adds options and
- * RTCL_DUMP_BINARY=FILE writes the built binary. Returns 0, or -1 with one
+ * with RTCL_DUMP_BINARY=FILE the built binary is kept for program_stage_dump
+ * (the last one built wins). Returns 0, or -1 with one
  * message in err (for a failed build, the build log and the options). */
 int program_build(struct device *dev, const struct render_settings *settings,
 		  const struct program_features *features, cl_program *program, char *options,
 		  int *cached, char *err, size_t err_size);
+
+/* RTCL_DUMP_BINARY's file, or NULL when it is not set: a debug output,
+ * checked, staged and committed with the run's other outputs. */
+const char *program_dump_path(void);
+
+/* Stages the binary of the last program built for RTCL_DUMP_BINARY. Returns
+ * 1 when staged, 0 when there is nothing to write (the variable unset, or no
+ * program built), or -1 with one message in err. */
+int program_stage_dump(struct staged_file *file, char *err, size_t err_size);
 
 /* Whether the program counts the pixels it has done for the progress line
  * (-DRTCL_PROGRESS, one atomic per chunk in serial, naive and cyclic): only

@@ -320,6 +320,22 @@ static int read_scene(struct loader *ld, json_t *doc)
 	return 0;
 }
 
+int loader_add_input(struct loader *ld, char *path, const char *kind)
+{
+	struct scene *scene = ld->scene;
+	struct scene_input *grown =
+		realloc(scene->inputs, ((size_t)scene->input_count + 1) * sizeof(*grown));
+
+	if (!grown) {
+		free(path);
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	scene->inputs = grown;
+	scene->inputs[scene->input_count++] = (struct scene_input){path, kind};
+	return 0;
+}
+
 /* The UTF-8 encoding of U+FEFF, which some editors put at the start of a
  * file; SCENE.md allows it there. */
 static const char utf8_bom[] = "\xef\xbb\xbf";
@@ -387,6 +403,18 @@ int scene_load_file(struct scene *scene, const char *path, char *err, size_t err
 		ret = load_buffer(scene, buf, len, path, dir, err, err_size);
 		free(buf);
 	}
+	if (ret == 0) {
+		struct loader ld = {
+			.source = path, .err = err, .err_size = err_size, .scene = scene};
+		char *copy = strdup(path);
+
+		if (!copy)
+			loader_write_err(&ld, "%s: out of memory", path);
+		if (!copy || loader_add_input(&ld, copy, "scene file")) {
+			scene_free(scene);
+			ret = -1;
+		}
+	}
 	free(dir);
 	return ret;
 }
@@ -409,6 +437,9 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 void scene_free(struct scene *scene)
 {
 	free(scene->source);
+	for (int i = 0; i < scene->input_count; i++)
+		free(scene->inputs[i].path);
+	free(scene->inputs);
 	free(scene->materials);
 	free(scene->spheres);
 	free(scene->planes);

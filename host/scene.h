@@ -66,8 +66,16 @@ struct scene_camera {
 	double fov; /* vertical, degrees */
 };
 
+/* A file the scene was read from. No output may replace one (outputs.h). */
+struct scene_input {
+	char *path;	  /* as opened: a mesh file's path joined to the scene's folder */
+	const char *kind; /* "scene file", "mesh file" */
+};
+
 struct scene {
 	char *source; /* file name (or "name (built-in)") used in messages */
+	struct scene_input *inputs; /* the scene file (none for a string) and its mesh files */
+	int input_count;
 	int width, height;
 	int samples; /* per pixel, image.samples (1 when not given) */
 	struct scene_camera camera;

@@ -72,6 +72,10 @@ enum range {
 
 void loader_write_err(struct loader *ld, const char *fmt, ...);
 
+/* Records path (malloc'd; the scene takes it, also on a failure) as a file
+ * the scene was read from. Returns 0, or -1 with one message. */
+int loader_add_input(struct loader *ld, char *path, const char *kind);
+
 /* "FILE: PATH: message"; always returns -1 so callers can `return loader_fail(...)`. */
 int loader_fail(struct loader *ld, const struct path *p, const char *fmt, ...);
 

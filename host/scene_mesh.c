@@ -247,7 +247,11 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 		return -1;
 	}
 	ret = mesh_import(path, &mesh, reason, sizeof(reason));
-	free(path);
+	if (loader_add_input(ld, path, "mesh file")) {
+		if (ret == 0)
+			mesh_data_free(&mesh);
+		return -1;
+	}
 	if (ret)
 		return loader_fail(ld, &file, "cannot read \"%s\": %s", one_line(name, text),
 				   one_line(reason, reason));

@@ -119,7 +119,7 @@ Test(multidev, held_frames_arrive_once_each_and_all_of_them)
 	cr_assert_str_eq(err, "frame out_0005.ppm arrived twice");
 	cr_assert_eq(frames_hold(&o, 1, malloc(12), err, sizeof(err)), 0);
 	cr_assert_eq(frames_check_held(&o, err, sizeof(err)), 0);
-	frames_output_close(&o, 4); /* frees the held frames (ASan, valgrind) */
+	frames_output_close(&o); /* frees the held frames (ASan, valgrind) */
 }
 
 Test(multidev, held_frames_beyond_half_the_memory_are_refused_with_the_numbers)

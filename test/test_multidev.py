@@ -151,7 +151,8 @@ def test_frames_refuse_an_unwritable_frame_before_rendering(tmp_path):
 def test_stats_naming_a_frame_is_refused(tmp_path):
     result = run(*SMALL, "--frames", "1:3", "-o", str(tmp_path / "f.png"), "--stats",
                  str(tmp_path / "f_0003.png"))
-    expect_failure(result, 1, "name the same file", tmp_path)
+    # A usage error, as two outputs of one image naming one file are.
+    expect_failure(result, 2, "name the same file", tmp_path)
 
 
 # ---- MPI: mpirun --oversubscribe -np 3 over loopback ------------------------

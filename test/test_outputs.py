@@ -53,6 +53,18 @@ PREVIOUS_IMAGE = b"the user's previous image"
 PREVIOUS_STATS = b"the user's previous stats"
 
 
+def staged_files(folder):
+    """The files in folder's staging folders (.rtcl-stage-HOST-PID)."""
+    names = []
+    for stage in os.listdir(folder):
+        if stage.startswith(".rtcl-stage-"):
+            try:
+                names += os.listdir(os.path.join(folder, stage))
+            except (FileNotFoundError, NotADirectoryError):
+                pass  # removed meanwhile
+    return names
+
+
 def start_and_signal(tmp_path, when, signal_number):
     """Starts the run, waits for the moment `when` returns true (polling
     every millisecond), sends the signal, and returns the finished process."""
@@ -77,7 +89,7 @@ def test_interrupts_while_writing_leave_the_old_files_or_all_new_ones(tmp_path):
 
     work = tmp_path / "work"
     work.mkdir()
-    staged = lambda: any(".tmp-" in name for name in os.listdir(work))
+    staged = lambda: staged_files(work) != []
     # Moments after the first temporary file appears (the write has begun),
     # and moments when the image has just been replaced (the commit).
     moments = [(staged, delay) for delay in (0, 0.002, 0.01, 0.03, 0.06, 0.1, 0.2)]
