@@ -263,6 +263,7 @@ fuzz-mesh: $(FUZZ_DIR)/fuzz_mesh
 	cp $(filter-out %.md,$(wildcard test/meshes/*.obj test/meshes/*.ply scenes/models/icosphere.obj \
 		test/fuzz_mesh_regressions/*)) $(FUZZ_DIR)/mesh_corpus/
 	$(FUZZ_DIR)/fuzz_mesh -max_total_time=$(FUZZ_SECONDS) -max_len=16384 -timeout=10 \
+		-dict=test/fuzz_mesh.dict \
 		-rss_limit_mb=2048 -print_final_stats=1 \
 		-artifact_prefix=$(FUZZ_DIR)/artifacts/mesh- $(FUZZ_DIR)/mesh_corpus
 

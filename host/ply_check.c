@@ -21,8 +21,8 @@
 enum ply_format { ASCII, BINARY_LE, BINARY_BE };
 
 struct property {
-	int is_face; /* a list of vertex indices: a polygon */
-	int size;    /* bytes of a scalar, or of a list's items */
+	int is_face;	/* a list of vertex indices: a polygon */
+	int size;	/* bytes of a scalar, or of a list's items */
 	int count_size; /* bytes of a list's length; 0: a scalar */
 	int count_signed;
 };
@@ -49,12 +49,10 @@ static int type_size(const char *name, int *is_signed, int *is_integer)
 		const char *name;
 		int size, is_signed, is_integer;
 	} types[] = {
-		{"char", 1, 1, 1},     {"uchar", 1, 0, 1},   {"int8", 1, 1, 1},
-		{"uint8", 1, 0, 1},    {"short", 2, 1, 1},   {"ushort", 2, 0, 1},
-		{"int16", 2, 1, 1},    {"uint16", 2, 0, 1},  {"int", 4, 1, 1},
-		{"uint", 4, 0, 1},     {"int32", 4, 1, 1},   {"uint32", 4, 0, 1},
-		{"float", 4, 1, 0},    {"float32", 4, 1, 0}, {"double", 8, 1, 0},
-		{"float64", 8, 1, 0},
+		{"char", 1, 1, 1},  {"uchar", 1, 0, 1},	  {"int8", 1, 1, 1},   {"uint8", 1, 0, 1},
+		{"short", 2, 1, 1}, {"ushort", 2, 0, 1},  {"int16", 2, 1, 1},  {"uint16", 2, 0, 1},
+		{"int", 4, 1, 1},   {"uint", 4, 0, 1},	  {"int32", 4, 1, 1},  {"uint32", 4, 0, 1},
+		{"float", 4, 1, 0}, {"float32", 4, 1, 0}, {"double", 8, 1, 0}, {"float64", 8, 1, 0},
 	};
 
 	for (size_t i = 0; i < sizeof(types) / sizeof(types[0]); i++)
@@ -168,7 +166,8 @@ static unsigned long long min_record_bytes(const struct header *h, const struct 
 
 	for (int i = 0; i < e->prop_count; i++) {
 		const struct property *p = &e->props[i];
-		bytes += h->format == ASCII ? 2 : (unsigned)(p->count_size ? p->count_size : p->size);
+		bytes += h->format == ASCII ? 2
+					    : (unsigned)(p->count_size ? p->count_size : p->size);
 	}
 	return bytes ? bytes : 1;
 }
@@ -382,15 +381,18 @@ static int body_whole(struct body *b, const struct header *h, char *reason, size
 					 e->name, r, MESH_MAX_POLYGON_VERTICES);
 			else if (got < 0)
 				snprintf(reason, size,
-					 "its PLY \"%s\" record %llu has a list length that is not a "
+					 "its PLY \"%s\" record %llu has a list length that is not "
+					 "a "
 					 "whole number",
 					 e->name, r);
 			else
-				snprintf(reason, size,
-					 "its PLY header declares %llu \"%s\" records, but the file "
-					 "ends after %llu of them (a truncated file, or a header that "
-					 "does not match it)",
-					 e->count, e->name, r);
+				snprintf(
+					reason, size,
+					"its PLY header declares %llu \"%s\" records, but the file "
+					"ends after %llu of them (a truncated file, or a header "
+					"that "
+					"does not match it)",
+					e->count, e->name, r);
 			return 0;
 		}
 	}
