@@ -116,7 +116,7 @@ $(BIN): $(BUILD)/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
 
 # The mesh import helper: Assimp in a process of its own.
-$(MESHREAD): $(BUILD)/meshread.o $(BUILD)/mesh.o $(BUILD)/mesh_spawn.o $(BUILD)/libdir.o
+$(MESHREAD): $(BUILD)/meshread.o $(BUILD)/mesh.o $(BUILD)/ply_check.o $(BUILD)/mesh_spawn.o $(BUILD)/libdir.o
 	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -lstdc++
 
 # Where the companion files (rtcl-oiio.so, rtcl-meshread) are in a build tree.
@@ -233,7 +233,7 @@ FUZZ_HEADERS := test/devscene_check.h host/scene.h host/scene_loader.h host/mesh
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
-$(FUZZ_DIR)/rtcl-meshread: host/meshread.c host/mesh.c host/mesh_spawn.c host/libdir.c host/mesh.h
+$(FUZZ_DIR)/rtcl-meshread: host/meshread.c host/mesh.c host/ply_check.c host/ply_check.h host/mesh_spawn.c host/libdir.c host/mesh.h
 	mkdir -p $(FUZZ_DIR)
 	$(FUZZ_CC) $(filter-out -fsanitize=fuzzer%,$(FUZZ_FLAGS)) -fsanitize=address,undefined \
 		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -lstdc++
@@ -263,6 +263,7 @@ fuzz-mesh: $(FUZZ_DIR)/fuzz_mesh
 	cp $(filter-out %.md,$(wildcard test/meshes/*.obj test/meshes/*.ply scenes/models/icosphere.obj \
 		test/fuzz_mesh_regressions/*)) $(FUZZ_DIR)/mesh_corpus/
 	$(FUZZ_DIR)/fuzz_mesh -max_total_time=$(FUZZ_SECONDS) -max_len=16384 -timeout=10 \
+		-dict=test/fuzz_mesh.dict \
 		-rss_limit_mb=2048 -print_final_stats=1 \
 		-artifact_prefix=$(FUZZ_DIR)/artifacts/mesh- $(FUZZ_DIR)/mesh_corpus
 

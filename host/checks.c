@@ -105,6 +105,15 @@ int checks_device_fault_injected(void)
 	return fault && strcmp(fault, "1") == 0;
 }
 
+void checks_cache_write_delay(void)
+{
+	const char *value = getenv("RTCL_TEST_SLOW_CACHE_WRITE");
+	long ms = value ? strtol(value, NULL, 10) : 0;
+
+	if (ms > 0)
+		nanosleep(&(struct timespec){ms / 1000, ms % 1000 * 1000000L}, NULL);
+}
+
 /* Parses "K:N" from the environment variable name; 0 when set and well
  * formed. */
 static int env_pair(const char *name, long *k, long *n)

@@ -4,7 +4,7 @@
  * only with render_settings.check_writes (kernel tests) or
  * RTCL_TEST_DEVICE_FAULT=1, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE and
  * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_DOUBLE_BAND and
- * RTCL_TEST_FAIL_RENAME (CLI tests). */
+ * RTCL_TEST_FAIL_RENAME and RTCL_TEST_SLOW_CACHE_WRITE (CLI tests). */
 #ifndef RTCL_CHECKS_H
 #define RTCL_CHECKS_H
 
@@ -46,6 +46,11 @@ cl_int checks_read(struct device *dev, const struct render_settings *s,
 /* RTCL_TEST_DEVICE_FAULT=1: the last launch of a frame fails as a device that
  * failed mid-render does (there is no way to make a real one fail on demand). */
 int checks_device_fault_injected(void);
+
+/* RTCL_TEST_SLOW_CACHE_WRITE=MS: the program cache sleeps MS milliseconds
+ * with its temporary file written and not yet renamed, so that a test can
+ * interrupt it there (host/progcache.c). */
+void checks_cache_write_delay(void);
 
 /* RTCL_TEST_SLOW_DEVICE=K:MS: device K of a several-device job (multidev.h)
  * sleeps MS milliseconds after each piece, inside its busy time, as a

@@ -1,11 +1,13 @@
 #include "cli.h"
 
 #include <getopt.h>
+#include <limits.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
 
 #include "frames.h"
+#include "mesh.h"
 #include "render.h"
 #include "scene.h"
 #include "suggest.h"
@@ -31,6 +33,8 @@ enum long_only_option {
 	OPT_MPI,
 	OPT_ACCEL,
 	OPT_PIECE_ROWS,
+	OPT_MESH_TIME_LIMIT,
+	OPT_MESH_MEMORY_LIMIT,
 };
 
 static const struct option long_options[] = {
@@ -64,6 +68,8 @@ static const struct option long_options[] = {
 	{"help", no_argument, NULL, 'h'},
 	{"version", no_argument, NULL, OPT_VERSION},
 	{"accel", required_argument, NULL, OPT_ACCEL},
+	{"mesh-time-limit", required_argument, NULL, OPT_MESH_TIME_LIMIT},
+	{"mesh-memory-limit", required_argument, NULL, OPT_MESH_MEMORY_LIMIT},
 	{NULL, 0, NULL, 0},
 };
 
@@ -100,6 +106,10 @@ static void print_help_after_kernels(FILE *out)
 		"                         the linear colours: the sRGB curve (default), or\n"
 		"                         round(255 c) as in the paper; EXR, HDR and PFM are\n"
 		"                         always linear\n"
+		"      --mesh-time-limit SECONDS  refuse a mesh file whose import takes\n"
+		"                         longer (default 60; 0: no limit)\n"
+		"      --mesh-memory-limit MIB  the memory a mesh file's import may take\n"
+		"                         (default: half the machine's; 0: no limit)\n"
 		"\n"
 		"Device:\n"
 		"  -p, --platform N       OpenCL platform index (default: the first with a GPU)\n"
@@ -160,7 +170,10 @@ static void print_help_after_kernels(FILE *out)
 		"  -h, --help             show this help and exit\n"
 		"      --version          show the version and exit\n"
 		"\n"
-		"Environment, for kernel development:\n"
+		"Environment:\n"
+		"  RTCL_MESH_TIME_LIMIT=SECONDS  --mesh-time-limit, when not given\n"
+		"  RTCL_MESH_MEMORY_LIMIT=MIB  --mesh-memory-limit, when not given\n"
+		"For kernel development:\n"
 		"  RTCL_CL_DIR=DIR          load the OpenCL sources from DIR instead of the\n"
 		"                           copies built into the binary\n"
 		"  RTCL_BUILD_OPTIONS=OPTS  add OPTS to the program build options, e.g.\n"
@@ -253,6 +266,39 @@ static int parse_bounded(const char *option, const char *text, long min, long ma
 		return -1;
 	}
 	*out = (int)value;
+	return 0;
+}
+
+/* A mesh import limit (mesh.h) from `source` (an option or an environment
+ * variable): a whole number, 0 for none, at most `max`. */
+static int parse_limit(const char *source, const char *text, const char *unit, long max,
+		       unsigned long *out, char *err, size_t err_size)
+{
+	long value;
+
+	if (parse_decimal(text, strlen(text), 0, max, &value)) {
+		snprintf(err, err_size,
+			 "%s: expected a whole number of %s from 0 (no limit) to %ld, got \"%s\"",
+			 source, unit, max, text);
+		return -1;
+	}
+	*out = (unsigned long)value;
+	return 0;
+}
+
+/* The limits not given as options, from the environment. */
+static int mesh_limits_from_environment(struct options *o, char *err, size_t err_size)
+{
+	const char *time = getenv(MESH_TIME_LIMIT_ENV), *memory = getenv(MESH_MEMORY_LIMIT_ENV);
+
+	if (o->mesh_time_limit == ULONG_MAX && time &&
+	    parse_limit(MESH_TIME_LIMIT_ENV, time, "seconds", MESH_TIME_LIMIT_MAX,
+			&o->mesh_time_limit, err, err_size))
+		return -1;
+	if (o->mesh_memory_limit == ULONG_MAX && memory &&
+	    parse_limit(MESH_MEMORY_LIMIT_ENV, memory, "MiB", MESH_MEMORY_LIMIT_MAX,
+			&o->mesh_memory_limit, err, err_size))
+		return -1;
 	return 0;
 }
 
@@ -409,6 +455,12 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return 0;
 	case OPT_ACCEL:
 		return parse_choice("--accel", arg, "none", "bvh", &o->accel, err, err_size);
+	case OPT_MESH_TIME_LIMIT:
+		return parse_limit("--mesh-time-limit", arg, "seconds", MESH_TIME_LIMIT_MAX,
+				   &o->mesh_time_limit, err, err_size);
+	case OPT_MESH_MEMORY_LIMIT:
+		return parse_limit("--mesh-memory-limit", arg, "MiB", MESH_MEMORY_LIMIT_MAX,
+				   &o->mesh_memory_limit, err, err_size);
 	case OPT_PIECE_ROWS:
 		return parse_bounded("--piece-rows", arg, 1, SCENE_MAX_IMAGE_SIDE, &o->piece_rows,
 				     err, err_size);
@@ -604,6 +656,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	o->repeat = 0; /* not given: one launch, no warm-up */
 	o->batch = 1;
 	o->accel = 1; /* bvh */
+	o->mesh_time_limit = o->mesh_memory_limit = ULONG_MAX;
 
 	opterr = 0;
 	optind = 1;
@@ -615,7 +668,8 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 		if (apply_option(c, optarg, o, err, err_size))
 			return -1;
 	}
-	if (take_scene_argument(argc - optind, argv + optind, o, err, err_size))
+	if (take_scene_argument(argc - optind, argv + optind, o, err, err_size) ||
+	    mesh_limits_from_environment(o, err, err_size))
 		return -1;
 	return check_combination(o, err, err_size);
 }

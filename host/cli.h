@@ -43,6 +43,9 @@ struct options {
 	int accel;		       /* --accel: 1 bvh (ACCEL_BVH), 0 none */
 	int quiet, verbose;
 	int help, version;
+	/* --mesh-time-limit SECONDS, --mesh-memory-limit MIB, or their
+	 * environment variables (mesh.h); ULONG_MAX when neither is given. */
+	unsigned long mesh_time_limit, mesh_memory_limit;
 };
 
 /* Parses argv into o. Returns 0, or -1 with one message in err (the caller

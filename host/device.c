@@ -254,6 +254,10 @@ static void query_info(struct device *dev)
 	clGetDeviceInfo(dev->id, CL_DEVICE_MEM_BASE_ADDR_ALIGN, sizeof(align_bits), &align_bits,
 			NULL);
 	dev->mem_base_addr_align = align_bits / 8 ? align_bits / 8 : 128;
+	cl_bool unified = CL_FALSE;
+	if (clGetDeviceInfo(dev->id, CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof(unified), &unified,
+			    NULL) == CL_SUCCESS)
+		dev->host_unified = unified == CL_TRUE;
 
 	size_t size = 0;
 	clGetDeviceInfo(dev->id, CL_DEVICE_EXTENSIONS, 0, NULL, &size);
@@ -330,8 +334,17 @@ cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes
 			    const char *what, char *err, size_t err_size)
 {
 	cl_int status;
-	cl_mem buffer = clCreateBuffer(dev->context, flags, bytes, host, &status);
+	cl_mem buffer;
 
+	if (dev->host_unified && !(flags & CL_MEM_USE_HOST_PTR))
+		flags |= CL_MEM_ALLOC_HOST_PTR;
+	buffer = clCreateBuffer(dev->context, flags, bytes, host, &status);
+	if (status == CL_OUT_OF_HOST_MEMORY ||
+	    (dev->host_unified && status == CL_MEM_OBJECT_ALLOCATION_FAILURE)) {
+		snprintf(err, err_size, "out of host memory for the %s (%zu bytes) on %s", what,
+			 bytes, dev->name);
+		return NULL;
+	}
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "clCreateBuffer for the %s (%zu bytes) failed: %s", what,
 			 bytes, cl_error_name(status));

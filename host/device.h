@@ -28,6 +28,7 @@ struct device {
 	cl_ulong max_alloc_size;
 	cl_uint mem_base_addr_align; /* bytes */
 	int nv_compiler_options;     /* cl_nv_compiler_options: -cl-nv-* build options */
+	int host_unified;	     /* CL_DEVICE_HOST_UNIFIED_MEMORY: a CPU device */
 };
 
 /* Opens a device. platform_index < 0 and device_index < 0 mean "the first
@@ -54,7 +55,11 @@ void device_close(struct device *dev);
 int device_check_fits(const struct device *dev, const char *what, double bytes, char *err,
 		      size_t err_size);
 
-/* clCreateBuffer with one message naming `what` on failure; NULL then. */
+/* clCreateBuffer with one message naming `what` on failure; NULL then. On a
+ * device that shares the host's memory the buffer is allocated at once
+ * (CL_MEM_ALLOC_HOST_PTR), so that too little host memory is this message
+ * ("out of host memory for the image ..."), not a failure at the first launch
+ * (PoCL 3.1 allocates a plain buffer there, and asserts when it cannot). */
 cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
 			    const char *what, char *err, size_t err_size);
 

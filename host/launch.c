@@ -359,22 +359,11 @@ double launch_image_work(const struct render_settings *s)
 	return (double)s->width * s->height * (s->samples > 0 ? s->samples : 1);
 }
 
-/* Whether dev shares the host's memory (a CPU device). */
-static int host_unified(const struct device *dev)
-{
-	cl_bool unified = CL_FALSE;
-
-	if (clGetDeviceInfo(dev->id, CL_DEVICE_HOST_UNIFIED_MEMORY, sizeof(unified), &unified,
-			    NULL) != CL_SUCCESS)
-		return 0;
-	return unified == CL_TRUE;
-}
-
 int launch_create_counter(struct device *dev, int watched, struct work_counter *c, char *err,
 			  size_t err_size)
 {
 	size_t bytes = RT_COUNTER_WORDS * sizeof(cl_uint);
-	int in_place = watched && host_unified(dev);
+	int in_place = watched && dev->host_unified;
 	cl_int status = CL_SUCCESS;
 
 	memset(c, 0, sizeof(*c));

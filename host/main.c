@@ -7,6 +7,7 @@
  * process from interrupt.c's thread, leaving the previous outputs or the
  * complete new ones.
  */
+#include <limits.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -21,6 +22,7 @@
 #include "embedded.h"
 #include "files.h"
 #include "interrupt.h"
+#include "mesh.h"
 #include "mpi_render.h"
 #include "outputs.h"
 #include "progress.h"
@@ -293,6 +295,12 @@ int main(int argc, char **argv)
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_USAGE;
 	}
+	struct mesh_limits limits = mesh_get_limits();
+	if (opt.mesh_time_limit != ULONG_MAX)
+		limits.seconds = opt.mesh_time_limit;
+	if (opt.mesh_memory_limit != ULONG_MAX)
+		limits.memory_mib = opt.mesh_memory_limit;
+	mesh_set_limits(&limits);
 	progress_init(shows_progress(&opt));
 	files_inject_rename_failure(checks_rename_fault());
 	/* Before the OpenCL runtime starts threads of its own. */

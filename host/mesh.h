@@ -38,6 +38,10 @@ int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t re
  * message (which quotes the scene's words). */
 unsigned long mesh_importer_failures(void);
 
+/* The most vertices of a polygon in a mesh file (OBJ, PLY), which the
+ * importer triangulates in time that grows with their square. */
+#define MESH_MAX_POLYGON_VERTICES 4096
+
 /* The helper's side: Assimp in this process. Returns 0, or -1 with the
  * importer's words in reason. (host/mesh.c, linked into rtcl-meshread only.) */
 int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size);
@@ -47,6 +51,36 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 int mesh_send(int fd, const struct mesh_data *mesh, const char *reason);
 
 void mesh_data_free(struct mesh_data *mesh);
+
+/* The limits on each import (docs/SCENE.md, "Limits of a mesh import"):
+ * the helper is killed when it has not answered after `seconds`, and runs
+ * with an address space of `memory_mib` MiB. 0: no limit. */
+struct mesh_limits {
+	unsigned long seconds;
+	unsigned long memory_mib;
+};
+#define MESH_TIME_LIMIT_DEFAULT 60 /* seconds */
+/* The memory limit's default: half the machine's physical memory. */
+#define MESH_MEMORY_LIMIT_DEFAULT_SHARE 2
+#define MESH_TIME_LIMIT_MAX 604800	 /* a week */
+#define MESH_MEMORY_LIMIT_MAX 1073741824 /* MiB: a pebibyte */
+#define MESH_TIME_LIMIT_ENV "RTCL_MESH_TIME_LIMIT"
+#define MESH_MEMORY_LIMIT_ENV "RTCL_MESH_MEMORY_LIMIT"
+
+/* The limits of later mesh_import calls, instead of the defaults. */
+void mesh_set_limits(const struct mesh_limits *limits);
+
+/* The limits in force (the defaults worked out, where not set). */
+struct mesh_limits mesh_get_limits(void);
+
+/* What an import that ran out of its memory is refused with (%lu: the
+ * limit in MiB). */
+#define MESH_MEMORY_MESSAGE                                                                        \
+	"the import needed more memory than its limit of %lu MiB (--mesh-memory-limit or "         \
+	MESH_MEMORY_LIMIT_ENV ")"
+
+/* What the helper prints on stderr when it crashes near its memory limit. */
+#define MESH_MEMORY_NOTE "rtcl-meshread: crashed near its memory limit"
 
 /* The environment variable that names the helper program, overriding where
  * rtcl looks for it (host/libdir.h). */

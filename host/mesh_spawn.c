@@ -12,8 +12,10 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <poll.h>
 #include <signal.h>
 #include <spawn.h>
+#include <limits.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -21,6 +23,7 @@
 #include <strings.h>
 #include <sys/stat.h>
 #include <sys/wait.h>
+#include <time.h>
 #include <unistd.h>
 
 #include "libdir.h"
@@ -56,16 +59,48 @@ static int write_all(int fd, const void *data, size_t size)
 	return 0;
 }
 
+/* When the helper's answer must be in: CLOCK_MONOTONIC seconds, or 0 for
+ * no limit. */
+static double deadline;
+
+static double now(void)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+/* Outcomes of read_all besides 0. */
+#define ENDED (-1)     /* the pipe ended or failed */
+#define TOO_LATE (-2)  /* the deadline passed */
+
+/* Reads size bytes from fd, waiting no later than the deadline. */
 static int read_all(int fd, void *data, size_t size)
 {
 	char *p = data;
 
 	while (size > 0) {
+		if (deadline > 0) {
+			double left = deadline - now();
+			struct pollfd pfd = {.fd = fd, .events = POLLIN};
+			int ready;
+
+			if (left <= 0)
+				return TOO_LATE;
+			ready = poll(&pfd, 1, left > 1e6 ? 1000000000 : (int)(left * 1000) + 1);
+			if (ready < 0 && errno == EINTR)
+				continue;
+			if (ready == 0)
+				continue; /* the loop sees whether the deadline passed */
+			if (ready < 0)
+				return ENDED;
+		}
 		ssize_t n = read(fd, p, size);
 		if (n < 0 && errno == EINTR)
 			continue;
 		if (n <= 0)
-			return -1;
+			return ENDED;
 		p += n;
 		size -= (size_t)n;
 	}
@@ -107,6 +142,7 @@ void mesh_data_free(struct mesh_data *mesh)
 #define BROKE_OFF (-10)	    /* the pipe ended early: the helper died */
 #define NONSENSE (-11)	    /* an answer no helper of this rtcl sends */
 #define OUT_OF_MEMORY (-12) /* reason says for what */
+#define TIMED_OUT (-13)	    /* no answer within the time limit */
 
 /* An array of count items of item_size bytes: NULL for an impossible size
  * (counts from the pipe are not trusted). */
@@ -122,16 +158,19 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 {
 	struct reply r;
 
-	if (read_all(fd, &r, sizeof(r)))
-		return BROKE_OFF;
+	int got = read_all(fd, &r, sizeof(r));
+
+	if (got)
+		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	if (r.magic != REPLY_MAGIC)
 		return NONSENSE;
 	if (!r.ok) {
 		char text[REASON_MAX + 1];
 		if (r.reason_length > REASON_MAX)
 			return NONSENSE;
-		if (read_all(fd, text, r.reason_length))
-			return BROKE_OFF;
+		got = read_all(fd, text, r.reason_length);
+		if (got)
+			return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 		text[r.reason_length] = '\0';
 		snprintf(reason, reason_size, "%s", text);
 		return MESH_REFUSED;
@@ -146,10 +185,13 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	}
 	out->vertex_count = (size_t)r.vertex_count;
 	out->triangle_count = (size_t)r.triangle_count;
-	if (read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double)) ||
-	    (r.has_normals && read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double))) ||
-	    read_all(fd, out->indices, 3 * out->triangle_count * sizeof(size_t)))
-		return BROKE_OFF;
+	got = read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double));
+	if (!got && r.has_normals)
+		got = read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double));
+	if (!got)
+		got = read_all(fd, out->indices, 3 * out->triangle_count * sizeof(size_t));
+	if (got)
+		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	for (size_t i = 0; i < 3 * out->triangle_count; i++)
 		if (out->indices[i] >= out->vertex_count)
 			return NONSENSE;
@@ -199,6 +241,20 @@ static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t r
 	/* Answers cut short here end the helper with SIGPIPE: not its fault. */
 	if (received == OUT_OF_MEMORY)
 		return MESH_REFUSED;
+	if (received == TIMED_OUT) {
+		snprintf(reason, reason_size,
+			 "the import took longer than its limit of %lu s (--mesh-time-limit or "
+			 MESH_TIME_LIMIT_ENV ")",
+			 mesh_get_limits().seconds);
+		return MESH_REFUSED;
+	}
+	/* An allocation that failed under the memory limit where Assimp does
+	 * not catch it: "terminate called after throwing ... std::bad_alloc". */
+	if (WIFSIGNALED(status) && mesh_get_limits().memory_mib &&
+	    (strstr(said, "bad_alloc") || strstr(said, MESH_MEMORY_NOTE))) {
+		snprintf(reason, reason_size, MESH_MEMORY_MESSAGE, mesh_get_limits().memory_mib);
+		return MESH_REFUSED;
+	}
 	if (received == NONSENSE) {
 		snprintf(reason, reason_size,
 			 "the mesh importer failed: its answer makes no sense");
@@ -333,8 +389,11 @@ static int start_helper(const char *helper, const char *path, int answer_fd, FIL
 	posix_spawn_file_actions_t actions;
 	posix_spawnattr_t attr;
 	sigset_t none, defaults;
-	char *argv[] = {(char *)MESH_HELPER_NAME, (char *)path, NULL};
+	char memory[32];
+	char *argv[] = {(char *)MESH_HELPER_NAME, "--memory-limit", memory, (char *)path, NULL};
 	int err;
+
+	snprintf(memory, sizeof(memory), "%lu", mesh_get_limits().memory_mib);
 
 	sigemptyset(&none);
 	sigemptyset(&defaults);
@@ -361,6 +420,28 @@ static int start_helper(const char *helper, const char *path, int answer_fd, FIL
 		return -1;
 	}
 	return 0;
+}
+
+/* ULONG_MAX: the default, worked out when first asked for. */
+static struct mesh_limits limits = {MESH_TIME_LIMIT_DEFAULT, ULONG_MAX};
+
+void mesh_set_limits(const struct mesh_limits *set)
+{
+	limits = *set;
+}
+
+struct mesh_limits mesh_get_limits(void)
+{
+	if (limits.memory_mib == ULONG_MAX) {
+		long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
+
+		limits.memory_mib = pages > 0 && page_size > 0
+					    ? (unsigned long)((double)pages * page_size /
+							      MESH_MEMORY_LIMIT_DEFAULT_SHARE /
+							      (1 << 20))
+					    : 0;
+	}
+	return limits;
 }
 
 static unsigned long importer_failures;
@@ -401,7 +482,10 @@ static int import(const char *path, struct mesh_data *out, char *reason, size_t 
 		return MESH_IMPORTER_FAILED;
 	}
 	close(fds[1]);
+	deadline = mesh_get_limits().seconds ? now() + (double)mesh_get_limits().seconds : 0;
 	received = receive(fds[0], out, reason, reason_size);
+	if (received == TIMED_OUT)
+		kill(pid, SIGKILL);
 	close(fds[0]); /* a helper still writing gets EPIPE and ends */
 	ret = reap(pid, received, said, reason, reason_size);
 	if (said)

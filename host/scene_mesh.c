@@ -209,7 +209,22 @@ static int place_mesh(struct loader *ld, const struct path *file, const char *na
 				 mesh->vertex_count);
 		goto out_free;
 	}
+	int before = ld->scene->triangle_count;
 	append_triangles(ld->scene, mesh, placed, vn, pl, material);
+	/* Nothing to see, and most likely not a mesh at all (random bytes that
+	 * an importer read as one): issue 24 finding 10. */
+	if (ld->scene->triangle_count == before) {
+		char text[MESSAGE_TEXT_MAX];
+		ret = mesh->triangle_count == 1
+			      ? loader_fail(ld, file,
+					    "\"%s\": its one triangle has area 0 (after placement)",
+					    one_line(name, text))
+			      : loader_fail(ld, file,
+					    "\"%s\": all of its %zu triangles have area 0 (after "
+					    "placement)",
+					    one_line(name, text), mesh->triangle_count);
+		goto out_free;
+	}
 	ret = 0;
 out_free:
 	free(placed);

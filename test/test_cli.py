@@ -521,6 +521,27 @@ def test_million_spheres_render_from_global_memory(tmp_path):
     assert netpbm_header(out) == ("P6", 4, 3)
 
 
+@pytest.mark.parametrize("extra", [[], ["--devices", "0:0", "--piece-rows", "2000"],
+                                   ["-k", "wavefront"]], ids=["one", "devices", "wavefront"])
+def test_too_little_host_memory_is_one_message(tmp_path, extra):
+    """Issue 24 finding 6: under `ulimit -v 1500000` an 8000x8000 image on PoCL
+    aborted in PoCL's assertion (rc 134), as PoCL allocated the image buffer at
+    the first launch; buffers of a device that shares the host's memory are now
+    allocated when created, on every path."""
+    import resource
+    if "(CPU" not in rtcl("--list-devices").stdout.splitlines()[1]:
+        pytest.skip("the first device is not a CPU device")
+
+    def limit_address_space():
+        resource.setrlimit(resource.RLIMIT_AS, (1_500_000 * 1024, 1_500_000 * 1024))
+    out_dir = tmp_path / "out"
+    out_dir.mkdir()
+    result = subprocess.run([RTCL, "--size", "8000x8000", *extra, "-o", str(out_dir / "x.png")],
+                            capture_output=True, text=True, timeout=300,
+                            preexec_fn=limit_address_space)
+    expect_failure(result, 1, "out of host memory for the image (768000000 bytes)", out_dir)
+
+
 def test_kernel_build_failure_shows_log_and_options(tmp_path):
     cl_dir = tmp_path / "cl"
     cl_dir.mkdir()

@@ -152,5 +152,37 @@ Test(fuzz, mesh_regressions_load_cleanly)
 {
 	int n = load_folder("test/fuzz_mesh_regressions", load_mesh_cleanly);
 
-	cr_expect_geq(n, 6, "only %d inputs in test/fuzz_mesh_regressions", n);
+	cr_expect_geq(n, 10, "only %d inputs in test/fuzz_mesh_regressions", n);
+}
+
+/* Issue 24's mesh findings (the README says what each is): refused, with the
+ * words that say why. */
+Test(fuzz, issue_24_mesh_files_are_refused)
+{
+	static const struct {
+		const char *file, *why;
+	} refused[] = {
+		{"ply-face-count-two-billion.ply", "\"face\" records, at least 4000000017 bytes"},
+		{"ply-fewer-faces-than-declared.ply", "but the file ends after 1 of them"},
+		{"ply-all-area-zero.ply", "have area 0 (after placement)"},
+		{"obj-all-area-zero.obj", "have area 0 (after placement)"},
+	};
+
+	for (size_t i = 0; i < sizeof(refused) / sizeof(refused[0]); i++) {
+		char path[256], *full, json[2048], err[512] = "";
+		struct scene s;
+
+		snprintf(path, sizeof(path), "test/fuzz_mesh_regressions/%s", refused[i].file);
+		full = realpath(path, NULL);
+		cr_assert_not_null(full, "%s: no such file", path);
+		snprintf(json, sizeof(json),
+			 "{\"format\": \"rtcl-scene\", \"version\": 2,"
+			 " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+			 " \"meshes\": [{\"file\": \"%s\"}]}",
+			 full);
+		free(full);
+		cr_expect_neq(scene_load_string(&s, json, path, err, sizeof(err)), 0,
+			      "%s: accepted", path);
+		cr_expect(strstr(err, refused[i].why) != NULL, "%s: %s", path, err);
+	}
 }

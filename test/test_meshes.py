@@ -2,9 +2,15 @@
 mesh scene renders with every option that counts work, -v reports the
 triangles, and a refused mesh leaves no output."""
 import json
+import math
 import os
 import pathlib
+import random
+import struct
 import subprocess
+import time
+
+import pytest
 
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
@@ -249,3 +255,170 @@ def test_the_helper_refuses_to_write_binary_to_a_terminal_or_without_a_file():
     result = subprocess.run([str(helper)], capture_output=True, text=True, timeout=60)
     assert result.returncode == 2
     assert "rtcl's mesh import helper" in result.stderr
+
+
+# ---- issue 24: no mesh file hangs rtcl, exhausts memory or is read wrong ----
+
+PLY_FACES = ("ply\nformat {format} 1.0\nelement vertex {vertices}\nproperty float x\n"
+             "property float y\nproperty float z\nelement face {faces}\n"
+             "property list uchar int vertex_indices\nend_header\n")
+
+
+def refused(tmp_path, mesh, *options, env=None, timeout=60):
+    """Renders a scene placing mesh (a path); returns the reason it was refused,
+    checking the one line, the exit status and that no output appeared. The
+    timeout bounds what once hung."""
+    scene, out = tmp_path / "scene.json", tmp_path / "o.png"
+    scene.write_text(json.dumps({
+        "format": "rtcl-scene", "version": 2,
+        "camera": {"eye": [0, 0, -5], "look_at": [0, 0, 0]},
+        "meshes": [{"file": str(mesh)}]}))
+    result = subprocess.run([RTCL, "-s", str(scene), "-o", str(out), "--size", "8x6", *options],
+                            capture_output=True, text=True, cwd=ROOT, timeout=timeout,
+                            env={**os.environ, **(env or {})})
+    assert result.returncode == 1, result.stderr
+    assert not out.exists()
+    assert result.stderr.count("\n") == 1, result.stderr
+    prefix = f"{scene}: meshes[0].file: "
+    assert result.stderr.startswith(prefix), result.stderr
+    return result.stderr[len(prefix):-1]
+
+
+def test_an_obj_whose_mtllib_is_a_fifo_is_refused_not_waited_on(tmp_path):
+    """Finding 4: Assimp opened the FIFO an OBJ's mtllib names and waited for a
+    writer for ever. Every file the importer opens must now be a regular one."""
+    os.mkfifo(tmp_path / "fifo.mtl")
+    mesh = tmp_path / "m.obj"
+    mesh.write_text("mtllib fifo.mtl\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n")
+    assert refused(tmp_path, mesh) == (
+        f'cannot read "{mesh}": it names "{tmp_path}/fifo.mtl", which is not a regular file')
+
+
+def test_a_gltf_whose_buffer_is_a_fifo_is_refused_not_waited_on(tmp_path):
+    os.mkfifo(tmp_path / "fifo.bin")
+    gltf = json.loads((ROOT / "test" / "meshes" / "nodes.gltf").read_text())
+    gltf["buffers"][0]["uri"] = "fifo.bin"
+    mesh = tmp_path / "m.gltf"
+    mesh.write_text(json.dumps(gltf))
+    reason = refused(tmp_path, mesh)
+    assert reason.startswith(f'cannot read "{mesh}": ') and "fifo.bin" in reason, reason
+
+
+@pytest.mark.parametrize("how", ["option", "environment"])
+def test_an_import_past_its_time_limit_is_refused_with_the_limit(tmp_path, how):
+    """Finding 4: the import has a time limit; a helper that does not answer
+    (here one that sleeps) is killed when it passes, with one message."""
+    helper = write_helper(tmp_path, "sleep 100")
+    options, env = (["--mesh-time-limit", "1"], {}) if how == "option" else \
+        ([], {"RTCL_MESH_TIME_LIMIT": "1"})
+    started = time.monotonic()
+    reason = refused(tmp_path, ROOT / "test" / "meshes" / "quad.ply", *options,
+                     env={"RTCL_MESHREAD": str(helper), **env})
+    assert time.monotonic() - started < 30
+    assert reason.endswith(": the import took longer than its limit of 1 s "
+                           "(--mesh-time-limit or RTCL_MESH_TIME_LIMIT)")
+
+
+def test_a_polygon_of_100000_vertices_is_refused_at_once(tmp_path):
+    """Finding 4: a 4.9 MB OBJ with one 100,000-vertex face ran for minutes
+    (Assimp triangulates in time quadratic in a polygon's vertices)."""
+    n = 100000
+    mesh = tmp_path / "disc.obj"
+    angles = [2 * math.pi * i / n for i in range(n)]
+    mesh.write_text("".join(f"v {math.cos(a):.6f} {math.sin(a):.6f} 0\n" for a in angles)
+                    + "f " + " ".join(str(i + 1) for i in range(n)) + "\n")
+    assert refused(tmp_path, mesh, timeout=30) == (
+        f'cannot read "{mesh}": line {n + 1}: a face of {n} vertices, more than the 4096 a '
+        "polygon may have")
+
+
+def test_a_ply_declaring_two_billion_faces_is_refused_before_any_allocation(tmp_path):
+    """Finding 5: a 187-byte ASCII PLY declaring 2,000,000,000 faces made the
+    helper take 15.6 GB for 38 s, then "std::bad_alloc"."""
+    mesh = tmp_path / "huge.ply"
+    mesh.write_text(PLY_FACES.format(format="ascii", vertices=3, faces=2000000000)
+                    + "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")
+    started = time.monotonic()
+    assert refused(tmp_path, mesh, timeout=30) == (
+        f'cannot read "{mesh}": its PLY header declares 3 "vertex" and 2000000000 "face" '
+        "records, at least 4000000017 bytes, but the file holds 26 after its header")
+    assert time.monotonic() - started < 10
+
+
+def test_an_import_beyond_its_memory_limit_is_one_message(tmp_path):
+    """Finding 5: the helper runs under a memory limit (RLIMIT_AS); a file
+    that needs more is refused naming the limit."""
+    n = 300000
+    mesh = tmp_path / "big.ply"
+    vertices = b"".join(struct.pack("<9f", i, 0, 0, i + 1, 0, 0, i, 1, 0) for i in range(n))
+    faces = b"".join(struct.pack("<B3i", 3, 3 * i, 3 * i + 1, 3 * i + 2) for i in range(n))
+    mesh.write_bytes(PLY_FACES.format(format="binary_little_endian", vertices=3 * n,
+                                      faces=n).encode() + vertices + faces)
+    assert refused(tmp_path, mesh, "--mesh-memory-limit", "40") == (
+        f'cannot read "{mesh}": the import needed more memory than its limit of 40 MiB '
+        "(--mesh-memory-limit or RTCL_MESH_MEMORY_LIMIT)")
+    assert refused(tmp_path, mesh, env={"RTCL_MESH_MEMORY_LIMIT": "40"}).endswith("40 MiB "
+        "(--mesh-memory-limit or RTCL_MESH_MEMORY_LIMIT)")
+
+
+@pytest.mark.parametrize("bad", ["-1", "1.5", "x", ""])
+def test_a_bad_mesh_limit_is_a_usage_error(bad):
+    for args, env in ((["--mesh-time-limit", bad], {}), (["--mesh-memory-limit", bad], {}),
+                      ([], {"RTCL_MESH_TIME_LIMIT": bad}), ([], {"RTCL_MESH_MEMORY_LIMIT": bad})):
+        result = subprocess.run([RTCL, *args, "-o", "/nonexistent/x.png"], capture_output=True,
+                                text=True, timeout=60, env={**os.environ, **env})
+        assert result.returncode == 2 and result.stderr.count("\n") == 1, result.stderr
+        assert "expected a whole number of " in result.stderr
+
+
+@pytest.mark.parametrize("kind", ["ascii", "binary"])
+def test_a_ply_with_fewer_faces_than_declared_is_refused(tmp_path, kind):
+    """Finding 11: a header declaring 1000 faces over a body holding 1 gave 1000
+    triangles (Assimp pads); the body must hold every declared record. The
+    padding makes the file long enough to pass the size check."""
+    mesh = tmp_path / "short.ply"
+    if kind == "ascii":
+        body = b"0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n" + b" " * 10000
+        header = PLY_FACES.format(format="ascii", vertices=3, faces=1000)
+    else:
+        body = (struct.pack("<9f", 0, 0, 0, 1, 0, 0, 0, 1, 0) + struct.pack("<B3i", 3, 0, 1, 2)
+                + b"\xff" * 2000)  # faces of 255 vertices, the second one cut off
+        header = PLY_FACES.format(format="binary_little_endian", vertices=3, faces=1000)
+    mesh.write_bytes(header.encode() + body)
+    expected_after = 1 if kind == "ascii" else 2
+    assert refused(tmp_path, mesh) == (
+        f'cannot read "{mesh}": its PLY header declares 1000 "face" records, but the file '
+        f"ends after {expected_after} of them (a truncated file, or a header that does not "
+        "match it)")
+
+
+def test_a_mesh_whose_triangles_all_have_area_0_is_refused(tmp_path):
+    """Finding 10: SCENE.md's rule, once only for inline triangles."""
+    flat = tmp_path / "flat.obj"
+    flat.write_text("v 0 0 0\nv 1 0 0\nv 2 0 0\nv 3 0 0\nf 1 2 3\nf 2 3 4\n")
+    assert refused(tmp_path, flat) == (
+        f'"{flat}": all of its 2 triangles have area 0 (after placement)')
+    regression = ROOT / "test" / "fuzz_mesh_regressions" / "ply-all-area-zero.ply"
+    assert "area 0 (after placement)" in refused(tmp_path, regression)
+
+
+def test_a_gltf_node_of_scale_0_is_refused(tmp_path):
+    gltf = json.loads((ROOT / "test" / "meshes" / "nodes.gltf").read_text())
+    gltf["nodes"][1]["scale"] = [0, 0, 0]
+    for buffer in gltf["buffers"]:
+        if not buffer["uri"].startswith("data:"):
+            buffer["uri"] = str(ROOT / "test" / "meshes" / buffer["uri"])
+    mesh = tmp_path / "m.gltf"
+    mesh.write_text(json.dumps(gltf))
+    assert refused(tmp_path, mesh) == (
+        f'"{mesh}": its one triangle has area 0 (after placement)')
+
+
+@pytest.mark.parametrize("name", ["x.ase", "x.csm"])
+def test_random_bytes_are_not_a_mesh(tmp_path, name):
+    """Finding 10: random bytes named x.ase or x.csm were accepted (every triangle
+    of area 0, or none)."""
+    mesh = tmp_path / name
+    mesh.write_bytes(random.Random(24).randbytes(4096))
+    reason = refused(tmp_path, mesh)
+    assert str(mesh) in reason

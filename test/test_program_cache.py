@@ -4,7 +4,9 @@ a build from source, never a failure (issue 12 item 3)."""
 import json
 import os
 import pathlib
+import signal
 import subprocess
+import time
 
 import pytest
 
@@ -106,3 +108,68 @@ def test_rtcl_cache_0_turns_it_off(tmp_path):
     assert cache_files(tmp_path / "cache") == []
     render(tmp_path, tmp_path / "cache")
     assert render(tmp_path, tmp_path / "cache", RTCL_CACHE="0")[0] is False
+
+
+def test_a_cache_entry_that_is_a_fifo_is_a_miss_not_a_hang(tmp_path):
+    """Issue 24 finding 7: a FIFO in place of the cache file hung every render
+    (fopen waited for a writer). Now it is opened without blocking, refused as
+    not a regular file (said with -v), and the build's binary replaces it."""
+    _, image, _ = render(tmp_path, tmp_path / "cache")
+    path = cache_files(tmp_path / "cache")[0]
+    path.unlink()
+    os.mkfifo(path)
+    result = subprocess.run([RTCL, *SMALL, "-o", "x.ppm", "--stats", "s.json", "-v"],
+                            capture_output=True, text=True, cwd=tmp_path, timeout=60,
+                            env=environment(tmp_path / "cache"))
+    assert result.returncode == 0, result.stderr
+    assert f"rtcl: program cache: {path} is not a regular file; building from source" \
+        in result.stderr.splitlines()
+    assert (tmp_path / "x.ppm").read_bytes() == image
+    assert path.is_file() and render(tmp_path, tmp_path / "cache")[0] is True
+
+
+def test_temporary_files_of_writers_that_are_gone_are_removed(tmp_path):
+    """A writer killed between its temporary file and the rename (SIGKILL) left
+    <key>.bin.tmp-* behind for good; a save now removes those whose writer is
+    gone (its pid no longer runs; without a pid, older than an hour) and keeps
+    those of a running writer."""
+    render(tmp_path, tmp_path / "cache")
+    entry = cache_files(tmp_path / "cache")[0]
+    gone = subprocess.Popen(["true"])
+    gone.wait()
+    dead = entry.with_name(f"{entry.name}.tmp-{gone.pid}-AbCdEf")
+    old_style = entry.with_name(f"{entry.name}.tmp-XyZ123")
+    running = entry.with_name(f"{entry.name}.tmp-{os.getpid()}-GhIjKl")
+    recent = entry.with_name(f"{entry.name}.tmp-MnOpQr")
+    for path in (dead, old_style, running, recent):
+        path.write_bytes(b"half a binary")
+    os.utime(old_style, (1e9, 1e9))
+    entry.unlink()  # a miss, so that the render saves
+    assert render(tmp_path, tmp_path / "cache")[0] is False
+    assert cache_files(tmp_path / "cache") == sorted([entry, running, recent])
+
+
+def test_an_interrupt_while_the_cache_is_written_leaves_no_temporary_file(tmp_path):
+    """Issue 24 finding 7: Ctrl-C between the cache's temporary file and its
+    rename left <key>.bin.tmp-* behind; the interrupt now removes it. The
+    test hook RTCL_TEST_SLOW_CACHE_WRITE holds the write open."""
+    folder = tmp_path / "cache" / "rtcl"
+    process = subprocess.Popen([RTCL, *SMALL, "-o", "x.ppm"], cwd=tmp_path,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env=environment(tmp_path / "cache",
+                                               RTCL_TEST_SLOW_CACHE_WRITE="20000"))
+    try:
+        deadline = time.monotonic() + 120
+        while not (folder.exists() and any(".tmp-" in p.name for p in folder.iterdir())):
+            assert process.poll() is None and time.monotonic() < deadline, \
+                "no temporary cache file appeared"
+            time.sleep(0.05)
+        process.send_signal(signal.SIGINT)
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+        process.wait()
+    assert process.returncode == 130, stderr
+    assert "rtcl: interrupted; no output written" in stderr
+    assert list(folder.iterdir()) == []
+    assert not (tmp_path / "x.ppm").exists()
