@@ -34,13 +34,14 @@ import statistics
 import subprocess
 import sys
 
-from .. import files, locations
+from .. import files, locations, ppm
 from . import genbench
 from ..report import git_commit, markdown_table, one_line, to_csv, utc_now
 from ..usage import (UsageError, add_update_committed, check_positive_int, parse_size,
                      program_name, report_error)
 
 DEFAULT_MESHES = "tetra:8,mount:8,mount:9,lake"
+BACKGROUND = (1, 0, 1)
 PEER_SOURCES = ("side.cpp", "tiny_bvh.h", "tiny_ocl.h", "ply2bin.py")
 CSV_COLUMNS = ("mesh", "triangles", "side", "kernel", "median_ms", "min_ms", "grays_per_s")
 
@@ -153,20 +154,28 @@ def primary_scene(scene, ply, width, height):
             raise Failure(f"{ply}: the scene places its mesh with {key!r}: the peer "
                           "would trace other floats")
     mesh["file"] = str(ply.resolve())
-    kept = {key: scene[key] for key in ("format", "camera", "background", "materials")
-            if key in scene}
+    kept = {key: scene[key] for key in ("format", "camera", "materials") if key in scene}
+    # Magenta behind the mesh: the pixels of another colour are the hits.
     return {**kept, "version": 2, "image": {"width": width, "height": height},
+            "background": list(BACKGROUND),
             "max_depth": 0, "lights": [], "meshes": [mesh]}
+
+
+def count_hits(image):
+    """The pixels of a PPM that are not the background: the rays that hit."""
+    _, data = ppm.pixels(image)
+    background = bytes(255 * channel for channel in BACKGROUND)
+    return sum(data[i:i + 3] != background for i in range(0, len(data), 3))
 
 
 def time_rtcl(rtcl, platform, scene_path, kernel, repeat, out, name):
     stats = out / "raw" / f"rtcl-{name}-{kernel}.json"
+    image = out / "meshes" / f"rtcl-{name}-{kernel}.ppm"
     run([rtcl, "-q", "-p", platform, "-k", kernel, "-r", repeat, scene_path,
-         "-o", out / "raw" / f"rtcl-{name}-{kernel}.ppm", "--stats", stats],
-        out / "raw" / f"rtcl-{name}-{kernel}.txt")
+         "-o", image, "--stats", stats], out / "raw" / f"rtcl-{name}-{kernel}.txt")
     figures = json.loads(stats.read_text())
     times = figures["kernel_ms_all"]
-    return statistics.median(times), min(times), figures
+    return statistics.median(times), min(times), figures, count_hits(image)
 
 
 PEER_LINE = re.compile(r"^(.+?)\s+build\s+([\d.]+) ms\s+trace median ([\d.]+) ms\s+min ([\d.]+) ms")
@@ -181,9 +190,12 @@ def time_peer(side_folder, bin_path, scene, width, height, repeat, variants, out
     rows = []
     for line in output.splitlines():
         match = PEER_LINE.match(line)
+        hits = re.match(r"\s*hits (\d+)", line)
         if match:
-            rows.append((match.group(1).strip(), float(match.group(3)), float(match.group(4)),
-                         float(match.group(2))))
+            rows.append([match.group(1).strip(), float(match.group(3)), float(match.group(4)),
+                         float(match.group(2)), None])
+        elif hits and rows:
+            rows[-1][4] = int(hits.group(1))
     if not rows:
         raise Failure(f"the peer printed no timing ({out / 'raw' / f'peer-{name}.txt'})")
     triangles = int(re.search(r"triangles (\d+)", output).group(1))
@@ -213,16 +225,15 @@ def compare(args, rtcl, out):
                                          args.variants, out, name)
         rtcl_rows = []
         for kernel in args.kernels.split(","):
-            median, low, figures = time_rtcl(rtcl, platform, scene_path, kernel, repeat, out,
-                                             name)
-            rtcl_rows.append((kernel, median, low, figures))
+            rtcl_rows.append((kernel, *time_rtcl(rtcl, platform, scene_path, kernel, repeat,
+                                                 out, name)))
         rays = width * height
         best_rtcl = min(rtcl_rows, key=lambda row: row[1])
         best_peer = min(peer_rows, key=lambda row: row[1])
-        for kernel, median, low, _ in rtcl_rows:
+        for kernel, median, low, _, _ in rtcl_rows:
             csv_rows.append(dict(zip(CSV_COLUMNS, (name, triangles, "rtcl", kernel, median, low,
                                                    rays / median * 1e-6))))
-        for variant, median, low, _ in peer_rows:
+        for variant, median, low, _, _ in peer_rows:
             csv_rows.append(dict(zip(CSV_COLUMNS, (name, triangles, "peer", variant, median, low,
                                                    rays / median * 1e-6))))
         figures = best_rtcl[3]
@@ -231,13 +242,15 @@ def compare(args, rtcl, out):
                       f"{best_peer[0]} {best_peer[1]:.3f}", f"{rays / best_peer[1] * 1e-6:.2f}",
                       f"{best_peer[1] / best_rtcl[1]:.2f}x",
                       f"{figures.get('bytes_per_triangle', 0):.1f}",
-                      f"{figures['bvh']['build_ms']:.0f}", f"{best_peer[3]:.0f}"))
+                      f"{figures['bvh']['build_ms']:.0f}", f"{best_peer[3]:.0f}",
+                      f"{best_rtcl[4]:,} / {best_peer[4]:,}" if best_peer[4] is not None
+                      else f"{best_rtcl[4]:,} / ?"))
         print(f"{name}: rtcl {best_rtcl[0]} {best_rtcl[1]:.3f} ms, peer {best_peer[0]} "
               f"{best_peer[1]:.3f} ms: {best_peer[1] / best_rtcl[1]:.2f}x", flush=True)
     device = json.loads(next((out / "raw").glob("rtcl-*.json")).read_text())["device"]
     header = ("mesh", "triangles", "rtcl fastest (ms)", "rtcl G rays/s", "peer fastest (ms)",
               "peer G rays/s", "rtcl / peer", "rtcl bytes/tri", "rtcl build ms",
-              "peer build ms")
+              "peer build ms", "hits rtcl / peer")
     report = (f"# rtcl against the peer on primary rays\n\n{device}, {width}x{height}, one "
               f"primary ray per pixel, median of {repeat} launches (OpenCL profiling "
               f"events) on each side; rtcl {git_commit() or 'commit unknown'}, {utc_now()}.\n"
