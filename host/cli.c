@@ -399,6 +399,7 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		o->devices_given = 1;
 		return devices_parse(arg, &o->devices, err, err_size);
 	case OPT_SPLIT:
+		o->split_given = 1;
 		return parse_choice("--split", arg, "dynamic", "static", &o->split_static, err,
 				    err_size);
 	case OPT_FRAMES:
@@ -513,6 +514,12 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 			 "--mpi (one device too: --devices P:D); it does not apply to %s",
 			 o->frames_given ? "--frames, whose pieces are whole frames"
 					 : "a render without them");
+		return -1;
+	}
+	if (o->split_given && !(o->devices_given || o->mpi)) {
+		snprintf(err, err_size,
+			 "--split chooses how pieces go to the devices of --devices or --mpi; it "
+			 "does not apply to a render without them");
 		return -1;
 	}
 	if (several && o->flops_path) {

@@ -120,6 +120,9 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--devices", "0:0,0:1", "--piece-rows", "0"], "--piece-rows: expected"),
     (["--devices", "0:0,0:1", "--piece-rows", "2x"], "--piece-rows: expected"),
     (["--piece-rows", "4"], "--piece-rows cuts one image into bands for the devices of"),
+    # Like --piece-rows: refused, not silently ignored, without several devices.
+    (["--split", "static"], "--split chooses how pieces go to the devices of --devices or --mpi"),
+    (["--split", "dynamic", "--frames", "0:1"], "--split chooses how pieces go"),
     (["--devices", "all", "--frames", "0:1", "--piece-rows", "4"],
      "it does not apply to --frames"),
     (["--devices", "0:0,0:1", "--flops", "x.npy"], "use --work-map FILE.npy (per pixel)"),
