@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include "interrupt.h"
+#include "quote.h"
 
 /* Longest part of the target's name kept in the temporary file's name, so
  * that the latter stays under NAME_MAX (255) with its additions. */
@@ -27,16 +28,16 @@ static int open_regular(const char *path, const char *noun, size_t max_bytes, si
 	int fd = open(path, O_RDONLY | O_NONBLOCK);
 
 	if (fd < 0) {
-		snprintf(err, err_size, "%s: cannot open: %s", path, strerror(errno));
+		snprintf(err, err_size, "%s: cannot open: %s", quote_text(path), strerror(errno));
 		return -1;
 	}
 	if (fstat(fd, &st) != 0)
-		snprintf(err, err_size, "%s: cannot stat: %s", path, strerror(errno));
+		snprintf(err, err_size, "%s: cannot stat: %s", quote_text(path), strerror(errno));
 	else if (!S_ISREG(st.st_mode))
-		snprintf(err, err_size, "%s: not a regular file", path);
+		snprintf(err, err_size, "%s: not a regular file", quote_text(path));
 	else if ((unsigned long long)st.st_size > max_bytes)
 		snprintf(err, err_size, "%s: %s is %lld bytes, more than the limit of %zu bytes",
-			 path, noun, (long long)st.st_size, max_bytes);
+			 quote_text(path), noun, (long long)st.st_size, max_bytes);
 	else {
 		*size = (size_t)st.st_size;
 		return fd;
@@ -58,7 +59,7 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 	capacity++;
 	buf = malloc(capacity);
 	if (!buf) {
-		snprintf(err, err_size, "%s: out of memory", path);
+		snprintf(err, err_size, "%s: out of memory", quote_text(path));
 		goto out_close;
 	}
 	for (;;) {
@@ -67,10 +68,10 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 			if (!grown) {
 				if (capacity > max_bytes)
 					snprintf(err, err_size,
-						 "%s: %s is more than the limit of %zu bytes", path,
+						 "%s: %s is more than the limit of %zu bytes", quote_text(path),
 						 noun, max_bytes);
 				else
-					snprintf(err, err_size, "%s: out of memory", path);
+					snprintf(err, err_size, "%s: out of memory", quote_text(path));
 				goto out_free;
 			}
 			buf = grown;
@@ -80,7 +81,7 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 		if (n < 0 && errno == EINTR)
 			continue;
 		if (n < 0) {
-			snprintf(err, err_size, "%s: cannot read: %s", path, strerror(errno));
+			snprintf(err, err_size, "%s: cannot read: %s", quote_text(path), strerror(errno));
 			goto out_free;
 		}
 		if (n == 0)
@@ -136,7 +137,7 @@ static int create_temp(struct staged_file *f, char *err, size_t err_size)
 				 (int)(base - f->target), f->target, TEMP_NAME_KEEP, base,
 				 (long)getpid(), suffix, ext);
 		if (n < 0 || (size_t)n >= sizeof(f->temp)) {
-			snprintf(err, err_size, "%s: %s", f->target, strerror(ENAMETOOLONG));
+			snprintf(err, err_size, "%s: %s", quote_text(f->target), strerror(ENAMETOOLONG));
 			return -1;
 		}
 		int fd = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -145,7 +146,7 @@ static int create_temp(struct staged_file *f, char *err, size_t err_size)
 		if (errno != EEXIST)
 			break;
 	}
-	snprintf(err, err_size, "%s: cannot create a file in its directory: %s", f->target,
+	snprintf(err, err_size, "%s: cannot create a file in its directory: %s", quote_text(f->target),
 		 strerror(errno));
 	return -1;
 }
@@ -159,7 +160,7 @@ int files_stage(struct staged_file *f, const char *target, char *err, size_t err
 	interrupt_hold();
 	fd = create_temp(f, err, err_size);
 	if (fd >= 0 && interrupt_track(f->temp)) {
-		snprintf(err, err_size, "%s: too many files open for writing at once", target);
+		snprintf(err, err_size, "%s: too many files open for writing at once", quote_text(target));
 		close(fd);
 		unlink(f->temp);
 		fd = -1;
@@ -189,7 +190,7 @@ int files_commit(struct staged_file *files, int count, char *err, size_t err_siz
 	for (int i = 0; i < count; i++) {
 		struct staged_file *f = &files[i];
 		if (ret == 0 && rename(f->temp, f->target) != 0) {
-			snprintf(err, err_size, "%s: cannot replace: %s", f->target,
+			snprintf(err, err_size, "%s: cannot replace: %s", quote_text(f->target),
 				 strerror(errno));
 			ret = -1;
 		}
@@ -237,7 +238,7 @@ int files_stage_with(struct staged_file *f, const char *target, files_fill fill,
 	return 0;
 
 out_discard:
-	snprintf(err, err_size, "%s: cannot write: %s", target,
+	snprintf(err, err_size, "%s: cannot write: %s", quote_text(target),
 		 errno ? strerror(errno) : "write failed");
 	files_discard(f);
 	return -1;
@@ -281,7 +282,7 @@ static int directory_of(const char *path, char *dir, char *err, size_t err_size)
 	if (length > 1)
 		length--; /* drop the slash, except for "/" itself */
 	if (length >= PATH_MAX) {
-		snprintf(err, err_size, "%s: %s", path, strerror(ENAMETOOLONG));
+		snprintf(err, err_size, "%s: %s", quote_text(path), strerror(ENAMETOOLONG));
 		return -1;
 	}
 	memcpy(dir, path, length);
@@ -297,14 +298,14 @@ static int check_directory(const char *path, const char *dir, char *err, size_t 
 
 	if (stat(dir, &st) != 0) {
 		if (errno == ENOENT)
-			snprintf(err, err_size, "%s: directory \"%s\" does not exist", path, dir);
+			snprintf(err, err_size, "%s: directory \"%s\" does not exist", quote_text(path), quote_text(dir));
 		else
-			snprintf(err, err_size, "%s: directory \"%s\": %s", path, dir,
+			snprintf(err, err_size, "%s: directory \"%s\": %s", quote_text(path), quote_text(dir),
 				 strerror(errno));
 		return -1;
 	}
 	if (!S_ISDIR(st.st_mode)) {
-		snprintf(err, err_size, "%s: \"%s\" is not a directory", path, dir);
+		snprintf(err, err_size, "%s: \"%s\" is not a directory", quote_text(path), quote_text(dir));
 		return -1;
 	}
 	name_max = pathconf(dir, _PC_NAME_MAX);
@@ -312,7 +313,7 @@ static int check_directory(const char *path, const char *dir, char *err, size_t 
 		snprintf(err, err_size,
 			 "%s: the file name is %zu characters long, more than the %ld this file "
 			 "system allows",
-			 path, strlen(files_base_name(path)), name_max);
+			 quote_text(path), strlen(files_base_name(path)), name_max);
 		return -1;
 	}
 	return 0;
@@ -330,14 +331,14 @@ static int check_replaceable(const char *path, const char *dir, char *err, size_
 		return 0; /* nothing to replace */
 	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
 		snprintf(err, err_size,
-			 "%s: exists and is not a regular file; refusing to replace it", path);
+			 "%s: exists and is not a regular file; refusing to replace it", quote_text(path));
 		return -1;
 	}
 	if (access(path, W_OK) != 0 && errno != ENOENT) {
 		snprintf(err, err_size,
 			 "%s: exists and you cannot write it (%s); rtcl replaces only a file you "
 			 "could overwrite: remove it or choose another name",
-			 path, strerror(errno));
+			 quote_text(path), strerror(errno));
 		return -1;
 	}
 	if (lstat(path, &st) == 0 && stat(dir, &dir_st) == 0 && (dir_st.st_mode & S_ISVTX) &&
@@ -345,7 +346,7 @@ static int check_replaceable(const char *path, const char *dir, char *err, size_
 		snprintf(err, err_size,
 			 "%s: belongs to another user in the sticky directory \"%s\", so it "
 			 "cannot be replaced: choose another name",
-			 path, dir);
+			 quote_text(path), quote_text(dir));
 		return -1;
 	}
 	return 0;
@@ -358,7 +359,7 @@ int files_check_writable(const char *path, char *err, size_t err_size)
 	int fd;
 
 	if (path[0] == '\0' || path[strlen(path) - 1] == '/') {
-		snprintf(err, err_size, "%s: not a file name", path);
+		snprintf(err, err_size, "%s: not a file name", quote_text(path));
 		return -1;
 	}
 	if (directory_of(path, dir, err, err_size) || check_directory(path, dir, err, err_size) ||

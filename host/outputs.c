@@ -11,6 +11,7 @@
 #include "files.h"
 #include "image.h"
 #include "interrupt.h"
+#include "quote.h"
 #include "workmap.h"
 
 /* Room for a path and the ".json" of the --flops sidecar. */
@@ -113,7 +114,7 @@ int outputs_check(const struct options *opt, char *err, size_t err_size)
 				snprintf(err, err_size,
 					 "%s %s and %s %s name the same file: give each output "
 					 "a file of its own",
-					 out[j].option, out[j].path, out[i].option, out[i].path);
+					 out[j].option, quote_text(out[j].path), out[i].option, quote_text(out[i].path));
 				return OUTPUTS_CLASH;
 			}
 		}

@@ -14,6 +14,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "quote.h"
+
 /* The file's first bytes; a new layout gets a new one. */
 static const char magic[8] = {'r', 't', 'c', 'l', 'b', 'i', 'n', '1'};
 
@@ -103,7 +105,7 @@ out_close:
 	fclose(file);
 	if (!binary && cache->verbose)
 		fprintf(stderr, "rtcl: program cache: %s is damaged; building from source\n",
-			cache->path);
+			quote_text(cache->path));
 	return binary;
 }
 
@@ -132,7 +134,7 @@ cl_program progcache_load(const struct progcache *cache, const struct device *de
 	if (cache->verbose)
 		fprintf(stderr,
 			"rtcl: program cache: the device refused %s; building from source\n",
-			cache->path);
+			quote_text(cache->path));
 	return NULL;
 }
 
@@ -204,7 +206,7 @@ void progcache_save(const struct progcache *cache, cl_program program)
 		if (make_dirs(dir) != 0 || write_atomically(cache->path, &h, binary) != 0) {
 			if (cache->verbose)
 				fprintf(stderr, "rtcl: program cache: cannot write %s (%s)\n",
-					cache->path, strerror(errno));
+					quote_text(cache->path), strerror(errno));
 		}
 	}
 	free(binary);

@@ -21,6 +21,7 @@
 #include <jansson.h>
 
 #include "files.h"
+#include "quote.h"
 #include "scene_loader.h"
 
 /* Larger documents are refused before parsing: jansson needs many times the
@@ -328,7 +329,9 @@ static const char utf8_bom[] = "\xef\xbb\xbf";
 static int load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
 		       const char *base_dir, char *err, size_t err_size)
 {
-	struct loader ld = {.source = source,
+	/* Messages show the name with its control bytes escaped (quote.h). */
+	char *shown = strdup(quote_text(source));
+	struct loader ld = {.source = shown ? shown : "(scene)",
 			    .err = err,
 			    .err_size = err_size,
 			    .scene = scene,
@@ -340,7 +343,8 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 	memset(scene, 0, sizeof(*scene));
 	if (len > SCENE_MAX_BYTES) {
 		loader_write_err(&ld, "%s: scene is %zu bytes, more than the limit of %zu bytes",
-				 source, len, SCENE_MAX_BYTES);
+				 ld.source, len, SCENE_MAX_BYTES);
+		free(shown);
 		return -1;
 	}
 	if (len >= 3 && memcmp(json, utf8_bom, 3) == 0) {
@@ -348,12 +352,15 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 		len -= 3;
 	}
 	doc = json_loadb(json, len, JSON_REJECT_DUPLICATES, &jerr);
-	if (!doc)
-		return loader_fail_json(&ld, &jerr);
+	if (!doc) {
+		loader_fail_json(&ld, &jerr);
+		free(shown);
+		return -1;
+	}
 
 	scene->source = strdup(source);
-	if (!scene->source) {
-		loader_write_err(&ld, "%s: out of memory", source);
+	if (!scene->source || !shown) {
+		loader_write_err(&ld, "%s: out of memory", ld.source);
 		ret = -1;
 	} else {
 		ld.doc = doc;
@@ -363,6 +370,7 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 	}
 	json_decref(ld.name_index);
 	json_decref(doc);
+	free(shown);
 	if (ret)
 		scene_free(scene);
 	return ret;
@@ -378,7 +386,7 @@ int scene_load_file(struct scene *scene, const char *path, char *err, size_t err
 
 	memset(scene, 0, sizeof(*scene));
 	if (!dir) {
-		snprintf(err, err_size, "%s: out of memory", path);
+		snprintf(err, err_size, "%s: out of memory", quote_text(path));
 		return -1;
 	}
 	ret = files_read(path, "scene", SCENE_MAX_BYTES, &buf, &len, err, err_size);
@@ -400,7 +408,7 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		struct loader ld = {.source = name, .err = err, .err_size = err_size};
 
 		memset(scene, 0, sizeof(*scene));
-		loader_write_err(&ld, "%s: no scene text", name);
+		loader_write_err(&ld, "%s: no scene text", quote_text(name));
 		return -1;
 	}
 	return load_buffer(scene, json, strlen(json), name, NULL, err, err_size);
