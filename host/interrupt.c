@@ -31,6 +31,21 @@ static void lock_held(void)
 	pthread_mutex_lock(&lock);
 }
 
+/* How the message names the signal: not at all for the interrupts, whose
+ * names say nothing more than "interrupted". */
+static const char *signal_name(int signal_number)
+{
+	switch (signal_number) {
+	case SIGQUIT:
+		return " (SIGQUIT)";
+	case SIGABRT:
+		return " (SIGABRT sent to rtcl)";
+	case SIGSEGV:
+		return " (SIGSEGV sent to rtcl)";
+	}
+	return "";
+}
+
 /* Runs with the lock held, so no rename or new temporary file can start. */
 static void leave(int signal_number)
 {
@@ -38,8 +53,8 @@ static void leave(int signal_number)
 		if (tracked[i])
 			unlink(tracked[i]);
 	/* dprintf, not stdio: the main thread may hold stderr's lock. */
-	dprintf(STDERR_FILENO, "%srtcl: interrupted; %s\n", progress_on_stderr ? "\n" : "",
-		outcome);
+	dprintf(STDERR_FILENO, "%srtcl: interrupted%s; %s\n", progress_on_stderr ? "\n" : "",
+		signal_name(signal_number), outcome);
 	_exit(128 + signal_number);
 }
 
@@ -68,6 +83,15 @@ int interrupt_setup(int progress_line, char *err, size_t err_size)
 	sigaddset(&signals, SIGINT);
 	sigaddset(&signals, SIGTERM);
 	sigaddset(&signals, SIGHUP);
+	/* A quit, and the crash signals that a user sends with kill: the OpenCL
+	 * runtime's LLVM installs handlers for these that print nothing and
+	 * return, which swallowed them (the render went on). Blocked, they come
+	 * here instead. A real fault is unaffected: the kernel delivers a
+	 * SIGSEGV that the faulting thread blocks with the default action (the
+	 * process dies), and abort() unblocks SIGABRT in its own thread. */
+	sigaddset(&signals, SIGQUIT);
+	sigaddset(&signals, SIGABRT);
+	sigaddset(&signals, SIGSEGV);
 	failed = pthread_sigmask(SIG_BLOCK, &signals, NULL);
 	if (!failed)
 		failed = pthread_attr_init(&attributes);

@@ -1,4 +1,5 @@
-/* Interrupts (SIGINT, SIGTERM, SIGHUP) in a multi-threaded process.
+/* Interrupts (SIGINT, SIGTERM, SIGHUP, and SIGQUIT, SIGABRT or SIGSEGV sent
+ * by another process) in a multi-threaded process.
  *
  * The signals are blocked in every thread from the start of main, before the
  * OpenCL runtime starts threads of its own (which inherit the mask), and are
