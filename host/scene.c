@@ -450,3 +450,81 @@ int scene_bounds(const struct scene *scene, double lo[3], double hi[3])
 	memcpy(hi, box_hi, sizeof(box_hi));
 	return scene->sphere_count + scene->triangle_count;
 }
+
+/* FNV-1a over n bytes. */
+static void digest_bytes(unsigned long long *h, const void *data, size_t n)
+{
+	const unsigned char *b = data;
+
+	for (size_t i = 0; i < n; i++) {
+		*h ^= b[i];
+		*h *= 0x100000001b3ULL;
+	}
+}
+
+static void digest_doubles(unsigned long long *h, const double *v, size_t n)
+{
+	digest_bytes(h, v, n * sizeof(double));
+}
+
+static void digest_int(unsigned long long *h, long long v)
+{
+	digest_bytes(h, &v, sizeof(v));
+}
+
+unsigned long long scene_digest(const struct scene *scene)
+{
+	unsigned long long h = 0xcbf29ce484222325ULL;
+	const struct scene_camera *c = &scene->camera;
+
+	digest_int(&h, scene->width);
+	digest_int(&h, scene->height);
+	digest_int(&h, scene->samples);
+	digest_int(&h, scene->max_depth);
+	digest_doubles(&h, c->eye, 3);
+	digest_doubles(&h, c->look_at, 3);
+	digest_doubles(&h, c->up, 3);
+	digest_doubles(&h, &c->fov, 1);
+	digest_doubles(&h, scene->background, 3);
+	digest_doubles(&h, scene->ambient, 3);
+	digest_doubles(&h, &scene->epsilon, 1);
+	/* Field by field: the structs' padding holds whatever it held. */
+	digest_int(&h, scene->material_count);
+	for (int i = 0; i < scene->material_count; i++) {
+		const struct scene_material *m = &scene->materials[i];
+		double fields[] = {m->ambient, m->diffuse, m->specular, m->shininess,
+				   m->reflect,	m->transmit, m->ior};
+		digest_doubles(&h, m->color, 3);
+		digest_doubles(&h, fields, sizeof(fields) / sizeof(fields[0]));
+	}
+	digest_int(&h, scene->sphere_count);
+	for (int i = 0; i < scene->sphere_count; i++) {
+		digest_doubles(&h, scene->spheres[i].center, 3);
+		digest_doubles(&h, &scene->spheres[i].radius, 1);
+		digest_int(&h, scene->spheres[i].material);
+	}
+	digest_int(&h, scene->plane_count);
+	for (int i = 0; i < scene->plane_count; i++) {
+		const struct scene_plane *p = &scene->planes[i];
+		digest_doubles(&h, p->point, 3);
+		digest_doubles(&h, p->normal, 3);
+		digest_int(&h, p->material);
+		digest_int(&h, p->has_checker);
+		digest_doubles(&h, &p->checker_size, 1);
+		digest_doubles(&h, p->checker_color, 3);
+	}
+	digest_int(&h, scene->light_count);
+	for (int i = 0; i < scene->light_count; i++) {
+		digest_doubles(&h, scene->lights[i].position, 3);
+		digest_doubles(&h, scene->lights[i].color, 3);
+	}
+	digest_int(&h, scene->triangle_count);
+	for (int i = 0; i < scene->triangle_count; i++) {
+		const struct scene_triangle *t = &scene->triangles[i];
+		digest_doubles(&h, &t->v[0][0], 9);
+		digest_doubles(&h, &t->normal[0][0], 9);
+		digest_int(&h, t->material);
+		digest_int(&h, t->smooth);
+	}
+	return h;
+}

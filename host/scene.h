@@ -106,6 +106,13 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 
 void scene_free(struct scene *scene);
 
+/* A 64-bit FNV-1a digest of everything in the loaded scene that its image
+ * depends on: the image and camera settings and every material, sphere,
+ * plane, light and triangle (the mesh files' contents, placed), field by
+ * field; not the file's name. Equal scenes give equal digests on every host
+ * of one byte order (--mpi ranks compare them, mpi_render.h). */
+unsigned long long scene_digest(const struct scene *scene);
+
 /* Sets lo and hi to the world-space axis-aligned box of the scene's finite
  * objects, the spheres and triangles (planes are infinite), and returns how
  * many there are; with none, lo and hi are left as they were. */

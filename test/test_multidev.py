@@ -264,6 +264,56 @@ def test_mpi_rank_that_dies_fails_the_run_with_no_output(tmp_path, kill):
     assert os.listdir(tmp_path) == [], "a dead rank left files behind"
 
 
+def mpmd_run(first, second, cwd=(ROOT, ROOT)):
+    """Two ranks of different command lines (mpirun's app contexts)."""
+    command = ["mpirun", "--oversubscribe", "-np", "1", "--wdir", str(cwd[0]), RTCL, "--mpi",
+               *first, ":", "-np", "1", "--wdir", str(cwd[1]), RTCL, "--mpi", *second]
+    return subprocess.run(command, capture_output=True, text=True, cwd=ROOT, timeout=120,
+                          env={**os.environ, **MPI_ENV})
+
+
+# Ranks that render different jobs (issue 24, finding 8) spliced one image
+# from both with exit status 0, or failed with "internal error: piece 3 of 3".
+@needs_mpi
+@pytest.mark.parametrize("first, second, message", [
+    (["-s", "scenes/two_balls.json"], ["-s", "scenes/paper60.json"],
+     "rank 1 renders another job: the scene differs (file scenes/two_balls.json on rank 0, "
+     "scenes/paper60.json on rank 1)"),
+    ([], ["--spp", "4"], "rank 1 renders another job: --spp 4 against rank 0's --spp 1"),
+    (["--frames", "0:1"], ["--frames", "0:2"],
+     "rank 1 renders another job: --frames 0:2 against rank 0's --frames 0:1"),
+    ([], ["--size", "64x24"],
+     "rank 1 renders another job: --size 64x24 against rank 0's --size 32x24"),
+    (["--piece-rows", "2"], ["--piece-rows", "3"],
+     "rank 1 renders another job: --piece-rows 3 against rank 0's --piece-rows 2"),
+])
+def test_mpi_ranks_that_render_different_jobs_are_refused(tmp_path, first, second, message):
+    out = ["-o", str(tmp_path / "x.ppm"), "--stats", str(tmp_path / "s.json")]
+    result = mpmd_run([*SMALL, *first, *out], [*SMALL, *second, *out])
+    assert result.returncode == 1, result.stderr
+    assert own_messages(result.stderr) == [f"rtcl: {message}"], result.stderr
+    assert os.listdir(tmp_path) == []
+
+
+@needs_mpi
+def test_mpi_ranks_whose_scene_files_differ_in_content_are_refused(tmp_path):
+    # The same name in two folders: the digest of the loaded scene tells.
+    a, b, out = tmp_path / "a", tmp_path / "b", tmp_path / "out"
+    for folder in (a, b, out):
+        folder.mkdir()
+    scene = json.loads((ROOT / "scenes" / "two_balls.json").read_text())
+    (a / "s.json").write_text(json.dumps(scene))
+    scene["spheres"][0]["radius"] *= 1.0000001
+    (b / "s.json").write_text(json.dumps(scene))
+    args = [*SMALL, "-s", "s.json", "-o", str(out / "x.ppm")]
+    result = mpmd_run(args, args, cwd=(a, b))
+    assert result.returncode == 1, result.stderr
+    assert own_messages(result.stderr) == [
+        "rtcl: rank 1 renders another job: the scene differs (file s.json on rank 0, s.json "
+        "on rank 1, with other contents)"], result.stderr
+    assert os.listdir(out) == []
+
+
 @needs_mpi
 def test_mpi_frames_that_do_not_fit_in_rank_0s_memory_are_refused(tmp_path):
     result = mpi_run("--size", "16384x16384", "--frames", "0:999", "-o",
