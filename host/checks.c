@@ -183,3 +183,14 @@ int checks_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");
 }
+
+void checks_commit_delay(void)
+{
+	const char *value = getenv("RTCL_TEST_COMMIT_DELAY");
+	long ms = value ? strtol(value, NULL, 10) : 0;
+
+	if (ms > 0) {
+		struct timespec wait = {(time_t)(ms / 1000), (ms % 1000) * 1000000L};
+		nanosleep(&wait, NULL);
+	}
+}

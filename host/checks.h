@@ -3,8 +3,8 @@
  * per-pixel write counts read back, and an injected device fault. Active
  * only with render_settings.check_writes (kernel tests) or
  * RTCL_TEST_DEVICE_FAULT=1, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE and
- * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES and RTCL_TEST_DOUBLE_BAND (CLI
- * tests). */
+ * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_DOUBLE_BAND and
+ * RTCL_TEST_COMMIT_DELAY (CLI tests). */
 #ifndef RTCL_CHECKS_H
 #define RTCL_CHECKS_H
 
@@ -72,5 +72,10 @@ int checks_count_writes(void);
 /* RTCL_TEST_DOUBLE_BAND=1: several devices in one process render band 0 a
  * second time on another device, which the write-count check must catch. */
 int checks_double_band(void);
+
+/* RTCL_TEST_COMMIT_DELAY=MS: the commit of the outputs takes MS milliseconds
+ * more after its renames, as on a slow file system, with interrupts held:
+ * a signal then comes while the outputs are committed. */
+void checks_commit_delay(void);
 
 #endif

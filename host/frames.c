@@ -5,6 +5,7 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "checks.h"
 #include "devstats.h"
 #include "image.h"
 #include "interrupt.h"
@@ -204,8 +205,10 @@ int frames_commit(const struct run *run, struct frames_output *o, const struct f
 	}
 	interrupt_hold();
 	int ret = files_commit(o->staged, n, err, err_size);
-	if (ret == 0)
+	if (ret == 0) {
 		interrupt_set_outcome("the outputs were written");
+		checks_commit_delay();
+	}
 	interrupt_release();
 	if (ret == 0 && !opt->quiet)
 		print_summary(run, r);

@@ -14,6 +14,9 @@ static const char *tracked[INTERRUPT_MAX_TRACKED]; /* NULL: a free slot */
 static const char *outcome = "no output written";
 static int progress_on_stderr;
 static sigset_t signals;
+static volatile sig_atomic_t received; /* a signal taken, its handling under way */
+static int blocks_sigcont;		/* under mpirun (interrupt_setup) */
+static int watches_mpirun;		/* interrupt_watch_mpirun() was called */
 
 static void init_lock(void)
 {
@@ -66,19 +69,22 @@ static void *take_signals(void *unused)
 
 		if (sigwait(&signals, &signal_number) != 0)
 			continue;
+		received = signal_number; /* before the lock: interrupt_settle() */
 		lock_held();
 		leave(signal_number);
 	}
 	return NULL;
 }
 
-int interrupt_setup(int progress_line, char *err, size_t err_size)
+int interrupt_setup(int progress_line, int under_mpirun, char *err, size_t err_size)
 {
 	pthread_attr_t attributes;
 	pthread_t thread;
+	sigset_t blocked;
 	int failed;
 
 	progress_on_stderr = progress_line;
+	blocks_sigcont = under_mpirun;
 	sigemptyset(&signals);
 	sigaddset(&signals, SIGINT);
 	sigaddset(&signals, SIGTERM);
@@ -92,7 +98,11 @@ int interrupt_setup(int progress_line, char *err, size_t err_size)
 	sigaddset(&signals, SIGQUIT);
 	sigaddset(&signals, SIGABRT);
 	sigaddset(&signals, SIGSEGV);
-	failed = pthread_sigmask(SIG_BLOCK, &signals, NULL);
+	/* Under mpirun, SIGCONT too, left pending for interrupt_settle(). */
+	blocked = signals;
+	if (under_mpirun)
+		sigaddset(&blocked, SIGCONT);
+	failed = pthread_sigmask(SIG_BLOCK, &blocked, NULL);
 	if (!failed)
 		failed = pthread_attr_init(&attributes);
 	if (!failed) {
@@ -141,4 +151,54 @@ void interrupt_set_outcome(const char *text)
 	lock_held();
 	outcome = text;
 	pthread_mutex_unlock(&lock);
+}
+
+/* Takes a pending SIGCONT; returns 1 if there was one. */
+static int take_sigcont(void)
+{
+	struct timespec now = {0, 0};
+	sigset_t cont;
+
+	sigemptyset(&cont);
+	sigaddset(&cont, SIGCONT);
+	return sigtimedwait(&cont, NULL, &now) == SIGCONT;
+}
+
+void interrupt_watch_mpirun(void)
+{
+	if (!blocks_sigcont)
+		return;
+	take_sigcont(); /* one from before (a job resumed) does not count */
+	watches_mpirun = 1;
+}
+
+/* How long rank 0 waits for mpirun's SIGTERM after its SIGCONT. */
+#define MPIRUN_SIGTERM_WAIT_S 1
+
+void interrupt_settle(void)
+{
+	struct timespec now = {0, 0};
+	int signal_number;
+
+	lock_held();
+	/* One taken by the thread, which waits for the lock we hold now, or
+	 * one not taken yet. */
+	if (received)
+		leave(received);
+	signal_number = sigtimedwait(&signals, NULL, &now);
+	if (signal_number > 0)
+		leave(signal_number);
+	if (watches_mpirun && take_sigcont()) {
+		/* mpirun ends a job it was told to end (Ctrl-C) with SIGCONT, then
+		 * SIGTERM some 30 ms later (Open MPI 4.1.4's odls): a rank 0 that
+		 * finished its commit in between exited 0 unaware, and mpirun's
+		 * status 1 came with no message at all. A SIGCONT during the end of
+		 * the run is waited on: the SIGTERM that follows ends rank 0 with
+		 * the message; none (a job resumed after Ctrl-Z) costs a second. */
+		struct timespec wait = {MPIRUN_SIGTERM_WAIT_S, 0};
+		signal_number = sigtimedwait(&signals, NULL, &wait);
+		if (signal_number > 0)
+			leave(signal_number);
+	}
+	/* Held until the process exits: a later signal finds the run over. */
 }

@@ -947,8 +947,12 @@ static int mpi_render(struct run *run, int image)
 	 * left to die, and the writing (staging, then one commit) takes about
 	 * 10-90 ms a frame (README). */
 	MPI_Finalize();
-	if (j.rank == ROOT && status == 0)
+	if (j.rank != ROOT && status == 0)
+		interrupt_set_outcome("this rank's pieces were delivered; rank 0 writes the outputs");
+	if (j.rank == ROOT && status == 0) {
+		interrupt_watch_mpirun();
 		status = write_root(&j);
+	}
 	free_job(&j);
 	return status;
 }

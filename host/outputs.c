@@ -8,6 +8,7 @@
 #include <strings.h>
 #include <sys/stat.h>
 
+#include "checks.h"
 #include "files.h"
 #include "image.h"
 #include "interrupt.h"
@@ -187,8 +188,10 @@ int outputs_write(const struct run *run, char *err, size_t err_size)
 	/* One step for an interrupt: the renames and what the message says. */
 	interrupt_hold();
 	int ret = files_commit(staged, n, err, err_size);
-	if (ret == 0)
+	if (ret == 0) {
 		interrupt_set_outcome("the outputs were written");
+		checks_commit_delay();
+	}
 	interrupt_release();
 	return ret;
 }

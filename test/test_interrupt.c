@@ -12,7 +12,7 @@ static void start_interrupt_thread(void)
 {
 	char err[256];
 
-	cr_assert_eq(interrupt_setup(0, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(interrupt_setup(0, 0, err, sizeof(err)), 0, "%s", err);
 }
 
 /* A fault in a thread that blocks SIGSEGV: the kernel ends the process with

@@ -7,8 +7,10 @@ import json
 import os
 import pathlib
 import re
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -312,6 +314,32 @@ def test_mpi_ranks_whose_scene_files_differ_in_content_are_refused(tmp_path):
         "rtcl: rank 1 renders another job: the scene differs (file s.json on rank 0, s.json "
         "on rank 1, with other contents)"], result.stderr
     assert os.listdir(out) == []
+
+
+# Ctrl-C to mpirun while rank 0 commits (issue 24, finding 15): mpirun sends
+# SIGCONT, then SIGTERM some 30 ms later; rank 0 had finished and exited 0
+# in between, and mpirun's status 1 came with no message at all, though
+# every output was written. RTCL_TEST_COMMIT_DELAY holds rank 0 in its
+# commit, after the renames, for the signal to come then.
+@needs_mpi
+def test_mpi_interrupt_while_rank_0_commits_says_the_outputs_were_written(tmp_path):
+    command = [*MPIRUN[:-1], "2", RTCL, "--mpi", *SMALL, "-q", "--frames", "0:19", "-o",
+               str(tmp_path / "f.ppm")]
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, **MPI_ENV, "RTCL_TEST_COMMIT_DELAY": "300"})
+    deadline = time.monotonic() + 120
+    while (not any(name.startswith("f_") for name in os.listdir(tmp_path))
+           and process.poll() is None and time.monotonic() < deadline):
+        time.sleep(0.001)
+    process.send_signal(signal.SIGINT)
+    try:
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert sorted(os.listdir(tmp_path)) == [f"f_{f:04d}.ppm" for f in range(20)]
+    assert "rtcl: interrupted; the outputs were written\n" in stderr, stderr
+    assert "no output written" not in stderr, stderr
 
 
 @needs_mpi
