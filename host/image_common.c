@@ -240,8 +240,8 @@ static float largest_value(const char *ext)
 	return FLT_MAX;
 }
 
-/* Radiance that overflowed float (+inf, or NaN from inf × 0) or that the
- * format cannot hold, clamped to its largest value (RENDERING.md, "Writing
+/* Radiance that overflowed float (+inf) or that the format cannot hold,
+ * clamped to its largest value (RENDERING.md, "Writing
  * the image"): never inf, never black. Returns rgb itself when nothing
  * needs it, else a malloc'd copy in *copy (NULL when out of memory). */
 static const float *clamp_radiance(const float *rgb, size_t count, float largest, float **copy)
@@ -249,7 +249,7 @@ static const float *clamp_radiance(const float *rgb, size_t count, float largest
 	size_t i = 0;
 
 	*copy = NULL;
-	while (i < count && rgb[i] <= largest)
+	while (i < count && !(rgb[i] > largest))
 		i++;
 	if (i == count)
 		return rgb;
@@ -257,7 +257,7 @@ static const float *clamp_radiance(const float *rgb, size_t count, float largest
 	if (!*copy)
 		return NULL;
 	for (i = 0; i < count; i++)
-		(*copy)[i] = rgb[i] <= largest ? rgb[i] : largest; /* NaN fails the test */
+		(*copy)[i] = rgb[i] > largest ? largest : rgb[i]; /* NaN stays NaN */
 	return *copy;
 }
 

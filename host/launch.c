@@ -261,7 +261,8 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 		s->accel == ACCEL_BVH && (scene->sphere_count > 0 || scene->triangle_count > 0);
 
 	*block = NULL;
-	if (launch_pack_scene(dev, scene, s, use_bvh, res, block, err, err_size))
+	if (devscene_check_resolution(scene, err, err_size) ||
+	    launch_pack_scene(dev, scene, s, use_bvh, res, block, err, err_size))
 		return -1;
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
 	if (!res->rgb) {

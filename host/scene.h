@@ -106,6 +106,16 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 
 void scene_free(struct scene *scene);
 
+/* p relative to the camera's eye, in double: the device renders the scene
+ * translated so that the eye is its origin (camera-relative rendering,
+ * RENDERING.md "Coordinates on the device"), where float keeps the most
+ * precision. Every world position that goes to the device goes through it. */
+static inline void scene_from_eye(const struct scene *scene, const double p[3], double out[3])
+{
+	for (int i = 0; i < 3; i++)
+		out[i] = p[i] - scene->camera.eye[i];
+}
+
 /* A 64-bit FNV-1a digest of everything in the loaded scene that its image
  * depends on: the image and camera settings and every material, sphere,
  * plane, light and triangle (the mesh files' contents, placed), field by
