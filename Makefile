@@ -98,7 +98,7 @@ endif
 # Every host module but main; tests link them too.
 HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devmesh.o devscene.o scene.o scene_check.o \
 	scene_literal.o scene_material.o scene_mesh.o mesh_spawn.o libdir.o mesh_place.o timing.o suggest.o \
-	files.o \
+	files.o quote.o \
 	interrupt.o checks.o program.o progcache.o progress.o launch.o singlepass.o wavefront.o render.o \
 	stats.o devices.o multidev.o devstats.o frames.o tiles.o \
 	outputs.o \
@@ -225,11 +225,11 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # starts the helper; the helper (build/fuzz/rtcl-meshread) is built with the
 # same sanitizers, and its reports fail the run (host/mesh.h).
 FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c host/suggest.c \
-	host/scene_mesh.c host/mesh_spawn.c host/libdir.c host/mesh_place.c host/files.c \
+	host/scene_mesh.c host/mesh_spawn.c host/libdir.c host/mesh_place.c host/files.c host/quote.c \
 	host/interrupt.c host/devscene.c \
 	host/devmesh.c host/bvh.c
 FUZZ_HEADERS := test/devscene_check.h host/scene.h host/scene_loader.h host/mesh.h \
-	host/mesh_place.h host/files.h host/devscene.h host/devmesh.h host/bvh.h host/libdir.h \
+	host/mesh_place.h host/files.h host/quote.h host/devscene.h host/devmesh.h host/bvh.h host/libdir.h \
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 

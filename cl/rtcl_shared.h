@@ -75,6 +75,10 @@ struct rt_plane {
 	rt_int has_checker;
 	rt_int checker_s_axis; /* the two world axes kept for the checker pattern */
 	rt_int checker_t_axis;
+	rt_vec4 checker_origin; /* xyz: where the device's origin (the eye, which
+				   the device's coordinates are relative to) lies
+				   in the world, modulo twice the square size: the
+				   pattern stays where the world has it; w: 0 */
 };
 
 struct rt_light {
@@ -214,7 +218,8 @@ _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");
 _Static_assert(sizeof(struct rt_material) == 48, "rt_material layout");
 _Static_assert(sizeof(struct rt_sphere) == 32, "rt_sphere layout");
 _Static_assert(offsetof(struct rt_sphere, material) == 24, "rt_sphere layout");
-_Static_assert(sizeof(struct rt_plane) == 48, "rt_plane layout");
+_Static_assert(sizeof(struct rt_plane) == 64, "rt_plane layout");
+_Static_assert(offsetof(struct rt_plane, checker_origin) == 48, "rt_plane layout");
 _Static_assert(offsetof(struct rt_plane, material) == 32, "rt_plane layout");
 _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_triangle) == 16, "rt_triangle layout");

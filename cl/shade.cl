@@ -11,9 +11,12 @@ static float3 plane_color(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_pl
 		return material_color;
 	float4 checker = pl->checker_color; /* the colour and the square size */
 	float size = checker_size(checker);
-	int square = (int)floor(component(p, pl->checker_s_axis) / size) +
-		     (int)floor(component(p, pl->checker_t_axis) / size);
-	COUNT_FLOPS(tr, 2);
+	/* p is relative to the eye: the plane's checker origin puts the squares
+	 * back where the world has them. */
+	float3 world = p + pl->checker_origin.xyz;
+	int square = (int)floor(component(world, pl->checker_s_axis) / size) +
+		     (int)floor(component(world, pl->checker_t_axis) / size);
+	COUNT_FLOPS(tr, 2 + FLOPS_ADD3);
 	return (square & 1) ? checker.xyz : material_color;
 }
 

@@ -273,9 +273,10 @@ int bvh_build(struct bvh_prim *prims, int count, struct bvh *out)
  * test takes inside the box, and so the image equal to brute force's. */
 #define BVH_SPHERE_PAD 1e-5
 
-void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *out)
+/* The box of a sphere whose centre is c in the device's coordinates. */
+static void sphere_prim_at(const struct scene_sphere *sphere, const double c[3], int i,
+			   struct bvh_prim *out)
 {
-	const double *c = sphere->center;
 	double r = sphere->radius;
 	double scale = fmax(fmax(fabs(c[0]), fabs(c[1])), fabs(c[2])) + r;
 	double reach = r + BVH_SPHERE_PAD * scale;
@@ -288,6 +289,11 @@ void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *
 	out->ref = RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT | (uint32_t)i;
 }
 
+void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *out)
+{
+	sphere_prim_at(sphere, sphere->center, i, out);
+}
+
 /* A triangle's box is padded like a sphere's, by BVH_SPHERE_PAD of its
  * largest vertex coordinate: the Moller-Trumbore test and the box test round
  * differently, and the pad keeps every ray the triangle test takes inside the
@@ -295,13 +301,13 @@ void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *
  * so that the slab test never meets a zero-width slab. The vertices are the
  * device's, rounded to float (host/devmesh.c); the triangle test takes the
  * edges between them in float, which the pad also covers. */
-void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim *out)
+static void triangle_prim_at(const double corner[3][3], int i, struct bvh_prim *out)
 {
 	double v[3][3], scale = 0.0;
 
 	for (int k = 0; k < 3; k++) {
 		for (int j = 0; j < 3; j++) {
-			v[j][k] = (float)tri->v[j][k];
+			v[j][k] = (float)corner[j][k];
 			scale = fmax(scale, fabs(v[j][k]));
 		}
 	}
@@ -316,6 +322,11 @@ void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim 
 	out->ref = RT_PRIM_TRIANGLE << RT_PRIM_KIND_SHIFT | (uint32_t)i;
 }
 
+void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim *out)
+{
+	triangle_prim_at(tri->v, i, out);
+}
+
 int bvh_build_scene(const struct scene *scene, struct bvh *out)
 {
 	int spheres = scene->sphere_count, n = spheres + scene->triangle_count;
@@ -323,10 +334,18 @@ int bvh_build_scene(const struct scene *scene, struct bvh *out)
 
 	if (!prims)
 		return -1;
-	for (int i = 0; i < spheres; i++)
-		bvh_sphere_prim(&scene->spheres[i], i, &prims[i]);
-	for (int i = 0; i < scene->triangle_count; i++)
-		bvh_triangle_prim(&scene->triangles[i], i, &prims[spheres + i]);
+	/* In the device's coordinates, relative to the eye (scene_from_eye). */
+	for (int i = 0; i < spheres; i++) {
+		double c[3];
+		scene_from_eye(scene, scene->spheres[i].center, c);
+		sphere_prim_at(&scene->spheres[i], c, i, &prims[i]);
+	}
+	for (int i = 0; i < scene->triangle_count; i++) {
+		double v[3][3];
+		for (int j = 0; j < 3; j++)
+			scene_from_eye(scene, scene->triangles[i].v[j], v[j]);
+		triangle_prim_at((const double(*)[3])v, i, &prims[spheres + i]);
+	}
 	int ret = bvh_build(prims, n, out);
 	free(prims);
 	return ret;

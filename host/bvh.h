@@ -43,12 +43,14 @@ struct bvh {
  * prims is reordered. Returns 0, or -1 when out of memory. */
 int bvh_build(struct bvh_prim *prims, int count, struct bvh *out);
 
-/* The BVH of the scene's spheres and triangles, in one hierarchy. Returns 0,
- * or -1 when out of memory. */
+/* The BVH of the scene's spheres and triangles, in one hierarchy, in the
+ * device's coordinates: relative to the camera's eye (scene_from_eye).
+ * Returns 0, or -1 when out of memory. */
 int bvh_build_scene(const struct scene *scene, struct bvh *out);
 
 /* Sphere i of the scene as a primitive, its box padded outward (bvh.c says
- * by how much and why). */
+ * by how much and why), in the sphere's own coordinates (an eye at the
+ * origin). */
 void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *out);
 
 /* Triangle i of the scene as a primitive, its box padded outward too. */

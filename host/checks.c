@@ -204,3 +204,14 @@ int checks_rename_fault(void)
 	n = strtol(value, &end, 10);
 	return end != value && *end == '\0' && n > 0 && n < 1000000 ? (int)n : 0;
 }
+
+void checks_commit_delay(void)
+{
+	const char *value = getenv("RTCL_TEST_COMMIT_DELAY");
+	long ms = value ? strtol(value, NULL, 10) : 0;
+
+	if (ms > 0) {
+		struct timespec wait = {(time_t)(ms / 1000), (ms % 1000) * 1000000L};
+		nanosleep(&wait, NULL);
+	}
+}

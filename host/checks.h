@@ -4,7 +4,8 @@
  * only with render_settings.check_writes (kernel tests) or
  * RTCL_TEST_DEVICE_FAULT=1, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE and
  * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_DOUBLE_BAND and
- * RTCL_TEST_FAIL_RENAME and RTCL_TEST_SLOW_CACHE_WRITE (CLI tests). */
+ * RTCL_TEST_FAIL_RENAME, RTCL_TEST_SLOW_CACHE_WRITE and RTCL_TEST_COMMIT_DELAY (CLI
+ * tests). */
 #ifndef RTCL_CHECKS_H
 #define RTCL_CHECKS_H
 
@@ -82,5 +83,10 @@ int checks_double_band(void);
  * in a commit fails (files_inject_rename_failure), as a target that cannot
  * be replaced (a bind-mounted file) makes it fail. Returns N, or 0. */
 int checks_rename_fault(void);
+
+/* RTCL_TEST_COMMIT_DELAY=MS: the commit of the outputs takes MS milliseconds
+ * more after its renames, as on a slow file system, with interrupts held:
+ * a signal then comes while the outputs are committed. */
+void checks_commit_delay(void);
 
 #endif

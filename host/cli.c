@@ -8,6 +8,7 @@
 
 #include "frames.h"
 #include "mesh.h"
+#include "quote.h"
 #include "render.h"
 #include "scene.h"
 #include "suggest.h"
@@ -242,12 +243,12 @@ static int parse_shape(const char *option, const char *text, long max, int out[2
 	int h_status = x ? parse_decimal(x + 1, strlen(x + 1), 1, max, &h) : -1;
 
 	if (w_status == -1 || h_status == -1) {
-		snprintf(err, err_size, "%s: expected WxH (e.g. 8x8), got \"%s\"", option, text);
+		snprintf(err, err_size, "%s: expected WxH (e.g. 8x8), got \"%s\"", option, quote_text(text));
 		return -1;
 	}
 	if (w_status || h_status) {
 		snprintf(err, err_size, "%s: each size must be between 1 and %ld, got %s", option,
-			 max, text);
+			 max, quote_text(text));
 		return -1;
 	}
 	out[0] = (int)w;
@@ -262,7 +263,7 @@ static int parse_bounded(const char *option, const char *text, long min, long ma
 
 	if (parse_decimal(text, strlen(text), min, max, &value)) {
 		snprintf(err, err_size, "%s: expected an integer between %ld and %ld, got \"%s\"",
-			 option, min, max, text);
+			 option, min, max, quote_text(text));
 		return -1;
 	}
 	*out = (int)value;
@@ -324,7 +325,7 @@ static int take_flops_name(const char *name, const char **out, char *err, size_t
 		return 0;
 	snprintf(err, err_size,
 		 "--flops: the file name must end in .npy (it holds a NumPy array), got \"%s\"",
-		 name);
+		 quote_text(name));
 	return -1;
 }
 
@@ -332,7 +333,7 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 {
 	if (strcmp(name, "reference") == 0 || render_find_kernel(name))
 		return 0;
-	int n = snprintf(err, err_size, "-k/--kernel: unknown kernel \"%s\" (choose from", name);
+	int n = snprintf(err, err_size, "-k/--kernel: unknown kernel \"%s\" (choose from", quote_text(name));
 	for (int i = 0; i < render_kernel_count && n >= 0 && (size_t)n < err_size; i++)
 		n += snprintf(err + n, err_size - (size_t)n, " %s,", render_kernels[i].name);
 	if (n >= 0 && (size_t)n < err_size)
@@ -348,7 +349,7 @@ static int parse_choice(const char *option, const char *text, const char *first,
 {
 	if (strcmp(text, first) != 0 && strcmp(text, second) != 0) {
 		snprintf(err, err_size, "%s: expected %s or %s, got \"%s\"", option, first, second,
-			 text);
+			 quote_text(text));
 		return -1;
 	}
 	*is_second = strcmp(text, second) == 0;
@@ -366,14 +367,14 @@ static int parse_frames(const char *text, int frames[2], char *err, size_t err_s
 		snprintf(err, err_size,
 			 "--frames: expected A:B, frame numbers from 0 to 99999 (e.g. 1:120), "
 			 "got \"%s\"",
-			 text);
+			 quote_text(text));
 		return -1;
 	}
 	if (b < a || b - a + 1 > FRAMES_MAX) {
 		snprintf(err, err_size,
 			 "--frames: the last frame must not come before the first, and at most %d "
 			 "frames, got %s",
-			 FRAMES_MAX, text);
+			 FRAMES_MAX, quote_text(text));
 		return -1;
 	}
 	frames[0] = (int)a;
@@ -391,7 +392,7 @@ static int parse_device_kind(const char *text, enum device_kind *kind, char *err
 	else if (strcmp(text, "all") == 0)
 		*kind = DEVICE_KIND_ANY;
 	else {
-		snprintf(err, err_size, "-t/--type: expected gpu, cpu or all, got \"%s\"", text);
+		snprintf(err, err_size, "-t/--type: expected gpu, cpu or all, got \"%s\"", quote_text(text));
 		return -1;
 	}
 	return 0;
@@ -445,6 +446,7 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		o->devices_given = 1;
 		return devices_parse(arg, &o->devices, err, err_size);
 	case OPT_SPLIT:
+		o->split_given = 1;
 		return parse_choice("--split", arg, "dynamic", "static", &o->split_static, err,
 				    err_size);
 	case OPT_FRAMES:
@@ -540,17 +542,22 @@ static void describe_bad_option(int c, int argc, char **argv, char *err, size_t 
 			snprintf(err, err_size, "option --%s takes no value (see --help)",
 				 opt->name);
 	} else if (is_long && optopt == 0) {
-		snprintf(err, err_size, "%s option %.*s (see --help)",
-			 matches > 1 ? "ambiguous" : "unknown", name_len, arg);
+		char name[512];
+
+		snprintf(name, sizeof(name), "%.*s", name_len, arg);
+		snprintf(err, err_size, "%s option %s (see --help)",
+			 matches > 1 ? "ambiguous" : "unknown", quote_text(name));
 		if (matches == 0)
 			suggest_option(arg + 2, name_len - 2, err, err_size);
 	} else if (optopt > 0 && optopt < OPT_GROUPS) {
+		char letter[QUOTE_BYTE_SIZE];
+
 		snprintf(err, err_size,
-			 c == ':' ? "-%c needs a value (see --help)"
-				  : "unknown option -%c (see --help)",
-			 optopt);
+			 c == ':' ? "-%s needs a value (see --help)"
+				  : "unknown option -%s (see --help)",
+			 quote_byte((unsigned char)optopt, 0, letter));
 	} else {
-		snprintf(err, err_size, "bad option %s (see --help)", arg);
+		snprintf(err, err_size, "bad option %s (see --help)", quote_text(arg));
 	}
 }
 
@@ -565,6 +572,12 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 			 "--mpi (one device too: --devices P:D); it does not apply to %s",
 			 o->frames_given ? "--frames, whose pieces are whole frames"
 					 : "a render without them");
+		return -1;
+	}
+	if (o->split_given && !(o->devices_given || o->mpi)) {
+		snprintf(err, err_size,
+			 "--split chooses how pieces go to the devices of --devices or --mpi; it "
+			 "does not apply to a render without them");
 		return -1;
 	}
 	if (several && o->flops_path) {
@@ -636,8 +649,8 @@ static int take_scene_argument(int count, char **args, struct options *o, char *
 		snprintf(err, err_size,
 			 "two scenes given, \"%s\" and \"%s\": give one, as the argument or with "
 			 "-s/--scene",
-			 o->scene_path ? o->scene_path : args[0],
-			 o->scene_path ? args[0] : args[1]);
+			 quote_text(o->scene_path ? o->scene_path : args[0]),
+			 quote_text(o->scene_path ? args[0] : args[1]));
 		return -1;
 	}
 	return take_file_name("the scene argument", args[0], &o->scene_path, err, err_size);

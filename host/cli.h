@@ -29,6 +29,7 @@ struct options {
 	struct device_list devices; /* --devices LIST|all */
 	int devices_given;
 	int split_static; /* --split static */
+	int split_given;  /* --split given */
 	int frames[2];	  /* --frames A:B */
 	int frames_given;
 	int mpi;	/* --mpi: rank 0 hands out the pieces (mpi_render.h) */

@@ -4,6 +4,8 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "quote.h"
+
 /* Parses one "P:D" entry of len characters. */
 static int parse_entry(const char *text, size_t len, struct device_spec *spec)
 {
@@ -47,7 +49,7 @@ int devices_parse(const char *text, struct device_list *list, char *err, size_t 
 			snprintf(err, err_size,
 				 "--devices: expected all or a list of PLATFORM:DEVICE indices "
 				 "(e.g. 1:0,0:0; see --list-devices), got \"%s\"",
-				 text);
+				 quote_text(text));
 			return -1;
 		}
 		if (find_duplicate(list, &spec)) {
@@ -57,7 +59,7 @@ int devices_parse(const char *text, struct device_list *list, char *err, size_t 
 		}
 		if (list->count == DEVICES_MAX) {
 			snprintf(err, err_size, "--devices: at most %d devices, got more in \"%s\"",
-				 DEVICES_MAX, text);
+				 DEVICES_MAX, quote_text(text));
 			return -1;
 		}
 		list->specs[list->count++] = spec;

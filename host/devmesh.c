@@ -15,11 +15,15 @@ struct vertex_key {
 	rt_vec4 position, normal;
 };
 
-static void vertex_key(const struct scene_triangle *tri, int k, struct vertex_key *out)
+static void vertex_key(const struct scene *scene, const struct scene_triangle *tri, int k,
+		       struct vertex_key *out)
 {
+	double position[3];
+
 	memset(out, 0, sizeof(*out));
+	scene_from_eye(scene, tri->v[k], position);
 	for (int i = 0; i < 3; i++) {
-		out->position.s[i] = (float)tri->v[k][i];
+		out->position.s[i] = (float)position[i];
 		if (tri->smooth)
 			out->normal.s[i] = (float)tri->normal[k][i];
 	}
@@ -62,12 +66,13 @@ static rt_uint vertex_index(struct vertex_table *table, struct devmesh *mesh,
 }
 
 static void index_triangle(struct vertex_table *table, struct devmesh *mesh,
-			   const struct scene_triangle *in, struct rt_triangle *out)
+			   const struct scene *scene, const struct scene_triangle *in,
+			   struct rt_triangle *out)
 {
 	for (int k = 0; k < 3; k++) {
 		struct vertex_key v;
 
-		vertex_key(in, k, &v);
+		vertex_key(scene, in, k, &v);
 		out->index.s[k] = vertex_index(table, mesh, &v);
 	}
 	out->index.s[3] = (rt_uint)in->material | (in->smooth ? RT_TRIANGLE_SMOOTH : 0u);
@@ -92,7 +97,7 @@ int devmesh_build(const struct scene *scene, struct devmesh *mesh)
 		goto free_all;
 	memset(table.slots, 0xff, slots * sizeof(*table.slots));
 	for (int i = 0; i < scene->triangle_count; i++)
-		index_triangle(&table, mesh, &scene->triangles[i], &mesh->triangles[i]);
+		index_triangle(&table, mesh, scene, &scene->triangles[i], &mesh->triangles[i]);
 	free(table.slots);
 	/* Usually about a sixth of the corners: give the rest back. */
 	struct rt_vertex *fitted =

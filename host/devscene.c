@@ -1,10 +1,13 @@
 #include "devscene.h"
 
+#include <float.h>
 #include <math.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "../cl/rtcl_shared.h"
+#include "quote.h"
 
 static double dot(const double a[3], const double b[3])
 {
@@ -52,7 +55,9 @@ static void pack_camera(struct rt_scene *out, const struct scene *scene, int wid
 	cross(right, forward, up);
 
 	/* The scalars in w: scene_half_width, scene_half_height, scene_epsilon. */
-	out->eye = vec4(cam->eye, aspect * h);
+	static const double origin[3] = {0, 0, 0}; /* the eye: scene_from_eye */
+
+	out->eye = vec4(origin, aspect * h);
 	out->forward = vec4(forward, h);
 	out->right = vec4(right, scene->epsilon);
 	out->up = vec4(up, 0.0);
@@ -70,19 +75,35 @@ static void pack_material(struct rt_material *out, const struct scene_material *
 	out->inv_ior = (float)(1.0 / in->ior);
 }
 
-static void pack_sphere(struct rt_sphere *out, const struct scene_sphere *in, int scene_index)
+static void pack_sphere(struct rt_sphere *out, const struct scene *scene,
+			const struct scene_sphere *in, int scene_index)
 {
-	out->center = vec4(in->center, in->radius * in->radius); /* sphere_radius2 */
+	double center[3];
+
+	scene_from_eye(scene, in->center, center);
+	out->center = vec4(center, in->radius * in->radius); /* sphere_radius2 */
 	out->radius = (float)in->radius;
 	out->inv_radius = (float)(1.0 / in->radius);
 	out->material = in->material;
 	out->scene_index = scene_index;
 }
 
-static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
+static void pack_plane(struct rt_plane *out, const struct scene *scene,
+		       const struct scene_plane *in)
 {
 	const double *n = in->normal;
+	double point[3], origin[3];
 	int drop = 0;
+
+	scene_from_eye(scene, in->point, point);
+	/* The eye modulo twice the square size: the checker's parity is the
+	 * same, and the offset small enough for float to keep. */
+	for (int i = 0; i < 3; i++) {
+		double period = 2.0 * in->checker_size;
+		origin[i] = in->has_checker ? fmod(scene->camera.eye[i], period) : 0.0;
+		if (origin[i] < 0)
+			origin[i] += period;
+	}
 
 	/* The checker drops the axis of the normal's largest |component|,
 	 * ties going to x, then y. */
@@ -91,7 +112,8 @@ static void pack_plane(struct rt_plane *out, const struct scene_plane *in)
 	if (fabs(n[2]) > fabs(n[drop]))
 		drop = 2;
 	/* The offset and the square size ride in w (plane_offset, checker_size). */
-	out->normal = vec4(n, dot(n, in->point));
+	out->normal = vec4(n, dot(n, point));
+	out->checker_origin = vec4(origin, 0.0);
 	out->checker_color = vec4(in->checker_color, in->checker_size);
 	out->material = in->material;
 	out->has_checker = in->has_checker;
@@ -261,7 +283,7 @@ void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const
 
 	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
 	for (int i = 0; i < scene->sphere_count; i++)
-		pack_sphere(&spheres[i], &scene->spheres[order[i]], order[i]);
+		pack_sphere(&spheres[i], scene, &scene->spheres[order[i]], order[i]);
 	free(order);
 	/* The padding: radius² -1, which no squared distance is below. */
 	for (int i = scene->sphere_count; i < sphere_slots; i++)
@@ -269,11 +291,13 @@ void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const
 
 	struct rt_plane *planes = (struct rt_plane *)(block + plane_offset);
 	for (int i = 0; i < scene->plane_count; i++)
-		pack_plane(&planes[i], &scene->planes[i]);
+		pack_plane(&planes[i], scene, &scene->planes[i]);
 
 	struct rt_light *lights = (struct rt_light *)(block + light_offset);
 	for (int i = 0; i < scene->light_count; i++) {
-		lights[i].position = vec4(scene->lights[i].position, 0.0);
+		double position[3];
+		scene_from_eye(scene, scene->lights[i].position, position);
+		lights[i].position = vec4(position, 0.0);
 		lights[i].color = vec4(scene->lights[i].color, 0.0);
 	}
 
@@ -288,4 +312,65 @@ void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const
 
 	*bytes = total;
 	return block;
+}
+
+/* The float step at distance d from the eye: the spacing of floats there. */
+static double float_step(double d)
+{
+	float f = (float)d;
+
+	return (double)nextafterf(f, FLT_MAX) - (double)f;
+}
+
+static double distance(const double a[3])
+{
+	return sqrt(dot(a, a));
+}
+
+/* Whether an object (named by what) of the given size at distance d from
+ * the eye spans fewer than DEVSCENE_MIN_STEPS float steps; then the message. */
+static int too_small(const struct scene *scene, const char *what, double size, double d,
+		     char *err, size_t err_size)
+{
+	double step = float_step(d);
+
+	if (size >= DEVSCENE_MIN_STEPS * step)
+		return 0;
+	snprintf(err, err_size,
+		 "%s: %s %g at %g from the eye is below what float resolves there (%d steps "
+		 "of %g): rtcl renders in float relative to the eye; move the camera closer "
+		 "or enlarge the object",
+		 quote_text(scene->source), what, size, d, DEVSCENE_MIN_STEPS, step);
+	return 1;
+}
+
+int devscene_check_resolution(const struct scene *scene, char *err, size_t err_size)
+{
+	char what[128];
+
+	for (int i = 0; i < scene->sphere_count; i++) {
+		double c[3];
+		scene_from_eye(scene, scene->spheres[i].center, c);
+		snprintf(what, sizeof(what), "spheres[%d]: the radius", i);
+		if (too_small(scene, what, scene->spheres[i].radius, distance(c), err, err_size))
+			return -1;
+	}
+	for (int i = 0; i < scene->triangle_count; i++) {
+		const struct scene_triangle *t = &scene->triangles[i];
+		double v[3][3], edge = 0, nearest = HUGE_VAL;
+		for (int k = 0; k < 3; k++) {
+			scene_from_eye(scene, t->v[k], v[k]);
+			nearest = fmin(nearest, distance(v[k]));
+		}
+		for (int k = 0; k < 3; k++) {
+			double e[3] = {v[(k + 1) % 3][0] - v[k][0], v[(k + 1) % 3][1] - v[k][1],
+				       v[(k + 1) % 3][2] - v[k][2]};
+			edge = fmax(edge, distance(e));
+		}
+		snprintf(what, sizeof(what),
+			 "triangle %d (of the meshes', then the inline ones): the longest edge", i);
+		if (too_small(scene, what, edge, nearest, err, err_size))
+			return -1;
+	}
+	return 0;
 }

@@ -16,10 +16,19 @@
  * devmesh_build indexed them, and bvh (or NULL). */
 size_t devscene_bytes(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh);
 
+/* The device computes in float, relative to the camera's eye
+ * (scene_from_eye): an object smaller than DEVSCENE_MIN_STEPS float steps at
+ * its distance from the eye (a sphere's radius, a triangle's longest edge)
+ * cannot be drawn. Returns 0, or -1 with a message in err that names the
+ * first such object and the numbers. */
+#define DEVSCENE_MIN_STEPS 4
+int devscene_check_resolution(const struct scene *scene, char *err, size_t err_size);
+
 /* Returns a malloc'd block holding struct rt_scene followed by its arrays, for
  * the scene at width×height with the given max_depth, and its size in *bytes;
- * NULL when out of memory or larger than DEVSCENE_MAX_BYTES. The camera basis
- * is computed in double precision and rounded once to float. mesh: the
+ * NULL when out of memory or larger than DEVSCENE_MAX_BYTES. Every position
+ * is taken relative to the eye in double (scene_from_eye) and rounded once
+ * to float; so is the camera basis. mesh: the
  * scene's triangles from devmesh_build. bvh: the BVH of
  * the scene's spheres and triangles, or NULL for none (--accel none). */
 void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh,

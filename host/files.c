@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include "interrupt.h"
+#include "quote.h"
 
 /* Longest part of the target's name kept in the temporary file's name, so
  * that the latter stays under NAME_MAX (255) with its additions. */
@@ -40,16 +41,16 @@ static int open_regular(const char *path, const char *noun, size_t max_bytes, si
 	int fd = open(path, O_RDONLY | O_NONBLOCK);
 
 	if (fd < 0) {
-		snprintf(err, err_size, "%s: cannot open: %s", path, strerror(errno));
+		snprintf(err, err_size, "%s: cannot open: %s", quote_text(path), strerror(errno));
 		return -1;
 	}
 	if (fstat(fd, &st) != 0)
-		snprintf(err, err_size, "%s: cannot stat: %s", path, strerror(errno));
+		snprintf(err, err_size, "%s: cannot stat: %s", quote_text(path), strerror(errno));
 	else if (!S_ISREG(st.st_mode))
-		snprintf(err, err_size, "%s: not a regular file", path);
+		snprintf(err, err_size, "%s: not a regular file", quote_text(path));
 	else if ((unsigned long long)st.st_size > max_bytes)
 		snprintf(err, err_size, "%s: %s is %lld bytes, more than the limit of %zu bytes",
-			 path, noun, (long long)st.st_size, max_bytes);
+			 quote_text(path), noun, (long long)st.st_size, max_bytes);
 	else {
 		*size = (size_t)st.st_size;
 		return fd;
@@ -71,7 +72,7 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 	capacity++;
 	buf = malloc(capacity);
 	if (!buf) {
-		snprintf(err, err_size, "%s: out of memory", path);
+		snprintf(err, err_size, "%s: out of memory", quote_text(path));
 		goto out_close;
 	}
 	for (;;) {
@@ -80,10 +81,10 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 			if (!grown) {
 				if (capacity > max_bytes)
 					snprintf(err, err_size,
-						 "%s: %s is more than the limit of %zu bytes", path,
+						 "%s: %s is more than the limit of %zu bytes", quote_text(path),
 						 noun, max_bytes);
 				else
-					snprintf(err, err_size, "%s: out of memory", path);
+					snprintf(err, err_size, "%s: out of memory", quote_text(path));
 				goto out_free;
 			}
 			buf = grown;
@@ -93,7 +94,7 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 		if (n < 0 && errno == EINTR)
 			continue;
 		if (n < 0) {
-			snprintf(err, err_size, "%s: cannot read: %s", path, strerror(errno));
+			snprintf(err, err_size, "%s: cannot read: %s", quote_text(path), strerror(errno));
 			goto out_free;
 		}
 		if (n == 0)
@@ -149,7 +150,7 @@ static int directory_of(const char *path, char *dir, char *err, size_t err_size)
 	if (length > 1)
 		length--; /* drop the slash, except for "/" itself */
 	if (length >= PATH_MAX) {
-		snprintf(err, err_size, "%s: %s", path, strerror(ENAMETOOLONG));
+		snprintf(err, err_size, "%s: %s", quote_text(path), strerror(ENAMETOOLONG));
 		return -1;
 	}
 	memcpy(dir, path, length);
@@ -284,7 +285,8 @@ static int acquire_stage(const char *target, const char *dir, char *err, size_t 
 	int slot = -1;
 
 	if (stat(dir, &st) != 0) {
-		snprintf(err, err_size, "%s: directory \"%s\": %s", target, dir, strerror(errno));
+		snprintf(err, err_size, "%s: directory \"%s\": %s", quote_text(target), quote_text(dir),
+			 strerror(errno));
 		return -1;
 	}
 	for (int i = 0; i < STAGE_DIRS_MAX; i++) {
@@ -297,7 +299,7 @@ static int acquire_stage(const char *target, const char *dir, char *err, size_t 
 			slot = i;
 	}
 	if (slot < 0) {
-		snprintf(err, err_size, "%s: more than %d output folders at once", target,
+		snprintf(err, err_size, "%s: more than %d output folders at once", quote_text(target),
 			 STAGE_DIRS_MAX);
 		return -1;
 	}
@@ -307,12 +309,13 @@ static int acquire_stage(const char *target, const char *dir, char *err, size_t 
 	int n = snprintf(s->path, sizeof(s->path), "%s/%s%s-%ld", dir, STAGE_PREFIX, host,
 			 (long)getpid());
 	if (n < 0 || (size_t)n >= sizeof(s->path)) {
-		snprintf(err, err_size, "%s: %s", target, strerror(ENAMETOOLONG));
+		snprintf(err, err_size, "%s: %s", quote_text(target), strerror(ENAMETOOLONG));
 	} else if (mkdir(s->path, 0700) != 0) {
-		snprintf(err, err_size, "%s: cannot create a file in its directory: %s", target,
+		snprintf(err, err_size, "%s: cannot create a file in its directory: %s", quote_text(target),
 			 strerror(errno));
 	} else if (interrupt_track(s->path)) {
-		snprintf(err, err_size, "%s: too many files open for writing at once", target);
+		snprintf(err, err_size, "%s: too many files open for writing at once",
+			 quote_text(target));
 		rmdir(s->path);
 	} else {
 		s->dev = st.st_dev;
@@ -349,7 +352,7 @@ static int resolve_target(const char *target, char *path, char *err, size_t err_
 
 	if (lstat(target, &st) != 0 || !S_ISLNK(st.st_mode)) {
 		if (strlen(target) >= PATH_MAX) {
-			snprintf(err, err_size, "%s: %s", target, strerror(ENAMETOOLONG));
+			snprintf(err, err_size, "%s: %s", quote_text(target), strerror(ENAMETOOLONG));
 			return -1;
 		}
 		strcpy(path, target);
@@ -363,9 +366,9 @@ static int resolve_target(const char *target, char *path, char *err, size_t err_
 			"%s: is a symbolic link to a file that does not exist; rtcl writes through "
 			"a link only to an existing file, as cp does: create the file or remove "
 			"the link",
-			target);
+			quote_text(target));
 	else
-		snprintf(err, err_size, "%s: cannot follow the symbolic link: %s", target,
+		snprintf(err, err_size, "%s: cannot follow the symbolic link: %s", quote_text(target),
 			 strerror(errno));
 	return -1;
 }
@@ -386,7 +389,7 @@ static int create_temp(struct staged_file *f, char *err, size_t err_size)
 				 stage_dirs[f->stage].path, TEMP_PREFIX, TEMP_NAME_KEEP, base,
 				 suffix, ext);
 		if (n < 0 || (size_t)n >= sizeof(f->temp)) {
-			snprintf(err, err_size, "%s: %s", f->target, strerror(ENAMETOOLONG));
+			snprintf(err, err_size, "%s: %s", quote_text(f->target), strerror(ENAMETOOLONG));
 			return -1;
 		}
 		int fd = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -395,7 +398,7 @@ static int create_temp(struct staged_file *f, char *err, size_t err_size)
 		if (errno != EEXIST)
 			break;
 	}
-	snprintf(err, err_size, "%s: cannot create a file in its directory: %s", f->target,
+	snprintf(err, err_size, "%s: cannot create a file in its directory: %s", quote_text(f->target),
 		 strerror(errno));
 	return -1;
 }
@@ -416,7 +419,7 @@ int files_stage(struct staged_file *f, const char *target, char *err, size_t err
 	if (f->stage >= 0)
 		fd = create_temp(f, err, err_size);
 	if (fd >= 0 && interrupt_track(f->temp)) {
-		snprintf(err, err_size, "%s: too many files open for writing at once", target);
+		snprintf(err, err_size, "%s: too many files open for writing at once", quote_text(target));
 		close(fd);
 		unlink(f->temp);
 		fd = -1;
@@ -476,14 +479,14 @@ static int keep_old(const struct staged_file *f, struct old_file *old, char *err
 	if (lstat(f->path, &st) != 0) {
 		if (errno == ENOENT)
 			return 0;
-		snprintf(err, err_size, "%s: cannot replace: %s", f->target, strerror(errno));
+		snprintf(err, err_size, "%s: cannot replace: %s", quote_text(f->target), strerror(errno));
 		return -1;
 	}
 	if (!S_ISREG(st.st_mode)) {
 		const char *now = S_ISDIR(st.st_mode) ? "now a directory" : "replaced meanwhile";
 		snprintf(err, err_size,
 			 "%s: is no longer a regular file (%s), so it cannot be replaced",
-			 f->target, now);
+			 quote_text(f->target), now);
 		return -1;
 	}
 	backup_name(f, old->backup);
@@ -493,7 +496,7 @@ static int keep_old(const struct staged_file *f, struct old_file *old, char *err
 		old->moved = 1;
 		return 0;
 	}
-	snprintf(err, err_size, "%s: cannot replace: %s", f->target, strerror(errno));
+	snprintf(err, err_size, "%s: cannot replace: %s", quote_text(f->target), strerror(errno));
 	old->backup[0] = '\0';
 	return -1;
 }
@@ -536,7 +539,7 @@ static int commit(struct staged_file *files, struct old_file *old, int count, ch
 		int failed = rename_failure_at == done + 1 ? (errno = EIO, 1)
 							   : rename(f->temp, f->path) != 0;
 		if (failed) {
-			snprintf(err, err_size, "%s: cannot replace: %s", f->target,
+			snprintf(err, err_size, "%s: cannot replace: %s", quote_text(f->target),
 				 strerror(errno));
 			goto out_put_back;
 		}
@@ -554,7 +557,8 @@ out_put_back:
 	else
 		snprintf(err + length, err_size - length,
 			 "; and %s could not be put back: its previous version is %s",
-			 files[lost].target, old[lost].backup[0] ? old[lost].backup : "lost");
+			 quote_text(files[lost].target),
+			 old[lost].backup[0] ? quote_text(old[lost].backup) : "lost");
 	return -1;
 }
 
@@ -621,7 +625,7 @@ int files_stage_with(struct staged_file *f, const char *target, files_fill fill,
 	return 0;
 
 out_discard:
-	snprintf(err, err_size, "%s: cannot write: %s", target,
+	snprintf(err, err_size, "%s: cannot write: %s", quote_text(target),
 		 errno ? strerror(errno) : "write failed");
 	files_discard(f);
 	return -1;
@@ -663,14 +667,14 @@ static int check_directory(const char *name, const char *path, const char *dir, 
 
 	if (stat(dir, &st) != 0) {
 		if (errno == ENOENT)
-			snprintf(err, err_size, "%s: directory \"%s\" does not exist", name, dir);
+			snprintf(err, err_size, "%s: directory \"%s\" does not exist", quote_text(name), quote_text(dir));
 		else
-			snprintf(err, err_size, "%s: directory \"%s\": %s", name, dir,
+			snprintf(err, err_size, "%s: directory \"%s\": %s", quote_text(name), quote_text(dir),
 				 strerror(errno));
 		return -1;
 	}
 	if (!S_ISDIR(st.st_mode)) {
-		snprintf(err, err_size, "%s: \"%s\" is not a directory", name, dir);
+		snprintf(err, err_size, "%s: \"%s\" is not a directory", quote_text(name), quote_text(dir));
 		return -1;
 	}
 	name_max = pathconf(dir, _PC_NAME_MAX);
@@ -678,7 +682,7 @@ static int check_directory(const char *name, const char *path, const char *dir, 
 		snprintf(err, err_size,
 			 "%s: the file name is %zu characters long, more than the %ld this file "
 			 "system allows",
-			 name, strlen(files_base_name(path)), name_max);
+			 quote_text(name), strlen(files_base_name(path)), name_max);
 		return -1;
 	}
 	return 0;
@@ -697,14 +701,14 @@ static int check_replaceable(const char *name, const char *path, const char *dir
 		return 0; /* nothing to replace */
 	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
 		snprintf(err, err_size,
-			 "%s: exists and is not a regular file; refusing to replace it", name);
+			 "%s: exists and is not a regular file; refusing to replace it", quote_text(name));
 		return -1;
 	}
 	if (access(path, W_OK) != 0 && errno != ENOENT) {
 		snprintf(err, err_size,
 			 "%s: exists and you cannot write it (%s); rtcl replaces only a file you "
 			 "could overwrite: remove it or choose another name",
-			 name, strerror(errno));
+			 quote_text(name), strerror(errno));
 		return -1;
 	}
 	if (lstat(path, &st) == 0 && stat(dir, &dir_st) == 0 && (dir_st.st_mode & S_ISVTX) &&
@@ -712,7 +716,7 @@ static int check_replaceable(const char *name, const char *path, const char *dir
 		snprintf(err, err_size,
 			 "%s: belongs to another user in the sticky directory \"%s\", so it "
 			 "cannot be replaced: choose another name",
-			 name, dir);
+			 quote_text(name), quote_text(dir));
 		return -1;
 	}
 	return 0;
@@ -725,7 +729,7 @@ int files_check_writable(const char *path, char *err, size_t err_size)
 	int fd;
 
 	if (path[0] == '\0' || path[strlen(path) - 1] == '/') {
-		snprintf(err, err_size, "%s: not a file name", path);
+		snprintf(err, err_size, "%s: not a file name", quote_text(path));
 		return -1;
 	}
 	/* A symbolic link is checked where it leads: that file is replaced. */

@@ -5,12 +5,14 @@
 #include <string.h>
 #include <unistd.h>
 
+#include "checks.h"
 #include "devstats.h"
 #include "image.h"
 #include "interrupt.h"
 #include "launch.h"
 #include "program.h"
 #include "progress.h"
+#include "quote.h"
 #include "render.h"
 #include "timing.h"
 
@@ -69,7 +71,7 @@ int frames_check_outputs(const struct options *opt, char *err, size_t err_size)
 	for (int f = opt->frames[0]; f <= opt->frames[1]; f++) {
 		if (frames_output_name(opt->output, f, name)) {
 			snprintf(err, err_size, "-o/--output: %s: the frame names are too long",
-				 opt->output);
+				 quote_text(opt->output));
 			return -1;
 		}
 		if (image_check_writable(name, err, err_size))
@@ -172,13 +174,14 @@ static void print_summary(const struct run *run, const struct frames_report *r)
 
 	printf("frames:  %d..%d (%d), camera orbit, %dx%d, max depth %d, scene %s, kernel %s\n",
 	       opt->frames[0], opt->frames[1], n, s->width, s->height, s->max_depth,
-	       run->scene->source, s->kernel->name);
+	       quote_text(run->scene->source), s->kernel->name);
 	devstats_print(stdout, r->devs, r->ranks, r->work, r->count, "frame");
 	printf("time:    %.1f ms for %d frame%s (%.1f ms each), %s split\n", r->wall_ms, n,
 	       n == 1 ? "" : "s", r->wall_ms / n, opt->split_static ? "static" : "dynamic");
 	frames_output_name(opt->output, opt->frames[0], first);
 	frames_output_name(opt->output, opt->frames[1], last);
-	printf("output:  %s%s%s\n", first, n > 1 ? " .. " : "", n > 1 ? last : "");
+	printf("output:  %s%s%s\n", quote_text(first), n > 1 ? " .. " : "",
+	       n > 1 ? quote_text(last) : "");
 }
 
 int frames_commit(const struct run *run, struct frames_output *o, const struct frames_report *r,
@@ -199,8 +202,10 @@ int frames_commit(const struct run *run, struct frames_output *o, const struct f
 	n += dumped;
 	interrupt_hold();
 	int ret = files_commit(o->staged, n, err, err_size);
-	if (ret == 0)
+	if (ret == 0) {
 		interrupt_set_outcome("the outputs were written");
+		checks_commit_delay();
+	}
 	interrupt_release();
 	if (ret == 0 && !opt->quiet)
 		print_summary(run, r);
@@ -231,7 +236,7 @@ int frames_hold(struct frames_output *o, int piece, float *rgb, char *err, size_
 {
 	if (o->held[piece]) {
 		free(rgb);
-		snprintf(err, err_size, "frame %s arrived twice", o->names[piece]);
+		snprintf(err, err_size, "frame %s arrived twice", quote_text(o->names[piece]));
 		return -1;
 	}
 	o->held[piece] = rgb;
@@ -242,7 +247,7 @@ int frames_check_held(const struct frames_output *o, char *err, size_t err_size)
 {
 	for (int i = 0; i < o->count; i++) {
 		if (!o->held[i]) {
-			snprintf(err, err_size, "frame %s never arrived", o->names[i]);
+			snprintf(err, err_size, "frame %s never arrived", quote_text(o->names[i]));
 			return -1;
 		}
 	}

@@ -37,20 +37,36 @@ int image_backend_encode(const char *path, const char *tmp_path, int tmp_fd, con
 int image_backend_verify(const char *path, const char *tmp_path, int width, int height, char *err,
 			 size_t err_size);
 
-/* snprintf into err[err_size]; does nothing when err is NULL or err_size 0.
- * Inline, so that the backends need nothing back from image_common.c. */
+/* snprintf into err[err_size], every control byte escaped as \n, \t or
+ * \xNN (a path with a newline or an ESC byte stays one line and cannot
+ * drive the terminal, as quote.h does for the rest of the host); does nothing
+ * when err is NULL or err_size 0. Inline, so that the backends need nothing
+ * back from image_common.c. */
 #ifdef __GNUC__
 __attribute__((format(printf, 3, 4)))
 #endif
 static inline void image_set_error(char *err, size_t err_size, const char *format, ...)
 {
+	char raw[8192];
+	size_t n = 0;
 	va_list args;
 
 	if (!err || err_size == 0)
 		return;
 	va_start(args, format);
-	vsnprintf(err, err_size, format, args);
+	vsnprintf(raw, sizeof(raw), format, args);
 	va_end(args);
+	for (const char *s = raw; *s && n + 5 <= err_size; s++) {
+		unsigned char c = (unsigned char)*s;
+
+		if (c == '\n' || c == '\t')
+			n += (size_t)snprintf(err + n, err_size - n, "\\%c", c == '\n' ? 'n' : 't');
+		else if (c < 0x20 || c == 0x7f)
+			n += (size_t)snprintf(err + n, err_size - n, "\\x%02x", c);
+		else
+			err[n++] = (char)c;
+	}
+	err[n < err_size ? n : err_size - 1] = '\0';
 }
 
 #ifdef __cplusplus

@@ -7,6 +7,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <float.h>
 #include <limits.h>
 #include <math.h>
 #include <stdarg.h>
@@ -229,12 +230,44 @@ static int verify_native(const char *path, const char *tmp, int width, int heigh
 	return ok ? 0 : -1;
 }
 
+/* The largest value the format at ext holds: Radiance HDR's RGBE keeps an
+ * 8-bit exponent, whose largest value is 2^127 (a value at or above it wraps
+ * to black); the other float formats hold any float. */
+static float largest_value(const char *ext)
+{
+	if (strcasecmp(ext, ".hdr") == 0 || strcasecmp(ext, ".rgbe") == 0)
+		return nextafterf(ldexpf(1.0f, 127), 0.0f);
+	return FLT_MAX;
+}
+
+/* Radiance that overflowed float (+inf) or that the format cannot hold,
+ * clamped to its largest value (RENDERING.md, "Writing
+ * the image"): never inf, never black. Returns rgb itself when nothing
+ * needs it, else a malloc'd copy in *copy (NULL when out of memory). */
+static const float *clamp_radiance(const float *rgb, size_t count, float largest, float **copy)
+{
+	size_t i = 0;
+
+	*copy = NULL;
+	while (i < count && !(rgb[i] > largest))
+		i++;
+	if (i == count)
+		return rgb;
+	*copy = malloc(count * sizeof(float));
+	if (!*copy)
+		return NULL;
+	for (i = 0; i < count; i++)
+		(*copy)[i] = rgb[i] > largest ? largest : rgb[i]; /* NaN stays NaN */
+	return *copy;
+}
+
 int image_stage(struct staged_file *staged, const char *path, const float *rgb, int width,
 		int height, const struct image_meta *meta, char *err, size_t err_size)
 {
 	const char *ext = files_extension(path);
 	int native = is_native(ext);
 	int fd, failed;
+	float *clamped;
 
 	if (check_path(path, err, err_size))
 		return -1;
@@ -243,9 +276,17 @@ int image_stage(struct staged_file *staged, const char *path, const float *rgb, 
 				height, rgb ? "" : ", no data");
 		return -1;
 	}
-	fd = files_stage(staged, path, err, err_size);
-	if (fd < 0)
+	rgb = clamp_radiance(rgb, (size_t)width * (size_t)height * 3, largest_value(ext), &clamped);
+	if (!rgb) {
+		image_set_error(err, err_size, "%s: out of memory for a %d x %d image", path, width,
+				height);
 		return -1;
+	}
+	fd = files_stage(staged, path, err, err_size);
+	if (fd < 0) {
+		free(clamped);
+		return -1;
+	}
 	if (native)
 		failed = write_native(fd, path, rgb, width, height, meta, err, err_size) ||
 			 verify_native(path, staged->temp, width, height, err, err_size);
@@ -253,6 +294,7 @@ int image_stage(struct staged_file *staged, const char *path, const float *rgb, 
 		failed = write_with_backend(fd, path, staged->temp, rgb, width, height, meta, err,
 					    err_size) ||
 			 image_backend_verify(path, staged->temp, width, height, err, err_size);
+	free(clamped);
 	if (failed)
 		files_discard(staged);
 	return failed ? -1 : 0;

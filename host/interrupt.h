@@ -1,4 +1,5 @@
-/* Interrupts (SIGINT, SIGTERM, SIGHUP) in a multi-threaded process.
+/* Interrupts (SIGINT, SIGTERM, SIGHUP, and SIGQUIT, SIGABRT or SIGSEGV sent
+ * by another process) in a multi-threaded process.
  *
  * The signals are blocked in every thread from the start of main, before the
  * OpenCL runtime starts threads of its own (which inherit the mask), and are
@@ -17,8 +18,9 @@
 
 /* Blocks the signals and starts the thread that takes them. progress_line:
  * a progress line may be open on stderr (the message then starts on a line of
- * its own). Returns 0, or -1 with one message in err. */
-int interrupt_setup(int progress_line, char *err, size_t err_size);
+ * its own). under_mpirun: --mpi (interrupt_watch_mpirun()). Returns 0, or -1
+ * with one message in err. */
+int interrupt_setup(int progress_line, int under_mpirun, char *err, size_t err_size);
 
 /* A critical section: while it is held, a signal waits. It may be nested. */
 void interrupt_hold(void);
@@ -35,5 +37,18 @@ void interrupt_untrack(const char *path);
 /* What the message says was left after an interrupt from now on (default "no
  * output written"); a string literal. */
 void interrupt_set_outcome(const char *outcome);
+
+/* At the end of a successful run, before the process exits: a signal that
+ * came while the run ended (its handling waiting, say, for a commit) ends
+ * the process as it would have, with its message and status, rather than
+ * being lost to a normal exit (under mpirun, Ctrl-C during rank 0's commit
+ * then said nothing at all). A signal after this call finds the run over
+ * and the process exits normally. */
+void interrupt_settle(void);
+
+/* Under mpirun, rank 0 from the end of the ranks' work to the end of its
+ * writing: mpirun's SIGCONT from now on announces its SIGTERM, which
+ * interrupt_settle() then waits for. */
+void interrupt_watch_mpirun(void);
 
 #endif

@@ -11,6 +11,7 @@
 #include "devscene.h"
 #include "program.h"
 #include "progress.h"
+#include "quote.h"
 #include "timing.h"
 
 void launch_default_groups(const struct device *dev, const struct render_settings *s, int groups[2])
@@ -174,7 +175,7 @@ int launch_check_scene_fits(const struct device *dev, const struct scene *scene,
 	snprintf(err, err_size,
 		 "%s: the scene (%d triangles) needs %zu bytes of device "
 		 "memory, more than the limit of %llu bytes in one buffer on %s (%s)",
-		 scene->source, scene->triangle_count, bytes, limit, dev->name,
+		 quote_text(scene->source), scene->triangle_count, bytes, limit, dev->name,
 		 limit == dev->max_alloc_size ? "CL_DEVICE_MAX_MEM_ALLOC_SIZE"
 					      : "rtcl's 32-bit scene offsets");
 	return -1;
@@ -260,7 +261,8 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 		s->accel == ACCEL_BVH && (scene->sphere_count > 0 || scene->triangle_count > 0);
 
 	*block = NULL;
-	if (launch_pack_scene(dev, scene, s, use_bvh, res, block, err, err_size))
+	if (devscene_check_resolution(scene, err, err_size) ||
+	    launch_pack_scene(dev, scene, s, use_bvh, res, block, err, err_size))
 		return -1;
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
 	if (!res->rgb) {

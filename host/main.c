@@ -304,7 +304,7 @@ int main(int argc, char **argv)
 	progress_init(shows_progress(&opt));
 	files_inject_rename_failure(checks_rename_fault());
 	/* Before the OpenCL runtime starts threads of its own. */
-	if (interrupt_setup(progress_enabled(), err, sizeof(err))) {
+	if (interrupt_setup(progress_enabled(), opt.mpi, err, sizeof(err))) {
 		fprintf(stderr, "rtcl: %s\n", err);
 		return EXIT_FAILED;
 	}
@@ -324,5 +324,7 @@ int main(int argc, char **argv)
 	render_result_free(&run.counted);
 	json_decref(run.multidevice);
 	scene_free(&scene);
+	if (status == 0)
+		interrupt_settle();
 	return status;
 }

@@ -8,7 +8,12 @@
  * device, writes nothing, and every rank exits with status 1. A rank that
  * dies makes mpirun end the others (SIGTERM): rank 0 then removes its staged
  * files (interrupt.h) and says no output was written, beside mpirun's report
- * of the rank that died. */
+ * of the rank that died.
+ *
+ * Every rank must render the same job: at the start the ranks compare the
+ * scene's digest (scene_digest()) and every setting that changes the image or
+ * its pieces; rank 0 names the first difference and every rank exits with
+ * status 1. */
 #ifndef RTCL_MPI_RENDER_H
 #define RTCL_MPI_RENDER_H
 

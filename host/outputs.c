@@ -8,11 +8,13 @@
 #include <strings.h>
 #include <sys/stat.h>
 
+#include "checks.h"
 #include "files.h"
 #include "frames.h"
 #include "image.h"
 #include "interrupt.h"
 #include "program.h"
+#include "quote.h"
 #include "workmap.h"
 
 /* Room for a path and the ".json" of the --flops sidecar. */
@@ -111,9 +113,9 @@ int outputs_same_file(const char *a, const char *b)
 static void describe(const struct output *out, int frame, const char *name, char *text, size_t size)
 {
 	if (out)
-		snprintf(text, size, "%s %s", out->option, out->path);
+		snprintf(text, size, "%s %s", out->option, quote_text(out->path));
 	else
-		snprintf(text, size, "frame %d's image %s", frame, name);
+		snprintf(text, size, "frame %d's image %s", frame, quote_text(name));
 }
 
 /* Refuses an output that is one of the files the scene was read from (by
@@ -135,7 +137,7 @@ static int check_not_input(const struct scene *scene, const struct stat *inputs,
 		snprintf(err, err_size,
 			 "%s names the %s %s: rtcl does not replace a file the run reads; give "
 			 "the output another name",
-			 what, scene->inputs[i].kind, scene->inputs[i].path);
+			 what, scene->inputs[i].kind, quote_text(scene->inputs[i].path));
 		return OUTPUTS_CLASH;
 	}
 	return 0;
@@ -176,7 +178,7 @@ static int check_clashes(const struct options *opt, const struct scene *scene,
 	for (int f = opt->frames[0]; opt->frames_given && f <= opt->frames[1] && !ret; f++) {
 		if (frames_output_name(opt->output, f, name)) {
 			snprintf(err, err_size, "-o/--output: %s: the frame names are too long",
-				 opt->output);
+				 quote_text(opt->output));
 			ret = -1;
 			break;
 		}
@@ -283,8 +285,10 @@ int outputs_write(const struct run *run, char *err, size_t err_size)
 	/* One step for an interrupt: the renames and what the message says. */
 	interrupt_hold();
 	int ret = files_commit(staged, n, err, err_size);
-	if (ret == 0)
+	if (ret == 0) {
 		interrupt_set_outcome("the outputs were written");
+		checks_commit_delay();
+	}
 	interrupt_release();
 	return ret;
 }

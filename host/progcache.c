@@ -26,6 +26,7 @@
 
 #include "checks.h" /* checks_cache_write_delay */
 #include "interrupt.h"
+#include "quote.h"
 
 /* The file's first bytes; a new layout gets a new one. */
 static const char magic[8] = {'r', 't', 'c', 'l', 'b', 'i', 'n', '1'};
@@ -142,7 +143,7 @@ out_close:
 	fclose(file);
 	if (!binary && cache->verbose)
 		fprintf(stderr, "rtcl: program cache: %s is damaged; building from source\n",
-			cache->path);
+			quote_text(cache->path));
 	return binary;
 }
 
@@ -171,7 +172,7 @@ cl_program progcache_load(const struct progcache *cache, const struct device *de
 	if (cache->verbose)
 		fprintf(stderr,
 			"rtcl: program cache: the device refused %s; building from source\n",
-			cache->path);
+			quote_text(cache->path));
 	return NULL;
 }
 
@@ -315,8 +316,8 @@ void progcache_save(const struct progcache *cache, cl_program program)
 			failed = write_atomically(cache->path, &h, binary);
 		}
 		if (failed && cache->verbose)
-			fprintf(stderr, "rtcl: program cache: cannot write %s (%s)\n", cache->path,
-				strerror(errno));
+			fprintf(stderr, "rtcl: program cache: cannot write %s (%s)\n",
+				quote_text(cache->path), strerror(errno));
 	}
 	free(binary);
 }

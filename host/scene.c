@@ -21,6 +21,7 @@
 #include <jansson.h>
 
 #include "files.h"
+#include "quote.h"
 #include "scene_loader.h"
 
 /* Larger documents are refused before parsing: jansson needs many times the
@@ -344,7 +345,9 @@ static const char utf8_bom[] = "\xef\xbb\xbf";
 static int load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
 		       const char *base_dir, char *err, size_t err_size)
 {
-	struct loader ld = {.source = source,
+	/* Messages show the name with its control bytes escaped (quote.h). */
+	char *shown = strdup(quote_text(source));
+	struct loader ld = {.source = shown ? shown : "(scene)",
 			    .err = err,
 			    .err_size = err_size,
 			    .scene = scene,
@@ -356,7 +359,8 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 	memset(scene, 0, sizeof(*scene));
 	if (len > SCENE_MAX_BYTES) {
 		loader_write_err(&ld, "%s: scene is %zu bytes, more than the limit of %zu bytes",
-				 source, len, SCENE_MAX_BYTES);
+				 ld.source, len, SCENE_MAX_BYTES);
+		free(shown);
 		return -1;
 	}
 	if (len >= 3 && memcmp(json, utf8_bom, 3) == 0) {
@@ -364,12 +368,15 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 		len -= 3;
 	}
 	doc = json_loadb(json, len, JSON_REJECT_DUPLICATES, &jerr);
-	if (!doc)
-		return loader_fail_json(&ld, &jerr);
+	if (!doc) {
+		loader_fail_json(&ld, &jerr);
+		free(shown);
+		return -1;
+	}
 
 	scene->source = strdup(source);
-	if (!scene->source) {
-		loader_write_err(&ld, "%s: out of memory", source);
+	if (!scene->source || !shown) {
+		loader_write_err(&ld, "%s: out of memory", ld.source);
 		ret = -1;
 	} else {
 		ld.doc = doc;
@@ -379,6 +386,7 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 	}
 	json_decref(ld.name_index);
 	json_decref(doc);
+	free(shown);
 	if (ret)
 		scene_free(scene);
 	return ret;
@@ -394,7 +402,7 @@ int scene_load_file(struct scene *scene, const char *path, char *err, size_t err
 
 	memset(scene, 0, sizeof(*scene));
 	if (!dir) {
-		snprintf(err, err_size, "%s: out of memory", path);
+		snprintf(err, err_size, "%s: out of memory", quote_text(path));
 		return -1;
 	}
 	ret = files_read(path, "scene", SCENE_MAX_BYTES, &buf, &len, err, err_size);
@@ -428,7 +436,7 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		struct loader ld = {.source = name, .err = err, .err_size = err_size};
 
 		memset(scene, 0, sizeof(*scene));
-		loader_write_err(&ld, "%s: no scene text", name);
+		loader_write_err(&ld, "%s: no scene text", quote_text(name));
 		return -1;
 	}
 	return load_buffer(scene, json, strlen(json), name, NULL, err, err_size);
@@ -472,4 +480,82 @@ int scene_bounds(const struct scene *scene, double lo[3], double hi[3])
 	memcpy(lo, box_lo, sizeof(box_lo));
 	memcpy(hi, box_hi, sizeof(box_hi));
 	return scene->sphere_count + scene->triangle_count;
+}
+
+/* FNV-1a over n bytes. */
+static void digest_bytes(unsigned long long *h, const void *data, size_t n)
+{
+	const unsigned char *b = data;
+
+	for (size_t i = 0; i < n; i++) {
+		*h ^= b[i];
+		*h *= 0x100000001b3ULL;
+	}
+}
+
+static void digest_doubles(unsigned long long *h, const double *v, size_t n)
+{
+	digest_bytes(h, v, n * sizeof(double));
+}
+
+static void digest_int(unsigned long long *h, long long v)
+{
+	digest_bytes(h, &v, sizeof(v));
+}
+
+unsigned long long scene_digest(const struct scene *scene)
+{
+	unsigned long long h = 0xcbf29ce484222325ULL;
+	const struct scene_camera *c = &scene->camera;
+
+	digest_int(&h, scene->width);
+	digest_int(&h, scene->height);
+	digest_int(&h, scene->samples);
+	digest_int(&h, scene->max_depth);
+	digest_doubles(&h, c->eye, 3);
+	digest_doubles(&h, c->look_at, 3);
+	digest_doubles(&h, c->up, 3);
+	digest_doubles(&h, &c->fov, 1);
+	digest_doubles(&h, scene->background, 3);
+	digest_doubles(&h, scene->ambient, 3);
+	digest_doubles(&h, &scene->epsilon, 1);
+	/* Field by field: the structs' padding holds whatever it held. */
+	digest_int(&h, scene->material_count);
+	for (int i = 0; i < scene->material_count; i++) {
+		const struct scene_material *m = &scene->materials[i];
+		double fields[] = {m->ambient, m->diffuse, m->specular, m->shininess,
+				   m->reflect,	m->transmit, m->ior};
+		digest_doubles(&h, m->color, 3);
+		digest_doubles(&h, fields, sizeof(fields) / sizeof(fields[0]));
+	}
+	digest_int(&h, scene->sphere_count);
+	for (int i = 0; i < scene->sphere_count; i++) {
+		digest_doubles(&h, scene->spheres[i].center, 3);
+		digest_doubles(&h, &scene->spheres[i].radius, 1);
+		digest_int(&h, scene->spheres[i].material);
+	}
+	digest_int(&h, scene->plane_count);
+	for (int i = 0; i < scene->plane_count; i++) {
+		const struct scene_plane *p = &scene->planes[i];
+		digest_doubles(&h, p->point, 3);
+		digest_doubles(&h, p->normal, 3);
+		digest_int(&h, p->material);
+		digest_int(&h, p->has_checker);
+		digest_doubles(&h, &p->checker_size, 1);
+		digest_doubles(&h, p->checker_color, 3);
+	}
+	digest_int(&h, scene->light_count);
+	for (int i = 0; i < scene->light_count; i++) {
+		digest_doubles(&h, scene->lights[i].position, 3);
+		digest_doubles(&h, scene->lights[i].color, 3);
+	}
+	digest_int(&h, scene->triangle_count);
+	for (int i = 0; i < scene->triangle_count; i++) {
+		const struct scene_triangle *t = &scene->triangles[i];
+		digest_doubles(&h, &t->v[0][0], 9);
+		digest_doubles(&h, &t->normal[0][0], 9);
+		digest_int(&h, t->material);
+		digest_int(&h, t->smooth);
+	}
+	return h;
 }

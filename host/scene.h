@@ -114,6 +114,23 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 
 void scene_free(struct scene *scene);
 
+/* p relative to the camera's eye, in double: the device renders the scene
+ * translated so that the eye is its origin (camera-relative rendering,
+ * RENDERING.md "Coordinates on the device"), where float keeps the most
+ * precision. Every world position that goes to the device goes through it. */
+static inline void scene_from_eye(const struct scene *scene, const double p[3], double out[3])
+{
+	for (int i = 0; i < 3; i++)
+		out[i] = p[i] - scene->camera.eye[i];
+}
+
+/* A 64-bit FNV-1a digest of everything in the loaded scene that its image
+ * depends on: the image and camera settings and every material, sphere,
+ * plane, light and triangle (the mesh files' contents, placed), field by
+ * field; not the file's name. Equal scenes give equal digests on every host
+ * of one byte order (--mpi ranks compare them, mpi_render.h). */
+unsigned long long scene_digest(const struct scene *scene);
+
 /* Sets lo and hi to the world-space axis-aligned box of the scene's finite
  * objects, the spheres and triangles (planes are infinite), and returns how
  * many there are; with none, lo and hi are left as they were. */

@@ -7,6 +7,7 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "quote.h"
 #include "scene_loader.h"
 #include "suggest.h"
 
@@ -55,16 +56,9 @@ static void sb_escaped(struct sbuf *sb, const char *s, int quoted)
 			sb_printf(sb, "...");
 			return;
 		}
-		if (quoted && (c == '"' || c == '\\'))
-			sb_printf(sb, "\\%c", c);
-		else if (c == '\n')
-			sb_printf(sb, "\\n");
-		else if (c == '\t')
-			sb_printf(sb, "\\t");
-		else if (c < 0x20 || c == 0x7f)
-			sb_printf(sb, "\\x%02x", c);
-		else
-			sb_printf(sb, "%c", c);
+		char escaped[QUOTE_BYTE_SIZE];
+
+		sb_printf(sb, "%s", quote_byte(c, quoted, escaped));
 	}
 }
 

@@ -6,6 +6,7 @@
 
 #include "cli.h"
 #include "files.h"
+#include "quote.h"
 #include "timing.h"
 
 void flop_summary_compute(struct flop_summary *s, const uint64_t *item_flops, size_t items,
@@ -39,7 +40,7 @@ int stats_stage_document(struct staged_file *staged, const char *path, json_t *d
 	int failed = !doc || files_stage_with(staged, path, fill_json, doc, err, err_size);
 
 	if (!doc)
-		snprintf(err, err_size, "%s: cannot build the JSON document", path);
+		snprintf(err, err_size, "%s: cannot build the JSON document", quote_text(path));
 	json_decref(doc);
 	return failed ? -1 : 0;
 }
@@ -263,7 +264,7 @@ void stats_print_summary(const struct run *run)
 		       s->kernel->name, s->workgroup[0], s->workgroup[1], r->groups[0],
 		       r->groups[1], r->global_size[0], r->global_size[1]);
 	printf("image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
-	       run->scene->source);
+	       quote_text(run->scene->source));
 	if (s->samples > 1)
 		printf("samples: %d per pixel in %d pass%s\n", s->samples, r->passes,
 		       r->passes == 1 ? "" : "es");
@@ -285,11 +286,11 @@ void stats_print_summary(const struct run *run)
 			       (unsigned long long)f->node_visits,
 			       f->rays ? (double)f->node_visits / f->rays : 0.0);
 	}
-	printf("output:  %s", run->opt->output);
+	printf("output:  %s", quote_text(run->opt->output));
 	if (run->opt->work_map_path)
-		printf(", work map %s", run->opt->work_map_path);
+		printf(", work map %s", quote_text(run->opt->work_map_path));
 	if (run->opt->flops_path)
-		printf(", flops %s", run->opt->flops_path);
+		printf(", flops %s", quote_text(run->opt->flops_path));
 	printf("\n");
 }
 

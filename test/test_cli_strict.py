@@ -123,7 +123,8 @@ def test_empty_file_name_is_a_usage_error(option, name, tmp_path):
     (["--size", "8x8 "], '--size: expected WxH (e.g. 8x8), got "8x8 "'),
     (["--size", "8x-8"], '--size: expected WxH (e.g. 8x8), got "8x-8"'),
     (["-w", "+8x8"], '-w/--workgroup: expected WxH (e.g. 8x8), got "+8x8"'),
-    (["--groups", "\t2x2"], '--groups: expected WxH (e.g. 8x8), got "\t2x2"'),
+    # The tab shown escaped (issue 24, finding 16).
+    (["--groups", "\t2x2"], '--groups: expected WxH (e.g. 8x8), got "\\t2x2"'),
     (["--depth", "+3"], '--depth: expected an integer between 0 and 64, got "+3"'),
     (["--depth", " 3"], '--depth: expected an integer between 0 and 64, got " 3"'),
     (["-r", "+2"], '-r/--repeat: expected an integer between 1 and 100000, got "+2"'),
@@ -250,3 +251,42 @@ def test_writable_pocl_cache_dir_renders(shared_dir, unprivileged_rtcl_works):
 
 def test_help_names_pocl_cache_dir():
     assert "POCL_CACHE_DIR=DIR" in rtcl("--help").stdout
+
+
+# ---- control bytes in paths and option values (issue 24, finding 16) ----------
+
+ESC_CLEAR = "\x1b[2J"  # would clear the terminal if echoed raw
+
+
+@pytest.mark.parametrize("args, shown", [
+    (["-s", "a\nb" + ESC_CLEAR + ".json"], "a\\nb\\x1b[2J.json: cannot open"),
+    (["-o", "missing\n/x.png"], "missing\\n/x.png: directory \"missing\\n\" does not exist"),
+    (["-o", "x" + ESC_CLEAR + ".bmpx"], "x\\x1b[2J.bmpx: unknown image format"),
+    (["--size", "8x" + ESC_CLEAR], "got \"8x\\x1b[2J\""),
+    (["-k", "x\ny"], "unknown kernel \"x\\ny\""),
+    (["--encoding", "\x1b"], "got \"\\x1b\""),
+    (["--devices", "0:0,\n"], "got \"0:0,\\n\""),
+    (["--fo\x1bo"], "unknown option --fo\\x1bo"),
+    (["one\n.json", "two\t.json"], "two scenes given, \"one\\n.json\" and \"two\\t.json\""),
+])
+def test_control_bytes_are_escaped_in_messages(tmp_path, args, shown):
+    if args[0] == "-o":
+        args = [*TINY, *args]  # relative to tmp_path, the working directory
+    result = subprocess.run([RTCL, *args], capture_output=True, text=True, cwd=tmp_path,
+                            timeout=60)
+    assert result.returncode != 0
+    assert "\x1b" not in result.stderr and "\t" not in result.stderr
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert shown in lines[0], lines[0]
+    assert sorted(os.listdir(tmp_path)) == []
+
+
+def test_control_bytes_in_a_scene_file_name_are_escaped_in_its_messages(tmp_path):
+    scene = tmp_path / ("s\n" + ESC_CLEAR + ".json")
+    scene.write_text("{}")
+    result = rtcl("-s", str(scene), "-o", str(tmp_path / "x.png"))
+    assert result.returncode == 1
+    (line,) = result.stderr.splitlines()
+    assert line == f"{tmp_path}/s\\n\\x1b[2J.json: format: required field is missing", line
+    assert sorted(p.name for p in tmp_path.iterdir()) == [scene.name]

@@ -88,3 +88,59 @@ def test_tags_read_back_through_openimageio(tmp_path, name, options, tag):
     info = subprocess.run(["oiiotool", "--info", "-v", name], capture_output=True, text=True,
                           cwd=tmp_path, timeout=60).stdout
     assert f"oiio:ColorSpace: {tag}" in info, info
+
+
+# ---- radiance that overflows float (issue 24, finding 12) -----------------------
+
+FLT_MAX = 3.4028234663852886e38
+RGBE_MAX = 1.7014117e38  # Radiance HDR: 2^127 and up wrap to black
+
+
+def hot_scene(directory):
+    """two_balls with lights, colours and diffuse coefficients of 1e18 (all
+    allowed): light x colour x kd = 1e54 overflows float on the lit spheres."""
+    import json
+    scene = json.loads((ROOT / "scenes" / "two_balls.json").read_text())
+    for light in scene["lights"]:
+        light["color"] = [1e18, 1e18, 1e18]
+    for material in scene["materials"].values():
+        material["color"] = [1e18, 1e18, 1e18]
+        material["diffuse"] = 1e18
+    path = directory / "hot.json"
+    path.write_text(json.dumps(scene))
+    return path
+
+
+@pytest.mark.parametrize("kernel", ["dynamic", "reference"])
+def test_overflowing_radiance_is_written_as_the_largest_float_never_inf(tmp_path, kernel):
+    np = pytest.importorskip("numpy")
+    rtcl("-s", str(hot_scene(tmp_path)), "-k", kernel, "-o", "hot.pfm", cwd=tmp_path)
+    values = pfm_values(tmp_path / "hot.pfm")
+    assert np.isfinite(values).all(), "inf or NaN written"
+    assert (values == np.float32(FLT_MAX)).sum() > 100  # the lit spheres, clamped
+    assert values.min() > 0
+
+
+@needs_oiiotool
+@pytest.mark.parametrize("name, largest", [("hot.exr", FLT_MAX), ("hot.hdr", RGBE_MAX)])
+def test_overflowing_radiance_in_exr_and_hdr_is_the_largest_value_never_black(tmp_path, name,
+                                                                              largest):
+    np = pytest.importorskip("numpy")
+    scene = hot_scene(tmp_path)
+    result = subprocess.run([RTCL, *SMALL, "-q", "-s", str(scene), "-o", name],
+                            capture_output=True, text=True, cwd=tmp_path, timeout=300)
+    if "no OpenImageIO" in result.stderr:
+        pytest.skip("a build without OpenImageIO")
+    assert result.returncode == 0, result.stderr
+    rtcl("-s", str(scene), "-o", "hot.pfm", cwd=tmp_path)
+    dump = subprocess.run(["oiiotool", "--dumpdata", name], capture_output=True, text=True,
+                          check=True, cwd=tmp_path, timeout=60).stdout
+    back = np.array([float(v) for line in dump.splitlines() if "Pixel (" in line
+                     for v in line.split(":")[1].split()])
+    direct = pfm_values(tmp_path / "hot.pfm")
+    assert np.isfinite(back).all()
+    overflowed = direct == np.float32(FLT_MAX)
+    assert overflowed.sum() > 100
+    # Where float overflowed, the file holds (about) its largest value, not 0.
+    assert (back[overflowed] >= 0.99 * largest).all(), back[overflowed].min()
+    assert back.max() <= largest

@@ -189,7 +189,15 @@ static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4]
 	cl_kernel kernel = clCreateKernel(f->program, name, &status);
 	size_t one = 1;
 	cl_ulong out[3];
-	cl_float4 va = {{a[0], a[1], a[2], a[3]}}, vb = {{b[0], b[1], b[2], b[3]}};
+	/* A ray's origin, given in world coordinates here, goes in the device's:
+	 * relative to the eye (scene_from_eye). */
+	int a_is_origin = strcmp(name, "count_triangle_normal") != 0 &&
+			  strcmp(name, "count_smooth_normal") != 0;
+	const double *eye = f->scene.camera.eye;
+	cl_float4 va = {{a_is_origin ? (float)(a[0] - eye[0]) : a[0],
+			 a_is_origin ? (float)(a[1] - eye[1]) : a[1],
+			 a_is_origin ? (float)(a[2] - eye[2]) : a[2], a[3]}};
+	cl_float4 vb = {{b[0], b[1], b[2], b[3]}};
 
 	cr_assert_eq(status, CL_SUCCESS, "clCreateKernel(%s): %s", name, cl_error_name(status));
 	clSetKernelArg(kernel, 0, sizeof(cl_mem), &f->scene_buffer);

@@ -7,8 +7,10 @@ import json
 import os
 import pathlib
 import re
+import signal
 import subprocess
 import sys
+import time
 
 import pytest
 
@@ -120,6 +122,9 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--devices", "0:0,0:1", "--piece-rows", "0"], "--piece-rows: expected"),
     (["--devices", "0:0,0:1", "--piece-rows", "2x"], "--piece-rows: expected"),
     (["--piece-rows", "4"], "--piece-rows cuts one image into bands for the devices of"),
+    # Like --piece-rows: refused, not silently ignored, without several devices.
+    (["--split", "static"], "--split chooses how pieces go to the devices of --devices or --mpi"),
+    (["--split", "dynamic", "--frames", "0:1"], "--split chooses how pieces go"),
     (["--devices", "all", "--frames", "0:1", "--piece-rows", "4"],
      "it does not apply to --frames"),
     (["--devices", "0:0,0:1", "--flops", "x.npy"], "use --work-map FILE.npy (per pixel)"),
@@ -260,6 +265,82 @@ def test_mpi_rank_that_dies_fails_the_run_with_no_output(tmp_path, kill):
     if kill == "term_then_kill":  # some rank has the time to say so
         assert "no output written" in result.stderr
     assert os.listdir(tmp_path) == [], "a dead rank left files behind"
+
+
+def mpmd_run(first, second, cwd=(ROOT, ROOT)):
+    """Two ranks of different command lines (mpirun's app contexts)."""
+    command = ["mpirun", "--oversubscribe", "-np", "1", "--wdir", str(cwd[0]), RTCL, "--mpi",
+               *first, ":", "-np", "1", "--wdir", str(cwd[1]), RTCL, "--mpi", *second]
+    return subprocess.run(command, capture_output=True, text=True, cwd=ROOT, timeout=120,
+                          env={**os.environ, **MPI_ENV})
+
+
+# Ranks that render different jobs (issue 24, finding 8) spliced one image
+# from both with exit status 0, or failed with "internal error: piece 3 of 3".
+@needs_mpi
+@pytest.mark.parametrize("first, second, message", [
+    (["-s", "scenes/two_balls.json"], ["-s", "scenes/paper60.json"],
+     "rank 1 renders another job: the scene differs (file scenes/two_balls.json on rank 0, "
+     "scenes/paper60.json on rank 1)"),
+    ([], ["--spp", "4"], "rank 1 renders another job: --spp 4 against rank 0's --spp 1"),
+    (["--frames", "0:1"], ["--frames", "0:2"],
+     "rank 1 renders another job: --frames 0:2 against rank 0's --frames 0:1"),
+    ([], ["--size", "64x24"],
+     "rank 1 renders another job: --size 64x24 against rank 0's --size 32x24"),
+    (["--piece-rows", "2"], ["--piece-rows", "3"],
+     "rank 1 renders another job: --piece-rows 3 against rank 0's --piece-rows 2"),
+])
+def test_mpi_ranks_that_render_different_jobs_are_refused(tmp_path, first, second, message):
+    out = ["-o", str(tmp_path / "x.ppm"), "--stats", str(tmp_path / "s.json")]
+    result = mpmd_run([*SMALL, *first, *out], [*SMALL, *second, *out])
+    assert result.returncode == 1, result.stderr
+    assert own_messages(result.stderr) == [f"rtcl: {message}"], result.stderr
+    assert os.listdir(tmp_path) == []
+
+
+@needs_mpi
+def test_mpi_ranks_whose_scene_files_differ_in_content_are_refused(tmp_path):
+    # The same name in two folders: the digest of the loaded scene tells.
+    a, b, out = tmp_path / "a", tmp_path / "b", tmp_path / "out"
+    for folder in (a, b, out):
+        folder.mkdir()
+    scene = json.loads((ROOT / "scenes" / "two_balls.json").read_text())
+    (a / "s.json").write_text(json.dumps(scene))
+    scene["spheres"][0]["radius"] *= 1.0000001
+    (b / "s.json").write_text(json.dumps(scene))
+    args = [*SMALL, "-s", "s.json", "-o", str(out / "x.ppm")]
+    result = mpmd_run(args, args, cwd=(a, b))
+    assert result.returncode == 1, result.stderr
+    assert own_messages(result.stderr) == [
+        "rtcl: rank 1 renders another job: the scene differs (file s.json on rank 0, s.json "
+        "on rank 1, with other contents)"], result.stderr
+    assert os.listdir(out) == []
+
+
+# Ctrl-C to mpirun while rank 0 commits (issue 24, finding 15): mpirun sends
+# SIGCONT, then SIGTERM some 30 ms later; rank 0 had finished and exited 0
+# in between, and mpirun's status 1 came with no message at all, though
+# every output was written. RTCL_TEST_COMMIT_DELAY holds rank 0 in its
+# commit, after the renames, for the signal to come then.
+@needs_mpi
+def test_mpi_interrupt_while_rank_0_commits_says_the_outputs_were_written(tmp_path):
+    command = [*MPIRUN[:-1], "2", RTCL, "--mpi", *SMALL, "-q", "--frames", "0:19", "-o",
+               str(tmp_path / "f.ppm")]
+    process = subprocess.Popen(command, cwd=ROOT, stdout=subprocess.PIPE,
+                               stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, **MPI_ENV, "RTCL_TEST_COMMIT_DELAY": "300"})
+    deadline = time.monotonic() + 120
+    while (not any(name.startswith("f_") for name in os.listdir(tmp_path))
+           and process.poll() is None and time.monotonic() < deadline):
+        time.sleep(0.001)
+    process.send_signal(signal.SIGINT)
+    try:
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert sorted(os.listdir(tmp_path)) == [f"f_{f:04d}.ppm" for f in range(20)]
+    assert "rtcl: interrupted; the outputs were written\n" in stderr, stderr
+    assert "no output written" not in stderr, stderr
 
 
 @needs_mpi

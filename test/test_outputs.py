@@ -126,6 +126,44 @@ def test_interrupts_while_writing_leave_the_old_files_or_all_new_ones(tmp_path):
     assert outcomes == {"old", "new"}
 
 
+# ---- quit and crash signals sent by a user (issue 24, finding 18) ------------
+
+def opencl_is_up(pid):
+    """Whether the OpenCL runtime has set its signal handlers (PoCL's LLVM
+    catches SIGQUIT, SIGABRT and SIGSEGV, and swallowed those sent by kill)."""
+    try:
+        status = pathlib.Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return True
+    caught = int(next(line for line in status.splitlines()
+                      if line.startswith("SigCgt:")).split()[1], 16)
+    return bool(caught & (1 << (signal.SIGQUIT - 1)))
+
+
+@pytest.mark.parametrize("signal_number", [signal.SIGQUIT, signal.SIGABRT, signal.SIGSEGV])
+def test_quit_and_crash_signals_sent_by_a_user_end_the_run_as_an_interrupt(tmp_path,
+                                                                            signal_number):
+    (tmp_path / "out.png").write_bytes(PREVIOUS_IMAGE)
+    # Seconds of rendering (PoCL), far more than the signal needs.
+    process = subprocess.Popen([RTCL, "--size", "800x600", "--spp", "16", "-o", "out.png"],
+                               cwd=tmp_path, stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                               text=True)
+    deadline = time.monotonic() + 5
+    while not opencl_is_up(process.pid) and time.monotonic() < deadline:
+        time.sleep(0.005)
+    process.send_signal(signal_number)
+    try:
+        _, stderr = process.communicate(timeout=60)
+    finally:
+        process.kill()
+    assert process.returncode == 128 + signal_number, (process.returncode, stderr)
+    name = signal.Signals(signal_number).name
+    assert stderr.startswith(f"rtcl: interrupted ({name}"), stderr
+    assert stderr.endswith("; no output written\n") and stderr.count("\n") == 1, stderr
+    assert os.listdir(tmp_path) == ["out.png"]
+    assert (tmp_path / "out.png").read_bytes() == PREVIOUS_IMAGE
+
+
 # ---- two outputs, one file ------------------------------------------------
 
 @pytest.mark.parametrize("options", [
