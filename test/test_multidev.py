@@ -283,12 +283,16 @@ def mpmd_run(first, second, cwd=(ROOT, ROOT)):
      "rank 1 renders another job: the scene differs (file scenes/two_balls.json on rank 0, "
      "scenes/paper60.json on rank 1)"),
     ([], ["--spp", "4"], "rank 1 renders another job: --spp 4 against rank 0's --spp 1"),
-    (["--frames", "0:1"], ["--frames", "0:2"],
-     "rank 1 renders another job: --frames 0:2 against rank 0's --frames 0:1"),
-    ([], ["--size", "64x24"],
-     "rank 1 renders another job: --size 64x24 against rank 0's --size 32x24"),
-    (["--piece-rows", "2"], ["--piece-rows", "3"],
-     "rank 1 renders another job: --piece-rows 3 against rank 0's --piece-rows 2"),
+    # The other settings go the same way: make test-long.
+    pytest.param(["--frames", "0:1"], ["--frames", "0:2"],
+                 "rank 1 renders another job: --frames 0:2 against rank 0's --frames 0:1",
+                 marks=pytest.mark.slow),
+    pytest.param([], ["--size", "64x24"],
+                 "rank 1 renders another job: --size 64x24 against rank 0's --size 32x24",
+                 marks=pytest.mark.slow),
+    pytest.param(["--piece-rows", "2"], ["--piece-rows", "3"],
+                 "rank 1 renders another job: --piece-rows 3 against rank 0's --piece-rows 2",
+                 marks=pytest.mark.slow),
 ])
 def test_mpi_ranks_that_render_different_jobs_are_refused(tmp_path, first, second, message):
     out = ["-o", str(tmp_path / "x.ppm"), "--stats", str(tmp_path / "s.json")]
@@ -392,7 +396,9 @@ def image_run(directory, name, *args, env=None):
     return result, json.loads(stats.read_text())
 
 
-@pytest.mark.parametrize("spp", ["1", "4"])
+# At 4 spp in make test-long: Criterion's multidev tests check bands at 1 and 4
+# spp for every kernel in make test.
+@pytest.mark.parametrize("spp", ["1", pytest.param("4", marks=pytest.mark.slow)])
 @pytest.mark.parametrize("kernel", KERNELS)
 def test_bands_on_two_devices_match_one_device_byte_for_byte(tmp_path, kernel, spp):
     common = ["-k", kernel, "--spp", spp]

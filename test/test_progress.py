@@ -7,6 +7,8 @@ import re
 import subprocess
 from pathlib import Path
 
+import pytest
+
 import terminal
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -69,17 +71,20 @@ def test_frames_show_the_frame_and_its_share(tmp_path):
     assert re.search(r"rendering \(dynamic, frame 2 of 2: \d+%\): \d+% done", text), text
 
 
-def test_progress_changes_neither_image_nor_flop_counts(tmp_path):
+# cyclic in make test (its count is the one inside a loop), the others in
+# make test-long: each builds four programs.
+@pytest.mark.parametrize("kernel", ["cyclic", pytest.param("serial", marks=pytest.mark.slow),
+                                    pytest.param("naive", marks=pytest.mark.slow)])
+def test_progress_changes_neither_image_nor_flop_counts(tmp_path, kernel):
     """With the line on, serial, naive and cyclic count their chunks done
     (RTCL_PROGRESS): the pixels and the counted flops stay the same."""
-    for kernel in ("serial", "naive", "cyclic"):
-        off, on = tmp_path / f"off_{kernel}", tmp_path / f"on_{kernel}"
-        args = ["-k", kernel, "--size", "40x30", "--spp", "2"]
-        plain = subprocess.run([RTCL, *args, "-o", f"{off}.ppm", "--flops", f"{off}.npy"],
-                               cwd=ROOT, capture_output=True, text=True, timeout=120)
-        assert plain.returncode == 0 and plain.stderr == "", plain.stderr
-        result, lines = on_terminal(*args, "-v", "-o", f"{on}.ppm", "--flops", f"{on}.npy")
-        assert result.returncode == 0
-        assert any("-DRTCL_PROGRESS" in line for line in lines), lines
-        assert Path(f"{off}.ppm").read_bytes() == Path(f"{on}.ppm").read_bytes(), kernel
-        assert Path(f"{off}.npy").read_bytes() == Path(f"{on}.npy").read_bytes(), kernel
+    off, on = tmp_path / f"off_{kernel}", tmp_path / f"on_{kernel}"
+    args = ["-k", kernel, "--size", "40x30", "--spp", "2"]
+    plain = subprocess.run([RTCL, *args, "-o", f"{off}.ppm", "--flops", f"{off}.npy"],
+                           cwd=ROOT, capture_output=True, text=True, timeout=120)
+    assert plain.returncode == 0 and plain.stderr == "", plain.stderr
+    result, lines = on_terminal(*args, "-v", "-o", f"{on}.ppm", "--flops", f"{on}.npy")
+    assert result.returncode == 0
+    assert any("-DRTCL_PROGRESS" in line for line in lines), lines
+    assert Path(f"{off}.ppm").read_bytes() == Path(f"{on}.ppm").read_bytes(), kernel
+    assert Path(f"{off}.npy").read_bytes() == Path(f"{on}.npy").read_bytes(), kernel
