@@ -12,6 +12,8 @@ import subprocess
 
 import pytest
 
+import builds
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 BAD_SCENES = ROOT / "test" / "bad_scenes"
@@ -523,6 +525,8 @@ def test_million_spheres_render_from_global_memory(tmp_path):
 
 @pytest.mark.parametrize("extra", [[], ["--devices", "0:0", "--piece-rows", "2000"],
                                    ["-k", "wavefront"]], ids=["one", "devices", "wavefront"])
+@pytest.mark.skipif(builds.built_with_asan(RTCL),
+                    reason="AddressSanitizer cannot run under an address-space limit")
 def test_too_little_host_memory_is_one_message(tmp_path, extra):
     """Issue 24 finding 6: under `ulimit -v 1500000` an 8000x8000 image on PoCL
     aborted in PoCL's assertion (rc 134), as PoCL allocated the image buffer at

@@ -12,6 +12,8 @@ import time
 
 import pytest
 
+import builds
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 MESH_SCENE = ROOT / "test" / "meshes" / "mesh_scene.json"
@@ -345,6 +347,8 @@ def test_a_ply_declaring_two_billion_faces_is_refused_before_any_allocation(tmp_
     assert time.monotonic() - started < 10
 
 
+@pytest.mark.skipif(builds.built_with_asan(RTCL),
+                    reason="AddressSanitizer cannot run under an address-space limit")
 def test_an_import_beyond_its_memory_limit_is_one_message(tmp_path):
     """Finding 5: the helper runs under a memory limit (RLIMIT_AS); a file
     that needs more is refused naming the limit."""
