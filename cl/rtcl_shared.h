@@ -123,8 +123,8 @@ struct rt_scene {
 	rt_int material_count, sphere_count, plane_count, light_count;
 	/* Byte offsets of the arrays from the start of this header. */
 	rt_uint material_offset, sphere_offset, plane_offset, light_offset;
-	rt_uint total_bytes;			 /* the whole block, a multiple of 16 */
-	rt_uint triangle_offset, vertex_offset;	 /* struct rt_triangle, rt_vertex */
+	rt_uint total_bytes;			/* the whole block, a multiple of 16 */
+	rt_uint triangle_offset, vertex_offset; /* struct rt_triangle, rt_vertex */
 	rt_int triangle_count;
 	/* The BVH over the bounded primitives, spheres and triangles
 	   (docs/bvh.md): bvh_node_count struct rt_bvh_node at bvh_node_offset,

@@ -43,8 +43,7 @@ struct shading {
  * at the hit's barycentric (u, v) from the vertex normals, normalised and
  * turned to the side of n_face (the geometric normal facing the ray); n_face
  * itself where the interpolation gives the zero vector. */
-static float3 triangle_shading_normal(struct tracer *tr, uint4 index, struct hit hit,
-				      float3 n_face)
+static float3 triangle_shading_normal(struct tracer *tr, uint4 index, struct hit hit, float3 n_face)
 {
 	float w = 1.0f - hit.u - hit.v;
 	float3 n = w * tr->normals[index.x].normal.xyz + hit.u * tr->normals[index.y].normal.xyz +
@@ -82,8 +81,7 @@ static float3 triangle_normal(struct tracer *tr, uint4 index, float3 d)
 
 /* The geometric normal at the hit (step 2), the material and base colour
  * (step 3). A triangle's shading normal is left to shading_begin. */
-static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, float3 d,
-			  struct shading *sh)
+static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, float3 d, struct shading *sh)
 {
 	float3 normal;
 

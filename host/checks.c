@@ -39,8 +39,8 @@ void checks_release_image(struct guarded_image *g)
 	g->image = g->parent = NULL;
 }
 
-cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s,
-				  char *err, size_t err_size)
+cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s, char *err,
+				  size_t err_size)
 {
 	size_t bytes = s->check_writes ? (size_t)s->width * s->height * sizeof(cl_uint)
 				       : UNUSED_BUFFER_BYTES;
@@ -61,10 +61,9 @@ cl_int checks_poison(struct device *dev, const struct render_settings *s,
 	status = clEnqueueFillBuffer(dev->queue, write_counts, &zero, sizeof(zero), 0,
 				     pixels * sizeof(cl_uint), 0, NULL, NULL);
 	if (status == CL_SUCCESS)
-		status = clEnqueueFillBuffer(dev->queue, g->parent, &poison, sizeof(poison), 0,
-					     image_float_bytes(s->width, s->height) +
-						     2 * g->guard_bytes,
-					     0, NULL, NULL);
+		status = clEnqueueFillBuffer(
+			dev->queue, g->parent, &poison, sizeof(poison), 0,
+			image_float_bytes(s->width, s->height) + 2 * g->guard_bytes, 0, NULL, NULL);
 	return status;
 }
 

@@ -31,8 +31,8 @@ void checks_release_image(struct guarded_image *g);
 
 /* Creates the per-pixel write-count buffer (a small placeholder without
  * check_writes, since the kernels always take the argument). */
-cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s,
-				  char *err, size_t err_size);
+cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s, char *err,
+				  size_t err_size);
 
 /* With check_writes, enqueues the poison over the image and its guard zones
  * and zeroes the write counts; otherwise does nothing. */
@@ -42,7 +42,8 @@ cl_int checks_poison(struct device *dev, const struct render_settings *s,
 /* With check_writes: reads the per-pixel write counts into
  * result->write_counts and checks the guard zones (result->guards_intact). */
 cl_int checks_read(struct device *dev, const struct render_settings *s,
-		   const struct guarded_image *g, cl_mem write_counts, struct render_result *result);
+		   const struct guarded_image *g, cl_mem write_counts,
+		   struct render_result *result);
 
 /* RTCL_TEST_DEVICE_FAULT=1: the last launch of a frame fails as a device that
  * failed mid-render does (there is no way to make a real one fail on demand). */

@@ -243,7 +243,8 @@ static int parse_shape(const char *option, const char *text, long max, int out[2
 	int h_status = x ? parse_decimal(x + 1, strlen(x + 1), 1, max, &h) : -1;
 
 	if (w_status == -1 || h_status == -1) {
-		snprintf(err, err_size, "%s: expected WxH (e.g. 8x8), got \"%s\"", option, quote_text(text));
+		snprintf(err, err_size, "%s: expected WxH (e.g. 8x8), got \"%s\"", option,
+			 quote_text(text));
 		return -1;
 	}
 	if (w_status || h_status) {
@@ -333,7 +334,8 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 {
 	if (strcmp(name, "reference") == 0 || render_find_kernel(name))
 		return 0;
-	int n = snprintf(err, err_size, "-k/--kernel: unknown kernel \"%s\" (choose from", quote_text(name));
+	int n = snprintf(err, err_size, "-k/--kernel: unknown kernel \"%s\" (choose from",
+			 quote_text(name));
 	for (int i = 0; i < render_kernel_count && n >= 0 && (size_t)n < err_size; i++)
 		n += snprintf(err + n, err_size - (size_t)n, " %s,", render_kernels[i].name);
 	if (n >= 0 && (size_t)n < err_size)
@@ -392,7 +394,8 @@ static int parse_device_kind(const char *text, enum device_kind *kind, char *err
 	else if (strcmp(text, "all") == 0)
 		*kind = DEVICE_KIND_ANY;
 	else {
-		snprintf(err, err_size, "-t/--type: expected gpu, cpu or all, got \"%s\"", quote_text(text));
+		snprintf(err, err_size, "-t/--type: expected gpu, cpu or all, got \"%s\"",
+			 quote_text(text));
 		return -1;
 	}
 	return 0;

@@ -16,8 +16,8 @@ struct devmesh {
 };
 
 /* Fills *mesh from the scene's triangles: vertices relative to the eye
- * (scene_from_eye) and normals, rounded to float, those equal in position and (on smooth triangles) normal merged.
- * Returns 0, or -1 when out of memory (then *mesh holds nothing to free). */
+ * (scene_from_eye) and normals, rounded to float, those equal in position and (on smooth triangles)
+ * normal merged. Returns 0, or -1 when out of memory (then *mesh holds nothing to free). */
 int devmesh_build(const struct scene *scene, struct devmesh *mesh);
 
 void devmesh_free(struct devmesh *mesh);

@@ -329,8 +329,8 @@ static double distance(const double a[3])
 
 /* Whether an object (named by what) of the given size at distance d from
  * the eye spans fewer than DEVSCENE_MIN_STEPS float steps; then the message. */
-static int too_small(const struct scene *scene, const char *what, double size, double d,
-		     char *err, size_t err_size)
+static int too_small(const struct scene *scene, const char *what, double size, double d, char *err,
+		     size_t err_size)
 {
 	double step = float_step(d);
 

@@ -59,8 +59,8 @@ static int open_regular(const char *path, const char *noun, size_t max_bytes, si
 	return -1;
 }
 
-int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
-	       size_t *out_len, char *err, size_t err_size)
+int files_read(const char *path, const char *noun, size_t max_bytes, char **out, size_t *out_len,
+	       char *err, size_t err_size)
 {
 	size_t len = 0, capacity;
 	char *buf;
@@ -81,10 +81,11 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 			if (!grown) {
 				if (capacity > max_bytes)
 					snprintf(err, err_size,
-						 "%s: %s is more than the limit of %zu bytes", quote_text(path),
-						 noun, max_bytes);
+						 "%s: %s is more than the limit of %zu bytes",
+						 quote_text(path), noun, max_bytes);
 				else
-					snprintf(err, err_size, "%s: out of memory", quote_text(path));
+					snprintf(err, err_size, "%s: out of memory",
+						 quote_text(path));
 				goto out_free;
 			}
 			buf = grown;
@@ -94,7 +95,8 @@ int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
 		if (n < 0 && errno == EINTR)
 			continue;
 		if (n < 0) {
-			snprintf(err, err_size, "%s: cannot read: %s", quote_text(path), strerror(errno));
+			snprintf(err, err_size, "%s: cannot read: %s", quote_text(path),
+				 strerror(errno));
 			goto out_free;
 		}
 		if (n == 0)
@@ -285,8 +287,8 @@ static int acquire_stage(const char *target, const char *dir, char *err, size_t 
 	int slot = -1;
 
 	if (stat(dir, &st) != 0) {
-		snprintf(err, err_size, "%s: directory \"%s\": %s", quote_text(target), quote_text(dir),
-			 strerror(errno));
+		snprintf(err, err_size, "%s: directory \"%s\": %s", quote_text(target),
+			 quote_text(dir), strerror(errno));
 		return -1;
 	}
 	for (int i = 0; i < STAGE_DIRS_MAX; i++) {
@@ -299,8 +301,8 @@ static int acquire_stage(const char *target, const char *dir, char *err, size_t 
 			slot = i;
 	}
 	if (slot < 0) {
-		snprintf(err, err_size, "%s: more than %d output folders at once", quote_text(target),
-			 STAGE_DIRS_MAX);
+		snprintf(err, err_size, "%s: more than %d output folders at once",
+			 quote_text(target), STAGE_DIRS_MAX);
 		return -1;
 	}
 	sweep_once(dir, &st);
@@ -311,8 +313,8 @@ static int acquire_stage(const char *target, const char *dir, char *err, size_t 
 	if (n < 0 || (size_t)n >= sizeof(s->path)) {
 		snprintf(err, err_size, "%s: %s", quote_text(target), strerror(ENAMETOOLONG));
 	} else if (mkdir(s->path, 0700) != 0) {
-		snprintf(err, err_size, "%s: cannot create a file in its directory: %s", quote_text(target),
-			 strerror(errno));
+		snprintf(err, err_size, "%s: cannot create a file in its directory: %s",
+			 quote_text(target), strerror(errno));
 	} else if (interrupt_track(s->path)) {
 		snprintf(err, err_size, "%s: too many files open for writing at once",
 			 quote_text(target));
@@ -352,7 +354,8 @@ static int resolve_target(const char *target, char *path, char *err, size_t err_
 
 	if (lstat(target, &st) != 0 || !S_ISLNK(st.st_mode)) {
 		if (strlen(target) >= PATH_MAX) {
-			snprintf(err, err_size, "%s: %s", quote_text(target), strerror(ENAMETOOLONG));
+			snprintf(err, err_size, "%s: %s", quote_text(target),
+				 strerror(ENAMETOOLONG));
 			return -1;
 		}
 		strcpy(path, target);
@@ -368,8 +371,8 @@ static int resolve_target(const char *target, char *path, char *err, size_t err_
 			"the link",
 			quote_text(target));
 	else
-		snprintf(err, err_size, "%s: cannot follow the symbolic link: %s", quote_text(target),
-			 strerror(errno));
+		snprintf(err, err_size, "%s: cannot follow the symbolic link: %s",
+			 quote_text(target), strerror(errno));
 	return -1;
 }
 
@@ -389,7 +392,8 @@ static int create_temp(struct staged_file *f, char *err, size_t err_size)
 				 stage_dirs[f->stage].path, TEMP_PREFIX, TEMP_NAME_KEEP, base,
 				 suffix, ext);
 		if (n < 0 || (size_t)n >= sizeof(f->temp)) {
-			snprintf(err, err_size, "%s: %s", quote_text(f->target), strerror(ENAMETOOLONG));
+			snprintf(err, err_size, "%s: %s", quote_text(f->target),
+				 strerror(ENAMETOOLONG));
 			return -1;
 		}
 		int fd = open(f->temp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0666);
@@ -398,8 +402,8 @@ static int create_temp(struct staged_file *f, char *err, size_t err_size)
 		if (errno != EEXIST)
 			break;
 	}
-	snprintf(err, err_size, "%s: cannot create a file in its directory: %s", quote_text(f->target),
-		 strerror(errno));
+	snprintf(err, err_size, "%s: cannot create a file in its directory: %s",
+		 quote_text(f->target), strerror(errno));
 	return -1;
 }
 
@@ -419,7 +423,8 @@ int files_stage(struct staged_file *f, const char *target, char *err, size_t err
 	if (f->stage >= 0)
 		fd = create_temp(f, err, err_size);
 	if (fd >= 0 && interrupt_track(f->temp)) {
-		snprintf(err, err_size, "%s: too many files open for writing at once", quote_text(target));
+		snprintf(err, err_size, "%s: too many files open for writing at once",
+			 quote_text(target));
 		close(fd);
 		unlink(f->temp);
 		fd = -1;
@@ -479,7 +484,8 @@ static int keep_old(const struct staged_file *f, struct old_file *old, char *err
 	if (lstat(f->path, &st) != 0) {
 		if (errno == ENOENT)
 			return 0;
-		snprintf(err, err_size, "%s: cannot replace: %s", quote_text(f->target), strerror(errno));
+		snprintf(err, err_size, "%s: cannot replace: %s", quote_text(f->target),
+			 strerror(errno));
 		return -1;
 	}
 	if (!S_ISREG(st.st_mode)) {
@@ -631,8 +637,7 @@ out_discard:
 	return -1;
 }
 
-int files_write(const char *path, files_fill fill, const void *context, char *err,
-		size_t err_size)
+int files_write(const char *path, files_fill fill, const void *context, char *err, size_t err_size)
 {
 	struct staged_file f;
 
@@ -667,14 +672,16 @@ static int check_directory(const char *name, const char *path, const char *dir, 
 
 	if (stat(dir, &st) != 0) {
 		if (errno == ENOENT)
-			snprintf(err, err_size, "%s: directory \"%s\" does not exist", quote_text(name), quote_text(dir));
+			snprintf(err, err_size, "%s: directory \"%s\" does not exist",
+				 quote_text(name), quote_text(dir));
 		else
-			snprintf(err, err_size, "%s: directory \"%s\": %s", quote_text(name), quote_text(dir),
-				 strerror(errno));
+			snprintf(err, err_size, "%s: directory \"%s\": %s", quote_text(name),
+				 quote_text(dir), strerror(errno));
 		return -1;
 	}
 	if (!S_ISDIR(st.st_mode)) {
-		snprintf(err, err_size, "%s: \"%s\" is not a directory", quote_text(name), quote_text(dir));
+		snprintf(err, err_size, "%s: \"%s\" is not a directory", quote_text(name),
+			 quote_text(dir));
 		return -1;
 	}
 	name_max = pathconf(dir, _PC_NAME_MAX);
@@ -701,7 +708,8 @@ static int check_replaceable(const char *name, const char *path, const char *dir
 		return 0; /* nothing to replace */
 	if (stat(path, &st) == 0 && !S_ISREG(st.st_mode)) {
 		snprintf(err, err_size,
-			 "%s: exists and is not a regular file; refusing to replace it", quote_text(name));
+			 "%s: exists and is not a regular file; refusing to replace it",
+			 quote_text(name));
 		return -1;
 	}
 	if (access(path, W_OK) != 0 && errno != ENOENT) {

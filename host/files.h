@@ -28,8 +28,8 @@
  * is in the message for one that is too large ("scene"). Returns 0, or -1
  * with one message in err naming path. A FIFO or device is refused without
  * blocking. */
-int files_read(const char *path, const char *noun, size_t max_bytes, char **out,
-	       size_t *out_len, char *err, size_t err_size);
+int files_read(const char *path, const char *noun, size_t max_bytes, char **out, size_t *out_len,
+	       char *err, size_t err_size);
 
 /* An output written to a temporary file in its folder's staging folder. */
 struct staged_file {
@@ -72,8 +72,7 @@ int files_stage_with(struct staged_file *file, const char *target, files_fill fi
 		     const void *context, char *err, size_t err_size);
 
 /* files_stage_with, then files_commit. */
-int files_write(const char *path, files_fill fill, const void *context, char *err,
-		size_t err_size);
+int files_write(const char *path, files_fill fill, const void *context, char *err, size_t err_size);
 
 /* The part of path after the last slash. */
 const char *files_base_name(const char *path);

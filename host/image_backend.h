@@ -45,7 +45,8 @@ int image_backend_verify(const char *path, const char *tmp_path, int width, int 
 #ifdef __GNUC__
 __attribute__((format(printf, 3, 4)))
 #endif
-static inline void image_set_error(char *err, size_t err_size, const char *format, ...)
+static inline void
+image_set_error(char *err, size_t err_size, const char *format, ...)
 {
 	char raw[8192];
 	size_t n = 0;

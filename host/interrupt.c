@@ -15,8 +15,8 @@ static const char *outcome = "no output written";
 static int progress_on_stderr;
 static sigset_t signals;
 static volatile sig_atomic_t received; /* a signal taken, its handling under way */
-static int blocks_sigcont;		/* under mpirun (interrupt_setup) */
-static int watches_mpirun;		/* interrupt_watch_mpirun() was called */
+static int blocks_sigcont;	       /* under mpirun (interrupt_setup) */
+static int watches_mpirun;	       /* interrupt_watch_mpirun() was called */
 
 static void init_lock(void)
 {

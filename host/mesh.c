@@ -23,7 +23,7 @@
  * their own, which are skipped; PreTransformVertices applies the node
  * hierarchy (glTF nodes, OBJ groups) to the vertices and normals, so every
  * mesh is in the file's world space before rtcl's placement. */
-#define IMPORT_FLAGS                                                                         \
+#define IMPORT_FLAGS                                                                               \
 	(aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices)
 
 /* ---- Assimp's file access: only regular files, opened without blocking ----
@@ -61,10 +61,12 @@ static size_t file_size(struct aiFile *file)
 
 static enum aiReturn file_seek(struct aiFile *file, size_t offset, enum aiOrigin origin)
 {
-	int whence = origin == aiOrigin_SET ? SEEK_SET : origin == aiOrigin_CUR ? SEEK_CUR : SEEK_END;
+	int whence = origin == aiOrigin_SET   ? SEEK_SET
+		     : origin == aiOrigin_CUR ? SEEK_CUR
+					      : SEEK_END;
 
 	return fseeko((FILE *)file->UserData, (off_t)offset, whence) == 0 ? aiReturn_SUCCESS
-									   : aiReturn_FAILURE;
+									  : aiReturn_FAILURE;
 }
 
 static void file_flush(struct aiFile *file)

@@ -76,8 +76,8 @@ struct mesh_limits mesh_get_limits(void);
 /* What an import that ran out of its memory is refused with (%lu: the
  * limit in MiB). */
 #define MESH_MEMORY_MESSAGE                                                                        \
-	"the import needed more memory than its limit of %lu MiB (--mesh-memory-limit or "         \
-	MESH_MEMORY_LIMIT_ENV ")"
+	"the import needed more memory than its limit of %lu MiB (--mesh-memory-limit "            \
+	"or " MESH_MEMORY_LIMIT_ENV ")"
 
 /* What the helper prints on stderr when it crashes near its memory limit. */
 #define MESH_MEMORY_NOTE "rtcl-meshread: crashed near its memory limit"

@@ -72,8 +72,8 @@ static double now(void)
 }
 
 /* Outcomes of read_all besides 0. */
-#define ENDED (-1)     /* the pipe ended or failed */
-#define TOO_LATE (-2)  /* the deadline passed */
+#define ENDED (-1)    /* the pipe ended or failed */
+#define TOO_LATE (-2) /* the deadline passed */
 
 /* Reads size bytes from fd, waiting no later than the deadline. */
 static int read_all(int fd, void *data, size_t size)
@@ -243,8 +243,8 @@ static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t r
 		return MESH_REFUSED;
 	if (received == TIMED_OUT) {
 		snprintf(reason, reason_size,
-			 "the import took longer than its limit of %lu s (--mesh-time-limit or "
-			 MESH_TIME_LIMIT_ENV ")",
+			 "the import took longer than its limit of %lu s (--mesh-time-limit "
+			 "or " MESH_TIME_LIMIT_ENV ")",
 			 mesh_get_limits().seconds);
 		return MESH_REFUSED;
 	}
@@ -435,11 +435,11 @@ struct mesh_limits mesh_get_limits(void)
 	if (limits.memory_mib == ULONG_MAX) {
 		long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
 
-		limits.memory_mib = pages > 0 && page_size > 0
-					    ? (unsigned long)((double)pages * page_size /
-							      MESH_MEMORY_LIMIT_DEFAULT_SHARE /
-							      (1 << 20))
-					    : 0;
+		limits.memory_mib =
+			pages > 0 && page_size > 0
+				? (unsigned long)((double)pages * page_size /
+						  MESH_MEMORY_LIMIT_DEFAULT_SHARE / (1 << 20))
+				: 0;
 	}
 	return limits;
 }

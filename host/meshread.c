@@ -49,8 +49,8 @@ static int near_limit(void)
 		close(fd);
 	for (ssize_t i = 0; i < n && text[i] >= '0' && text[i] <= '9'; i++)
 		pages = pages * 10 + (unsigned long long)(text[i] - '0');
-	return limit_bytes && pages * (unsigned long long)sysconf(_SC_PAGESIZE) >=
-				      limit_bytes / 10 * 9;
+	return limit_bytes &&
+	       pages * (unsigned long long)sysconf(_SC_PAGESIZE) >= limit_bytes / 10 * 9;
 }
 
 /* A crash (Assimp dereferencing a failed allocation) near the limit says so

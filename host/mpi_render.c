@@ -525,9 +525,9 @@ static const struct {
 	enum job_setting first;
 	int count;
 } job_options[] = {
-	{JOB_WIDTH, 2},	       {JOB_SAMPLES, 1},     {JOB_DEPTH, 1},	   {JOB_FRAMES_GIVEN, 3},
-	{JOB_PIECE_ROWS, 1},   {JOB_SPLIT_STATIC, 1}, {JOB_KERNEL, 1},	   {JOB_WORKGROUP_X, 2},
-	{JOB_GROUPS_X, 2},     {JOB_BATCH, 1},	     {JOB_ACCEL, 1},
+	{JOB_WIDTH, 2},	     {JOB_SAMPLES, 1},	    {JOB_DEPTH, 1},  {JOB_FRAMES_GIVEN, 3},
+	{JOB_PIECE_ROWS, 1}, {JOB_SPLIT_STATIC, 1}, {JOB_KERNEL, 1}, {JOB_WORKGROUP_X, 2},
+	{JOB_GROUPS_X, 2},   {JOB_BATCH, 1},	    {JOB_ACCEL, 1},
 };
 
 /* One setting of a record as an option would give it ("--spp 4"). */
@@ -638,7 +638,6 @@ static int agree_on_job(struct mpi_job *j)
 	free(all);
 	return 0;
 }
-
 
 /* Opens this rank's devices; rank 0 first checks and prepares the outputs.
  * Returns 0, OUTPUTS_CLASH, or -1 with one message in err. */
@@ -952,7 +951,8 @@ static int mpi_render(struct run *run, int image)
 	 * 10-90 ms a frame (README). */
 	MPI_Finalize();
 	if (j.rank != ROOT && status == 0)
-		interrupt_set_outcome("this rank's pieces were delivered; rank 0 writes the outputs");
+		interrupt_set_outcome(
+			"this rank's pieces were delivered; rank 0 writes the outputs");
 	if (j.rank == ROOT && status == 0) {
 		interrupt_watch_mpirun();
 		status = write_root(&j);

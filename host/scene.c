@@ -523,8 +523,8 @@ unsigned long long scene_digest(const struct scene *scene)
 	digest_int(&h, scene->material_count);
 	for (int i = 0; i < scene->material_count; i++) {
 		const struct scene_material *m = &scene->materials[i];
-		double fields[] = {m->ambient, m->diffuse, m->specular, m->shininess,
-				   m->reflect,	m->transmit, m->ior};
+		double fields[] = {m->ambient, m->diffuse,  m->specular, m->shininess,
+				   m->reflect, m->transmit, m->ior};
 		digest_doubles(&h, m->color, 3);
 		digest_doubles(&h, fields, sizeof(fields) / sizeof(fields[0]));
 	}

@@ -73,7 +73,7 @@ struct scene_input {
 };
 
 struct scene {
-	char *source; /* file name (or "name (built-in)") used in messages */
+	char *source;		    /* file name (or "name (built-in)") used in messages */
 	struct scene_input *inputs; /* the scene file (none for a string) and its mesh files */
 	int input_count;
 	int width, height;

@@ -347,8 +347,8 @@ static int check_map(const char *name, const uint64_t *pixel_flops, int width, i
 	if (pixel_flops && width > 0 && height > 0 &&
 	    (size_t)width <= SIZE_MAX / 12 / (size_t)height)
 		return 0;
-	snprintf(err, err_size, "%s: invalid work map (%d x %d pixels%s)", quote_text(name), width, height,
-		 pixel_flops ? "" : ", no data");
+	snprintf(err, err_size, "%s: invalid work map (%d x %d pixels%s)", quote_text(name), width,
+		 height, pixel_flops ? "" : ", no data");
 	return -1;
 }
 
@@ -382,8 +382,8 @@ int workmap_stage(struct staged_file *staged, const char *path, const uint64_t *
 		return -1;
 	rgb = malloc(3 * sizeof(float) * pixels);
 	if (!rgb) {
-		snprintf(err, err_size, "%s: out of memory for a %d x %d work map", quote_text(name), width,
-			 height);
+		snprintf(err, err_size, "%s: out of memory for a %d x %d work map",
+			 quote_text(name), width, height);
 		return -1;
 	}
 	max = max_count(pixel_flops, pixels);
@@ -407,8 +407,8 @@ int workmap_stage_bar(struct staged_file *staged, const char *path, const uint64
 	workmap_bar_size(width, &bar_width, &bar_height);
 	rgb = malloc(3 * sizeof(float) * (size_t)bar_width * (size_t)bar_height);
 	if (!rgb) {
-		snprintf(err, err_size, "%s: out of memory for a %d x %d scale bar", quote_text(name),
-			 bar_width, bar_height);
+		snprintf(err, err_size, "%s: out of memory for a %d x %d scale bar",
+			 quote_text(name), bar_width, bar_height);
 		return -1;
 	}
 	max = max_count(pixel_flops, (size_t)width * (size_t)height);
@@ -468,8 +468,8 @@ int workmap_stage_counts(struct staged_file *staged, const char *path, const uin
 	int status;
 
 	if (!rgb) {
-		snprintf(err, err_size, "%s: out of memory for a %d x %d work map", quote_text(path), width,
-			 height);
+		snprintf(err, err_size, "%s: out of memory for a %d x %d work map",
+			 quote_text(path), width, height);
 		return -1;
 	}
 	for (size_t i = 0; i < pixels; i++)
