@@ -166,6 +166,7 @@ def test_installed_tool_commands_run_from_any_folder(installed, tmp_path, comman
     assert not list(installed.rglob("__pycache__")), "a tool left __pycache__ when run"
 
 
+@pytest.mark.slow  # ten programs; test_tools_package.py checks the installed rtcl is found
 def test_installed_experiments_runs_the_installed_rtcl_outside_the_source_tree(installed,
                                                                                 tmp_path):
     """Not ./rtcl of the current folder, and not one on PATH: the rtcl beside it,

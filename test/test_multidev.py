@@ -396,10 +396,13 @@ def image_run(directory, name, *args, env=None):
     return result, json.loads(stats.read_text())
 
 
-# At 4 spp in make test-long: Criterion's multidev tests check bands at 1 and 4
-# spp for every kernel in make test.
+# make test runs dynamic and the wavefront at 1 spp through the command line;
+# the other kernels and 4 spp are in make test-long: Criterion's multidev tests
+# check bands at 1 and 4 spp for every kernel in make test.
 @pytest.mark.parametrize("spp", ["1", pytest.param("4", marks=pytest.mark.slow)])
-@pytest.mark.parametrize("kernel", KERNELS)
+@pytest.mark.parametrize("kernel", [kernel if kernel in ("dynamic", "wavefront")
+                                    else pytest.param(kernel, marks=pytest.mark.slow)
+                                    for kernel in KERNELS])
 def test_bands_on_two_devices_match_one_device_byte_for_byte(tmp_path, kernel, spp):
     common = ["-k", kernel, "--spp", spp]
     image_run(tmp_path, "one", *common, "-p", "0", "-d", "0")
