@@ -182,8 +182,7 @@ static float *reference_checked(const struct scene *scene, int width, int height
  * more than 2/255. */
 static void expect_kernel_near_reference(struct device *dev, const struct scene *scene,
 					 const char *path, const char *kernel, int width,
-					 int height, int max_depth, int samples,
-					 const float *want)
+					 int height, int max_depth, int samples, const float *want)
 {
 	size_t pixels = (size_t)width * height;
 	char what[256];
@@ -806,10 +805,8 @@ Test(kernels, wavefront_matches_reference_at_4_spp_tir, .timeout = 600)
  * misses, so a sample costs what the centre ray costs (F1 flops) plus the 2
  * of its position, and the pixel N - 1 additions of 3 and the division by N,
  * 3: N (F1 + 2) + 3 (N - 1) + 3, counted the same by every kernel. */
-Test(kernels, flops_count_every_sample, .timeout = 600)
+static void check_flops_count_every_sample(const char *const *kernels, int kernel_count)
 {
-	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
-					      "dynamic", "persistent", "wavefront"};
 	static const int counts[] = {2, 5, 16};
 	struct device dev;
 	struct scene scene;
@@ -825,7 +822,7 @@ Test(kernels, flops_count_every_sample, .timeout = 600)
 	for (int i = 0; i < 13 * 9; i++)
 		cr_assert_eq(res.pixel_flops[i], one);
 	render_result_free(&res);
-	for (int k = 0; k < 6; k++)
+	for (int k = 0; k < kernel_count; k++)
 		for (int c = 0; c < 3; c++) {
 			int n = counts[c];
 			uint64_t want = (uint64_t)n * (one + 2) + 3 * (uint64_t)(n - 1) + 3;
@@ -846,4 +843,18 @@ Test(kernels, flops_count_every_sample, .timeout = 600)
 		}
 	scene_free(&scene);
 	device_close(&dev);
+}
+
+/* dynamic and the wavefront (its own sample loop) in make test; the others,
+ * twelve more programs, in make test-long. */
+Test(kernels, flops_count_every_sample, .timeout = 600)
+{
+	static const char *const kernels[] = {"dynamic", "wavefront"};
+	check_flops_count_every_sample(kernels, 2);
+}
+
+Test(kernels_slow, flops_count_every_sample_other_kernels, .timeout = 600)
+{
+	static const char *const kernels[] = {"serial", "naive", "cyclic", "persistent"};
+	check_flops_count_every_sample(kernels, 4);
 }
