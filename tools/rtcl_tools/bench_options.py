@@ -5,8 +5,8 @@ import math
 from .bench_plan import (BATCHES, DEFAULT_REPEAT, GROUP_SCALES, KERNELS, MIN_REPEAT, QUICK,
                          WORKGROUPS)
 from .scaling import SCALING_SIZES, SCALING_SPHERES, parse_scaling_config
-from .usage import (Parser, UsageError, add_update_committed, check_pair, check_positive_int,
-                    split_list)
+from .usage import (Parser, UsageError, add_rtcl_option, add_update_committed, check_pair,
+                    check_positive_int, split_list)
 
 
 def check_kernel(option, text):
@@ -34,9 +34,7 @@ def parse_arguments(argv):
                            "rtcl-results/<device-slug>-<date-time>.  Files tracked by git "
                            "are never replaced: --update-committed (make results) "
                            "regenerates docs/results/<device-slug>.")
-    parser.add_argument("--rtcl", metavar="PROGRAM",
-                        help="the rtcl program (default: the rtcl installed beside this "
-                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    add_rtcl_option(parser)
     parser.add_argument("-p", "--platform", type=int, help="OpenCL platform index")
     parser.add_argument("-d", "--device", type=int, help="device index within the platform")
     parser.add_argument("-s", "--scene", metavar="FILE", help="scene file (default: rtcl's built-in paper60)")

@@ -20,6 +20,14 @@ def command_name():
     return f"tools/{name}" if name.endswith(".py") else name
 
 
+def add_rtcl_option(parser):
+    """Adds --rtcl PROGRAM: the rtcl a tool runs (locations.find_rtcl says which
+    one it takes without it)."""
+    parser.add_argument("--rtcl", metavar="PROGRAM",
+                        help="the rtcl program (default: the rtcl installed beside this "
+                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+
+
 def add_update_committed(parser, default_folder=None):
     """Adds --update-committed: the one way to replace files tracked by git, which
     every writer refuses otherwise (rtcl_tools.files)."""

@@ -17,7 +17,8 @@ import tempfile
 
 from .. import files, locations, runner
 from ..report import device_slug, one_line, to_csv
-from ..usage import add_update_committed, command_name, program_name, report_error
+from ..usage import (add_rtcl_option, add_update_committed, command_name, program_name,
+                     report_error)
 
 OUTPUT_NAMES = ("spp.md", "spp.csv")
 CSV_COLUMNS = ("spp", "passes", "kernel_ms", "kernel_ms_min", "kernel_ms_max",
@@ -26,9 +27,7 @@ CSV_COLUMNS = ("spp", "passes", "kernel_ms", "kernel_ms_min", "kernel_ms_max",
 
 def parse_arguments(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--rtcl", metavar="PROGRAM",
-                        help="the rtcl program (default: the rtcl installed beside this "
-                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    add_rtcl_option(parser)
     parser.add_argument("-k", "--kernel", default="dynamic")
     parser.add_argument("-s", "--scene")
     parser.add_argument("--size", default="200x150")

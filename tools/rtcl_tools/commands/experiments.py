@@ -84,7 +84,7 @@ from ..flops import FlopsFileError  # noqa: E402
 from ..paper import DEFAULT_REPEAT, QUICK_SIZE  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..runner import RtclFailed  # noqa: E402
-from ..usage import add_update_committed, program_name, report_error  # noqa: E402
+from ..usage import add_rtcl_option, add_update_committed, program_name, report_error  # noqa: E402
 
 
 def parse_arguments(argv):
@@ -96,9 +96,7 @@ def parse_arguments(argv):
                "nvidia-h200-bvh-paper60.  Files tracked by git are never replaced: "
                "--update-committed (make results) regenerates docs/results/<study>.  See "
                "rtcl_tools/commands/experiments.py for what each file holds.")
-    parser.add_argument("--rtcl", metavar="PROGRAM",
-                        help="the rtcl program (default: the rtcl installed beside this "
-                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    add_rtcl_option(parser)
     parser.add_argument("-p", "--platform", type=int, help="OpenCL platform index")
     parser.add_argument("-d", "--device", type=int, help="device index within the platform")
     parser.add_argument("-s", "--scene", metavar="FILE",

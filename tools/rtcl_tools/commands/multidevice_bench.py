@@ -37,7 +37,8 @@ import time
 
 from .. import files, locations
 from ..runner import RtclFailed, rtcl_reason
-from ..usage import add_update_committed, os_error_message, program_name, report_error
+from ..usage import (add_rtcl_option, add_update_committed, os_error_message, program_name,
+                     report_error)
 
 
 def run(command, env, stats):
@@ -144,9 +145,7 @@ def measure(label, command, env, runs, workdir):
 
 def parse_arguments(argv):
     parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    parser.add_argument("--rtcl", metavar="PROGRAM",
-                        help="the rtcl program (default: the rtcl installed beside this "
-                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    add_rtcl_option(parser)
     parser.add_argument("--single", required=True)
     parser.add_argument("--multi", required=True)
     parser.add_argument("--mpi-np", type=int, default=0)

@@ -37,8 +37,8 @@ import sys
 from .. import files, locations, ppm
 from . import genbench
 from ..report import git_commit, markdown_table, one_line, to_csv, utc_now
-from ..usage import (UsageError, add_update_committed, check_positive_int, parse_size,
-                     program_name, report_error)
+from ..usage import (UsageError, add_rtcl_option, add_update_committed, check_positive_int,
+                     parse_size, program_name, report_error)
 
 DEFAULT_MESHES = "tetra:8,mount:8,mount:9,lake"
 BACKGROUND = (1, 0, 1)
@@ -71,9 +71,7 @@ def parse_arguments(argv):
     parser.add_argument("--variants", default="aA",
                         help="the peer's kernels: letters of side.cpp (default aA: "
                              "BVH_GPU built HQ and SAH)")
-    parser.add_argument("--rtcl", metavar="PROGRAM",
-                        help="the rtcl program (default: the rtcl installed beside this "
-                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    add_rtcl_option(parser)
     parser.add_argument("-p", "--platform", help="rtcl's OpenCL platform (default: NVIDIA's)")
     parser.add_argument("-o", "--out", type=pathlib.Path, metavar="DIR",
                         help="results folder (default: a new rtcl-results/peer-<time>)")

@@ -48,7 +48,8 @@ from ..scene import SceneError, load_scene  # noqa: E402
 from ..time_to_image import (RunError, cpu_model, format_breakdown, interleaved,  # noqa: E402
                              median_breakdown, parse_breakdown, povray_command,
                              ratio_verdict, rtcl_command, rtcl_device, summary, time_once)
-from ..usage import add_update_committed, os_error_message, parse_size, program_name  # noqa: E402
+from ..usage import (add_rtcl_option, add_update_committed, os_error_message,  # noqa: E402
+                     parse_size, program_name)
 
 TARGET = 0.5
 BALLS = 60
@@ -69,9 +70,7 @@ def parse_arguments(argv):
                         help="timed runs of each program (default %(default)s)")
     parser.add_argument("--threads", type=int, default=2, metavar="N",
                         help="POV-Ray render threads, +WT (default %(default)s)")
-    parser.add_argument("--rtcl", metavar="PROGRAM",
-                        help="the rtcl program (default: the rtcl installed beside this "
-                             "command, else the source tree's ./rtcl, else rtcl on PATH)")
+    add_rtcl_option(parser)
     parser.add_argument("--povray", default="povray", metavar="EXE",
                         help="POV-Ray executable (default %(default)s)")
     parser.add_argument("-o", "--output", "--out", metavar="FILE",
