@@ -789,7 +789,7 @@ static int assemble_image(struct mpi_job *j, double wall_ms)
 }
 
 /* Rank 0, image: writes the outputs and prints the summary. */
-static int write_image(struct mpi_job *j, char *err, size_t err_size)
+static int write_job_image(struct mpi_job *j, char *err, size_t err_size)
 {
 	struct run *run = j->run;
 
@@ -829,7 +829,7 @@ static int write_root(struct mpi_job *j)
 {
 	struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total, j->wall_ms};
 	char err[MESSAGE_SIZE];
-	int failed = j->image ? write_image(j, err, sizeof(err))
+	int failed = j->image ? write_job_image(j, err, sizeof(err))
 			      : frames_write_held(j->run, &j->output, &report, err, sizeof(err));
 
 	if (!failed)

@@ -105,7 +105,7 @@ static int split(char *line, char **words, int max)
 
 /* Reads the header from f. Returns 1 when it is one this check understands,
  * 0 when not (or not PLY at all). */
-static int read_header(FILE *f, struct header *h)
+static int read_ply_header(FILE *f, struct header *h)
 {
 	char line[LINE_MAX_BYTES], *words[8];
 	int n;
@@ -228,7 +228,7 @@ struct body {
 };
 
 /* Makes at least one byte available; 0 at the end of the file. */
-static int fill(struct body *b)
+static int refill_body(struct body *b)
 {
 	ssize_t n;
 
@@ -248,7 +248,7 @@ static int fill(struct body *b)
 static int skip(struct body *b, unsigned long long n)
 {
 	while (n > 0) {
-		if (!fill(b))
+		if (!refill_body(b))
 			return 0;
 		size_t take = b->len - b->pos < n ? b->len - b->pos : (size_t)n;
 		b->pos += take;
@@ -265,7 +265,7 @@ static long long read_count(struct body *b, const struct header *h, const struct
 	unsigned long long value = 0;
 
 	for (int i = 0; i < p->count_size; i++) {
-		if (!fill(b))
+		if (!refill_body(b))
 			return -1;
 		bytes[i] = b->buf[b->pos++];
 	}
@@ -285,14 +285,14 @@ static int next_word(struct body *b, char *word, size_t size)
 	size_t n = 0;
 
 	for (;;) {
-		if (!fill(b))
+		if (!refill_body(b))
 			return 0;
 		unsigned char c = b->buf[b->pos];
 		if (c != ' ' && c != '\t' && c != '\r' && c != '\n')
 			break;
 		b->pos++;
 	}
-	while (fill(b)) {
+	while (refill_body(b)) {
 		unsigned char c = b->buf[b->pos];
 		if (c == ' ' || c == '\t' || c == '\r' || c == '\n')
 			break;
@@ -336,7 +336,7 @@ static int read_record(struct body *b, const struct header *h, const struct elem
 		if (p->count_size) {
 			long long count = read_count(b, h, p);
 			if (count < 0)
-				return b->pos < b->len || fill(b) ? -1 : 0;
+				return b->pos < b->len || refill_body(b) ? -1 : 0;
 			items = (unsigned long long)count;
 			if (p->is_face && items > MESH_MAX_POLYGON_VERTICES)
 				return -2;
@@ -416,7 +416,7 @@ int ply_check(const char *path, char *reason, size_t reason_size)
 	f = header_fd >= 0 ? fdopen(header_fd, "rb") : NULL;
 	if (!f && header_fd >= 0)
 		close(header_fd);
-	if (!h || !b || !f || !read_header(f, h))
+	if (!h || !b || !f || !read_ply_header(f, h))
 		goto out_close;
 	if (!fits(h, (unsigned long long)(st.st_size - h->body_start), reason, reason_size)) {
 		ret = -1;

@@ -321,22 +321,6 @@ static int read_scene(struct loader *ld, json_t *doc)
 	return 0;
 }
 
-int loader_add_input(struct loader *ld, char *path, const char *kind)
-{
-	struct scene *scene = ld->scene;
-	struct scene_input *grown =
-		realloc(scene->inputs, ((size_t)scene->input_count + 1) * sizeof(*grown));
-
-	if (!grown) {
-		free(path);
-		loader_write_err(ld, "%s: out of memory", ld->source);
-		return -1;
-	}
-	scene->inputs = grown;
-	scene->inputs[scene->input_count++] = (struct scene_input){path, kind};
-	return 0;
-}
-
 /* The UTF-8 encoding of U+FEFF, which some editors put at the start of a
  * file; SCENE.md allows it there. */
 static const char utf8_bom[] = "\xef\xbb\xbf";

@@ -5,6 +5,7 @@
 #include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "quote.h"
@@ -399,4 +400,22 @@ int loader_scale_to_unit_max(const double v[3], double out[3])
 double loader_length3(const double v[3])
 {
 	return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+}
+
+/* The scene loader's files: recorded here, with the messages, so that the
+ * parts of the loader (scene.c, scene_mesh.c) need not call each other. */
+int loader_add_input(struct loader *ld, char *path, const char *kind)
+{
+	struct scene *scene = ld->scene;
+	struct scene_input *grown =
+		realloc(scene->inputs, ((size_t)scene->input_count + 1) * sizeof(*grown));
+
+	if (!grown) {
+		free(path);
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	scene->inputs = grown;
+	scene->inputs[scene->input_count++] = (struct scene_input){path, kind};
+	return 0;
 }
