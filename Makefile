@@ -5,6 +5,7 @@
 #   make render       build and render the default scene to render.png
 #   make test         unit, kernel (PoCL), command-line and tools tests (<= 3 min)
 #   make test-long    the long tests make test leaves out; make check: both
+#   make layers       check host/'s layering rule (docs/STYLE.md, "Layers")
 #   make test SAN=1   the same suite, host side built with ASan+UBSan in build-san/
 #   make fuzz         libFuzzer on the scene loader for FUZZ_SECONDS (needs clang)
 #   make fuzz-mesh    the same on mesh files (OBJ, PLY) through Assimp
@@ -51,7 +52,7 @@ CFLAGS += -std=c11 $(WARNINGS) -pthread
 CXXFLAGS ?= -O2 -g
 CXXFLAGS += -std=c++17 $(WARNINGS)
 # Mesh files (docs/SCENE.md version 2) through the Open Asset Import Library,
-# which only the mesh import helper rtcl-meshread links (host/mesh.h says why).
+# which only the mesh import helper rtcl-meshread links (host/scene/mesh.h says why).
 # Expanded when used, like OIIO_LIBS below.
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
@@ -72,83 +73,98 @@ endif
 
 ifeq ($(OIIO),1)
 # OpenImageIO's backend is a module that rtcl loads only for the formats it
-# does not write itself (host/image_dl.c says why).
-IMAGE_BACKEND := $(BUILD)/image_dl.o
+# does not write itself (host/output/image_dl.c says why).
+IMAGE_BACKEND := $(BUILD)/output/image_dl.o
 OIIO_MODULE := $(BUILD)/rtcl-oiio.so
 LDLIBS += -ldl
 # Expanded when used, so that `make deps render` finds what deps installed.
 OIIO_CFLAGS = $(shell pkg-config --cflags OpenImageIO 2>/dev/null)
 OIIO_LIBS = $(shell pkg-config --libs OpenImageIO 2>/dev/null)
 else
-IMAGE_BACKEND := $(BUILD)/image_ppm.o
+IMAGE_BACKEND := $(BUILD)/output/image_ppm.o
 endif
 LDLIBS += -lstdc++
 
-# MPI=1: --mpi through Open MPI (host/mpi_render.c); MPI=0: host/mpi_stub.c,
+# MPI=1: --mpi through Open MPI (host/run/mpi_render.c); MPI=0: host/run/mpi_stub.c,
 # whose --mpi says how to get it. The default: 1 when Open MPI is installed.
 MPI ?= $(shell pkg-config --exists ompi-c 2>/dev/null && echo 1 || echo 0)
 ifeq ($(MPI),1)
-MPI_MODULE := $(BUILD)/mpi_render.o
+MPI_MODULE := $(BUILD)/run/mpi_render.o
 MPI_CFLAGS = $(shell pkg-config --cflags ompi-c)
 LDLIBS += $(shell pkg-config --libs ompi-c)
 else
-MPI_MODULE := $(BUILD)/mpi_stub.o
+MPI_MODULE := $(BUILD)/run/mpi_stub.o
 endif
 
-# Every host module but main; tests link them too.
-HOST_OBJS := $(addprefix $(BUILD)/, bvh.o cli.o clerror.o device.o devmesh.o devscene.o scene.o scene_check.o \
-	scene_literal.o scene_material.o scene_mesh.o mesh_spawn.o libdir.o mesh_place.o timing.o suggest.o \
-	files.o quote.o \
-	interrupt.o checks.o program.o progcache.o progress.o launch.o singlepass.o wavefront.o render.o \
-	stats.o devices.o multidev.o devstats.o frames.o tiles.o \
-	outputs.o \
-	workmap.o image_common.o image_encode.o image_png.o reference.o embedded.o) \
+# Every host module but main, by folder (host/README.md: the layers); tests
+# link them too. Objects mirror the folders: build/render/launch.o.
+HOST_MODULES := \
+	base/timing base/files base/quote base/suggest base/interrupt base/libdir base/progress \
+	scene/scene scene/scene_check scene/scene_literal scene/scene_material scene/scene_mesh \
+	scene/mesh_place scene/mesh_spawn \
+	device/device device/devices device/clerror device/progcache \
+	layout/bvh layout/devmesh layout/devscene \
+	render/checks render/program render/launch render/singlepass render/wavefront render/render \
+	render/reference \
+	schedule/multidev schedule/tiles \
+	report/stats report/devstats \
+	output/outputs output/workmap output/image_common output/image_encode output/image_png \
+	run/frames \
+	cmd/cli
+HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \
 	$(IMAGE_BACKEND) $(MPI_MODULE)
 CL_SOURCES := cl/rtcl_shared.h $(wildcard cl/*.cl)
 EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 
 UNIT_TESTS := $(wildcard test/test_*.c)
 
-.PHONY: all deps render test test-long check experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
+.PHONY: all deps render test test-long check layers experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
 all: $(BIN)
 
-$(BIN): $(BUILD)/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
+$(BIN): $(BUILD)/cmd/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
 
 # The mesh import helper: Assimp in a process of its own.
-$(MESHREAD): $(BUILD)/meshread.o $(BUILD)/mesh.o $(BUILD)/ply_check.o $(BUILD)/mesh_spawn.o $(BUILD)/libdir.o
+$(MESHREAD): $(BUILD)/meshread/meshread.o $(BUILD)/meshread/meshread_assimp.o \
+		$(BUILD)/meshread/ply_check.o $(BUILD)/scene/mesh_spawn.o $(BUILD)/base/libdir.o
 	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -lstdc++
 
 # Where the companion files (rtcl-oiio.so, rtcl-meshread) are in a build tree.
-$(BUILD)/libdir.o: CPPFLAGS += -DRTCL_MODULE_DIR='"$(abspath $(BUILD))"'
+$(BUILD)/base/libdir.o: CPPFLAGS += -DRTCL_MODULE_DIR='"$(abspath $(BUILD))"'
 
-$(BUILD)/rtcl-oiio.so: host/image_oiio.cpp host/image_encode.c | $(BUILD)
-	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -c -o $(BUILD)/image_encode.pic.o host/image_encode.c
-	$(CXX) $(CPPFLAGS) $(CXXFLAGS) $(OIIO_CFLAGS) -fPIC -shared -MMD -MF $(BUILD)/rtcl-oiio.d \
-		$(LDFLAGS) -o $@ $< $(BUILD)/image_encode.pic.o $(OIIO_LIBS)
+$(BUILD)/rtcl-oiio.so: host/output/image_oiio.cpp host/output/image_encode.c | $(BUILD)
+	@mkdir -p $(BUILD)/output
+	$(CC) $(CPPFLAGS) $(CFLAGS) -fPIC -c -o $(BUILD)/output/image_encode.pic.o host/output/image_encode.c
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) $(OIIO_CFLAGS) -fPIC -shared -MMD -MP -MF $(BUILD)/output/rtcl-oiio.d \
+		$(LDFLAGS) -o $@ $< $(BUILD)/output/image_encode.pic.o $(OIIO_LIBS)
 
 $(BUILD)/embedded.c: tools/build/embed.py $(EMBEDDED) | $(BUILD)
 	$(PYTHON) tools/build/embed.py $@ $(EMBEDDED)
 
 $(BUILD)/%.o: host/%.c | $(BUILD)
-	$(CC) $(CPPFLAGS) $(CFLAGS) $(ASSIMP_CFLAGS) -MMD -c -o $@ $<
+	@mkdir -p $(@D)
+	$(CC) $(CPPFLAGS) $(CFLAGS) $(ASSIMP_CFLAGS) -MMD -MP -c -o $@ $<
 
-$(BUILD)/mpi_render.o: host/mpi_render.c | $(BUILD)
-	$(CC) $(CPPFLAGS) $(MPI_CFLAGS) $(CFLAGS) -MMD -c -o $@ $<
+$(BUILD)/run/mpi_render.o: host/run/mpi_render.c | $(BUILD)
+	@mkdir -p $(@D)
+	$(CC) $(CPPFLAGS) $(MPI_CFLAGS) $(CFLAGS) -MMD -MP -c -o $@ $<
 
 $(BUILD)/embedded.o: $(BUILD)/embedded.c
 	$(CC) $(CPPFLAGS) $(CFLAGS) -c -o $@ $<
 
 $(BUILD)/%.o: host/%.cpp | $(BUILD)
-	$(CXX) $(CPPFLAGS) $(CXXFLAGS) $(OIIO_CFLAGS) -MMD -c -o $@ $<
+	@mkdir -p $(@D)
+	$(CXX) $(CPPFLAGS) $(CXXFLAGS) $(OIIO_CFLAGS) -MMD -MP -c -o $@ $<
 
-$(BUILD)/test/%.o: test/%.c | $(BUILD)/test
-	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -c -o $@ $<
+# Objects in tests/, so that the .d files of the flat layout before host/
+# had folders are never read (they name headers that moved).
+$(BUILD)/tests/%.o: test/%.c | $(BUILD)/tests
+	$(CC) $(CPPFLAGS) $(CFLAGS) -MMD -MP -c -o $@ $<
 
-$(BUILD)/unit_tests: $(UNIT_TESTS:test/%.c=$(BUILD)/test/%.o) $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
+$(BUILD)/unit_tests: $(UNIT_TESTS:test/%.c=$(BUILD)/tests/%.o) $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS) -lcriterion
 
-$(BUILD) $(BUILD)/test:
+$(BUILD) $(BUILD)/tests:
 	mkdir -p $@
 
 deps:
@@ -184,6 +200,11 @@ test-long: $(BIN) $(BUILD)/unit_tests
 	RTCL_TEST_WHAT="make test-long" $(PYTEST) -m slow test
 
 check: test test-long
+
+# The layering rule of docs/STYLE.md ("Layers"): includes and, from the
+# objects, calls between host/'s folders.
+layers: $(BIN)
+	$(PYTHON) tools/build/layers.py --objects $(BUILD)
 
 # The paper's experiment (Table 1, Figures 6-7) on one device, e.g.
 # make experiments DEVICE="-p 1 -d 0"; results in a new folder
@@ -223,17 +244,17 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # The scene loader and what it calls: its parts, the file reader, the interrupt
 # bookkeeping the file module keeps, and the side of the mesh import that
 # starts the helper; the helper (build/fuzz/rtcl-meshread) is built with the
-# same sanitizers, and its reports fail the run (host/mesh.h).
-FUZZ_SOURCES := host/scene.c host/scene_check.c host/scene_literal.c host/scene_material.c host/suggest.c \
-	host/scene_mesh.c host/mesh_spawn.c host/libdir.c host/mesh_place.c host/files.c host/quote.c \
-	host/interrupt.c host/devscene.c \
-	host/devmesh.c host/bvh.c
-FUZZ_HEADERS := test/devscene_check.h host/scene.h host/scene_loader.h host/mesh.h \
-	host/mesh_place.h host/files.h host/quote.h host/devscene.h host/devmesh.h host/bvh.h host/libdir.h \
+# same sanitizers, and its reports fail the run (host/scene/mesh.h).
+FUZZ_SOURCES := host/scene/scene.c host/scene/scene_check.c host/scene/scene_literal.c host/scene/scene_material.c host/base/suggest.c \
+	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/base/files.c host/base/quote.c \
+	host/base/interrupt.c host/layout/devscene.c \
+	host/layout/devmesh.c host/layout/bvh.c
+FUZZ_HEADERS := test/devscene_check.h host/scene/scene.h host/scene/scene_loader.h host/scene/mesh.h \
+	host/scene/mesh_place.h host/base/files.h host/base/quote.h host/layout/devscene.h host/layout/devmesh.h host/layout/bvh.h host/base/libdir.h \
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
-$(FUZZ_DIR)/rtcl-meshread: host/meshread.c host/mesh.c host/ply_check.c host/ply_check.h host/mesh_spawn.c host/libdir.c host/mesh.h
+$(FUZZ_DIR)/rtcl-meshread: host/meshread/meshread.c host/meshread/meshread_assimp.c host/meshread/ply_check.c host/meshread/ply_check.h host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh.h
 	mkdir -p $(FUZZ_DIR)
 	$(FUZZ_CC) $(filter-out -fsanitize=fuzzer%,$(FUZZ_FLAGS)) -fsanitize=address,undefined \
 		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -lstdc++
@@ -336,4 +357,4 @@ uninstall:
 clean:
 	rm -rf $(BUILD) build-san build/fuzz rtcl
 
--include $(wildcard $(BUILD)/*.d $(BUILD)/test/*.d)
+-include $(wildcard $(BUILD)/*/*.d)

@@ -1,6 +1,6 @@
 /* Intersection (docs/RENDERING.md, trace step 1): the nearest hit of a ray
  * over every sphere, triangle and plane, or any hit for shadow rays. Part of the
- * tracer: built after tracer.cl (host/program.c lists the order). */
+ * tracer: built after tracer.cl (host/render/program.c lists the order). */
 
 /* A frame across a ray: unit u and v, perpendicular to its direction d and to
  * each other (Duff et al., "Building an Orthonormal Basis, Revisited", JCGT
@@ -45,7 +45,7 @@ static float sphere_gap(float4 sphere, const struct ray_frame *f)
 }
 
 /* Device sphere i's index in the scene: with a BVH the device's spheres are
- * in leaf order (host/devscene.c); brute force keeps the scene's order. */
+ * in leaf order (host/layout/devscene.c); brute force keeps the scene's order. */
 static inline int scene_order(struct tracer *tr, int i)
 {
 #ifdef RTCL_BVH
@@ -82,7 +82,7 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 	/* Equal distances go to the lower index in the scene, and a sphere
 	 * beats a triangle, as brute force's order (spheres by index, then
 	 * triangles) gives, so that the BVH's order of visits and of the
-	 * device's spheres (leaf order, host/devscene.c) gives the same hits. */
+	 * device's spheres (leaf order, host/layout/devscene.c) gives the same hits. */
 	if (t > 0.0f &&
 	    (t < *nearest ||
 	     (t == *nearest &&

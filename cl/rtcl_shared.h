@@ -62,7 +62,7 @@ struct rt_sphere {
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
 	rt_int scene_index; /* its index in the scene: with a BVH the spheres are
-			       in leaf order (host/devscene.c), and equal
+			       in leaf order (host/layout/devscene.c), and equal
 			       distances go to the lower scene index */
 };
 
@@ -148,7 +148,7 @@ struct rt_scene {
  * reference count otherwise (0 with lo.w 0 too: an empty leaf, only beside a
  * root's single primitive). On the device a leaf of spheres only has
  * RT_LEAF_SPHERES in its count, and lo.w is its first sphere: the spheres
- * are in leaf order there (host/devscene.c). */
+ * are in leaf order there (host/layout/devscene.c). */
 struct rt_bvh_box {
 	rt_vec4 lo, hi;
 };
@@ -181,7 +181,7 @@ struct rt_bvh_node {
  * next chunk of dynamic, the next pixel of persistent); word RT_COUNTER_DONE
  * counts, in a build with RTCL_PROGRESS, the pixels of whole chunks that
  * serial, naive and cyclic have done, one atomic_add per chunk. The host
- * reads both while a launch runs, for the progress line (host/launch.h). */
+ * reads both while a launch runs, for the progress line (host/render/launch.h). */
 #define RT_COUNTER_NEXT 0
 #define RT_COUNTER_DONE 1
 #define RT_COUNTER_WORDS 2

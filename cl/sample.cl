@@ -2,7 +2,7 @@
  * the first two dimensions of the Sobol' sequence, a (0,2)-sequence,
  * scrambled per pixel by an XOR with a hash of (x, y), in 24-bit fixed point.
  * Integer work only, then one exact scaling by 2^-24, so every device, kernel
- * and the CPU reference (host/reference.cpp) place the samples on the same
+ * and the CPU reference (host/render/reference.cpp) place the samples on the same
  * bits. Part of the tracer: built after tracer.cl. */
 
 /* Fixed-point bits of a sample coordinate: 2^-24 · bits is exact in float. */

@@ -2,7 +2,7 @@
  * every scheduling kernel. OpenCL C 1.2.
  *
  * The tracer is seven files, built in this order before the kernel file
- * (host/program.c lists them) and read best in the same order:
+ * (host/render/program.c lists them) and read best in the same order:
  *   tracer.cl      counting, the scene as the tracer sees it, vector helpers
  *   sample.cl      where a pixel's samples lie
  *   intersect.cl   the nearest (or any) hit over spheres, triangles and planes
@@ -12,10 +12,10 @@
  *   walk.cl        ray_step, one ray by one intersection; the pixel's walk
  *   scheduling.cl  what the scheduling kernels share: scene loading, counts,
  *                  the chunk grid over the piece being rendered
- * host/reference.cpp computes the same model in double precision, written
+ * host/render/reference.cpp computes the same model in double precision, written
  * independently from RENDERING.md: it is the readable version of it.
  *
- * Build-time options, set by the host (host/program.c):
+ * Build-time options, set by the host (host/render/program.c):
  *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack
  *   RTCL_SCENE_IN_LOCAL copy the scene into __local memory per work-group;
  *                       without it the tracer reads it from __global memory

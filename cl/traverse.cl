@@ -1,5 +1,5 @@
 /* BVH traversal (docs/bvh.md): the spheres' and triangles' part of
- * intersect_scene through the one hierarchy the host built (host/bvh.c), when
+ * intersect_scene through the one hierarchy the host built (host/layout/bvh.c), when
  * built with RTCL_BVH. Part of the tracer: built after intersect.cl, whose
  * sphere and triangle tests it uses. Planes, unbounded, stay outside the
  * hierarchy and are tested by intersect_scene as before. */
@@ -98,7 +98,7 @@ struct bvh_entry {
  * the first hit. The closest hit is that of brute force: the same sphere and
  * triangle tests, ties decided as brute force's order decides them
  * (sphere_consider, triangle_consider), and boxes padded so that every
- * sphere or triangle a test hits is inside (host/bvh.c, BVH_SPHERE_PAD).
+ * sphere or triangle a test hits is inside (host/layout/bvh.c, BVH_SPHERE_PAD).
  * Leaves wait on the stack like nodes, so that each iteration is one kind of
  * step for the whole SIMD group: testing leaves inside the node step measured
  * 4-7 % slower on an H100 (docs/bvh.md). */

@@ -10,7 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../cl/rtcl_shared.h"
+#include "rtcl_shared.h"
 
 static int vec4_finite(rt_vec4 v)
 {
@@ -61,7 +61,7 @@ static const char *refs_problem(const struct rt_scene *h, const rt_uint *refs, i
 
 /* The BVH: every child a later node, a range of spheres (RT_LEAF_SPHERES) or
  * of references within their arrays, naming primitives the scene has; the
- * spheres' scene indices (leaf order, host/devscene.c) each scene index once. */
+ * spheres' scene indices (leaf order, host/layout/devscene.c) each scene index once. */
 static const char *bvh_problem(const void *packed)
 {
 	const unsigned char *block = packed;

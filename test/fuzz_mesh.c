@@ -1,8 +1,8 @@
 /* libFuzzer target for mesh files (issue 11): malformed OBJ and PLY inputs
  * through the scene loader, the import helper (Assimp in a process of its
  * own, built with the same sanitizers as build/fuzz/rtcl-meshread), the
- * placement and the device packing (host/scene_mesh.c, host/mesh_spawn.c,
- * host/mesh.c, host/devmesh.c, host/devscene.c).
+ * placement and the device packing (host/scene/scene_mesh.c, host/scene/mesh_spawn.c,
+ * host/meshread/meshread_assimp.c, host/layout/devmesh.c, host/layout/devscene.c).
  *
  * Each input is a mesh file: PLY when it starts with "ply", else OBJ (Assimp
  * picks its reader by the extension). It is written to a private folder and
@@ -24,10 +24,10 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "devscene.h"
+#include "layout/devscene.h"
 #include "devscene_check.h"
-#include "mesh.h"
-#include "scene.h"
+#include "scene/mesh.h"
+#include "scene/scene.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -105,7 +105,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		abort();
 	} else if (mesh_importer_failures() > 0) {
 		/* Not the file's fault: the helper's sanitizers caught something
-		 * in rtcl's import code, or it did not run (host/mesh.h). */
+		 * in rtcl's import code, or it did not run (host/scene/mesh.h). */
 		fprintf(stderr, "%s\n", err);
 		abort();
 	}

@@ -1,5 +1,5 @@
 /* libFuzzer target for the scene loader, its validation and the packing into
- * the device layout (host/scene.c, host/devscene.c).
+ * the device layout (host/scene/scene.c, host/layout/devscene.c).
  *
  * Each input is loaded as a NUL-terminated document: it must be accepted or
  * refused with one message, never crash, leak, hang or hit undefined
@@ -16,10 +16,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "devscene.h"
+#include "layout/devscene.h"
 #include "devscene_check.h"
-#include "mesh.h"
-#include "scene.h"
+#include "scene/mesh.h"
+#include "scene/scene.h"
 
 int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 
@@ -55,7 +55,7 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		 * nothing left to release. */
 		abort();
 	} else if (mesh_importer_failures() > 0) {
-		/* The helper's sanitizers caught something (host/mesh.h). */
+		/* The helper's sanitizers caught something (host/scene/mesh.h). */
 		fprintf(stderr, "%s\n", err);
 		abort();
 	}

@@ -1,4 +1,4 @@
-/* The BVH builder (host/bvh.c): every primitive in exactly one leaf, every box
+/* The BVH builder (host/layout/bvh.c): every primitive in exactly one leaf, every box
  * holding what lies below it, a tree shallow enough for the tracer's stack,
  * an SAH cost well under brute force's on random spheres, and the
  * degenerate inputs. */
@@ -9,7 +9,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "bvh.h"
+#include "layout/bvh.h"
 
 static int child_index(const struct rt_bvh_box *b)
 {

@@ -1,4 +1,4 @@
-/* Indexing the triangles for the device (host/devmesh.c): a vertex shared by
+/* Indexing the triangles for the device (host/layout/devmesh.c): a vertex shared by
  * several triangles is stored once, vertices that differ in position or, on
  * smooth triangles, in normal are not merged, and every triangle reads back
  * the vertices, normals and material it was given. */
@@ -6,7 +6,7 @@
 
 #include <string.h>
 
-#include "devmesh.h"
+#include "layout/devmesh.h"
 
 static char err[512];
 

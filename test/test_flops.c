@@ -11,14 +11,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "../cl/rtcl_shared.h"
-#include "bvh.h"
-#include "devscene.h"
-#include "device.h"
-#include "embedded.h"
-#include "program.h"
-#include "render.h"
-#include "scene.h"
+#include "rtcl_shared.h"
+#include "layout/bvh.h"
+#include "layout/devscene.h"
+#include "device/device.h"
+#include "base/embedded.h"
+#include "render/program.h"
+#include "render/render.h"
+#include "scene/scene.h"
 
 static char err[65536];
 
@@ -245,7 +245,7 @@ Test(flops, ray_sphere_test)
 }
 
 /* The BVH's part (RENDERING.md, "BVH traversal"): the analytic scene's one
- * sphere is a root whose two children are the same leaf (host/bvh.c). */
+ * sphere is a root whose two children are the same leaf (host/layout/bvh.c). */
 Test(flops, ray_box_test)
 {
 	struct fixture f;

@@ -11,10 +11,10 @@
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "devscene.h"
+#include "layout/devscene.h"
 #include "devscene_check.h"
-#include "mesh.h"
-#include "scene.h"
+#include "scene/mesh.h"
+#include "scene/scene.h"
 
 #include <criterion/criterion.h>
 #include <dirent.h>
@@ -75,7 +75,7 @@ static void check_load(const char *path, const char *json)
 	} else {
 		cr_expect_neq(err[0], '\0', "%s: refused without a message", path);
 		/* The file's fault, not the helper's (a sanitizer report in a
-		 * SAN=1 build, a helper that did not run): host/mesh.h. */
+		 * SAN=1 build, a helper that did not run): host/scene/mesh.h. */
 		cr_expect_eq(mesh_importer_failures(), 0, "%s: %s", path, err);
 		cr_expect_null(strchr(err, '\n'), "%s: message of several lines: %s", path, err);
 		cr_expect_null(s.source, "%s: refused scene holds memory", path);
@@ -146,7 +146,7 @@ Test(fuzz, corpus_loads_cleanly)
 
 /* The mesh fuzzer's findings (test/fuzz_mesh.c; its README says what each
  * is): PLY headers on which Assimp loops, a file on which it aborts (now in
- * the helper, host/mesh.h), a face naming a missing vertex, and a mesh whose
+ * the helper, host/scene/mesh.h), a face naming a missing vertex, and a mesh whose
  * triangles all have area 0, which once packed a NULL array. */
 Test(fuzz, mesh_regressions_load_cleanly)
 {

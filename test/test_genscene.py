@@ -22,7 +22,7 @@ def genscene(*args):
     return done.stdout
 
 
-# --- the scene validator shared with the tools (rtcl_tools.scene, mirroring host/scene.c)
+# --- the scene validator shared with the tools (rtcl_tools.scene, mirroring host/scene/scene.c)
 
 Invalid = scene_module.SceneError
 load = scene_module.parse

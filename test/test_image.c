@@ -1,4 +1,4 @@
-/* Image output (host/image.h), with whichever implementation is linked:
+/* Image output (host/output/image.h), with whichever implementation is linked:
  * image_oiio.cpp or image_ppm.c. Tests for formats other than .ppm/.pfm
  * run only when the build can write them. */
 #define _GNU_SOURCE /* unshare, mount: the full-disk tests */
@@ -16,7 +16,7 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "image.h"
+#include "output/image.h"
 
 #define ERR_SIZE 512
 

@@ -1,4 +1,4 @@
-/* The interrupt thread (host/interrupt.c) takes the signals a user sends,
+/* The interrupt thread (host/base/interrupt.c) takes the signals a user sends,
  * SIGQUIT, SIGABRT and SIGSEGV among them (test_outputs.py sends them); a
  * real crash must still crash. */
 #include <criterion/criterion.h>
@@ -6,7 +6,7 @@
 #include <stdlib.h>
 #include <sys/mman.h>
 
-#include "interrupt.h"
+#include "base/interrupt.h"
 
 static void start_interrupt_thread(void)
 {

@@ -12,14 +12,14 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "device.h"
-#include "devscene.h"
-#include "image.h"
-#include "launch.h"
-#include "reference.h"
-#include "render.h"
-#include "renderer.h"
-#include "scene.h"
+#include "device/device.h"
+#include "layout/devscene.h"
+#include "output/image.h"
+#include "render/launch.h"
+#include "render/reference.h"
+#include "render/render.h"
+#include "render/renderer.h"
+#include "scene/scene.h"
 
 static char err[65536];
 
@@ -438,7 +438,7 @@ Test(kernels_slow, bvh_matches_brute_force_small_scenes, .timeout = 600)
 /* 40 pairs of coincident spheres, the red ones first in the file and the blue
  * ones after: brute force shows them red (equal distances go to the lower
  * index), and so must the BVH, whose leaf order puts 18 of the pairs blue
- * first on the device (host/devscene.c). Comparing device indices there
+ * first on the device (host/layout/devscene.c). Comparing device indices there
  * turns 298 bytes blue. */
 Test(kernels, bvh_keeps_the_scene_order_for_equal_distances, .timeout = 600)
 {

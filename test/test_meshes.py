@@ -166,7 +166,7 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
     assert f"built in {bvh['build_ms']:.3f} ms" in stderr
 
 
-# ---- the mesh import helper (host/mesh.h): Assimp in a process of its own ----
+# ---- the mesh import helper (host/scene/mesh.h): Assimp in a process of its own ----
 
 def quad_scene(tmp_path):
     scene = tmp_path / "s.json"

@@ -7,12 +7,12 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "devices.h"
-#include "files.h"
-#include "frames.h"
-#include "multidev.h"
-#include "render.h"
-#include "tiles.h"
+#include "device/devices.h"
+#include "base/files.h"
+#include "run/frames.h"
+#include "schedule/multidev.h"
+#include "render/render.h"
+#include "schedule/tiles.h"
 
 Test(multidev, devices_list_parses_entries_in_order)
 {

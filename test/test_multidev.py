@@ -2,7 +2,7 @@
 (--frames), end to end under PoCL, which exposes two CPU devices with
 POCL_DEVICES="pthread pthread". A slower device is simulated with
 RTCL_TEST_SLOW_DEVICE=K:MS, a failing one with RTCL_TEST_FAIL_DEVICE=K:N
-(host/checks.h)."""
+(host/render/checks.h)."""
 import json
 import os
 import pathlib

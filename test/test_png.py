@@ -1,6 +1,6 @@
-"""rtcl's own PNG writer (host/image_png.c): the pixels are the PPM's, every
+"""rtcl's own PNG writer (host/output/image_png.c): the pixels are the PPM's, every
 chunk's CRC holds, the colour tags are OpenImageIO's; and a .ppm or .png run
-never loads OpenImageIO (host/image_dl.c)."""
+never loads OpenImageIO (host/output/image_dl.c)."""
 import os
 import pathlib
 import struct

@@ -1,4 +1,4 @@
-"""rtcl's program binary cache (host/progcache.h): a second render loads the
+"""rtcl's program binary cache (host/device/progcache.h): a second render loads the
 built program, says so in -v and --stats, and any trouble with the cache means
 a build from source, never a failure (issue 12 item 3)."""
 import json

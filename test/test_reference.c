@@ -1,4 +1,4 @@
-/* Unit tests for the CPU reference renderer (host/reference.cpp).
+/* Unit tests for the CPU reference renderer (host/render/reference.cpp).
  *
  * Every expected value is worked out by hand from ../shared/docs/RENDERING.md,
  * with the arithmetic in the comments, so that these tests check the
@@ -12,7 +12,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "reference.h"
+#include "render/reference.h"
 
 #define MAX_MATERIALS 16
 #define MAX_SPHERES 16

@@ -8,10 +8,10 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "device.h"
-#include "embedded.h"
-#include "program.h"
-#include "reference.h"
+#include "device/device.h"
+#include "base/embedded.h"
+#include "render/program.h"
+#include "render/reference.h"
 
 static char err[65536];
 

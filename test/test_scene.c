@@ -1,13 +1,13 @@
-/* Unit tests for host/scene.c (the scene loader, docs: SCENE.md).
+/* Unit tests for host/scene/scene.c (the scene loader, docs: SCENE.md).
  *
  * Build and run from the repository root:
- *   gcc -std=c11 -Wall -Wextra -Ihost host/scene.c test/test_scene.c \
+ *   gcc -std=c11 -Wall -Wextra -Ihost host/scene/scene.c test/test_scene.c \
  *       -ljansson -lcriterion -lm -o /tmp/test_scene && /tmp/test_scene
  * RTCL_BAD_SCENES overrides the folder of bad scenes (default test/bad_scenes).
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "scene.h"
+#include "scene/scene.h"
 
 #include <criterion/criterion.h>
 #include <dirent.h>

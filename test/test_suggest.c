@@ -1,8 +1,8 @@
-/* host/suggest.c: the edit distance and the "did you mean" rule. */
+/* host/base/suggest.c: the edit distance and the "did you mean" rule. */
 #include <criterion/criterion.h>
 #include <string.h>
 
-#include "suggest.h"
+#include "base/suggest.h"
 
 Test(suggest, distance_counts_insertions_deletions_substitutions_and_swaps)
 {

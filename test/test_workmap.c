@@ -1,4 +1,4 @@
-/* The work map and its scale bar (host/workmap.h), written as .ppm and read
+/* The work map and its scale bar (host/output/workmap.h), written as .ppm and read
  * back. */
 #include <criterion/criterion.h>
 #include <dirent.h>
@@ -10,8 +10,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "image.h"
-#include "workmap.h"
+#include "output/image.h"
+#include "output/workmap.h"
 
 #define ERR_SIZE 512
 

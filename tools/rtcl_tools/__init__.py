@@ -7,7 +7,7 @@
                  which never replaces a file tracked by git (--update-committed)
     locations    where the tools find rtcl and the results folders
     requirements a missing numpy or matplotlib as one line
-    scene        the scene validator (docs/SCENE.md, mirroring host/scene.c)
+    scene        the scene validator (docs/SCENE.md, mirroring host/scene/scene.c)
     runner       running rtcl: RtclFailed, Run, Settings, progress lines
     report       number formats, markdown tables, CSV, device folder names
     paper        the 2009 paper's figures and geometries

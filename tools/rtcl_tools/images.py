@@ -1,5 +1,5 @@
 """The images rtcl writes, read and compared: PPM, PFM and PNG with the standard
-library alone (rtcl's own writers: host/image_common.c, host/image_png.c); any
+library alone (rtcl's own writers: host/output/image_common.c, host/output/image_png.c); any
 other format (EXR, HDR, TIFF, ...) through OpenImageIO's idiff, when installed.
 
 Values are compared on one scale, 0 ... 1 for the full range of an integer

@@ -1,7 +1,7 @@
 """A version 2 scene's meshes and inline triangles as POV-Ray 3.7 SDL.
 
 Each mesh becomes one mesh2 (vertex_vectors, face_indices and, for a smooth
-mesh, normal_vectors with normal_indices), placed here as host/mesh_place.c
+mesh, normal_vectors with normal_indices), placed here as host/scene/mesh_place.c
 places it: scale, then rotate about x, y, z (degrees, right-handed, world
 axes), then translate, in double; triangles of area 0 after placement are
 dropped as rtcl skips them; smooth normals are area-weighted over the
@@ -28,7 +28,7 @@ class MeshError(ValueError):
 
 
 def cos_sin(degrees):
-    """cos and sin, exact at multiples of 90 degrees (host/mesh_place.c)."""
+    """cos and sin, exact at multiples of 90 degrees (host/scene/mesh_place.c)."""
     quarter = degrees / 90.0
     if quarter == math.floor(quarter) and abs(quarter) < 1e15:
         k = int(math.fmod(quarter, 4.0)) % 4

@@ -1,7 +1,7 @@
 """The tools' scene validator: docs/SCENE.md (format versions 1 and 2) in Python.
 
-host/scene.c is the authority; this module (with scene_check.py for the messages
-and the checks of values, as host/scene_check.c) mirrors it for the tools (povray.py
+host/scene/scene.c is the authority; this module (with scene_check.py for the messages
+and the checks of values, as host/scene/scene_check.c) mirrors it for the tools (povray.py
 reads scenes through it) and for the tests, rule for rule and in the same
 order, with the same "PATH: what is wrong" messages, so that every file rtcl
 refuses is refused here too, with rtcl's message (test/test_rtcl_tools.py
@@ -202,7 +202,7 @@ def boolean(value, path):
 
 
 def one_line(text):
-    """Returns a file name as rtcl quotes it (host/scene_mesh.c): control characters
+    """Returns a file name as rtcl quotes it (host/scene/scene_mesh.c): control characters
     become '?', cut after 299 bytes, without trailing '?' and spaces."""
     raw = bytes(b if b >= 0x20 and b != 0x7f else 0x3f for b in text.encode("utf-8"))
     return raw[:299].rstrip(b"? ").decode("utf-8", errors="replace")

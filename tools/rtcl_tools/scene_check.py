@@ -1,5 +1,5 @@
 """The scene validator's messages ("PATH: what is wrong", rtcl's wording) and its
-checks of fields, numbers and vectors, as host/scene_check.c words and checks them;
+checks of fields, numbers and vectors, as host/scene/scene_check.c words and checks them;
 tools/rtcl_tools/scene.py reads the sections of docs/SCENE.md with them."""
 
 import math
@@ -7,7 +7,7 @@ import sys
 
 MIN_MAGNITUDE, MAX_MAGNITUDE = 1e-18, 1e18   # SCENE.md: the device computes in float
 NAME_MAX = 64                                # longer keys are cut in messages
-SUGGEST_MAX_LENGTH = 64                      # host/suggest.h
+SUGGEST_MAX_LENGTH = 64                      # host/base/suggest.h
 
 
 class SceneError(ValueError):
@@ -76,7 +76,7 @@ def type_name(value):
 
 def distance(a, b):
     """The Damerau-Levenshtein distance (adjacent swaps count one), as
-    host/suggest.c computes it (which gives up on words over 64 characters)."""
+    host/base/suggest.c computes it (which gives up on words over 64 characters)."""
     if len(a) > SUGGEST_MAX_LENGTH or len(b) > SUGGEST_MAX_LENGTH:
         return math.inf
     rows = [list(range(len(b) + 1))]
@@ -92,7 +92,7 @@ def distance(a, b):
 
 
 def did_you_mean(word, names):
-    """'; did you mean "NAME"?' for the nearest of names within host/suggest.c's
+    """'; did you mean "NAME"?' for the nearest of names within host/base/suggest.c's
     limit (one edit up to five characters, two from six), else ''."""
     limit = min(max(len(word) // 3, 1), 2)
     best = None

@@ -1,0 +1,35 @@
+/* rtcl's cache of built OpenCL programs: the binary of each build
+ * (CL_PROGRAM_BINARIES) under $XDG_CACHE_HOME/rtcl (default ~/.cache/rtcl),
+ * named by a hash of everything that changes it: the platform, the device and
+ * its driver and OpenCL versions, rtcl's version, every source text and the
+ * build options. RTCL_CACHE=0 turns it off. Any trouble with the cache (a
+ * missing, short, corrupt or foreign file, a device that refuses the binary,
+ * a folder that cannot be written) means a build from source, never an
+ * error; with -v it is said once on stderr. */
+#ifndef RTCL_PROGCACHE_H
+#define RTCL_PROGCACHE_H
+
+#include <stdint.h>
+
+#include "device/device.h"
+
+struct progcache {
+	int enabled;
+	int verbose;
+	uint64_t key;	 /* the hash of the build's inputs */
+	char path[4096]; /* DIR/KEY.bin; empty when there is no folder to use */
+};
+
+/* Works out the build's key and the cache file's path. */
+void progcache_init(struct progcache *cache, const struct device *dev, const char *const *texts,
+		    int count, const char *options, int verbose);
+
+/* A program made from the cached binary and built, or NULL (none cached,
+ * or it did not load: then the caller builds from source). */
+cl_program progcache_load(const struct progcache *cache, const struct device *dev);
+
+/* Saves the binary of a program built from source; failures are only
+ * reported with -v. */
+void progcache_save(const struct progcache *cache, cl_program program);
+
+#endif

@@ -1,0 +1,376 @@
+#include "layout/devscene.h"
+
+#include <float.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "rtcl_shared.h"
+#include "base/quote.h"
+
+static double dot(const double a[3], const double b[3])
+{
+	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+}
+
+static void normalize(double v[3])
+{
+	double length = sqrt(dot(v, v));
+
+	for (int i = 0; i < 3; i++)
+		v[i] /= length;
+}
+
+static void cross(const double a[3], const double b[3], double out[3])
+{
+	out[0] = a[1] * b[2] - a[2] * b[1];
+	out[1] = a[2] * b[0] - a[0] * b[2];
+	out[2] = a[0] * b[1] - a[1] * b[0];
+}
+
+static rt_vec4 vec4(const double v[3], double w)
+{
+	rt_vec4 out = {{(float)v[0], (float)v[1], (float)v[2], (float)w}};
+	return out;
+}
+
+static size_t round16(size_t bytes)
+{
+	return (bytes + 15) / 16 * 16;
+}
+
+static void pack_camera(struct rt_scene *out, const struct scene *scene, int width, int height)
+{
+	const struct scene_camera *cam = &scene->camera;
+	double forward[3], right[3], up[3];
+	double h = tan(cam->fov * M_PI / 360.0);
+	double aspect = (double)width / height;
+
+	for (int i = 0; i < 3; i++)
+		forward[i] = cam->look_at[i] - cam->eye[i];
+	normalize(forward);
+	cross(forward, cam->up, right);
+	normalize(right);
+	cross(right, forward, up);
+
+	/* The scalars in w: scene_half_width, scene_half_height, scene_epsilon. */
+	static const double origin[3] = {0, 0, 0}; /* the eye: scene_from_eye */
+
+	out->eye = vec4(origin, aspect * h);
+	out->forward = vec4(forward, h);
+	out->right = vec4(right, scene->epsilon);
+	out->up = vec4(up, 0.0);
+}
+
+static void pack_material(struct rt_material *out, const struct scene_material *in)
+{
+	out->color = vec4(in->color, in->ambient); /* ka in w: material_ambient */
+	out->diffuse = (float)in->diffuse;
+	out->specular = (float)in->specular;
+	out->shininess = (float)in->shininess;
+	out->reflect = (float)in->reflect;
+	out->transmit = (float)in->transmit;
+	out->ior = (float)in->ior;
+	out->inv_ior = (float)(1.0 / in->ior);
+}
+
+static void pack_sphere(struct rt_sphere *out, const struct scene *scene,
+			const struct scene_sphere *in, int scene_index)
+{
+	double center[3];
+
+	scene_from_eye(scene, in->center, center);
+	out->center = vec4(center, in->radius * in->radius); /* sphere_radius2 */
+	out->radius = (float)in->radius;
+	out->inv_radius = (float)(1.0 / in->radius);
+	out->material = in->material;
+	out->scene_index = scene_index;
+}
+
+static void pack_plane(struct rt_plane *out, const struct scene *scene,
+		       const struct scene_plane *in)
+{
+	const double *n = in->normal;
+	double point[3], origin[3];
+	int drop = 0;
+
+	scene_from_eye(scene, in->point, point);
+	/* The eye modulo twice the square size: the checker's parity is the
+	 * same, and the offset small enough for float to keep. */
+	for (int i = 0; i < 3; i++) {
+		double period = 2.0 * in->checker_size;
+		origin[i] = in->has_checker ? fmod(scene->camera.eye[i], period) : 0.0;
+		if (origin[i] < 0)
+			origin[i] += period;
+	}
+
+	/* The checker drops the axis of the normal's largest |component|,
+	 * ties going to x, then y. */
+	if (fabs(n[1]) > fabs(n[drop]))
+		drop = 1;
+	if (fabs(n[2]) > fabs(n[drop]))
+		drop = 2;
+	/* The offset and the square size ride in w (plane_offset, checker_size). */
+	out->normal = vec4(n, dot(n, point));
+	out->checker_origin = vec4(origin, 0.0);
+	out->checker_color = vec4(in->checker_color, in->checker_size);
+	out->material = in->material;
+	out->has_checker = in->has_checker;
+	out->checker_s_axis = drop == 0 ? 1 : 0;
+	out->checker_t_axis = drop == 2 ? 1 : 2;
+}
+
+static int is_sphere_ref(uint32_t ref)
+{
+	return ref >> RT_PRIM_KIND_SHIFT == RT_PRIM_SPHERE;
+}
+
+/* With a BVH the spheres go to the device in leaf order: the k-th sphere
+ * reference of bvh->refs is device sphere k (order[k] gives its scene index),
+ * so a leaf of spheres only names a range of the sphere array and the
+ * traversal reads no reference on the way to a sphere test (RT_LEAF_SPHERES).
+ * Returns order (sphere_count entries, malloc'd; identity without a BVH), or
+ * NULL when out of memory. */
+static int *sphere_order(const struct scene *scene, const struct bvh *bvh)
+{
+	int *order = malloc((size_t)(scene->sphere_count ? scene->sphere_count : 1) * sizeof(int));
+	int k = 0;
+
+	if (!order)
+		return NULL;
+	if (!bvh || bvh->node_count == 0) {
+		for (int i = 0; i < scene->sphere_count; i++)
+			order[i] = i;
+		return order;
+	}
+	for (int r = 0; r < bvh->ref_count; r++)
+		if (is_sphere_ref(bvh->refs[r]))
+			order[k++] = (int)(bvh->refs[r] & RT_PRIM_INDEX_MASK);
+	return order;
+}
+
+/* A leaf child whose references are all spheres becomes a range of the
+ * sphere array: its first device sphere, and its count with
+ * RT_LEAF_SPHERES. spheres_before[r]: sphere references before r. */
+static void leaf_to_sphere_range(struct rt_bvh_box *child, const struct bvh *bvh,
+				 const int *spheres_before)
+{
+	int32_t first, count;
+
+	memcpy(&first, &child->lo.s[3], sizeof(first));
+	memcpy(&count, &child->hi.s[3], sizeof(count));
+	if (count <= 0)
+		return;
+	for (int r = first; r < first + count; r++)
+		if (!is_sphere_ref(bvh->refs[r]))
+			return;
+	first = spheres_before[first];
+	count |= RT_LEAF_SPHERES;
+	memcpy(&child->lo.s[3], &first, sizeof(first));
+	memcpy(&child->hi.s[3], &count, sizeof(count));
+}
+
+/* The BVH's nodes and references, after the triangles (none without a BVH),
+ * with the spheres in leaf order (sphere_order): sphere references name
+ * device spheres, leaves of spheres are ranges. Returns 0, or -1 when out of
+ * memory. */
+static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh)
+{
+	struct rt_bvh_node *nodes = (struct rt_bvh_node *)(block + header->bvh_node_offset);
+	uint32_t *refs = (uint32_t *)(block + header->bvh_ref_offset);
+	int *spheres_before, k = 0;
+
+	if (!bvh || bvh->node_count == 0)
+		return 0;
+	spheres_before = malloc((size_t)bvh->ref_count * sizeof(int));
+	if (!spheres_before)
+		return -1;
+	header->bvh_node_count = bvh->node_count;
+	for (int r = 0; r < bvh->ref_count; r++) {
+		spheres_before[r] = k;
+		refs[r] = is_sphere_ref(bvh->refs[r]) ? (RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT) | k++
+						      : bvh->refs[r];
+	}
+	memcpy(nodes, bvh->nodes, (size_t)bvh->node_count * sizeof(*bvh->nodes));
+	for (int n = 0; n < bvh->node_count; n++)
+		for (int c = 0; c < 2; c++)
+			leaf_to_sphere_range(&nodes[n].child[c], bvh, spheres_before);
+	free(spheres_before);
+	return 0;
+}
+
+/* Where the arrays go in the block (byte offsets) and its size. */
+struct layout {
+	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, total;
+	int sphere_slots;
+};
+
+static struct layout layout_of(const struct scene *scene, const struct devmesh *mesh,
+			       const struct bvh *bvh)
+{
+	struct layout l;
+
+	l.material = round16(sizeof(struct rt_scene));
+	l.sphere = l.material + (size_t)scene->material_count * sizeof(struct rt_material);
+	l.sphere_slots =
+		(scene->sphere_count + RT_SPHERE_GROUP - 1) / RT_SPHERE_GROUP * RT_SPHERE_GROUP;
+	l.plane = l.sphere + (size_t)l.sphere_slots * sizeof(struct rt_sphere);
+	l.light = l.plane + (size_t)scene->plane_count * sizeof(struct rt_plane);
+	l.triangle = l.light + (size_t)scene->light_count * sizeof(struct rt_light);
+	l.vertex = l.triangle + (size_t)scene->triangle_count * sizeof(struct rt_triangle);
+	l.normal = l.vertex + (size_t)mesh->vertex_count * sizeof(struct rt_vertex);
+	l.node = l.normal + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal);
+	l.ref = l.node + (bvh ? (size_t)bvh->node_count * sizeof(*bvh->nodes) : 0);
+	l.total = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
+	return l;
+}
+
+size_t devscene_bytes(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh)
+{
+	return layout_of(scene, mesh, bvh).total;
+}
+
+void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh,
+		    int width, int height, int max_depth, size_t *bytes)
+{
+	struct layout l = layout_of(scene, mesh, bvh);
+	size_t material_offset = l.material, sphere_offset = l.sphere, plane_offset = l.plane;
+	size_t light_offset = l.light, total = l.total;
+	int sphere_slots = l.sphere_slots;
+	unsigned char *block;
+
+	/* The header's offsets are 32-bit (launch_prepare_scene refuses more). */
+	if (total > DEVSCENE_MAX_BYTES)
+		return NULL;
+	block = calloc(1, total);
+	if (!block)
+		return NULL;
+
+	struct rt_scene *header = (struct rt_scene *)block;
+	pack_camera(header, scene, width, height);
+	header->background = vec4(scene->background, 0.0);
+	header->ambient = vec4(scene->ambient, 0.0);
+	header->width = width;
+	header->height = height;
+	header->max_depth = max_depth;
+	header->material_count = scene->material_count;
+	header->sphere_count = scene->sphere_count;
+	header->sphere_slots = sphere_slots;
+	header->plane_count = scene->plane_count;
+	header->light_count = scene->light_count;
+	header->material_offset = (rt_uint)material_offset;
+	header->sphere_offset = (rt_uint)sphere_offset;
+	header->plane_offset = (rt_uint)plane_offset;
+	header->light_offset = (rt_uint)light_offset;
+	header->total_bytes = (rt_uint)total;
+	header->triangle_offset = (rt_uint)l.triangle;
+	header->vertex_offset = (rt_uint)l.vertex;
+	header->normal_offset = (rt_uint)l.normal;
+	header->triangle_count = scene->triangle_count;
+	header->bvh_node_offset = (rt_uint)l.node;
+	header->bvh_ref_offset = (rt_uint)l.ref;
+	int *order = sphere_order(scene, bvh);
+	if (!order || pack_bvh(block, header, bvh)) {
+		free(order);
+		free(block);
+		return NULL;
+	}
+
+	struct rt_material *materials = (struct rt_material *)(block + material_offset);
+	for (int i = 0; i < scene->material_count; i++)
+		pack_material(&materials[i], &scene->materials[i]);
+
+	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
+	for (int i = 0; i < scene->sphere_count; i++)
+		pack_sphere(&spheres[i], scene, &scene->spheres[order[i]], order[i]);
+	free(order);
+	/* The padding: radius² -1, which no squared distance is below. */
+	for (int i = scene->sphere_count; i < sphere_slots; i++)
+		spheres[i].center.s[3] = -1.0f;
+
+	struct rt_plane *planes = (struct rt_plane *)(block + plane_offset);
+	for (int i = 0; i < scene->plane_count; i++)
+		pack_plane(&planes[i], scene, &scene->planes[i]);
+
+	struct rt_light *lights = (struct rt_light *)(block + light_offset);
+	for (int i = 0; i < scene->light_count; i++) {
+		double position[3];
+		scene_from_eye(scene, scene->lights[i].position, position);
+		lights[i].position = vec4(position, 0.0);
+		lights[i].color = vec4(scene->lights[i].color, 0.0);
+	}
+
+	if (scene->triangle_count > 0) { /* else the arrays are NULL, which memcpy may not take */
+		memcpy(block + l.triangle, mesh->triangles,
+		       (size_t)scene->triangle_count * sizeof(struct rt_triangle));
+		memcpy(block + l.vertex, mesh->vertices,
+		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex));
+		memcpy(block + l.normal, mesh->normals,
+		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal));
+	}
+
+	*bytes = total;
+	return block;
+}
+
+/* The float step at distance d from the eye: the spacing of floats there. */
+static double float_step(double d)
+{
+	float f = (float)d;
+
+	return (double)nextafterf(f, FLT_MAX) - (double)f;
+}
+
+static double distance(const double a[3])
+{
+	return sqrt(dot(a, a));
+}
+
+/* Whether an object (named by what) of the given size at distance d from
+ * the eye spans fewer than DEVSCENE_MIN_STEPS float steps; then the message. */
+static int too_small(const struct scene *scene, const char *what, double size, double d, char *err,
+		     size_t err_size)
+{
+	double step = float_step(d);
+
+	if (size >= DEVSCENE_MIN_STEPS * step)
+		return 0;
+	snprintf(err, err_size,
+		 "%s: %s %g at %g from the eye is below what float resolves there (%d steps "
+		 "of %g): rtcl renders in float relative to the eye; move the camera closer "
+		 "or enlarge the object",
+		 quote_text(scene->source), what, size, d, DEVSCENE_MIN_STEPS, step);
+	return 1;
+}
+
+int devscene_check_resolution(const struct scene *scene, char *err, size_t err_size)
+{
+	char what[128];
+
+	for (int i = 0; i < scene->sphere_count; i++) {
+		double c[3];
+		scene_from_eye(scene, scene->spheres[i].center, c);
+		snprintf(what, sizeof(what), "spheres[%d]: the radius", i);
+		if (too_small(scene, what, scene->spheres[i].radius, distance(c), err, err_size))
+			return -1;
+	}
+	for (int i = 0; i < scene->triangle_count; i++) {
+		const struct scene_triangle *t = &scene->triangles[i];
+		double v[3][3], edge = 0, nearest = HUGE_VAL;
+		for (int k = 0; k < 3; k++) {
+			scene_from_eye(scene, t->v[k], v[k]);
+			nearest = fmin(nearest, distance(v[k]));
+		}
+		for (int k = 0; k < 3; k++) {
+			double e[3] = {v[(k + 1) % 3][0] - v[k][0], v[(k + 1) % 3][1] - v[k][1],
+				       v[(k + 1) % 3][2] - v[k][2]};
+			edge = fmax(edge, distance(e));
+		}
+		snprintf(what, sizeof(what),
+			 "triangle %d (of the meshes', then the inline ones): the longest edge", i);
+		if (too_small(scene, what, edge, nearest, err, err_size))
+			return -1;
+	}
+	return 0;
+}

@@ -1,0 +1,498 @@
+/* CPU reference renderer (see reference.h).
+ *
+ * Each numbered step of RENDERING.md's trace() is marked below with its
+ * number, so the two can be read side by side. Clarity comes before speed:
+ * the only optimisation is converting the scene once into GLM vectors.
+ */
+#include "render/reference.h"
+
+#include <glm/glm.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <new>
+#include <vector>
+
+namespace
+{
+
+using glm::dvec3;
+
+dvec3 to_dvec3(const double v[3])
+{
+	return dvec3(v[0], v[1], v[2]);
+}
+
+struct material {
+	dvec3 color;
+	double ka, kd, ks, shininess, kr, kt, ior;
+};
+
+struct sphere {
+	dvec3 center;
+	double radius;
+	double radius_sq;
+	int material;
+};
+
+struct plane {
+	dvec3 point;
+	dvec3 normal;
+	int material;
+	bool has_checker;
+	double checker_size;
+	dvec3 checker_color;
+	int dropped_axis; /* world axis left out of the checker coordinates */
+};
+
+struct triangle {
+	dvec3 v0, v1, v2;
+	dvec3 n_g;	 /* unit geometric normal, (v1 - v0) x (v2 - v0) normalised */
+	dvec3 normal[3]; /* unit shading normals at the vertices */
+	bool smooth;
+	int material;
+};
+
+struct light {
+	dvec3 position;
+	dvec3 color;
+};
+
+/* The nearest hit of a ray: exactly one of sphere, triangle and plane is
+ * set; u and v are the barycentric coordinates of v1 and v2 on a triangle. */
+struct hit {
+	double t;
+	const struct sphere *sphere;
+	const struct plane *plane;
+	const struct triangle *tri;
+	double u, v;
+};
+
+/* The axis along which `n` has its largest |component|; ties go to the
+ * earlier axis (x before y before z). */
+int largest_axis(const dvec3 &n)
+{
+	int axis = 0;
+	if (std::fabs(n.y) > std::fabs(n[axis]))
+		axis = 1;
+	if (std::fabs(n.z) > std::fabs(n[axis]))
+		axis = 2;
+	return axis;
+}
+
+/* Returns the smallest t > 0 where the ray meets the sphere (the far root
+ * when the origin is inside), or 0 if there is none. d is unit length. */
+double intersect_sphere(const sphere &s, const dvec3 &o, const dvec3 &d)
+{
+	dvec3 oc = o - s.center;
+	double b = glm::dot(oc, d);
+	double c = glm::dot(oc, oc) - s.radius_sq;
+	double disc = b * b - c;
+	if (disc < 0.0)
+		return 0.0;
+	double root = std::sqrt(disc);
+	double t_near = -b - root;
+	double t_far = -b + root;
+	if (t_near > 0.0)
+		return t_near;
+	if (t_far > 0.0)
+		return t_far;
+	return 0.0;
+}
+
+/* Returns t > 0 where the ray meets the plane, or 0 if it does not (a ray
+ * parallel to the plane misses it). */
+double intersect_plane(const plane &p, const dvec3 &o, const dvec3 &d)
+{
+	double denom = glm::dot(p.normal, d);
+	if (denom == 0.0)
+		return 0.0;
+	double t = glm::dot(p.point - o, p.normal) / denom;
+	return t > 0.0 ? t : 0.0;
+}
+
+/* Returns t > 0 where the ray meets the triangle (either side), or 0 if it
+ * does not, with the barycentric coordinates of v1 and v2 in *u and *v:
+ * Moller and Trumbore, "Fast, Minimum Storage Ray/Triangle Intersection"
+ * (1997), the textbook form in double. A ray in the triangle's plane misses. */
+double intersect_triangle(const triangle &tri, const dvec3 &o, const dvec3 &d, double *u, double *v)
+{
+	dvec3 e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+	dvec3 pv = glm::cross(d, e2);
+	double det = glm::dot(e1, pv);
+	if (det == 0.0)
+		return 0.0;
+	dvec3 s = o - tri.v0;
+	*u = glm::dot(s, pv) / det;
+	if (*u < 0.0 || *u > 1.0)
+		return 0.0;
+	dvec3 q = glm::cross(s, e1);
+	*v = glm::dot(d, q) / det;
+	if (*v < 0.0 || *u + *v > 1.0)
+		return 0.0;
+	double t = glm::dot(e2, q) / det;
+	return t > 0.0 ? t : 0.0;
+}
+
+class tracer
+{
+      public:
+	/* May throw std::bad_alloc. */
+	tracer(const struct scene &sc, int max_depth);
+
+	dvec3 trace(const dvec3 &o, const dvec3 &d, int depth) const;
+
+      private:
+	bool nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const;
+	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
+	dvec3 base_color(const hit &h, const dvec3 &p) const;
+	dvec3 local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
+			  const dvec3 &n_face, const dvec3 &d) const;
+	void secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
+			      dvec3 *reflected, dvec3 *refracted) const;
+
+	std::vector<material> materials;
+	std::vector<sphere> spheres;
+	std::vector<triangle> triangles;
+	std::vector<plane> planes;
+	std::vector<light> lights;
+	dvec3 background;
+	dvec3 ambient;
+	double epsilon;
+	int max_depth;
+};
+
+tracer::tracer(const struct scene &sc, int max_depth_)
+    : background(to_dvec3(sc.background)), ambient(to_dvec3(sc.ambient)), epsilon(sc.epsilon),
+      max_depth(max_depth_)
+{
+	for (int i = 0; i < sc.material_count; i++) {
+		const scene_material &m = sc.materials[i];
+		materials.push_back({to_dvec3(m.color), m.ambient, m.diffuse, m.specular,
+				     m.shininess, m.reflect, m.transmit, m.ior});
+	}
+	for (int i = 0; i < sc.sphere_count; i++) {
+		const scene_sphere &s = sc.spheres[i];
+		spheres.push_back({to_dvec3(s.center), s.radius, s.radius * s.radius, s.material});
+	}
+	for (int i = 0; i < sc.plane_count; i++) {
+		const scene_plane &p = sc.planes[i];
+		dvec3 normal = to_dvec3(p.normal);
+		planes.push_back({to_dvec3(p.point), normal, p.material, p.has_checker != 0,
+				  p.checker_size, to_dvec3(p.checker_color), largest_axis(normal)});
+	}
+	for (int i = 0; i < sc.triangle_count; i++) {
+		const scene_triangle &t = sc.triangles[i];
+		dvec3 v0 = to_dvec3(t.v[0]), v1 = to_dvec3(t.v[1]), v2 = to_dvec3(t.v[2]);
+		triangles.push_back(
+			{v0,
+			 v1,
+			 v2,
+			 glm::normalize(glm::cross(v1 - v0, v2 - v0)),
+			 {to_dvec3(t.normal[0]), to_dvec3(t.normal[1]), to_dvec3(t.normal[2])},
+			 t.smooth != 0,
+			 t.material});
+	}
+	for (int i = 0; i < sc.light_count; i++) {
+		const scene_light &l = sc.lights[i];
+		lights.push_back({to_dvec3(l.position), to_dvec3(l.color)});
+	}
+}
+
+/* Step 1. Spheres are tested first, then triangles, then planes, each in
+ * scene order, and only a strictly smaller t replaces a hit, so an exact tie
+ * goes to the object listed first. Returns false when nothing is hit. */
+bool tracer::nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const
+{
+	hit best = {0.0, nullptr, nullptr, nullptr, 0.0, 0.0};
+	for (const sphere &s : spheres) {
+		double t = intersect_sphere(s, o, d);
+		if (t > 0.0 && (best.t == 0.0 || t < best.t))
+			best = {t, &s, nullptr, nullptr, 0.0, 0.0};
+	}
+	for (const triangle &tri : triangles) {
+		double u, v, t = intersect_triangle(tri, o, d, &u, &v);
+		if (t > 0.0 && (best.t == 0.0 || t < best.t))
+			best = {t, nullptr, nullptr, &tri, u, v};
+	}
+	for (const plane &p : planes) {
+		double t = intersect_plane(p, o, d);
+		if (t > 0.0 && (best.t == 0.0 || t < best.t))
+			best = {t, nullptr, &p, nullptr, 0.0, 0.0};
+	}
+	*out = best;
+	return best.t > 0.0;
+}
+
+/* Whether any object (transparent ones too) lies on the ray at 0 < t < distance. */
+bool tracer::blocked(const dvec3 &o, const dvec3 &d, double distance) const
+{
+	for (const sphere &s : spheres) {
+		double t = intersect_sphere(s, o, d);
+		if (t > 0.0 && t < distance)
+			return true;
+	}
+	for (const triangle &tri : triangles) {
+		double u, v, t = intersect_triangle(tri, o, d, &u, &v);
+		if (t > 0.0 && t < distance)
+			return true;
+	}
+	for (const plane &p : planes) {
+		double t = intersect_plane(p, o, d);
+		if (t > 0.0 && t < distance)
+			return true;
+	}
+	return false;
+}
+
+/* Step 3: the material colour, or the checker colour on the odd squares of a
+ * checkered plane. */
+dvec3 tracer::base_color(const hit &h, const dvec3 &p) const
+{
+	if (h.sphere)
+		return materials[h.sphere->material].color;
+	if (h.tri)
+		return materials[h.tri->material].color;
+
+	const plane &pl = *h.plane;
+	if (!pl.has_checker)
+		return materials[pl.material].color;
+
+	double s, t;
+	switch (pl.dropped_axis) {
+	case 0:
+		s = p.y, t = p.z;
+		break;
+	case 1:
+		s = p.x, t = p.z;
+		break;
+	default:
+		s = p.x, t = p.y;
+		break;
+	}
+	/* Both floors are whole numbers, so their sum is exact (below 2^53) and
+	 * fmod gives its parity without any integer overflow. */
+	double cells = std::floor(s / pl.checker_size) + std::floor(t / pl.checker_size);
+	bool odd = std::fmod(std::fabs(cells), 2.0) == 1.0;
+	return odd ? pl.checker_color : materials[pl.material].color;
+}
+
+/* RENDERING.md step 2 on a triangle: the shading normal, interpolated from
+ * the vertex normals at the barycentric (u, v) of the hit, and turned to the
+ * side of the surface the ray is on (n_face, the geometric normal facing the
+ * ray). A flat triangle's is n_face itself. */
+dvec3 shading_normal(const triangle &tri, double u, double v, const dvec3 &n_face)
+{
+	if (!tri.smooth)
+		return n_face;
+	dvec3 n = (1.0 - u - v) * tri.normal[0] + u * tri.normal[1] + v * tri.normal[2];
+	if (n == dvec3(0.0))
+		return n_face;
+	n = glm::normalize(n);
+	return glm::dot(n, n_face) < 0.0 ? -n : n;
+}
+
+dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
+{
+	/* 1. */
+	hit h;
+	if (!nearest_hit(o, d, &h))
+		return background;
+
+	/* 2. */
+	dvec3 p = o + h.t * d;
+	/* RENDERING.md's (p - center)/radius, which is unit length only while p
+	 * lies on the sphere. From an origin far from a small sphere (a ray coming
+	 * back from the wall of a sphere of radius 1e18), b*b - c in
+	 * intersect_sphere cancels to noise and p can miss the surface by orders
+	 * of magnitude more than the radius; a normal of length 1e10 then makes
+	 * pow(n.H, shininess) inf. Normalising gives the same n on the surface. */
+	dvec3 n_g = h.sphere ? glm::normalize(p - h.sphere->center)
+		    : h.tri  ? h.tri->n_g
+			     : h.plane->normal;
+	bool inside = glm::dot(n_g, d) > 0.0;
+	dvec3 n_face = inside ? -n_g : n_g;
+	dvec3 n = h.tri ? shading_normal(*h.tri, h.u, h.v, n_face) : n_face;
+	int material_index = h.sphere ? h.sphere->material
+			     : h.tri  ? h.tri->material
+				      : h.plane->material;
+	const material &m = materials[material_index];
+
+	/* 3. */
+	dvec3 c = base_color(h, p);
+
+	/* 4. */
+	dvec3 color = local_color(m, c, p, n, n_face, d);
+
+	/* 5. (in the order of the sums before this function was split) */
+	if (depth < max_depth) {
+		dvec3 reflected, refracted;
+		secondary_colors(m, p, n, n_face, d, inside, depth, &reflected, &refracted);
+		color += reflected;
+		color += refracted;
+	}
+
+	/* 6. */
+	return color;
+}
+
+/* RENDERING.md trace step 4: ambient, then each light not in shadow. */
+dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
+			  const dvec3 &n_face, const dvec3 &d) const
+{
+	dvec3 color = m.ka * c * ambient;
+	/* Off the surface along the geometric normal (n itself but on a smooth
+	 * triangle), so that the shadow ray starts on the ray's side of it. */
+	dvec3 shadow_origin = p + epsilon * n_face;
+	for (const light &li : lights) {
+		/* The shadow ray runs from shadow_origin straight to the light, and
+		 * t is measured along it, so "distance" is from shadow_origin. */
+		dvec3 to_light = li.position - shadow_origin;
+		double distance = glm::length(to_light);
+		if (distance > 0.0 && blocked(shadow_origin, to_light / distance, distance))
+			continue;
+
+		dvec3 surface_to_light = li.position - p;
+		if (surface_to_light == dvec3(0.0))
+			continue; /* light exactly at p: L is undefined */
+		dvec3 L = glm::normalize(surface_to_light);
+		color += m.kd * std::max(0.0, glm::dot(n, L)) * c * li.color;
+
+		dvec3 half = L - d;
+		if (half != dvec3(0.0)) { /* L == d: no half vector, no specular term */
+			dvec3 H = glm::normalize(half);
+			color += m.ks * std::pow(std::max(0.0, glm::dot(n, H)), m.shininess) *
+				 li.color;
+		}
+	}
+	return color;
+}
+
+/* RENDERING.md trace step 5: the colours of the reflected and refracted
+ * rays, weighted (zero where there is none).
+ *
+ * R and T are unit vectors in exact arithmetic, but trace() needs
+ * |d| = 1 to the last bit: intersect_sphere solves t^2 + 2bt + c = 0,
+ * which holds only for a unit d. Unnormalised, the rounding error of |d|
+ * grew about 16-fold per bounce (1e-16 at the camera, 0.3 at depth 13 of
+ * two_balls.json), hits landed off the surfaces, the normals
+ * (p - center)/radius lost unit length and the colours went to inf past
+ * depth 20. Normalising each new direction keeps the error at 1 ulp. */
+void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
+			      dvec3 *reflected, dvec3 *refracted) const
+{
+	double reflect_weight = m.kr;
+
+	*reflected = *refracted = dvec3(0.0);
+	if (m.kt > 0.0) {
+		double eta = inside ? m.ior : 1.0 / m.ior;
+		double cos_i = -glm::dot(d, n);
+		double k = 1.0 - eta * eta * (1.0 - cos_i * cos_i);
+		if (k < 0.0) {
+			reflect_weight += m.kt; /* total internal reflection */
+		} else {
+			/* RENDERING.md's T = eta*d + (eta*c - sqrt(k))*n, grouped
+			 * as eta*(d + c*n) - sqrt(k)*n: d + c*n is d's part along
+			 * the surface, of length sin(i), so no two large terms
+			 * cancel (with ior 1e18 at normal incidence the written
+			 * order gives 1e18*d - 1e18*d = 0, and no direction). */
+			dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
+			*refracted = m.kt * trace(p - epsilon * n_face, T, depth + 1);
+		}
+	}
+	if (reflect_weight > 0.0) {
+		dvec3 R = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
+		*reflected = reflect_weight * trace(p + epsilon * n_face, R, depth + 1);
+	}
+}
+
+/* RENDERING.md's hash of a pixel's coordinates: lowbias32. */
+uint32_t sample_hash(uint32_t v)
+{
+	v = (v ^ (v >> 16)) * 0x7feb352du;
+	v = (v ^ (v >> 15)) * 0x846ca68bu;
+	return v ^ (v >> 16);
+}
+
+/* The Sobol' points as RENDERING.md writes them, through the generator
+ * matrices rather than direction numbers: dimension 0's is the identity (the
+ * radical inverse), dimension 1's has binomial(i, j) mod 2 in row j, column i
+ * (the Pascal matrix), so output bit j (of weight 2^-(j+1)) is the XOR of the
+ * bits i >= j of k with odd binomial(i, j), that is with (i & j) == j. */
+uint32_t sobol_point(uint32_t k, int dimension)
+{
+	uint32_t r = 0;
+
+	for (int j = 0; j < 32; j++) {
+		uint32_t bit = 0;
+		for (int i = j; i < 32; i++)
+			if ((k >> i) & 1u)
+				bit ^= dimension == 0 ? (uint32_t)(i == j)
+						      : (uint32_t)((i & j) == j);
+		r |= bit << (31 - j);
+	}
+	return r;
+}
+
+} // namespace
+
+extern "C" void reference_sample_position(int x, int y, int k, int n, double uv[2])
+{
+	if (n == 1) {
+		uv[0] = uv[1] = 0.5;
+		return;
+	}
+	uint32_t scramble_u = sample_hash(sample_hash((uint32_t)x) ^ (uint32_t)y);
+	uint32_t scramble_v = sample_hash(scramble_u);
+	uv[0] = std::ldexp((double)((sobol_point((uint32_t)k, 0) ^ scramble_u) >> 8), -24);
+	uv[1] = std::ldexp((double)((sobol_point((uint32_t)k, 1) ^ scramble_v) >> 8), -24);
+}
+
+int reference_render(const struct scene *scene, int width, int height, int max_depth, float *rgb)
+{
+	return reference_render_samples(scene, width, height, max_depth, 1, rgb);
+}
+
+int reference_render_samples(const struct scene *scene, int width, int height, int max_depth,
+			     int samples, float *rgb)
+{
+	if (!scene || !rgb || width < 1 || height < 1 || max_depth < 0 || samples < 1)
+		return -1;
+
+	try {
+		const tracer tr(*scene, max_depth);
+
+		const scene_camera &cam = scene->camera;
+		dvec3 eye = to_dvec3(cam.eye);
+		dvec3 f = glm::normalize(to_dvec3(cam.look_at) - eye);
+		dvec3 r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
+		dvec3 u = glm::cross(r, f);
+		double h = std::tan(glm::radians(cam.fov) / 2.0);
+		double a = (double)width / (double)height;
+
+		for (int y = 0; y < height; y++) {
+			for (int x = 0; x < width; x++) {
+				dvec3 sum(0.0);
+				for (int k = 0; k < samples; k++) {
+					double uv[2];
+					reference_sample_position(x, y, k, samples, uv);
+					double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
+					double sy = (1.0 - 2.0 * (y + uv[1]) / height) * h;
+					dvec3 dir = glm::normalize(f + sx * r + sy * u);
+					sum += tr.trace(eye, dir, 0);
+				}
+				dvec3 c = sum / (double)samples;
+				float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);
+				out[0] = (float)c.r;
+				out[1] = (float)c.g;
+				out[2] = (float)c.b;
+			}
+		}
+	} catch (const std::bad_alloc &) {
+		return -1;
+	}
+	return 0;
+}

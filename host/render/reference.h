@@ -1,0 +1,37 @@
+/* CPU reference renderer: the test oracle for the OpenCL kernels.
+ *
+ * A plain recursive Whitted tracer in double precision (C++ with GLM),
+ * written from docs/RENDERING.md independently of the code in cl/.
+ */
+#ifndef RTCL_REFERENCE_H
+#define RTCL_REFERENCE_H
+
+#include "scene/scene.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+/* Renders `scene` as RENDERING.md defines it, with width, height and
+ * max_depth taken from the arguments (not from the scene). Writes the linear,
+ * unclamped colour of pixel (x, y) to rgb[3 * (y * width + x) + c], c = 0, 1, 2
+ * for red, green, blue; rgb must hold 3 * width * height floats.
+ * Returns 0 on success, -1 on invalid arguments (NULL pointer, width or height
+ * < 1, max_depth < 0) or allocation failure; rgb is then left unspecified. */
+int reference_render(const struct scene *scene, int width, int height, int max_depth, float *rgb);
+
+/* reference_render with `samples` samples per pixel (RENDERING.md, "Samples
+ * per pixel"): the pixel is the mean of its samples' colours. samples < 1 is
+ * refused (-1). reference_render is samples = 1. */
+int reference_render_samples(const struct scene *scene, int width, int height, int max_depth,
+			     int samples, float *rgb);
+
+/* Sets uv to sample k (0 <= k < n) of pixel (x, y)'s position in the pixel, in
+ * [0, 1)^2 from its top-left corner, as RENDERING.md defines it. */
+void reference_sample_position(int x, int y, int k, int n, double uv[2]);
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif

@@ -1,0 +1,39 @@
+/* Rendering a scene: on an OpenCL device with one of the scheduling kernels
+ * of cl/, or with the CPU reference (reference.h). */
+#ifndef RTCL_RENDER_H
+#define RTCL_RENDER_H
+
+#include "render/settings.h"
+
+extern const struct kernel_info render_kernels[];
+extern const int render_kernel_count;
+
+/* Returns the kernel named `name`, or NULL. */
+const struct kernel_info *render_find_kernel(const char *name);
+
+/* A pass of a long render traces about this many samples in all (pixels ×
+ * samples of the pass), at least one sample of every pixel: on an H100 a few
+ * milliseconds, on a CPU a few seconds, so that progress moves. */
+#define RENDER_PASS_PIXEL_SAMPLES (1 << 22)
+
+/* Returns how many samples of every pixel one pass of render() traces:
+ * settings->samples_per_pass, else about RENDER_PASS_PIXEL_SAMPLES in all;
+ * the last pass takes what is left. The image does not depend on it. */
+int render_pass_samples(const struct render_settings *settings);
+
+/* Renders `scene` with `settings` (settings->kernel not NULL) on `dev`: each
+ * frame in passes over the whole image (renderer.h), render_pass_samples()
+ * samples of every pixel each.
+ * Returns 0, or -1 with one message in err (a failed build puts the build log
+ * and the options there) and nothing held in result. */
+int render(struct device *dev, const struct scene *scene, const struct render_settings *settings,
+	   struct render_result *result, char *err, size_t err_size);
+
+/* Renders with the CPU reference, settings->repeat times, each timed by the
+ * host clock like a single launch. Returns 0, or -1 with one message in err. */
+int render_reference(const struct scene *scene, const struct render_settings *settings,
+		     struct render_result *result, char *err, size_t err_size);
+
+void render_result_free(struct render_result *result);
+
+#endif

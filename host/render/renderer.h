@@ -1,0 +1,76 @@
+/* A renderer open on one device and one scene, rendering pieces of the image
+ * (struct rt_piece, cl/rtcl_shared.h): what a plain render (render.c) and a
+ * multi-device render call per device.
+ *
+ *   renderer_open       once: plans the NDRange for the whole image, packs and
+ *                       uploads the scene, builds the program, creates the
+ *                       full-image buffers (image, counts, write counts)
+ *   renderer_piece      any number of times: renders one piece, a rectangle
+ *                       of the image and a range of its pixels' samples
+ *   renderer_read_back  the whole image and the counts, into the result
+ *   renderer_close      releases everything open took
+ *
+ * The image buffer holds, for each pixel, the running sum of the samples
+ * traced so far in sample order, and the mean once the piece with the
+ * render's last sample (sample_end = samples) has run: pieces of one pixel
+ * must come in sample order, each starting where the last ended (the first at
+ * 0). Pixels no piece covered are left as they were (poison with
+ * check_writes). Flop counts add up over every piece since open: per pixel
+ * on the device; per work-item on the host, work-item i of every launch added
+ * together (single-pass kernels), or every launch's work-items appended
+ * (wavefront). Write counts (check_writes) count one write per pixel per
+ * piece that covers it. */
+#ifndef RTCL_RENDERER_H
+#define RTCL_RENDERER_H
+
+#include "rtcl_shared.h"
+#include "render/settings.h"
+
+/* What one piece took. */
+struct piece_result {
+	double kernel_ms; /* the profiled time of its launches */
+	int launches;
+};
+
+struct renderer {
+	const struct renderer_ops *ops; /* the kernel's: singlepass or wavefront */
+	struct device *dev;
+	const struct render_settings *settings;
+	struct render_result *result; /* the plan, scene and build facts; read_back
+					 fills the image and counts */
+	void *state;		      /* the renderer's own, behind ops */
+};
+
+/* The functions a family of kernels provides (kernel_info.ops). Each returns
+ * 0, or -1 with one message in err. */
+struct renderer_ops {
+	int (*open)(struct renderer *r, const struct scene *scene, char *err, size_t err_size);
+	int (*piece)(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
+		     char *err, size_t err_size);
+	int (*read_back)(struct renderer *r, char *err, size_t err_size);
+	void (*close)(struct renderer *r);
+};
+
+/* Opens settings->kernel's renderer on dev for scene; result is zeroed first
+ * and must outlive the renderer. On failure nothing is held by r (result may
+ * hold memory: render_result_free). */
+int renderer_open(struct renderer *r, struct device *dev, const struct scene *scene,
+		  const struct render_settings *settings, struct render_result *result, char *err,
+		  size_t err_size);
+
+/* Renders piece, which must lie inside the image with
+ * 0 <= sample_begin < sample_end <= samples = settings->samples; sets *out
+ * and adds its pixel samples to the progress line (progress.h). */
+int renderer_piece(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
+		   char *err, size_t err_size);
+
+/* Reads the whole image (result->rgb) and, when counting or checking, the
+ * counts accumulated since open into the result. */
+int renderer_read_back(struct renderer *r, char *err, size_t err_size);
+
+void renderer_close(struct renderer *r);
+
+/* Returns the piece of the whole image with samples [begin, end) of n. */
+struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end);
+
+#endif

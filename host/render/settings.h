@@ -1,0 +1,111 @@
+/* What a render is asked for and what it gives back: the data that passes
+ * between main, render.c and the renderers below it (singlepass.c,
+ * wavefront.c). Types only, so that every layer can include it. */
+#ifndef RTCL_SETTINGS_H
+#define RTCL_SETTINGS_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "device/device.h"
+#include "scene/scene.h"
+
+struct render_settings;
+struct render_result;
+struct renderer_ops; /* renderer.h */
+
+/* The scheduling kernels, one cl/NAME.cl each. */
+struct kernel_info {
+	const char *name;
+	const char *summary;
+	int uses_groups;		/* persistent work-groups: --groups applies */
+	int single_item;		/* one work-item renders everything: -w does not apply */
+	int multi_pass;			/* several launches per frame (wavefront) */
+	int pixel_counter;		/* its work counter counts pixels, --batch at a time */
+	int counts_handed_out;		/* the progress line reads the work handed out
+					   (RT_COUNTER_NEXT), not the chunks done */
+	const struct renderer_ops *ops; /* singlepass_ops or wavefront_ops */
+};
+
+/* --accel: how the tracer finds a ray's hit among the spheres. */
+enum accel {
+	ACCEL_NONE, /* every sphere tested, the paper's brute force */
+	ACCEL_BVH,  /* a BVH built on the host (host/layout/bvh.c, docs/bvh.md) */
+};
+
+struct render_settings {
+	const struct kernel_info *kernel; /* NULL: the CPU reference */
+	int workgroup[2];		  /* local size, e.g. 8x8 */
+	int groups[2];	   /* persistent work-groups; 0x0: enough to fill the device */
+	int width, height; /* image size */
+	int max_depth;
+	int samples;		/* N, samples per pixel (0 counts as 1) */
+	int samples_per_pass;	/* 0: chosen by render_pass_samples() */
+	int repeat;		/* timed frames */
+	int warm_up;		/* one untimed launch first (-r given) */
+	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
+	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
+	int check_writes;	/* tests: count writes per pixel, poison the image and
+				   surround it with guard zones (checks.h) */
+	int force_global_scene; /* read the scene from __global memory even if it
+				   would fit in __local memory */
+	int accel;		/* ACCEL_BVH or ACCEL_NONE (--accel) */
+	const char *source_dir; /* load cl/ sources from here instead of the
+				   embedded copies (development) */
+	int progress;		/* render() runs the progress line (progress.h) itself;
+				   else its caller does, and render() adds to it */
+	int verbose;
+};
+
+/* Where a render's host time went, in milliseconds (wall clock). */
+struct render_times {
+	double build;	  /* the program build */
+	double scene;	  /* packing the scene, creating and filling the buffers */
+	double kernels;	  /* every launch, warm-up included, with its waits */
+	double read_back; /* the image and counts back to the host */
+};
+
+/* Room for rtcl's own build options and RTCL_BUILD_OPTIONS (program.h). */
+#define BUILD_OPTIONS_SIZE 512
+
+struct render_result {
+	float *rgb; /* width*height*3 linear floats, row 0 at the top */
+	double kernel_ms_median, kernel_ms_min, kernel_ms_max;
+	double *kernel_ms; /* each timed launch, in order */
+	int repeat;
+	int launches; /* frames rendered: the timed ones and any warm-up */
+	int passes;   /* passes per frame, each a range of the samples */
+	struct render_times times;
+	int groups[2]; /* as launched (1x1 for serial; the NDRange's for naive) */
+	size_t global_size[2], local_size[2];
+	int scene_in_local;
+	size_t scene_bytes;
+	int vertex_count; /* the triangles' distinct vertices (host/layout/devmesh.h) */
+	char build_options[BUILD_OPTIONS_SIZE];
+	int build_cached; /* the program came from rtcl's cache (progcache.h) */
+
+	/* With count_flops: per launched work-item, row-major over the global
+	 * NDRange. */
+	uint64_t *item_flops;
+	size_t item_count;
+	uint64_t *pixel_flops; /* per pixel, row-major */
+	uint64_t total_flops, total_rays;
+	uint64_t total_node_visits; /* BVH nodes visited by every ray */
+
+	/* The BVH, with ACCEL_BVH and a sphere or triangle (else bvh_nodes 0). */
+	int bvh_nodes, bvh_depth;
+	double bvh_sah_cost, bvh_build_ms;
+	size_t bvh_bytes; /* its nodes and references in the scene block */
+
+	/* With check_writes. */
+	uint32_t *write_counts; /* per pixel */
+	int guards_intact;	/* no byte outside the image was written */
+};
+
+/* Bytes of the linear RGB float image of width × height pixels. */
+static inline size_t image_float_bytes(int width, int height)
+{
+	return (size_t)width * (size_t)height * 3 * sizeof(float);
+}
+
+#endif

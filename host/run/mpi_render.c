@@ -1,0 +1,972 @@
+#include "run/mpi_render.h"
+
+#include <limits.h>
+#include <mpi.h>
+#include <pthread.h>
+#include <signal.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "render/checks.h"
+#include "cmd/cli.h"
+#include "run/frames.h"
+#include "report/devstats.h"
+#include "base/interrupt.h"
+#include "render/launch.h"
+#include "base/progress.h"
+#include "output/outputs.h"
+#include "base/quote.h"
+#include "render/render.h"
+#include "scene/scene.h"
+#include "schedule/tiles.h"
+#include "base/timing.h"
+
+#define ROOT 0
+#define MESSAGE_SIZE 8192
+
+/* Messages to rank 0, and its answers (TAG_GIVE + the asking device). */
+enum tag { TAG_TAKE = 1, TAG_RESULT, TAG_FAIL, TAG_DONE, TAG_GIVE = 100 };
+
+/* What a rank tells rank 0 of one of its devices once it is done. */
+struct device_report {
+	int device;
+	int platform_index, device_index;
+	char name[256], platform_name[256];
+	struct device_work work;
+};
+
+struct mpi_job {
+	struct run *run;
+	int rank, size;
+	struct device devs[DEVICES_MAX]; /* this rank's */
+	int count;
+	struct device_work work[DEVICES_MAX];
+	int taken;			/* pieces this rank took (the test-only rank death) */
+	int image;			/* one image in bands (tiles.h), not --frames */
+	int pieces;			/* frames, or bands */
+	struct tiles_job tiles;		/* image: this rank's devices and bands */
+	int device_failed[DEVICES_MAX]; /* image: a piece of this device failed */
+	pthread_mutex_t lock;
+
+	/* Rank 0: the dispenser over every rank's devices, and the outputs. */
+	int *first;   /* global index of each rank's first device */
+	int *rank_of; /* each global device's rank */
+	int total;    /* devices over every rank */
+	int next;     /* dynamic split: the next piece */
+	int *next_static, *end_static;
+	int *current; /* the piece each other rank's device renders, or -1 */
+	int failed;
+	char message[MESSAGE_SIZE];
+	struct frames_output output;
+	struct device *all_devs;
+	struct device_work *all_work;
+	int *arrived; /* image: how often each band arrived */
+	double wall_ms;
+};
+
+static int piece_count(const struct mpi_job *j)
+{
+	return j->pieces;
+}
+
+/* Rank 0: records the first failure; later ones are their consequences. */
+static void record_failure(struct mpi_job *j, int rank, const char *message)
+{
+	pthread_mutex_lock(&j->lock);
+	if (!j->failed)
+		snprintf(j->message, sizeof(j->message), "rank %d, %.8000s", rank, message);
+	j->failed = 1;
+	pthread_mutex_unlock(&j->lock);
+}
+
+/* Rank 0: the next piece for global device g, or -1. */
+static int central_take(struct mpi_job *j, int g)
+{
+	int piece = -1;
+
+	pthread_mutex_lock(&j->lock);
+	if (j->failed)
+		piece = -1;
+	else if (j->run->opt->split_static)
+		piece = j->next_static[g] < j->end_static[g] ? j->next_static[g]++ : -1;
+	else if (j->next < piece_count(j))
+		piece = j->next++;
+	pthread_mutex_unlock(&j->lock);
+	return piece;
+}
+
+/* ---- waiting without spinning --------------------------------------------
+ *
+ * Open MPI's blocking calls poll at full speed while they wait, each taking
+ * a core that the ranks' PoCL devices render on. These wait in naps that
+ * grow from MPI_NAP_MIN_NS to MPI_NAP_MAX_NS: a message waits at most about
+ * a millisecond, against pieces of tens of milliseconds or more. */
+#define MPI_NAP_MIN_NS 20000L
+#define MPI_NAP_MAX_NS 1000000L
+
+static void nap(long *ns)
+{
+	struct timespec t = {0, *ns};
+
+	nanosleep(&t, NULL);
+	*ns = *ns * 2 < MPI_NAP_MAX_NS ? *ns * 2 : MPI_NAP_MAX_NS;
+}
+
+/* MPI_Probe for any message, in naps. */
+static int wait_probe(MPI_Status *status)
+{
+	long ns = MPI_NAP_MIN_NS;
+
+	for (;;) {
+		int arrived = 0;
+		if (MPI_Iprobe(MPI_ANY_SOURCE, MPI_ANY_TAG, MPI_COMM_WORLD, &arrived, status) !=
+		    MPI_SUCCESS)
+			return -1;
+		if (arrived)
+			return 0;
+		nap(&ns);
+	}
+}
+
+/* MPI_Wait, in naps. */
+static int wait_request(MPI_Request *request)
+{
+	long ns = MPI_NAP_MIN_NS;
+
+	for (;;) {
+		int done = 0;
+		if (MPI_Test(request, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS)
+			return -1;
+		if (done)
+			return 0;
+		nap(&ns);
+	}
+}
+
+/* MPI_Recv of count ints from rank 0, in naps. */
+static int wait_recv_ints(int *data, int count, int tag)
+{
+	MPI_Request request;
+
+	if (MPI_Irecv(data, count, MPI_INT, ROOT, tag, MPI_COMM_WORLD, &request) != MPI_SUCCESS)
+		return -1;
+	return wait_request(&request);
+}
+
+/* ---- the devices' threads, on every rank -------------------------------- */
+
+static int take_rank_piece(void *context, int device)
+{
+	struct mpi_job *j = context;
+	int piece;
+
+	if (j->rank == ROOT)
+		return central_take(j, device);
+	if (MPI_Send(&device, 1, MPI_INT, ROOT, TAG_TAKE, MPI_COMM_WORLD) != MPI_SUCCESS ||
+	    wait_recv_ints(&piece, 1, TAG_GIVE + device))
+		return -1;
+	pthread_mutex_lock(&j->lock);
+	int taken = piece >= 0 ? ++j->taken : j->taken;
+	pthread_mutex_unlock(&j->lock);
+	if (checks_rank_dies(j->rank, taken, piece < 0))
+		raise(SIGKILL); /* as a node that goes down */
+	return piece;
+}
+
+/* Sends a piece's pixels (a frame, or a band) to rank 0: the piece number,
+ * then the floats. */
+static int send_result(int piece, const float *rgb, size_t bytes, char *err, size_t err_size)
+{
+	char *message = bytes + sizeof(int) <= INT_MAX ? malloc(sizeof(int) + bytes) : NULL;
+	int status;
+
+	if (!message) {
+		snprintf(err, err_size,
+			 "cannot send a piece of %zu bytes to rank 0 (at most 2 GiB, and host "
+			 "memory for a copy)",
+			 bytes);
+		return -1;
+	}
+	memcpy(message, &piece, sizeof(int));
+	memcpy(message + sizeof(int), rgb, bytes);
+	status = MPI_Send(message, (int)(sizeof(int) + bytes), MPI_BYTE, ROOT, TAG_RESULT,
+			  MPI_COMM_WORLD);
+	free(message);
+	if (status != MPI_SUCCESS) {
+		snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)", status);
+		return -1;
+	}
+	return 0;
+}
+
+/* Rank 0: keeps a frame's pixels (malloc'd, taken) until every frame has
+ * arrived; nothing goes to the output folder before (frames.h). */
+static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_t err_size)
+{
+	pthread_mutex_lock(&j->lock);
+	int failed = frames_hold(&j->output, piece, rgb, err, err_size);
+	pthread_mutex_unlock(&j->lock);
+	return failed;
+}
+
+static int render_rank_piece(void *context, int device, int piece, struct piece_work *done,
+			     char *err, size_t err_size)
+{
+	struct mpi_job *j = context;
+	const struct render_settings *s = &j->run->settings;
+	struct render_result result;
+	int failed;
+
+	if (j->image)
+		return tiles_render_band(&j->tiles, device, piece, done, err, err_size);
+	if (frames_render_frame(j->run, &j->devs[device], piece, &result, err, err_size))
+		return -1;
+	if (j->rank == ROOT) {
+		failed = hold_frame(j, piece, result.rgb, err, err_size);
+		result.rgb = NULL; /* held, or freed */
+	} else {
+		failed = send_result(piece, result.rgb, image_float_bytes(s->width, s->height), err,
+				     err_size);
+	}
+	*done = frames_piece_work(s, &result);
+	render_result_free(&result);
+	return failed ? -1 : 0;
+}
+
+static void piece_failed(void *context, int device, const char *message)
+{
+	struct mpi_job *j = context;
+
+	j->device_failed[device] = 1;
+	if (j->rank == ROOT)
+		record_failure(j, ROOT, message);
+	else
+		MPI_Send(message, (int)strlen(message) + 1, MPI_CHAR, ROOT, TAG_FAIL,
+			 MPI_COMM_WORLD);
+}
+
+/* Image: opens the device's renderer once, before its first band. */
+static int open_rank_device(void *context, int device, char *err, size_t err_size)
+{
+	struct mpi_job *j = context;
+
+	return tiles_open(&j->tiles, device, err, err_size);
+}
+
+/* Rank 0: band b's rows, rgb, into the image. */
+static void place_band(struct mpi_job *j, int band, const float *rgb)
+{
+	struct rt_piece p = tiles_band(&j->run->settings, j->tiles.rows, band, 0, 1);
+
+	pthread_mutex_lock(&j->lock);
+	j->arrived[band]++;
+	pthread_mutex_unlock(&j->lock);
+	memcpy(j->run->result.rgb + 3 * (size_t)p.y0 * p.width, rgb,
+	       image_float_bytes(p.width, p.height));
+}
+
+/* Image: the device is done: reads it back once (checking its write counts
+ * under check_writes) and places or sends rank 0 the bands it rendered. */
+static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
+{
+	struct tiles_job *t = &j->tiles;
+
+	if (tiles_collect(t, device, err, err_size) ||
+	    (t->settings->check_writes && tiles_check_device(t, device, err, err_size)))
+		return -1;
+	for (int b = 0; b < t->bands; b++) {
+		if (t->owner[b] != device)
+			continue;
+		struct rt_piece p = tiles_band(t->settings, t->rows, b, 0, 1);
+		const float *rows = t->dev[device].result.rgb + 3 * (size_t)p.y0 * p.width;
+		if (j->rank == ROOT)
+			place_band(j, b, rows);
+		else if (send_result(b, rows, image_float_bytes(p.width, p.height), err, err_size))
+			return -1;
+	}
+	return 0;
+}
+
+/* Image: the device's bands to rank 0, or the failure. */
+static void finish_bands(struct mpi_job *j, int device)
+{
+	char err[MESSAGE_SIZE], message[MESSAGE_SIZE + 600];
+	const struct device *d = &j->devs[device];
+
+	if (j->device_failed[device] || send_bands(j, device, err, sizeof(err)) == 0)
+		return;
+	snprintf(message, sizeof(message), "device %d:%d (%s): %s", d->platform_index,
+		 d->device_index, d->name, err);
+	piece_failed(j, device, message);
+}
+
+/* A device is done: its bands (image), then, on ranks other than 0, what it
+ * did, for the summary. */
+static void device_done(void *context, int device)
+{
+	struct mpi_job *j = context;
+	struct device_report r;
+
+	if (j->image)
+		finish_bands(j, device);
+	if (j->rank == ROOT)
+		return;
+	memset(&r, 0, sizeof(r));
+	r.device = device;
+	r.platform_index = j->devs[device].platform_index;
+	r.device_index = j->devs[device].device_index;
+	snprintf(r.name, sizeof(r.name), "%s", j->devs[device].name);
+	snprintf(r.platform_name, sizeof(r.platform_name), "%s", j->devs[device].platform_name);
+	r.work = j->work[device];
+	MPI_Send(&r, (int)sizeof(r), MPI_BYTE, ROOT, TAG_DONE, MPI_COMM_WORLD);
+}
+
+/* ---- rank 0's server: the other ranks' requests, pixels and reports ----- */
+
+/* The pixel samples of piece: a whole frame, or a band. */
+static double piece_work(const struct mpi_job *j, int piece)
+{
+	const struct render_settings *s = &j->run->settings;
+
+	if (!j->image)
+		return launch_image_work(s);
+	struct rt_piece p = tiles_band(s, j->tiles.rows, piece, 0, 1);
+	return (double)p.width * p.height * p.samples;
+}
+
+/* A device of another rank asks for a piece: its previous one is done,
+ * which the progress line counts (rank 0's own devices add theirs as they
+ * render). */
+static void serve_take(struct mpi_job *j, int source)
+{
+	int device, piece;
+
+	MPI_Recv(&device, 1, MPI_INT, source, TAG_TAKE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+	int g = device >= 0 && device < j->total ? j->first[source] + device : -1;
+	piece = g >= 0 ? central_take(j, g) : -1;
+	MPI_Send(&piece, 1, MPI_INT, source, TAG_GIVE + device, MPI_COMM_WORLD);
+	if (g < 0)
+		return;
+	if (j->current[g] >= 0)
+		progress_add(NULL, piece_work(j, j->current[g]));
+	j->current[g] = piece;
+	progress_draw();
+}
+
+/* The bytes of piece's pixels: a whole frame, or a band. */
+static size_t piece_bytes(const struct mpi_job *j, int piece)
+{
+	const struct render_settings *s = &j->run->settings;
+	struct rt_piece p;
+
+	if (!j->image)
+		return image_float_bytes(s->width, s->height);
+	p = tiles_band(s, j->tiles.rows, piece, 0, 1);
+	return image_float_bytes(p.width, p.height);
+}
+
+static void serve_result(struct mpi_job *j, const MPI_Status *status)
+{
+	char *message, err[MESSAGE_SIZE];
+	int bytes = 0, piece = -1;
+
+	MPI_Get_count(status, MPI_BYTE, &bytes);
+	message = malloc(bytes > 0 ? (size_t)bytes : 1);
+	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
+		 MPI_STATUS_IGNORE);
+	if (message && (size_t)bytes >= sizeof(int))
+		memcpy(&piece, message, sizeof(int));
+	const float *rgb = (const float *)(message + sizeof(int));
+	if (piece < 0 || piece >= piece_count(j)) {
+		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
+	} else if ((size_t)bytes != sizeof(int) + piece_bytes(j, piece)) {
+		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
+	} else if (j->image) {
+		place_band(j, piece, rgb);
+	} else {
+		/* The frame's floats to the front: the buffer becomes the frame. */
+		memmove(message, rgb, (size_t)bytes - sizeof(int));
+		if (hold_frame(j, piece, (float *)message, err, sizeof(err)))
+			record_failure(j, status->MPI_SOURCE, err);
+		return;
+	}
+	free(message);
+}
+
+static void serve_fail(struct mpi_job *j, const MPI_Status *status)
+{
+	char message[MESSAGE_SIZE];
+	int length = 0;
+
+	MPI_Get_count(status, MPI_CHAR, &length);
+	char *text = malloc(length > 0 ? (size_t)length : 1);
+	MPI_Recv(text, length, MPI_CHAR, status->MPI_SOURCE, TAG_FAIL, MPI_COMM_WORLD,
+		 MPI_STATUS_IGNORE);
+	snprintf(message, sizeof(message), "%.*s", text ? length : 0, text ? text : "");
+	free(text);
+	record_failure(j, status->MPI_SOURCE, message);
+}
+
+/* Returns 1 when a device's report arrived. */
+static int serve_done(struct mpi_job *j, int source)
+{
+	struct device_report r;
+
+	MPI_Recv(&r, (int)sizeof(r), MPI_BYTE, source, TAG_DONE, MPI_COMM_WORLD, MPI_STATUS_IGNORE);
+	int g = j->first[source] + r.device;
+	if (r.device < 0 || g >= j->total || (source + 1 < j->size && g >= j->first[source + 1]))
+		return 1;
+	struct device *d = &j->all_devs[g];
+	d->platform_index = r.platform_index;
+	d->device_index = r.device_index;
+	snprintf(d->name, sizeof(d->name), "%s", r.name);
+	snprintf(d->platform_name, sizeof(d->platform_name), "%s", r.platform_name);
+	j->all_work[g] = r.work;
+	return 1;
+}
+
+/* Until every device of the other ranks has reported. */
+static void *serve(void *context)
+{
+	struct mpi_job *j = context;
+	int remaining = j->total - j->count;
+
+	while (remaining > 0) {
+		MPI_Status status;
+		if (wait_probe(&status)) {
+			record_failure(j, ROOT, "waiting for the other ranks failed");
+			MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+		}
+		switch (status.MPI_TAG) {
+		case TAG_TAKE:
+			serve_take(j, status.MPI_SOURCE);
+			break;
+		case TAG_RESULT:
+			serve_result(j, &status);
+			break;
+		case TAG_FAIL:
+			serve_fail(j, &status);
+			break;
+		case TAG_DONE:
+			remaining -= serve_done(j, status.MPI_SOURCE);
+			break;
+		}
+	}
+	return NULL;
+}
+
+/* ---- start, run, finish -------------------------------------------------- */
+
+/* What every rank must share to render one job: the scene's digest and
+ * every setting that changes the image or how it is cut into pieces, as
+ * numbers, so that a rank that differs is told which setting first. Ranks
+ * that disagreed rendered an image spliced from two jobs (or failed on a
+ * piece of the wrong size). The devices may differ from rank to rank. */
+enum job_setting {
+	JOB_WIDTH,
+	JOB_HEIGHT,
+	JOB_SAMPLES,
+	JOB_DEPTH,
+	JOB_FRAMES_GIVEN,
+	JOB_FRAME_FIRST,
+	JOB_FRAME_LAST,
+	JOB_PIECE_ROWS,
+	JOB_SPLIT_STATIC,
+	JOB_KERNEL,
+	JOB_WORKGROUP_X,
+	JOB_WORKGROUP_Y,
+	JOB_GROUPS_X,
+	JOB_GROUPS_Y,
+	JOB_BATCH,
+	JOB_ACCEL,
+	JOB_SETTINGS
+};
+
+#define JOB_SOURCE_SIZE 256
+
+struct job_record {
+	unsigned long long scene_digest;
+	long long setting[JOB_SETTINGS];
+	char source[JOB_SOURCE_SIZE]; /* the scene's file name, for the message */
+};
+
+static void describe_job(const struct mpi_job *j, struct job_record *r)
+{
+	const struct render_settings *s = &j->run->settings;
+	const struct options *opt = j->run->opt;
+	long long *v = r->setting;
+
+	memset(r, 0, sizeof(*r));
+	r->scene_digest = scene_digest(j->run->scene);
+	snprintf(r->source, sizeof(r->source), "%s", j->run->scene->source);
+	v[JOB_WIDTH] = s->width;
+	v[JOB_HEIGHT] = s->height;
+	v[JOB_SAMPLES] = s->samples;
+	v[JOB_DEPTH] = s->max_depth;
+	v[JOB_FRAMES_GIVEN] = opt->frames_given;
+	v[JOB_FRAME_FIRST] = opt->frames_given ? opt->frames[0] : 0;
+	v[JOB_FRAME_LAST] = opt->frames_given ? opt->frames[1] : 0;
+	v[JOB_PIECE_ROWS] = opt->piece_rows;
+	v[JOB_SPLIT_STATIC] = opt->split_static;
+	v[JOB_KERNEL] = s->kernel ? s->kernel - render_kernels : -1;
+	v[JOB_WORKGROUP_X] = s->workgroup[0];
+	v[JOB_WORKGROUP_Y] = s->workgroup[1];
+	v[JOB_GROUPS_X] = s->groups[0];
+	v[JOB_GROUPS_Y] = s->groups[1];
+	v[JOB_BATCH] = s->batch;
+	v[JOB_ACCEL] = s->accel;
+}
+
+/* The settings as the options name them, in the order a mismatch is
+ * looked for: each covers count numbers from first. */
+static const struct {
+	enum job_setting first;
+	int count;
+} job_options[] = {
+	{JOB_WIDTH, 2},	     {JOB_SAMPLES, 1},	    {JOB_DEPTH, 1},  {JOB_FRAMES_GIVEN, 3},
+	{JOB_PIECE_ROWS, 1}, {JOB_SPLIT_STATIC, 1}, {JOB_KERNEL, 1}, {JOB_WORKGROUP_X, 2},
+	{JOB_GROUPS_X, 2},   {JOB_BATCH, 1},	    {JOB_ACCEL, 1},
+};
+
+/* One setting of a record as an option would give it ("--spp 4"). */
+static void show_setting(const long long *v, enum job_setting first, char *out, size_t size)
+{
+	switch (first) {
+	case JOB_WIDTH:
+		snprintf(out, size, "--size %lldx%lld", v[JOB_WIDTH], v[JOB_HEIGHT]);
+		break;
+	case JOB_SAMPLES:
+		snprintf(out, size, "--spp %lld", v[JOB_SAMPLES]);
+		break;
+	case JOB_DEPTH:
+		snprintf(out, size, "--depth %lld", v[JOB_DEPTH]);
+		break;
+	case JOB_FRAMES_GIVEN:
+		if (v[JOB_FRAMES_GIVEN])
+			snprintf(out, size, "--frames %lld:%lld", v[JOB_FRAME_FIRST],
+				 v[JOB_FRAME_LAST]);
+		else
+			snprintf(out, size, "one image (no --frames)");
+		break;
+	case JOB_PIECE_ROWS:
+		if (v[JOB_PIECE_ROWS])
+			snprintf(out, size, "--piece-rows %lld", v[JOB_PIECE_ROWS]);
+		else
+			snprintf(out, size, "no --piece-rows");
+		break;
+	case JOB_SPLIT_STATIC:
+		snprintf(out, size, "--split %s", v[JOB_SPLIT_STATIC] ? "static" : "dynamic");
+		break;
+	case JOB_KERNEL:
+		snprintf(out, size, "-k %s",
+			 v[JOB_KERNEL] >= 0 && v[JOB_KERNEL] < render_kernel_count
+				 ? render_kernels[v[JOB_KERNEL]].name
+				 : "?");
+		break;
+	case JOB_WORKGROUP_X:
+		snprintf(out, size, "-w %lldx%lld", v[JOB_WORKGROUP_X], v[JOB_WORKGROUP_Y]);
+		break;
+	case JOB_GROUPS_X:
+		snprintf(out, size, "--groups %lldx%lld", v[JOB_GROUPS_X], v[JOB_GROUPS_Y]);
+		break;
+	case JOB_BATCH:
+		snprintf(out, size, "--batch %lld", v[JOB_BATCH]);
+		break;
+	case JOB_ACCEL:
+		snprintf(out, size, "--accel %s", v[JOB_ACCEL] ? "bvh" : "none");
+		break;
+	default:
+		snprintf(out, size, "setting %d", (int)first);
+	}
+}
+
+/* Writes into message what rank's record differs in from rank 0's, or
+ * returns 0 when it renders the same job. */
+static int job_differs(const struct job_record *root, const struct job_record *r, int rank,
+		       char *message, size_t size)
+{
+	char mine[64], theirs[64], root_source[JOB_SOURCE_SIZE + 16];
+
+	if (r->scene_digest != root->scene_digest) {
+		snprintf(root_source, sizeof(root_source), "%s", quote_text(root->source));
+		snprintf(message, size,
+			 "rank %d renders another job: the scene differs (file %s on rank 0, %s on "
+			 "rank %d%s)",
+			 rank, root_source, quote_text(r->source), rank,
+			 strcmp(root->source, r->source) ? "" : ", with other contents");
+		return 1;
+	}
+	for (size_t k = 0; k < sizeof(job_options) / sizeof(job_options[0]); k++) {
+		enum job_setting first = job_options[k].first;
+		if (memcmp(&r->setting[first], &root->setting[first],
+			   (size_t)job_options[k].count * sizeof(long long)) == 0)
+			continue;
+		show_setting(r->setting, first, mine, sizeof(mine));
+		show_setting(root->setting, first, theirs, sizeof(theirs));
+		snprintf(message, size, "rank %d renders another job: %s against rank 0's %s", rank,
+			 mine, theirs);
+		return 1;
+	}
+	return 0;
+}
+
+/* Every rank learns whether all render the same job; rank 0 names the first
+ * setting in which the lowest differing rank differs. Returns 0 when all
+ * agree. */
+static int agree_on_job(struct mpi_job *j)
+{
+	struct job_record mine, *all = calloc((size_t)j->size, sizeof(*all));
+	char message[MESSAGE_SIZE];
+
+	describe_job(j, &mine);
+	if (!all || MPI_Allgather(&mine, (int)sizeof(mine), MPI_BYTE, all, (int)sizeof(mine),
+				  MPI_BYTE, MPI_COMM_WORLD) != MPI_SUCCESS) {
+		fprintf(stderr, "rtcl: rank %d: --mpi: the ranks could not compare their jobs\n",
+			j->rank);
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	for (int r = 1; r < j->size; r++) {
+		if (!job_differs(&all[0], &all[r], r, message, sizeof(message)))
+			continue;
+		if (j->rank == ROOT)
+			fprintf(stderr, "rtcl: %s\n", message);
+		free(all);
+		return -1;
+	}
+	free(all);
+	return 0;
+}
+
+/* Opens this rank's devices; rank 0 first checks and prepares the outputs.
+ * Returns 0, OUTPUTS_CLASH, or -1 with one message in err. */
+static int start_rank(struct mpi_job *j, char *err, size_t err_size)
+{
+	const struct options *opt = j->run->opt;
+	int checked = j->rank == ROOT ? outputs_check(opt, j->run->scene, err, err_size) : 0;
+
+	if (checked)
+		return checked;
+	if (j->rank == ROOT && !j->image &&
+	    (frames_check_memory(opt, &j->run->settings, err, err_size) ||
+	     frames_output_open(&j->output, opt, err, err_size)))
+		return -1;
+	if (opt->devices_given)
+		return devices_open(&opt->devices, opt->device_kind, j->devs, &j->count, err,
+				    err_size);
+	j->count = 1;
+	if (device_open_kind(&j->devs[0], opt->platform, opt->device, opt->device_kind, err,
+			     err_size) == 0)
+		return 0;
+	j->count = 0;
+	return -1;
+}
+
+/* Rank 0: where each rank's devices fall among all, and the static split. */
+static int plan_devices(struct mpi_job *j, const int *counts)
+{
+	j->first = calloc((size_t)j->size + 1, sizeof(int));
+	for (int r = 0; j->first && r < j->size; r++)
+		j->first[r + 1] = j->first[r] + counts[r];
+	j->total = j->first ? j->first[j->size] : 0;
+	j->rank_of = calloc((size_t)j->total, sizeof(int));
+	j->next_static = calloc((size_t)j->total, sizeof(int));
+	j->end_static = calloc((size_t)j->total, sizeof(int));
+	j->all_devs = calloc((size_t)j->total, sizeof(struct device));
+	j->all_work = calloc((size_t)j->total, sizeof(struct device_work));
+	j->current = malloc((size_t)j->total * sizeof(int));
+	if (!j->rank_of || !j->next_static || !j->end_static || !j->all_devs || !j->all_work ||
+	    !j->current)
+		return -1;
+	for (int g = 0; g < j->total; g++)
+		j->current[g] = -1;
+	for (int r = 0; r < j->size; r++)
+		for (int g = j->first[r]; g < j->first[r + 1]; g++)
+			j->rank_of[g] = r;
+	for (int g = 0; g < j->total; g++) {
+		j->next_static[g] = multidev_static_first(g, j->total, piece_count(j));
+		j->end_static[g] = multidev_static_first(g + 1, j->total, piece_count(j));
+	}
+	return 0;
+}
+
+/* The pieces, once every rank's device count is known: the frames, or the
+ * image's bands over all devices (total). */
+static int choose_pieces(struct mpi_job *j, int total)
+{
+	struct run *run = j->run;
+	const struct render_settings *s = &run->settings;
+	char err[MESSAGE_SIZE];
+
+	if (!j->image) {
+		j->pieces = run->opt->frames[1] - run->opt->frames[0] + 1;
+		return 0;
+	}
+	if (tiles_job_init(&j->tiles, run->scene, s,
+			   tiles_band_rows(s, run->opt->piece_rows, total), 0, j->devs, j->count,
+			   err, sizeof(err)))
+		return -1;
+	j->pieces = j->tiles.bands;
+	if (j->rank != ROOT)
+		return 0;
+	j->arrived = calloc((size_t)j->pieces, sizeof(int));
+	run->result.rgb = malloc(image_float_bytes(s->width, s->height));
+	return j->arrived && run->result.rgb ? 0 : -1;
+}
+
+/* Every rank learns whether all started; the lowest rank that did not says
+ * why. failed: 0, -1, or OUTPUTS_CLASH (a usage error). Returns 0 when all
+ * started, else the exit status of the lowest rank's failure. */
+static int agree_on_start(struct mpi_job *j, int failed, const char *err)
+{
+	int mine = failed == OUTPUTS_CLASH ? -2 : failed ? -1 : j->count, lowest = -1;
+	int *counts = malloc((size_t)j->size * sizeof(int));
+
+	if (!counts ||
+	    MPI_Allgather(&mine, 1, MPI_INT, counts, 1, MPI_INT, MPI_COMM_WORLD) != MPI_SUCCESS) {
+		fprintf(stderr,
+			"rtcl: rank %d: --mpi: the ranks could not exchange their "
+			"device counts\n",
+			j->rank);
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	for (int r = j->size - 1; r >= 0; r--)
+		if (counts[r] < 0)
+			lowest = r;
+	if (lowest == j->rank)
+		fprintf(stderr, "rtcl: rank %d: %s\n", j->rank, err);
+	int total = 0;
+	for (int r = 0; r < j->size; r++)
+		total += counts[r];
+	if (lowest < 0 &&
+	    (choose_pieces(j, total) || (j->rank == ROOT && plan_devices(j, counts)))) {
+		fprintf(stderr, "rtcl: out of host memory for the device plan\n");
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	int status = lowest < 0 ? 0 : counts[lowest] == -2 ? EXIT_USAGE : EXIT_FAILED;
+	free(counts);
+	return status;
+}
+
+/* Rank 0, image: every band arrived once, then the result the outputs and
+ * the summary read. Returns 0, or -1 with the failure recorded. */
+static int assemble_image(struct mpi_job *j, double wall_ms)
+{
+	struct run *run = j->run;
+	struct render_result *res = &run->result;
+	char message[256];
+
+	for (int b = 0; b < j->pieces; b++) {
+		if (j->arrived[b] != 1) {
+			snprintf(message, sizeof(message), "band %d of the image arrived %d times",
+				 b, j->arrived[b]);
+			record_failure(j, ROOT, message);
+			return -1;
+		}
+	}
+	res->kernel_ms = malloc(sizeof(double));
+	if (!res->kernel_ms) {
+		record_failure(j, ROOT, "out of host memory");
+		return -1;
+	}
+	res->kernel_ms[0] = res->kernel_ms_median = res->kernel_ms_min = res->kernel_ms_max =
+		wall_ms;
+	res->repeat = res->launches = 1;
+	res->passes = 1;
+	tiles_copy_facts(&j->tiles.dev[0].result, res);
+	snprintf(run->device_name, sizeof(run->device_name), "%d devices over %d ranks, first %s",
+		 j->total, j->size, j->devs[0].name);
+	run->multidevice =
+		devstats_json(j->all_devs, j->rank_of, j->all_work, j->total,
+			      run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC, "band");
+	if (run->multidevice) {
+		json_object_set_new(run->multidevice, "band_rows", json_integer(j->tiles.rows));
+		json_object_set_new(run->multidevice, "bands", json_integer(j->pieces));
+		json_object_set_new(run->multidevice, "ranks", json_integer(j->size));
+	}
+	return 0;
+}
+
+/* Rank 0, image: writes the outputs and prints the summary. */
+static int write_job_image(struct mpi_job *j, char *err, size_t err_size)
+{
+	struct run *run = j->run;
+
+	run->write_start = timing_now();
+	if (outputs_write(run, err, err_size))
+		return -1;
+	if (run->opt->quiet)
+		return 0;
+	stats_print_summary(run);
+	devstats_print(stdout, j->all_devs, j->rank_of, j->all_work, j->total, "band");
+	return 0;
+}
+
+/* Rank 0 after every device is done: every piece arrived once, or the
+ * failure, printed. Returns the exit status. */
+static int finish_root(struct mpi_job *j)
+{
+	char err[MESSAGE_SIZE];
+
+	for (int k = 0; k < j->count; k++) {
+		j->all_devs[k] = j->devs[k];
+		j->all_work[k] = j->work[k];
+	}
+	if (!j->failed && j->image)
+		assemble_image(j, j->wall_ms);
+	else if (!j->failed && frames_check_held(&j->output, err, sizeof(err)))
+		record_failure(j, ROOT, err);
+	if (!j->failed)
+		return 0;
+	fprintf(stderr, "rtcl: %s\n", j->message);
+	return EXIT_FAILED;
+}
+
+/* Rank 0, after MPI_Finalize (mpi_render): the outputs and the summary.
+ * Returns the exit status. */
+static int write_root(struct mpi_job *j)
+{
+	struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total, j->wall_ms};
+	char err[MESSAGE_SIZE];
+	int failed = j->image ? write_job_image(j, err, sizeof(err))
+			      : frames_write_held(j->run, &j->output, &report, err, sizeof(err));
+
+	if (!failed)
+		return 0;
+	fprintf(stderr, "rtcl: rank 0, %s\n", err);
+	return EXIT_FAILED;
+}
+
+/* Every rank's devices render; rank 0 serves the others meanwhile. Every
+ * rank learns whether the render succeeded. Returns the exit status. */
+static int render_all(struct mpi_job *j)
+{
+	struct multidev_job job = {.piece_count = piece_count(j),
+				   .split =
+					   j->run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+				   .begin = j->image ? open_rank_device : NULL,
+				   .render_piece = render_rank_piece,
+				   .end = device_done,
+				   .take_piece = take_rank_piece,
+				   .failed = piece_failed,
+				   .context = j};
+	char err[MESSAGE_SIZE];
+	pthread_t server;
+	int status = 0;
+	double start = timing_now();
+
+	if (j->rank == ROOT) {
+		char ranks[32];
+		snprintf(ranks, sizeof(ranks), "%d rank%s", j->size, j->size == 1 ? "" : "s");
+		launch_progress_begin(&j->run->settings, j->image ? 1 : piece_count(j), ranks);
+	}
+	if (j->rank == ROOT && pthread_create(&server, NULL, serve, j) != 0) {
+		fprintf(stderr, "rtcl: cannot start rank 0's server thread\n");
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
+	if (j->rank == ROOT) {
+		pthread_join(server, NULL);
+		progress_end();
+		j->wall_ms = (timing_now() - start) * 1e3;
+		status = finish_root(j);
+	}
+	/* The other ranks wait here while rank 0's own devices finish. */
+	MPI_Request request;
+	if (MPI_Ibcast(&status, 1, MPI_INT, ROOT, MPI_COMM_WORLD, &request) != MPI_SUCCESS ||
+	    wait_request(&request))
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	return status;
+}
+
+static void free_job(struct mpi_job *j)
+{
+	tiles_job_free(&j->tiles); /* the renderers, before their devices */
+	devices_close(j->devs, j->count);
+	if (j->rank == ROOT && !j->image)
+		frames_output_close(&j->output);
+	free(j->arrived);
+	free(j->first);
+	free(j->rank_of);
+	free(j->next_static);
+	free(j->end_static);
+	free(j->current);
+	free(j->all_devs);
+	free(j->all_work);
+	pthread_mutex_destroy(&j->lock);
+}
+
+int mpi_render_available(void)
+{
+	return 1;
+}
+
+/* Either kind of job: frames, or one image in bands. */
+static int mpi_render(struct run *run, int image)
+{
+	static struct mpi_job j;
+	char err[MESSAGE_SIZE] = "";
+	int provided = 0, status = EXIT_FAILED;
+
+	if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
+		fprintf(stderr, "rtcl: --mpi: MPI_Init_thread failed (run rtcl under mpirun)\n");
+		return EXIT_FAILED;
+	}
+	MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+	memset(&j, 0, sizeof(j));
+	pthread_mutex_init(&j.lock, NULL);
+	j.run = run;
+	j.image = image;
+	run->settings.check_writes |= image && checks_count_writes();
+	MPI_Comm_rank(MPI_COMM_WORLD, &j.rank);
+	MPI_Comm_size(MPI_COMM_WORLD, &j.size);
+	/* Rank 0 shows the line for every rank; render() only adds to it. */
+	run->settings.progress = 0;
+	if (j.rank != ROOT)
+		progress_init(0);
+	interrupt_set_outcome("no output written (under --mpi, mpirun ends every rank when one "
+			      "dies or is interrupted: see its report)");
+	if (provided < MPI_THREAD_MULTIPLE) {
+		snprintf(err, sizeof(err),
+			 "--mpi: this MPI library does not give threads MPI_THREAD_MULTIPLE");
+		agree_on_start(&j, 1, err);
+	} else if (agree_on_job(&j) == 0) {
+		status = agree_on_start(&j, start_rank(&j, err, sizeof(err)), err);
+		if (status == 0)
+			status = render_all(&j);
+	}
+	/* Rank 0 writes once every rank has finalised. A rank that dies makes
+	 * Open MPI's daemon send the others SIGCONT, SIGTERM after
+	 * odls_base_sigkill_timeout (1 s), then SIGKILL after as long again; but
+	 * that sleep(1) returns 0 when the SIGCHLD of a rank that exits on the
+	 * SIGTERM interrupts it, so SIGKILL follows in about 5 ms (strace of
+	 * Open MPI 4.1.4's mpirun), and a busy rank 0 is killed before its
+	 * interrupt thread can remove its staged files (left behind before this
+	 * design, which staged each frame as it arrived). Hence: until here,
+	 * rank 0 has created nothing
+	 * in the output folder (the frames, or the image, are in memory), so a
+	 * rank that dies before it leaves nothing; from here no other rank is
+	 * left to die, and the writing (staging, then one commit) takes about
+	 * 10-90 ms a frame (README). */
+	MPI_Finalize();
+	if (j.rank != ROOT && status == 0)
+		interrupt_set_outcome(
+			"this rank's pieces were delivered; rank 0 writes the outputs");
+	if (j.rank == ROOT && status == 0) {
+		interrupt_watch_mpirun();
+		status = write_root(&j);
+	}
+	free_job(&j);
+	return status;
+}
+
+int mpi_render_frames(struct run *run)
+{
+	return mpi_render(run, 0);
+}
+
+int mpi_render_image(struct run *run)
+{
+	return mpi_render(run, 1);
+}

@@ -1,0 +1,90 @@
+/* Reading a mesh file (any format the Open Asset Import Library reads: OBJ,
+ * PLY, STL, glTF 2.0, ...) into one flat list of triangles, with the file's
+ * own node transforms applied. Placement, normals and the checks of
+ * docs/SCENE.md are the scene loader's (host/scene/scene_mesh.c).
+ *
+ * Assimp runs in a helper program of its own, rtcl-meshread (host/meshread/meshread.c),
+ * which rtcl starts for each mesh file and which sends the mesh back through a
+ * pipe (host/scene/mesh_spawn.c): Assimp 5.2 calls abort() on some malformed files
+ * (found by the mesh fuzzer, test/fuzz_mesh.c), and that must end the helper,
+ * never rtcl and its user's render. rtcl itself does not link Assimp. */
+#ifndef RTCL_MESH_H
+#define RTCL_MESH_H
+
+#include <stddef.h>
+
+struct mesh_data {
+	double *positions; /* 3 per vertex */
+	double *normals;   /* 3 per vertex, or NULL where the file has none */
+	size_t *indices;   /* 3 per triangle, into the vertices */
+	size_t vertex_count, triangle_count;
+};
+
+/* What mesh_import returns besides 0. */
+enum {
+	MESH_REFUSED = -1,	  /* the file's fault: unreadable, malformed, or the
+				     importer died on it */
+	MESH_IMPORTER_FAILED = -2 /* rtcl's: the helper is missing, could not start,
+				     failed a sanitizer check or answered nonsense */
+};
+
+/* Reads `path` through the helper program. Returns 0 (triangle_count may be
+ * 0: points and lines are left out), or MESH_REFUSED / MESH_IMPORTER_FAILED
+ * with why in reason[reason_size]. */
+int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size);
+
+/* How many mesh_import calls of this process returned MESH_IMPORTER_FAILED:
+ * the fuzzers and the regression test check that none did, whatever the
+ * message (which quotes the scene's words). */
+unsigned long mesh_importer_failures(void);
+
+/* The most vertices of a polygon in a mesh file (OBJ, PLY), which the
+ * importer triangulates in time that grows with their square. */
+#define MESH_MAX_POLYGON_VERTICES 4096
+
+/* The helper's side: Assimp in this process. Returns 0, or -1 with the
+ * importer's words in reason. (host/meshread/meshread_assimp.c, linked into rtcl-meshread only.) */
+int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size);
+
+/* The helper's answer on fd: the mesh (mesh != NULL) or the reason it was
+ * refused. Returns 0, or -1 when the pipe broke. */
+int mesh_send(int fd, const struct mesh_data *mesh, const char *reason);
+
+void mesh_data_free(struct mesh_data *mesh);
+
+/* The limits on each import (docs/SCENE.md, "Limits of a mesh import"):
+ * the helper is killed when it has not answered after `seconds`, and runs
+ * with an address space of `memory_mib` MiB. 0: no limit. */
+struct mesh_limits {
+	unsigned long seconds;
+	unsigned long memory_mib;
+};
+#define MESH_TIME_LIMIT_DEFAULT 60 /* seconds */
+/* The memory limit's default: half the machine's physical memory. */
+#define MESH_MEMORY_LIMIT_DEFAULT_SHARE 2
+#define MESH_TIME_LIMIT_MAX 604800	 /* a week */
+#define MESH_MEMORY_LIMIT_MAX 1073741824 /* MiB: a pebibyte */
+#define MESH_TIME_LIMIT_ENV "RTCL_MESH_TIME_LIMIT"
+#define MESH_MEMORY_LIMIT_ENV "RTCL_MESH_MEMORY_LIMIT"
+
+/* The limits of later mesh_import calls, instead of the defaults. */
+void mesh_set_limits(const struct mesh_limits *limits);
+
+/* The limits in force (the defaults worked out, where not set). */
+struct mesh_limits mesh_get_limits(void);
+
+/* What an import that ran out of its memory is refused with (%lu: the
+ * limit in MiB). */
+#define MESH_MEMORY_MESSAGE                                                                        \
+	"the import needed more memory than its limit of %lu MiB (--mesh-memory-limit "            \
+	"or " MESH_MEMORY_LIMIT_ENV ")"
+
+/* What the helper prints on stderr when it crashes near its memory limit. */
+#define MESH_MEMORY_NOTE "rtcl-meshread: crashed near its memory limit"
+
+/* The environment variable that names the helper program, overriding where
+ * rtcl looks for it (host/base/libdir.h). */
+#define MESH_HELPER_ENV "RTCL_MESHREAD"
+#define MESH_HELPER_NAME "rtcl-meshread"
+
+#endif

@@ -1,0 +1,505 @@
+/* mesh_import (mesh.h): the mesh import helper, rtcl-meshread, started for
+ * each mesh file with posix_spawn, answers through a pipe: a header, then
+ * the arrays as they are. A helper that dies (Assimp's abort() on a malformed
+ * file) or answers nonsense costs a message, never rtcl.
+ *
+ * posix_spawn, not fork: rtcl has threads by the time it loads a scene (the
+ * one that takes signals, interrupt.h), and a forked child of a threaded
+ * process may deadlock on a lock another thread held (a fork-based version
+ * hung once under AddressSanitizer); a spawned program starts afresh. */
+#define _GNU_SOURCE /* strsignal */
+#include "scene/mesh.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <poll.h>
+#include <signal.h>
+#include <spawn.h>
+#include <limits.h>
+#include <stdint.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "base/libdir.h"
+
+#ifndef PATH_MAX
+#define PATH_MAX 4096
+#endif
+
+extern char **environ;
+
+/* The header of the helper's answer: the import's outcome and the arrays'
+ * sizes, then (ok) the arrays or (!ok) reason_length bytes of reason. */
+struct reply {
+	uint32_t magic, ok, has_normals, reason_length;
+	uint64_t vertex_count, triangle_count;
+};
+#define REPLY_MAGIC 0x6873656du /* "mesh" */
+#define REASON_MAX 1024
+
+static int write_all(int fd, const void *data, size_t size)
+{
+	const char *p = data;
+
+	while (size > 0) {
+		ssize_t n = write(fd, p, size);
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n <= 0)
+			return -1;
+		p += n;
+		size -= (size_t)n;
+	}
+	return 0;
+}
+
+/* When the helper's answer must be in: CLOCK_MONOTONIC seconds, or 0 for
+ * no limit. */
+static double deadline;
+
+static double now(void)
+{
+	struct timespec t;
+
+	clock_gettime(CLOCK_MONOTONIC, &t);
+	return (double)t.tv_sec + t.tv_nsec * 1e-9;
+}
+
+/* Outcomes of read_all besides 0. */
+#define ENDED (-1)    /* the pipe ended or failed */
+#define TOO_LATE (-2) /* the deadline passed */
+
+/* Reads size bytes from fd, waiting no later than the deadline. */
+static int read_all(int fd, void *data, size_t size)
+{
+	char *p = data;
+
+	while (size > 0) {
+		if (deadline > 0) {
+			double left = deadline - now();
+			struct pollfd pfd = {.fd = fd, .events = POLLIN};
+			int ready;
+
+			if (left <= 0)
+				return TOO_LATE;
+			ready = poll(&pfd, 1, left > 1e6 ? 1000000000 : (int)(left * 1000) + 1);
+			if (ready < 0 && errno == EINTR)
+				continue;
+			if (ready == 0)
+				continue; /* the loop sees whether the deadline passed */
+			if (ready < 0)
+				return ENDED;
+		}
+		ssize_t n = read(fd, p, size);
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n <= 0)
+			return ENDED;
+		p += n;
+		size -= (size_t)n;
+	}
+	return 0;
+}
+
+int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
+{
+	struct reply r = {.magic = REPLY_MAGIC};
+
+	if (!mesh) {
+		size_t n = strlen(reason);
+		r.reason_length = n < REASON_MAX ? (uint32_t)n : REASON_MAX;
+		return write_all(fd, &r, sizeof(r)) || write_all(fd, reason, r.reason_length) ? -1
+											      : 0;
+	}
+	r.ok = 1;
+	r.has_normals = mesh->normals != NULL;
+	r.vertex_count = mesh->vertex_count;
+	r.triangle_count = mesh->triangle_count;
+	if (write_all(fd, &r, sizeof(r)) ||
+	    write_all(fd, mesh->positions, 3 * mesh->vertex_count * sizeof(double)) ||
+	    (mesh->normals &&
+	     write_all(fd, mesh->normals, 3 * mesh->vertex_count * sizeof(double))) ||
+	    write_all(fd, mesh->indices, 3 * mesh->triangle_count * sizeof(size_t)))
+		return -1;
+	return 0;
+}
+
+void mesh_data_free(struct mesh_data *mesh)
+{
+	free(mesh->positions);
+	free(mesh->normals);
+	free(mesh->indices);
+	memset(mesh, 0, sizeof(*mesh));
+}
+
+/* Outcomes of receive() besides 0 and MESH_REFUSED. */
+#define BROKE_OFF (-10)	    /* the pipe ended early: the helper died */
+#define NONSENSE (-11)	    /* an answer no helper of this rtcl sends */
+#define OUT_OF_MEMORY (-12) /* reason says for what */
+#define TIMED_OUT (-13)	    /* no answer within the time limit */
+
+/* An array of count items of item_size bytes: NULL for an impossible size
+ * (counts from the pipe are not trusted). */
+static void *alloc_array(uint64_t count, size_t item_size)
+{
+	if (count > SIZE_MAX / item_size)
+		return NULL;
+	return malloc(count ? (size_t)count * item_size : 1);
+}
+
+/* The answer on fd, into *out (ok) or reason (refused). */
+static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_size)
+{
+	struct reply r;
+
+	int got = read_all(fd, &r, sizeof(r));
+
+	if (got)
+		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
+	if (r.magic != REPLY_MAGIC)
+		return NONSENSE;
+	if (!r.ok) {
+		char text[REASON_MAX + 1];
+		if (r.reason_length > REASON_MAX)
+			return NONSENSE;
+		got = read_all(fd, text, r.reason_length);
+		if (got)
+			return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
+		text[r.reason_length] = '\0';
+		snprintf(reason, reason_size, "%s", text);
+		return MESH_REFUSED;
+	}
+	out->positions = alloc_array(r.vertex_count, 3 * sizeof(double));
+	out->normals = r.has_normals ? alloc_array(r.vertex_count, 3 * sizeof(double)) : NULL;
+	out->indices = alloc_array(r.triangle_count, 3 * sizeof(size_t));
+	if (!out->positions || (r.has_normals && !out->normals) || !out->indices) {
+		snprintf(reason, reason_size, "out of memory for %llu triangles",
+			 (unsigned long long)r.triangle_count);
+		return OUT_OF_MEMORY;
+	}
+	out->vertex_count = (size_t)r.vertex_count;
+	out->triangle_count = (size_t)r.triangle_count;
+	got = read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double));
+	if (!got && r.has_normals)
+		got = read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double));
+	if (!got)
+		got = read_all(fd, out->indices, 3 * out->triangle_count * sizeof(size_t));
+	if (got)
+		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
+	for (size_t i = 0; i < 3 * out->triangle_count; i++)
+		if (out->indices[i] >= out->vertex_count)
+			return NONSENSE;
+	return 0;
+}
+
+/* The line of the helper's stderr (captured in f) that says most: the first
+ * that is not blank or a rule of '=' (a sanitizer report opens with one).
+ * "" when it said nothing. */
+static void helper_said(FILE *f, char *line, size_t size)
+{
+	line[0] = '\0';
+	if (!f || fseek(f, 0, SEEK_SET))
+		return;
+	while (fgets(line, (int)size, f)) {
+		line[strcspn(line, "\r\n")] = '\0';
+		if (line[strspn(line, " \t=")] != '\0')
+			return;
+	}
+	line[0] = '\0';
+}
+
+/* Whether the helper's words come from a sanitizer (a test build's check
+ * that failed in rtcl's code, not the file's fault). */
+static int sanitizer_report(const char *said)
+{
+	return strstr(said, "Sanitizer") || strstr(said, "runtime error:");
+}
+
+/* Waits for the helper, then turns what happened into the outcome: the
+ * answer received, or why there is none. */
+static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t reason_size)
+{
+	char said[400], paren[420] = "";
+	int status, code;
+
+	while (waitpid(pid, &status, 0) < 0)
+		if (errno != EINTR) {
+			snprintf(reason, reason_size,
+				 "the mesh importer failed: waiting for it: %s", strerror(errno));
+			return MESH_IMPORTER_FAILED;
+		}
+	helper_said(said_file, said, sizeof(said));
+	if (said[0])
+		snprintf(paren, sizeof(paren), ": %s", said);
+	code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+	/* Answers cut short here end the helper with SIGPIPE: not its fault. */
+	if (received == OUT_OF_MEMORY)
+		return MESH_REFUSED;
+	if (received == TIMED_OUT) {
+		snprintf(reason, reason_size,
+			 "the import took longer than its limit of %lu s (--mesh-time-limit "
+			 "or " MESH_TIME_LIMIT_ENV ")",
+			 mesh_get_limits().seconds);
+		return MESH_REFUSED;
+	}
+	/* An allocation that failed under the memory limit where Assimp does
+	 * not catch it: "terminate called after throwing ... std::bad_alloc". */
+	if (WIFSIGNALED(status) && mesh_get_limits().memory_mib &&
+	    (strstr(said, "bad_alloc") || strstr(said, MESH_MEMORY_NOTE))) {
+		snprintf(reason, reason_size, MESH_MEMORY_MESSAGE, mesh_get_limits().memory_mib);
+		return MESH_REFUSED;
+	}
+	if (received == NONSENSE) {
+		snprintf(reason, reason_size,
+			 "the mesh importer failed: its answer makes no sense");
+		return MESH_IMPORTER_FAILED;
+	}
+	if (WIFSIGNALED(status)) {
+		int sig = WTERMSIG(status);
+		if (sanitizer_report(said)) {
+			snprintf(reason, reason_size, "the mesh importer failed%s", paren);
+			return MESH_IMPORTER_FAILED;
+		}
+		if (sig == SIGINT || sig == SIGTERM || sig == SIGHUP || sig == SIGKILL) {
+			snprintf(reason, reason_size,
+				 "the mesh importer was stopped by a signal (%s)", strsignal(sig));
+			return MESH_REFUSED;
+		}
+		snprintf(reason, reason_size,
+			 "the importer (Assimp) crashed on it (%s%s); the file is malformed",
+			 strsignal(sig), paren);
+		return MESH_REFUSED;
+	}
+	if (code != 0) {
+		snprintf(reason, reason_size, "the mesh importer failed (exit status %d)%s", code,
+			 paren);
+		return MESH_IMPORTER_FAILED;
+	}
+	if (received == BROKE_OFF) {
+		snprintf(reason, reason_size,
+			 "the mesh importer failed: it ended without an answer");
+		return MESH_IMPORTER_FAILED;
+	}
+	return received;
+}
+
+static int has_ply_extension(const char *path)
+{
+	size_t n = strlen(path);
+
+	return n >= 4 && strcasecmp(path + n - 4, ".ply") == 0;
+}
+
+/* How much of a PLY file is searched for the end of its header. */
+#define PLY_HEADER_MAX (1 << 20)
+
+/* Whether the file at path, open at its start in f, is a PLY file (named
+ * .ply and starting "ply", or whose first line is "ply") whose header does
+ * not end in a line "end_header" (trailing blanks allowed) within its first
+ * PLY_HEADER_MAX bytes: Assimp 5.2's PLY reader loops forever on one (found
+ * by test/fuzz_mesh.c), so such a file is refused before it. */
+static int ply_header_unterminated(const char *path, FILE *f)
+{
+	char magic[4], *line = NULL;
+	size_t capacity = 0, got = fread(magic, 1, sizeof(magic), f), read = 0;
+	int magic_line = got == 4 && (magic[3] == '\n' || magic[3] == '\r');
+	int unterminated = 0;
+	ssize_t n;
+
+	if (got < 3 || memcmp(magic, "ply", 3) != 0 || !(magic_line || has_ply_extension(path)))
+		return 0;
+	unterminated = 1;
+	rewind(f);
+	while (read < PLY_HEADER_MAX && (n = getline(&line, &capacity, f)) >= 0) {
+		read += (size_t)n;
+		if (strncmp(line, "end_header", 10) == 0 &&
+		    strspn(line + 10, " \t\r\n") == strlen(line + 10)) {
+			unterminated = 0;
+			break;
+		}
+	}
+	free(line);
+	return unterminated;
+}
+
+/* What the importer would say vaguely, not at all, or never: a missing file,
+ * a folder, a FIFO or device (opened without blocking, then refused), a PLY
+ * header without its end. 0 when the file may go to Assimp. */
+static int probe_file(const char *path, char *reason, size_t reason_size)
+{
+	struct stat st;
+	int fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	FILE *probe;
+
+	if (fd < 0) {
+		snprintf(reason, reason_size, "%s", strerror(errno));
+		return -1;
+	}
+	if (fstat(fd, &st) != 0) {
+		snprintf(reason, reason_size, "%s", strerror(errno));
+		close(fd);
+		return -1;
+	}
+	if (!S_ISREG(st.st_mode)) {
+		snprintf(reason, reason_size, "%s",
+			 S_ISDIR(st.st_mode) ? strerror(EISDIR) : "not a regular file");
+		close(fd);
+		return -1;
+	}
+	probe = fdopen(fd, "rb");
+	if (!probe) {
+		snprintf(reason, reason_size, "%s", strerror(errno));
+		close(fd);
+		return -1;
+	}
+	if (ply_header_unterminated(path, probe)) {
+		fclose(probe);
+		snprintf(reason, reason_size,
+			 "its PLY header has no end_header line (a truncated or broken file)");
+		return -1;
+	}
+	fclose(probe);
+	return 0;
+}
+
+/* The helper program: $RTCL_MESHREAD, else the installed or built one. */
+static int helper_path(char *path, size_t size)
+{
+	const char *named = getenv(MESH_HELPER_ENV);
+
+	if (named && named[0]) {
+		snprintf(path, size, "%s", named);
+		return 0;
+	}
+	return libdir_find(MESH_HELPER_NAME, path, size);
+}
+
+/* Starts the helper on path with its stdout on answer_fd and its stderr in
+ * said (or /dev/null). The signals rtcl blocks in every thread (interrupt.h)
+ * are unblocked and at their defaults in the helper, so Ctrl-C stops it too. */
+static int start_helper(const char *helper, const char *path, int answer_fd, FILE *said, pid_t *pid,
+			char *reason, size_t reason_size)
+{
+	posix_spawn_file_actions_t actions;
+	posix_spawnattr_t attr;
+	sigset_t none, defaults;
+	char memory[32];
+	char *argv[] = {(char *)MESH_HELPER_NAME, "--memory-limit", memory, (char *)path, NULL};
+	int err;
+
+	snprintf(memory, sizeof(memory), "%lu", mesh_get_limits().memory_mib);
+
+	sigemptyset(&none);
+	sigemptyset(&defaults);
+	sigaddset(&defaults, SIGINT);
+	sigaddset(&defaults, SIGTERM);
+	sigaddset(&defaults, SIGHUP);
+	sigaddset(&defaults, SIGPIPE);
+	posix_spawn_file_actions_init(&actions);
+	posix_spawn_file_actions_adddup2(&actions, answer_fd, STDOUT_FILENO);
+	if (said)
+		posix_spawn_file_actions_adddup2(&actions, fileno(said), STDERR_FILENO);
+	else
+		posix_spawn_file_actions_addopen(&actions, STDERR_FILENO, "/dev/null", O_WRONLY, 0);
+	posix_spawnattr_init(&attr);
+	posix_spawnattr_setsigmask(&attr, &none);
+	posix_spawnattr_setsigdefault(&attr, &defaults);
+	posix_spawnattr_setflags(&attr, POSIX_SPAWN_SETSIGMASK | POSIX_SPAWN_SETSIGDEF);
+	err = posix_spawn(pid, helper, &actions, &attr, argv, environ);
+	posix_spawnattr_destroy(&attr);
+	posix_spawn_file_actions_destroy(&actions);
+	if (err) {
+		snprintf(reason, reason_size, "the mesh importer failed: cannot run %s: %s", helper,
+			 strerror(err));
+		return -1;
+	}
+	return 0;
+}
+
+/* ULONG_MAX: the default, worked out when first asked for. */
+static struct mesh_limits limits = {MESH_TIME_LIMIT_DEFAULT, ULONG_MAX};
+
+void mesh_set_limits(const struct mesh_limits *set)
+{
+	limits = *set;
+}
+
+struct mesh_limits mesh_get_limits(void)
+{
+	if (limits.memory_mib == ULONG_MAX) {
+		long pages = sysconf(_SC_PHYS_PAGES), page_size = sysconf(_SC_PAGESIZE);
+
+		limits.memory_mib =
+			pages > 0 && page_size > 0
+				? (unsigned long)((double)pages * page_size /
+						  MESH_MEMORY_LIMIT_DEFAULT_SHARE / (1 << 20))
+				: 0;
+	}
+	return limits;
+}
+
+static unsigned long importer_failures;
+
+unsigned long mesh_importer_failures(void)
+{
+	return importer_failures;
+}
+
+static int import(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
+{
+	char helper[PATH_MAX + 128];
+	int fds[2], received, ret;
+	FILE *said;
+	pid_t pid;
+
+	memset(out, 0, sizeof(*out));
+	if (probe_file(path, reason, reason_size))
+		return MESH_REFUSED;
+	if (helper_path(helper, sizeof(helper))) {
+		snprintf(reason, reason_size,
+			 "the mesh importer failed: %s (reinstall rtcl, or "
+			 "name it in " MESH_HELPER_ENV ")",
+			 helper);
+		return MESH_IMPORTER_FAILED;
+	}
+	if (pipe2(fds, O_CLOEXEC)) {
+		snprintf(reason, reason_size, "the mesh importer failed: no pipe: %s",
+			 strerror(errno));
+		return MESH_IMPORTER_FAILED;
+	}
+	said = tmpfile(); /* what the helper prints (an assertion) goes in reason */
+	if (start_helper(helper, path, fds[1], said, &pid, reason, reason_size)) {
+		close(fds[0]);
+		close(fds[1]);
+		if (said)
+			fclose(said);
+		return MESH_IMPORTER_FAILED;
+	}
+	close(fds[1]);
+	deadline = mesh_get_limits().seconds ? now() + (double)mesh_get_limits().seconds : 0;
+	received = receive(fds[0], out, reason, reason_size);
+	if (received == TIMED_OUT)
+		kill(pid, SIGKILL);
+	close(fds[0]); /* a helper still writing gets EPIPE and ends */
+	ret = reap(pid, received, said, reason, reason_size);
+	if (said)
+		fclose(said);
+	if (ret)
+		mesh_data_free(out);
+	return ret;
+}
+
+int mesh_import(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
+{
+	int ret = import(path, out, reason, reason_size);
+
+	if (ret == MESH_IMPORTER_FAILED)
+		importer_failures++; /* the scene loader runs in one thread */
+	return ret;
+}

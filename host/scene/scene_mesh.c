@@ -1,0 +1,351 @@
+/* The scene loader's version 2 (docs/SCENE.md, "Version 2: triangle meshes"):
+ * "meshes", files placed with scale, rotate and translate, and the inline
+ * "triangles". mesh_import (host/scene/mesh.h) reads the files, host/scene/mesh_place.c computes the
+ * placement and the normals; this file reads the fields, puts the triangles
+ * in the scene and checks what SCENE.md asks. */
+#define _POSIX_C_SOURCE 200809L
+
+#include <limits.h>
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "scene/mesh.h"
+#include "scene/mesh_place.h"
+#include "scene/scene_loader.h"
+
+/* Triangle indices are ints on the device; far below INT_MAX so that the
+ * counts and byte offsets computed from them cannot overflow either. */
+#define SCENE_MAX_TRIANGLES (INT_MAX / 4)
+
+/* Where a file's name or the importer's reason goes into a message: control
+ * bytes become '?', so that the message stays one line. */
+#define MESSAGE_TEXT_MAX 300
+
+static const char *one_line(const char *text, char buf[MESSAGE_TEXT_MAX])
+{
+	size_t i = 0;
+
+	for (; text[i] && i + 1 < MESSAGE_TEXT_MAX; i++)
+		buf[i] = (unsigned char)text[i] < 0x20 || text[i] == 0x7f ? '?' : text[i];
+	/* The importer ends some reasons with a newline or a space. */
+	while (i > 0 && (buf[i - 1] == '?' || buf[i - 1] == ' '))
+		i--;
+	buf[i] = '\0';
+	return buf;
+}
+
+/* Makes room for `more` triangles in scene->triangles. */
+static int reserve(struct loader *ld, const struct path *p, size_t more)
+{
+	struct scene *s = ld->scene;
+	size_t need = (size_t)s->triangle_count + more, capacity = ld->triangle_capacity;
+	struct scene_triangle *grown;
+
+	if (more > SCENE_MAX_TRIANGLES || need > SCENE_MAX_TRIANGLES)
+		return loader_fail(ld, p,
+				   "the scene would have %zu triangles, more than the limit of %d",
+				   need, SCENE_MAX_TRIANGLES);
+	if (need <= capacity)
+		return 0;
+	capacity = capacity * 2 > need ? capacity * 2 : need;
+	grown = realloc(s->triangles, capacity * sizeof(*grown));
+	if (!grown) {
+		loader_write_err(ld, "%s: out of memory for %zu triangles", ld->source, need);
+		return -1;
+	}
+	s->triangles = grown;
+	ld->triangle_capacity = capacity;
+	return 0;
+}
+
+/* Places every vertex; refuses a non-finite one (from the file) and one that
+ * placement puts beyond what float holds. */
+static int place_vertices(struct loader *ld, const struct path *p, const char *name,
+			  const struct mesh_data *mesh, const struct placement *pl, double *placed)
+{
+	char buf[100], text[MESSAGE_TEXT_MAX];
+
+	for (size_t v = 0; v < mesh->vertex_count; v++) {
+		const double *in = mesh->positions + 3 * v;
+		double *out = placed + 3 * v;
+
+		if (!isfinite(in[0]) || !isfinite(in[1]) || !isfinite(in[2]))
+			return loader_fail(ld, p, "\"%s\": vertex %zu is not finite, got %s",
+					   one_line(name, text), v, loader_fmt_vec3(in, buf));
+		place_point(pl, in, out);
+		for (int i = 0; i < 3; i++) {
+			if (!(fabs(out[i]) <= SCENE_MAX_MAGNITUDE))
+				return loader_fail(
+					ld, p,
+					"\"%s\": vertex %zu is at %s after placement, beyond %g in "
+					"magnitude (rtcl computes in float)",
+					one_line(name, text), v, loader_fmt_vec3(out, buf),
+					SCENE_MAX_MAGNITUDE);
+		}
+	}
+	return 0;
+}
+
+/* Appends the mesh's triangles with area (after placement), in the vertex
+ * order that keeps their normals outward under a mirroring scale; counts
+ * the others in scene->skipped_triangles. vn: the vertex normals, or NULL. */
+static void append_triangles(struct scene *s, const struct mesh_data *mesh, const double *placed,
+			     const double *vn, const struct placement *pl, int material)
+{
+	static const int straight[3] = {0, 1, 2}, mirrored[3] = {0, 2, 1};
+	const int *order = pl->mirrored ? mirrored : straight;
+
+	for (size_t t = 0; t < mesh->triangle_count; t++) {
+		struct scene_triangle *tri = &s->triangles[s->triangle_count];
+		double n[3];
+
+		for (int k = 0; k < 3; k++)
+			memcpy(tri->v[k], placed + 3 * mesh->indices[3 * t + order[k]],
+			       sizeof(tri->v[k]));
+		if (!place_triangle_normal(tri->v, n)) {
+			s->skipped_triangles++;
+			continue;
+		}
+		for (int k = 0; k < 3; k++) {
+			const double *from = vn ? vn + 3 * mesh->indices[3 * t + order[k]] : n;
+
+			/* A vertex without a usable normal takes the triangle's. */
+			memcpy(tri->normal[k], from[0] || from[1] || from[2] ? from : n,
+			       sizeof(tri->normal[k]));
+		}
+		tri->material = material;
+		tri->smooth = vn != NULL;
+		s->triangle_count++;
+	}
+}
+
+/* "scale": a number or a vec3, no part 0. */
+static int read_scale(struct loader *ld, const struct path *item, json_t *obj, double scale[3])
+{
+	struct path field = child_key(item, "scale");
+	json_t *v = json_object_get(obj, "scale");
+
+	scale[0] = scale[1] = scale[2] = 1;
+	if (!v)
+		return 0;
+	if (json_is_number(v)) {
+		if (loader_check_number(ld, &field, v, ANY, &scale[0]))
+			return -1;
+		if (scale[0] == 0)
+			return loader_fail(ld, &field, "must not be 0");
+		scale[1] = scale[2] = scale[0];
+		return 0;
+	}
+	if (!json_is_array(v))
+		return loader_fail(ld, &field, "must be a number or an array of 3 numbers, got %s",
+				   loader_type_name(v));
+	if (loader_check_vec3(ld, &field, v, ANY, scale))
+		return -1;
+	for (size_t i = 0; i < 3; i++) {
+		struct path part = child_index(&field, i);
+
+		if (scale[i] == 0)
+			return loader_fail(ld, &part, "must not be 0");
+	}
+	return 0;
+}
+
+static int read_placement(struct loader *ld, const struct path *item, json_t *obj,
+			  struct placement *pl)
+{
+	struct path smooth = child_key(item, "smooth");
+	double degrees[3] = {0, 0, 0};
+	json_t *v;
+
+	memset(pl, 0, sizeof(*pl));
+	if (read_scale(ld, item, obj, pl->scale) ||
+	    loader_read_vec3(ld, item, obj, "rotate", OPTIONAL, ANY, degrees) ||
+	    loader_read_vec3(ld, item, obj, "translate", OPTIONAL, ANY, pl->translate) ||
+	    loader_get_field(ld, item, obj, "smooth", OPTIONAL, &v))
+		return -1;
+	if (v && !json_is_boolean(v))
+		return loader_fail(ld, &smooth, "must be true or false, got %s",
+				   loader_type_name(v));
+	pl->smooth = !v || json_is_true(v);
+	place_set_rotation(pl, degrees);
+	return 0;
+}
+
+/* The file's path: relative to the scene file's folder unless absolute. */
+static char *mesh_path(const struct loader *ld, const char *name)
+{
+	const char *dir = name[0] == '/' || !ld->base_dir ? "" : ld->base_dir;
+	size_t size = strlen(dir) + strlen(name) + 1;
+	char *path = malloc(size);
+
+	if (path)
+		snprintf(path, size, "%s%s", dir, name);
+	return path;
+}
+
+/* Places the imported mesh and appends its triangles. */
+static int place_mesh(struct loader *ld, const struct path *file, const char *name,
+		      const struct mesh_data *mesh, const struct placement *pl, int material)
+{
+	size_t values = 3 * (mesh->vertex_count ? mesh->vertex_count : 1);
+	double *placed = malloc(values * sizeof(double));
+	double *vn = pl->smooth ? calloc(values, sizeof(double)) : NULL;
+	int ret = -1;
+
+	if (!placed || (pl->smooth && !vn)) {
+		loader_write_err(ld, "%s: out of memory for %zu vertices", ld->source,
+				 mesh->vertex_count);
+		goto out_free;
+	}
+	if (place_vertices(ld, file, name, mesh, pl, placed) ||
+	    reserve(ld, file, mesh->triangle_count))
+		goto out_free;
+	if (vn && mesh->normals)
+		place_file_normals(mesh, pl, vn);
+	else if (vn && place_area_weighted_normals(mesh, placed, pl->mirrored, vn)) {
+		loader_write_err(ld, "%s: out of memory for %zu vertices", ld->source,
+				 mesh->vertex_count);
+		goto out_free;
+	}
+	int before = ld->scene->triangle_count;
+	append_triangles(ld->scene, mesh, placed, vn, pl, material);
+	/* Nothing to see, and most likely not a mesh at all (random bytes that
+	 * an importer read as one): issue 24 finding 10. */
+	if (ld->scene->triangle_count == before) {
+		char text[MESSAGE_TEXT_MAX];
+		ret = mesh->triangle_count == 1
+			      ? loader_fail(ld, file,
+					    "\"%s\": its one triangle has area 0 (after placement)",
+					    one_line(name, text))
+			      : loader_fail(ld, file,
+					    "\"%s\": all of its %zu triangles have area 0 (after "
+					    "placement)",
+					    one_line(name, text), mesh->triangle_count);
+		goto out_free;
+	}
+	ret = 0;
+out_free:
+	free(placed);
+	free(vn);
+	return ret;
+}
+
+static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
+{
+	static const char *const keys[] = {"file",	"material", "scale", "rotate",
+					   "translate", "smooth",   NULL};
+	struct path file = child_key(item, "file");
+	char reason[MESSAGE_TEXT_MAX], text[MESSAGE_TEXT_MAX];
+	struct mesh_data mesh;
+	struct placement pl;
+	const char *name;
+	int material, ret;
+	char *path;
+	json_t *v;
+
+	if (loader_expect_object(ld, item, obj, keys) ||
+	    loader_get_field(ld, item, obj, "file", REQUIRED, &v))
+		return -1;
+	if (!json_is_string(v))
+		return loader_fail(ld, &file, "must be a string, got %s", loader_type_name(v));
+	name = json_string_value(v);
+	if (!name[0])
+		return loader_fail(ld, &file, "must name a file, got \"\"");
+	if (loader_read_material_ref(ld, item, obj, &material) ||
+	    read_placement(ld, item, obj, &pl))
+		return -1;
+	path = mesh_path(ld, name);
+	if (!path) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	ret = mesh_import(path, &mesh, reason, sizeof(reason));
+	if (loader_add_input(ld, path, "mesh file")) {
+		if (ret == 0)
+			mesh_data_free(&mesh);
+		return -1;
+	}
+	if (ret)
+		return loader_fail(ld, &file, "cannot read \"%s\": %s", one_line(name, text),
+				   one_line(reason, reason));
+	if (mesh.triangle_count == 0)
+		ret = loader_fail(ld, &file, "\"%s\" holds no triangles", one_line(name, text));
+	else
+		ret = place_mesh(ld, &file, name, &mesh, &pl, material);
+	mesh_data_free(&mesh);
+	return ret;
+}
+
+int loader_read_meshes(struct loader *ld, json_t *array)
+{
+	struct path p = child_key(&root_path, "meshes");
+
+	for (size_t i = 0; i < json_array_size(array); i++) {
+		struct path item = child_index(&p, i);
+
+		if (read_mesh(ld, &item, json_array_get(array, i)))
+			return -1;
+	}
+	return 0;
+}
+
+/* An inline triangle: "vertices" (three vec3) and "material". */
+static int read_triangle(struct loader *ld, const struct path *item, json_t *obj)
+{
+	static const char *const keys[] = {"vertices", "material", NULL};
+	struct path vertices = child_key(item, "vertices");
+	struct scene *s = ld->scene;
+	struct scene_triangle *tri;
+	double n[3];
+	json_t *v;
+
+	if (loader_expect_object(ld, item, obj, keys) ||
+	    loader_get_field(ld, item, obj, "vertices", REQUIRED, &v))
+		return -1;
+	if (!json_is_array(v))
+		return loader_fail(ld, &vertices, "must be an array of 3 vertices, got %s",
+				   loader_type_name(v));
+	if (json_array_size(v) != 3)
+		return loader_fail(ld, &vertices,
+				   "must be an array of 3 vertices, got %zu element%s",
+				   json_array_size(v), json_array_size(v) == 1 ? "" : "s");
+	if (reserve(ld, item, 1))
+		return -1;
+	tri = &s->triangles[s->triangle_count];
+	for (size_t k = 0; k < 3; k++) {
+		struct path vertex = child_index(&vertices, k);
+
+		if (loader_check_vec3(ld, &vertex, json_array_get(v, k), ANY, tri->v[k]))
+			return -1;
+	}
+	if (!place_triangle_normal(tri->v, n)) {
+		char a[100], b[100], c[100];
+
+		return loader_fail(ld, &vertices,
+				   "must span a triangle of non-zero area, got %s, %s, %s",
+				   loader_fmt_vec3(tri->v[0], a), loader_fmt_vec3(tri->v[1], b),
+				   loader_fmt_vec3(tri->v[2], c));
+	}
+	for (int k = 0; k < 3; k++)
+		memcpy(tri->normal[k], n, sizeof(n));
+	tri->smooth = 0;
+	if (loader_read_material_ref(ld, item, obj, &tri->material))
+		return -1;
+	s->triangle_count++;
+	return 0;
+}
+
+int loader_read_triangles(struct loader *ld, json_t *array)
+{
+	struct path p = child_key(&root_path, "triangles");
+
+	for (size_t i = 0; i < json_array_size(array); i++) {
+		struct path item = child_index(&p, i);
+
+		if (read_triangle(ld, &item, json_array_get(array, i)))
+			return -1;
+	}
+	return 0;
+}

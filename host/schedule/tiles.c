@@ -1,0 +1,552 @@
+#include "schedule/tiles.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "render/checks.h"
+#include "report/devstats.h"
+#include "render/launch.h"
+#include "base/progress.h"
+#include "render/render.h"
+#include "base/timing.h"
+
+int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices)
+{
+	int unit = s->workgroup[1] > 0 ? s->workgroup[1] : 1;
+	int wanted = TILES_PER_DEVICE * (devices > 0 ? devices : 1);
+	int rows;
+
+	if (piece_rows > 0)
+		return piece_rows < s->height ? piece_rows : s->height;
+	rows = (s->height + wanted - 1) / wanted;
+	/* Whole work-groups: the naive kernel's NDRange covers the band
+	 * rounded up, so a band of a group's height wastes no work-items. */
+	rows = (rows + unit - 1) / unit * unit;
+	return rows < s->height ? rows : s->height;
+}
+
+static int band_count(int height, int rows)
+{
+	return (height + rows - 1) / rows;
+}
+
+struct rt_piece tiles_band(const struct render_settings *s, int rows, int index, int begin, int end)
+{
+	int y0 = index * rows;
+	int height = s->height - y0 < rows ? s->height - y0 : rows;
+	struct rt_piece p = {0, y0, s->width, height, begin, end, s->samples > 0 ? s->samples : 1,
+			     0};
+
+	return p;
+}
+
+int tiles_pass_samples(const struct render_settings *s, const struct rt_piece *band)
+{
+	double pixels = (double)band->width * band->height;
+	double per_pass = s->samples_per_pass > 0 ? s->samples_per_pass
+						  : floor(RENDER_PASS_PIXEL_SAMPLES / pixels);
+
+	return per_pass < 1 ? 1 : per_pass > band->samples ? band->samples : (int)per_pass;
+}
+
+int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece)
+{
+	int per_pass = tiles_pass_samples(s, piece);
+
+	return (piece->samples + per_pass - 1) / per_pass;
+}
+
+/* The work-items a device keeps in flight: a GPU about 2048 per compute
+ * unit (NVIDIA's SMs), a CPU one work-group per compute unit. */
+static double resident_items(const struct device *dev, int group)
+{
+	return dev->is_gpu ? 2048.0 * dev->compute_units : (double)group * dev->compute_units;
+}
+
+/* Each device's smallest piece: TILES_GPU_LAUNCHES times what it keeps in
+ * flight for a GPU (one launch's worth for a CPU), but not more than its
+ * share of the image by that measure, so that several GPUs all get work. */
+static void set_min_pieces(struct tiles_job *t, int group)
+{
+	double pixels = (double)t->settings->width * t->settings->height, all = 0;
+
+	for (int k = 0; k < t->count; k++)
+		all += resident_items(&t->devs[k], group);
+	for (int k = 0; k < t->count; k++) {
+		double resident = resident_items(&t->devs[k], group);
+		double launches = t->devs[k].is_gpu ? TILES_GPU_LAUNCHES : 1;
+		double share = pixels * resident / all;
+		adapt_set_min_pixels(&t->adapt, k,
+				     launches * resident < share ? launches * resident : share);
+	}
+}
+
+/* The adaptive dispenser's cells: one work-group, so a piece wastes no
+ * work-items of the naive kernel's rounded-up NDRange. */
+static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
+{
+	int cell_w = s->workgroup[0] > 0 ? s->workgroup[0] : 8;
+	int cell_h = s->workgroup[1] > 0 ? s->workgroup[1] : 8;
+
+	adapt_init(&t->adapt, s->width, s->height, s->samples, cell_w, cell_h, t->count);
+	set_min_pieces(t, cell_w * cell_h);
+	t->piece_cap = t->adapt.cells_x * t->adapt.cells_y;
+	t->piece_count = 0;
+}
+
+int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
+		   int rows, int adaptive, struct device *devs, int count, char *err,
+		   size_t err_size)
+{
+	size_t pixels = (size_t)s->width * s->height;
+
+	memset(t, 0, sizeof(*t));
+	t->settings = s;
+	t->scene = scene;
+	t->devs = devs;
+	t->count = count;
+	t->rows = rows;
+	t->bands = band_count(s->height, rows);
+	t->adaptive = adaptive;
+	t->piece_cap = t->piece_count = t->bands;
+	if (adaptive)
+		init_adaptive(t, s);
+	pthread_mutex_init(&t->lock, NULL);
+	pthread_cond_init(&t->asked, NULL);
+	t->pieces = malloc((size_t)t->piece_cap * sizeof(*t->pieces));
+	t->owner = malloc((size_t)t->piece_cap * sizeof(int));
+	t->expected = s->check_writes ? calloc(pixels, sizeof(uint32_t)) : NULL;
+	if (!t->pieces || !t->owner || (s->check_writes && !t->expected)) {
+		snprintf(err, err_size, "out of host memory for %d pieces", t->piece_cap);
+		return -1;
+	}
+	for (int b = 0; b < t->piece_count; b++) {
+		t->pieces[b] = tiles_band(s, rows, b, 0, s->samples > 0 ? s->samples : 1);
+		t->owner[b] = -1;
+	}
+	return 0;
+}
+
+/* Under t->lock: waits, at most TILES_FRONT_WAIT_MS, until the devices that
+ * keep more pixels in flight than k have asked for their first piece of the
+ * frame (adapt_fronts_asked). Their threads start with k's, so the wait is
+ * short; the limit covers a thread that never asks (a failed job). */
+static void wait_for_fronts(struct tiles_job *t, int k)
+{
+	struct timespec until;
+
+	clock_gettime(CLOCK_REALTIME, &until);
+	until.tv_nsec += TILES_FRONT_WAIT_MS * 1000000L;
+	until.tv_sec += until.tv_nsec / 1000000000L;
+	until.tv_nsec %= 1000000000L;
+	while (!adapt_fronts_asked(&t->adapt, k))
+		if (pthread_cond_timedwait(&t->asked, &t->lock, &until) != 0)
+			break;
+}
+
+int tiles_take_piece(struct tiles_job *t, int k)
+{
+	int index = -1;
+	struct rt_piece piece;
+
+	pthread_mutex_lock(&t->lock);
+	wait_for_fronts(t, k);
+	if (t->piece_count < t->piece_cap && adapt_take(&t->adapt, k, timing_now() * 1e3, &piece)) {
+		index = t->piece_count++;
+		t->pieces[index] = piece;
+		t->owner[index] = k;
+	}
+	pthread_cond_broadcast(&t->asked);
+	pthread_mutex_unlock(&t->lock);
+	return index;
+}
+
+void tiles_job_free(struct tiles_job *t)
+{
+	for (int k = 0; k < t->count; k++) {
+		if (t->dev[k].open)
+			renderer_close(&t->dev[k].renderer);
+		render_result_free(&t->dev[k].result);
+		t->dev[k].open = 0;
+	}
+	free(t->owner);
+	free(t->pieces);
+	free(t->expected);
+	t->owner = NULL;
+	t->pieces = NULL;
+	t->expected = NULL;
+	pthread_mutex_destroy(&t->lock);
+	pthread_cond_destroy(&t->asked);
+}
+
+int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	struct tiles_device *d = &t->dev[k];
+
+	if (d->open)
+		return 0;
+	if (renderer_open(&d->renderer, &t->devs[k], t->scene, t->settings, &d->result, err,
+			  err_size))
+		return -1;
+	d->open = 1;
+	return 0;
+}
+
+/* Adds piece's launches to the expected write counts (check_writes). */
+static void expect_writes(struct tiles_job *t, const struct rt_piece *p, int sign)
+{
+	int launches = tiles_piece_launches(t->settings, p) * sign;
+
+	for (int y = p->y0; t->expected && y < p->y0 + p->height; y++)
+		for (int x = p->x0; x < p->x0 + p->width; x++)
+			t->expected[(size_t)y * t->settings->width + x] += launches;
+}
+
+int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
+		      size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	struct rt_piece whole;
+	int per_pass;
+
+	/* Adaptive: other threads add pieces meanwhile, under the lock; this
+	 * one's index was handed out already. */
+	int known = t->adaptive ? t->piece_cap : t->piece_count;
+
+	if (band < 0 || band >= known) {
+		snprintf(err, err_size, "internal error: piece %d of %d", band, known);
+		return -1;
+	}
+	whole = t->pieces[band];
+	per_pass = tiles_pass_samples(s, &whole);
+	/* Every sample of the piece on this device, in order: the running
+	 * sums stay in its buffer. */
+	for (int begin = 0; begin < whole.samples; begin += per_pass) {
+		struct rt_piece piece = whole;
+		struct piece_result out;
+		piece.sample_begin = begin;
+		piece.sample_end =
+			whole.samples - begin > per_pass ? begin + per_pass : whole.samples;
+		if (renderer_piece(&t->dev[k].renderer, &piece, &out, err, err_size))
+			return -1;
+		done->kernel_ms += out.kernel_ms;
+		done->launches += out.launches;
+	}
+	t->owner[band] = k; /* pieces are distinct: no two threads write one */
+	expect_writes(t, &whole, 1);
+	done->pixels += (long long)whole.width * whole.height;
+	return 0;
+}
+
+int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	struct tiles_device *d = &t->dev[k];
+
+	if (d->collected)
+		return 0;
+	if (renderer_read_back(&d->renderer, err, err_size))
+		return -1;
+	if (t->settings->check_writes && !d->result.guards_intact) {
+		snprintf(err, err_size, "internal error: a kernel wrote outside the image");
+		return -1;
+	}
+	d->collected = 1;
+	return 0;
+}
+
+void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_result *from,
+		      struct render_result *to)
+{
+	const struct rt_piece *p = &t->pieces[piece];
+
+	for (int y = p->y0; y < p->y0 + p->height; y++) {
+		size_t first = (size_t)y * t->settings->width + p->x0;
+		memcpy(to->rgb + 3 * first, from->rgb + 3 * first,
+		       3 * (size_t)p->width * sizeof(float));
+		if (from->pixel_flops && to->pixel_flops)
+			memcpy(to->pixel_flops + first, from->pixel_flops + first,
+			       (size_t)p->width * sizeof(uint64_t));
+	}
+}
+
+int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected, char *err,
+		       size_t err_size)
+{
+	for (int y = 0; y < height; y++)
+		for (int x = 0; x < width; x++)
+			if (counts[(size_t)y * width + x] != expected) {
+				snprintf(err, err_size,
+					 "internal error: pixel (%d, %d) of a band was written %u "
+					 "times, not %u",
+					 x, y, counts[(size_t)y * width + x], expected);
+				return -1;
+			}
+	return 0;
+}
+
+/* RTCL_TEST_DOUBLE_BAND=1 (checks.h): piece 0 rendered once more by another
+ * device, as a dispenser that handed it out twice would (unknowingly: not
+ * in the expected counts). */
+static int double_band(struct tiles_job *t, char *err, size_t err_size)
+{
+	int owner = t->owner[0];
+	struct piece_work pixels = {0};
+
+	if (!checks_double_band())
+		return 0;
+	if (tiles_render_band(t, (owner + 1) % t->count, 0, &pixels, err, err_size))
+		return -1;
+	expect_writes(t, &t->pieces[0], -1);
+	t->owner[0] = owner;
+	return 0;
+}
+
+int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	const uint32_t *counts = t->dev[k].result.write_counts;
+
+	for (int b = 0; counts && b < t->piece_count; b++) {
+		const struct rt_piece *p = &t->pieces[b];
+		uint32_t expected = t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p) : 0;
+		for (int y = p->y0; y < p->y0 + p->height; y++)
+			if (tiles_check_counts(counts + (size_t)y * s->width + p->x0, p->width, 1,
+					       expected, err, err_size))
+				return -1;
+	}
+	return 0;
+}
+
+/* ---- one image on several devices of this process ----------------------- */
+
+static int open_tile_device(void *context, int k, char *err, size_t err_size)
+{
+	return tiles_open(context, k, err, err_size);
+}
+
+static int render_band(void *context, int k, int band, struct piece_work *done, char *err,
+		       size_t err_size)
+{
+	return tiles_render_band(context, k, band, done, err, err_size);
+}
+
+static int take_tile_piece(void *context, int k)
+{
+	return tiles_take_piece(context, k);
+}
+
+/* Every pixel written once per launch of the piece that covered it in each
+ * frame, over all devices together: the sum of the devices' counts against
+ * what the pieces handed out add up to (check_writes). */
+static int check_summed_counts(const struct tiles_job *t, uint32_t *sum, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	size_t pixels = (size_t)s->width * s->height;
+
+	for (int k = 0; k < t->count; k++)
+		for (size_t i = 0; i < pixels; i++)
+			sum[i] += t->dev[k].result.write_counts[i];
+	for (size_t i = 0; i < pixels; i++) {
+		if (sum[i] == t->expected[i] && sum[i] > 0)
+			continue;
+		if (t->expected[i] == 0)
+			snprintf(err, err_size, "internal error: pixel (%d, %d) is in no piece",
+				 (int)(i % s->width), (int)(i / s->width));
+		else
+			snprintf(err, err_size,
+				 "internal error: pixel (%d, %d) of a band was written %u times, "
+				 "not %u",
+				 (int)(i % s->width), (int)(i / s->width), sum[i], t->expected[i]);
+		return -1;
+	}
+	return 0;
+}
+
+/* The per-work-item counts of every device, one after the other. */
+static int join_item_counts(const struct tiles_job *t, struct render_result *out)
+{
+	size_t n = 0;
+
+	for (int k = 0; k < t->count; k++)
+		n += t->dev[k].result.item_count;
+	out->item_flops = calloc(n ? n : 1, sizeof(uint64_t));
+	if (!out->item_flops)
+		return -1;
+	for (int k = 0; k < t->count; k++) {
+		const struct render_result *r = &t->dev[k].result;
+		memcpy(out->item_flops + out->item_count, r->item_flops,
+		       r->item_count * sizeof(uint64_t));
+		out->item_count += r->item_count;
+		out->total_flops += r->total_flops;
+		out->total_rays += r->total_rays;
+		out->total_node_visits += r->total_node_visits;
+	}
+	return 0;
+}
+
+void tiles_copy_facts(const struct render_result *from, struct render_result *to)
+{
+	memcpy(to->groups, from->groups, sizeof(to->groups));
+	memcpy(to->global_size, from->global_size, sizeof(to->global_size));
+	memcpy(to->local_size, from->local_size, sizeof(to->local_size));
+	to->scene_in_local = from->scene_in_local;
+	to->scene_bytes = from->scene_bytes;
+	memcpy(to->build_options, from->build_options, sizeof(to->build_options));
+	to->times.build = from->times.build;
+	to->times.scene = from->times.scene;
+	to->bvh_nodes = from->bvh_nodes;
+	to->bvh_depth = from->bvh_depth;
+	to->bvh_sah_cost = from->bvh_sah_cost;
+	to->bvh_build_ms = from->bvh_build_ms;
+	to->bvh_bytes = from->bvh_bytes;
+}
+
+/* Reads every device back and assembles the image (and counts) in out. */
+static int assemble(struct tiles_job *t, struct render_result *out, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	size_t pixels = (size_t)s->width * s->height;
+
+	out->rgb = malloc(image_float_bytes(s->width, s->height));
+	out->pixel_flops = s->count_flops ? malloc(pixels * sizeof(uint64_t)) : NULL;
+	out->write_counts = s->check_writes ? calloc(pixels, sizeof(uint32_t)) : NULL;
+	if (!out->rgb || (s->count_flops && !out->pixel_flops) ||
+	    (s->check_writes && !out->write_counts)) {
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
+			 s->height);
+		return -1;
+	}
+	for (int k = 0; k < t->count; k++)
+		if (tiles_collect(t, k, err, err_size))
+			return -1;
+	for (int b = 0; b < t->piece_count; b++)
+		tiles_copy_piece(t, b, &t->dev[t->owner[b]].result, out);
+	if (s->count_flops && join_item_counts(t, out)) {
+		snprintf(err, err_size, "out of host memory for the flop counts");
+		return -1;
+	}
+	out->guards_intact = 1;
+	tiles_copy_facts(&t->dev[0].result, out);
+	return s->check_writes ? check_summed_counts(t, out->write_counts, err, err_size) : 0;
+}
+
+/* Opens every device's renderer, each in its own thread (build and upload
+ * overlap), before the timed frames. */
+static int open_all(struct tiles_job *t, struct device_work *setup, char *err, size_t err_size)
+{
+	struct multidev_job job = {.piece_count = 0,
+				   .split = SPLIT_STATIC,
+				   .begin = open_tile_device,
+				   .render_piece = render_band,
+				   .context = t};
+
+	return multidev_run(&job, t->devs, t->count, setup, err, err_size);
+}
+
+/* The frames (a warm-up and -r N timed ones, or one), each every band over
+ * every device; each frame's wall time recorded in out. Returns the frames
+ * rendered, or -1. */
+static int render_tile_frames(struct tiles_job *t, int split_static, struct device_work *work,
+			      struct render_result *out, char *err, size_t err_size)
+{
+	struct multidev_job job = {.piece_count = t->bands,
+				   .split = split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+				   .render_piece = render_band,
+				   .take_piece = t->adaptive ? take_tile_piece : NULL,
+				   .context = t};
+	int frames = launch_begin_timing(t->settings, out, err, err_size);
+	char devices[32];
+
+	snprintf(devices, sizeof(devices), "%d device%s", t->count, t->count == 1 ? "" : "s");
+	if (frames > 0)
+		launch_progress_begin(t->settings, frames, devices);
+	for (int f = 0; f < frames; f++) {
+		double start = timing_now();
+		launch_progress_frame(t->settings, out, f, frames);
+		if (t->adaptive) {
+			adapt_new_frame(&t->adapt);
+			t->piece_count = 0;
+		}
+		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
+			return -1;
+		launch_record_frame(out, f, frames, (timing_now() - start) * 1e3);
+	}
+	return frames;
+}
+
+/* The adaptive dispenser unless --split static or --piece-rows (a fixed
+ * band height) asks for bands. */
+static int tiles_adaptive(const struct run *run)
+{
+	return !run->opt->split_static && run->opt->piece_rows <= 0;
+}
+
+/* One image with settings s on devs[count] into out. */
+static int render_image(const struct run *run, const struct render_settings *s, struct device *devs,
+			int count, struct device_work *work, struct render_result *out, char *err,
+			size_t err_size)
+{
+	struct device_work setup[DEVICES_MAX];
+	struct tiles_job t;
+	int rows = tiles_band_rows(s, run->opt->piece_rows, count), frames;
+
+	memset(out, 0, sizeof(*out));
+	if (tiles_job_init(&t, run->scene, s, rows, tiles_adaptive(run), devs, count, err,
+			   err_size))
+		return -1;
+	if (open_all(&t, setup, err, err_size))
+		goto out_free;
+	double lap = timing_now();
+	frames = render_tile_frames(&t, run->opt->split_static, work, out, err, err_size);
+	progress_end();
+	if (frames < 0 || launch_end_timing(out, err, err_size) || double_band(&t, err, err_size))
+		goto out_free;
+	out->times.kernels = timing_lap_ms(&lap);
+	out->passes = tiles_piece_launches(s, &t.pieces[0]);
+	if (assemble(&t, out, err, err_size))
+		goto out_free;
+	out->times.read_back = timing_lap_ms(&lap);
+	for (int k = 0; k < count; k++)
+		work[k].setup_ms = setup[k].setup_ms;
+	tiles_job_free(&t);
+	return 0;
+
+out_free:
+	tiles_job_free(&t);
+	render_result_free(out);
+	return -1;
+}
+
+int tiles_render(struct run *run, struct device *devs, int count, struct device_work *work,
+		 char *err, size_t err_size)
+{
+	struct render_settings *s = &run->settings;
+	int rows = tiles_band_rows(s, run->opt->piece_rows, count);
+
+	s->check_writes |= checks_count_writes();
+	if (run->counting) {
+		struct render_settings counting = *s;
+		double lap = timing_now();
+		counting.count_flops = 1;
+		if (render_image(run, &counting, devs, count, work, &run->counted, err, err_size))
+			return -1;
+		run->counting_ms = timing_lap_ms(&lap);
+		flop_summary_compute(&run->flops, run->counted.item_flops, run->counted.item_count,
+				     run->counted.total_rays);
+		run->flops.node_visits = run->counted.total_node_visits;
+	}
+	if (render_image(run, s, devs, count, work, &run->result, err, err_size))
+		return -1;
+	run->multidevice = devstats_json(devs, NULL, work, count,
+					 run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+					 tiles_adaptive(run) ? "rectangle" : "band");
+	if (run->multidevice && !tiles_adaptive(run)) {
+		json_object_set_new(run->multidevice, "band_rows", json_integer(rows));
+		json_object_set_new(run->multidevice, "bands",
+				    json_integer(band_count(s->height, rows)));
+	}
+	return 0;
+}

@@ -1,0 +1,136 @@
+/* One image over several devices (--devices with more than one, --mpi): the
+ * image cut into pieces (renderer.h), each carrying every sample of its
+ * pixels: with the dynamic split in one process, rectangles sized per device
+ * by multidev.h's adaptive dispenser; with --split static, --piece-rows or
+ * --mpi, row bands handed out by multidev.h's counter. Each device opens
+ * its renderer once, renders the bands it is given into its own full-size
+ * buffers, reads them back once at the end; the host copies each band from
+ * the device that rendered it. A band's samples all run on one device, in
+ * order, so the image is byte-identical to a one-device render. */
+#ifndef RTCL_TILES_H
+#define RTCL_TILES_H
+
+#include <pthread.h>
+#include <stddef.h>
+#include <stdint.h>
+
+#include "schedule/multidev.h"
+#include "render/renderer.h"
+#include "report/stats.h"
+
+/* Bands per device when bands are used and --piece-rows is not given: many, since a band costs
+ * only a launch and its wait (0.01 to 0.05 ms on PoCL,
+ * docs/results/multidevice) while the last band a slow device takes can end
+ * after the fast one is done: with n devices a device k times slower than
+ * the fastest delays the end by at most k / (32 n) of the fast device's time
+ * for the image. */
+#define TILES_PER_DEVICE 32
+
+/* A GPU's smallest adaptive piece, in launches' worth of the work-items it
+ * keeps in flight. A launch ends with its slowest work-item, and a pixel
+ * behind glass takes ~0.2 ms alone, so small pieces leave a GPU idle: on an
+ * H100 at 1024 spp, 2000x2000 in bands of 100, 250, 500, 1000 and 2000 rows
+ * took 2.7, 1.7, 1.3, 1.2 and 1.0 times the whole image's kernel time
+ * (docs/results/h100-batch6). 16 lets one GPU keep a 2000x2000 image whole
+ * beside a CPU; several GPUs split it (set_min_pieces caps it at a share). */
+#define TILES_GPU_LAUNCHES 16
+
+/* How long a CPU waits for the GPUs beside it to ask for their first piece
+ * of a frame (tiles_take_piece): their threads start together, so this is
+ * only a bound. */
+#define TILES_FRONT_WAIT_MS 200
+
+/* Rows per band: piece_rows when given (> 0), else about height / (32 ×
+ * devices) rounded up to a multiple of the work-group height. */
+int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices);
+
+/* Band `index` of bands of `rows` rows (the last may be shorter), samples
+ * [begin, end). */
+struct rt_piece tiles_band(const struct render_settings *s, int rows, int index, int begin,
+			   int end);
+
+/* Samples per launch for a band: settings->samples_per_pass, else about
+ * RENDER_PASS_PIXEL_SAMPLES over the band (render.h). */
+int tiles_pass_samples(const struct render_settings *s, const struct rt_piece *band);
+
+/* One device's renderer and what it read back. */
+struct tiles_device {
+	struct renderer renderer;
+	struct render_result result;
+	int open;
+	int collected; /* read back */
+};
+
+/* The pieces of one image on devs[count] of this process: the bands of
+ * `rows` rows, or (adaptive) the rectangles multidev.h's adaptive dispenser
+ * cuts each frame. */
+struct tiles_job {
+	const struct render_settings *settings;
+	const struct scene *scene;
+	struct device *devs;
+	int count;
+	int rows, bands;
+	int adaptive;		 /* pieces from `adapt`, not bands */
+	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
+	int *owner;		 /* each piece's device (index into devs) */
+	int piece_count, piece_cap;
+	uint32_t *expected; /* check_writes: each pixel's launches so far, all frames */
+	struct adapt adapt;
+	pthread_mutex_t lock; /* adaptive: adapt, pieces, piece_count */
+	pthread_cond_t asked; /* adaptive: a device asked for its first piece */
+	struct tiles_device dev[DEVICES_MAX];
+};
+
+/* Returns 0, or -1 with one message in err (out of memory). With adaptive,
+ * rows is ignored and the pieces are cut per frame. */
+int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
+		   int rows, int adaptive, struct device *devs, int count, char *err,
+		   size_t err_size);
+
+/* Adaptive: the next piece for device k (its previous one done), added to
+ * the job's pieces; returns its index, or -1 when there is none for k. */
+int tiles_take_piece(struct tiles_job *t, int k);
+
+/* Releases every renderer and what they read back. */
+void tiles_job_free(struct tiles_job *t);
+
+/* multidev callbacks' bodies: opens device k's renderer (once); renders band
+ * on device k and records it as k's. */
+int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size);
+int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
+		      size_t err_size);
+
+/* Launches that cover each pixel of piece once (its samples in passes). */
+int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece);
+
+/* Reads back device k's image (and counts), once. */
+int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size);
+
+/* Copies piece's pixels of from's image (and per-pixel flops when both hold
+ * them) into to. */
+void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_result *from,
+		      struct render_result *to);
+
+/* Checks write counts: every pixel of the image counted `expected` times
+ * (check_writes). Returns 0, or -1 with the first pixel that was not in err. */
+int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t expected, char *err,
+		       size_t err_size);
+
+/* The plan and build facts the summary shows (work-groups, NDRange, build
+ * options, set-up times), from one device's result: the first device's. */
+void tiles_copy_facts(const struct render_result *from, struct render_result *to);
+
+/* With check_writes, after one frame: device k's write counts are each
+ * piece's launches in the pieces it rendered and 0 elsewhere. Returns 0, or -1
+ * with the first pixel that was not in err. */
+int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
+
+/* One image of run on devs[count] (count > 1): with --flops/--work-map a
+ * counting run first, then the timed frames (-r: one warm-up, N timed, each
+ * the whole image over every device). Fills run->result, run->counted,
+ * run->flops and run->multidevice (the --stats part), and work. Returns 0, or
+ * -1 with one message in err. */
+int tiles_render(struct run *run, struct device *devs, int count, struct device_work *work,
+		 char *err, size_t err_size);
+
+#endif
