@@ -99,7 +99,7 @@ endif
 # Every host module but main, by folder (host/README.md: the layers); tests
 # link them too. Objects mirror the folders: build/render/launch.o.
 HOST_MODULES := \
-	base/timing base/files base/quote base/suggest base/interrupt base/libdir base/progress \
+	base/timing base/files base/test_hooks base/quote base/suggest base/interrupt base/libdir base/progress \
 	scene/scene scene/scene_check scene/scene_literal scene/scene_material scene/scene_mesh \
 	scene/mesh_place scene/mesh_spawn \
 	device/device device/devices device/clerror device/progcache \

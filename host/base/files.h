@@ -53,7 +53,7 @@ int files_stage(struct staged_file *file, const char *target, char *err, size_t 
  * message in err (the staged files are discarded either way). */
 int files_commit(struct staged_file *files, int count, char *err, size_t err_size);
 
-/* For tests (checks.h, RTCL_TEST_FAIL_RENAME): the nth rename of a new file
+/* For tests (base/test_hooks.h, RTCL_TEST_FAIL_RENAME): the nth rename of a new file
  * over its target in a commit (from 1) fails with EIO; 0: none does. */
 void files_inject_rename_failure(int nth);
 

@@ -5,13 +5,9 @@
 #include <stddef.h>
 #include <stdio.h>
 
+#include "base/version.h"
 #include "device/devices.h"
 
-#define RTCL_VERSION "0.1.0"
-
-/* Exit statuses. */
-#define EXIT_USAGE 2  /* a bad option */
-#define EXIT_FAILED 1 /* a bad scene, a device, build or file error */
 
 struct options {
 	const char *kernel;	/* serial, naive, cyclic, dynamic or reference */

@@ -13,7 +13,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "render/checks.h"
+#include "base/test_hooks.h"
 #include "cmd/cli.h"
 #include "device/device.h"
 #include "device/devices.h"
@@ -302,7 +302,7 @@ int main(int argc, char **argv)
 		limits.memory_mib = opt.mesh_memory_limit;
 	mesh_set_limits(&limits);
 	progress_init(shows_progress(&opt));
-	files_inject_rename_failure(checks_rename_fault());
+	files_inject_rename_failure(hook_rename_fault());
 	/* Before the OpenCL runtime starts threads of its own. */
 	if (interrupt_setup(progress_enabled(), opt.mpi, err, sizeof(err))) {
 		fprintf(stderr, "rtcl: %s\n", err);

@@ -11,7 +11,7 @@
  * (killed with SIGKILL, or from before this naming). */
 #include "device/progcache.h"
 
-#include "cmd/cli.h" /* RTCL_VERSION */
+#include "base/version.h"
 
 #include <dirent.h>
 #include <errno.h>
@@ -24,7 +24,7 @@
 #include <time.h>
 #include <unistd.h>
 
-#include "render/checks.h" /* checks_cache_write_delay */
+#include "base/test_hooks.h" /* hook_cache_write_delay */
 #include "base/interrupt.h"
 #include "base/quote.h"
 
@@ -268,7 +268,7 @@ static int write_atomically(const char *path, const struct header *h, const unsi
 		fclose(file);
 		goto out_unlink;
 	}
-	checks_cache_write_delay();
+	hook_cache_write_delay();
 	if (fclose(file) != 0) {
 		saved = errno;
 		goto out_unlink;

@@ -8,7 +8,7 @@
 #include <strings.h>
 #include <sys/stat.h>
 
-#include "render/checks.h"
+#include "base/test_hooks.h"
 #include "base/files.h"
 #include "run/frames.h"
 #include "output/image.h"
@@ -287,7 +287,7 @@ int outputs_write(const struct run *run, char *err, size_t err_size)
 	int ret = files_commit(staged, n, err, err_size);
 	if (ret == 0) {
 		interrupt_set_outcome("the outputs were written");
-		checks_commit_delay();
+		hook_commit_delay();
 	}
 	interrupt_release();
 	return ret;

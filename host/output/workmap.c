@@ -9,7 +9,7 @@
 #include <string.h>
 #include <strings.h>
 
-#include "cmd/cli.h"
+#include "base/version.h"
 #include "base/files.h"
 #include "output/image.h"
 #include "base/quote.h"

@@ -9,6 +9,7 @@
 
 #include "rtcl_shared.h"
 #include "render/checks.h"
+#include "base/test_hooks.h"
 #include "render/launch.h"
 #include "render/program.h"
 #include "base/progress.h"
@@ -214,7 +215,7 @@ static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 	if (status == CL_SUCCESS)
 		status = launch_run(dev, st->kernel, 2, global, r->result->local_size, &watch,
 				    &out->kernel_ms, &call);
-	if (status == CL_SUCCESS && checks_device_fault_injected()) {
+	if (status == CL_SUCCESS && hook_device_fault()) {
 		call = "waiting for the kernel";
 		status = CL_OUT_OF_RESOURCES;
 	}

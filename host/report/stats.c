@@ -4,7 +4,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "cmd/cli.h"
+#include "base/version.h"
 #include "base/files.h"
 #include "base/quote.h"
 #include "base/timing.h"

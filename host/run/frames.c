@@ -5,7 +5,7 @@
 #include <string.h>
 #include <unistd.h>
 
-#include "render/checks.h"
+#include "base/test_hooks.h"
 #include "report/devstats.h"
 #include "output/image.h"
 #include "base/interrupt.h"
@@ -204,7 +204,7 @@ int frames_commit(const struct run *run, struct frames_output *o, const struct f
 	int ret = files_commit(o->staged, n, err, err_size);
 	if (ret == 0) {
 		interrupt_set_outcome("the outputs were written");
-		checks_commit_delay();
+		hook_commit_delay();
 	}
 	interrupt_release();
 	if (ret == 0 && !opt->quiet)

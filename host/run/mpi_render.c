@@ -9,7 +9,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "render/checks.h"
+#include "base/test_hooks.h"
 #include "cmd/cli.h"
 #include "run/frames.h"
 #include "report/devstats.h"
@@ -170,7 +170,7 @@ static int take_rank_piece(void *context, int device)
 	pthread_mutex_lock(&j->lock);
 	int taken = piece >= 0 ? ++j->taken : j->taken;
 	pthread_mutex_unlock(&j->lock);
-	if (checks_rank_dies(j->rank, taken, piece < 0))
+	if (hook_rank_dies(j->rank, taken, piece < 0))
 		raise(SIGKILL); /* as a node that goes down */
 	return piece;
 }
@@ -918,7 +918,7 @@ static int mpi_render(struct run *run, int image)
 	pthread_mutex_init(&j.lock, NULL);
 	j.run = run;
 	j.image = image;
-	run->settings.check_writes |= image && checks_count_writes();
+	run->settings.check_writes |= image && hook_count_writes();
 	MPI_Comm_rank(MPI_COMM_WORLD, &j.rank);
 	MPI_Comm_size(MPI_COMM_WORLD, &j.size);
 	/* Rank 0 shows the line for every rank; render() only adds to it. */

@@ -4,7 +4,7 @@
 
 #include <stdio.h>
 
-#include "cmd/cli.h"
+#include "base/version.h"
 
 int mpi_render_available(void)
 {

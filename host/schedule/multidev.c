@@ -5,7 +5,7 @@
 #include <stdio.h>
 #include <string.h>
 
-#include "render/checks.h"
+#include "base/test_hooks.h"
 #include "base/timing.h"
 
 #define WORKER_ERR_SIZE 4096
@@ -85,15 +85,15 @@ static void fail(struct worker *w)
 	}
 }
 
-/* One piece, with the test-only delay and fault (checks.h) around it. */
+/* One piece, with the test-only delay and fault (base/test_hooks.h) around it. */
 static int render_one(struct worker *w, int piece, struct piece_work *done)
 {
 	const struct multidev_job *job = w->dispenser->job;
 	double start = timing_now();
 	int ret = job->render_piece(job->context, w->index, piece, done, w->err, sizeof(w->err));
 
-	checks_piece_delay(w->index, (timing_now() - start) * 1e3);
-	if (ret == 0 && checks_piece_fault(w->index, w->work->pieces + 1)) {
+	hook_piece_delay(w->index, (timing_now() - start) * 1e3);
+	if (ret == 0 && hook_piece_fault(w->index, w->work->pieces + 1)) {
 		snprintf(w->err, sizeof(w->err),
 			 "the device failed on its piece %d (RTCL_TEST_FAIL_DEVICE)",
 			 w->work->pieces + 1);

@@ -6,7 +6,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "render/checks.h"
+#include "base/test_hooks.h"
 #include "report/devstats.h"
 #include "render/launch.h"
 #include "base/progress.h"
@@ -287,7 +287,7 @@ int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t e
 	return 0;
 }
 
-/* RTCL_TEST_DOUBLE_BAND=1 (checks.h): piece 0 rendered once more by another
+/* RTCL_TEST_DOUBLE_BAND=1 (base/test_hooks.h): piece 0 rendered once more by another
  * device, as a dispenser that handed it out twice would (unknowingly: not
  * in the expected counts). */
 static int double_band(struct tiles_job *t, char *err, size_t err_size)
@@ -295,7 +295,7 @@ static int double_band(struct tiles_job *t, char *err, size_t err_size)
 	int owner = t->owner[0];
 	struct piece_work pixels = {0};
 
-	if (!checks_double_band())
+	if (!hook_double_band())
 		return 0;
 	if (tiles_render_band(t, (owner + 1) % t->count, 0, &pixels, err, err_size))
 		return -1;
@@ -526,7 +526,7 @@ int tiles_render(struct run *run, struct device *devs, int count, struct device_
 	struct render_settings *s = &run->settings;
 	int rows = tiles_band_rows(s, run->opt->piece_rows, count);
 
-	s->check_writes |= checks_count_writes();
+	s->check_writes |= hook_count_writes();
 	if (run->counting) {
 		struct render_settings counting = *s;
 		double lap = timing_now();
