@@ -107,9 +107,11 @@ HOST_MODULES := \
 	render/checks render/program render/launch render/singlepass render/wavefront render/render \
 	render/reference \
 	schedule/multidev schedule/tiles \
-	report/stats report/devstats \
-	output/outputs output/workmap output/image_common output/image_encode output/image_png \
-	run/frames \
+	job/job job/record \
+	report/summary report/document report/devstats \
+	output/plan output/npy output/workmap output/image_common output/image_encode \
+	output/image_png \
+	run/image run/frames \
 	cmd/cli
 HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \
 	$(IMAGE_BACKEND) $(MPI_MODULE)

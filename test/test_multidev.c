@@ -9,6 +9,7 @@
 
 #include "device/devices.h"
 #include "base/files.h"
+#include "output/plan.h"
 #include "run/frames.h"
 #include "schedule/multidev.h"
 #include "render/render.h"
@@ -89,11 +90,11 @@ Test(multidev, frame_names_put_the_number_before_the_extension)
 {
 	char name[PATH_MAX];
 
-	cr_assert_eq(frames_output_name("out.png", 7, name), 0);
+	cr_assert_eq(output_frame_name("out.png", 7, name), 0);
 	cr_assert_str_eq(name, "out_0007.png");
-	cr_assert_eq(frames_output_name("dir.d/out", 12345, name), 0);
+	cr_assert_eq(output_frame_name("dir.d/out", 12345, name), 0);
 	cr_assert_str_eq(name, "dir.d/out_12345");
-	cr_assert_eq(frames_output_name("a/.hidden.exr", 0, name), 0);
+	cr_assert_eq(output_frame_name("a/.hidden.exr", 0, name), 0);
 	cr_assert_str_eq(name, "a/.hidden_0000.exr");
 }
 
@@ -101,45 +102,46 @@ Test(multidev, frame_names_put_the_number_before_the_extension)
  * and what does not fit in half the host's memory is refused up front. */
 Test(multidev, held_frames_arrive_once_each_and_all_of_them)
 {
-	struct options opt;
-	struct frames_output o;
+	struct scene scene = {.source = "s.json"};
+	struct job job = {.scene = &scene, .animation = 1, .first_frame = 3, .last_frame = 5};
+	struct output_request request = {.image = "out.ppm"};
+	struct output_plan o;
 	char err[512];
 
-	memset(&opt, 0, sizeof(opt));
-	opt.output = "out.ppm";
-	opt.frames[0] = 3;
-	opt.frames[1] = 5;
-	cr_assert_eq(frames_output_open(&o, &opt, err, sizeof(err)), 0);
-	cr_assert_eq(o.count, 3);
-	cr_assert_eq(frames_hold(&o, 0, malloc(12), err, sizeof(err)), 0);
-	cr_assert_eq(frames_hold(&o, 2, malloc(12), err, sizeof(err)), 0);
-	cr_assert_eq(frames_check_held(&o, err, sizeof(err)), -1);
+	cr_assert_eq(output_plan_open(&o, &request, &job, err, sizeof(err)), 0);
+	cr_assert_eq(o.frames, 3);
+	cr_assert_eq(output_plan_hold(&o, 0, malloc(12), err, sizeof(err)), 0);
+	cr_assert_eq(output_plan_hold(&o, 2, malloc(12), err, sizeof(err)), 0);
+	cr_assert_eq(output_plan_check_held(&o, err, sizeof(err)), -1);
 	cr_assert_str_eq(err, "frame out_0004.ppm never arrived");
-	cr_assert_eq(frames_hold(&o, 2, malloc(12), err, sizeof(err)), -1);
+	cr_assert_eq(output_plan_hold(&o, 2, malloc(12), err, sizeof(err)), -1);
 	cr_assert_str_eq(err, "frame out_0005.ppm arrived twice");
-	cr_assert_eq(frames_hold(&o, 1, malloc(12), err, sizeof(err)), 0);
-	cr_assert_eq(frames_check_held(&o, err, sizeof(err)), 0);
-	frames_output_close(&o); /* frees the held frames (ASan, valgrind) */
+	cr_assert_eq(output_plan_hold(&o, 1, malloc(12), err, sizeof(err)), 0);
+	cr_assert_eq(output_plan_check_held(&o, err, sizeof(err)), 0);
+	output_plan_close(&o); /* frees the held frames (ASan, valgrind) */
 }
 
 Test(multidev, held_frames_beyond_half_the_memory_are_refused_with_the_numbers)
 {
-	struct options opt;
-	struct render_settings s;
+	struct scene scene = {.source = "s.json"};
+	struct job job = {.scene = &scene, .animation = 1, .first_frame = 0, .last_frame = 9};
+	struct output_request request = {.image = "out.ppm"};
+	struct output_plan o;
 	char err[512];
 
-	memset(&opt, 0, sizeof(opt));
-	memset(&s, 0, sizeof(s));
-	opt.frames[1] = 9;
-	s.width = 64;
-	s.height = 48;
-	cr_assert_eq(frames_check_memory(&opt, &s, err, sizeof(err)), 0);
-	opt.frames[1] = 999; /* 1000 frames of 16384x16384: 3000 GiB */
-	s.width = s.height = 16384;
-	cr_assert_eq(frames_check_memory(&opt, &s, err, sizeof(err)), -1);
+	job.settings.width = 64;
+	job.settings.height = 48;
+	cr_assert_eq(output_plan_open(&o, &request, &job, err, sizeof(err)), 0);
+	cr_assert_eq(output_plan_check_memory(&o, err, sizeof(err)), 0);
+	output_plan_close(&o);
+	job.last_frame = 999; /* 1000 frames of 16384x16384: 3000 GiB */
+	job.settings.width = job.settings.height = 16384;
+	cr_assert_eq(output_plan_open(&o, &request, &job, err, sizeof(err)), 0);
+	cr_assert_eq(output_plan_check_memory(&o, err, sizeof(err)), -1);
 	cr_assert(strstr(err, "1000 frames of 16384x16384 need 3000.0 GiB (12 bytes a pixel)"),
 		  "%s", err);
 	cr_assert(strstr(err, "half of this host's memory"), "%s", err);
+	output_plan_close(&o);
 }
 
 static struct render_settings band_settings(int width, int height, int samples)

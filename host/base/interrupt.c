@@ -60,7 +60,8 @@ static void leave(int signal_number)
 		if (tracked[i])
 			rmdir(tracked[i]);
 	/* dprintf, not stdio: the main thread may hold stderr's lock. */
-	dprintf(STDERR_FILENO, "%srtcl: interrupted%s; %s\n", progress_on_stderr ? "\n" : "",
+	if (outcome)
+		dprintf(STDERR_FILENO, "%srtcl: interrupted%s; %s\n", progress_on_stderr ? "\n" : "",
 		signal_name(signal_number), outcome);
 	_exit(128 + signal_number);
 }

@@ -35,7 +35,8 @@ int interrupt_track(const char *path);
 void interrupt_untrack(const char *path);
 
 /* What the message says was left after an interrupt from now on (default "no
- * output written"); a string literal. */
+ * output written"); a string literal. NULL: no message (the run has failed
+ * and said why; under --mpi, mpirun may still end the rank). */
 void interrupt_set_outcome(const char *outcome);
 
 /* At the end of a successful run, before the process exits: a signal that

@@ -6,7 +6,6 @@
 #include <string.h>
 #include <strings.h>
 
-#include "run/frames.h"
 #include "scene/mesh.h"
 #include "base/quote.h"
 #include "render/render.h"
@@ -416,7 +415,7 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case 's':
 		return take_file_name("-s/--scene", arg, &o->scene_path, err, err_size);
 	case 'o':
-		return take_file_name("-o/--output", arg, &o->output, err, err_size);
+		return take_file_name("-o/--output", arg, &o->outputs.image, err, err_size);
 	case OPT_SIZE:
 		return parse_shape("--size", arg, SCENE_MAX_IMAGE_SIDE, o->size, err, err_size);
 	case OPT_DEPTH:
@@ -424,30 +423,30 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_SPP:
 		return parse_bounded("--spp", arg, 1, SCENE_MAX_SAMPLES, &o->spp, err, err_size);
 	case 'p':
-		return parse_bounded("-p/--platform", arg, 0, 1000, &o->platform, err, err_size);
+		return parse_bounded("-p/--platform", arg, 0, 1000, &o->devices.platform, err, err_size);
 	case 'd':
-		return parse_bounded("-d/--device", arg, 0, 1000, &o->device, err, err_size);
+		return parse_bounded("-d/--device", arg, 0, 1000, &o->devices.device, err, err_size);
 	case 't':
-		return parse_device_kind(arg, &o->device_kind, err, err_size);
+		return parse_device_kind(arg, &o->devices.kind, err, err_size);
 	case 'r':
 		return parse_bounded("-r/--repeat", arg, 1, 100000, &o->repeat, err, err_size);
 	case OPT_STATS:
-		return take_file_name("--stats", arg, &o->stats_path, err, err_size);
+		return take_file_name("--stats", arg, &o->outputs.stats, err, err_size);
 	case OPT_FLOPS:
-		return take_flops_name(arg, &o->flops_path, err, err_size);
+		return take_flops_name(arg, &o->outputs.flops, err, err_size);
 	case OPT_WORK_MAP:
-		return take_file_name("--work-map", arg, &o->work_map_path, err, err_size);
+		return take_file_name("--work-map", arg, &o->outputs.work_map, err, err_size);
 	case OPT_WORK_MAP_BAR:
-		return take_file_name("--work-map-bar", arg, &o->work_map_bar_path, err, err_size);
+		return take_file_name("--work-map-bar", arg, &o->outputs.work_map_bar, err, err_size);
 	case OPT_WORK_MAP_SCALE:
-		return parse_choice("--work-map-scale", arg, "linear", "log", &o->work_map_log, err,
+		return parse_choice("--work-map-scale", arg, "linear", "log", &o->outputs.work_map_log, err,
 				    err_size);
 	case OPT_ENCODING:
-		return parse_choice("--encoding", arg, "srgb", "linear", &o->linear_encoding, err,
+		return parse_choice("--encoding", arg, "srgb", "linear", &o->outputs.linear_encoding, err,
 				    err_size);
 	case OPT_DEVICES:
-		o->devices_given = 1;
-		return devices_parse(arg, &o->devices, err, err_size);
+		o->devices.list_given = 1;
+		return devices_parse(arg, &o->devices.list, err, err_size);
 	case OPT_SPLIT:
 		o->split_given = 1;
 		return parse_choice("--split", arg, "dynamic", "static", &o->split_static, err,
@@ -567,9 +566,9 @@ static void describe_bad_option(int c, int argc, char **argv, char *err, size_t 
 /* One image over several devices or ranks (tiles.h): what does not apply. */
 static int check_several_devices(const struct options *o, char *err, size_t err_size)
 {
-	int several = o->mpi || (o->devices_given && (o->devices.all || o->devices.count > 1));
+	int several = o->mpi || (o->devices.list_given && (o->devices.list.all || o->devices.list.count > 1));
 
-	if (o->piece_rows && (!(o->devices_given || o->mpi) || o->frames_given)) {
+	if (o->piece_rows && (!(o->devices.list_given || o->mpi) || o->frames_given)) {
 		snprintf(err, err_size,
 			 "--piece-rows cuts one image into bands for the devices of --devices or "
 			 "--mpi (one device too: --devices P:D); it does not apply to %s",
@@ -577,19 +576,19 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 					 : "a render without them");
 		return -1;
 	}
-	if (o->split_given && !(o->devices_given || o->mpi)) {
+	if (o->split_given && !(o->devices.list_given || o->mpi)) {
 		snprintf(err, err_size,
 			 "--split chooses how pieces go to the devices of --devices or --mpi; it "
 			 "does not apply to a render without them");
 		return -1;
 	}
-	if (several && o->flops_path) {
+	if (several && o->outputs.flops) {
 		snprintf(err, err_size,
 			 "--flops writes one device's NDRange of work-items; with several devices "
 			 "or --mpi use --work-map FILE.npy (per pixel) or one device");
 		return -1;
 	}
-	if (o->mpi && !o->frames_given && (o->repeat || o->work_map_path)) {
+	if (o->mpi && !o->frames_given && (o->repeat || o->outputs.work_map)) {
 		snprintf(err, err_size,
 			 "--mpi renders the image once and sends only its pixels to rank 0: "
 			 "-r/--repeat and --work-map need --devices in one process");
@@ -601,32 +600,32 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 /* Rules between options, checked once all are read. */
 static int check_combination(const struct options *o, char *err, size_t err_size)
 {
-	if (strcmp(o->kernel, "reference") == 0 && (o->flops_path || o->work_map_path)) {
+	if (strcmp(o->kernel, "reference") == 0 && (o->outputs.flops || o->outputs.work_map)) {
 		snprintf(err, err_size,
 			 "--flops and --work-map count the OpenCL kernels' work; the reference "
 			 "renderer does not count (choose an OpenCL kernel)");
 		return -1;
 	}
-	if (o->devices_given && (o->platform >= 0 || o->device >= 0)) {
+	if (o->devices.list_given && (o->devices.platform >= 0 || o->devices.device >= 0)) {
 		snprintf(err, err_size,
 			 "--devices and -p/-d both choose devices: give one or the other");
 		return -1;
 	}
-	if ((o->devices_given || o->frames_given || o->mpi) &&
+	if ((o->devices.list_given || o->frames_given || o->mpi) &&
 	    strcmp(o->kernel, "reference") == 0) {
 		snprintf(err, err_size,
 			 "--devices, --frames and --mpi render on OpenCL devices; the reference "
 			 "renderer runs on the host (choose an OpenCL kernel)");
 		return -1;
 	}
-	if (o->frames_given && (o->repeat || o->flops_path || o->work_map_path)) {
+	if (o->frames_given && (o->repeat || o->outputs.flops || o->outputs.work_map)) {
 		snprintf(err, err_size,
 			 "--frames renders each frame once: -r/--repeat, --flops and --work-map "
 			 "do not apply");
 		return -1;
 	}
-	if (o->work_map_bar_path &&
-	    (!o->work_map_path || workmap_kind(o->work_map_path) != WORKMAP_PICTURE)) {
+	if (o->outputs.work_map_bar &&
+	    (!o->outputs.work_map || workmap_kind(o->outputs.work_map) != WORKMAP_PICTURE)) {
 		snprintf(err, err_size,
 			 "--work-map-bar: the bar is the legend of a --work-map picture; give "
 			 "--work-map an image file (not .npy, .exr, .pfm or .hdr)");
@@ -666,9 +665,9 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	memset(o, 0, sizeof(*o));
 	o->kernel = "dynamic";
 	o->workgroup[0] = o->workgroup[1] = 8;
-	o->output = "render.png";
+	o->outputs.image = "render.png";
 	o->depth = -1;
-	o->platform = o->device = -1;
+	o->devices.platform = o->devices.device = -1;
 	o->repeat = 0; /* not given: one launch, no warm-up */
 	o->batch = 1;
 	o->accel = 1; /* bvh */

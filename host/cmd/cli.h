@@ -7,36 +7,32 @@
 
 #include "base/version.h"
 #include "device/devices.h"
+#include "job/job.h"
+#include "output/plan.h"
 
 
+/* The options, composed of what each layer reads: the devices (job.h), the
+ * outputs (the output plan's request), and the rest, which main resolves
+ * into the job. */
 struct options {
 	const char *kernel;	/* serial, naive, cyclic, dynamic or reference */
 	int workgroup[2];	/* -w WxH */
 	int groups[2];		/* --groups GXxGY; 0x0 when not given */
 	int batch;		/* --batch N for the persistent kernel */
 	const char *scene_path; /* -s or the argument; NULL: the built-in paper60 scene */
-	const char *output;
-	int size[2];		      /* --size WxH; 0x0 when not given */
-	int depth;		      /* --depth N; -1 when not given */
-	int spp;		      /* --spp N; 0 when not given */
-	int platform, device;	      /* -p, -d; -1 when not given */
-	enum device_kind device_kind; /* -t/--type gpu|cpu|all */
+	int size[2];		/* --size WxH; 0x0 when not given */
+	int depth;		/* --depth N; -1 when not given */
+	int spp;		/* --spp N; 0 when not given */
+	struct device_choice devices; /* -p, -d (-1 when not given), -t, --devices */
 	int list_devices;
-	struct device_list devices; /* --devices LIST|all */
-	int devices_given;
 	int split_static; /* --split static */
 	int split_given;  /* --split given */
 	int frames[2];	  /* --frames A:B */
 	int frames_given;
-	int mpi;	/* --mpi: rank 0 hands out the pieces (mpi_render.h) */
-	int piece_rows; /* --piece-rows N; 0: chosen (tiles.h) */
+	int mpi;	/* --mpi: rank 0 hands out the pieces (run/mpi_render.h) */
+	int piece_rows; /* --piece-rows N; 0: chosen (schedule/tiles.h) */
 	int repeat;	/* -r N; 0 when not given */
-	const char *stats_path;
-	const char *flops_path;	       /* --flops FILE.npy */
-	const char *work_map_path;     /* --work-map IMAGE */
-	int work_map_log;	       /* --work-map-scale log */
-	const char *work_map_bar_path; /* --work-map-bar IMAGE */
-	int linear_encoding;	       /* --encoding linear: 8-bit files hold round(255 c) */
+	struct output_request outputs; /* -o, --stats, --flops, --work-map, ... */
 	int accel;		       /* --accel: 1 bvh (ACCEL_BVH), 0 none */
 	int quiet, verbose;
 	int help, version;

@@ -10,13 +10,12 @@
 #include <time.h>
 
 #include "base/test_hooks.h"
-#include "cmd/cli.h"
+#include "base/version.h"
 #include "run/frames.h"
-#include "report/devstats.h"
+#include "run/mode.h"
 #include "base/interrupt.h"
 #include "render/launch.h"
 #include "base/progress.h"
-#include "output/outputs.h"
 #include "base/quote.h"
 #include "render/render.h"
 #include "scene/scene.h"
@@ -38,7 +37,10 @@ struct device_report {
 };
 
 struct mpi_job {
-	struct run *run;
+	const struct job *job;
+	struct render_settings settings; /* the job's, for this rank */
+	struct record *record;
+	struct output_plan *plan;
 	int rank, size;
 	struct device devs[DEVICES_MAX]; /* this rank's */
 	int count;
@@ -59,11 +61,12 @@ struct mpi_job {
 	int *current; /* the piece each other rank's device renders, or -1 */
 	int failed;
 	char message[MESSAGE_SIZE];
-	struct frames_output output;
 	struct device *all_devs;
 	struct device_work *all_work;
 	int *arrived; /* image: how often each band arrived */
 	double wall_ms;
+	int initialized; /* MPI_Init_thread succeeded */
+	int threads;	 /* with MPI_THREAD_MULTIPLE */
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -89,7 +92,7 @@ static int central_take(struct mpi_job *j, int g)
 	pthread_mutex_lock(&j->lock);
 	if (j->failed)
 		piece = -1;
-	else if (j->run->opt->split_static)
+	else if (j->job->split == SPLIT_STATIC)
 		piece = j->next_static[g] < j->end_static[g] ? j->next_static[g]++ : -1;
 	else if (j->next < piece_count(j))
 		piece = j->next++;
@@ -206,7 +209,7 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_t err_size)
 {
 	pthread_mutex_lock(&j->lock);
-	int failed = frames_hold(&j->output, piece, rgb, err, err_size);
+	int failed = output_plan_hold(j->plan, piece, rgb, err, err_size);
 	pthread_mutex_unlock(&j->lock);
 	return failed;
 }
@@ -215,13 +218,13 @@ static int render_rank_piece(void *context, int device, int piece, struct piece_
 			     char *err, size_t err_size)
 {
 	struct mpi_job *j = context;
-	const struct render_settings *s = &j->run->settings;
+	const struct render_settings *s = &j->settings;
 	struct render_result result;
 	int failed;
 
 	if (j->image)
 		return tiles_render_band(&j->tiles, device, piece, done, err, err_size);
-	if (frames_render_frame(j->run, &j->devs[device], piece, &result, err, err_size))
+	if (frames_render_frame(j->job, &j->settings, &j->devs[device], piece, &result, err, err_size))
 		return -1;
 	if (j->rank == ROOT) {
 		failed = hold_frame(j, piece, result.rgb, err, err_size);
@@ -258,12 +261,12 @@ static int open_rank_device(void *context, int device, char *err, size_t err_siz
 /* Rank 0: band b's rows, rgb, into the image. */
 static void place_band(struct mpi_job *j, int band, const float *rgb)
 {
-	struct rt_piece p = tiles_band(&j->run->settings, j->tiles.rows, band, 0, 1);
+	struct rt_piece p = tiles_band(&j->settings, j->tiles.rows, band, 0, 1);
 
 	pthread_mutex_lock(&j->lock);
 	j->arrived[band]++;
 	pthread_mutex_unlock(&j->lock);
-	memcpy(j->run->result.rgb + 3 * (size_t)p.y0 * p.width, rgb,
+	memcpy(j->record->result.rgb + 3 * (size_t)p.y0 * p.width, rgb,
 	       image_float_bytes(p.width, p.height));
 }
 
@@ -328,7 +331,7 @@ static void device_done(void *context, int device)
 /* The pixel samples of piece: a whole frame, or a band. */
 static double piece_work(const struct mpi_job *j, int piece)
 {
-	const struct render_settings *s = &j->run->settings;
+	const struct render_settings *s = &j->settings;
 
 	if (!j->image)
 		return launch_image_work(s);
@@ -358,7 +361,7 @@ static void serve_take(struct mpi_job *j, int source)
 /* The bytes of piece's pixels: a whole frame, or a band. */
 static size_t piece_bytes(const struct mpi_job *j, int piece)
 {
-	const struct render_settings *s = &j->run->settings;
+	const struct render_settings *s = &j->settings;
 	struct rt_piece p;
 
 	if (!j->image)
@@ -494,22 +497,22 @@ struct job_record {
 
 static void describe_job(const struct mpi_job *j, struct job_record *r)
 {
-	const struct render_settings *s = &j->run->settings;
-	const struct options *opt = j->run->opt;
+	const struct render_settings *s = &j->settings;
+	const struct job *job = j->job;
 	long long *v = r->setting;
 
 	memset(r, 0, sizeof(*r));
-	r->scene_digest = scene_digest(j->run->scene);
-	snprintf(r->source, sizeof(r->source), "%s", j->run->scene->source);
+	r->scene_digest = scene_digest(job->scene);
+	snprintf(r->source, sizeof(r->source), "%s", job->scene->source);
 	v[JOB_WIDTH] = s->width;
 	v[JOB_HEIGHT] = s->height;
 	v[JOB_SAMPLES] = s->samples;
 	v[JOB_DEPTH] = s->max_depth;
-	v[JOB_FRAMES_GIVEN] = opt->frames_given;
-	v[JOB_FRAME_FIRST] = opt->frames_given ? opt->frames[0] : 0;
-	v[JOB_FRAME_LAST] = opt->frames_given ? opt->frames[1] : 0;
-	v[JOB_PIECE_ROWS] = opt->piece_rows;
-	v[JOB_SPLIT_STATIC] = opt->split_static;
+	v[JOB_FRAMES_GIVEN] = job->animation;
+	v[JOB_FRAME_FIRST] = job->animation ? job->first_frame : 0;
+	v[JOB_FRAME_LAST] = job->animation ? job->last_frame : 0;
+	v[JOB_PIECE_ROWS] = job->piece_rows;
+	v[JOB_SPLIT_STATIC] = job->split == SPLIT_STATIC;
 	v[JOB_KERNEL] = s->kernel ? s->kernel - render_kernels : -1;
 	v[JOB_WORKGROUP_X] = s->workgroup[0];
 	v[JOB_WORKGROUP_Y] = s->workgroup[1];
@@ -639,28 +642,20 @@ static int agree_on_job(struct mpi_job *j)
 	return 0;
 }
 
-/* Opens this rank's devices; rank 0 first checks and prepares the outputs.
- * Returns 0, OUTPUTS_CLASH, or -1 with one message in err. */
-static int start_rank(struct mpi_job *j, char *err, size_t err_size)
+/* Opens this rank's devices, unless rank 0's check of the outputs (checked)
+ * failed. Returns 0, OUTPUT_CLASH, or -1 with one message in err. */
+static int start_rank(struct mpi_job *j, int checked, char *err, size_t err_size)
 {
-	const struct options *opt = j->run->opt;
-	int checked = j->rank == ROOT ? outputs_check(opt, j->run->scene, err, err_size) : 0;
-
 	if (checked)
 		return checked;
-	if (j->rank == ROOT && !j->image &&
-	    (frames_check_memory(opt, &j->run->settings, err, err_size) ||
-	     frames_output_open(&j->output, opt, err, err_size)))
+	if (j->rank == ROOT && j->job->animation &&
+	    output_plan_check_memory(j->plan, err, err_size))
 		return -1;
-	if (opt->devices_given)
-		return devices_open(&opt->devices, opt->device_kind, j->devs, &j->count, err,
-				    err_size);
-	j->count = 1;
-	if (device_open_kind(&j->devs[0], opt->platform, opt->device, opt->device_kind, err,
-			     err_size) == 0)
-		return 0;
-	j->count = 0;
-	return -1;
+	if (job_open_devices(j->job, j->devs, &j->count, err, err_size)) {
+		j->count = 0;
+		return -1;
+	}
+	return 0;
 }
 
 /* Rank 0: where each rank's devices fall among all, and the static split. */
@@ -695,32 +690,31 @@ static int plan_devices(struct mpi_job *j, const int *counts)
  * image's bands over all devices (total). */
 static int choose_pieces(struct mpi_job *j, int total)
 {
-	struct run *run = j->run;
-	const struct render_settings *s = &run->settings;
+	const struct job *job = j->job;
+	const struct render_settings *s = &j->settings;
 	char err[MESSAGE_SIZE];
 
 	if (!j->image) {
-		j->pieces = run->opt->frames[1] - run->opt->frames[0] + 1;
+		j->pieces = job_frame_count(job);
 		return 0;
 	}
-	if (tiles_job_init(&j->tiles, run->scene, s,
-			   tiles_band_rows(s, run->opt->piece_rows, total), 0, j->devs, j->count,
-			   err, sizeof(err)))
+	if (tiles_job_init(&j->tiles, job->scene, s, tiles_band_rows(s, job->piece_rows, total), 0,
+			   j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
 	if (j->rank != ROOT)
 		return 0;
 	j->arrived = calloc((size_t)j->pieces, sizeof(int));
-	run->result.rgb = malloc(image_float_bytes(s->width, s->height));
-	return j->arrived && run->result.rgb ? 0 : -1;
+	j->record->result.rgb = malloc(image_float_bytes(s->width, s->height));
+	return j->arrived && j->record->result.rgb ? 0 : -1;
 }
 
 /* Every rank learns whether all started; the lowest rank that did not says
- * why. failed: 0, -1, or OUTPUTS_CLASH (a usage error). Returns 0 when all
+ * why. failed: 0, -1, or OUTPUT_CLASH (a usage error). Returns 0 when all
  * started, else the exit status of the lowest rank's failure. */
 static int agree_on_start(struct mpi_job *j, int failed, const char *err)
 {
-	int mine = failed == OUTPUTS_CLASH ? -2 : failed ? -1 : j->count, lowest = -1;
+	int mine = failed == OUTPUT_CLASH ? -2 : failed ? -1 : j->count, lowest = -1;
 	int *counts = malloc((size_t)j->size * sizeof(int));
 
 	if (!counts ||
@@ -753,8 +747,8 @@ static int agree_on_start(struct mpi_job *j, int failed, const char *err)
  * the summary read. Returns 0, or -1 with the failure recorded. */
 static int assemble_image(struct mpi_job *j, double wall_ms)
 {
-	struct run *run = j->run;
-	struct render_result *res = &run->result;
+	struct record *record = j->record;
+	struct render_result *res = &record->result;
 	char message[256];
 
 	for (int b = 0; b < j->pieces; b++) {
@@ -775,31 +769,11 @@ static int assemble_image(struct mpi_job *j, double wall_ms)
 	res->repeat = res->launches = 1;
 	res->passes = 1;
 	tiles_copy_facts(&j->tiles.dev[0].result, res);
-	snprintf(run->device_name, sizeof(run->device_name), "%d devices over %d ranks, first %s",
-		 j->total, j->size, j->devs[0].name);
-	run->multidevice =
-		devstats_json(j->all_devs, j->rank_of, j->all_work, j->total,
-			      run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC, "band");
-	if (run->multidevice) {
-		json_object_set_new(run->multidevice, "band_rows", json_integer(j->tiles.rows));
-		json_object_set_new(run->multidevice, "bands", json_integer(j->pieces));
-		json_object_set_new(run->multidevice, "ranks", json_integer(j->size));
-	}
-	return 0;
-}
-
-/* Rank 0, image: writes the outputs and prints the summary. */
-static int write_job_image(struct mpi_job *j, char *err, size_t err_size)
-{
-	struct run *run = j->run;
-
-	run->write_start = timing_now();
-	if (outputs_write(run, err, err_size))
-		return -1;
-	if (run->opt->quiet)
-		return 0;
-	stats_print_summary(run);
-	devstats_print(stdout, j->all_devs, j->rank_of, j->all_work, j->total, "band");
+	record_device(record, &j->devs[0]);
+	snprintf(record->device.name, sizeof(record->device.name),
+		 "%d devices over %d ranks, first %s", j->total, j->size, j->devs[0].name);
+	record->shares.band_rows = j->tiles.rows;
+	record->shares.bands = j->pieces;
 	return 0;
 }
 
@@ -813,28 +787,23 @@ static int finish_root(struct mpi_job *j)
 		j->all_devs[k] = j->devs[k];
 		j->all_work[k] = j->work[k];
 	}
+	j->record->shares = (struct device_shares){
+		.devs = j->all_devs,
+		.ranks = j->rank_of,
+		.work = j->all_work,
+		.count = j->total,
+		.ranks_count = j->image ? j->size : 0,
+		.split = j->job->split,
+		.piece = j->image ? "band" : "frame",
+		.wall_ms = j->wall_ms,
+	};
 	if (!j->failed && j->image)
 		assemble_image(j, j->wall_ms);
-	else if (!j->failed && frames_check_held(&j->output, err, sizeof(err)))
+	else if (!j->failed && output_plan_check_held(j->plan, err, sizeof(err)))
 		record_failure(j, ROOT, err);
 	if (!j->failed)
 		return 0;
 	fprintf(stderr, "rtcl: %s\n", j->message);
-	return EXIT_FAILED;
-}
-
-/* Rank 0, after MPI_Finalize (mpi_render): the outputs and the summary.
- * Returns the exit status. */
-static int write_root(struct mpi_job *j)
-{
-	struct frames_report report = {j->all_devs, j->rank_of, j->all_work, j->total, j->wall_ms};
-	char err[MESSAGE_SIZE];
-	int failed = j->image ? write_job_image(j, err, sizeof(err))
-			      : frames_write_held(j->run, &j->output, &report, err, sizeof(err));
-
-	if (!failed)
-		return 0;
-	fprintf(stderr, "rtcl: rank 0, %s\n", err);
 	return EXIT_FAILED;
 }
 
@@ -844,7 +813,7 @@ static int render_all(struct mpi_job *j)
 {
 	struct multidev_job job = {.piece_count = piece_count(j),
 				   .split =
-					   j->run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
+					   j->job->split == SPLIT_STATIC ? SPLIT_STATIC : SPLIT_DYNAMIC,
 				   .begin = j->image ? open_rank_device : NULL,
 				   .render_piece = render_rank_piece,
 				   .end = device_done,
@@ -859,7 +828,7 @@ static int render_all(struct mpi_job *j)
 	if (j->rank == ROOT) {
 		char ranks[32];
 		snprintf(ranks, sizeof(ranks), "%d rank%s", j->size, j->size == 1 ? "" : "s");
-		launch_progress_begin(&j->run->settings, j->image ? 1 : piece_count(j), ranks);
+		launch_progress_begin(&j->settings, j->image ? 1 : piece_count(j), ranks);
 	}
 	if (j->rank == ROOT && pthread_create(&server, NULL, serve, j) != 0) {
 		fprintf(stderr, "rtcl: cannot start rank 0's server thread\n");
@@ -884,8 +853,6 @@ static void free_job(struct mpi_job *j)
 {
 	tiles_job_free(&j->tiles); /* the renderers, before their devices */
 	devices_close(j->devs, j->count);
-	if (j->rank == ROOT && !j->image)
-		frames_output_close(&j->output);
 	free(j->arrived);
 	free(j->first);
 	free(j->rank_of);
@@ -897,76 +864,121 @@ static void free_job(struct mpi_job *j)
 	pthread_mutex_destroy(&j->lock);
 }
 
-int mpi_render_available(void)
+/* Starts MPI; only rank 0 writes the outputs. */
+static int mpi_begin(struct mode_run *run, char *err, size_t err_size)
 {
-	return 1;
-}
+	struct mpi_job *j = calloc(1, sizeof(*j));
+	int provided = 0;
 
-/* Either kind of job: frames, or one image in bands. */
-static int mpi_render(struct run *run, int image)
-{
-	static struct mpi_job j;
-	char err[MESSAGE_SIZE] = "";
-	int provided = 0, status = EXIT_FAILED;
-
-	if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
-		fprintf(stderr, "rtcl: --mpi: MPI_Init_thread failed (run rtcl under mpirun)\n");
+	if (!j) {
+		snprintf(err, err_size, "out of host memory");
 		return EXIT_FAILED;
 	}
-	MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
-	memset(&j, 0, sizeof(j));
-	pthread_mutex_init(&j.lock, NULL);
-	j.run = run;
-	j.image = image;
-	run->settings.check_writes |= image && hook_count_writes();
-	MPI_Comm_rank(MPI_COMM_WORLD, &j.rank);
-	MPI_Comm_size(MPI_COMM_WORLD, &j.size);
+	run->state = j;
+	pthread_mutex_init(&j->lock, NULL);
+	j->job = run->job;
+	j->record = run->record;
+	j->plan = run->plan;
+	j->image = !run->job->animation;
+	j->settings = run->job->settings;
+	j->settings.check_writes |= j->image && hook_count_writes();
 	/* Rank 0 shows the line for every rank; render() only adds to it. */
-	run->settings.progress = 0;
-	if (j.rank != ROOT)
+	j->settings.progress = 0;
+	if (MPI_Init_thread(NULL, NULL, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS) {
+		snprintf(err, err_size, "--mpi: MPI_Init_thread failed (run rtcl under mpirun)");
+		run->writes = 0;
+		return EXIT_FAILED;
+	}
+	j->initialized = 1;
+	j->threads = provided >= MPI_THREAD_MULTIPLE;
+	MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
+	MPI_Comm_rank(MPI_COMM_WORLD, &j->rank);
+	MPI_Comm_size(MPI_COMM_WORLD, &j->size);
+	run->writes = j->rank == ROOT;
+	if (j->rank != ROOT)
 		progress_init(0);
 	interrupt_set_outcome("no output written (under --mpi, mpirun ends every rank when one "
 			      "dies or is interrupted: see its report)");
-	if (provided < MPI_THREAD_MULTIPLE) {
-		snprintf(err, sizeof(err),
+	return 0;
+}
+
+/* Every rank agrees on the job and on starting (rank 0's check of the
+ * outputs included), then renders. Each rank prints its own failure. */
+static int mpi_render(struct mode_run *run, int checked, char *err, size_t err_size)
+{
+	struct mpi_job *j = run->state;
+
+	if (!j->threads) {
+		snprintf(err, err_size,
 			 "--mpi: this MPI library does not give threads MPI_THREAD_MULTIPLE");
-		agree_on_start(&j, 1, err);
-	} else if (agree_on_job(&j) == 0) {
-		status = agree_on_start(&j, start_rank(&j, err, sizeof(err)), err);
-		if (status == 0)
-			status = render_all(&j);
+		agree_on_start(j, 1, err);
+		err[0] = '\0';
+		return EXIT_FAILED;
 	}
-	/* Rank 0 writes once every rank has finalised. A rank that dies makes
-	 * Open MPI's daemon send the others SIGCONT, SIGTERM after
-	 * odls_base_sigkill_timeout (1 s), then SIGKILL after as long again; but
-	 * that sleep(1) returns 0 when the SIGCHLD of a rank that exits on the
-	 * SIGTERM interrupts it, so SIGKILL follows in about 5 ms (strace of
-	 * Open MPI 4.1.4's mpirun), and a busy rank 0 is killed before its
-	 * interrupt thread can remove its staged files (left behind before this
-	 * design, which staged each frame as it arrived). Hence: until here,
-	 * rank 0 has created nothing
-	 * in the output folder (the frames, or the image, are in memory), so a
-	 * rank that dies before it leaves nothing; from here no other rank is
-	 * left to die, and the writing (staging, then one commit) takes about
-	 * 10-90 ms a frame (README). */
+	if (agree_on_job(j)) {
+		err[0] = '\0'; /* rank 0 printed it */
+		return EXIT_FAILED;
+	}
+	int status = agree_on_start(j, start_rank(j, checked, err, err_size), err);
+	err[0] = '\0'; /* printed by the rank that failed */
+	if (status)
+		/* Said; a rank that exits first makes mpirun end this one, which
+		 * must not add "interrupted" to the reason. */
+		interrupt_set_outcome(NULL);
+	return status ? status : render_all(j);
+}
+
+/* Rank 0 writes once every rank has finalised. A rank that dies makes Open
+ * MPI's daemon send the others SIGCONT, SIGTERM after
+ * odls_base_sigkill_timeout (1 s), then SIGKILL after as long again; but
+ * that sleep(1) returns 0 when the SIGCHLD of a rank that exits on the
+ * SIGTERM interrupts it, so SIGKILL follows in about 5 ms (strace of Open
+ * MPI 4.1.4's mpirun), and a busy rank 0 is killed before its interrupt
+ * thread can remove its staged files (left behind before this design, which
+ * staged each frame as it arrived). Hence: until here, rank 0 has created
+ * nothing in the output folder (the frames, or the image, are in memory),
+ * so a rank that dies before it leaves nothing; from here no other rank is
+ * left to die, and the writing (staging, then one commit) takes about
+ * 10-90 ms a frame (README). */
+static void mpi_end(struct mode_run *run, int status)
+{
+	struct mpi_job *j = run->state;
+
+	if (!j || !j->initialized)
+		return;
 	MPI_Finalize();
-	if (j.rank != ROOT && status == 0)
+	if (j->rank != ROOT && status == 0)
 		interrupt_set_outcome(
 			"this rank's pieces were delivered; rank 0 writes the outputs");
-	if (j.rank == ROOT && status == 0) {
+	if (j->rank == ROOT && status == 0)
 		interrupt_watch_mpirun();
-		status = write_root(&j);
-	}
-	free_job(&j);
-	return status;
 }
 
-int mpi_render_frames(struct run *run)
+static void mpi_summary(const struct mode_run *run, FILE *out)
 {
-	return mpi_render(run, 0);
+	if (run->job->animation)
+		mode_summary_frames(run, out);
+	else
+		mode_summary_image(run, out);
 }
 
-int mpi_render_image(struct run *run)
+static void mpi_release(struct mode_run *run)
 {
-	return mpi_render(run, 1);
+	struct mpi_job *j = run->state;
+
+	if (!j)
+		return;
+	free_job(j);
+	free(j);
+	run->state = NULL;
 }
+
+const struct mode mpi_mode = {
+	.name = "mpi",
+	.begin = mpi_begin,
+	.render = mpi_render,
+	.checks_in_render = 1,
+	.end = mpi_end,
+	.summary = mpi_summary,
+	.release = mpi_release,
+};

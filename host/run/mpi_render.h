@@ -17,27 +17,14 @@
 #ifndef RTCL_MPI_RENDER_H
 #define RTCL_MPI_RENDER_H
 
-#include <stddef.h>
-
-#include "report/stats.h"
+/* The mode is mpi_mode (run/mode.h): --mpi --frames A:B renders the
+ * animation over every rank's devices; --mpi alone one image in row bands
+ * (schedule/tiles.h), each rank reading its devices back once and sending
+ * rank 0 the bands they rendered. */
 
 /* The message --mpi gives when rtcl was built without MPI. */
 #define MPI_MISSING_MESSAGE                                                                        \
 	"--mpi: rtcl was built without MPI: install Open MPI (apt-get install libopenmpi-dev "     \
 	"openmpi-bin, or make deps) and rebuild with make MPI=1"
-
-/* 1 when built with MPI. */
-int mpi_render_available(void);
-
-/* --mpi --frames A:B: the animation over every rank's devices. Prints its
- * own message (rank 0, or the lowest rank that failed to start) and returns
- * the exit status. */
-int mpi_render_frames(struct run *run);
-
-/* --mpi without --frames: one image in row bands (tiles.h) over every rank's
- * devices; each rank reads its devices back once and sends rank 0 the bands
- * they rendered; rank 0 assembles and writes the outputs. Returns the exit
- * status, as mpi_render_frames. */
-int mpi_render_image(struct run *run);
 
 #endif

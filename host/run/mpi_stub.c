@@ -1,24 +1,26 @@
-/* mpi_render.h without MPI (MPI=0): --mpi is refused with MPI_MISSING_MESSAGE
- * before any work (main.c). */
-#include "run/mpi_render.h"
-
+/* mpi_mode without MPI (MPI=0): --mpi is refused with MPI_MISSING_MESSAGE
+ * before any work. */
 #include <stdio.h>
 
 #include "base/version.h"
+#include "run/mode.h"
+#include "run/mpi_render.h"
 
-int mpi_render_available(void)
+static int refuse(struct mode_run *run, char *err, size_t err_size)
 {
-	return 0;
-}
-
-int mpi_render_frames(struct run *run)
-{
-	(void)run;
-	fprintf(stderr, "rtcl: %s\n", MPI_MISSING_MESSAGE);
+	run->writes = 0;
+	snprintf(err, err_size, "%s", MPI_MISSING_MESSAGE);
 	return EXIT_FAILED;
 }
 
-int mpi_render_image(struct run *run)
+static int never(struct mode_run *run, int checked, char *err, size_t err_size)
 {
-	return mpi_render_frames(run);
+	(void)run, (void)checked, (void)err, (void)err_size;
+	return EXIT_FAILED;
 }
+
+const struct mode mpi_mode = {
+	.name = "mpi",
+	.begin = refuse,
+	.render = never,
+};

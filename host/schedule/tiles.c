@@ -7,7 +7,6 @@
 #include <time.h>
 
 #include "base/test_hooks.h"
-#include "report/devstats.h"
 #include "render/launch.h"
 #include "base/progress.h"
 #include "render/render.h"
@@ -28,7 +27,7 @@ int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices
 	return rows < s->height ? rows : s->height;
 }
 
-static int band_count(int height, int rows)
+int tiles_band_count(int height, int rows)
 {
 	return (height + rows - 1) / rows;
 }
@@ -109,7 +108,7 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	t->devs = devs;
 	t->count = count;
 	t->rows = rows;
-	t->bands = band_count(s->height, rows);
+	t->bands = tiles_band_count(s->height, rows);
 	t->adaptive = adaptive;
 	t->piece_cap = t->piece_count = t->bands;
 	if (adaptive)
@@ -477,30 +476,26 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 	return frames;
 }
 
-/* The adaptive dispenser unless --split static or --piece-rows (a fixed
- * band height) asks for bands. */
-static int tiles_adaptive(const struct run *run)
+int tiles_adaptive(enum split split, int piece_rows)
 {
-	return !run->opt->split_static && run->opt->piece_rows <= 0;
+	return split != SPLIT_STATIC && piece_rows <= 0;
 }
 
-/* One image with settings s on devs[count] into out. */
-static int render_image(const struct run *run, const struct render_settings *s, struct device *devs,
-			int count, struct device_work *work, struct render_result *out, char *err,
-			size_t err_size)
+int tiles_render(const struct tiles_request *r, const struct render_settings *s,
+		 struct device_work *work, struct render_result *out, char *err, size_t err_size)
 {
 	struct device_work setup[DEVICES_MAX];
 	struct tiles_job t;
-	int rows = tiles_band_rows(s, run->opt->piece_rows, count), frames;
+	int rows = tiles_band_rows(s, r->piece_rows, r->count), frames;
 
 	memset(out, 0, sizeof(*out));
-	if (tiles_job_init(&t, run->scene, s, rows, tiles_adaptive(run), devs, count, err,
-			   err_size))
+	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows), r->devs,
+			   r->count, err, err_size))
 		return -1;
 	if (open_all(&t, setup, err, err_size))
 		goto out_free;
 	double lap = timing_now();
-	frames = render_tile_frames(&t, run->opt->split_static, work, out, err, err_size);
+	frames = render_tile_frames(&t, r->split == SPLIT_STATIC, work, out, err, err_size);
 	progress_end();
 	if (frames < 0 || launch_end_timing(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
@@ -509,7 +504,7 @@ static int render_image(const struct run *run, const struct render_settings *s, 
 	if (assemble(&t, out, err, err_size))
 		goto out_free;
 	out->times.read_back = timing_lap_ms(&lap);
-	for (int k = 0; k < count; k++)
+	for (int k = 0; k < r->count; k++)
 		work[k].setup_ms = setup[k].setup_ms;
 	tiles_job_free(&t);
 	return 0;
@@ -518,35 +513,4 @@ out_free:
 	tiles_job_free(&t);
 	render_result_free(out);
 	return -1;
-}
-
-int tiles_render(struct run *run, struct device *devs, int count, struct device_work *work,
-		 char *err, size_t err_size)
-{
-	struct render_settings *s = &run->settings;
-	int rows = tiles_band_rows(s, run->opt->piece_rows, count);
-
-	s->check_writes |= hook_count_writes();
-	if (run->counting) {
-		struct render_settings counting = *s;
-		double lap = timing_now();
-		counting.count_flops = 1;
-		if (render_image(run, &counting, devs, count, work, &run->counted, err, err_size))
-			return -1;
-		run->counting_ms = timing_lap_ms(&lap);
-		flop_summary_compute(&run->flops, run->counted.item_flops, run->counted.item_count,
-				     run->counted.total_rays);
-		run->flops.node_visits = run->counted.total_node_visits;
-	}
-	if (render_image(run, s, devs, count, work, &run->result, err, err_size))
-		return -1;
-	run->multidevice = devstats_json(devs, NULL, work, count,
-					 run->opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
-					 tiles_adaptive(run) ? "rectangle" : "band");
-	if (run->multidevice && !tiles_adaptive(run)) {
-		json_object_set_new(run->multidevice, "band_rows", json_integer(rows));
-		json_object_set_new(run->multidevice, "bands",
-				    json_integer(band_count(s->height, rows)));
-	}
-	return 0;
 }

@@ -16,7 +16,6 @@
 
 #include "schedule/multidev.h"
 #include "render/renderer.h"
-#include "report/stats.h"
 
 /* Bands per device when bands are used and --piece-rows is not given: many, since a band costs
  * only a launch and its wait (0.01 to 0.05 ms on PoCL,
@@ -125,12 +124,27 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
  * with the first pixel that was not in err. */
 int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
 
-/* One image of run on devs[count] (count > 1): with --flops/--work-map a
- * counting run first, then the timed frames (-r: one warm-up, N timed, each
- * the whole image over every device). Fills run->result, run->counted,
- * run->flops and run->multidevice (the --stats part), and work. Returns 0, or
- * -1 with one message in err. */
-int tiles_render(struct run *run, struct device *devs, int count, struct device_work *work,
-		 char *err, size_t err_size);
+/* One image over devices of this process: which, and how it is cut. */
+struct tiles_request {
+	const struct scene *scene;
+	struct device *devs;
+	int count;
+	enum split split; /* SPLIT_STATIC: bands, handed out statically */
+	int piece_rows;	  /* --piece-rows: bands of this height; 0: chosen */
+};
+
+/* Whether the pieces come from the adaptive dispenser (multidev.h): unless
+ * --split static or --piece-rows (a fixed band height) asks for bands. */
+int tiles_adaptive(enum split split, int piece_rows);
+
+/* Bands of `rows` rows in an image of `height` rows. */
+int tiles_band_count(int height, int rows);
+
+/* One image with settings s over r's devices into out (-r: one warm-up, N
+ * timed frames, each the whole image over every device), and what each
+ * device did into work[r->count]. Returns 0, or -1 with one message in err
+ * and nothing held in out. */
+int tiles_render(const struct tiles_request *r, const struct render_settings *s,
+		 struct device_work *work, struct render_result *out, char *err, size_t err_size);
 
 #endif

@@ -1,0 +1,75 @@
+/* What happened: the record of a run, filled by the mode that rendered the
+ * job (run/) and read by the report and the outputs. */
+#ifndef RTCL_RECORD_H
+#define RTCL_RECORD_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "device/device.h"
+#include "render/settings.h"
+#include "schedule/multidev.h"
+
+/* Figures of a counting run (RENDERING.md). */
+struct flop_summary {
+	uint64_t total;
+	double mean, max, min;	    /* per launched work-item */
+	double parallel_efficiency; /* mean / max */
+	uint64_t rays;
+	uint64_t node_visits; /* BVH nodes visited by all rays (0: --accel none) */
+};
+
+/* The device that rendered, as the summary and --stats name it. */
+struct device_identity {
+	char name[640];
+	char version[256];
+	char driver[256];
+	int on_device;		/* an OpenCL device (not the CPU reference) */
+	unsigned compute_units; /* CL_DEVICE_MAX_COMPUTE_UNITS */
+	unsigned max_clock_mhz; /* CL_DEVICE_MAX_CLOCK_FREQUENCY */
+};
+
+/* Several devices (schedule/): who did what. The arrays belong to the mode,
+ * which keeps them until the run is reported. count 0: one device. */
+struct device_shares {
+	const struct device *devs;
+	const int *ranks; /* each device's MPI rank, or NULL */
+	const struct device_work *work;
+	int count;
+	int ranks_count;   /* MPI ranks; 0 without --mpi */
+	enum split split;
+	const char *piece; /* what a piece is: "band", "rectangle", "frame" */
+	int band_rows, bands; /* bands of fixed rows; 0 for other pieces */
+	double wall_ms;	      /* an animation: all its frames */
+};
+
+struct record {
+	struct render_result result;  /* the timed, uncounted render */
+	struct render_result counted; /* the counting run (job->counting) */
+	struct flop_summary flops;
+	struct device_identity device;
+	struct device_shares shares;
+
+	/* Where the process's time went (base/timing.h clock, seconds or ms). */
+	double start;	    /* main began */
+	double device_ms;   /* platform and device set-up */
+	double counting_ms; /* the whole counting run */
+	double write_start; /* the outputs began to be written */
+};
+
+void flop_summary_compute(struct flop_summary *summary, const uint64_t *item_flops, size_t items,
+			  uint64_t rays);
+
+/* The counted render's figures into record->flops. */
+void record_count_flops(struct record *record);
+
+/* Names dev as the device that rendered. */
+void record_device(struct record *record, const struct device *dev);
+
+/* Names devs[count] as the devices that rendered: "N devices: a, b". */
+void record_devices(struct record *record, const struct device *devs, int count);
+
+/* Frees both results. */
+void record_free(struct record *record);
+
+#endif

@@ -1,0 +1,184 @@
+#include "report/document.h"
+
+#include <stdio.h>
+#include <string.h>
+
+#include "base/timing.h"
+#include "base/version.h"
+#include "report/devstats.h"
+
+int report_fill_json(FILE *file, const void *document)
+{
+	if (json_dumpf(document, file, JSON_INDENT(2) | JSON_REAL_PRECISION(9)) != 0)
+		return -1;
+	return fputc('\n', file) == EOF ? -1 : 0;
+}
+
+/* The figures of the counting run, for --stats and the --flops sidecar. */
+static void add_flop_figures(json_t *doc, const struct record *record)
+{
+	const struct flop_summary *f = &record->flops;
+	double ms = record->result.kernel_ms_median;
+
+	json_object_set_new(doc, "gflop", json_real(f->total * 1e-9));
+	json_object_set_new(doc, "total_flops", json_integer((json_int_t)f->total));
+	json_object_set_new(
+		doc, "flops_per_item",
+		json_pack("{s:f, s:f, s:f}", "mean", f->mean, "max", f->max, "min", f->min));
+	json_object_set_new(doc, "parallel_efficiency", json_real(f->parallel_efficiency));
+	json_object_set_new(doc, "gflops", json_real(f->total * 1e-6 / ms));
+	json_object_set_new(doc, "rays", json_integer((json_int_t)f->rays));
+	json_object_set_new(doc, "mrays_per_s", json_real(f->rays * 1e-3 / ms));
+	json_object_set_new(doc, "node_visits", json_integer((json_int_t)f->node_visits));
+	json_object_set_new(doc, "node_visits_per_ray",
+			    json_real(f->rays ? (double)f->node_visits / f->rays : 0.0));
+}
+
+/* --accel and, with a BVH, its size and build. */
+static void add_accel_figures(json_t *doc, const struct job *job, const struct record *record)
+{
+	const struct render_result *r = &record->result;
+
+	json_object_set_new(doc, "accel",
+			    json_string(job->settings.accel == ACCEL_BVH ? "bvh" : "none"));
+	/* The device's scene block (none for the CPU reference), and per
+	 * triangle, the figure issue 11 budgets. */
+	if (r->scene_bytes)
+		json_object_set_new(doc, "scene_bytes", json_integer((json_int_t)r->scene_bytes));
+	if (r->scene_bytes && job->scene->triangle_count) {
+		json_object_set_new(doc, "bytes_per_triangle",
+				    json_real((double)r->scene_bytes / job->scene->triangle_count));
+		json_object_set_new(doc, "vertices", json_integer(r->vertex_count));
+	}
+	if (r->bvh_nodes == 0)
+		return;
+	json_object_set_new(doc, "bvh",
+			    json_pack("{s:i, s:i, s:f, s:f, s:I}", "nodes", r->bvh_nodes, "depth",
+				      r->bvh_depth, "sah_cost", r->bvh_sah_cost, "build_ms",
+				      r->bvh_build_ms, "bytes", (json_int_t)r->bvh_bytes));
+}
+
+/* The --stats document, without the figures added below. */
+static json_t *image_document(const struct job *job, const struct record *record)
+{
+	const struct render_settings *s = &job->settings;
+	const struct render_result *r = &record->result;
+	char workgroup[32], groups[32];
+	json_t *times = json_array();
+
+	snprintf(workgroup, sizeof(workgroup), "%dx%d", s->workgroup[0], s->workgroup[1]);
+	snprintf(groups, sizeof(groups), "%dx%d", r->groups[0], r->groups[1]);
+	for (int i = 0; i < r->repeat; i++)
+		json_array_append_new(times, json_real(r->kernel_ms[i]));
+	return json_pack("{s:s, s:s, s:s, s:s, s:s, s:s, s:s, s:[I,I], s:i, s:i, s:i, s:s, s:b,"
+			 " s:f, s:f, s:f, s:i, s:o, s:s, s:i, s:i, s:i}",
+			 "rtcl_version", RTCL_VERSION, "device", record->device.name, "device_version",
+			 record->device.version, "driver", record->device.driver, "kernel",
+			 s->kernel ? s->kernel->name : "reference", "workgroup", workgroup,
+			 "groups", groups, "global_size", (json_int_t)r->global_size[0],
+			 (json_int_t)r->global_size[1], "width", s->width, "height", s->height,
+			 "max_depth", s->max_depth, "scene", job->scene->source,
+			 "scene_in_local_memory", r->scene_in_local, "kernel_ms",
+			 r->kernel_ms_median, "kernel_ms_min", r->kernel_ms_min, "kernel_ms_max",
+			 r->kernel_ms_max, "repeat", r->repeat, "kernel_ms_all", times,
+			 "build_options", r->build_options, "batch", s->batch, "samples",
+			 s->samples > 0 ? s->samples : 1, "passes", r->passes > 0 ? r->passes : 1);
+}
+
+/* The device's size and clock, for peak-throughput estimates (not for the
+ * CPU reference, which opens no device). */
+static void add_device_figures(json_t *doc, const struct record *record)
+{
+	if (!record->device.on_device)
+		return;
+	json_object_set_new(doc, "compute_units", json_integer(record->device.compute_units));
+	json_object_set_new(doc, "max_clock_mhz", json_integer(record->device.max_clock_mhz));
+}
+
+/* The --flops sidecar: how the counts were launched. */
+static json_t *flops_sidecar(const struct job *job, const struct record *record)
+{
+	const struct render_settings *s = &job->settings;
+	const struct render_result *c = &record->counted;
+	json_t *doc = json_pack(
+		"{s:s, s:i, s:s, s:[i,i], s:[i,i], s:[I,I], s:i, s:i, s:i, s:s, s:s, s:s}",
+		"format", "rtcl-flops", "version", 1, "kernel", s->kernel->name, "workgroup",
+		(int)c->local_size[0], (int)c->local_size[1], "groups", c->groups[0], c->groups[1],
+		"global_size", (json_int_t)c->global_size[0], (json_int_t)c->global_size[1],
+		"width", s->width, "height", s->height, "max_depth", s->max_depth, "device",
+		record->device.name, "scene", job->scene->source, "layout",
+		s->kernel->multi_pass
+			? "counts[0][i]: every launch's work-items one after the other (per "
+			  "sample: the primary-ray launch, one launch per bounce, the "
+			  "accumulate launch)"
+			: "counts[y][x] for the work-item at global id (x, y), summed over the "
+			  "passes; 0 for those given no pixel");
+
+	if (doc)
+		add_flop_figures(doc, record);
+	return doc;
+}
+
+/* The time breakdown of the whole process, up to now. */
+static json_t *times_document(const struct record *record)
+{
+	const struct render_times *t = &record->result.times;
+	double now = timing_now();
+
+	return json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:i}", "device_setup",
+			 record->device_ms, "scene_and_upload", t->scene, "build", t->build, "kernels",
+			 t->kernels, "read_back", t->read_back, "counting_run", record->counting_ms,
+			 "encode_and_write", (now - record->write_start) * 1e3, "total",
+			 (now - record->start) * 1e3, "launches", record->result.launches);
+}
+
+/* Several devices: who did what (devstats.h), and the bands. */
+static json_t *shares_document(const struct device_shares *d)
+{
+	json_t *doc = devstats_json(d->devs, d->ranks, d->work, d->count, d->split, d->piece);
+
+	if (doc && d->bands) {
+		json_object_set_new(doc, "band_rows", json_integer(d->band_rows));
+		json_object_set_new(doc, "bands", json_integer(d->bands));
+	}
+	if (doc && d->ranks_count)
+		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
+	return doc;
+}
+
+/* The --stats document of an animation. */
+static json_t *frames_document(const struct job *job, const struct record *record)
+{
+	const struct render_settings *s = &job->settings;
+
+	return json_pack("{s:s, s:s, s:i, s:i, s:i, s:s, s:[i,i], s:s, s:f, s:o}", "rtcl_version",
+			 RTCL_VERSION, "kernel", s->kernel->name, "width", s->width, "height",
+			 s->height, "max_depth", s->max_depth, "scene", job->scene->source,
+			 "frames", job->first_frame, job->last_frame, "camera_path", "orbit",
+			 "wall_ms", record->shares.wall_ms, "multidevice",
+			 shares_document(&record->shares));
+}
+
+json_t *report_document(const struct job *job, const struct record *record)
+{
+	if (job->animation)
+		return frames_document(job, record);
+	json_t *doc = image_document(job, record);
+
+	if (!doc)
+		return NULL;
+	json_object_set_new(doc, "time_breakdown_ms", times_document(record));
+	json_object_set_new(doc, "build_cached", json_boolean(record->result.build_cached));
+	if (job->counting)
+		add_flop_figures(doc, record);
+	add_device_figures(doc, record);
+	add_accel_figures(doc, job, record);
+	if (record->shares.count)
+		json_object_set_new(doc, "multidevice", shares_document(&record->shares));
+	return doc;
+}
+
+json_t *report_flops_sidecar(const struct job *job, const struct record *record)
+{
+	return flops_sidecar(job, record);
+}

@@ -1,0 +1,83 @@
+#include "report/summary.h"
+
+#include <stdio.h>
+
+#include "base/quote.h"
+#include "base/timing.h"
+#include "report/devstats.h"
+
+void report_print_image(FILE *out, const struct job *job, const struct record *record)
+{
+	const struct render_settings *s = &job->settings;
+	const struct render_result *r = &record->result;
+
+	fprintf(out, "device:  %s\n", record->device.name);
+	if (!s->kernel)
+		fprintf(out, "kernel:  reference\n");
+	else if (s->kernel->single_item)
+		fprintf(out, "kernel:  %s (one work-item)\n", s->kernel->name);
+	else
+		fprintf(out, "kernel:  %s, work-group %dx%d, %dx%d groups (global %zux%zu)\n",
+		       s->kernel->name, s->workgroup[0], s->workgroup[1], r->groups[0],
+		       r->groups[1], r->global_size[0], r->global_size[1]);
+	fprintf(out, "image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
+	       quote_text(job->scene->source));
+	if (s->samples > 1)
+		fprintf(out, "samples: %d per pixel in %d pass%s\n", s->samples, r->passes,
+		       r->passes == 1 ? "" : "es");
+	if (r->repeat > 1)
+		fprintf(out, "time:    %.3f ms median of %d launches (min %.3f, max %.3f)\n",
+		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
+	else
+		fprintf(out, "time:    %.3f ms\n", r->kernel_ms_median);
+	if (job->counting) {
+		const struct flop_summary *f = &record->flops;
+		fprintf(out, "work:    %.3f GFLOP, %.1f GFLOP/s; per work-item mean %.0f, max %.0f, min "
+		       "%.0f flops: parallel efficiency %.1f%%\n",
+		       f->total * 1e-9, f->total * 1e-6 / r->kernel_ms_median, f->mean, f->max,
+		       f->min, 100 * f->parallel_efficiency);
+		fprintf(out, "rays:    %llu (primary, secondary and shadow), %.1f Mrays/s\n",
+		       (unsigned long long)f->rays, f->rays * 1e-3 / r->kernel_ms_median);
+		if (s->accel == ACCEL_BVH)
+			fprintf(out, "nodes:   %llu BVH node visits, %.2f per ray\n",
+			       (unsigned long long)f->node_visits,
+			       f->rays ? (double)f->node_visits / f->rays : 0.0);
+	}
+}
+
+void report_print_frames(FILE *out, const struct job *job, const struct record *record)
+{
+	const struct render_settings *s = &job->settings;
+	const struct device_shares *d = &record->shares;
+	int n = job_frame_count(job);
+
+	fprintf(out, "frames:  %d..%d (%d), camera orbit, %dx%d, max depth %d, scene %s, kernel %s\n",
+		job->first_frame, job->last_frame, n, s->width, s->height, s->max_depth,
+		quote_text(job->scene->source), s->kernel->name);
+	devstats_print(out, d->devs, d->ranks, d->work, d->count, d->piece);
+	fprintf(out, "time:    %.1f ms for %d frame%s (%.1f ms each), %s split\n", d->wall_ms, n,
+		n == 1 ? "" : "s", d->wall_ms / n, d->split == SPLIT_STATIC ? "static" : "dynamic");
+}
+
+void report_print_shares(FILE *out, const struct record *record)
+{
+	const struct device_shares *d = &record->shares;
+
+	if (d->count)
+		devstats_print(out, d->devs, d->ranks, d->work, d->count, d->piece);
+}
+
+void report_print_times(const struct record *record)
+{
+	const struct render_times *t = &record->result.times;
+	double now = timing_now();
+
+	fprintf(stderr,
+		"rtcl: time: device set-up %.1f ms, scene and upload %.1f ms, build %.1f ms%s, "
+		"kernels %.1f ms (%d launch%s), read-back %.1f ms, counting run %.1f ms, encoding "
+		"and writing %.1f ms; total %.1f ms\n",
+		record->device_ms, t->scene, t->build, record->result.build_cached ? " (cached)" : "",
+		t->kernels, record->result.launches, record->result.launches == 1 ? "" : "es",
+		t->read_back, record->counting_ms, (now - record->write_start) * 1e3,
+		(now - record->start) * 1e3);
+}

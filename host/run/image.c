@@ -1,0 +1,160 @@
+/* One image: on the CPU reference, on one device, or cut into pieces over
+ * several (schedule/tiles.h); with --flops or --work-map a counting run
+ * first, then the timed run. */
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "base/test_hooks.h"
+#include "base/version.h"
+#include "base/timing.h"
+#include "render/render.h"
+#include "report/summary.h"
+#include "run/mode.h"
+#include "schedule/tiles.h"
+
+/* The devices of one image, open until the summary has named them. */
+struct image_devices {
+	struct device devs[DEVICES_MAX];
+	struct device_work work[DEVICES_MAX];
+	int count;
+	struct tiles_request tiles;
+};
+
+/* Renders one image with settings s into out: render() on one device, or
+ * tiles_render() over several. */
+typedef int (*render_fn)(struct image_devices *d, const struct job *job,
+			 const struct render_settings *s, struct render_result *out, char *err,
+			 size_t err_size);
+
+static int render_one(struct image_devices *d, const struct job *job,
+		      const struct render_settings *s, struct render_result *out, char *err,
+		      size_t err_size)
+{
+	return render(&d->devs[0], job->scene, s, out, err, err_size);
+}
+
+static int render_pieces(struct image_devices *d, const struct job *job,
+			 const struct render_settings *s, struct render_result *out, char *err,
+			 size_t err_size)
+{
+	(void)job;
+	return tiles_render(&d->tiles, s, d->work, out, err, err_size);
+}
+
+/* With --flops or --work-map, a separate counting run first; then the timed
+ * run. Returns 0, or -1 with one message in err. */
+static int render_counted(struct image_devices *d, const struct job *job,
+			  const struct render_settings *s, render_fn fn, struct record *record,
+			  char *err, size_t err_size)
+{
+	if (job->counting) {
+		struct render_settings counting = *s;
+		double lap = timing_now();
+
+		counting.count_flops = 1;
+		int failed = fn(d, job, &counting, &record->counted, err, err_size);
+		record->counting_ms = timing_lap_ms(&lap);
+		if (failed)
+			return -1;
+		record_count_flops(record);
+	}
+	return fn(d, job, s, &record->result, err, err_size);
+}
+
+/* One image on the devices the job names; several share it in pieces. */
+static int render_on_devices(struct image_devices *d, const struct job *job, struct record *record,
+			     char *err, size_t err_size)
+{
+	double lap = timing_now();
+
+	if (job_open_devices(job, d->devs, &d->count, err, err_size)) {
+		d->count = 0; /* nothing left open */
+		return -1;
+	}
+	record->device_ms = timing_lap_ms(&lap);
+	if (!job_in_pieces(job, d->count)) {
+		record_device(record, &d->devs[0]);
+		if (job->verbose)
+			fprintf(stderr, "rtcl: platform %d, device %d: %s\n",
+				d->devs[0].platform_index, d->devs[0].device_index,
+				record->device.name);
+		return render_counted(d, job, &job->settings, render_one, record, err, err_size);
+	}
+	struct render_settings s = job->settings;
+	s.check_writes |= hook_count_writes();
+	d->tiles = (struct tiles_request){job->scene, d->devs, d->count, job->split,
+					  job->piece_rows};
+	record_devices(record, d->devs, d->count);
+	int adaptive = tiles_adaptive(job->split, job->piece_rows);
+	int rows = tiles_band_rows(&s, job->piece_rows, d->count);
+	record->shares = (struct device_shares){
+		.devs = d->devs,
+		.work = d->work,
+		.count = d->count,
+		.split = job->split,
+		.piece = adaptive ? "rectangle" : "band",
+		.band_rows = adaptive ? 0 : rows,
+		.bands = adaptive ? 0 : tiles_band_count(s.height, rows),
+	};
+	return render_counted(d, job, &s, render_pieces, record, err, err_size);
+}
+
+static int image_render(struct mode_run *run, int checked, char *err, size_t err_size)
+{
+	const struct job *job = run->job;
+	struct record *record = run->record;
+	struct image_devices *d = calloc(1, sizeof(*d));
+	int failed;
+
+	(void)checked; /* not called with a failed check */
+	if (!d) {
+		snprintf(err, err_size, "out of host memory");
+		return EXIT_FAILED;
+	}
+	run->state = d;
+	if (!job->settings.kernel) {
+		snprintf(record->device.name, sizeof(record->device.name),
+			 "CPU reference (C++, GLM, double precision, one core)");
+		failed = render_reference(job->scene, &job->settings, &record->result, err,
+					  err_size);
+	} else {
+		failed = render_on_devices(d, job, record, err, err_size);
+	}
+	if (!failed && job->verbose && job->settings.kernel)
+		fprintf(stderr, "rtcl: build options: %s\n", record->result.build_options);
+	return failed ? EXIT_FAILED : 0;
+}
+
+void mode_summary_image(const struct mode_run *run, FILE *out)
+{
+	if (run->job->verbose)
+		report_print_times(run->record);
+	report_print_image(out, run->job, run->record);
+	output_plan_print(run->plan, out);
+	report_print_shares(out, run->record);
+}
+
+static void image_release(struct mode_run *run)
+{
+	struct image_devices *d = run->state;
+
+	if (d)
+		devices_close(d->devs, d->count);
+	free(d);
+	run->state = NULL;
+}
+
+const struct mode image_mode = {
+	.name = "image",
+	.render = image_render,
+	.summary = mode_summary_image,
+	.release = image_release,
+};
+
+const struct mode *mode_for(const struct job *job)
+{
+	if (job->mpi)
+		return &mpi_mode;
+	return job->animation ? &frames_mode : &image_mode;
+}
