@@ -10,6 +10,7 @@
 #include "device/devices.h"
 #include "base/files.h"
 #include "run/frames.h"
+#include "schedule/adapt.h"
 #include "schedule/multidev.h"
 #include "render/render.h"
 #include "schedule/tiles.h"
@@ -250,7 +251,7 @@ Test(multidev, write_count_check_names_the_first_pixel_off)
 	cr_assert(strstr(err, "pixel (0, 0)"), "%s", err);
 }
 
-/* ---- the adaptive dispenser (multidev.h) --------------------------------- */
+/* ---- the adaptive policy (adapt.h) --------------------------------------- */
 
 static struct adapt_view view(double remaining, double rate, double others_rate)
 {
