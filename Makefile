@@ -106,7 +106,7 @@ HOST_MODULES := \
 	layout/bvh layout/devmesh layout/devscene \
 	render/checks render/program render/launch render/singlepass render/wavefront render/render \
 	render/reference \
-	schedule/multidev schedule/adapt schedule/tiles \
+	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	report/stats report/devstats \
 	output/outputs output/workmap output/image_common output/image_encode output/image_png \
 	run/frames \

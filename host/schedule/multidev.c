@@ -9,19 +9,17 @@
 
 #define WORKER_ERR_SIZE 4096
 
-/* What the threads share: the dispenser and the first failure. */
-struct dispenser {
+/* What the threads share: the pieces and the first failure, under lock. */
+struct pool {
 	pthread_mutex_t lock;
 	const struct multidev_job *job;
-	int count; /* devices */
-	int next;  /* dynamic: the next piece to hand out */
-	int next_static[DEVICES_MAX], end_static[DEVICES_MAX];
-	int failed;   /* a piece failed: hand out no more */
-	double start; /* timing_now() when the job started */
+	struct dispenser pieces; /* unless the job has its own take_piece */
+	int failed;		 /* a piece failed: hand out no more */
+	double start;		 /* timing_now() when the job started */
 };
 
 struct worker {
-	struct dispenser *dispenser;
+	struct pool *pool;
 	struct device *dev;
 	int index;
 	struct device_work *work;
@@ -29,38 +27,29 @@ struct worker {
 	char err[WORKER_ERR_SIZE];
 };
 
-int multidev_static_first(int k, int n, int count)
-{
-	return (int)((long long)k * count / n);
-}
-
 /* The next piece for device k, or -1 when there is none left for it. */
-static int dispenser_take(struct dispenser *d, int k)
+static int pool_take(struct pool *p, int k)
 {
 	int piece = -1;
 
-	if (d->job->take_piece) {
-		pthread_mutex_lock(&d->lock);
-		int failed = d->failed;
-		pthread_mutex_unlock(&d->lock);
-		return failed ? -1 : d->job->take_piece(d->job->context, k);
+	if (p->job->take_piece) {
+		pthread_mutex_lock(&p->lock);
+		int failed = p->failed;
+		pthread_mutex_unlock(&p->lock);
+		return failed ? -1 : p->job->take_piece(p->job->context, k);
 	}
-	pthread_mutex_lock(&d->lock);
-	if (d->failed)
-		piece = -1;
-	else if (d->job->split == SPLIT_STATIC)
-		piece = d->next_static[k] < d->end_static[k] ? d->next_static[k]++ : -1;
-	else if (d->next < d->job->piece_count)
-		piece = d->next++;
-	pthread_mutex_unlock(&d->lock);
+	pthread_mutex_lock(&p->lock);
+	if (!p->failed)
+		piece = dispenser_take(&p->pieces, k);
+	pthread_mutex_unlock(&p->lock);
 	return piece;
 }
 
-static void mark_failed(struct dispenser *d)
+static void mark_failed(struct pool *p)
 {
-	pthread_mutex_lock(&d->lock);
-	d->failed = 1;
-	pthread_mutex_unlock(&d->lock);
+	pthread_mutex_lock(&p->lock);
+	p->failed = 1;
+	pthread_mutex_unlock(&p->lock);
 }
 
 /* "DEVICE P:D (NAME): what failed" */
@@ -73,11 +62,11 @@ static void describe_failure(const struct worker *w, char *out, size_t size)
 /* Stops the job after w's failure, telling the job's failed callback. */
 static void fail(struct worker *w)
 {
-	const struct multidev_job *job = w->dispenser->job;
+	const struct multidev_job *job = w->pool->job;
 	char message[WORKER_ERR_SIZE + 600];
 
 	w->failed = 1;
-	mark_failed(w->dispenser);
+	mark_failed(w->pool);
 	if (job->failed) {
 		describe_failure(w, message, sizeof(message));
 		job->failed(job->context, w->index, message);
@@ -87,7 +76,7 @@ static void fail(struct worker *w)
 /* One piece, with the test-only delay and fault (base/test_hooks.h) around it. */
 static int render_one(struct worker *w, int piece, struct piece_work *done)
 {
-	const struct multidev_job *job = w->dispenser->job;
+	const struct multidev_job *job = w->pool->job;
 	double start = timing_now();
 	int ret = job->render_piece(job->context, w->index, piece, done, w->err, sizeof(w->err));
 
@@ -104,7 +93,7 @@ static int render_one(struct worker *w, int piece, struct piece_work *done)
 static void *work_loop(void *arg)
 {
 	struct worker *w = arg;
-	const struct multidev_job *job = w->dispenser->job;
+	const struct multidev_job *job = w->pool->job;
 	double lap = timing_now(), piece_ms;
 	int piece;
 
@@ -113,7 +102,7 @@ static void *work_loop(void *arg)
 		return NULL;
 	}
 	w->work->setup_ms = timing_lap_ms(&lap);
-	while ((piece = dispenser_take(w->dispenser, w->index)) >= 0) {
+	while ((piece = pool_take(w->pool, w->index)) >= 0) {
 		struct piece_work done = {0};
 		if (render_one(w, piece, &done)) {
 			fail(w);
@@ -126,24 +115,22 @@ static void *work_loop(void *arg)
 		piece_ms = timing_lap_ms(&lap);
 		w->work->busy_ms += piece_ms;
 		w->work->last_piece_ms = piece_ms;
-		w->work->finish_ms = (lap - w->dispenser->start) * 1e3;
+		w->work->finish_ms = (lap - w->pool->start) * 1e3;
 	}
 	if (job->end)
 		job->end(job->context, w->index);
 	return NULL;
 }
 
-static void init_dispenser(struct dispenser *d, const struct multidev_job *job, int count)
+static int init_pool(struct pool *p, const struct multidev_job *job, int count)
 {
-	memset(d, 0, sizeof(*d));
-	pthread_mutex_init(&d->lock, NULL);
-	d->job = job;
-	d->count = count;
-	d->start = timing_now();
-	for (int k = 0; k < count; k++) {
-		d->next_static[k] = multidev_static_first(k, count, job->piece_count);
-		d->end_static[k] = multidev_static_first(k + 1, count, job->piece_count);
-	}
+	memset(p, 0, sizeof(*p));
+	p->job = job;
+	p->start = timing_now();
+	if (dispenser_init(&p->pieces, job->piece_count, count, job->split))
+		return -1;
+	pthread_mutex_init(&p->lock, NULL);
+	return 0;
 }
 
 /* The first failed device's message (by device order), with its name. */
@@ -163,16 +150,19 @@ int multidev_run(const struct multidev_job *job, struct device *devs, int count,
 {
 	static struct worker workers[DEVICES_MAX];
 	pthread_t threads[DEVICES_MAX];
-	struct dispenser dispenser;
+	struct pool pool;
 	int started = 0, failed = 0;
 
-	init_dispenser(&dispenser, job, count);
 	memset(work, 0, (size_t)count * sizeof(*work));
+	if (init_pool(&pool, job, count)) {
+		snprintf(err, err_size, "out of host memory for the pieces of %d devices", count);
+		return -1;
+	}
 	for (int k = 0; k < count; k++) {
-		workers[k] = (struct worker){&dispenser, &devs[k], k, &work[k], 0, ""};
+		workers[k] = (struct worker){&pool, &devs[k], k, &work[k], 0, ""};
 		if (pthread_create(&threads[k], NULL, work_loop, &workers[k]) != 0) {
 			snprintf(err, err_size, "cannot start a host thread for device %d", k);
-			mark_failed(&dispenser);
+			mark_failed(&pool);
 			failed = 1;
 			break;
 		}
@@ -180,7 +170,8 @@ int multidev_run(const struct multidev_job *job, struct device *devs, int count,
 	}
 	for (int k = 0; k < started; k++)
 		pthread_join(threads[k], NULL);
-	pthread_mutex_destroy(&dispenser.lock);
+	pthread_mutex_destroy(&pool.lock);
+	dispenser_free(&pool.pieces);
 	for (int k = 0; k < started; k++)
 		failed |= workers[k].failed;
 	if (failed && started == count)

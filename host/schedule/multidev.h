@@ -1,11 +1,10 @@
 /* Several devices rendering pieces of one job, one host thread per device.
  *
  * A job is a count of pieces (tiles or row bands of an image, or whole
- * frames of an animation). The host hands them out: with the dynamic split
- * each device's thread takes the next piece from a counter under a mutex as
- * soon as its previous one is done, so a slower device takes fewer (the
- * paper's dynamic scheme one level up); with the static split device k of n
- * gets the pieces [k*count/n, (k+1)*count/n) whatever its speed. A thread
+ * frames of an animation). Each device's thread takes its next piece as
+ * soon as its previous one is done: from a dispenser under a mutex
+ * (dispenser.h: the dynamic or the static split), or from the job's
+ * take_piece (the adaptive policy of tiles.c, rank 0 under --mpi). A thread
  * waits for its device in the blocking OpenCL calls (an in-order queue,
  * clFinish or a blocking read), never by polling. The first piece that fails
  * stops the job: the other devices take no further piece, and the job
@@ -16,8 +15,7 @@
 #include <stddef.h>
 
 #include "device/devices.h"
-
-enum split { SPLIT_DYNAMIC, SPLIT_STATIC };
+#include "schedule/dispenser.h"
 
 /* What one piece took: the render_piece callback fills it. */
 struct piece_work {
@@ -54,7 +52,7 @@ struct multidev_job {
 	 * (releases what begin made). */
 	void (*end)(void *context, int device);
 	/* Optional: hands out device's next piece instead of the job's own
-	 * counter (under MPI, rank 0 does); -1 when there is none. */
+	 * dispenser (under MPI, rank 0 does); -1 when there is none. */
 	int (*take_piece)(void *context, int device);
 	/* Optional: told at once when a piece fails, with the job's message. */
 	void (*failed)(void *context, int device, const char *message);
@@ -69,9 +67,5 @@ int multidev_run(const struct multidev_job *job, struct device *devs, int count,
 /* Device-level efficiency: the mean busy time over the largest (1 when
  * every device was busy as long as the busiest; 1/n when one did it all). */
 double multidev_efficiency(const struct device_work *work, int count);
-
-/* Static split: the first piece of device k of n, for count pieces (the
- * device's pieces end where device k+1's begin). */
-int multidev_static_first(int k, int n, int count);
 
 #endif
