@@ -1,5 +1,5 @@
 /* The host-side pieces of issue 13 that need no device: the --devices
- * parser, the static split, the device-level efficiency, the orbit and the
+ * parser, the dispenser, the device-level efficiency, the orbit and the
  * frame names, the bands of one image over several devices. */
 #include <criterion/criterion.h>
 
@@ -11,6 +11,8 @@
 #include "base/files.h"
 #include "output/plan.h"
 #include "run/frames.h"
+#include "schedule/adapt.h"
+#include "schedule/dispenser.h"
 #include "schedule/multidev.h"
 #include "render/render.h"
 #include "schedule/tiles.h"
@@ -48,14 +50,54 @@ Test(multidev, static_split_covers_every_piece_once)
 {
 	for (int n = 1; n <= 5; n++) {
 		for (int count = 0; count <= 13; count++) {
-			cr_assert_eq(multidev_static_first(0, n, count), 0);
-			cr_assert_eq(multidev_static_first(n, n, count), count);
+			cr_assert_eq(dispenser_static_first(0, n, count), 0);
+			cr_assert_eq(dispenser_static_first(n, n, count), count);
 			for (int k = 0; k < n; k++) {
-				int size = multidev_static_first(k + 1, n, count) -
-					   multidev_static_first(k, n, count);
+				int size = dispenser_static_first(k + 1, n, count) -
+					   dispenser_static_first(k, n, count);
 				/* equal shares, one more for some */
 				cr_assert(size == count / n || size == count / n + 1);
 			}
+		}
+	}
+}
+
+/* Takes from devices in turn until none gets a piece: every piece once, and
+ * with the static split each device its own run of pieces in order. */
+static void take_all(enum split split, int pieces, int devices)
+{
+	struct dispenser d;
+	int seen[16] = {0}, last[8], busy = devices;
+
+	cr_assert_eq(dispenser_init(&d, pieces, devices, split), 0);
+	for (int k = 0; k < devices; k++)
+		last[k] = dispenser_static_first(k, devices, pieces) - 1;
+	while (busy > 0) {
+		busy = 0;
+		for (int k = 0; k < devices; k++) {
+			int piece = dispenser_take(&d, k);
+			if (piece < 0)
+				continue;
+			busy++;
+			cr_assert(piece < pieces);
+			seen[piece]++;
+			if (split == SPLIT_STATIC)
+				cr_assert_eq(piece, last[k] + 1, "device %d of %d", k, devices);
+			last[k] = piece;
+		}
+	}
+	for (int p = 0; p < pieces; p++)
+		cr_assert_eq(seen[p], 1, "piece %d of %d", p, pieces);
+	cr_assert_eq(dispenser_take(&d, 0), -1);
+	dispenser_free(&d);
+}
+
+Test(multidev, dispenser_hands_out_every_piece_once)
+{
+	for (int devices = 1; devices <= 5; devices++) {
+		for (int pieces = 0; pieces <= 13; pieces++) {
+			take_all(SPLIT_DYNAMIC, pieces, devices);
+			take_all(SPLIT_STATIC, pieces, devices);
 		}
 	}
 }
@@ -252,7 +294,7 @@ Test(multidev, write_count_check_names_the_first_pixel_off)
 	cr_assert(strstr(err, "pixel (0, 0)"), "%s", err);
 }
 
-/* ---- the adaptive dispenser (multidev.h) --------------------------------- */
+/* ---- the adaptive policy (adapt.h) --------------------------------------- */
 
 static struct adapt_view view(double remaining, double rate, double others_rate)
 {

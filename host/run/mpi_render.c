@@ -56,8 +56,7 @@ struct mpi_job {
 	int *first;   /* global index of each rank's first device */
 	int *rank_of; /* each global device's rank */
 	int total;    /* devices over every rank */
-	int next;     /* dynamic split: the next piece */
-	int *next_static, *end_static;
+	struct dispenser dispenser;
 	int *current; /* the piece each other rank's device renders, or -1 */
 	int failed;
 	char message[MESSAGE_SIZE];
@@ -90,12 +89,8 @@ static int central_take(struct mpi_job *j, int g)
 	int piece = -1;
 
 	pthread_mutex_lock(&j->lock);
-	if (j->failed)
-		piece = -1;
-	else if (j->job->split == SPLIT_STATIC)
-		piece = j->next_static[g] < j->end_static[g] ? j->next_static[g]++ : -1;
-	else if (j->next < piece_count(j))
-		piece = j->next++;
+	if (!j->failed)
+		piece = dispenser_take(&j->dispenser, g);
 	pthread_mutex_unlock(&j->lock);
 	return piece;
 }
@@ -658,7 +653,7 @@ static int start_rank(struct mpi_job *j, int checked, char *err, size_t err_size
 	return 0;
 }
 
-/* Rank 0: where each rank's devices fall among all, and the static split. */
+/* Rank 0: where each rank's devices fall among all, and the dispenser. */
 static int plan_devices(struct mpi_job *j, const int *counts)
 {
 	j->first = calloc((size_t)j->size + 1, sizeof(int));
@@ -666,23 +661,18 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 		j->first[r + 1] = j->first[r] + counts[r];
 	j->total = j->first ? j->first[j->size] : 0;
 	j->rank_of = calloc((size_t)j->total, sizeof(int));
-	j->next_static = calloc((size_t)j->total, sizeof(int));
-	j->end_static = calloc((size_t)j->total, sizeof(int));
 	j->all_devs = calloc((size_t)j->total, sizeof(struct device));
 	j->all_work = calloc((size_t)j->total, sizeof(struct device_work));
 	j->current = malloc((size_t)j->total * sizeof(int));
-	if (!j->rank_of || !j->next_static || !j->end_static || !j->all_devs || !j->all_work ||
-	    !j->current)
+	if (!j->rank_of || !j->all_devs || !j->all_work || !j->current ||
+	    dispenser_init(&j->dispenser, piece_count(j), j->total,
+			   j->job->split))
 		return -1;
 	for (int g = 0; g < j->total; g++)
 		j->current[g] = -1;
 	for (int r = 0; r < j->size; r++)
 		for (int g = j->first[r]; g < j->first[r + 1]; g++)
 			j->rank_of[g] = r;
-	for (int g = 0; g < j->total; g++) {
-		j->next_static[g] = multidev_static_first(g, j->total, piece_count(j));
-		j->end_static[g] = multidev_static_first(g + 1, j->total, piece_count(j));
-	}
 	return 0;
 }
 
@@ -856,8 +846,7 @@ static void free_job(struct mpi_job *j)
 	free(j->arrived);
 	free(j->first);
 	free(j->rank_of);
-	free(j->next_static);
-	free(j->end_static);
+	dispenser_free(&j->dispenser);
 	free(j->current);
 	free(j->all_devs);
 	free(j->all_work);

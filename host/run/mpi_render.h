@@ -1,5 +1,5 @@
 /* Rendering across MPI ranks (--mpi, under mpirun): rank 0 hands the pieces
- * out to every rank's devices from one dispenser (multidev.h's split, over
+ * out to every rank's devices from one dispenser (dispenser.h's split, over
  * every device of every rank) and writes the outputs; the other ranks render
  * and send their pixels to rank 0. Compiled only with MPI=1 (mpi_render.c);
  * without it mpi_stub.c says how to get it.

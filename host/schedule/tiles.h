@@ -1,8 +1,8 @@
 /* One image over several devices (--devices with more than one, --mpi): the
  * image cut into pieces (renderer.h), each carrying every sample of its
  * pixels: with the dynamic split in one process, rectangles sized per device
- * by multidev.h's adaptive dispenser; with --split static, --piece-rows or
- * --mpi, row bands handed out by multidev.h's counter. Each device opens
+ * by adapt.h's policy; with --split static, --piece-rows or
+ * --mpi, row bands handed out by dispenser.h. Each device opens
  * its renderer once, renders the bands it is given into its own full-size
  * buffers, reads them back once at the end; the host copies each band from
  * the device that rendered it. A band's samples all run on one device, in
@@ -14,6 +14,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "schedule/adapt.h"
 #include "schedule/multidev.h"
 #include "render/renderer.h"
 
@@ -61,8 +62,8 @@ struct tiles_device {
 };
 
 /* The pieces of one image on devs[count] of this process: the bands of
- * `rows` rows, or (adaptive) the rectangles multidev.h's adaptive dispenser
- * cuts each frame. */
+ * `rows` rows, or (adaptive) the rectangles adapt.h's policy cuts each
+ * frame. */
 struct tiles_job {
 	const struct render_settings *settings;
 	const struct scene *scene;
