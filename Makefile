@@ -106,19 +106,12 @@ HOST_MODULES := \
 	layout/bvh layout/devmesh layout/devscene \
 	render/checks render/program render/launch render/singlepass render/wavefront render/render \
 	render/reference \
-<<<<<<< HEAD
-	schedule/multidev schedule/tiles \
+	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
 	report/summary report/document report/devstats \
 	output/plan output/npy output/workmap output/image_common output/image_encode \
 	output/image_png \
 	run/image run/frames \
-=======
-	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
-	report/stats report/devstats \
-	output/outputs output/workmap output/image_common output/image_encode output/image_png \
-	run/frames \
->>>>>>> helper-b
 	cmd/cli
 HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \
 	$(IMAGE_BACKEND) $(MPI_MODULE)
