@@ -61,7 +61,7 @@ int renderer_piece(struct renderer *r, const struct rt_piece *p, struct piece_re
 		   char *err, size_t err_size)
 {
 	const struct render_settings *s = r->settings;
-	int samples = s->samples > 0 ? s->samples : 1;
+	int samples = settings_samples(s);
 
 	if (p->x0 < 0 || p->y0 < 0 || p->width < 1 || p->height < 1 ||
 	    p->width > s->width - p->x0 || p->height > s->height - p->y0 || p->samples != samples ||
@@ -94,14 +94,13 @@ void renderer_close(struct renderer *r)
 
 struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end)
 {
-	struct rt_piece p = {0, 0, s->width, s->height, begin, end, s->samples > 0 ? s->samples : 1,
-			     0};
+	struct rt_piece p = {0, 0, s->width, s->height, begin, end, settings_samples(s), 0};
 	return p;
 }
 
 int render_pass_samples(const struct render_settings *s)
 {
-	int samples = s->samples > 0 ? s->samples : 1;
+	int samples = settings_samples(s);
 	double pixels = (double)s->width * s->height;
 	double per_pass = s->samples_per_pass > 0 ? s->samples_per_pass
 						  : floor(RENDER_PASS_PIXEL_SAMPLES / pixels);
@@ -114,7 +113,7 @@ int render_pass_samples(const struct render_settings *s)
 static int render_frame(struct renderer *r, double *ms, char *err, size_t err_size)
 {
 	const struct render_settings *s = r->settings;
-	int samples = s->samples > 0 ? s->samples : 1;
+	int samples = settings_samples(s);
 	int per_pass = render_pass_samples(s);
 
 	*ms = 0;
@@ -134,7 +133,7 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	   struct render_result *res, char *err, size_t err_size)
 {
 	struct renderer r;
-	int per_pass = render_pass_samples(s), samples = s->samples > 0 ? s->samples : 1;
+	int per_pass = render_pass_samples(s), samples = settings_samples(s);
 
 	if (renderer_open(&r, dev, scene, s, res, err, err_size))
 		goto out_free;
@@ -187,7 +186,7 @@ int render_reference(const struct scene *scene, const struct render_settings *s,
 	for (int i = 0; i < s->repeat; i++) {
 		double start = timing_now();
 		if (reference_render_samples(scene, s->width, s->height, s->max_depth,
-					     s->samples > 0 ? s->samples : 1, res->rgb)) {
+					     settings_samples(s), res->rgb)) {
 			snprintf(err, err_size,
 				 "the CPU reference renderer failed (out of memory)");
 			goto out_free;

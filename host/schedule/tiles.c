@@ -37,8 +37,7 @@ struct rt_piece tiles_band(const struct render_settings *s, int rows, int index,
 {
 	int y0 = index * rows;
 	int height = s->height - y0 < rows ? s->height - y0 : rows;
-	struct rt_piece p = {0, y0, s->width, height, begin, end, s->samples > 0 ? s->samples : 1,
-			     0};
+	struct rt_piece p = {0, y0, s->width, height, begin, end, settings_samples(s), 0};
 
 	return p;
 }
@@ -91,7 +90,7 @@ static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
 	int cell_w = s->workgroup[0] > 0 ? s->workgroup[0] : 8;
 	int cell_h = s->workgroup[1] > 0 ? s->workgroup[1] : 8;
 
-	adapt_init(&t->adapt, s->width, s->height, s->samples, cell_w, cell_h, t->count);
+	adapt_init(&t->adapt, s->width, s->height, settings_samples(s), cell_w, cell_h, t->count);
 	set_min_pieces(t, cell_w * cell_h);
 	t->piece_cap = t->adapt.cells_x * t->adapt.cells_y;
 	t->piece_count = 0;
@@ -124,7 +123,7 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 		return -1;
 	}
 	for (int b = 0; b < t->piece_count; b++) {
-		t->pieces[b] = tiles_band(s, rows, b, 0, s->samples > 0 ? s->samples : 1);
+		t->pieces[b] = tiles_band(s, rows, b, 0, settings_samples(s));
 		t->owner[b] = -1;
 	}
 	return 0;
