@@ -15,6 +15,7 @@
 #include "base/quote.h"
 #include "render/render.h"
 #include "base/timing.h"
+#include "base/vec3.h"
 
 #define PI 3.14159265358979323846
 
@@ -22,10 +23,10 @@
 static void rotate(const double v[3], const double k[3], double a, double out[3])
 {
 	double c = cos(a), s = sin(a);
-	double dot = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
-	double cross[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2],
-			   k[0] * v[1] - k[1] * v[0]};
+	double dot = vec3_dot(k, v);
+	double cross[3];
 
+	vec3_cross(k, v, cross);
 	for (int i = 0; i < 3; i++)
 		out[i] = v[i] * c + cross[i] * s + k[i] * dot * (1 - c);
 }
