@@ -8,26 +8,7 @@
 
 #include "rtcl_shared.h"
 #include "base/quote.h"
-
-static double dot(const double a[3], const double b[3])
-{
-	return a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-}
-
-static void normalize(double v[3])
-{
-	double length = sqrt(dot(v, v));
-
-	for (int i = 0; i < 3; i++)
-		v[i] /= length;
-}
-
-static void cross(const double a[3], const double b[3], double out[3])
-{
-	out[0] = a[1] * b[2] - a[2] * b[1];
-	out[1] = a[2] * b[0] - a[0] * b[2];
-	out[2] = a[0] * b[1] - a[1] * b[0];
-}
+#include "base/vec3.h"
 
 static rt_vec4 vec4(const double v[3], double w)
 {
@@ -49,10 +30,10 @@ static void pack_camera(struct rt_scene *out, const struct scene *scene, int wid
 
 	for (int i = 0; i < 3; i++)
 		forward[i] = cam->look_at[i] - cam->eye[i];
-	normalize(forward);
-	cross(forward, cam->up, right);
-	normalize(right);
-	cross(right, forward, up);
+	vec3_normalize(forward);
+	vec3_cross(forward, cam->up, right);
+	vec3_normalize(right);
+	vec3_cross(right, forward, up);
 
 	/* The scalars in w: scene_half_width, scene_half_height, scene_epsilon. */
 	static const double origin[3] = {0, 0, 0}; /* the eye: scene_from_eye */
@@ -112,7 +93,7 @@ static void pack_plane(struct rt_plane *out, const struct scene *scene,
 	if (fabs(n[2]) > fabs(n[drop]))
 		drop = 2;
 	/* The offset and the square size ride in w (plane_offset, checker_size). */
-	out->normal = vec4(n, dot(n, point));
+	out->normal = vec4(n, vec3_dot(n, point));
 	out->checker_origin = vec4(origin, 0.0);
 	out->checker_color = vec4(in->checker_color, in->checker_size);
 	out->material = in->material;
@@ -322,11 +303,6 @@ static double float_step(double d)
 	return (double)nextafterf(f, FLT_MAX) - (double)f;
 }
 
-static double distance(const double a[3])
-{
-	return sqrt(dot(a, a));
-}
-
 /* Whether an object (named by what) of the given size at distance d from
  * the eye spans fewer than DEVSCENE_MIN_STEPS float steps; then the message. */
 static int too_small(const struct scene *scene, const char *what, double size, double d, char *err,
@@ -352,7 +328,7 @@ int devscene_check_resolution(const struct scene *scene, char *err, size_t err_s
 		double c[3];
 		scene_from_eye(scene, scene->spheres[i].center, c);
 		snprintf(what, sizeof(what), "spheres[%d]: the radius", i);
-		if (too_small(scene, what, scene->spheres[i].radius, distance(c), err, err_size))
+		if (too_small(scene, what, scene->spheres[i].radius, vec3_length(c), err, err_size))
 			return -1;
 	}
 	for (int i = 0; i < scene->triangle_count; i++) {
@@ -360,12 +336,12 @@ int devscene_check_resolution(const struct scene *scene, char *err, size_t err_s
 		double v[3][3], edge = 0, nearest = HUGE_VAL;
 		for (int k = 0; k < 3; k++) {
 			scene_from_eye(scene, t->v[k], v[k]);
-			nearest = fmin(nearest, distance(v[k]));
+			nearest = fmin(nearest, vec3_length(v[k]));
 		}
 		for (int k = 0; k < 3; k++) {
 			double e[3] = {v[(k + 1) % 3][0] - v[k][0], v[(k + 1) % 3][1] - v[k][1],
 				       v[(k + 1) % 3][2] - v[k][2]};
-			edge = fmax(edge, distance(e));
+			edge = fmax(edge, vec3_length(e));
 		}
 		snprintf(what, sizeof(what),
 			 "triangle %d (of the meshes', then the inline ones): the longest edge", i);

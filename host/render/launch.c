@@ -358,7 +358,7 @@ void launch_progress_frame(const struct render_settings *s, const struct render_
 
 double launch_image_work(const struct render_settings *s)
 {
-	return (double)s->width * s->height * (s->samples > 0 ? s->samples : 1);
+	return (double)s->width * s->height * settings_samples(s);
 }
 
 int launch_create_counter(struct device *dev, int watched, struct work_counter *c, char *err,

@@ -61,7 +61,7 @@ int renderer_piece(struct renderer *r, const struct rt_piece *p, struct piece_re
 		   char *err, size_t err_size)
 {
 	const struct render_settings *s = r->settings;
-	int samples = s->samples > 0 ? s->samples : 1;
+	int samples = settings_samples(s);
 
 	if (p->x0 < 0 || p->y0 < 0 || p->width < 1 || p->height < 1 ||
 	    p->width > s->width - p->x0 || p->height > s->height - p->y0 || p->samples != samples ||
@@ -92,40 +92,58 @@ void renderer_close(struct renderer *r)
 	r->ops = NULL;
 }
 
-struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end)
+struct rt_piece renderer_rows(const struct render_settings *s, int y0, int height, int begin,
+			      int end)
 {
-	struct rt_piece p = {0, 0, s->width, s->height, begin, end, s->samples > 0 ? s->samples : 1,
-			     0};
+	struct rt_piece p = {0, y0, s->width, height, begin, end, settings_samples(s), 0};
 	return p;
 }
 
-int render_pass_samples(const struct render_settings *s)
+struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end)
 {
-	int samples = s->samples > 0 ? s->samples : 1;
-	double pixels = (double)s->width * s->height;
-	double per_pass = s->samples_per_pass > 0 ? s->samples_per_pass
-						  : floor(RENDER_PASS_PIXEL_SAMPLES / pixels);
+	return renderer_rows(s, 0, s->height, begin, end);
+}
+
+int render_pass_samples_for(const struct render_settings *s, long long pixels)
+{
+	int samples = settings_samples(s);
+	double per_pass = s->samples_per_pass > 0
+				  ? s->samples_per_pass
+				  : floor(RENDER_PASS_PIXEL_SAMPLES / (double)pixels);
 
 	return per_pass < 1 ? 1 : per_pass > samples ? samples : (int)per_pass;
 }
 
-/* Renders one frame as passes over the whole image, each a range of the
- * samples, and sets *ms to the sum of their kernel times. */
-static int render_frame(struct renderer *r, double *ms, char *err, size_t err_size)
+int render_pass_samples(const struct render_settings *s)
 {
-	const struct render_settings *s = r->settings;
-	int samples = s->samples > 0 ? s->samples : 1;
-	int per_pass = render_pass_samples(s);
+	return render_pass_samples_for(s, (long long)s->width * s->height);
+}
 
-	*ms = 0;
-	for (int begin = 0; begin < samples; begin += per_pass) {
-		int end = samples - begin > per_pass ? begin + per_pass : samples;
-		struct rt_piece piece = renderer_whole_image(s, begin, end);
-		struct piece_result out;
+int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece)
+{
+	int per_pass = render_pass_samples_for(s, (long long)piece->width * piece->height);
 
-		if (renderer_piece(r, &piece, &out, err, err_size))
+	return (piece->samples + per_pass - 1) / per_pass;
+}
+
+int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struct piece_result *out,
+			 char *err, size_t err_size)
+{
+	int per_pass =
+		render_pass_samples_for(r->settings, (long long)whole->width * whole->height);
+
+	out->kernel_ms = 0;
+	out->launches = 0;
+	for (int begin = 0; begin < whole->samples; begin += per_pass) {
+		struct rt_piece piece = *whole;
+		struct piece_result pass;
+		piece.sample_begin = begin;
+		piece.sample_end =
+			whole->samples - begin > per_pass ? begin + per_pass : whole->samples;
+		if (renderer_piece(r, &piece, &pass, err, err_size))
 			return -1;
-		*ms += out.kernel_ms;
+		out->kernel_ms += pass.kernel_ms;
+		out->launches += pass.launches;
 	}
 	return 0;
 }
@@ -134,7 +152,7 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	   struct render_result *res, char *err, size_t err_size)
 {
 	struct renderer r;
-	int per_pass = render_pass_samples(s), samples = s->samples > 0 ? s->samples : 1;
+	struct rt_piece whole = renderer_whole_image(s, 0, settings_samples(s));
 
 	if (renderer_open(&r, dev, scene, s, res, err, err_size))
 		goto out_free;
@@ -142,16 +160,16 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	int frames = launch_begin_timing(s, res, err, err_size);
 	if (frames < 0)
 		goto out_close;
-	res->passes = (samples + per_pass - 1) / per_pass;
+	res->passes = renderer_pass_count(s, &whole);
 	if (s->progress)
 		launch_progress_begin(s, frames, NULL);
 	for (int frame = 0; frame < frames; frame++) {
-		double ms;
+		struct piece_result out;
 		if (s->progress)
 			launch_progress_frame(s, res, frame, frames);
-		if (render_frame(&r, &ms, err, err_size))
+		if (renderer_all_samples(&r, &whole, &out, err, err_size))
 			goto out_close;
-		launch_record_frame(res, frame, frames, ms);
+		launch_record_frame(res, frame, frames, out.kernel_ms);
 	}
 	if (s->progress)
 		progress_end();
@@ -187,7 +205,7 @@ int render_reference(const struct scene *scene, const struct render_settings *s,
 	for (int i = 0; i < s->repeat; i++) {
 		double start = timing_now();
 		if (reference_render_samples(scene, s->width, s->height, s->max_depth,
-					     s->samples > 0 ? s->samples : 1, res->rgb)) {
+					     settings_samples(s), res->rgb)) {
 			snprintf(err, err_size,
 				 "the CPU reference renderer failed (out of memory)");
 			goto out_free;

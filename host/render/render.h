@@ -16,9 +16,13 @@ const struct kernel_info *render_find_kernel(const char *name);
  * milliseconds, on a CPU a few seconds, so that progress moves. */
 #define RENDER_PASS_PIXEL_SAMPLES (1 << 22)
 
-/* Returns how many samples of every pixel one pass of render() traces:
- * settings->samples_per_pass, else about RENDER_PASS_PIXEL_SAMPLES in all;
- * the last pass takes what is left. The image does not depend on it. */
+/* Returns how many samples of every pixel one pass over a piece of `pixels`
+ * pixels traces: settings->samples_per_pass, else about
+ * RENDER_PASS_PIXEL_SAMPLES in all; at least 1, at most settings_samples().
+ * The last pass takes what is left. The image does not depend on it. */
+int render_pass_samples_for(const struct render_settings *settings, long long pixels);
+
+/* render_pass_samples_for() the whole image: one pass of render(). */
 int render_pass_samples(const struct render_settings *settings);
 
 /* Renders `scene` with `settings` (settings->kernel not NULL) on `dev`: each

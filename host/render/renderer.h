@@ -70,7 +70,22 @@ int renderer_read_back(struct renderer *r, char *err, size_t err_size);
 
 void renderer_close(struct renderer *r);
 
-/* Returns the piece of the whole image with samples [begin, end) of n. */
+/* Returns the piece of rows [y0, y0 + height), the image's whole width, with
+ * samples [begin, end) of settings_samples(s). */
+struct rt_piece renderer_rows(const struct render_settings *s, int y0, int height, int begin,
+			      int end);
+
+/* Returns the piece of the whole image with samples [begin, end). */
 struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end);
+
+/* Returns how many passes renderer_all_samples() makes over piece. */
+int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece);
+
+/* Renders every sample of piece's pixels (its sample range is ignored) in
+ * passes of render_pass_samples_for() samples, in sample order on this one
+ * renderer, so that the running sums stay in its buffer; sets *out to the
+ * sum of the passes' kernel times and launches. */
+int renderer_all_samples(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
+			 char *err, size_t err_size);
 
 #endif

@@ -102,6 +102,12 @@ struct render_result {
 	int guards_intact;	/* no byte outside the image was written */
 };
 
+/* Samples per pixel, 0 counting as 1. */
+static inline int settings_samples(const struct render_settings *s)
+{
+	return s->samples > 0 ? s->samples : 1;
+}
+
 /* Bytes of the linear RGB float image of width × height pixels. */
 static inline size_t image_float_bytes(int width, int height)
 {

@@ -15,7 +15,7 @@
 #include <string.h>
 
 #include "rtcl_shared.h"
-#include "render/checks.h"
+#include "render/buffers.h"
 #include "render/launch.h"
 #include "render/renderer.h"
 #include "render/program.h"
@@ -26,19 +26,14 @@
 #define FRAME_OVERFLOWED 1
 
 struct wavefront {
-	cl_program program;
+	struct render_buffers b; /* b.item_flops: every launch's work-items, appended */
 	cl_kernel start, bounce, accumulate;
-	struct guarded_image image;
-	cl_mem scene, queues[2], next_count, overflow;
-	cl_mem item_counts, pixel_flops, write_counts;
+	cl_mem queues[2], next_count, overflow, item_counts;
 	cl_mem sample_rgb, sample_flops; /* the sample being traced */
-	void *scene_block;
-	size_t capacity;      /* rays per queue */
-	size_t item_capacity; /* work-items whose counts item_counts holds */
-	size_t bounce_local;  /* 1D work-group size of the bounce launches */
-	uint64_t *item_flops; /* every launch's work-items, appended */
-	size_t item_count, item_alloc;
-	uint64_t rays, node_visits;
+	size_t capacity;		 /* rays per queue */
+	size_t item_capacity;		 /* work-items whose counts item_counts holds */
+	size_t bounce_local;		 /* 1D work-group size of the bounce launches */
+	size_t item_alloc;		 /* b.item_flops' room */
 };
 
 static void release_queues(struct wavefront *w)
@@ -53,11 +48,9 @@ static void release_queues(struct wavefront *w)
 
 static void release_all(struct wavefront *w)
 {
-	cl_mem buffers[] = {w->sample_flops, w->sample_rgb, w->write_counts, w->pixel_flops,
-			    w->overflow,     w->next_count, w->scene};
+	cl_mem buffers[] = {w->sample_flops, w->sample_rgb, w->overflow, w->next_count};
 
 	release_queues(w);
-	checks_release_image(&w->image);
 	for (size_t i = 0; i < sizeof(buffers) / sizeof(buffers[0]); i++)
 		if (buffers[i])
 			clReleaseMemObject(buffers[i]);
@@ -67,10 +60,7 @@ static void release_all(struct wavefront *w)
 		clReleaseKernel(w->bounce);
 	if (w->start)
 		clReleaseKernel(w->start);
-	if (w->program)
-		clReleaseProgram(w->program);
-	free(w->item_flops);
-	free(w->scene_block);
+	buffers_release(&w->b);
 }
 
 /* (Re)creates the two ray queues and the per-work-item counts for the
@@ -101,30 +91,25 @@ static int create_queues(struct device *dev, const struct render_settings *s, st
 }
 
 static int create_wavefront_buffers(struct device *dev, const struct render_settings *s,
-				    struct render_result *res, struct wavefront *w,
-				    void *scene_block, char *err, size_t err_size)
+				    struct render_result *res, struct wavefront *w, char *err,
+				    size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
 	size_t flops_bytes = s->count_flops ? pixels * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES;
 
-	w->scene = device_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-					res->scene_bytes, scene_block, "scene", err, err_size);
-	if (!w->scene || checks_create_image(dev, s, &w->image, err, err_size))
+	if (buffers_create(dev, s, res, &w->b, pixels * sizeof(cl_ulong), "per-pixel counts", err,
+			   err_size))
 		return -1;
 	w->next_count = device_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 					     "queue counter", err, err_size);
 	w->overflow = device_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 					   "overflow flag", err, err_size);
-	w->pixel_flops = device_create_buffer(dev, CL_MEM_READ_WRITE, flops_bytes, NULL,
-					      "per-pixel counts", err, err_size);
 	w->sample_flops = device_create_buffer(dev, CL_MEM_READ_WRITE, flops_bytes, NULL,
 					       "per-pixel counts of a sample", err, err_size);
 	w->sample_rgb =
 		device_create_buffer(dev, CL_MEM_READ_WRITE, image_float_bytes(s->width, s->height),
 				     NULL, "the colours of a sample", err, err_size);
-	w->write_counts = checks_create_write_counts(dev, s, err, err_size);
-	if (!w->next_count || !w->overflow || !w->pixel_flops || !w->sample_flops ||
-	    !w->sample_rgb || !w->write_counts)
+	if (!w->next_count || !w->overflow || !w->sample_flops || !w->sample_rgb)
 		return -1;
 	return create_queues(dev, s, w, err, err_size);
 }
@@ -132,26 +117,23 @@ static int create_wavefront_buffers(struct device *dev, const struct render_sett
 /* Appends the counts of a launch's `items` work-items. */
 static cl_int append_counts(struct device *dev, struct wavefront *w, size_t items)
 {
-	if (w->item_count + items > w->item_alloc) {
-		size_t alloc = (w->item_count + items) * 2;
-		uint64_t *grown = realloc(w->item_flops, alloc * sizeof(uint64_t));
+	struct render_buffers *b = &w->b;
+
+	if (b->item_count + items > w->item_alloc) {
+		size_t alloc = (b->item_count + items) * 2;
+		uint64_t *grown = realloc(b->item_flops, alloc * sizeof(uint64_t));
 		if (!grown)
 			return CL_OUT_OF_HOST_MEMORY;
-		w->item_flops = grown;
+		b->item_flops = grown;
 		w->item_alloc = alloc;
 	}
-	cl_ulong *counts = malloc(items * RT_ITEM_COUNTS * sizeof(cl_ulong));
-	if (!counts)
-		return CL_OUT_OF_HOST_MEMORY;
-	cl_int status = clEnqueueReadBuffer(dev->queue, w->item_counts, CL_TRUE, 0,
-					    items * RT_ITEM_COUNTS * sizeof(cl_ulong), counts, 0,
-					    NULL, NULL);
-	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
-		w->item_flops[w->item_count++] = counts[RT_ITEM_COUNTS * i];
-		w->rays += counts[RT_ITEM_COUNTS * i + 1];
-		w->node_visits += counts[RT_ITEM_COUNTS * i + 2];
-	}
-	free(counts);
+	/* Zeroed, as buffers_add_item_counts adds: a retried sample appends
+	 * over the attempt it drops. */
+	memset(b->item_flops + b->item_count, 0, items * sizeof(uint64_t));
+	cl_int status = buffers_add_item_counts(dev, b, w->item_counts, 0, items,
+						b->item_flops + b->item_count);
+	if (status == CL_SUCCESS)
+		b->item_count += items;
 	return status;
 }
 
@@ -185,7 +167,7 @@ static cl_int launch_primary(struct renderer *r, struct wavefront *w, size_t loc
 	size_t global[2];
 	cl_uint zero = 0;
 	const char *call; /* the wavefront's errors name the sample, not the call */
-	const void *args[] = {&w->scene,	NULL,		&w->queues[0], &w->item_counts,
+	const void *args[] = {&w->b.scene,	NULL,		&w->queues[0], &w->item_counts,
 			      &w->sample_flops, &w->sample_rgb, piece,	       &sample};
 	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem), sizeof(cl_mem),
 				sizeof(cl_mem), sizeof(cl_mem), sizeof(*piece), sizeof(cl_uint)};
@@ -209,16 +191,9 @@ static cl_int launch_accumulate(struct renderer *r, struct wavefront *w, size_t 
 {
 	size_t global[2];
 	const char *call;
-	const void *args[] = {&w->scene,
-			      NULL,
-			      &w->image.image,
-			      &w->sample_rgb,
-			      &w->item_counts,
-			      &w->pixel_flops,
-			      &w->sample_flops,
-			      &w->write_counts,
-			      piece,
-			      &sample};
+	const void *args[] = {&w->b.scene,     NULL,	    &w->b.image.image, &w->sample_rgb,
+			      &w->item_counts, &w->b.flops, &w->sample_flops,  &w->b.write_counts,
+			      piece,	       &sample};
 	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem), sizeof(cl_mem),
 				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),
 				sizeof(*piece), sizeof(cl_uint)};
@@ -244,7 +219,7 @@ static cl_int launch_bounce(struct device *dev, const struct render_settings *s,
 	cl_uint zero = 0, overflowed = 0, capacity = (cl_uint)w->capacity;
 	const char *call;
 	const void *args[] = {
-		&w->scene,	 NULL,	    &in,	  queued,	  &out,
+		&w->b.scene,	 NULL,	    &in,	  queued,	  &out,
 		&w->next_count,	 &capacity, &w->overflow, &w->sample_rgb, &w->item_counts,
 		&w->sample_flops};
 	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem),	 sizeof(cl_uint),
@@ -277,8 +252,8 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 {
 	size_t local_bytes =
 		r->result->scene_in_local ? r->result->scene_bytes : UNUSED_BUFFER_BYTES;
-	size_t items_before = w->item_count;
-	uint64_t rays_before = w->rays, visits_before = w->node_visits;
+	size_t items_before = w->b.item_count;
+	uint64_t rays_before = w->b.rays, visits_before = w->b.node_visits;
 
 	for (;;) {
 		double attempt = 0;
@@ -296,9 +271,9 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 					"tracing the sample again with %zu\n",
 					w->capacity, 2 * w->capacity);
 			w->capacity *= 2;
-			w->item_count = items_before;
-			w->rays = rays_before;
-			w->node_visits = visits_before;
+			w->b.item_count = items_before;
+			w->b.rays = rays_before;
+			w->b.node_visits = visits_before;
 			if (create_queues(r->dev, r->settings, w, err, err_size))
 				return -1;
 			continue;
@@ -338,57 +313,9 @@ static int wavefront_piece(struct renderer *r, const struct rt_piece *piece,
 
 static int wavefront_read_back(struct renderer *r, char *err, size_t err_size)
 {
-	struct device *dev = r->dev;
-	const struct render_settings *s = r->settings;
-	struct render_result *res = r->result;
 	struct wavefront *w = r->state;
-	size_t pixels = (size_t)s->width * s->height;
-	cl_int status = clEnqueueReadBuffer(dev->queue, w->image.image, CL_TRUE, 0,
-					    image_float_bytes(s->width, s->height), res->rgb, 0,
-					    NULL, NULL);
 
-	if (status == CL_SUCCESS && s->count_flops) {
-		res->pixel_flops = malloc(pixels * sizeof(uint64_t));
-		status = res->pixel_flops ? clEnqueueReadBuffer(dev->queue, w->pixel_flops, CL_TRUE,
-								0, pixels * sizeof(cl_ulong),
-								res->pixel_flops, 0, NULL, NULL)
-					  : CL_OUT_OF_HOST_MEMORY;
-		res->item_flops = w->item_flops;
-		res->item_count = w->item_count;
-		w->item_flops = NULL;
-		res->total_flops = 0;
-		for (size_t i = 0; i < res->item_count; i++)
-			res->total_flops += res->item_flops[i];
-		res->total_rays = w->rays;
-		res->total_node_visits = w->node_visits;
-	}
-	if (status == CL_SUCCESS)
-		status = checks_read(dev, s, &w->image, w->write_counts, res);
-	if (status != CL_SUCCESS) {
-		snprintf(err, err_size, "reading the wavefront results failed: %s",
-			 cl_error_name(status));
-		return -1;
-	}
-	return 0;
-}
-
-/* Zeroes the per-pixel counts and, with check_writes, poisons the image:
- * the pieces add to what the buffers hold. */
-static int clear_wavefront_buffers(struct device *dev, const struct render_settings *s,
-				   struct wavefront *w, char *err, size_t err_size)
-{
-	cl_ulong zero = 0;
-	cl_int status = checks_poison(dev, s, &w->image, w->write_counts);
-
-	if (status == CL_SUCCESS && s->count_flops)
-		status = clEnqueueFillBuffer(dev->queue, w->pixel_flops, &zero, sizeof(zero), 0,
-					     (size_t)s->width * s->height * sizeof(cl_ulong), 0,
-					     NULL, NULL);
-	if (status != CL_SUCCESS) {
-		snprintf(err, err_size, "clEnqueueFillBuffer failed: %s", cl_error_name(status));
-		return -1;
-	}
-	return 0;
+	return buffers_read_back(r->dev, r->settings, &w->b, r->result, err, err_size);
 }
 
 static int wavefront_open(struct renderer *r, const struct scene *scene, char *err, size_t err_size)
@@ -404,22 +331,22 @@ static int wavefront_open(struct renderer *r, const struct scene *scene, char *e
 	}
 	r->state = w;
 	/* The per-pixel launches cover the image as the naive kernel does. */
-	if (launch_setup(r->dev, scene, s, res, &w->scene_block, &w->program, err, err_size))
+	if (launch_setup(r->dev, scene, s, res, &w->b.scene_block, &w->b.program, err, err_size))
 		return -1;
 	w->bounce_local = res->local_size[0] * res->local_size[1];
 	w->item_capacity = res->global_size[0] * res->global_size[1];
 	/* Room for two rays a pixel; more is found on demand. */
 	w->capacity = pixels * 2 > 1024 ? pixels * 2 : 1024;
-	w->start = program_create_kernel(w->program, "wavefront_start", err, err_size);
-	w->bounce = w->start ? program_create_kernel(w->program, "wavefront_bounce", err, err_size)
-			     : NULL;
-	w->accumulate =
-		w->bounce ? program_create_kernel(w->program, "wavefront_accumulate", err, err_size)
-			  : NULL;
+	w->start = program_create_kernel(w->b.program, "wavefront_start", err, err_size);
+	w->bounce = w->start
+			    ? program_create_kernel(w->b.program, "wavefront_bounce", err, err_size)
+			    : NULL;
+	w->accumulate = w->bounce ? program_create_kernel(w->b.program, "wavefront_accumulate", err,
+							  err_size)
+				  : NULL;
 	double lap = timing_now();
-	if (!w->accumulate ||
-	    create_wavefront_buffers(r->dev, s, res, w, w->scene_block, err, err_size) ||
-	    clear_wavefront_buffers(r->dev, s, w, err, err_size))
+	if (!w->accumulate || create_wavefront_buffers(r->dev, s, res, w, err, err_size) ||
+	    buffers_clear(r->dev, s, &w->b, err, err_size))
 		return -1;
 	res->times.scene += timing_lap_ms(&lap);
 	return 0;

@@ -82,7 +82,7 @@ static json_t *image_document(const struct job *job, const struct record *record
 			 r->kernel_ms_median, "kernel_ms_min", r->kernel_ms_min, "kernel_ms_max",
 			 r->kernel_ms_max, "repeat", r->repeat, "kernel_ms_all", times,
 			 "build_options", r->build_options, "batch", s->batch, "samples",
-			 s->samples > 0 ? s->samples : 1, "passes", r->passes > 0 ? r->passes : 1);
+			 settings_samples(s), "passes", r->passes > 0 ? r->passes : 1);
 }
 
 /* The device's size and clock, for peak-throughput estimates (not for the

@@ -6,6 +6,7 @@
 
 #include "base/progress.h"
 #include "base/timing.h"
+#include "base/vec3.h"
 #include "base/version.h"
 #include "render/launch.h"
 #include "render/render.h"
@@ -18,10 +19,10 @@
 static void rotate(const double v[3], const double k[3], double a, double out[3])
 {
 	double c = cos(a), s = sin(a);
-	double dot = k[0] * v[0] + k[1] * v[1] + k[2] * v[2];
-	double cross[3] = {k[1] * v[2] - k[2] * v[1], k[2] * v[0] - k[0] * v[2],
-			   k[0] * v[1] - k[1] * v[0]};
+	double dot = vec3_dot(k, v);
+	double cross[3];
 
+	vec3_cross(k, v, cross);
 	for (int i = 0; i < 3; i++)
 		out[i] = v[i] * c + cross[i] * s + k[i] * dot * (1 - c);
 }
@@ -30,8 +31,7 @@ void frames_orbit(const struct scene_camera *camera, int frame, int first, int l
 		  struct scene_camera *out)
 {
 	double angle = 2 * PI * (frame - first) / (last - first + 1);
-	double length = sqrt(camera->up[0] * camera->up[0] + camera->up[1] * camera->up[1] +
-			     camera->up[2] * camera->up[2]);
+	double length = vec3_length(camera->up);
 	double axis[3], offset[3], turned[3];
 
 	*out = *camera;

@@ -7,6 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/vec3.h"
 #include "scene/scene_loader.h"
 
 /* cos and sin of `degrees`, exact at multiples of 90 (cos(pi/2) in double is
@@ -67,13 +68,6 @@ void place_point(const struct placement *pl, const double in[3], double out[3])
 		out[i] += pl->translate[i];
 }
 
-static void cross(const double a[3], const double b[3], double out[3])
-{
-	out[0] = a[1] * b[2] - a[2] * b[1];
-	out[1] = a[2] * b[0] - a[0] * b[2];
-	out[2] = a[0] * b[1] - a[1] * b[0];
-}
-
 int place_unit(double v[3])
 {
 	double scaled[3], length;
@@ -96,7 +90,7 @@ int place_triangle_normal(const double v[3][3], double n[3])
 		e1[i] = v[1][i] - v[0][i];
 		e2[i] = v[2][i] - v[0][i];
 	}
-	cross(e1, e2, n);
+	vec3_cross(e1, e2, n);
 	return place_unit(n);
 }
 
@@ -144,7 +138,7 @@ static void add_face_normals(const struct mesh_data *mesh, const double *placed,
 			e1[i] = placed[3 * ix[1] + i] - placed[3 * ix[0] + i];
 			e2[i] = placed[3 * ix[2] + i] - placed[3 * ix[0] + i];
 		}
-		cross(e1, e2, n);
+		vec3_cross(e1, e2, n);
 		for (int k = 0; k < 3; k++)
 			for (int i = 0; i < 3; i++)
 				vn[3 * ix[k] + i] += mirrored ? -n[i] : n[i];

@@ -9,6 +9,7 @@
 #include <string.h>
 
 #include "base/quote.h"
+#include "base/vec3.h"
 #include "scene/scene_loader.h"
 #include "base/suggest.h"
 
@@ -399,7 +400,7 @@ int loader_scale_to_unit_max(const double v[3], double out[3])
 
 double loader_length3(const double v[3])
 {
-	return sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+	return vec3_length(v);
 }
 
 /* The scene loader's files: recorded here, with the messages, so that the

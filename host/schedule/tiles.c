@@ -1,6 +1,5 @@
 #include "schedule/tiles.h"
 
-#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -36,26 +35,13 @@ struct rt_piece tiles_band(const struct render_settings *s, int rows, int index,
 {
 	int y0 = index * rows;
 	int height = s->height - y0 < rows ? s->height - y0 : rows;
-	struct rt_piece p = {0, y0, s->width, height, begin, end, s->samples > 0 ? s->samples : 1,
-			     0};
 
-	return p;
-}
-
-int tiles_pass_samples(const struct render_settings *s, const struct rt_piece *band)
-{
-	double pixels = (double)band->width * band->height;
-	double per_pass = s->samples_per_pass > 0 ? s->samples_per_pass
-						  : floor(RENDER_PASS_PIXEL_SAMPLES / pixels);
-
-	return per_pass < 1 ? 1 : per_pass > band->samples ? band->samples : (int)per_pass;
+	return renderer_rows(s, y0, height, begin, end);
 }
 
 int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece)
 {
-	int per_pass = tiles_pass_samples(s, piece);
-
-	return (piece->samples + per_pass - 1) / per_pass;
+	return renderer_pass_count(s, piece);
 }
 
 /* The work-items a device keeps in flight: a GPU about 2048 per compute
@@ -90,7 +76,7 @@ static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
 	int cell_w = s->workgroup[0] > 0 ? s->workgroup[0] : 8;
 	int cell_h = s->workgroup[1] > 0 ? s->workgroup[1] : 8;
 
-	adapt_init(&t->adapt, s->width, s->height, s->samples, cell_w, cell_h, t->count);
+	adapt_init(&t->adapt, s->width, s->height, settings_samples(s), cell_w, cell_h, t->count);
 	set_min_pieces(t, cell_w * cell_h);
 	t->piece_cap = t->adapt.cells_x * t->adapt.cells_y;
 	t->piece_count = 0;
@@ -123,7 +109,7 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 		return -1;
 	}
 	for (int b = 0; b < t->piece_count; b++) {
-		t->pieces[b] = tiles_band(s, rows, b, 0, s->samples > 0 ? s->samples : 1);
+		t->pieces[b] = tiles_band(s, rows, b, 0, settings_samples(s));
 		t->owner[b] = -1;
 	}
 	return 0;
@@ -207,9 +193,8 @@ static void expect_writes(struct tiles_job *t, const struct rt_piece *p, int sig
 int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
 		      size_t err_size)
 {
-	const struct render_settings *s = t->settings;
 	struct rt_piece whole;
-	int per_pass;
+	struct piece_result out;
 
 	/* Adaptive: other threads add pieces meanwhile, under the lock; this
 	 * one's index was handed out already. */
@@ -220,20 +205,12 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 		return -1;
 	}
 	whole = t->pieces[band];
-	per_pass = tiles_pass_samples(s, &whole);
 	/* Every sample of the piece on this device, in order: the running
 	 * sums stay in its buffer. */
-	for (int begin = 0; begin < whole.samples; begin += per_pass) {
-		struct rt_piece piece = whole;
-		struct piece_result out;
-		piece.sample_begin = begin;
-		piece.sample_end =
-			whole.samples - begin > per_pass ? begin + per_pass : whole.samples;
-		if (renderer_piece(&t->dev[k].renderer, &piece, &out, err, err_size))
-			return -1;
-		done->kernel_ms += out.kernel_ms;
-		done->launches += out.launches;
-	}
+	if (renderer_all_samples(&t->dev[k].renderer, &whole, &out, err, err_size))
+		return -1;
+	done->kernel_ms += out.kernel_ms;
+	done->launches += out.launches;
 	t->owner[band] = k; /* pieces are distinct: no two threads write one */
 	expect_writes(t, &whole, 1);
 	done->pixels += (long long)whole.width * whole.height;

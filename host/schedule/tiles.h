@@ -49,10 +49,6 @@ int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices
 struct rt_piece tiles_band(const struct render_settings *s, int rows, int index, int begin,
 			   int end);
 
-/* Samples per launch for a band: settings->samples_per_pass, else about
- * RENDER_PASS_PIXEL_SAMPLES over the band (render.h). */
-int tiles_pass_samples(const struct render_settings *s, const struct rt_piece *band);
-
 /* One device's renderer and what it read back. */
 struct tiles_device {
 	struct renderer renderer;

@@ -1,0 +1,123 @@
+#include "render/buffers.h"
+
+#include <stdio.h>
+#include <stdlib.h>
+
+#include "rtcl_shared.h"
+#include "render/launch.h"
+
+/* Bytes of the per-pixel flops at the head of the flop-count buffer. */
+static size_t pixel_flops_bytes(const struct render_settings *s)
+{
+	return (size_t)s->width * s->height * sizeof(cl_ulong);
+}
+
+int buffers_create(struct device *dev, const struct render_settings *s,
+		   const struct render_result *res, struct render_buffers *b, size_t flops_bytes,
+		   const char *flops_what, char *err, size_t err_size)
+{
+	b->scene = device_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+					res->scene_bytes, b->scene_block, "scene", err, err_size);
+	if (!b->scene || checks_create_image(dev, s, &b->image, err, err_size))
+		return -1;
+	b->flops = device_create_buffer(dev, CL_MEM_READ_WRITE,
+					s->count_flops ? flops_bytes : UNUSED_BUFFER_BYTES, NULL,
+					flops_what, err, err_size);
+	if (!b->flops)
+		return -1;
+	b->write_counts = checks_create_write_counts(dev, s, err, err_size);
+	return b->write_counts ? 0 : -1;
+}
+
+int buffers_clear(struct device *dev, const struct render_settings *s, struct render_buffers *b,
+		  char *err, size_t err_size)
+{
+	cl_ulong zero = 0;
+	cl_int status = checks_poison(dev, s, &b->image, b->write_counts);
+
+	if (status == CL_SUCCESS && s->count_flops)
+		status = clEnqueueFillBuffer(dev->queue, b->flops, &zero, sizeof(zero), 0,
+					     pixel_flops_bytes(s), 0, NULL, NULL);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clEnqueueFillBuffer failed: %s", cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
+cl_int buffers_add_item_counts(struct device *dev, struct render_buffers *b, cl_mem from,
+			       size_t offset, size_t items, uint64_t *flops)
+{
+	cl_ulong *counts = malloc(items * RT_ITEM_COUNTS * sizeof(cl_ulong));
+	cl_int status;
+
+	if (!counts)
+		return CL_OUT_OF_HOST_MEMORY;
+	status = clEnqueueReadBuffer(dev->queue, from, CL_TRUE, offset,
+				     items * RT_ITEM_COUNTS * sizeof(cl_ulong), counts, 0, NULL,
+				     NULL);
+	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
+		flops[i] += counts[RT_ITEM_COUNTS * i];
+		b->rays += counts[RT_ITEM_COUNTS * i + 1];
+		b->node_visits += counts[RT_ITEM_COUNTS * i + 2];
+	}
+	free(counts);
+	return status;
+}
+
+/* Reads the per-pixel flops and hands over the per-work-item sums. */
+static cl_int read_counts(struct device *dev, const struct render_settings *s,
+			  struct render_buffers *b, struct render_result *res)
+{
+	res->pixel_flops = malloc(pixel_flops_bytes(s));
+	if (!res->pixel_flops)
+		return CL_OUT_OF_HOST_MEMORY;
+	res->item_flops = b->item_flops;
+	res->item_count = b->item_count;
+	b->item_flops = NULL;
+	res->total_flops = 0;
+	for (size_t i = 0; i < res->item_count; i++)
+		res->total_flops += res->item_flops[i];
+	res->total_rays = b->rays;
+	res->total_node_visits = b->node_visits;
+	return clEnqueueReadBuffer(dev->queue, b->flops, CL_TRUE, 0, pixel_flops_bytes(s),
+				   res->pixel_flops, 0, NULL, NULL);
+}
+
+int buffers_read_back(struct device *dev, const struct render_settings *s, struct render_buffers *b,
+		      struct render_result *res, char *err, size_t err_size)
+{
+	cl_int status = clEnqueueReadBuffer(dev->queue, b->image.image, CL_TRUE, 0,
+					    image_float_bytes(s->width, s->height), res->rgb, 0,
+					    NULL, NULL);
+
+	if (status == CL_SUCCESS && s->count_flops) {
+		status = read_counts(dev, s, b, res);
+		if (status == CL_OUT_OF_HOST_MEMORY) {
+			snprintf(err, err_size, "out of host memory for the flop counts");
+			return -1;
+		}
+	}
+	if (status == CL_SUCCESS)
+		status = checks_read(dev, s, &b->image, b->write_counts, res);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "reading the results back failed (kernel '%s' on %s): %s",
+			 s->kernel->name, dev->name, cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
+void buffers_release(struct render_buffers *b)
+{
+	cl_mem buffers[] = {b->write_counts, b->flops, b->scene};
+
+	free(b->item_flops);
+	free(b->scene_block);
+	checks_release_image(&b->image);
+	for (size_t i = 0; i < sizeof(buffers) / sizeof(buffers[0]); i++)
+		if (buffers[i])
+			clReleaseMemObject(buffers[i]);
+	if (b->program)
+		clReleaseProgram(b->program);
+}

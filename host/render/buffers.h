@@ -1,0 +1,51 @@
+/* What both renderers (singlepass.c, wavefront.c) hold for the whole image,
+ * and the steps they take alike: creating the buffers, clearing the counts
+ * before the first piece, adding up a launch's per-work-item counts, reading
+ * the image and the counts back, releasing. Each renderer keeps its kernels
+ * and launch buffers around this, behind renderer_ops (renderer.h). */
+#ifndef RTCL_BUFFERS_H
+#define RTCL_BUFFERS_H
+
+#include "render/checks.h"
+
+struct render_buffers {
+	cl_program program;
+	void *scene_block; /* the packed scene (launch_setup) */
+	cl_mem scene;
+	struct guarded_image image;
+	cl_mem flops;	      /* the per-pixel flop counts at its head (count_flops) */
+	cl_mem write_counts;  /* check_writes (checks.h) */
+	uint64_t *item_flops; /* per work-item, as the renderer lays them out */
+	size_t item_count;
+	uint64_t rays, node_visits;
+};
+
+/* Creates the scene buffer from b->scene_block, the image, the flop-count
+ * buffer `flops_what` of flops_bytes (a placeholder without count_flops) and
+ * the write counts. Returns 0, or -1 with one message in err. */
+int buffers_create(struct device *dev, const struct render_settings *s,
+		   const struct render_result *res, struct render_buffers *b, size_t flops_bytes,
+		   const char *flops_what, char *err, size_t err_size);
+
+/* Zeroes the per-pixel flop counts and, with check_writes, poisons the image:
+ * the pieces add to what the buffers hold. Returns 0, or -1 with one message
+ * in err. */
+int buffers_clear(struct device *dev, const struct render_settings *s, struct render_buffers *b,
+		  char *err, size_t err_size);
+
+/* Reads the counts of `items` work-items (RT_ITEM_COUNTS each) from `from` at
+ * byte `offset`, adds their flops to flops[0 .. items) and their rays and node
+ * visits to b's sums. */
+cl_int buffers_add_item_counts(struct device *dev, struct render_buffers *b, cl_mem from,
+			       size_t offset, size_t items, uint64_t *flops);
+
+/* Reads the image into res->rgb and, when counting, the per-pixel flops and
+ * the per-work-item sums (handed over to res), when checking, the write
+ * counts and guard zones. Returns 0, or -1 with one message in err. */
+int buffers_read_back(struct device *dev, const struct render_settings *s, struct render_buffers *b,
+		      struct render_result *res, char *err, size_t err_size);
+
+/* Releases what b holds, the program last. */
+void buffers_release(struct render_buffers *b);
+
+#endif
