@@ -103,8 +103,8 @@ HOST_MODULES := \
 	scene/scene scene/scene_check scene/scene_literal scene/scene_material scene/scene_mesh \
 	scene/mesh_place scene/mesh_spawn \
 	device/device device/devices device/clerror device/progcache \
-	layout/bvh layout/devmesh layout/devscene \
-	render/checks render/buffers render/program render/launch render/singlepass render/wavefront render/render \
+	layout/bvh layout/mesh_block layout/scene_block \
+	render/checks render/buffers render/program render/launch render/singlepass render/wavefront render/renderer render/render \
 	render/reference \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
@@ -234,7 +234,7 @@ BENCH_SCENES ?= build/bench-scenes
 bench-scenes:
 	$(PYTHON) tools/genbench.py all -o $(BENCH_SCENES)
 
-# libFuzzer on the scene loader and devscene_pack (test/fuzz_scene.c), seeded
+# libFuzzer on the scene loader and scene_block_pack (test/fuzz_scene.c), seeded
 # with the shipped and the bad scenes; the seeds are copied, the growing corpus
 # and any crash-*, leak-*, timeout-* files stay under build/fuzz/.
 FUZZ_SECONDS ?= 60
@@ -249,10 +249,10 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # same sanitizers, and its reports fail the run (host/scene/mesh.h).
 FUZZ_SOURCES := host/scene/scene.c host/scene/scene_check.c host/scene/scene_literal.c host/scene/scene_material.c host/base/suggest.c \
 	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/base/files.c host/base/quote.c \
-	host/base/interrupt.c host/layout/devscene.c \
-	host/layout/devmesh.c host/layout/bvh.c
-FUZZ_HEADERS := test/devscene_check.h host/scene/scene.h host/scene/scene_loader.h host/scene/mesh.h \
-	host/scene/mesh_place.h host/base/files.h host/base/quote.h host/layout/devscene.h host/layout/devmesh.h host/layout/bvh.h host/base/libdir.h \
+	host/base/interrupt.c host/layout/scene_block.c \
+	host/layout/mesh_block.c host/layout/bvh.c
+FUZZ_HEADERS := test/scene_block_check.h host/scene/scene.h host/scene/scene_loader.h host/scene/mesh.h \
+	host/scene/mesh_place.h host/base/files.h host/base/quote.h host/layout/scene_block.h host/layout/mesh_block.h host/layout/bvh.h host/base/libdir.h \
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 

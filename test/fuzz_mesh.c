@@ -2,7 +2,7 @@
  * through the scene loader, the import helper (Assimp in a process of its
  * own, built with the same sanitizers as build/fuzz/rtcl-meshread), the
  * placement and the device packing (host/scene/scene_mesh.c, host/scene/mesh_spawn.c,
- * host/meshread/meshread_assimp.c, host/layout/devmesh.c, host/layout/devscene.c).
+ * host/meshread/meshread_assimp.c, host/layout/mesh_block.c, host/layout/scene_block.c).
  *
  * Each input is a mesh file: PLY when it starts with "ply", else OBJ (Assimp
  * picks its reader by the extension). It is written to a private folder and
@@ -10,7 +10,7 @@
  * with one message (a crash inside Assimp is the file's fault and refuses
  * it), never crash, leak, hang or hit undefined behaviour in rtcl's code;
  * an accepted scene is packed with its BVH, as a render would, and the
- * device layout must hold only usable numbers (devscene_check.h).
+ * device layout must hold only usable numbers (scene_block_check.h).
  *
  *   make fuzz-mesh FUZZ_SECONDS=600   # build/fuzz/fuzz_mesh, seeded from
  *                                     # test/meshes/ and the regressions,
@@ -24,8 +24,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-#include "layout/devscene.h"
-#include "devscene_check.h"
+#include "layout/scene_block.h"
+#include "scene_block_check.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
 
@@ -68,16 +68,16 @@ static void write_input(const char *path, const uint8_t *data, size_t size)
 static void pack_and_check(const struct scene *scene)
 {
 	struct bvh bvh;
-	struct devmesh mesh;
+	struct mesh_block mesh;
 	size_t bytes;
 
-	if (bvh_build_scene(scene, &bvh) || devmesh_build(scene, &mesh))
+	if (bvh_build_scene(scene, &bvh) || mesh_block_build(scene, &mesh))
 		abort();
-	void *packed = devscene_pack(scene, &mesh, &bvh, 4, 4, 2, &bytes);
-	if (!packed || devscene_problem(packed))
+	void *packed = scene_block_pack(scene, &mesh, &bvh, 4, 4, 2, &bytes);
+	if (!packed || scene_block_problem(packed))
 		abort();
 	free(packed);
-	devmesh_free(&mesh);
+	mesh_block_free(&mesh);
 	bvh_free(&bvh);
 }
 

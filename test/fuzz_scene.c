@@ -1,10 +1,10 @@
 /* libFuzzer target for the scene loader, its validation and the packing into
- * the device layout (host/scene/scene.c, host/layout/devscene.c).
+ * the device layout (host/scene/scene.c, host/layout/scene_block.c).
  *
  * Each input is loaded as a NUL-terminated document: it must be accepted or
  * refused with one message, never crash, leak, hang or hit undefined
  * behaviour. An accepted scene is also packed, as render.c would pack it,
- * and the device layout must hold only usable numbers (devscene_check.h).
+ * and the device layout must hold only usable numbers (scene_block_check.h).
  *
  *   make fuzz FUZZ_SECONDS=600    # build/fuzz/fuzz_scene, seeded from scenes/,
  *                                 # test/bad_scenes/ and the committed corpus
@@ -16,8 +16,8 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "layout/devscene.h"
-#include "devscene_check.h"
+#include "layout/scene_block.h"
+#include "scene_block_check.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
 
@@ -37,16 +37,16 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 	if (scene_load_string(&scene, json, "fuzz.json", err, sizeof(err)) == 0) {
 		size_t bytes;
 		struct bvh bvh;
-		struct devmesh mesh;
-		if (bvh_build_scene(&scene, &bvh) || devmesh_build(&scene, &mesh))
+		struct mesh_block mesh;
+		if (bvh_build_scene(&scene, &bvh) || mesh_block_build(&scene, &mesh))
 			abort();
-		void *packed = devscene_pack(&scene, &mesh, &bvh, scene.width, scene.height,
+		void *packed = scene_block_pack(&scene, &mesh, &bvh, scene.width, scene.height,
 					     scene.max_depth, &bytes);
 
-		if (!packed || devscene_problem(packed))
+		if (!packed || scene_block_problem(packed))
 			abort();
 		bvh_free(&bvh);
-		devmesh_free(&mesh);
+		mesh_block_free(&mesh);
 		free(packed);
 		scene_free(&scene);
 	} else if (strlen(err) == 0 || strchr(err, '\n') || scene.source || scene.materials ||

@@ -13,7 +13,7 @@
 
 #include "rtcl_shared.h"
 #include "layout/bvh.h"
-#include "layout/devscene.h"
+#include "layout/scene_block.h"
 #include "device/device.h"
 #include "base/embedded.h"
 #include "render/program.h"
@@ -139,12 +139,12 @@ static void setup_scene(struct fixture *f, const char *json, int bvh)
 	cr_assert_eq(scene_load_string(&f->scene, json, "analytic", err, sizeof(err)), 0, "%s",
 		     err);
 	struct bvh tree;
-	struct devmesh mesh;
+	struct mesh_block mesh;
 	cr_assert_eq(bvh_build_scene(&f->scene, &tree), 0);
-	cr_assert_eq(devmesh_build(&f->scene, &mesh), 0);
-	void *block = devscene_pack(&f->scene, &mesh, bvh ? &tree : NULL, 3, 3, 1, &bytes);
+	cr_assert_eq(mesh_block_build(&f->scene, &mesh), 0);
+	void *block = scene_block_pack(&f->scene, &mesh, bvh ? &tree : NULL, 3, 3, 1, &bytes);
 	bvh_free(&tree);
-	devmesh_free(&mesh);
+	mesh_block_free(&mesh);
 	f->program =
 		clCreateProgramWithSource(f->dev.context, (cl_uint)count, sources, NULL, &status);
 	cr_assert_eq(status, CL_SUCCESS);

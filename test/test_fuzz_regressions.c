@@ -5,14 +5,14 @@
  * Every file in test/fuzz_regressions/ (inputs that once crashed, leaked,
  * hung or hit undefined behaviour) and test/fuzz_corpus/ (small inputs that
  * reach distinct code) is loaded as the fuzzer loads it: accepted and packed
- * into usable numbers (devscene_check.h), or refused with one line and
+ * into usable numbers (scene_block_check.h), or refused with one line and
  * nothing left to free. Under `make test SAN=1`
  * AddressSanitizer and UBSan watch every load.
  */
 #define _POSIX_C_SOURCE 200809L
 
-#include "layout/devscene.h"
-#include "devscene_check.h"
+#include "layout/scene_block.h"
+#include "scene_block_check.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
 
@@ -58,18 +58,18 @@ static void check_load(const char *path, const char *json)
 	if (scene_load_string(&s, json, path, err, sizeof(err)) == 0) {
 		size_t bytes = 0;
 		struct bvh bvh;
-		struct devmesh mesh;
+		struct mesh_block mesh;
 		cr_assert_eq(bvh_build_scene(&s, &bvh), 0, "%s: out of memory", path);
-		cr_assert_eq(devmesh_build(&s, &mesh), 0, "%s: out of memory", path);
+		cr_assert_eq(mesh_block_build(&s, &mesh), 0, "%s: out of memory", path);
 		void *packed =
-			devscene_pack(&s, &mesh, &bvh, s.width, s.height, s.max_depth, &bytes);
+			scene_block_pack(&s, &mesh, &bvh, s.width, s.height, s.max_depth, &bytes);
 		bvh_free(&bvh);
-		devmesh_free(&mesh);
+		mesh_block_free(&mesh);
 
-		cr_assert_not_null(packed, "%s: devscene_pack failed", path);
+		cr_assert_not_null(packed, "%s: scene_block_pack failed", path);
 		cr_expect_gt(bytes, 0);
-		cr_expect_null(devscene_problem(packed), "%s: accepted, but packs with %s", path,
-			       devscene_problem(packed));
+		cr_expect_null(scene_block_problem(packed), "%s: accepted, but packs with %s", path,
+			       scene_block_problem(packed));
 		free(packed);
 		scene_free(&s);
 	} else {

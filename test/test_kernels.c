@@ -13,7 +13,7 @@
 #include <string.h>
 
 #include "device/device.h"
-#include "layout/devscene.h"
+#include "layout/scene_block.h"
 #include "output/image.h"
 #include "render/launch.h"
 #include "render/reference.h"
@@ -315,16 +315,16 @@ Test(kernels, scene_larger_than_a_buffer_is_refused)
 
 	memset(&dev, 0, sizeof(dev));
 	snprintf(dev.name, sizeof(dev.name), "Tiny Device");
-	struct devmesh mesh;
+	struct mesh_block mesh;
 	load(&scene, "test/meshes/mesh_scene.json");
-	cr_assert_eq(devmesh_build(&scene, &mesh), 0);
-	size_t bytes = devscene_bytes(&scene, &mesh, NULL);
+	cr_assert_eq(mesh_block_build(&scene, &mesh), 0);
+	size_t bytes = scene_block_bytes(&scene, &mesh, NULL);
 	dev.max_alloc_size = bytes;
 	cr_expect_eq(launch_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), 0, "%s",
 		     err);
 	dev.max_alloc_size--;
 	cr_assert_eq(launch_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), -1);
-	devmesh_free(&mesh);
+	mesh_block_free(&mesh);
 	snprintf(want, sizeof(want),
 		 "test/meshes/mesh_scene.json: the scene (335 triangles) needs "
 		 "%zu bytes of device memory, more than the limit of %zu bytes in one buffer on "
@@ -438,7 +438,7 @@ Test(kernels_slow, bvh_matches_brute_force_small_scenes, .timeout = 600)
 /* 40 pairs of coincident spheres, the red ones first in the file and the blue
  * ones after: brute force shows them red (equal distances go to the lower
  * index), and so must the BVH, whose leaf order puts 18 of the pairs blue
- * first on the device (host/layout/devscene.c). Comparing device indices there
+ * first on the device (host/layout/scene_block.c). Comparing device indices there
  * turns 298 bytes blue. */
 Test(kernels, bvh_keeps_the_scene_order_for_equal_distances, .timeout = 600)
 {

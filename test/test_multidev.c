@@ -272,14 +272,14 @@ Test(multidev, band_passes_keep_a_launch_near_the_pass_budget)
 	struct rt_piece band = tiles_band(&s, 64, 0, 0, 65536);
 
 	/* 64 Ki pixels: 2^22 / 2^16 = 64 samples per launch. */
-	cr_assert_eq(render_pass_samples_for(&s, (long long)band.width * band.height), 64);
+	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height), 64);
 	cr_assert_eq(tiles_piece_launches(&s, &band), 1024);
 	s.samples_per_pass = 5;
-	cr_assert_eq(render_pass_samples_for(&s, (long long)band.width * band.height), 5);
+	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height), 5);
 	s = band_settings(8, 8, 3);
 	band = tiles_band(&s, 8, 0, 0, 3);
 	/* never more than there are */
-	cr_assert_eq(render_pass_samples_for(&s, (long long)band.width * band.height), 3);
+	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height), 3);
 }
 
 Test(multidev, write_count_check_names_the_first_pixel_off)

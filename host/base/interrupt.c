@@ -7,7 +7,7 @@
 #include <unistd.h>
 
 /* Recursive, so that a caller may hold it around calls that hold it too
- * (outputs.c commits the files and records the outcome as one step). */
+ * (output/plan.c commits the files and records the outcome as one step). */
 static pthread_mutex_t lock;
 static pthread_once_t lock_once = PTHREAD_ONCE_INIT;
 static const char *tracked[INTERRUPT_MAX_TRACKED]; /* NULL: a free slot */

@@ -299,7 +299,7 @@ void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *
  * differently, and the pad keeps every ray the triangle test takes inside the
  * box. It also gives an axis-aligned (flat) triangle a box of some thickness,
  * so that the slab test never meets a zero-width slab. The vertices are the
- * device's, rounded to float (host/layout/devmesh.c); the triangle test takes the
+ * device's, rounded to float (host/layout/mesh_block.c); the triangle test takes the
  * edges between them in float, which the pad also covers. */
 static void triangle_prim_at(const double corner[3][3], int i, struct bvh_prim *out)
 {

@@ -19,7 +19,7 @@
 
 /* What to write: from the options (cmd/), read only by this layer. */
 struct output_request {
-	const char *image;	  /* -o: the image, or the frames' name (frames.h) */
+	const char *image;	  /* -o: the image, or the frames' name (output_frame_name) */
 	const char *stats;	  /* --stats */
 	const char *flops;	  /* --flops FILE.npy (and FILE.npy.json) */
 	const char *work_map;	  /* --work-map */

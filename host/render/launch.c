@@ -8,7 +8,7 @@
 #include <string.h>
 #include <time.h>
 
-#include "layout/devscene.h"
+#include "layout/scene_block.h"
 #include "render/program.h"
 #include "base/progress.h"
 #include "base/quote.h"
@@ -161,10 +161,10 @@ int launch_check_kernel(const struct device *dev, cl_kernel kernel, const struct
 }
 
 int launch_check_scene_fits(const struct device *dev, const struct scene *scene,
-			    const struct devmesh *mesh, const struct bvh *bvh, char *err,
+			    const struct mesh_block *mesh, const struct bvh *bvh, char *err,
 			    size_t err_size)
 {
-	size_t bytes = devscene_bytes(scene, mesh, bvh);
+	size_t bytes = scene_block_bytes(scene, mesh, bvh);
 	/* One buffer holds the whole block, whose offsets are 32-bit. */
 	unsigned long long limit = dev->max_alloc_size < DEVSCENE_MAX_BYTES
 					   ? (unsigned long long)dev->max_alloc_size
@@ -219,17 +219,17 @@ static void launch_print_triangle_bytes(const struct scene *scene, const struct 
 		res->bvh_bytes / n);
 }
 
-/* The scene's triangles indexed (devmesh) and its BVH (with use_bvh), checked
+/* The scene's triangles indexed (the mesh block) and its BVH (with use_bvh), checked
  * to fit on dev and packed into *block. */
 static int launch_pack_scene(struct device *dev, const struct scene *scene,
 			     const struct render_settings *s, int use_bvh,
 			     struct render_result *res, void **block, char *err, size_t err_size)
 {
 	struct bvh bvh = {0};
-	struct devmesh mesh;
+	struct mesh_block mesh;
 	int ret = -1;
 
-	if (devmesh_build(scene, &mesh)) {
+	if (mesh_block_build(scene, &mesh)) {
 		snprintf(err, err_size, "out of host memory for the %d triangles' vertices",
 			 scene->triangle_count);
 		return -1;
@@ -239,17 +239,17 @@ static int launch_pack_scene(struct device *dev, const struct scene *scene,
 		goto free_mesh;
 	if (launch_check_scene_fits(dev, scene, &mesh, use_bvh ? &bvh : NULL, err, err_size))
 		goto free_bvh;
-	*block = devscene_pack(scene, &mesh, use_bvh ? &bvh : NULL, s->width, s->height,
+	*block = scene_block_pack(scene, &mesh, use_bvh ? &bvh : NULL, s->width, s->height,
 			       s->max_depth, &res->scene_bytes);
 	if (!*block)
 		snprintf(err, err_size, "out of host memory for the scene's %zu bytes",
-			 devscene_bytes(scene, &mesh, use_bvh ? &bvh : NULL));
+			 scene_block_bytes(scene, &mesh, use_bvh ? &bvh : NULL));
 	else
 		ret = 0;
 free_bvh:
 	bvh_free(&bvh);
 free_mesh:
-	devmesh_free(&mesh);
+	mesh_block_free(&mesh);
 	return ret;
 }
 
@@ -261,7 +261,7 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 		s->accel == ACCEL_BVH && (scene->sphere_count > 0 || scene->triangle_count > 0);
 
 	*block = NULL;
-	if (devscene_check_resolution(scene, err, err_size) ||
+	if (scene_block_check_resolution(scene, err, err_size) ||
 	    launch_pack_scene(dev, scene, s, use_bvh, res, block, err, err_size))
 		return -1;
 	res->rgb = malloc(image_float_bytes(s->width, s->height));

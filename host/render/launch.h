@@ -43,13 +43,13 @@ int launch_check_kernel(const struct device *dev, cl_kernel kernel,
 			size_t err_size);
 
 struct bvh;
-struct devmesh;
+struct mesh_block;
 
-/* Refuses a scene whose device block (devscene_bytes, with its indexed
+/* Refuses a scene whose device block (scene_block_bytes, with its indexed
  * triangles and bvh or NULL) is larger than one buffer on dev may be, naming
  * the size and the limit. */
 int launch_check_scene_fits(const struct device *dev, const struct scene *scene,
-			    const struct devmesh *mesh, const struct bvh *bvh, char *err,
+			    const struct mesh_block *mesh, const struct bvh *bvh, char *err,
 			    size_t err_size);
 
 /* Builds the BVH (--accel bvh), packs the scene into *block

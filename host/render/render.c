@@ -1,6 +1,6 @@
-/* The kernels rtcl knows; the renderer of a piece (renderer.h), which hands
- * it to the chosen kernel's functions (singlepass.c or wavefront.c); and
- * render(), a frame as passes over the whole image, or the CPU reference. */
+/* The kernels rtcl knows, and render(): each frame as passes over the whole
+ * image through the chosen kernel's renderer (renderer.h), or the CPU
+ * reference. */
 #include "render/render.h"
 
 #include <math.h>
@@ -41,111 +41,9 @@ const struct kernel_info *render_find_kernel(const char *name)
 	return NULL;
 }
 
-int renderer_open(struct renderer *r, struct device *dev, const struct scene *scene,
-		  const struct render_settings *s, struct render_result *res, char *err,
-		  size_t err_size)
-{
-	memset(r, 0, sizeof(*r));
-	memset(res, 0, sizeof(*res));
-	r->ops = s->kernel->ops;
-	r->dev = dev;
-	r->settings = s;
-	r->result = res;
-	if (r->ops->open(r, scene, err, err_size) == 0)
-		return 0;
-	r->ops->close(r);
-	return -1;
-}
-
-int renderer_piece(struct renderer *r, const struct rt_piece *p, struct piece_result *out,
-		   char *err, size_t err_size)
-{
-	const struct render_settings *s = r->settings;
-	int samples = settings_samples(s);
-
-	if (p->x0 < 0 || p->y0 < 0 || p->width < 1 || p->height < 1 ||
-	    p->width > s->width - p->x0 || p->height > s->height - p->y0 || p->samples != samples ||
-	    p->sample_begin < 0 || p->sample_end <= p->sample_begin || p->sample_end > samples) {
-		snprintf(err, err_size,
-			 "internal error: piece %dx%d at (%d, %d), samples [%d, %d) of %d, does "
-			 "not fit a %dx%d image of %d samples per pixel",
-			 p->width, p->height, p->x0, p->y0, p->sample_begin, p->sample_end,
-			 p->samples, s->width, s->height, samples);
-		return -1;
-	}
-	if (r->ops->piece(r, p, out, err, err_size))
-		return -1;
-	progress_add(r->dev, (double)p->width * p->height * (p->sample_end - p->sample_begin));
-	progress_draw();
-	return 0;
-}
-
-int renderer_read_back(struct renderer *r, char *err, size_t err_size)
-{
-	return r->ops->read_back(r, err, err_size);
-}
-
-void renderer_close(struct renderer *r)
-{
-	if (r->ops)
-		r->ops->close(r);
-	r->ops = NULL;
-}
-
-struct rt_piece renderer_rows(const struct render_settings *s, int y0, int height, int begin,
-			      int end)
-{
-	struct rt_piece p = {0, y0, s->width, height, begin, end, settings_samples(s), 0};
-	return p;
-}
-
-struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end)
-{
-	return renderer_rows(s, 0, s->height, begin, end);
-}
-
-int render_pass_samples_for(const struct render_settings *s, long long pixels)
-{
-	int samples = settings_samples(s);
-	double per_pass = s->samples_per_pass > 0
-				  ? s->samples_per_pass
-				  : floor(RENDER_PASS_PIXEL_SAMPLES / (double)pixels);
-
-	return per_pass < 1 ? 1 : per_pass > samples ? samples : (int)per_pass;
-}
-
 int render_pass_samples(const struct render_settings *s)
 {
-	return render_pass_samples_for(s, (long long)s->width * s->height);
-}
-
-int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece)
-{
-	int per_pass = render_pass_samples_for(s, (long long)piece->width * piece->height);
-
-	return (piece->samples + per_pass - 1) / per_pass;
-}
-
-int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struct piece_result *out,
-			 char *err, size_t err_size)
-{
-	int per_pass =
-		render_pass_samples_for(r->settings, (long long)whole->width * whole->height);
-
-	out->kernel_ms = 0;
-	out->launches = 0;
-	for (int begin = 0; begin < whole->samples; begin += per_pass) {
-		struct rt_piece piece = *whole;
-		struct piece_result pass;
-		piece.sample_begin = begin;
-		piece.sample_end =
-			whole->samples - begin > per_pass ? begin + per_pass : whole->samples;
-		if (renderer_piece(r, &piece, &pass, err, err_size))
-			return -1;
-		out->kernel_ms += pass.kernel_ms;
-		out->launches += pass.launches;
-	}
-	return 0;
+	return renderer_pass_samples(s, (long long)s->width * s->height);
 }
 
 int render(struct device *dev, const struct scene *scene, const struct render_settings *s,

@@ -3,6 +3,7 @@
 #ifndef RTCL_RENDER_H
 #define RTCL_RENDER_H
 
+#include "render/renderer.h"
 #include "render/settings.h"
 
 extern const struct kernel_info render_kernels[];
@@ -11,18 +12,7 @@ extern const int render_kernel_count;
 /* Returns the kernel named `name`, or NULL. */
 const struct kernel_info *render_find_kernel(const char *name);
 
-/* A pass of a long render traces about this many samples in all (pixels ×
- * samples of the pass), at least one sample of every pixel: on an H100 a few
- * milliseconds, on a CPU a few seconds, so that progress moves. */
-#define RENDER_PASS_PIXEL_SAMPLES (1 << 22)
-
-/* Returns how many samples of every pixel one pass over a piece of `pixels`
- * pixels traces: settings->samples_per_pass, else about
- * RENDER_PASS_PIXEL_SAMPLES in all; at least 1, at most settings_samples().
- * The last pass takes what is left. The image does not depend on it. */
-int render_pass_samples_for(const struct render_settings *settings, long long pixels);
-
-/* render_pass_samples_for() the whole image: one pass of render(). */
+/* renderer_pass_samples() for the whole image: one pass of render(). */
 int render_pass_samples(const struct render_settings *settings);
 
 /* Renders `scene` with `settings` (settings->kernel not NULL) on `dev`: each

@@ -82,10 +82,21 @@ struct rt_piece renderer_whole_image(const struct render_settings *s, int begin,
 int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece);
 
 /* Renders every sample of piece's pixels (its sample range is ignored) in
- * passes of render_pass_samples_for() samples, in sample order on this one
+ * passes of renderer_pass_samples() samples, in sample order on this one
  * renderer, so that the running sums stay in its buffer; sets *out to the
  * sum of the passes' kernel times and launches. */
 int renderer_all_samples(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
 			 char *err, size_t err_size);
+
+/* A pass of a long render traces about this many samples in all (pixels ×
+ * samples of the pass), at least one sample of every pixel: on an H100 a few
+ * milliseconds, on a CPU a few seconds, so that progress moves. */
+#define RENDER_PASS_PIXEL_SAMPLES (1 << 22)
+
+/* Returns how many samples of every pixel one pass over a piece of `pixels`
+ * pixels traces: settings->samples_per_pass, else about
+ * RENDER_PASS_PIXEL_SAMPLES in all; at least 1, at most settings_samples().
+ * The last pass takes what is left. The image does not depend on it. */
+int renderer_pass_samples(const struct render_settings *settings, long long pixels);
 
 #endif

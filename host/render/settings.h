@@ -80,7 +80,7 @@ struct render_result {
 	size_t global_size[2], local_size[2];
 	int scene_in_local;
 	size_t scene_bytes;
-	int vertex_count; /* the triangles' distinct vertices (host/layout/devmesh.h) */
+	int vertex_count; /* the triangles' distinct vertices (host/layout/mesh_block.h) */
 	char build_options[BUILD_OPTIONS_SIZE];
 	int build_cached; /* the program came from rtcl's cache (progcache.h) */
 

@@ -200,7 +200,7 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 }
 
 /* Rank 0: keeps a frame's pixels (malloc'd, taken) until every frame has
- * arrived; nothing goes to the output folder before (frames.h). */
+ * arrived; nothing goes to the output folder before (output/plan.h). */
 static int hold_frame(struct mpi_job *j, int piece, float *rgb, char *err, size_t err_size)
 {
 	pthread_mutex_lock(&j->lock);

@@ -66,7 +66,7 @@ struct scene_camera {
 	double fov; /* vertical, degrees */
 };
 
-/* A file the scene was read from. No output may replace one (outputs.h). */
+/* A file the scene was read from. No output may replace one (output/plan.h). */
 struct scene_input {
 	char *path;	  /* as opened: a mesh file's path joined to the scene's folder */
 	const char *kind; /* "scene file", "mesh file" */

@@ -1,6 +1,6 @@
 /* The property the scene fuzzer checks on every accepted scene, shared by
  * test/fuzz_scene.c and test/test_fuzz_regressions.c: the device layout
- * from devscene_pack holds only numbers the tracer can use. inf or NaN there,
+ * from scene_block_pack holds only numbers the tracer can use. inf or NaN there,
  * or a radius, epsilon, ior or checker size that rounded to 0 in float,
  * would render a silently wrong picture. */
 #ifndef RTCL_TEST_DEVSCENE_CHECK_H
@@ -61,7 +61,7 @@ static const char *refs_problem(const struct rt_scene *h, const rt_uint *refs, i
 
 /* The BVH: every child a later node, a range of spheres (RT_LEAF_SPHERES) or
  * of references within their arrays, naming primitives the scene has; the
- * spheres' scene indices (leaf order, host/layout/devscene.c) each scene index once. */
+ * spheres' scene indices (leaf order, host/layout/scene_block.c) each scene index once. */
 static const char *bvh_problem(const void *packed)
 {
 	const unsigned char *block = packed;
@@ -109,7 +109,7 @@ static const char *bvh_problem(const void *packed)
 }
 
 /* Returns NULL when the packed scene is usable, else what is wrong. */
-static const char *devscene_problem(const void *packed)
+static const char *scene_block_problem(const void *packed)
 {
 	const unsigned char *block = packed;
 	const struct rt_scene *h = packed;

@@ -1,20 +1,20 @@
 /* Packing a loaded scene into the device layout of cl/rtcl_shared.h. */
-#ifndef RTCL_DEVSCENE_H
-#define RTCL_DEVSCENE_H
+#ifndef RTCL_SCENE_BLOCK_H
+#define RTCL_SCENE_BLOCK_H
 
 #include <stddef.h>
 #include <stdint.h>
 
 #include "layout/bvh.h"
-#include "layout/devmesh.h"
+#include "layout/mesh_block.h"
 #include "scene/scene.h"
 
 /* The most the block may hold: struct rt_scene's offsets are 32-bit. */
 #define DEVSCENE_MAX_BYTES ((size_t)UINT32_MAX - 15)
 
-/* The size of the block devscene_pack makes for the scene, its triangles as
- * devmesh_build indexed them, and bvh (or NULL). */
-size_t devscene_bytes(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh);
+/* The size of the block scene_block_pack makes for the scene, its triangles as
+ * mesh_block_build indexed them, and bvh (or NULL). */
+size_t scene_block_bytes(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh);
 
 /* The device computes in float, relative to the camera's eye
  * (scene_from_eye): an object smaller than DEVSCENE_MIN_STEPS float steps at
@@ -22,16 +22,16 @@ size_t devscene_bytes(const struct scene *scene, const struct devmesh *mesh, con
  * cannot be drawn. Returns 0, or -1 with a message in err that names the
  * first such object and the numbers. */
 #define DEVSCENE_MIN_STEPS 4
-int devscene_check_resolution(const struct scene *scene, char *err, size_t err_size);
+int scene_block_check_resolution(const struct scene *scene, char *err, size_t err_size);
 
 /* Returns a malloc'd block holding struct rt_scene followed by its arrays, for
  * the scene at width×height with the given max_depth, and its size in *bytes;
  * NULL when out of memory or larger than DEVSCENE_MAX_BYTES. Every position
  * is taken relative to the eye in double (scene_from_eye) and rounded once
  * to float; so is the camera basis. mesh: the
- * scene's triangles from devmesh_build. bvh: the BVH of
+ * scene's triangles from mesh_block_build. bvh: the BVH of
  * the scene's spheres and triangles, or NULL for none (--accel none). */
-void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh,
+void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
 		    int width, int height, int max_depth, size_t *bytes);
 
 #endif

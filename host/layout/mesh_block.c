@@ -2,7 +2,7 @@
  * storage"). The loader gives every triangle its own three vertices and
  * normals in double; the device gets each distinct vertex once, found with a
  * hash table on the vertex's position and normal as the device stores them. */
-#include "layout/devmesh.h"
+#include "layout/mesh_block.h"
 
 #include <stdint.h>
 #include <stdlib.h>
@@ -47,8 +47,8 @@ struct vertex_table {
 };
 
 /* Returns the index of the vertex equal to *v in mesh, adding it first when
- * there is none. The table has room for every vertex (devmesh_build). */
-static rt_uint vertex_index(struct vertex_table *table, struct devmesh *mesh,
+ * there is none. The table has room for every vertex (mesh_block_build). */
+static rt_uint vertex_index(struct vertex_table *table, struct mesh_block *mesh,
 			    const struct vertex_key *v)
 {
 	for (uint32_t s = vertex_hash(v) & table->mask;; s = (s + 1) & table->mask) {
@@ -65,7 +65,7 @@ static rt_uint vertex_index(struct vertex_table *table, struct devmesh *mesh,
 	}
 }
 
-static void index_triangle(struct vertex_table *table, struct devmesh *mesh,
+static void index_triangle(struct vertex_table *table, struct mesh_block *mesh,
 			   const struct scene *scene, const struct scene_triangle *in,
 			   struct rt_triangle *out)
 {
@@ -78,7 +78,7 @@ static void index_triangle(struct vertex_table *table, struct devmesh *mesh,
 	out->index.s[3] = (rt_uint)in->material | (in->smooth ? RT_TRIANGLE_SMOOTH : 0u);
 }
 
-int devmesh_build(const struct scene *scene, struct devmesh *mesh)
+int mesh_block_build(const struct scene *scene, struct mesh_block *mesh)
 {
 	size_t corners = 3 * (size_t)scene->triangle_count, slots = 16;
 	struct vertex_table table;
@@ -112,11 +112,11 @@ int devmesh_build(const struct scene *scene, struct devmesh *mesh)
 
 free_all:
 	free(table.slots);
-	devmesh_free(mesh);
+	mesh_block_free(mesh);
 	return -1;
 }
 
-void devmesh_free(struct devmesh *mesh)
+void mesh_block_free(struct mesh_block *mesh)
 {
 	free(mesh->triangles);
 	free(mesh->vertices);

@@ -2,13 +2,13 @@
  * "Triangle storage"): each distinct vertex once, its position and its
  * shading normal in two arrays, and per triangle the indices of its three
  * vertices and its material. */
-#ifndef RTCL_DEVMESH_H
-#define RTCL_DEVMESH_H
+#ifndef RTCL_MESH_BLOCK_H
+#define RTCL_MESH_BLOCK_H
 
 #include "rtcl_shared.h"
 #include "scene/scene.h"
 
-struct devmesh {
+struct mesh_block {
 	struct rt_triangle *triangles;	  /* scene->triangle_count of them */
 	struct rt_vertex *vertices;	  /* vertex_count of them */
 	struct rt_vertex_normal *normals; /* vertex i's is normals[i] */
@@ -18,8 +18,8 @@ struct devmesh {
 /* Fills *mesh from the scene's triangles: vertices relative to the eye
  * (scene_from_eye) and normals, rounded to float, those equal in position and (on smooth triangles)
  * normal merged. Returns 0, or -1 when out of memory (then *mesh holds nothing to free). */
-int devmesh_build(const struct scene *scene, struct devmesh *mesh);
+int mesh_block_build(const struct scene *scene, struct mesh_block *mesh);
 
-void devmesh_free(struct devmesh *mesh);
+void mesh_block_free(struct mesh_block *mesh);
 
 #endif

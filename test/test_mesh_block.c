@@ -1,4 +1,4 @@
-/* Indexing the triangles for the device (host/layout/devmesh.c): a vertex shared by
+/* Indexing the triangles for the device (host/layout/mesh_block.c): a vertex shared by
  * several triangles is stored once, vertices that differ in position or, on
  * smooth triangles, in normal are not merged, and every triangle reads back
  * the vertices, normals and material it was given. */
@@ -6,17 +6,17 @@
 
 #include <string.h>
 
-#include "layout/devmesh.h"
+#include "layout/mesh_block.h"
 
 static char err[512];
 
 static void load(struct scene *s, const char *json)
 {
-	cr_assert_eq(scene_load_string(s, json, "devmesh", err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(scene_load_string(s, json, "mesh_block", err, sizeof(err)), 0, "%s", err);
 }
 
 /* Triangle i's corner k as the device reads it, against the scene's. */
-static void expect_corner(const struct devmesh *mesh, const struct scene *s, int i, int k)
+static void expect_corner(const struct mesh_block *mesh, const struct scene *s, int i, int k)
 {
 	const struct scene_triangle *tri = &s->triangles[i];
 	rt_uint v = mesh->triangles[i].index.s[k];
@@ -31,7 +31,7 @@ static void expect_corner(const struct devmesh *mesh, const struct scene *s, int
 	}
 }
 
-static void expect_round_trip(const struct devmesh *mesh, const struct scene *s)
+static void expect_round_trip(const struct mesh_block *mesh, const struct scene *s)
 {
 	for (int i = 0; i < s->triangle_count; i++) {
 		rt_uint w = mesh->triangles[i].index.s[3];
@@ -43,29 +43,29 @@ static void expect_round_trip(const struct devmesh *mesh, const struct scene *s)
 }
 
 /* The flat cube: 12 triangles over 8 corners. */
-Test(devmesh, cube_corners_are_shared)
+Test(mesh_block, cube_corners_are_shared)
 {
 	struct scene s;
-	struct devmesh mesh;
+	struct mesh_block mesh;
 
 	load(&s, "{\"format\": \"rtcl-scene\", \"version\": 2,"
 		 " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
 		 " \"meshes\": [{\"file\": \"test/meshes/cube.obj\", \"smooth\": false}]}");
-	cr_assert_eq(devmesh_build(&s, &mesh), 0);
+	cr_assert_eq(mesh_block_build(&s, &mesh), 0);
 	cr_expect_eq(s.triangle_count, 12);
 	cr_expect_eq(mesh.vertex_count, 8);
 	expect_round_trip(&mesh, &s);
-	devmesh_free(&mesh);
+	mesh_block_free(&mesh);
 	scene_free(&s);
 }
 
 /* Smooth, the cube's area-weighted normals are one per corner: still 8. The
  * mixed scene below shares no vertex between a flat and a smooth triangle
  * (their normals differ), and two inline triangles on one edge share it. */
-Test(devmesh, normals_keep_vertices_apart)
+Test(mesh_block, normals_keep_vertices_apart)
 {
 	struct scene s;
-	struct devmesh mesh;
+	struct mesh_block mesh;
 
 	load(&s, "{\"format\": \"rtcl-scene\", \"version\": 2,"
 		 " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
@@ -74,25 +74,25 @@ Test(devmesh, normals_keep_vertices_apart)
 		 " \"triangles\": [{\"vertices\": [[0, 0, 0], [1, 0, 0], [0, 1, 0]]},"
 		 "               {\"vertices\": [[1, 0, 0], [0, 1, 0], [1, 1, 0]],"
 		 "                \"material\": {\"color\": [1, 0, 0]}}]}");
-	cr_assert_eq(devmesh_build(&s, &mesh), 0);
+	cr_assert_eq(mesh_block_build(&s, &mesh), 0);
 	cr_expect_eq(s.triangle_count, 26);
 	cr_expect_eq(mesh.vertex_count, 8 + 8 + 4);
 	expect_round_trip(&mesh, &s);
-	devmesh_free(&mesh);
+	mesh_block_free(&mesh);
 	scene_free(&s);
 }
 
-Test(devmesh, no_triangles)
+Test(mesh_block, no_triangles)
 {
 	struct scene s;
-	struct devmesh mesh;
+	struct mesh_block mesh;
 
 	load(&s, "{\"format\": \"rtcl-scene\", \"version\": 2,"
 		 " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
 		 " \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1}]}");
-	cr_assert_eq(devmesh_build(&s, &mesh), 0);
+	cr_assert_eq(mesh_block_build(&s, &mesh), 0);
 	cr_expect_eq(mesh.vertex_count, 0);
 	cr_expect_null(mesh.triangles);
-	devmesh_free(&mesh);
+	mesh_block_free(&mesh);
 	scene_free(&s);
 }

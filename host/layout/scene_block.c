@@ -1,4 +1,4 @@
-#include "layout/devscene.h"
+#include "layout/scene_block.h"
 
 #include <float.h>
 #include <math.h>
@@ -187,7 +187,7 @@ struct layout {
 	int sphere_slots;
 };
 
-static struct layout layout_of(const struct scene *scene, const struct devmesh *mesh,
+static struct layout layout_of(const struct scene *scene, const struct mesh_block *mesh,
 			       const struct bvh *bvh)
 {
 	struct layout l;
@@ -207,12 +207,12 @@ static struct layout layout_of(const struct scene *scene, const struct devmesh *
 	return l;
 }
 
-size_t devscene_bytes(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh)
+size_t scene_block_bytes(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh)
 {
 	return layout_of(scene, mesh, bvh).total;
 }
 
-void *devscene_pack(const struct scene *scene, const struct devmesh *mesh, const struct bvh *bvh,
+void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
 		    int width, int height, int max_depth, size_t *bytes)
 {
 	struct layout l = layout_of(scene, mesh, bvh);
@@ -320,7 +320,7 @@ static int too_small(const struct scene *scene, const char *what, double size, d
 	return 1;
 }
 
-int devscene_check_resolution(const struct scene *scene, char *err, size_t err_size)
+int scene_block_check_resolution(const struct scene *scene, char *err, size_t err_size)
 {
 	char what[128];
 
