@@ -45,7 +45,7 @@ static float sphere_gap(float4 sphere, const struct ray_frame *f)
 }
 
 /* Device sphere i's index in the scene: with a BVH the device's spheres are
- * in leaf order (host/layout/devscene.c); brute force keeps the scene's order. */
+ * in leaf order (host/layout/scene_block.c); brute force keeps the scene's order. */
 static inline int scene_order(struct tracer *tr, int i)
 {
 #ifdef RTCL_BVH
@@ -82,7 +82,7 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 	/* Equal distances go to the lower index in the scene, and a sphere
 	 * beats a triangle, as brute force's order (spheres by index, then
 	 * triangles) gives, so that the BVH's order of visits and of the
-	 * device's spheres (leaf order, host/layout/devscene.c) gives the same hits. */
+	 * device's spheres (leaf order, host/layout/scene_block.c) gives the same hits. */
 	if (t > 0.0f &&
 	    (t < *nearest ||
 	     (t == *nearest &&

@@ -62,7 +62,7 @@ struct rt_sphere {
 	rt_float inv_radius; /* 1/radius */
 	rt_int material;
 	rt_int scene_index; /* its index in the scene: with a BVH the spheres are
-			       in leaf order (host/layout/devscene.c), and equal
+			       in leaf order (host/layout/scene_block.c), and equal
 			       distances go to the lower scene index */
 };
 
@@ -148,7 +148,7 @@ struct rt_scene {
  * reference count otherwise (0 with lo.w 0 too: an empty leaf, only beside a
  * root's single primitive). On the device a leaf of spheres only has
  * RT_LEAF_SPHERES in its count, and lo.w is its first sphere: the spheres
- * are in leaf order there (host/layout/devscene.c). */
+ * are in leaf order there (host/layout/scene_block.c). */
 struct rt_bvh_box {
 	rt_vec4 lo, hi;
 };
