@@ -12,7 +12,7 @@
  * progress line (the chunks handed out). */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *next_chunk_counter,
-		     __global ulong *counts, __global uint *write_counts, struct rt_piece piece)
+		     __global ulong *counts, __global uint *probe, struct rt_piece piece)
 {
 	__local uint group_chunk; /* the chunk item (0,0) took for the group */
 	struct tracer tr;
@@ -28,7 +28,7 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	uint chunk = group_chunk;
 	while (chunk < chunks) {
 		render_pixel_if_inside(
-			&tr, &piece, image, write_counts,
+			&tr, &piece, image, probe,
 			numbered_chunk_pixel(&grid, chunk, get_local_id(0), get_local_id(1)));
 		/* Everyone has read group_chunk before it is replaced. */
 		barrier(CLK_LOCAL_MEM_FENCE);

@@ -176,6 +176,16 @@ struct rt_bvh_node {
  * node visits. */
 #define RT_ITEM_COUNTS 3
 
+/* The probe buffer of the single-pass kernels: with RTCL_COUNT_WRITES (the
+ * tests), one write count per pixel; with RTCL_SCHEDULE_MAP (--schedule-map,
+ * docs/RENDERING.md), RT_SCHEDULE_WORDS per pixel (its work-group, its
+ * work-item in the group, its ticket), then the ticket counter; otherwise a
+ * placeholder. */
+#define RT_SCHEDULE_WORDS 3
+#define RT_SCHEDULE_GROUP 0
+#define RT_SCHEDULE_ITEM 1
+#define RT_SCHEDULE_TICKET 2
+
 /* The single-pass kernels' work counter: RT_COUNTER_WORDS uints that the
  * host zeroes before every launch. Word RT_COUNTER_NEXT hands out work (the
  * next chunk of dynamic, the next pixel of persistent); word RT_COUNTER_DONE

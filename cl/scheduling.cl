@@ -113,9 +113,9 @@ static inline int2 numbered_chunk_pixel(const struct chunk_grid *g, uint chunk, 
 /* Traces and stores pixel p (image coordinates) if it lies inside the
  * piece's rectangle. */
 static inline void render_pixel_if_inside(struct tracer *tr, const struct rt_piece *piece,
-					  __global float *image, __global uint *write_counts,
+					  __global float *image, __global uint *probe,
 					  int2 p)
 {
 	if (p.x < piece->x0 + piece->width && p.y < piece->y0 + piece->height)
-		render_pixel(tr, piece, image, write_counts, p.x, p.y);
+		render_pixel(tr, piece, image, probe, p.x, p.y);
 }

@@ -3,14 +3,14 @@
  * no work: work_counter only counts the rows done for the progress line. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
 		     __global float *image, __global uint *work_counter, __global ulong *counts,
-		     __global uint *write_counts, struct rt_piece piece)
+		     __global uint *probe, struct rt_piece piece)
 {
 	struct tracer tr;
 
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
 	for (int y = piece.y0; y < piece.y0 + piece.height; y++) {
 		for (int x = piece.x0; x < piece.x0 + piece.width; x++)
-			render_pixel(&tr, &piece, image, write_counts, x, y);
+			render_pixel(&tr, &piece, image, probe, x, y);
 		progress_chunk_done(work_counter, (uint)piece.width); /* a row of 1x1 chunks */
 	}
 	store_counts(&tr, global_item());

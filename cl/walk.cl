@@ -179,14 +179,37 @@ static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting
 	return false;
 }
 
-/* Counts a write of pixel, when the tests ask for it (RTCL_COUNT_WRITES). */
-static inline void count_write(__global uint *write_counts, int pixel)
+/* Counts a write of pixel, when the tests ask for it (RTCL_COUNT_WRITES):
+ * probe holds one count per pixel then. */
+static inline void count_write(__global uint *probe, int pixel)
 {
 #ifdef RTCL_COUNT_WRITES
-	atomic_inc(&write_counts[pixel]);
+	atomic_inc(&probe[pixel]);
 #else
-	(void)write_counts;
+	(void)probe;
 	(void)pixel;
+#endif
+}
+
+/* With RTCL_SCHEDULE_MAP (--schedule-map): records who starts pixel, and
+ * when, as its first sample begins: the work-group and the work-item in it,
+ * row-major, and a ticket from the counter after the image's words
+ * (docs/RENDERING.md, "The schedule map"). */
+static inline void record_schedule(__global uint *probe, int pixel, int pixels,
+				   const struct rt_piece *piece)
+{
+#ifdef RTCL_SCHEDULE_MAP
+	if (piece->sample_begin > 0)
+		return;
+	__global uint *words = probe + RT_SCHEDULE_WORDS * pixel;
+	words[RT_SCHEDULE_GROUP] = get_group_id(1) * get_num_groups(0) + get_group_id(0);
+	words[RT_SCHEDULE_ITEM] = get_local_id(1) * get_local_size(0) + get_local_id(0);
+	words[RT_SCHEDULE_TICKET] = atomic_inc(probe + RT_SCHEDULE_WORDS * pixels);
+#else
+	(void)probe;
+	(void)pixel;
+	(void)pixels;
+	(void)piece;
 #endif
 }
 
@@ -207,12 +230,14 @@ static inline void count_pixel_flops(__global ulong *pixel_flops, int pixel, ulo
  * inside the image, and stores the running sum of its sample colours, or
  * after the last sample their mean (sample.cl). */
 static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __global float *image,
-			 __global uint *write_counts, int x, int y)
+			 __global uint *probe, int x, int y)
 {
 	struct walk w;
 	struct ray_job waiting[RAY_STACK_SIZE];
 	int pixel = y * tr->scene->width + x;
 	ulong flops_before = tracer_flops(tr);
+
+	record_schedule(probe, pixel, tr->scene->width * tr->scene->height, piece);
 #ifdef RTCL_ONE_SAMPLE
 	/* One sample per pixel (the host builds --spp 1 with RTCL_ONE_SAMPLE):
 	 * what the loop below does for it, the centre stored as it is, with no
@@ -234,5 +259,5 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 	vstore3(sample_finish(tr, sum, piece), pixel, image);
 #endif
 	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
-	count_write(write_counts, pixel);
+	count_write(probe, pixel);
 }

@@ -23,7 +23,8 @@ PREFIX = "usr"
 # The commands the README and the man page name; one per tools/*.py.
 TOOL_COMMANDS = {"rtcl-bench", "rtcl-bench-spp", "rtcl-experiments", "rtcl-flops-hist",
                  "rtcl-genbench", "rtcl-genscene", "rtcl-imgdiff", "rtcl-multidevice-bench",
-                 "rtcl-peer-compare", "rtcl-povray", "rtcl-ppmdiff", "rtcl-time-to-image"}
+                 "rtcl-peer-compare", "rtcl-povray", "rtcl-ppmdiff", "rtcl-schedule-replay",
+                 "rtcl-time-to-image"}
 MAN_SECTIONS = ["NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "ENVIRONMENT", "FILES",
                 "EXIT STATUS", "EXAMPLES", "SEE ALSO"]
 LONG_OPTION = re.compile(r"(?<![\w-])--[a-z][a-z-]*")

@@ -858,3 +858,68 @@ Test(kernels_slow, flops_count_every_sample_other_kernels, .timeout = 600)
 	static const char *const kernels[] = {"serial", "naive", "cyclic", "persistent"};
 	check_flops_count_every_sample(kernels, 4);
 }
+
+/* --schedule-map (docs/RENDERING.md): the instrumented build gives the same
+ * image; every pixel is started once (the tickets are a permutation); every
+ * group and item lies inside the NDRange; serial starts the pixels row by
+ * row with its one work-item; naive's pixel (x, y) is group (x / wx, y / wy)
+ * and item (x % wx, y % wy); with the samples in passes, the first pass's
+ * schedule is kept. */
+static void check_schedule_map(struct device *dev, const struct scene *scene, const char *kernel,
+			       int samples_per_pass)
+{
+	const int w = 37, h = 21, wx = 8, wy = 4, samples = 4;
+	struct render_settings s = settings_for(kernel, w, h, wx, wy, 5);
+	struct render_result plain, mapped;
+	size_t pixels = (size_t)w * h;
+
+	s.check_writes = 0;
+	s.samples = samples;
+	s.samples_per_pass = samples_per_pass;
+	cr_assert_eq(render(dev, scene, &s, &plain, err, sizeof(err)), 0, "%s", err);
+	s.record_schedule = 1;
+	cr_assert_eq(render(dev, scene, &s, &mapped, err, sizeof(err)), 0, "%s", err);
+	cr_assert_not_null(mapped.schedule);
+	cr_assert(memcmp(plain.rgb, mapped.rgb, image_float_bytes(w, h)) == 0,
+		  "%s: the instrumented image differs", kernel);
+	unsigned char *seen = calloc(pixels, 1);
+	size_t groups = (size_t)mapped.groups[0] * mapped.groups[1];
+	size_t items = mapped.local_size[0] * mapped.local_size[1];
+	for (size_t p = 0; p < pixels; p++) {
+		const uint32_t *word = mapped.schedule + RT_SCHEDULE_WORDS * p;
+		uint32_t ticket = word[RT_SCHEDULE_TICKET];
+		cr_assert_lt(ticket, pixels, "%s: pixel %zu has ticket %u", kernel, p, ticket);
+		cr_assert_eq(seen[ticket]++, 0, "%s: ticket %u given twice", kernel, ticket);
+		cr_assert_lt(word[RT_SCHEDULE_GROUP], groups, "%s: pixel %zu", kernel, p);
+		cr_assert_lt(word[RT_SCHEDULE_ITEM], items, "%s: pixel %zu", kernel, p);
+		int x = (int)(p % w), y = (int)(p / w);
+		if (strcmp(kernel, "serial") == 0) {
+			cr_assert_eq(ticket, p, "serial: pixel %zu started %u-th", p, ticket);
+			cr_assert_eq(word[RT_SCHEDULE_GROUP] + word[RT_SCHEDULE_ITEM], 0);
+		} else if (strcmp(kernel, "naive") == 0) {
+			cr_assert_eq(word[RT_SCHEDULE_GROUP],
+				     (uint32_t)((y / wy) * mapped.groups[0] + x / wx), "naive (%d, %d)", x,
+				     y);
+			cr_assert_eq(word[RT_SCHEDULE_ITEM], (uint32_t)((y % wy) * wx + x % wx),
+				     "naive (%d, %d)", x, y);
+		}
+	}
+	free(seen);
+	render_result_free(&plain);
+	render_result_free(&mapped);
+}
+
+Test(kernels, schedule_map_covers_every_pixel_once, .timeout = 600)
+{
+	static const char *const kernels[] = {"serial", "naive", "cyclic", "dynamic", "persistent"};
+	struct device dev;
+	struct scene scene;
+
+	open_device(&dev);
+	load(&scene, "scenes/two_balls.json");
+	for (size_t k = 0; k < sizeof(kernels) / sizeof(kernels[0]); k++)
+		check_schedule_map(&dev, &scene, kernels[k], 0);
+	check_schedule_map(&dev, &scene, "naive", 1); /* four passes */
+	scene_free(&scene);
+	device_close(&dev);
+}

@@ -25,6 +25,7 @@ enum long_only_option {
 	OPT_ENCODING,
 	OPT_WORK_MAP_SCALE,
 	OPT_WORK_MAP_BAR,
+	OPT_SCHEDULE_MAP,
 	OPT_VERSION,
 	OPT_SPP,
 	OPT_DEVICES,
@@ -63,6 +64,7 @@ static const struct option long_options[] = {
 	{"encoding", required_argument, NULL, OPT_ENCODING},
 	{"work-map-scale", required_argument, NULL, OPT_WORK_MAP_SCALE},
 	{"work-map-bar", required_argument, NULL, OPT_WORK_MAP_BAR},
+	{"schedule-map", required_argument, NULL, OPT_SCHEDULE_MAP},
 	{"quiet", no_argument, NULL, 'q'},
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
@@ -161,6 +163,12 @@ static void print_help_after_kernels(FILE *out)
 		"      --work-map-bar FILE  write the picture's scale bar to the image FILE: as\n"
 		"                         wide as the render (at least 170 pixels), labels 0,\n"
 		"                         middle and max, and the unit \"flops per pixel\"\n"
+		"      --schedule-map FILE  record which work-item traced each pixel, and when\n"
+		"                         (an instrumented run, the same image): FILE.npy holds\n"
+		"                         height x width x 3 uint32 (work-group, work-item in\n"
+		"                         it, ticket: the order pixels started); any image\n"
+		"                         format, the pixels coloured by work-group. One device,\n"
+		"                         a single-pass kernel (not the wavefront or reference)\n"
 		"\n"
 		"Other:\n"
 		"  -q, --quiet            print nothing but errors (on a terminal, rtcl otherwise\n"
@@ -438,6 +446,9 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return take_file_name("--work-map", arg, &o->outputs.work_map, err, err_size);
 	case OPT_WORK_MAP_BAR:
 		return take_file_name("--work-map-bar", arg, &o->outputs.work_map_bar, err, err_size);
+	case OPT_SCHEDULE_MAP:
+		return take_file_name("--schedule-map", arg, &o->outputs.schedule_map, err,
+				      err_size);
 	case OPT_WORK_MAP_SCALE:
 		return parse_choice("--work-map-scale", arg, "linear", "log", &o->outputs.work_map_log, err,
 				    err_size);
@@ -597,6 +608,31 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 	return 0;
 }
 
+/* --schedule-map: one launch's work-items over the whole image. */
+static int check_schedule_map(const struct options *o, char *err, size_t err_size)
+{
+	if (!o->outputs.schedule_map)
+		return 0;
+	if (strcmp(o->kernel, "reference") == 0 || strcmp(o->kernel, "wavefront") == 0) {
+		snprintf(err, err_size,
+			 "--schedule-map records which work-item traced each pixel: %s; choose "
+			 "serial, naive, cyclic, dynamic or persistent",
+			 strcmp(o->kernel, "reference") == 0
+				 ? "the reference renderer has none"
+				 : "the wavefront's work-items take rays, not pixels, and every "
+				   "bounce hands them out anew");
+		return -1;
+	}
+	if (o->devices.list_given || o->frames_given || o->mpi) {
+		snprintf(err, err_size,
+			 "--schedule-map records one device's launches over the whole image: it "
+			 "does not apply to %s",
+			 o->frames_given ? "--frames" : o->mpi ? "--mpi" : "--devices");
+		return -1;
+	}
+	return 0;
+}
+
 /* Rules between options, checked once all are read. */
 static int check_combination(const struct options *o, char *err, size_t err_size)
 {
@@ -631,7 +667,7 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 			 "--work-map an image file (not .npy, .exr, .pfm or .hdr)");
 		return -1;
 	}
-	if (check_several_devices(o, err, err_size))
+	if (check_several_devices(o, err, err_size) || check_schedule_map(o, err, err_size))
 		return -1;
 	if (o->quiet && o->verbose) {
 		snprintf(err, err_size, "-q/--quiet and -v/--verbose contradict each other");

@@ -94,6 +94,7 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	s->verbose = opt->verbose;
 	s->accel = opt->accel;
 	job->counting = opt->outputs.flops || opt->outputs.work_map;
+	job->mapping = opt->outputs.schedule_map != NULL;
 	job->devices = opt->devices;
 	job->split = opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC;
 	job->piece_rows = opt->piece_rows;

@@ -22,6 +22,7 @@ struct job {
 	const struct scene *scene;
 	struct render_settings settings; /* resolved: options, else the scene's */
 	int counting;			 /* a counting run first: --flops or --work-map */
+	int mapping;			 /* the same run records the schedule: --schedule-map */
 	struct device_choice devices;
 	enum split split;	    /* --split */
 	int piece_rows;		    /* --piece-rows; 0: chosen (tiles.h) */

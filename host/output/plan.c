@@ -17,6 +17,8 @@
 #include "base/version.h"
 #include "output/image.h"
 #include "output/npy.h"
+#include "output/schedmap.h"
+#include "rtcl_shared.h"
 #include "output/workmap.h"
 #include "render/program.h"
 #include "report/document.h"
@@ -25,9 +27,9 @@
 #define SIDECAR_PATH_SIZE (PATH_MAX + 8)
 /* A resolved directory, a slash and a file name. */
 #define CANONICAL_SIZE (2 * PATH_MAX)
-/* Besides the images: the work map and its bar, the flops and their sidecar,
- * the stats, RTCL_DUMP_BINARY. */
-#define MAX_OTHER_OUTPUTS 6
+/* Besides the images: the work map and its bar, the schedule map, the flops
+ * and their sidecar, the stats, RTCL_DUMP_BINARY. */
+#define MAX_OTHER_OUTPUTS 7
 
 /* One output file of the run besides the images, and the option that named
  * it. */
@@ -98,6 +100,8 @@ static int list_outputs(const struct output_request *r, char *sidecar, struct ou
 		out[n++] = (struct output){"--work-map", r->work_map};
 	if (r->work_map_bar)
 		out[n++] = (struct output){"--work-map-bar", r->work_map_bar};
+	if (r->schedule_map)
+		out[n++] = (struct output){"--schedule-map", r->schedule_map};
 	if (r->flops) {
 		snprintf(sidecar, SIDECAR_PATH_SIZE, "%s.json", r->flops);
 		out[n++] = (struct output){"--flops", r->flops};
@@ -254,7 +258,8 @@ int output_plan_check(const struct output_plan *plan, char *err, size_t err_size
 			return -1;
 	for (int i = others; i < n; i++) {
 		const char *path = out[i].path;
-		int image = (path == r->work_map && workmap_kind(path) != WORKMAP_NPY) ||
+		int image = ((path == r->work_map || path == r->schedule_map) &&
+			     workmap_kind(path) != WORKMAP_NPY) ||
 			    path == r->work_map_bar;
 		if (image ? image_check_writable(path, err, err_size)
 			  : files_check_writable(path, err, err_size))
@@ -390,6 +395,20 @@ static int stage_flops(struct staged_file *staged, const struct output_plan *pla
 			 one_row ? c->item_count : c->global_size[0], err, err_size);
 }
 
+/* The schedule map: its three words per pixel as .npy, or a picture. */
+static int stage_schedule_map(struct staged_file *staged, const struct output_plan *plan,
+			      const struct record *record, char *err, size_t err_size)
+{
+	const char *path = plan->request->schedule_map;
+	const uint32_t *schedule = record->counted.schedule;
+	int w = plan->job->settings.width, h = plan->job->settings.height;
+
+	if (workmap_kind(path) == WORKMAP_NPY)
+		return npy_stage_u32(staged, path, schedule, (size_t)h, (size_t)w,
+				     RT_SCHEDULE_WORDS, err, err_size);
+	return schedmap_stage(staged, path, schedule, w, h, err, err_size);
+}
+
 /* Stages the outputs besides the images into staged[]; returns how many,
  * or -1. */
 static int stage_others(const struct output_plan *plan, const struct record *record,
@@ -406,6 +425,8 @@ static int stage_others(const struct output_plan *plan, const struct record *rec
 	    workmap_stage_bar(&staged[n++], r->work_map_bar, record->counted.pixel_flops,
 			      s->width, s->height, r->work_map_log ? WORKMAP_LOG : WORKMAP_LINEAR,
 			      err, err_size))
+		return -1;
+	if (r->schedule_map && stage_schedule_map(&staged[n++], plan, record, err, err_size))
 		return -1;
 	if (r->flops) {
 		snprintf(sidecar, sizeof(sidecar), "%s.json", r->flops);
@@ -460,5 +481,7 @@ void output_plan_print(const struct output_plan *plan, FILE *out)
 		fprintf(out, ", work map %s", quote_text(r->work_map));
 	if (r->flops)
 		fprintf(out, ", flops %s", quote_text(r->flops));
+	if (r->schedule_map)
+		fprintf(out, ", schedule map %s", quote_text(r->schedule_map));
 	fprintf(out, "\n");
 }

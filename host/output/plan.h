@@ -25,6 +25,7 @@ struct output_request {
 	const char *work_map;	  /* --work-map */
 	int work_map_log;	  /* --work-map-scale log */
 	const char *work_map_bar; /* --work-map-bar */
+	const char *schedule_map; /* --schedule-map */
 	int linear_encoding;	  /* --encoding linear */
 };
 

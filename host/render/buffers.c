@@ -25,15 +25,18 @@ int buffers_create(struct device *dev, const struct render_settings *s,
 					flops_what, err, err_size);
 	if (!b->flops)
 		return -1;
-	b->write_counts = checks_create_write_counts(dev, s, err, err_size);
-	return b->write_counts ? 0 : -1;
+	b->probe = probe_create(dev, s, err, err_size);
+	return b->probe ? 0 : -1;
 }
 
 int buffers_clear(struct device *dev, const struct render_settings *s, struct render_buffers *b,
 		  char *err, size_t err_size)
 {
 	cl_ulong zero = 0;
-	cl_int status = checks_poison(dev, s, &b->image, b->write_counts);
+	cl_int status = checks_poison(dev, s, &b->image);
+
+	if (status == CL_SUCCESS)
+		status = probe_clear(dev, s, b->probe);
 
 	if (status == CL_SUCCESS && s->count_flops)
 		status = clEnqueueFillBuffer(dev->queue, b->flops, &zero, sizeof(zero), 0,
@@ -99,7 +102,9 @@ int buffers_read_back(struct device *dev, const struct render_settings *s, struc
 		}
 	}
 	if (status == CL_SUCCESS)
-		status = checks_read(dev, s, &b->image, b->write_counts, res);
+		status = checks_read_guards(dev, s, &b->image, res);
+	if (status == CL_SUCCESS)
+		status = probe_read(dev, s, b->probe, res);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "reading the results back failed (kernel '%s' on %s): %s",
 			 s->kernel->name, dev->name, cl_error_name(status));
@@ -110,7 +115,7 @@ int buffers_read_back(struct device *dev, const struct render_settings *s, struc
 
 void buffers_release(struct render_buffers *b)
 {
-	cl_mem buffers[] = {b->write_counts, b->flops, b->scene};
+	cl_mem buffers[] = {b->probe, b->flops, b->scene};
 
 	free(b->item_flops);
 	free(b->scene_block);

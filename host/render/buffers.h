@@ -7,6 +7,7 @@
 #define RTCL_BUFFERS_H
 
 #include "render/checks.h"
+#include "render/probe.h"
 
 struct render_buffers {
 	cl_program program;
@@ -14,7 +15,7 @@ struct render_buffers {
 	cl_mem scene;
 	struct guarded_image image;
 	cl_mem flops;	      /* the per-pixel flop counts at its head (count_flops) */
-	cl_mem write_counts;  /* check_writes (checks.h) */
+	cl_mem probe;	      /* write counts or the schedule map (probe.h) */
 	uint64_t *item_flops; /* per work-item, as the renderer lays them out */
 	size_t item_count;
 	uint64_t rays, node_visits;

@@ -39,51 +39,29 @@ void checks_release_image(struct guarded_image *g)
 	g->image = g->parent = NULL;
 }
 
-cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s, char *err,
-				  size_t err_size)
-{
-	size_t bytes = s->check_writes ? (size_t)s->width * s->height * sizeof(cl_uint)
-				       : UNUSED_BUFFER_BYTES;
-
-	return device_create_buffer(dev, CL_MEM_READ_WRITE, bytes, NULL, "write counts", err,
-				    err_size);
-}
-
 cl_int checks_poison(struct device *dev, const struct render_settings *s,
-		     const struct guarded_image *g, cl_mem write_counts)
+		     const struct guarded_image *g)
 {
-	size_t pixels = (size_t)s->width * s->height;
-	cl_uint zero = 0, poison = POISON_WORD;
-	cl_int status;
+	cl_uint poison = POISON_WORD;
 
 	if (!s->check_writes)
 		return CL_SUCCESS;
-	status = clEnqueueFillBuffer(dev->queue, write_counts, &zero, sizeof(zero), 0,
-				     pixels * sizeof(cl_uint), 0, NULL, NULL);
-	if (status == CL_SUCCESS)
-		status = clEnqueueFillBuffer(
-			dev->queue, g->parent, &poison, sizeof(poison), 0,
-			image_float_bytes(s->width, s->height) + 2 * g->guard_bytes, 0, NULL, NULL);
-	return status;
+	return clEnqueueFillBuffer(dev->queue, g->parent, &poison, sizeof(poison), 0,
+				   image_float_bytes(s->width, s->height) + 2 * g->guard_bytes, 0,
+				   NULL, NULL);
 }
 
-cl_int checks_read(struct device *dev, const struct render_settings *s,
-		   const struct guarded_image *g, cl_mem write_counts, struct render_result *res)
+cl_int checks_read_guards(struct device *dev, const struct render_settings *s,
+			  const struct guarded_image *g, struct render_result *res)
 {
-	size_t pixels = (size_t)s->width * s->height;
 	cl_uint *guard;
-	cl_int status;
+	cl_int status = CL_SUCCESS;
 
 	if (!s->check_writes)
 		return CL_SUCCESS;
 	guard = malloc(g->guard_bytes);
-	res->write_counts = malloc(pixels * sizeof(uint32_t));
-	if (!guard || !res->write_counts) {
-		free(guard);
+	if (!guard)
 		return CL_OUT_OF_HOST_MEMORY;
-	}
-	status = clEnqueueReadBuffer(dev->queue, write_counts, CL_TRUE, 0, pixels * sizeof(cl_uint),
-				     res->write_counts, 0, NULL, NULL);
 	res->guards_intact = 1;
 	for (int side = 0; status == CL_SUCCESS && side < 2; side++) {
 		size_t offset = side ? g->guard_bytes + image_float_bytes(s->width, s->height) : 0;

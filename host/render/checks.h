@@ -1,8 +1,8 @@
 /* The write checks of the kernel tests, kept out of the production path:
- * the image buffer with guard zones, the poison written over it before a
- * checked launch, and the per-pixel write counts read back. Active only with
- * render_settings.check_writes; the faults CLI tests inject are
- * base/test_hooks.h's. */
+ * the image buffer with guard zones and the poison written over it before a
+ * checked launch (the per-pixel write counts are the probe's, probe.h).
+ * Active only with render_settings.check_writes; the faults CLI tests inject
+ * are base/test_hooks.h's. */
 #ifndef RTCL_CHECKS_H
 #define RTCL_CHECKS_H
 
@@ -26,20 +26,13 @@ int checks_create_image(struct device *dev, const struct render_settings *s,
 
 void checks_release_image(struct guarded_image *g);
 
-/* Creates the per-pixel write-count buffer (a small placeholder without
- * check_writes, since the kernels always take the argument). */
-cl_mem checks_create_write_counts(struct device *dev, const struct render_settings *s, char *err,
-				  size_t err_size);
-
-/* With check_writes, enqueues the poison over the image and its guard zones
- * and zeroes the write counts; otherwise does nothing. */
+/* With check_writes, enqueues the poison over the image and its guard zones;
+ * otherwise does nothing. */
 cl_int checks_poison(struct device *dev, const struct render_settings *s,
-		     const struct guarded_image *g, cl_mem write_counts);
+		     const struct guarded_image *g);
 
-/* With check_writes: reads the per-pixel write counts into
- * result->write_counts and checks the guard zones (result->guards_intact). */
-cl_int checks_read(struct device *dev, const struct render_settings *s,
-		   const struct guarded_image *g, cl_mem write_counts,
-		   struct render_result *result);
+/* With check_writes: checks the guard zones (result->guards_intact). */
+cl_int checks_read_guards(struct device *dev, const struct render_settings *s,
+			  const struct guarded_image *g, struct render_result *result);
 
 #endif

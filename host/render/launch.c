@@ -304,9 +304,9 @@ int launch_prepare_scene(struct device *dev, const struct scene *scene,
 int launch_begin_timing(const struct render_settings *s, struct render_result *res, char *err,
 			size_t err_size)
 {
-	/* Counting runs are not timed: one run is enough. */
-	int timed = s->count_flops ? 1 : s->repeat;
-	int warm_up = !s->count_flops && s->warm_up;
+	/* Instrumented runs are not timed: one run is enough. */
+	int timed = settings_instrumented(s) ? 1 : s->repeat;
+	int warm_up = !settings_instrumented(s) && s->warm_up;
 
 	res->kernel_ms = calloc((size_t)timed, sizeof(double));
 	if (!res->kernel_ms) {
@@ -336,7 +336,10 @@ void launch_progress_begin(const struct render_settings *s, int frames, const ch
 {
 	char what[64];
 
-	snprintf(what, sizeof(what), "%s (%s%s%s)", s->count_flops ? "counting flops" : "rendering",
+	snprintf(what, sizeof(what), "%s (%s%s%s)",
+		 s->count_flops		? "counting flops"
+		 : s->record_schedule ? "recording the schedule"
+				      : "rendering",
 		 s->kernel->name, devices ? ", " : "", devices ? devices : "");
 	progress_begin(what, frames * launch_image_work(s));
 }

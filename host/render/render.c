@@ -131,7 +131,9 @@ void render_result_free(struct render_result *res)
 	free(res->item_flops);
 	free(res->pixel_flops);
 	free(res->write_counts);
+	free(res->schedule);
 	res->pixel_flops = NULL;
+	res->schedule = NULL;
 	res->rgb = NULL;
 	res->kernel_ms = NULL;
 	res->item_flops = NULL;

@@ -47,6 +47,8 @@ struct render_settings {
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
 	int check_writes;	/* tests: count writes per pixel, poison the image and
 				   surround it with guard zones (checks.h) */
+	int record_schedule;	/* build with RTCL_SCHEDULE_MAP and return each pixel's
+				   work-group, work-item and ticket (probe.h) */
 	int force_global_scene; /* read the scene from __global memory even if it
 				   would fit in __local memory */
 	int accel;		/* ACCEL_BVH or ACCEL_NONE (--accel) */
@@ -97,6 +99,9 @@ struct render_result {
 	double bvh_sah_cost, bvh_build_ms;
 	size_t bvh_bytes; /* its nodes and references in the scene block */
 
+	/* With record_schedule: RT_SCHEDULE_WORDS per pixel, row-major. */
+	uint32_t *schedule;
+
 	/* With check_writes. */
 	uint32_t *write_counts; /* per pixel */
 	int guards_intact;	/* no byte outside the image was written */
@@ -106,6 +111,13 @@ struct render_result {
 static inline int settings_samples(const struct render_settings *s)
 {
 	return s->samples > 0 ? s->samples : 1;
+}
+
+/* Whether s asks for an instrumented render (counting flops, recording the
+ * schedule): one untimed frame, no warm-up. */
+static inline int settings_instrumented(const struct render_settings *s)
+{
+	return s->count_flops || s->record_schedule;
 }
 
 /* Bytes of the linear RGB float image of width × height pixels. */

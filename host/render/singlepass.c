@@ -22,7 +22,7 @@ enum render_arg {
 	ARG_IMAGE,
 	ARG_WORK_COUNTER,
 	ARG_COUNTS,
-	ARG_WRITE_COUNTS,
+	ARG_PROBE,
 	ARG_PIECE,
 	RENDER_ARGS
 };
@@ -68,7 +68,7 @@ static int set_args(const struct launch_state *st, const struct render_result *r
 		[ARG_IMAGE] = &st->b.image.image,
 		[ARG_WORK_COUNTER] = &st->work_counter.buffer,
 		[ARG_COUNTS] = &st->b.flops,
-		[ARG_WRITE_COUNTS] = &st->b.write_counts,
+		[ARG_PROBE] = &st->b.probe,
 	};
 
 	for (cl_uint i = 0; i < RENDER_ARGS; i++) {

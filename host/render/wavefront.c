@@ -192,7 +192,7 @@ static cl_int launch_accumulate(struct renderer *r, struct wavefront *w, size_t 
 	size_t global[2];
 	const char *call;
 	const void *args[] = {&w->b.scene,     NULL,	    &w->b.image.image, &w->sample_rgb,
-			      &w->item_counts, &w->b.flops, &w->sample_flops,  &w->b.write_counts,
+			      &w->item_counts, &w->b.flops, &w->sample_flops,  &w->b.probe,
 			      piece,	       &sample};
 	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem), sizeof(cl_mem),
 				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),

@@ -42,22 +42,25 @@ static int render_pieces(struct image_devices *d, const struct job *job,
 	return tiles_render(&d->tiles, s, d->work, out, err, err_size);
 }
 
-/* With --flops or --work-map, a separate counting run first; then the timed
- * run. Returns 0, or -1 with one message in err. */
+/* With --flops, --work-map or --schedule-map, a separate instrumented run
+ * first (counting, recording the schedule, or both); then the timed run.
+ * Returns 0, or -1 with one message in err. */
 static int render_counted(struct image_devices *d, const struct job *job,
 			  const struct render_settings *s, render_fn fn, struct record *record,
 			  char *err, size_t err_size)
 {
-	if (job->counting) {
+	if (job->counting || job->mapping) {
 		struct render_settings counting = *s;
 		double lap = timing_now();
 
-		counting.count_flops = 1;
+		counting.count_flops = job->counting;
+		counting.record_schedule = job->mapping;
 		int failed = fn(d, job, &counting, &record->counted, err, err_size);
 		record->counting_ms = timing_lap_ms(&lap);
 		if (failed)
 			return -1;
-		record_count_flops(record);
+		if (job->counting)
+			record_count_flops(record);
 	}
 	return fn(d, job, s, &record->result, err, err_size);
 }

@@ -13,6 +13,7 @@ from .usage import program_name
 HOW_TO_INSTALL = {
     "numpy": "pip install numpy, or apt-get install python3-numpy",
     "matplotlib": "pip install matplotlib, or apt-get install python3-matplotlib",
+    "PIL": "pip install pillow, or apt-get install python3-pil",
 }
 
 
