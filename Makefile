@@ -104,7 +104,7 @@ HOST_MODULES := \
 	scene/mesh_place scene/mesh_spawn \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
-	render/checks render/buffers render/program render/launch render/singlepass render/wavefront render/renderer render/render \
+	render/checks render/buffers render/program render/block render/watch render/repeats render/launch render/singlepass render/wavefront render/renderer render/render \
 	render/reference \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \

@@ -14,7 +14,7 @@
 #include "run/frames.h"
 #include "run/mode.h"
 #include "base/interrupt.h"
-#include "render/launch.h"
+#include "render/repeats.h"
 #include "base/progress.h"
 #include "base/quote.h"
 #include "render/render.h"
@@ -329,7 +329,7 @@ static double piece_work(const struct mpi_job *j, int piece)
 	const struct render_settings *s = &j->settings;
 
 	if (!j->image)
-		return launch_image_work(s);
+		return repeats_image_work(s);
 	struct rt_piece p = tiles_band(s, j->tiles.rows, piece, 0, 1);
 	return (double)p.width * p.height * p.samples;
 }
@@ -818,7 +818,7 @@ static int render_all(struct mpi_job *j)
 	if (j->rank == ROOT) {
 		char ranks[32];
 		snprintf(ranks, sizeof(ranks), "%d rank%s", j->size, j->size == 1 ? "" : "s");
-		launch_progress_begin(&j->settings, j->image ? 1 : piece_count(j), ranks);
+		repeats_progress_begin(&j->settings, j->image ? 1 : piece_count(j), ranks);
 	}
 	if (j->rank == ROOT && pthread_create(&server, NULL, serve, j) != 0) {
 		fprintf(stderr, "rtcl: cannot start rank 0's server thread\n");
