@@ -111,7 +111,7 @@ HOST_MODULES := \
 	report/summary report/document report/devstats \
 	output/plan output/npy output/workmap output/image_common output/image_encode \
 	output/image_png \
-	run/image run/frames \
+	run/image run/frames run/job_digest \
 	cmd/cli
 HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \
 	$(IMAGE_BACKEND) $(MPI_MODULE)
