@@ -104,14 +104,15 @@ HOST_MODULES := \
 	scene/mesh_place scene/mesh_spawn \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
-	render/checks render/probe render/buffers render/program render/launch render/singlepass render/wavefront render/renderer render/render \
+	render/checks render/probe render/buffers render/program render/block render/watch render/repeats \
+	render/launch render/singlepass render/wavefront render/renderer render/render \
 	render/reference \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
 	report/summary report/document report/devstats \
 	output/plan output/npy output/schedmap output/workmap output/image_common output/image_encode \
 	output/image_png \
-	run/image run/frames \
+	run/image run/frames run/job_digest \
 	cmd/cli
 HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \
 	$(IMAGE_BACKEND) $(MPI_MODULE)

@@ -191,7 +191,7 @@ struct rt_bvh_node {
  * next chunk of dynamic, the next pixel of persistent); word RT_COUNTER_DONE
  * counts, in a build with RTCL_PROGRESS, the pixels of whole chunks that
  * serial, naive and cyclic have done, one atomic_add per chunk. The host
- * reads both while a launch runs, for the progress line (host/render/launch.h). */
+ * reads both while a launch runs, for the progress line (host/render/watch.h). */
 #define RT_COUNTER_NEXT 0
 #define RT_COUNTER_DONE 1
 #define RT_COUNTER_WORDS 2

@@ -15,7 +15,7 @@
 #include "device/device.h"
 #include "layout/scene_block.h"
 #include "output/image.h"
-#include "render/launch.h"
+#include "render/block.h"
 #include "render/reference.h"
 #include "render/render.h"
 #include "render/renderer.h"
@@ -320,10 +320,10 @@ Test(kernels, scene_larger_than_a_buffer_is_refused)
 	cr_assert_eq(mesh_block_build(&scene, &mesh), 0);
 	size_t bytes = scene_block_bytes(&scene, &mesh, NULL);
 	dev.max_alloc_size = bytes;
-	cr_expect_eq(launch_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), 0, "%s",
+	cr_expect_eq(block_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), 0, "%s",
 		     err);
 	dev.max_alloc_size--;
-	cr_assert_eq(launch_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), -1);
+	cr_assert_eq(block_check_scene_fits(&dev, &scene, &mesh, NULL, err, sizeof(err)), -1);
 	mesh_block_free(&mesh);
 	snprintf(want, sizeof(want),
 		 "test/meshes/mesh_scene.json: the scene (335 triangles) needs "

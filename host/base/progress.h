@@ -4,7 +4,7 @@
  * Work is counted in pixel samples (a pixel's samples of one launch). A run
  * (progress_begin) has a total; pieces add what they finished
  * (progress_add), and a launch under way says how far it is
- * (progress_partial), read from its device while it runs (launch.h). The
+ * (progress_partial), read from its device while it runs (render/watch.h). The
  * line is one per process and every function is thread-safe, so several
  * devices' threads add to one line. With progress_init(0) (stderr not a
  * terminal, or -q) every function does nothing. */

@@ -221,7 +221,7 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 	int sphere_slots = l.sphere_slots;
 	unsigned char *block;
 
-	/* The header's offsets are 32-bit (launch_prepare_scene refuses more). */
+	/* The header's offsets are 32-bit (block_prepare_scene refuses more). */
 	if (total > DEVSCENE_MAX_BYTES)
 		return NULL;
 	block = calloc(1, total);

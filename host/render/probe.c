@@ -3,7 +3,7 @@
 #include <stdlib.h>
 
 #include "rtcl_shared.h"
-#include "render/launch.h"
+#include "render/launch.h" /* UNUSED_BUFFER_BYTES */
 
 /* The words the probe holds for s: 0 when it is a placeholder. */
 static size_t probe_words(const struct render_settings *s)

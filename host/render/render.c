@@ -8,7 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#include "render/launch.h"
+#include "render/repeats.h"
 #include "base/progress.h"
 #include "render/reference.h"
 #include "render/renderer.h"
@@ -55,23 +55,23 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	if (renderer_open(&r, dev, scene, s, res, err, err_size))
 		goto out_free;
 	double lap = timing_now();
-	int frames = launch_begin_timing(s, res, err, err_size);
+	int frames = repeats_begin(s, res, err, err_size);
 	if (frames < 0)
 		goto out_close;
 	res->passes = renderer_pass_count(s, &whole);
 	if (s->progress)
-		launch_progress_begin(s, frames, NULL);
+		repeats_progress_begin(s, frames, NULL);
 	for (int frame = 0; frame < frames; frame++) {
 		struct piece_result out;
 		if (s->progress)
-			launch_progress_frame(s, res, frame, frames);
+			repeats_progress_step(s, res, frame, frames);
 		if (renderer_all_samples(&r, &whole, &out, err, err_size))
 			goto out_close;
-		launch_record_frame(res, frame, frames, out.kernel_ms);
+		repeats_record(res, frame, frames, out.kernel_ms);
 	}
 	if (s->progress)
 		progress_end();
-	if (launch_end_timing(res, err, err_size))
+	if (repeats_end(res, err, err_size))
 		goto out_close;
 	res->times.kernels = timing_lap_ms(&lap);
 	if (renderer_read_back(&r, err, err_size))

@@ -9,7 +9,6 @@
 
 #include "base/progress.h"
 #include "base/timing.h"
-#include "render/launch.h"
 
 int renderer_open(struct renderer *r, struct device *dev, const struct scene *scene,
 		  const struct render_settings *s, struct render_result *res, char *err,

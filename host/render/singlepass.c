@@ -11,6 +11,7 @@
 #include "render/buffers.h"
 #include "base/test_hooks.h"
 #include "render/launch.h"
+#include "render/watch.h"
 #include "render/program.h"
 #include "base/progress.h"
 #include "base/timing.h"
@@ -38,7 +39,7 @@ struct launch_state {
 
 static void release_state(struct launch_state *st)
 {
-	launch_release_counter(&st->work_counter);
+	watch_release_counter(&st->work_counter);
 	if (st->kernel)
 		clReleaseKernel(st->kernel);
 	buffers_release(&st->b);
@@ -96,7 +97,7 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 {
 	if (buffers_create(dev, s, res, &st->b, (size_t)counts_bytes(s, res), "flop counts", err,
 			   err_size) ||
-	    launch_create_counter(dev, progress_enabled(), &st->work_counter, err, err_size))
+	    watch_create_counter(dev, progress_enabled(), &st->work_counter, err, err_size))
 		return -1;
 	res->item_count = res->global_size[0] * res->global_size[1];
 	st->b.item_count = res->item_count;
@@ -156,7 +157,7 @@ static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 	const char *call = "clEnqueueFillBuffer";
 	size_t global[2];
 	struct launch_watch watch = piece_watch(r, piece);
-	cl_int status = launch_reset_counter(&st->work_counter);
+	cl_int status = watch_reset_counter(&st->work_counter);
 
 	piece_global_size(s, r->result, piece, global);
 	out->kernel_ms = 0;

@@ -8,7 +8,7 @@
 #include "base/timing.h"
 #include "base/vec3.h"
 #include "base/version.h"
-#include "render/launch.h"
+#include "render/repeats.h"
 #include "render/render.h"
 #include "report/summary.h"
 #include "run/mode.h"
@@ -86,7 +86,7 @@ static void show_frame(struct frames_state *f, int piece, int finished)
 
 	if (f->count == 1 && !finished) {
 		snprintf(step, sizeof(step), "frame %d of %d", piece + 1, n);
-		progress_step(step, launch_image_work(&f->settings));
+		progress_step(step, repeats_image_work(&f->settings));
 	} else if (f->count > 1 && finished) {
 		snprintf(step, sizeof(step), "%d of %d frames done",
 			 __atomic_add_fetch(&f->done, 1, __ATOMIC_RELAXED), n);
@@ -139,7 +139,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	f->settings.progress = 0;
 	char devices[32];
 	snprintf(devices, sizeof(devices), "%d devices", f->count);
-	launch_progress_begin(&f->settings, n, f->count > 1 ? devices : NULL);
+	repeats_progress_begin(&f->settings, n, f->count > 1 ? devices : NULL);
 	double start = timing_now();
 	int failed = multidev_run(&pieces, f->devs, f->count, f->work, err, err_size);
 	progress_end();

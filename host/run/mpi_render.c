@@ -12,13 +12,12 @@
 #include "base/test_hooks.h"
 #include "base/version.h"
 #include "run/frames.h"
+#include "run/job_digest.h"
 #include "run/mode.h"
 #include "base/interrupt.h"
-#include "render/launch.h"
+#include "render/repeats.h"
 #include "base/progress.h"
-#include "base/quote.h"
 #include "render/render.h"
-#include "scene/scene.h"
 #include "schedule/tiles.h"
 #include "base/timing.h"
 
@@ -329,7 +328,7 @@ static double piece_work(const struct mpi_job *j, int piece)
 	const struct render_settings *s = &j->settings;
 
 	if (!j->image)
-		return launch_image_work(s);
+		return repeats_image_work(s);
 	struct rt_piece p = tiles_band(s, j->tiles.rows, piece, 0, 1);
 	return (double)p.width * p.height * p.samples;
 }
@@ -457,168 +456,15 @@ static void *serve(void *context)
 
 /* ---- start, run, finish -------------------------------------------------- */
 
-/* What every rank must share to render one job: the scene's digest and
- * every setting that changes the image or how it is cut into pieces, as
- * numbers, so that a rank that differs is told which setting first. Ranks
- * that disagreed rendered an image spliced from two jobs (or failed on a
- * piece of the wrong size). The devices may differ from rank to rank. */
-enum job_setting {
-	JOB_WIDTH,
-	JOB_HEIGHT,
-	JOB_SAMPLES,
-	JOB_DEPTH,
-	JOB_FRAMES_GIVEN,
-	JOB_FRAME_FIRST,
-	JOB_FRAME_LAST,
-	JOB_PIECE_ROWS,
-	JOB_SPLIT_STATIC,
-	JOB_KERNEL,
-	JOB_WORKGROUP_X,
-	JOB_WORKGROUP_Y,
-	JOB_GROUPS_X,
-	JOB_GROUPS_Y,
-	JOB_BATCH,
-	JOB_ACCEL,
-	JOB_SETTINGS
-};
-
-#define JOB_SOURCE_SIZE 256
-
-struct job_record {
-	unsigned long long scene_digest;
-	long long setting[JOB_SETTINGS];
-	char source[JOB_SOURCE_SIZE]; /* the scene's file name, for the message */
-};
-
-static void describe_job(const struct mpi_job *j, struct job_record *r)
-{
-	const struct render_settings *s = &j->settings;
-	const struct job *job = j->job;
-	long long *v = r->setting;
-
-	memset(r, 0, sizeof(*r));
-	r->scene_digest = scene_digest(job->scene);
-	snprintf(r->source, sizeof(r->source), "%s", job->scene->source);
-	v[JOB_WIDTH] = s->width;
-	v[JOB_HEIGHT] = s->height;
-	v[JOB_SAMPLES] = s->samples;
-	v[JOB_DEPTH] = s->max_depth;
-	v[JOB_FRAMES_GIVEN] = job->animation;
-	v[JOB_FRAME_FIRST] = job->animation ? job->first_frame : 0;
-	v[JOB_FRAME_LAST] = job->animation ? job->last_frame : 0;
-	v[JOB_PIECE_ROWS] = job->piece_rows;
-	v[JOB_SPLIT_STATIC] = job->split == SPLIT_STATIC;
-	v[JOB_KERNEL] = s->kernel ? s->kernel - render_kernels : -1;
-	v[JOB_WORKGROUP_X] = s->workgroup[0];
-	v[JOB_WORKGROUP_Y] = s->workgroup[1];
-	v[JOB_GROUPS_X] = s->groups[0];
-	v[JOB_GROUPS_Y] = s->groups[1];
-	v[JOB_BATCH] = s->batch;
-	v[JOB_ACCEL] = s->accel;
-}
-
-/* The settings as the options name them, in the order a mismatch is
- * looked for: each covers count numbers from first. */
-static const struct {
-	enum job_setting first;
-	int count;
-} job_options[] = {
-	{JOB_WIDTH, 2},	     {JOB_SAMPLES, 1},	    {JOB_DEPTH, 1},  {JOB_FRAMES_GIVEN, 3},
-	{JOB_PIECE_ROWS, 1}, {JOB_SPLIT_STATIC, 1}, {JOB_KERNEL, 1}, {JOB_WORKGROUP_X, 2},
-	{JOB_GROUPS_X, 2},   {JOB_BATCH, 1},	    {JOB_ACCEL, 1},
-};
-
-/* One setting of a record as an option would give it ("--spp 4"). */
-static void show_setting(const long long *v, enum job_setting first, char *out, size_t size)
-{
-	switch (first) {
-	case JOB_WIDTH:
-		snprintf(out, size, "--size %lldx%lld", v[JOB_WIDTH], v[JOB_HEIGHT]);
-		break;
-	case JOB_SAMPLES:
-		snprintf(out, size, "--spp %lld", v[JOB_SAMPLES]);
-		break;
-	case JOB_DEPTH:
-		snprintf(out, size, "--depth %lld", v[JOB_DEPTH]);
-		break;
-	case JOB_FRAMES_GIVEN:
-		if (v[JOB_FRAMES_GIVEN])
-			snprintf(out, size, "--frames %lld:%lld", v[JOB_FRAME_FIRST],
-				 v[JOB_FRAME_LAST]);
-		else
-			snprintf(out, size, "one image (no --frames)");
-		break;
-	case JOB_PIECE_ROWS:
-		if (v[JOB_PIECE_ROWS])
-			snprintf(out, size, "--piece-rows %lld", v[JOB_PIECE_ROWS]);
-		else
-			snprintf(out, size, "no --piece-rows");
-		break;
-	case JOB_SPLIT_STATIC:
-		snprintf(out, size, "--split %s", v[JOB_SPLIT_STATIC] ? "static" : "dynamic");
-		break;
-	case JOB_KERNEL:
-		snprintf(out, size, "-k %s",
-			 v[JOB_KERNEL] >= 0 && v[JOB_KERNEL] < render_kernel_count
-				 ? render_kernels[v[JOB_KERNEL]].name
-				 : "?");
-		break;
-	case JOB_WORKGROUP_X:
-		snprintf(out, size, "-w %lldx%lld", v[JOB_WORKGROUP_X], v[JOB_WORKGROUP_Y]);
-		break;
-	case JOB_GROUPS_X:
-		snprintf(out, size, "--groups %lldx%lld", v[JOB_GROUPS_X], v[JOB_GROUPS_Y]);
-		break;
-	case JOB_BATCH:
-		snprintf(out, size, "--batch %lld", v[JOB_BATCH]);
-		break;
-	case JOB_ACCEL:
-		snprintf(out, size, "--accel %s", v[JOB_ACCEL] ? "bvh" : "none");
-		break;
-	default:
-		snprintf(out, size, "setting %d", (int)first);
-	}
-}
-
-/* Writes into message what rank's record differs in from rank 0's, or
- * returns 0 when it renders the same job. */
-static int job_differs(const struct job_record *root, const struct job_record *r, int rank,
-		       char *message, size_t size)
-{
-	char mine[64], theirs[64], root_source[JOB_SOURCE_SIZE + 16];
-
-	if (r->scene_digest != root->scene_digest) {
-		snprintf(root_source, sizeof(root_source), "%s", quote_text(root->source));
-		snprintf(message, size,
-			 "rank %d renders another job: the scene differs (file %s on rank 0, %s on "
-			 "rank %d%s)",
-			 rank, root_source, quote_text(r->source), rank,
-			 strcmp(root->source, r->source) ? "" : ", with other contents");
-		return 1;
-	}
-	for (size_t k = 0; k < sizeof(job_options) / sizeof(job_options[0]); k++) {
-		enum job_setting first = job_options[k].first;
-		if (memcmp(&r->setting[first], &root->setting[first],
-			   (size_t)job_options[k].count * sizeof(long long)) == 0)
-			continue;
-		show_setting(r->setting, first, mine, sizeof(mine));
-		show_setting(root->setting, first, theirs, sizeof(theirs));
-		snprintf(message, size, "rank %d renders another job: %s against rank 0's %s", rank,
-			 mine, theirs);
-		return 1;
-	}
-	return 0;
-}
-
 /* Every rank learns whether all render the same job; rank 0 names the first
  * setting in which the lowest differing rank differs. Returns 0 when all
  * agree. */
 static int agree_on_job(struct mpi_job *j)
 {
-	struct job_record mine, *all = calloc((size_t)j->size, sizeof(*all));
+	struct job_digest mine, *all = calloc((size_t)j->size, sizeof(*all));
 	char message[MESSAGE_SIZE];
 
-	describe_job(j, &mine);
+	job_digest_fill(j->job, &mine);
 	if (!all || MPI_Allgather(&mine, (int)sizeof(mine), MPI_BYTE, all, (int)sizeof(mine),
 				  MPI_BYTE, MPI_COMM_WORLD) != MPI_SUCCESS) {
 		fprintf(stderr, "rtcl: rank %d: --mpi: the ranks could not compare their jobs\n",
@@ -626,7 +472,7 @@ static int agree_on_job(struct mpi_job *j)
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
 	for (int r = 1; r < j->size; r++) {
-		if (!job_differs(&all[0], &all[r], r, message, sizeof(message)))
+		if (!job_digest_differs(&all[0], &all[r], r, message, sizeof(message)))
 			continue;
 		if (j->rank == ROOT)
 			fprintf(stderr, "rtcl: %s\n", message);
@@ -818,7 +664,7 @@ static int render_all(struct mpi_job *j)
 	if (j->rank == ROOT) {
 		char ranks[32];
 		snprintf(ranks, sizeof(ranks), "%d rank%s", j->size, j->size == 1 ? "" : "s");
-		launch_progress_begin(&j->settings, j->image ? 1 : piece_count(j), ranks);
+		repeats_progress_begin(&j->settings, j->image ? 1 : piece_count(j), ranks);
 	}
 	if (j->rank == ROOT && pthread_create(&server, NULL, serve, j) != 0) {
 		fprintf(stderr, "rtcl: cannot start rank 0's server thread\n");

@@ -12,8 +12,8 @@
  *
  * Every rank must render the same job: at the start the ranks compare the
  * scene's digest (scene_digest()) and every setting that changes the image or
- * its pieces; rank 0 names the first difference and every rank exits with
- * status 1. */
+ * its pieces (run/job_digest.h); rank 0 names the first difference and every
+ * rank exits with status 1. */
 #ifndef RTCL_MPI_RENDER_H
 #define RTCL_MPI_RENDER_H
 

@@ -128,7 +128,7 @@ static inline void scene_from_eye(const struct scene *scene, const double p[3], 
  * depends on: the image and camera settings and every material, sphere,
  * plane, light and triangle (the mesh files' contents, placed), field by
  * field; not the file's name. Equal scenes give equal digests on every host
- * of one byte order (--mpi ranks compare them, mpi_render.h). */
+ * of one byte order (--mpi ranks compare them, run/job_digest.h). */
 unsigned long long scene_digest(const struct scene *scene);
 
 /* Sets lo and hi to the world-space axis-aligned box of the scene's finite

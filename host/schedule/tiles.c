@@ -6,7 +6,7 @@
 #include <time.h>
 
 #include "base/test_hooks.h"
-#include "render/launch.h"
+#include "render/repeats.h"
 #include "base/progress.h"
 #include "render/render.h"
 #include "base/timing.h"
@@ -433,22 +433,22 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 				   .render_piece = render_band,
 				   .take_piece = t->adaptive ? take_tile_piece : NULL,
 				   .context = t};
-	int frames = launch_begin_timing(t->settings, out, err, err_size);
+	int frames = repeats_begin(t->settings, out, err, err_size);
 	char devices[32];
 
 	snprintf(devices, sizeof(devices), "%d device%s", t->count, t->count == 1 ? "" : "s");
 	if (frames > 0)
-		launch_progress_begin(t->settings, frames, devices);
+		repeats_progress_begin(t->settings, frames, devices);
 	for (int f = 0; f < frames; f++) {
 		double start = timing_now();
-		launch_progress_frame(t->settings, out, f, frames);
+		repeats_progress_step(t->settings, out, f, frames);
 		if (t->adaptive) {
 			adapt_new_frame(&t->adapt);
 			t->piece_count = 0;
 		}
 		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
 			return -1;
-		launch_record_frame(out, f, frames, (timing_now() - start) * 1e3);
+		repeats_record(out, f, frames, (timing_now() - start) * 1e3);
 	}
 	return frames;
 }
@@ -474,7 +474,7 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split == SPLIT_STATIC, work, out, err, err_size);
 	progress_end();
-	if (frames < 0 || launch_end_timing(out, err, err_size) || double_band(&t, err, err_size))
+	if (frames < 0 || repeats_end(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
 	out->passes = tiles_piece_launches(s, &t.pieces[0]);
