@@ -109,7 +109,7 @@ HOST_MODULES := \
 	render/reference \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
-	report/summary report/document report/devstats \
+	report/summary report/document report/simd report/devstats \
 	output/plan output/npy output/schedmap output/workmap output/image_common output/image_encode \
 	output/image_png \
 	run/image run/frames run/job_digest \

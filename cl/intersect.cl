@@ -220,6 +220,7 @@ static struct hit intersect_scene(struct tracer *tr, float3 o, float3 d, float m
 	struct hit best = {0.0f, -1, -1, -1, 0.0f, 0.0f};
 	float nearest = max_t;
 
+	SIMD_STEP(tr, RT_SIMD_INTERSECT);
 	/* RT_SPHERE_GROUP spheres at a time, so that when the ray misses them
 	 * all, as it mostly does, they cost one branch. */
 	struct ray_frame frame = ray_frame(tr, o, d);

@@ -37,9 +37,19 @@ static void tracer_init_counts(struct tracer *tr, scene_ptr scene, __global ulon
 static void store_counts(struct tracer *tr, uint item)
 {
 #ifdef RTCL_COUNT_FLOPS
-	tr->item_counts[RT_ITEM_COUNTS * item] = tr->flops;
-	tr->item_counts[RT_ITEM_COUNTS * item + 1] = tr->rays;
-	tr->item_counts[RT_ITEM_COUNTS * item + 2] = tr->node_visits;
+	__global ulong *counts = tr->item_counts + RT_ITEM_COUNTS * item;
+
+	counts[RT_ITEM_FLOPS] = tr->flops;
+	counts[RT_ITEM_RAYS] = tr->rays;
+	counts[RT_ITEM_NODE_VISITS] = tr->node_visits;
+	for (int p = 0; p < RT_SIMD_PHASES; p++) {
+#ifdef RTCL_SIMD_MEASURE
+		counts[RT_ITEM_LANE_STEPS(p)] = tr->lane_steps[p];
+		counts[RT_ITEM_WARP_STEPS(p)] = tr->warp_steps[p];
+#else
+		counts[RT_ITEM_LANE_STEPS(p)] = counts[RT_ITEM_WARP_STEPS(p)] = 0;
+#endif
+	}
 #else
 	(void)tr;
 	(void)item;

@@ -71,6 +71,27 @@
 #define COUNT_NODE_VISIT(tr) ((void)0)
 #endif
 
+/* SIMD efficiency, measured (RTCL_SIMD_MEASURE: the counting build on an
+ * NVIDIA device, whose OpenCL takes inline PTX): at each step of a phase,
+ * the work-item counts the step, and the lowest active lane of its warp
+ * (activemask, laneid) counts one warp-step for the warp; over every
+ * work-item, steps / (32 × warp-steps) is the phase's SIMD efficiency. */
+#ifdef RTCL_SIMD_MEASURE
+#define SIMD_STEP(tr, phase) simd_step((tr)->lane_steps + (phase), (tr)->warp_steps + (phase))
+static inline void simd_step(ulong *lane_steps, ulong *warp_steps)
+{
+	uint mask, lane;
+
+	__asm__ volatile("activemask.b32 %0;" : "=r"(mask));
+	__asm__ volatile("mov.u32 %0, %%laneid;" : "=r"(lane));
+	*lane_steps += 1;
+	if ((mask & ((1u << lane) - 1u)) == 0u)
+		*warp_steps += 1;
+}
+#else
+#define SIMD_STEP(tr, phase) ((void)0)
+#endif
+
 /* What the operations written below cost, by RENDERING.md's rules: +, −, ×,
  * ÷, sqrt, pow, min and max of floats 1 each, a fused multiply-add 2,
  * comparisons and integer work 0. Here also rsqrt 1, like the sqrt it
@@ -145,6 +166,10 @@ struct tracer {
 	ulong flops;
 	ulong rays;	   /* primary, secondary and shadow rays traced */
 	ulong node_visits; /* BVH nodes visited, every ray's */
+#endif
+#ifdef RTCL_SIMD_MEASURE
+	ulong lane_steps[RT_SIMD_PHASES]; /* steps this work-item took */
+	ulong warp_steps[RT_SIMD_PHASES]; /* of them, those it led for its warp */
 #endif
 };
 
@@ -226,6 +251,10 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 	tr->flops = 0;
 	tr->rays = 0;
 	tr->node_visits = 0;
+#endif
+#ifdef RTCL_SIMD_MEASURE
+	for (int p = 0; p < RT_SIMD_PHASES; p++)
+		tr->lane_steps[p] = tr->warp_steps[p] = 0;
 #endif
 }
 

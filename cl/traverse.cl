@@ -111,6 +111,7 @@ static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, floa
 	int waiting = 0;
 
 	for (;;) {
+		SIMD_STEP(tr, RT_SIMD_TRAVERSAL);
 		if (at.count > 0) {
 			leaf_intersect(tr, frame, o, d, at.index, at.count, any_hit, nearest, best);
 			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))

@@ -129,3 +129,38 @@ def test_the_replay_refuses_what_is_not_a_schedule_map(tmp_path):
                             text=True, cwd=tmp_path, timeout=120)
     assert result.returncode == 2
     assert "write a .gif" in result.stderr
+
+
+@pytest.mark.parametrize("kernel, low, high", [("serial", 1 / 32, 1 / 32), ("naive", 0.2, 1.0)])
+def test_flops_and_schedule_together_model_the_simd_efficiency(tmp_path, kernel, low, high):
+    import json
+    result = rtcl("-k", kernel, "-o", "x.ppm", "--work-map", "w.npy", "--schedule-map",
+                  "s.npy", "--stats", "st.json", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((tmp_path / "st.json").read_text())
+    efficiency = stats["simd_efficiency_model"]
+    assert low - 1e-12 <= efficiency <= high + 1e-12
+    assert stats["warp_width"] == 32
+    assert f"; modelled {100 * efficiency:.1f}% (warps of 32 in lock-step" in result.stdout
+    assert "simd:    not measurable on this device; " in result.stdout  # PoCL
+    # The model from the two files, as docs/RENDERING.md defines it.
+    flops, schedule = np.load(tmp_path / "w.npy"), np.load(tmp_path / "s.npy")
+    group, item, ticket = (schedule[..., i].ravel().astype(np.int64) for i in range(3))
+    order = np.lexsort((ticket, item, group))
+    step = np.zeros(order.size, dtype=np.int64)
+    for k in range(1, order.size):
+        a, b = order[k - 1], order[k]
+        if group[a] == group[b] and item[a] == item[b]:
+            step[k] = step[k - 1] + 1
+    cost = {}
+    for k, p in enumerate(order):
+        key = (group[p], item[p] // 32, step[k])
+        cost[key] = max(cost.get(key, 0), int(flops.ravel()[p]))
+    assert stats["warp_steps"] == len(cost)
+    assert efficiency == pytest.approx(int(flops.sum()) / (32 * sum(cost.values())), rel=1e-8)
+
+
+def test_without_flops_there_is_no_model(tmp_path):
+    result = rtcl("-k", "naive", "-o", "x.ppm", "--schedule-map", "s.npy", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "simd:" not in result.stdout  # no counting run

@@ -28,6 +28,8 @@ struct device {
 	cl_ulong max_alloc_size;
 	cl_uint mem_base_addr_align; /* bytes */
 	int nv_compiler_options;     /* cl_nv_compiler_options: -cl-nv-* build options */
+	int simd_measurable;	     /* NVIDIA, compute capability 7.0 or more: inline PTX
+					with activemask (RTCL_SIMD_MEASURE) */
 	int host_unified;	     /* CL_DEVICE_HOST_UNIFIED_MEMORY: a CPU device */
 };
 

@@ -43,10 +43,20 @@ struct device_shares {
 	double wall_ms;	      /* an animation: all its frames */
 };
 
+/* SIMD efficiency modelled from the instrumented run's flops and schedule
+ * (report/simd.h), when it recorded both. */
+struct simd_figures {
+	int modelled;
+	double efficiency;
+	uint64_t warp_steps;
+	int warp_width;
+};
+
 struct record {
 	struct render_result result;  /* the timed, uncounted render */
-	struct render_result counted; /* the counting run (job->counting) */
+	struct render_result counted; /* the instrumented run (job->counting, mapping) */
 	struct flop_summary flops;
+	struct simd_figures simd;
 	struct device_identity device;
 	struct device_shares shares;
 

@@ -60,9 +60,14 @@ cl_int buffers_add_item_counts(struct device *dev, struct render_buffers *b, cl_
 				     items * RT_ITEM_COUNTS * sizeof(cl_ulong), counts, 0, NULL,
 				     NULL);
 	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
-		flops[i] += counts[RT_ITEM_COUNTS * i];
-		b->rays += counts[RT_ITEM_COUNTS * i + 1];
-		b->node_visits += counts[RT_ITEM_COUNTS * i + 2];
+		const cl_ulong *c = counts + RT_ITEM_COUNTS * i;
+		flops[i] += c[RT_ITEM_FLOPS];
+		b->rays += c[RT_ITEM_RAYS];
+		b->node_visits += c[RT_ITEM_NODE_VISITS];
+		for (int p = 0; p < RT_SIMD_PHASES; p++) {
+			b->lane_steps[p] += c[RT_ITEM_LANE_STEPS(p)];
+			b->warp_steps[p] += c[RT_ITEM_WARP_STEPS(p)];
+		}
 	}
 	free(counts);
 	return status;
@@ -83,6 +88,11 @@ static cl_int read_counts(struct device *dev, const struct render_settings *s,
 		res->total_flops += res->item_flops[i];
 	res->total_rays = b->rays;
 	res->total_node_visits = b->node_visits;
+	res->simd_measured = dev->simd_measurable; /* the counting build measured */
+	for (int p = 0; p < RT_SIMD_PHASES; p++) {
+		res->lane_steps[p] = b->lane_steps[p];
+		res->warp_steps[p] = b->warp_steps[p];
+	}
 	return clEnqueueReadBuffer(dev->queue, b->flops, CL_TRUE, 0, pixel_flops_bytes(s),
 				   res->pixel_flops, 0, NULL, NULL);
 }

@@ -19,6 +19,7 @@ struct render_buffers {
 	uint64_t *item_flops; /* per work-item, as the renderer lays them out */
 	size_t item_count;
 	uint64_t rays, node_visits;
+	uint64_t lane_steps[RT_SIMD_PHASES], warp_steps[RT_SIMD_PHASES]; /* simd_measured */
 };
 
 /* Creates the scene buffer from b->scene_block, the image, the flop-count

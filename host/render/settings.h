@@ -7,6 +7,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "rtcl_shared.h"
 #include "device/device.h"
 #include "scene/scene.h"
 
@@ -93,6 +94,10 @@ struct render_result {
 	uint64_t *pixel_flops; /* per pixel, row-major */
 	uint64_t total_flops, total_rays;
 	uint64_t total_node_visits; /* BVH nodes visited by every ray */
+	/* SIMD steps, measured (simd_measured: RT_SIMD_* phases): the steps every
+	 * work-item took, and the warp-steps (docs/RENDERING.md). */
+	int simd_measured;
+	uint64_t lane_steps[RT_SIMD_PHASES], warp_steps[RT_SIMD_PHASES];
 
 	/* The BVH, with ACCEL_BVH and a sphere or triangle (else bvh_nodes 0). */
 	int bvh_nodes, bvh_depth;

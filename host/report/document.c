@@ -6,6 +6,7 @@
 #include "base/timing.h"
 #include "base/version.h"
 #include "report/devstats.h"
+#include "report/summary.h"
 
 int report_fill_json(FILE *file, const void *document)
 {
@@ -171,6 +172,22 @@ json_t *report_document(const struct job *job, const struct record *record)
 	json_object_set_new(doc, "build_cached", json_boolean(record->result.build_cached));
 	if (job->counting)
 		add_flop_figures(doc, record);
+	if (job->counting) {
+		const struct render_result *c = &record->counted;
+		json_t *measured = c->simd_measured
+					   ? json_pack("{s:f, s:f}", "intersect",
+						       report_simd_measured(c, RT_SIMD_INTERSECT),
+						       "traversal",
+						       report_simd_measured(c, RT_SIMD_TRAVERSAL))
+					   : json_string("not measurable on this device");
+		json_object_set_new(doc, "simd_efficiency_measured", measured);
+	}
+	if (record->simd.modelled) {
+		json_object_set_new(doc, "simd_efficiency_model", json_real(record->simd.efficiency));
+		json_object_set_new(doc, "warp_width", json_integer(record->simd.warp_width));
+		json_object_set_new(doc, "warp_steps",
+				    json_integer((json_int_t)record->simd.warp_steps));
+	}
 	add_device_figures(doc, record);
 	add_accel_figures(doc, job, record);
 	if (record->shares.count)

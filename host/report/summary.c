@@ -5,6 +5,37 @@
 #include "base/quote.h"
 #include "base/timing.h"
 #include "report/devstats.h"
+#include "report/simd.h"
+
+double report_simd_measured(const struct render_result *c, int phase)
+{
+	return c->warp_steps[phase]
+		       ? (double)c->lane_steps[phase] / (SIMD_WARP_WIDTH * (double)c->warp_steps[phase])
+		       : 1.0;
+}
+
+/* The counting run's SIMD efficiency: measured where the device lets
+ * software see it, modelled where the schedule was recorded too. */
+static void print_simd(FILE *out, const struct record *record)
+{
+	const struct render_result *c = &record->counted;
+	static const char *const phase[RT_SIMD_PHASES] = {"intersection steps",
+							  "traversal steps"};
+
+	fprintf(out, "simd:    %s", c->simd_measured ? "measured " : "not measurable on this device");
+	for (int p = 0, shown = 0; c->simd_measured && p < RT_SIMD_PHASES; p++) {
+		if (!c->warp_steps[p])
+			continue;
+		fprintf(out, "%s%.1f%% in %s", shown++ ? ", " : "",
+			100 * report_simd_measured(c, p), phase[p]);
+	}
+	if (record->simd.modelled)
+		fprintf(out, "; modelled %.1f%% (warps of %d in lock-step, %llu warp-steps)\n",
+			100 * record->simd.efficiency, record->simd.warp_width,
+			(unsigned long long)record->simd.warp_steps);
+	else
+		fprintf(out, "; modelled with --schedule-map\n");
+}
 
 void report_print_image(FILE *out, const struct job *job, const struct record *record)
 {
@@ -43,6 +74,8 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 			       (unsigned long long)f->node_visits,
 			       f->rays ? (double)f->node_visits / f->rays : 0.0);
 	}
+	if (job->counting)
+		print_simd(out, record);
 }
 
 void report_print_frames(FILE *out, const struct job *job, const struct record *record)

@@ -9,6 +9,7 @@
 #include "base/version.h"
 #include "base/timing.h"
 #include "render/render.h"
+#include "report/simd.h"
 #include "report/summary.h"
 #include "run/mode.h"
 #include "schedule/tiles.h"
@@ -42,6 +43,22 @@ static int render_pieces(struct image_devices *d, const struct job *job,
 	return tiles_render(&d->tiles, s, d->work, out, err, err_size);
 }
 
+/* SIMD efficiency from the instrumented run's flops and schedule. */
+static int model_simd(const struct job *job, struct record *record, char *err, size_t err_size)
+{
+	const struct render_result *c = &record->counted;
+	struct simd_model model;
+
+	if (simd_model_compute(c->schedule, c->pixel_flops,
+			       (size_t)job->settings.width * job->settings.height,
+			       SIMD_WARP_WIDTH, &model)) {
+		snprintf(err, err_size, "out of host memory to model the SIMD efficiency");
+		return -1;
+	}
+	record->simd = (struct simd_figures){1, model.efficiency, model.warp_steps, model.width};
+	return 0;
+}
+
 /* With --flops, --work-map or --schedule-map, a separate instrumented run
  * first (counting, recording the schedule, or both); then the timed run.
  * Returns 0, or -1 with one message in err. */
@@ -61,6 +78,8 @@ static int render_counted(struct image_devices *d, const struct job *job,
 			return -1;
 		if (job->counting)
 			record_count_flops(record);
+		if (job->counting && job->mapping && model_simd(job, record, err, err_size))
+			return -1;
 	}
 	return fn(d, job, s, &record->result, err, err_size);
 }

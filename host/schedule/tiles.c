@@ -359,6 +359,11 @@ static int join_item_counts(const struct tiles_job *t, struct render_result *out
 		out->total_flops += r->total_flops;
 		out->total_rays += r->total_rays;
 		out->total_node_visits += r->total_node_visits;
+		out->simd_measured |= r->simd_measured;
+		for (int p = 0; p < RT_SIMD_PHASES; p++) {
+			out->lane_steps[p] += r->lane_steps[p];
+			out->warp_steps[p] += r->warp_steps[p];
+		}
 	}
 	return 0;
 }
