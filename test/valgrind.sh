@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # Valgrind memcheck on full renders of the built-in scene (`make valgrind`):
-# a plain render, one with --flops and one with --work-map. Any invalid
+# a plain render, one with --flops, one with --work-map, and one with the
+# work map and the schedule map together (the SIMD model). Any invalid
 # access, use of uninitialised memory or definite leak fails the run;
 # test/valgrind.supp covers the OpenCL runtime's own reports only.
 #
@@ -25,7 +26,9 @@ memcheck() {
 memcheck --size 64x48 -o "$out/plain.ppm"
 memcheck --size 64x48 -o "$out/flops.ppm" --flops "$out/flops.npy"
 memcheck --size 64x48 -o "$out/work.ppm" --work-map "$out/work_map.ppm"
-for f in plain.ppm flops.ppm flops.npy work.ppm work_map.ppm; do
+memcheck --size 64x48 -o "$out/sched.ppm" --work-map "$out/sched_work.npy" \
+	--schedule-map "$out/sched.npy" --stats "$out/sched.json"
+for f in plain.ppm flops.ppm flops.npy work.ppm work_map.ppm sched.ppm sched.npy sched.json; do
 	[ -s "$out/$f" ] || { echo "valgrind: $f was not written" >&2; exit 1; }
 done
-echo "valgrind: 3 renders, no errors and no definite leaks"
+echo "valgrind: 4 renders, no errors and no definite leaks"
