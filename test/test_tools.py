@@ -380,10 +380,35 @@ def test_table1_has_our_figures_beside_the_papers():
         for name in ("paper time", "paper GFLOP/s", "paper efficiency", "paper speedup"):
             assert cell(row, name) == "–"
     assert "of all launches" in table and "go beyond the paper" in table
+    # SIMD efficiency: nothing counted in these runs' statistics.
+    assert cell("naive", "SIMD efficiency measured") == "–"
+    assert cell("naive", "SIMD efficiency modelled") == "–"
     for text in ("NVIDIA H100 80GB HBM3", "driver: 550.54", "2000x2000", "max depth 5",
                  "rtcl 0.1.0", "abc1234", "2024-01-01", "## Sweep", "## Commands",
                  "./rtcl -k dynamic -w 8x8", "2.000 GFLOP, the same for every run"):
         assert text in table
+
+
+def test_simd_cells_read_measured_modelled_and_not_measurable():
+    measured = {"simd_efficiency_measured": {"intersect": 0.9125, "traversal": 0.8431},
+                "simd_efficiency_model": 0.898}
+    assert table1.simd_cells(measured) == ("91.25% / 84.31%", "89.80%")
+    pocl = {"simd_efficiency_measured": "not measurable on this device",
+            "simd_efficiency_model": 0.5}
+    assert table1.simd_cells(pocl) == ("n/m", "50.00%")
+    assert table1.simd_cells({}) == ("–", "–")
+
+
+def test_the_runner_asks_for_a_schedule_map_beside_the_flops(tmp_path):
+    settings = runner.Settings("./rtcl", [], 3, tmp_path)
+    flops_path = tmp_path / "x.npy"
+    command = runner.rtcl_command(settings, "x", "dynamic", "8x8", None, 1, None, flops_path)
+    assert command[-2:] == ["--schedule-map", str(tmp_path / "x.schedule.npy")]
+    wavefront = runner.rtcl_command(settings, "x", "wavefront", "8x8", None, 1, None,
+                                    flops_path)
+    assert "--schedule-map" not in wavefront
+    plain = runner.rtcl_command(settings, "x", "dynamic", "8x8", None, 1, None, None)
+    assert "--schedule-map" not in plain
 
 
 def test_table1_flags_kernels_that_count_different_work():

@@ -17,7 +17,7 @@ from .paper import (GROUP_KERNELS, PAPER, PAPER_BATCH, PAPER_GEOMETRY, PARALLEL_
                     SWEEP_REPEAT, SWEEP_WORKGROUPS)
 from .report import device_slug, git_commit, scene_stem, utc_now
 from .runner import (REQUIRED_STATS, Progress, Run, Settings, common_options, run_rtcl,
-                     scaled_groups)
+                     scaled_groups, schedule_path)
 from .usage import command_name
 
 
@@ -83,7 +83,8 @@ def measure(settings, progress, role, kernel, *args, **options):
         try:
             run.histogram = histogram_of(load_checked_flops(run.flops_path))
         finally:
-            for path in (run.flops_path, flops.sidecar_path(run.flops_path)):
+            for path in (run.flops_path, flops.sidecar_path(run.flops_path),
+                         schedule_path(run.flops_path)):
                 path.unlink(missing_ok=True)
             run.flops_path = None
     return run

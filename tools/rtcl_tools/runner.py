@@ -114,8 +114,14 @@ def common_options(arguments):
     return options
 
 
+# The kernels whose pixels have a schedule map (docs/RENDERING.md).
+SCHEDULE_KERNELS = ("serial", "naive", "cyclic", "dynamic", "persistent")
+
+
 def rtcl_command(settings, name, kernel, workgroup, groups, repeat, batch, flops_path):
-    """Returns the argument list of one rtcl call writing NAME.ppm and NAME.json."""
+    """Returns the argument list of one rtcl call writing NAME.ppm and NAME.json;
+    with flops, the schedule map too (NAME.schedule.npy), so that --stats carries
+    the modelled SIMD efficiency."""
     command = [settings.rtcl, "-k", kernel, *settings.common,
                "-r", str(repeat or settings.repeat), "-q",
                "-o", str(settings.temp_dir / f"{name}.ppm"), "--encoding", "linear",
@@ -124,7 +130,14 @@ def rtcl_command(settings, name, kernel, workgroup, groups, repeat, batch, flops
                         ("--flops", flops_path)):
         if value:
             command += [flag, str(value)]
+    if flops_path and kernel in SCHEDULE_KERNELS:
+        command += ["--schedule-map", str(schedule_path(flops_path))]
     return command
+
+
+def schedule_path(flops_path):
+    """The schedule map written beside a flops file."""
+    return flops_path.with_suffix(".schedule.npy")
 
 
 def run_rtcl(settings, progress, role, kernel, workgroup=None, groups=None,

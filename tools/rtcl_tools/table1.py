@@ -5,8 +5,26 @@ from .report import BUILT_IN_SCENE, format_number, format_percent, markdown_tabl
 
 TABLE_COLUMNS = ("Implementation", "work-group", "groups / threads", "time ms (median)",
                  "paper time", "GFLOP/s", "paper GFLOP/s", "parallel efficiency",
-                 "paper efficiency", "speedup over serial", "paper speedup",
-                 "speedup over CPU reference")
+                 "paper efficiency", "SIMD efficiency measured", "SIMD efficiency modelled",
+                 "speedup over serial", "paper speedup", "speedup over CPU reference")
+
+# What a --stats file says where SIMD efficiency cannot be measured.
+NOT_MEASURABLE = "not measurable on this device"
+
+
+def simd_cells(stats):
+    """Returns the (measured, modelled) SIMD efficiency cells of a --stats file
+    (docs/RENDERING.md): measured as "intersection / traversal", "n/m" where the
+    device does not let software see it, "–" where nothing was counted."""
+    measured = stats.get("simd_efficiency_measured")
+    if isinstance(measured, dict):
+        measured_cell = (f"{format_percent(measured.get('intersect'))} / "
+                         f"{format_percent(measured.get('traversal'))}")
+    elif measured == NOT_MEASURABLE:
+        measured_cell = "n/m"
+    else:
+        measured_cell = "–"
+    return measured_cell, format_percent(stats.get("simd_efficiency_model"))
 
 
 def speedup(baseline_ms, kernel_ms):
@@ -58,7 +76,7 @@ def table_row(run, serial_ms, reference_ms):
             format_number(paper.get("time_s"), 2, " s"),
             format_number(stats.get("gflops"), 2), format_number(paper.get("gflops"), 2),
             format_percent(stats.get("parallel_efficiency")),
-            format_percent(paper.get("efficiency")),
+            format_percent(paper.get("efficiency")), *simd_cells(stats),
             format_number(speedup(serial_ms, kernel_ms), 1),
             format_number(paper.get("speedup"), 0),
             format_number(speedup(reference_ms, kernel_ms), 2))
@@ -183,6 +201,11 @@ def beyond_the_paper_lines(runs):
         lines.append("- persistent: each work-item fetches `batch` pixels at a time from a "
                      "global counter; paper-like row: dynamic's 8x8 work-groups and "
                      "10x10 groups, batch 1")
+    lines.append("- SIMD efficiency (docs/RENDERING.md): measured on NVIDIA devices in the "
+                 "counting run (intersection steps / BVH traversal steps; n/m: not "
+                 "measurable on this device), modelled from the flops per pixel and the "
+                 "schedule map (warps of 32 in lock-step; – for the wavefront, whose "
+                 "work-items take rays, and where nothing was counted)")
     if "wavefront" in kernels:
         lines.append("- wavefront: time = sum of every launch of a frame (primary rays, "
                      "then one launch per bounce); the work-group and groups are those of "
