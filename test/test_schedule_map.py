@@ -141,7 +141,9 @@ def test_flops_and_schedule_together_model_the_simd_efficiency(tmp_path, kernel,
     efficiency = stats["simd_efficiency_model"]
     assert low - 1e-12 <= efficiency <= high + 1e-12
     assert stats["warp_width"] == 32
+    assert stats["work_items_used"] == (1 if kernel == "serial" else 48 * 32)
     assert f"; modelled {100 * efficiency:.1f}% (warps of 32 in lock-step" in result.stdout
+    assert f"{stats['work_items_used']} of " in result.stdout
     assert "simd:    not measurable on this device; " in result.stdout  # PoCL
     # The model from the two files, as docs/RENDERING.md defines it.
     flops, schedule = np.load(tmp_path / "w.npy"), np.load(tmp_path / "s.npy")

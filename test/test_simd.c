@@ -43,6 +43,7 @@ Test(simd, one_lane_of_32_is_a_32nd)
 	cr_assert_eq(simd_model_compute(schedule, flops, 64, 32, &m), 0);
 	cr_assert_float_eq(m.efficiency, 1.0 / 32, 1e-12);
 	cr_assert_eq(m.warp_steps, 64);
+	cr_assert_eq(m.items_used, 1);
 }
 
 Test(simd, a_warp_step_costs_its_most_expensive_lane)
@@ -79,6 +80,7 @@ Test(simd, steps_follow_the_tickets_and_warps_the_item_numbers)
 	/* Steps 0 and 1 of warp 0 cost 10 each (10 with 1, then 1 with 10);
 	 * warp 1's one step costs 5. */
 	cr_assert_eq(m.warp_steps, 3);
+	cr_assert_eq(m.items_used, 3);
 	cr_assert_eq(m.flops, 27);
 	cr_assert_eq(m.capacity, 32 * 25);
 }
@@ -92,4 +94,5 @@ Test(simd, no_pixel_is_full_efficiency)
 	cr_assert_eq(simd_model_compute(schedule, flops, 1, 32, &m), 0);
 	cr_assert_float_eq(m.efficiency, 1.0, 1e-12);
 	cr_assert_eq(m.warp_steps, 0);
+	cr_assert_eq(m.items_used, 0);
 }

@@ -397,6 +397,9 @@ def test_simd_cells_read_measured_modelled_and_not_measurable():
             "simd_efficiency_model": 0.5}
     assert table1.simd_cells(pocl) == ("n/m", "50.00%")
     assert table1.simd_cells({}) == ("–", "–")
+    assert table1.used_items_cell({"work_items_used": 64, "global_size": [80, 80]}) == \
+        "64 of 6,400"
+    assert table1.used_items_cell({"global_size": [80, 80]}) == "–"
 
 
 def test_the_runner_asks_for_a_schedule_map_beside_the_flops(tmp_path):

@@ -50,6 +50,7 @@ struct simd_figures {
 	double efficiency;
 	uint64_t warp_steps;
 	int warp_width;
+	uint64_t items_used; /* work-items that traced at least one pixel */
 };
 
 struct record {

@@ -187,6 +187,8 @@ json_t *report_document(const struct job *job, const struct record *record)
 		json_object_set_new(doc, "warp_width", json_integer(record->simd.warp_width));
 		json_object_set_new(doc, "warp_steps",
 				    json_integer((json_int_t)record->simd.warp_steps));
+		json_object_set_new(doc, "work_items_used",
+				    json_integer((json_int_t)record->simd.items_used));
 	}
 	add_device_figures(doc, record);
 	add_accel_figures(doc, job, record);

@@ -61,9 +61,13 @@ int simd_model_compute(const uint32_t *schedule, const uint64_t *pixel_flops, si
 						pixel_flops[p]};
 	}
 	qsort(steps, n, sizeof(*steps), by_item_then_ticket);
-	for (size_t k = 1; k < n; k++)
+	out->items_used = n > 0;
+	for (size_t k = 1; k < n; k++) {
 		if (steps[k].group == steps[k - 1].group && steps[k].item == steps[k - 1].item)
 			steps[k].step = steps[k - 1].step + 1;
+		else
+			out->items_used++;
+	}
 	qsort(steps, n, sizeof(*steps), by_warp_step);
 	uint64_t cost = 0;
 	for (size_t k = 0; k < n; k++) {

@@ -16,6 +16,7 @@ struct simd_model {
 	uint64_t warp_steps; /* warp-steps that traced at least one pixel */
 	uint64_t flops;	     /* Σ flops of every pixel */
 	uint64_t capacity;   /* width × Σ warp-step costs */
+	uint64_t items_used; /* work-items that traced at least one pixel */
 	int width;
 };
 

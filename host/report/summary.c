@@ -30,9 +30,13 @@ static void print_simd(FILE *out, const struct record *record)
 			100 * report_simd_measured(c, p), phase[p]);
 	}
 	if (record->simd.modelled)
-		fprintf(out, "; modelled %.1f%% (warps of %d in lock-step, %llu warp-steps)\n",
+		fprintf(out,
+			"; modelled %.1f%% (warps of %d in lock-step, %llu warp-steps); %llu of %zu "
+			"work-items traced pixels\n",
 			100 * record->simd.efficiency, record->simd.warp_width,
-			(unsigned long long)record->simd.warp_steps);
+			(unsigned long long)record->simd.warp_steps,
+			(unsigned long long)record->simd.items_used,
+			c->global_size[0] * c->global_size[1]);
 	else
 		fprintf(out, "; modelled with --schedule-map\n");
 }

@@ -55,7 +55,8 @@ static int model_simd(const struct job *job, struct record *record, char *err, s
 		snprintf(err, err_size, "out of host memory to model the SIMD efficiency");
 		return -1;
 	}
-	record->simd = (struct simd_figures){1, model.efficiency, model.warp_steps, model.width};
+	record->simd = (struct simd_figures){1, model.efficiency, model.warp_steps, model.width,
+					     model.items_used};
 	return 0;
 }
 

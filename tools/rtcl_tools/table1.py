@@ -6,7 +6,8 @@ from .report import BUILT_IN_SCENE, format_number, format_percent, markdown_tabl
 TABLE_COLUMNS = ("Implementation", "work-group", "groups / threads", "time ms (median)",
                  "paper time", "GFLOP/s", "paper GFLOP/s", "parallel efficiency",
                  "paper efficiency", "SIMD efficiency measured", "SIMD efficiency modelled",
-                 "speedup over serial", "paper speedup", "speedup over CPU reference")
+                 "work-items that traced pixels", "speedup over serial", "paper speedup",
+                 "speedup over CPU reference")
 
 # What a --stats file says where SIMD efficiency cannot be measured.
 NOT_MEASURABLE = "not measurable on this device"
@@ -25,6 +26,16 @@ def simd_cells(stats):
     else:
         measured_cell = "–"
     return measured_cell, format_percent(stats.get("simd_efficiency_model"))
+
+
+def used_items_cell(stats):
+    """Returns "N of M": the work-items that traced at least one pixel (from the
+    schedule map) of those launched; "–" without a schedule map."""
+    used = stats.get("work_items_used")
+    width, height = stats.get("global_size", [0, 0])
+    if used is None or not width or not height:
+        return "–"
+    return f"{used:,} of {width * height:,}"
 
 
 def speedup(baseline_ms, kernel_ms):
@@ -76,7 +87,7 @@ def table_row(run, serial_ms, reference_ms):
             format_number(paper.get("time_s"), 2, " s"),
             format_number(stats.get("gflops"), 2), format_number(paper.get("gflops"), 2),
             format_percent(stats.get("parallel_efficiency")),
-            format_percent(paper.get("efficiency")), *simd_cells(stats),
+            format_percent(paper.get("efficiency")), *simd_cells(stats), used_items_cell(stats),
             format_number(speedup(serial_ms, kernel_ms), 1),
             format_number(paper.get("speedup"), 0),
             format_number(speedup(reference_ms, kernel_ms), 2))
@@ -205,7 +216,11 @@ def beyond_the_paper_lines(runs):
                  "counting run (intersection steps / BVH traversal steps; n/m: not "
                  "measurable on this device), modelled from the flops per pixel and the "
                  "schedule map (warps of 32 in lock-step; – for the wavefront, whose "
-                 "work-items take rays, and where nothing was counted)")
+                 "work-items take rays, and where nothing was counted); work-items that "
+                 "traced pixels: from the schedule map, of those launched (on a CPU, "
+                 "where a work-group's items run one after the other, the first items "
+                 "of dynamic and persistent take most of the work: their low parallel "
+                 "efficiency)")
     if "wavefront" in kernels:
         lines.append("- wavefront: time = sum of every launch of a frame (primary rays, "
                      "then one launch per bounce); the work-group and groups are those of "
