@@ -166,6 +166,8 @@ Test(fuzz, issue_24_mesh_files_are_refused)
 		{"ply-fewer-faces-than-declared.ply", "but the file ends after 1 of them"},
 		{"ply-all-area-zero.ply", "have area 0 (after placement)"},
 		{"obj-all-area-zero.obj", "have area 0 (after placement)"},
+		{"ply-element-line-with-count-in-name.ply",
+		 "line 7 of the PLY header: an element line must be \"element NAME COUNT\""},
 	};
 
 	for (size_t i = 0; i < sizeof(refused) / sizeof(refused[0]); i++) {

@@ -104,11 +104,13 @@ static int split(char *line, char **words, int max)
 }
 
 /* Reads the header from f. Returns 1 when it is one this check understands,
- * 0 when not (or not PLY at all). */
-static int read_ply_header(FILE *f, struct header *h)
+ * 0 when not (or not PLY at all), -1 with why in reason when an element line
+ * is malformed: Assimp reads a count out of the words it finds there (the mesh
+ * fuzzer: "element 4294967295perty list ..." made it allocate 103 GB). */
+static int read_ply_header(FILE *f, struct header *h, char *reason, size_t reason_size)
 {
 	char line[LINE_MAX_BYTES], *words[8];
-	int n;
+	int n, line_number = 1;
 
 	memset(h, 0, sizeof(*h));
 	if (!fgets(line, sizeof(line), f) || split(line, words, 8) != 1 ||
@@ -117,6 +119,7 @@ static int read_ply_header(FILE *f, struct header *h)
 	while (fgets(line, sizeof(line), f) && ftello(f) <= HEADER_MAX_BYTES) {
 		if (!strchr(line, '\n'))
 			return 0; /* a line longer than this check reads */
+		line_number++;
 		n = split(line, words, 8);
 		if (n == 0 || strcmp(words[0], "comment") == 0 || strcmp(words[0], "obj_info") == 0)
 			continue;
@@ -133,17 +136,25 @@ static int read_ply_header(FILE *f, struct header *h)
 				h->format = BINARY_BE;
 			else
 				return 0;
-		} else if (strcmp(words[0], "element") == 0 && n == 3) {
+		} else if (strcmp(words[0], "element") == 0) {
 			struct element *e = &h->elements[h->element_count];
-			char *end;
+			unsigned long long count = 0;
+			char *end = NULL;
 
-			if (h->element_count == MAX_ELEMENTS || words[2][0] < '0' ||
-			    words[2][0] > '9')
+			if (n == 3 && words[2][0] >= '0' && words[2][0] <= '9') {
+				errno = 0;
+				count = strtoull(words[2], &end, 10);
+			}
+			if (!end || *end || errno) {
+				snprintf(reason, reason_size,
+					 "line %d of the PLY header: an element line must be "
+					 "\"element NAME COUNT\", the count a whole number",
+					 line_number);
+				return -1;
+			}
+			if (h->element_count == MAX_ELEMENTS)
 				return 0;
-			errno = 0;
-			e->count = strtoull(words[2], &end, 10);
-			if (*end || errno)
-				return 0;
+			e->count = count;
 			snprintf(e->name, sizeof(e->name), "%s", words[1]);
 			h->element_count++;
 		} else if (strcmp(words[0], "property") == 0) {
@@ -416,8 +427,11 @@ int ply_check(const char *path, char *reason, size_t reason_size)
 	f = header_fd >= 0 ? fdopen(header_fd, "rb") : NULL;
 	if (!f && header_fd >= 0)
 		close(header_fd);
-	if (!h || !b || !f || !read_ply_header(f, h))
+	int header = h && b && f ? read_ply_header(f, h, reason, reason_size) : 0;
+	if (header <= 0) {
+		ret = header;
 		goto out_close;
+	}
 	if (!fits(h, (unsigned long long)(st.st_size - h->body_start), reason, reason_size)) {
 		ret = -1;
 		goto out_close;
