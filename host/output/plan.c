@@ -446,10 +446,14 @@ int output_plan_commit(struct output_plan *plan, struct record *record, char *er
 		       size_t err_size)
 {
 	record->write_start = timing_now();
-	if (any_held(plan) ? stage_held(plan, err, err_size)
-	    : !plan->job->animation
-		    ? output_plan_stage_image(plan, 0, record->result.rgb, err, err_size)
-		    : 0)
+	/* The images: held ones (--mpi), or one image's; an animation's frames
+	 * were staged as they were rendered. */
+	int failed = 0;
+	if (any_held(plan))
+		failed = stage_held(plan, err, err_size);
+	else if (!plan->job->animation)
+		failed = output_plan_stage_image(plan, 0, record->result.rgb, err, err_size);
+	if (failed)
 		return -1;
 	int others = stage_others(plan, record, plan->staged + plan->frames, err, err_size);
 	if (others < 0)

@@ -6,7 +6,7 @@
 #include "base/timing.h"
 #include "base/version.h"
 #include "report/devstats.h"
-#include "report/summary.h"
+#include "report/simd.h"
 
 int report_fill_json(FILE *file, const void *document)
 {
@@ -176,9 +176,9 @@ json_t *report_document(const struct job *job, const struct record *record)
 		const struct render_result *c = &record->counted;
 		json_t *measured = c->simd_measured
 					   ? json_pack("{s:f, s:f}", "intersect",
-						       report_simd_measured(c, RT_SIMD_INTERSECT),
+						       simd_measured(c, RT_SIMD_INTERSECT),
 						       "traversal",
-						       report_simd_measured(c, RT_SIMD_TRAVERSAL))
+						       simd_measured(c, RT_SIMD_TRAVERSAL))
 					   : json_string("not measurable on this device");
 		json_object_set_new(doc, "simd_efficiency_measured", measured);
 	}

@@ -40,6 +40,13 @@ static int same_warp_step(const struct lane_step *a, const struct lane_step *b)
 	return a->group == b->group && a->warp == b->warp && a->step == b->step;
 }
 
+double simd_measured(const struct render_result *c, int phase)
+{
+	return c->warp_steps[phase]
+		       ? (double)c->lane_steps[phase] / (SIMD_WARP_WIDTH * (double)c->warp_steps[phase])
+		       : 1.0;
+}
+
 int simd_model_compute(const uint32_t *schedule, const uint64_t *pixel_flops, size_t pixels,
 		       int width, struct simd_model *out)
 {

@@ -8,6 +8,8 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "render/settings.h"
+
 /* The warp width of the model: NVIDIA's warps. */
 #define SIMD_WARP_WIDTH 32
 
@@ -19,6 +21,11 @@ struct simd_model {
 	uint64_t items_used; /* work-items that traced at least one pixel */
 	int width;
 };
+
+/* The measured SIMD efficiency of phase (RT_SIMD_*) of an instrumented run
+ * (docs/RENDERING.md, "SIMD efficiency, measured"): its steps over
+ * SIMD_WARP_WIDTH times its warp-steps; 1 with none. */
+double simd_measured(const struct render_result *counted, int phase);
 
 /* Models `pixels` pixels: schedule holds RT_SCHEDULE_WORDS per pixel (group,
  * item, ticket), pixel_flops one count each; width lanes a warp. Pixels no

@@ -7,13 +7,6 @@
 #include "report/devstats.h"
 #include "report/simd.h"
 
-double report_simd_measured(const struct render_result *c, int phase)
-{
-	return c->warp_steps[phase]
-		       ? (double)c->lane_steps[phase] / (SIMD_WARP_WIDTH * (double)c->warp_steps[phase])
-		       : 1.0;
-}
-
 /* The counting run's SIMD efficiency: measured where the device lets
  * software see it, modelled where the schedule was recorded too. */
 static void print_simd(FILE *out, const struct record *record)
@@ -27,7 +20,7 @@ static void print_simd(FILE *out, const struct record *record)
 		if (!c->warp_steps[p])
 			continue;
 		fprintf(out, "%s%.1f%% in %s", shown++ ? ", " : "",
-			100 * report_simd_measured(c, p), phase[p]);
+			100 * simd_measured(c, p), phase[p]);
 	}
 	if (record->simd.modelled)
 		fprintf(out,

@@ -19,10 +19,6 @@ void report_print_frames(FILE *out, const struct job *job, const struct record *
  * nothing for one device. */
 void report_print_shares(FILE *out, const struct record *record);
 
-/* The measured SIMD efficiency of phase (RT_SIMD_*) of an instrumented run:
- * its steps over SIMD_WARP_WIDTH times its warp-steps; 1 with none. */
-double report_simd_measured(const struct render_result *counted, int phase);
-
 /* -v: where the process's time went, on stderr. */
 void report_print_times(const struct record *record);
 
