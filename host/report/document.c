@@ -175,10 +175,11 @@ json_t *report_document(const struct job *job, const struct record *record)
 	if (job->counting) {
 		const struct render_result *c = &record->counted;
 		json_t *measured = c->simd_measured
-					   ? json_pack("{s:f, s:f}", "intersect",
+					   ? json_pack("{s:f, s:f, s:f}", "intersect",
 						       simd_measured(c, RT_SIMD_INTERSECT),
 						       "traversal",
-						       simd_measured(c, RT_SIMD_TRAVERSAL))
+						       simd_measured(c, RT_SIMD_TRAVERSAL), "both",
+						       simd_measured_all(c))
 					   : json_string("not measurable on this device");
 		json_object_set_new(doc, "simd_efficiency_measured", measured);
 	}

@@ -47,6 +47,17 @@ double simd_measured(const struct render_result *c, int phase)
 		       : 1.0;
 }
 
+double simd_measured_all(const struct render_result *c)
+{
+	double steps = 0, warp_steps = 0;
+
+	for (int phase = 0; phase < RT_SIMD_PHASES; phase++) {
+		steps += (double)c->lane_steps[phase];
+		warp_steps += (double)c->warp_steps[phase];
+	}
+	return warp_steps > 0 ? steps / (SIMD_WARP_WIDTH * warp_steps) : 1.0;
+}
+
 int simd_model_compute(const uint32_t *schedule, const uint64_t *pixel_flops, size_t pixels,
 		       int width, struct simd_model *out)
 {

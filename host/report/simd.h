@@ -27,6 +27,10 @@ struct simd_model {
  * SIMD_WARP_WIDTH times its warp-steps; 1 with none. */
 double simd_measured(const struct render_result *counted, int phase);
 
+/* The measured SIMD efficiency of both phases together: their steps over
+ * SIMD_WARP_WIDTH times their warp-steps; 1 with none. */
+double simd_measured_all(const struct render_result *counted);
+
 /* Models `pixels` pixels: schedule holds RT_SCHEDULE_WORDS per pixel (group,
  * item, ticket), pixel_flops one count each; width lanes a warp. Pixels no
  * work-item started (group all ones) are left out. Returns 0, or -1 when out
