@@ -145,12 +145,40 @@ def test_histogram_is_what_the_figure_draws_of_the_counts(tmp_path, high):
         from_values = figure.add_subplot(1, 2, 1)
         from_values.hist(counts.ravel() / divisor, bins=stored.edges)
         drawn = figure.add_subplot(1, 2, 2)
-        plots._draw_one(drawn, stored)
+        plots._draw_one(drawn, stored, divisor, unit, share=False)
         heights = [patch.get_height() for patch in drawn.patches]
         assert heights == [patch.get_height() for patch in from_values.patches]
         assert heights == stored.counts
     finally:
         plt.close(figure)
+
+
+def test_histograms_of_several_kernels_share_one_unit_and_show_shares(tmp_path):
+    # Figures people can read (issue 25 item 6): one flop unit per figure, the
+    # one that shows the smallest subplot's largest count as 1..999, and with
+    # several kernels each bar a % of its kernel's work-items.
+    small = histogram.histogram_of(flops_file(tmp_path, [[0, 2_000, 4_000, 4_000]]))
+    large = histogram.histogram_of(flops_file(tmp_path, [[0] * 99 + [3_000_000]],
+                                              kernel="persistent"))
+    plt = plots.pyplot()
+    figure = plt.figure()
+    try:
+        plots.draw_histograms(figure, [small, large])
+        axes = figure.axes
+        assert [a.get_xlabel() for a in axes] == ["flops per work-item (kFLOP)"] * 2
+        assert [a.get_ylabel() for a in axes] == ["% of work-items"] * 2
+        for a in axes:
+            assert sum(patch.get_height() for patch in a.patches) == pytest.approx(100)
+        assert axes[1].patches[-1].get_x() + axes[1].patches[-1].get_width() \
+            == pytest.approx(3_000)
+        one = plt.figure()
+        plots.draw_histograms(one, [small])          # one kernel: its counts
+        assert one.axes[0].get_ylabel() == "work-items"
+        assert sum(patch.get_height() for patch in one.axes[0].patches) == 4
+        plt.close(one)
+    finally:
+        plt.close(figure)
+    assert plots.tick_label(1_250_000.0) == "1,250,000" and plots.tick_label(0.5) == "0.5"
 
 
 def test_histogram_survives_json_and_refuses_malformed_data(tmp_path):
@@ -221,10 +249,13 @@ def test_accel_and_scene_reach_every_rtcl_call_and_name_the_folder(tmp_path, fak
 
 def test_default_accel_is_none_in_the_device_folder(tmp_path, fake_rtcl):
     result = run_tool("--rtcl", fake_rtcl, "--quick", "--no-sweep", "--no-serial",
-                      "--no-reference", cwd=tmp_path)
+                      "--no-reference", "--peak-gflops", "500", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     (folder,) = (tmp_path / "rtcl-results").iterdir()
     assert re.fullmatch(r"fake-gpu-\d{8}-\d{6}", folder.name)
+    # The peak is kept for --replot elsewhere, and bounds the kernels in table1.md.
+    assert json.loads((folder / "results.json").read_text())["meta"]["peak"]["gflops"] == 500
+    assert "## Bounds" in (folder / "table1.md").read_text()
     assert f"results in rtcl-results/{folder.name}" in result.stderr
     calls = (fake_rtcl.parent / "calls").read_text().splitlines()
     assert calls and all("--accel none" in call for call in calls)

@@ -49,16 +49,41 @@ def failing_rtcl(tmp_path):
     return fake
 
 
-def replot(folder, rtcl):
+def replot(folder, rtcl, *options):
     return subprocess.run([sys.executable, str(TOOLS / "experiments.py"), "--rtcl", str(rtcl),
-                           "--replot", str(folder)], capture_output=True, text=True,
-                          cwd=ROOT, timeout=300)
+                           "--replot", str(folder), *options], capture_output=True,
+                          text=True, cwd=ROOT, timeout=300)
+
+
+def bounds_rows(markdown):
+    """Returns the Bounds table's rows by their first cell."""
+    return table_rows(markdown.split("## Bounds")[1])
+
+
+def test_replot_bounds_take_the_stored_peak_or_the_one_given(tmp_path, failing_rtcl):
+    folder = tmp_path / "device"
+    folder.mkdir()
+    results = synthetic_results()
+    results["meta"]["peak"] = {"gflops": 100.0, "formula": "stored at measurement"}
+    (folder / "results.json").write_text(json.dumps(results))
+    assert replot(folder, failing_rtcl, "--no-plots").returncode == 0
+    table = (folder / "table1.md").read_text()
+    assert "FP32 peak: stored at measurement" in table
+    # 1 GFLOP at 100 GFLOP/s: 10 ms; cyclic's paper row takes 9.0 ms
+    assert bounds_rows(table)["cyclic"][4] == "10.000"
+    assert replot(folder, failing_rtcl, "--no-plots", "--peak-gflops", "1000").returncode == 0
+    table = (folder / "table1.md").read_text()
+    assert "--peak-gflops 1000" in table and bounds_rows(table)["cyclic"][4] == "1.000"
+    refused = replot(folder, failing_rtcl, "--peak-gflops", "0")
+    assert refused.returncode == 2 and "--peak-gflops 0: expected a positive number" \
+        in refused.stderr
+    assert not (tmp_path / "rtcl-ran").exists()
 
 
 def table_rows(markdown):
     """Returns Table 1's rows by their first cell."""
     rows = {}
-    for line in markdown.split("## Sweep")[0].splitlines():
+    for line in markdown.split("## Bounds")[0].split("## Sweep")[0].splitlines():
         cells = [cell.strip() for cell in line.strip("|").split("|")]
         if line.startswith("|") and not line.startswith("|---"):
             rows[cells[0]] = cells

@@ -402,6 +402,29 @@ def test_simd_cells_read_measured_modelled_and_not_measurable():
     assert table1.used_items_cell({"global_size": [80, 80]}) == "–"
 
 
+def test_bounds_put_each_kernel_between_full_warps_and_the_flop_peak():
+    # Issue 25 item 4: at 100 % SIMD = time x SIMD efficiency (measured, both
+    # phases, where the device measured it; else modelled); flop-peak bound =
+    # GFLOP / peak; the two factors multiply back to the time.
+    run = runner.Run("paper", "naive", "8x8", None, "./rtcl -k naive",
+                     {"kernel_ms": 10.0, "gflop": 2.0,
+                      "simd_efficiency_measured": {"intersect": 0.9, "traversal": 0.6,
+                                                   "both": 0.625},
+                      "simd_efficiency_model": 0.8})
+    row = dict(zip(table1.BOUND_COLUMNS, table1.bound_row(run, 1000.0)))
+    assert row["SIMD efficiency"] == "62.50% (measured)"
+    assert row["at 100 % SIMD ms"] == "6.25"
+    assert row["flop-peak bound ms"] == "2.000"           # 2 GFLOP at 1,000 GFLOP/s
+    assert row["lost to idle lanes"] == "1.60×" and row["lost elsewhere"] == "3.1×"
+    assert row["share of peak"] == "20.00%"
+    run.stats["simd_efficiency_measured"] = "not measurable on this device"
+    row = dict(zip(table1.BOUND_COLUMNS, table1.bound_row(run, None)))
+    assert row["SIMD efficiency"] == "80.00% (modelled)" and row["at 100 % SIMD ms"] == "8.00"
+    assert row["flop-peak bound ms"] == "–" and row["lost elsewhere"] == "–"
+    lines = "\n".join(table1.bounds_lines([run], {"gflops": None, "formula": "unknown: X"}))
+    assert "## Bounds" in lines and "FP32 peak: unknown: X" in lines
+
+
 def test_the_runner_asks_for_a_schedule_map_beside_the_flops(tmp_path):
     settings = runner.Settings("./rtcl", [], 3, tmp_path)
     flops_path = tmp_path / "x.npy"

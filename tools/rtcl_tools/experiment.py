@@ -4,13 +4,14 @@ commands/experiments.py (rtcl-experiments, tools/experiments.py) is its command 
 and its docstring the description.
 """
 
+import argparse
 import dataclasses
 import json
 import pathlib
 import re
 import sys
 
-from . import files, flops, plots, table1
+from . import files, flops, peak, plots, table1
 from .histogram import histogram_from_json, histogram_of
 from .paper import (GROUP_KERNELS, PAPER, PAPER_BATCH, PAPER_GEOMETRY, PARALLEL_KERNELS,
                     QUICK_GROUP_SCALES, QUICK_WORKGROUPS, SWEEP_GROUP_SCALES,
@@ -136,9 +137,21 @@ def results_folder(out, device_name, accel="none", scene=None):
     return pathlib.Path(out) / study_folder(device_name, accel, scene)
 
 
+def study_peak(stats, peak_gflops=None, fma_units=None, cpuinfo=None):
+    """Returns {"gflops", "formula"}: the FP32 peak of the device of stats (peak.py),
+    gflops None when unknown. cpuinfo: /proc/cpuinfo's fields when the device is
+    this machine's CPU, {} otherwise (a stored study replotted elsewhere)."""
+    options = argparse.Namespace(peak_gflops=peak_gflops, fma_units=fma_units)
+    found = peak.find_peak(stats, options, cpuinfo or {})
+    return {"gflops": found.gflops, "formula": found.formula}
+
+
 def study_meta(arguments, stats):
-    """Returns results.json's meta: when and how the study was measured."""
+    """Returns results.json's meta: when and how the study was measured, and the
+    device's FP32 peak (for the bounds table)."""
     return {"commit": git_commit(), "repeat": arguments.repeat, "date": utc_now(),
+            "peak": study_peak(stats, arguments.peak_gflops, arguments.fma_units,
+                               peak.read_cpuinfo()),
             "accel": arguments.accel, "scene": stats["scene"],
             "scene_stem": scene_stem(arguments.scene),
             "size": f"{stats['width']}x{stats['height']}", "depth": stats["max_depth"]}
@@ -205,12 +218,24 @@ def draw_figures(out_dir, runs, meta, no_plots=False):
     plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", context)
     drawn = ["speedup.png"]
     for role, name in (("paper", "histograms.png"), ("best", "histograms_best.png")):
-        histograms = [run.histogram for run in runs if run.role == role and run.histogram]
+        histograms = [with_items_used(run) for run in runs
+                      if run.role == role and run.histogram]
         if histograms:
             title = f"Flops per work-item (Figure 7), {role} geometries: {context}"
             plots.plot_flops_histograms(histograms, out_dir / name, log=True, title=title)
             drawn.append(name)
     return drawn, []
+
+
+def with_items_used(run):
+    """Returns run's histogram, its title also saying how many work-items traced
+    pixels (from the schedule map, where the run recorded one): on a CPU the
+    reason for dynamic's and persistent's near-zero parallel efficiency."""
+    cell = table1.used_items_cell(run.stats)
+    if cell == "–":
+        return run.histogram
+    return dataclasses.replace(run.histogram,
+                               label=f"{run.histogram.label}\n{cell} work-items traced pixels")
 
 
 def load_checked_flops(path):
@@ -307,12 +332,14 @@ def changed_best_geometries(old_runs, new_runs):
             for kernel in old if kernel in new and old[kernel] != new[kernel]]
 
 
-def replot(out_dir, no_plots=False):
+def replot(out_dir, no_plots=False, peak_gflops=None):
     """Rewrites out_dir's table1.md and figures from its results.json.
 
     Runs no rtcl.  Histograms are redrawn from the histograms that results.json
     stores; one written before it stored them leaves histograms*.png as they are.
-    Without matplotlib (or with no_plots) only table1.md is rewritten.  Returns the
+    Without matplotlib (or with no_plots) only table1.md is rewritten.  The bounds
+    use peak_gflops when given, else the peak results.json stores, else the built-in
+    table of GPU peaks.  Returns the
     lines to print: what was rewritten, kept or skipped.  Nothing is written when
     results.json is missing or malformed (ValueError).
     """
@@ -321,6 +348,8 @@ def replot(out_dir, no_plots=False):
     meta, stored = load_results(out_dir / "results.json")
     runs = best_rows_from_sweep(stored)
     meta = dict(meta, regenerated={"date": utc_now(), "commit": git_commit()})
+    if peak_gflops is not None or not isinstance(meta.get("peak"), dict):
+        meta["peak"] = study_peak(table1.device_run(runs).stats, peak_gflops)
     text = table1.render_table1(runs, meta)
     drawn, notes = draw_figures(out_dir, runs, meta, no_plots)
     files.write_text(out_dir / "table1.md", text)

@@ -7,7 +7,7 @@ other parts (and every --help) work without it.
 import math
 
 from . import files
-from .flops import output_format
+from .flops import flop_unit, output_format
 from .histogram import DEFAULT_BINS, Histogram, bin_edges, histogram_of
 from .report import format_number
 
@@ -30,28 +30,37 @@ def pyplot():
 
 
 def draw_histograms(figure, flops_files, *, overlay=False, log=False,
-                    bins=DEFAULT_BINS, title=None):
+                    bins=DEFAULT_BINS, title=None, share=None):
     """Draws one histogram per file onto figure, or all on one axes with overlay.
 
     flops_files: flops.FlopsFile objects, or (without overlay) histogram.Histogram
-    objects, as results.json stores them.  Each subplot gets its own range and flop
-    unit: the paper-geometry kernels give their work-items 1 to ~100 pixels each, so
-    a shared axis would flatten some of them into one bar.  Overlaid histograms
-    share the unit and the bin edges.
+    objects, as results.json stores them.  One flop unit for the whole figure (the
+    one that shows the smallest subplot's largest count as 1 to 999), each subplot
+    over its own range: the paper-geometry kernels give their work-items 1 to ~100 pixels each, so a shared range would
+    flatten some of them into one bar.  share: the y axis in % of each file's
+    work-items, so that kernels of different work-item counts compare; by default
+    when several files share the figure.  Overlaid histograms share the bin edges.
     """
+    if share is None:
+        share = len(flops_files) > 1
+    histograms = [item if isinstance(item, Histogram) else histogram_of(item, bins)
+                  for item in flops_files] if not overlay else None
     if overlay:
         axes = figure.add_subplot(1, 1, 1)
-        _draw_overlay(axes, flops_files, bins)
+        _draw_overlay(axes, flops_files, bins, share)
         axes_list = [axes]
     else:
-        columns = min(len(flops_files), 3)
-        rows = math.ceil(len(flops_files) / columns)
+        # The unit that shows the smallest subplot's largest count as 1..999: no
+        # subplot reads 0.0001; the largest read with thousands separators.
+        divisor, unit = flop_unit(min(histogram.max for histogram in histograms))
+        columns = min(len(histograms), 3)
+        rows = math.ceil(len(histograms) / columns)
         axes_list = [figure.add_subplot(rows, columns, i + 1)
-                     for i in range(len(flops_files))]
-        for axes, item in zip(axes_list, flops_files):
-            _draw_one(axes, item if isinstance(item, Histogram) else histogram_of(item, bins))
+                     for i in range(len(histograms))]
+        for axes, histogram in zip(axes_list, histograms):
+            _draw_one(axes, histogram, divisor, unit, share)
     for axes in axes_list:
-        axes.set_ylabel("work-items")
+        axes.set_ylabel("% of work-items" if share else "work-items")
         if log:
             axes.set_yscale("log")
         axes.legend(fontsize="small")
@@ -59,33 +68,48 @@ def draw_histograms(figure, flops_files, *, overlay=False, log=False,
         figure.suptitle(title)
 
 
-def _draw_one(axes, histogram):
-    """Draws one Histogram with dashed mean and dotted max markers.
+def _draw_one(axes, histogram, divisor, unit, share):
+    """Draws one Histogram in unit (divisor FLOP each) with dashed mean and dotted max
+    markers; share: each bar as a % of the histogram's work-items.
 
     Each bin's count is drawn as the weight of its left edge: the same bars that
     axes.hist of the per-work-item values over these edges draws.
     """
-    edges = histogram.edges
-    axes.hist(edges[:-1], bins=edges, weights=histogram.counts, color="tab:blue")
-    divisor = histogram.divisor
+    edges = [edge * histogram.divisor / divisor for edge in histogram.edges]
+    scale = 100.0 / histogram.work_items if share and histogram.work_items else 1.0
+    axes.hist(edges[:-1], bins=edges, weights=[count * scale for count in histogram.counts],
+              color="tab:blue")
     axes.axvline(histogram.mean / divisor, color="tab:orange", linestyle="--", label="mean")
     axes.axvline(histogram.max / divisor, color="tab:red", linestyle=":", label="max")
     axes.set_title(histogram.label, fontsize="medium")
-    axes.set_xlabel(f"flops per work-item ({histogram.unit})")
+    axes.set_xlabel(f"flops per work-item ({unit})")
+    from matplotlib.ticker import FuncFormatter, MaxNLocator
+    axes.xaxis.set_major_locator(MaxNLocator(5))
+    axes.xaxis.set_major_formatter(FuncFormatter(tick_label))
 
 
-def _draw_overlay(axes, flops_files, bins):
+def tick_label(value, _position=None):
+    """Returns an axis tick's label: thousands separated from 10 on, else 3 digits."""
+    return f"{value:,.0f}" if abs(value) >= 10 else f"{value:.3g}"
+
+
+def _draw_overlay(axes, flops_files, bins, share):
     """Draws every file's histogram as an outline over shared bins."""
     largest = max(int(flops_file.counts.max()) for flops_file in flops_files)
     edges, divisor, unit = bin_edges(largest, bins)
     for flops_file in flops_files:
-        axes.hist(flops_file.counts.ravel() / divisor, bins=edges, histtype="step",
+        values = flops_file.counts.ravel()
+        weights = None
+        if share:
+            import numpy
+            weights = numpy.full(values.size, 100.0 / values.size)
+        axes.hist(values / divisor, bins=edges, weights=weights, histtype="step",
                   linewidth=1.5, label=flops_file.label())
     axes.set_xlabel(f"flops per work-item ({unit})")
 
 
 def plot_flops_histograms(flops_files, out_path, *, overlay=False, log=False,
-                          bins=DEFAULT_BINS, title=None):
+                          bins=DEFAULT_BINS, title=None, share=None):
     """Plots the histograms of flops_files (FlopsFile or Histogram list) into out_path."""
     output_format(out_path)  # fail before drawing anything
     count = len(flops_files)
@@ -98,7 +122,7 @@ def plot_flops_histograms(flops_files, out_path, *, overlay=False, log=False,
     figure = plt.figure(figsize=size, layout="constrained")
     try:
         draw_histograms(figure, flops_files, overlay=overlay, log=log, bins=bins,
-                        title=title)
+                        title=title, share=share)
         files.save_figure(figure, out_path, output_format(out_path))
     finally:
         plt.close(figure)

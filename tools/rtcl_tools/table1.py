@@ -38,6 +38,73 @@ def used_items_cell(stats):
     return f"{used:,} of {width * height:,}"
 
 
+def simd_for_bound(stats):
+    """Returns (SIMD efficiency, where it comes from) for a run's bound: the measured
+    efficiency of both phases together (docs/RENDERING.md) where the device measured
+    it, else the model; (None, None) where neither exists."""
+    measured = stats.get("simd_efficiency_measured")
+    if isinstance(measured, dict) and measured.get("both") is not None:
+        return measured["both"], "measured"
+    if stats.get("simd_efficiency_model") is not None:
+        return stats["simd_efficiency_model"], "modelled"
+    return None, None
+
+
+def bound_row(run, peak_gflops):
+    """Returns the cells of one row of the bounds table (item 4 of issue 25, after
+    Aila & Laine 2009): the time, the time at 100 % SIMD efficiency (time × SIMD
+    efficiency), the counted-flop peak bound (GFLOP / FP32 peak) and the two
+    factors between them: time / SIMD bound (lost to idle lanes) and SIMD bound /
+    peak bound (everything else: memory, uncounted instructions, occupancy)."""
+    stats = run.stats
+    kernel_ms = stats["kernel_ms"]
+    efficiency, source = simd_for_bound(stats)
+    simd_ms = kernel_ms * efficiency if efficiency is not None else None
+    gflop = stats.get("gflop")
+    peak_ms = 1e3 * gflop / peak_gflops if gflop and peak_gflops else None
+    return (implementation_name(run), format_number(kernel_ms, 2),
+            f"{format_percent(efficiency)} ({source})" if source else "–",
+            format_number(simd_ms, 2), format_number(peak_ms, 3),
+            format_number(ratio(kernel_ms, simd_ms), 2, "×"),
+            format_number(ratio(simd_ms, peak_ms), 1, "×"),
+            format_percent(ratio(peak_ms, kernel_ms)))
+
+
+def ratio(numerator, denominator):
+    """Returns numerator / denominator, None when either is unknown or zero."""
+    if not numerator or not denominator:
+        return None
+    return numerator / denominator
+
+
+BOUND_COLUMNS = ("Implementation", "time ms", "SIMD efficiency", "at 100 % SIMD ms",
+                 "flop-peak bound ms", "lost to idle lanes", "lost elsewhere",
+                 "share of peak")
+
+
+def bounds_lines(runs, peak):
+    """Returns the "Bounds" section of table1.md: for each row of Table 1 but the CPU
+    reference, where the kernel stands between the time it would take with every
+    lane of every warp busy and the time its counted flops take at the FP32 peak."""
+    shown = [run for run in table_runs(runs) if run.kernel != "reference"]
+    peak_gflops = peak.get("gflops") if peak else None
+    formula = peak.get("formula") if peak else "unknown (--peak-gflops X gives it)"
+    return ["", "## Bounds", "",
+            "Where each kernel stands between two lower bounds on its time (after Aila "
+            "& Laine 2009): **at 100 % SIMD** = time × SIMD efficiency, the time "
+            "if every lane of every warp-step were busy (measured: both phases, "
+            "intersection and traversal steps, docs/RENDERING.md; else modelled); "
+            "**flop-peak bound** = counted GFLOP / FP32 peak, the time if every lane "
+            "did one counted flop (an FMA two) every cycle. time = flop-peak bound × "
+            "lost elsewhere × lost to idle lanes: *lost to idle lanes* = time / at "
+            "100 % SIMD, what divergence costs; *lost elsewhere* = at 100 % SIMD / "
+            "flop-peak bound: memory waits, instructions the flop count leaves out "
+            "(traversal's integer work, loads), too few work-items in flight. "
+            "Share of peak = flop-peak bound / time.",
+            "", f"- FP32 peak: {formula}", "",
+            markdown_table(BOUND_COLUMNS, [bound_row(run, peak_gflops) for run in shown])]
+
+
 def speedup(baseline_ms, kernel_ms):
     """Returns baseline_ms / kernel_ms, or None when either is unknown or zero."""
     if not baseline_ms or not kernel_ms:
@@ -168,7 +235,8 @@ def render_table1(runs, meta):
              *best_of_sweep_lines(runs), f"- {total_work_line(runs)}",
              *beyond_the_paper_lines(runs), "",
              markdown_table(TABLE_COLUMNS, [table_row(run, serial_ms, reference_ms)
-                                            for run in table_runs(runs)])]
+                                            for run in table_runs(runs)]),
+             *bounds_lines(runs, meta.get("peak"))]
     sweep = [run for run in runs if run.role == "sweep"]
     if sweep:
         lines += ["", "## Sweep", "",

@@ -55,8 +55,14 @@ and `rtcl-experiments --replot DIR` on a machine with matplotlib draws them.
 every figure with the current report code (the best-of-sweep rows taken from the
 stored sweep runs, the table saying when and by which commit it was regenerated).
 A results.json written before it stored histograms leaves histograms*.png as they
-are.  Of the other options only --no-plots and --update-committed (needed to
-redraw committed results) are read.
+are.  Of the other options only --no-plots, --peak-gflops and --update-committed
+(needed to redraw committed results) are read.
+
+table1.md ends with the bounds of each kernel (docs/RENDERING.md): its time at 100 %
+SIMD efficiency and the time its counted flops take at the device's FP32 peak.  The
+peak comes from --peak-gflops, else a built-in table (NVIDIA H100, H200, A100), else,
+for a CPU, /proc/cpuinfo with --fma-units; results.json keeps it, so --replot on
+another machine uses the measuring machine's.
 
     rtcl-experiments -p 0 -d 0                 # the full 2000x2000 experiment
     rtcl-experiments --quick -o quick          # 400x400, a smaller sweep, into quick/
@@ -131,11 +137,19 @@ def parse_arguments(argv):
                              "(as when matplotlib is missing); --replot DIR draws the "
                              "figures later from results.json, on a machine with "
                              "matplotlib")
+    parser.add_argument("--peak-gflops", type=float,
+                        help="the device's FP32 peak in GFLOP/s, for the bounds table "
+                             "(default: NVIDIA H100/H200 and A100 from a built-in table, "
+                             "a CPU from /proc/cpuinfo with --fma-units; with --replot "
+                             "it replaces the stored peak)")
+    parser.add_argument("--fma-units", type=int,
+                        help="FMA units per CPU core, for a CPU's FP32 peak (1 for AMD "
+                             "Zen 4, 2 for most Intel Xeon Gold/Platinum)")
     parser.add_argument("--replot", metavar="DIR",
                         help="run no rtcl: rewrite DIR/table1.md and the figures from "
                              "DIR/results.json with the current report code (histograms "
                              "only where results.json stores them; other options than "
-                             "--no-plots are not read)")
+                             "--no-plots and --peak-gflops are not read)")
     arguments = parser.parse_args(argv)
     if arguments.update_committed and arguments.out is not None:
         parser.error("--update-committed writes into docs/results/<study>: it takes no --out")
@@ -143,6 +157,10 @@ def parse_arguments(argv):
         arguments.size = QUICK_SIZE
     if arguments.repeat < 1:
         parser.error("--repeat must be at least 1")
+    if arguments.peak_gflops is not None and not arguments.peak_gflops > 0:
+        parser.error(f"--peak-gflops {arguments.peak_gflops:g}: expected a positive number")
+    if arguments.fma_units is not None and arguments.fma_units < 1:
+        parser.error(f"--fma-units {arguments.fma_units}: expected a positive integer")
     return arguments
 
 
@@ -166,7 +184,8 @@ def main(argv=None):
     program = program_name()
     with files.committed_files_allowed(arguments.update_committed):
         if arguments.replot is not None:
-            return replot_main(program, arguments.replot, arguments.no_plots)
+            return replot_main(program, arguments.replot, arguments.no_plots,
+                               arguments.peak_gflops)
         return experiment_main(program, arguments)
 
 
@@ -193,10 +212,10 @@ def experiment_main(program, arguments):
     return 0
 
 
-def replot_main(program, out_dir, no_plots):
+def replot_main(program, out_dir, no_plots, peak_gflops=None):
     """--replot: redraws the report of out_dir; returns the exit status."""
     try:
-        notes = replot(out_dir, no_plots)
+        notes = replot(out_dir, no_plots, peak_gflops)
     except (OSError, ValueError, locations.NotFound) as error:
         return report_error(program, one_line(error))
     for note in notes:

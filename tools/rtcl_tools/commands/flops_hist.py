@@ -4,10 +4,11 @@ Reads the per-work-item flop counts that `rtcl --flops FILE.npy` writes (dtype
 '<u8', shape (global_height, global_width), one count per launched work-item,
 0 for work-items given no pixel) and, when present, the sidecar FILE.npy.json
 that names the kernel and geometry.  Each file gets one histogram (or one curve
-of a shared plot with --overlay) titled with its kernel, work-group shape, group
-count and parallel efficiency = mean / max flops per launched work-item
-(docs/RENDERING.md), computed from the counts and cross-checked against the
-sidecar.
+of a shared plot with --overlay), all in one flop unit, titled with its kernel,
+work-group shape, group count and parallel efficiency = mean / max flops per
+launched work-item (docs/RENDERING.md), computed from the counts and
+cross-checked against the sidecar.  With several files the y axis is the % of each file's work-items
+(--counts: the counts themselves), since kernels launch different numbers of them.
 
     rtcl-flops-hist naive.npy cyclic.npy dynamic.npy -o fig7.png --log
     rtcl-flops-hist run.npy --overlay --bins 100 -o run.svg
@@ -42,6 +43,10 @@ def parse_arguments(argv):
     parser.add_argument("-o", "--output", "--out", default="flops_hist.png",
                         help="image to write: .png, .svg or .pdf (default %(default)s)")
     parser.add_argument("--log", action="store_true", help="log-scale work-item counts")
+    parser.add_argument("--counts", action="store_true",
+                        help="draw work-item counts on the y axis; by default, with "
+                             "several files, each bar is a %% of its file's work-items "
+                             "(kernels launch different numbers of them)")
     parser.add_argument("--overlay", action="store_true",
                         help="draw every file on one plot instead of one subplot each")
     parser.add_argument("--bins", type=int, default=DEFAULT_BINS,
@@ -76,4 +81,5 @@ def draw(program, arguments):
             print(f"{program}: warning: {sidecar_path(flops_file.path)}: {problem}",
                   file=sys.stderr)
     plot_flops_histograms(flops_files, arguments.output, overlay=arguments.overlay,
-                          log=arguments.log, bins=arguments.bins, title=arguments.title)
+                          log=arguments.log, bins=arguments.bins, title=arguments.title,
+                          share=False if arguments.counts else None)
