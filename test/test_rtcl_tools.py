@@ -210,6 +210,7 @@ def test_help_needs_no_matplotlib(tmp_path, tool):
     ("flops_hist.py", "matplotlib", ["x.npy"]),
     ("experiments.py", "numpy", ["--quick"]),
     ("genbench.py", "numpy", ["balls", "-o", "out"]),
+    ("maps.py", "matplotlib", ["--work", "x.npy"]),
 ])
 def test_a_missing_module_is_one_line_saying_how_to_install_it(tmp_path, tool, module, args):
     result = subprocess.run([sys.executable, str(ROOT / "tools" / tool), *args],

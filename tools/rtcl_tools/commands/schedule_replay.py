@@ -30,15 +30,12 @@ import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
 from ..report import one_line  # noqa: E402
+from ..schedule import UNSTARTED_GROUP, ScheduleMapError, load_map  # noqa: E402
 from ..usage import add_update_committed, program_name, report_error  # noqa: E402
 
 LABEL_HEIGHT = 16
 GAP = 8
 UNSTARTED = (40, 40, 40)
-
-
-class ScheduleMapError(ValueError):
-    """A schedule map that cannot be read."""
 
 
 def parse_arguments(argv):
@@ -71,19 +68,6 @@ def parse_arguments(argv):
     return arguments
 
 
-def load_map(path):
-    """The (height, width, 3) uint32 array of a schedule map."""
-    try:
-        array = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as error:
-        raise ScheduleMapError(f"{path}: cannot read it as .npy: {one_line(error)}") from None
-    if array.dtype != np.dtype("<u4") or array.ndim != 3 or array.shape[2] != 3:
-        raise ScheduleMapError(f"{path}: not a schedule map (dtype {array.dtype}, shape "
-                               f"{array.shape}; rtcl --schedule-map writes uint32, "
-                               "height x width x 3)")
-    return array
-
-
 def group_colours(groups):
     """rtcl's colour of each work-group (output/schedmap.c): a lowbias32 hash of
     the number, each channel 0.15 + 0.8 of one byte of it; 8-bit, unencoded."""
@@ -96,7 +80,7 @@ def group_colours(groups):
         h = h ^ (h >> 16)
     rgb = np.stack([(h >> (8 * c)) & 0xFF for c in range(3)], axis=-1).astype(np.float64)
     rgb = 0.15 + 0.8 * rgb / 255.0
-    rgb[groups == 0xFFFFFFFF] = 0.0
+    rgb[groups == UNSTARTED_GROUP] = 0.0
     return np.clip(np.rint(rgb * 255), 0, 255).astype(np.uint8)
 
 
