@@ -1,0 +1,84 @@
+"""The measured SIMD efficiency at its two ends (docs/RENDERING.md, "SIMD
+efficiency, measured"): the serial kernel, one lane of 32, is 1/32 in every
+phase; a scene in which every pixel is one miss, with full warps, is 100 %.
+
+Needs an NVIDIA OpenCL device that lets software see its warps (compute
+capability 7.0 or more); skipped elsewhere, which is every CI machine. On a GPU
+machine: `RTCL=path/to/rtcl python3 -m pytest test/test_simd_measured.py`, or
+without pytest `RTCL=... python3 test/test_simd_measured.py` (GPU batch 39 ran it
+so on the H100).
+"""
+import json
+import os
+import pathlib
+import re
+import subprocess
+import sys
+import tempfile
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+EMPTY = str(ROOT / "scenes" / "empty.json")
+
+
+def nvidia_platform():
+    """Returns the index of the NVIDIA platform rtcl lists, or None."""
+    listing = subprocess.run([RTCL, "--list-devices"], capture_output=True, text=True,
+                             timeout=120).stdout
+    match = re.search(r"^Platform #(\d+): .*NVIDIA", listing, re.MULTILINE)
+    return match.group(1) if match else None
+
+
+def measured(platform, *args):
+    """Runs one counting render and returns its simd_efficiency_measured."""
+    with tempfile.TemporaryDirectory() as folder:
+        stats = pathlib.Path(folder) / "stats.json"
+        result = subprocess.run([RTCL, "-p", platform, "-d", "0", *args, "-q", "-o",
+                                 str(pathlib.Path(folder) / "x.ppm"), "--flops",
+                                 str(pathlib.Path(folder) / "f.npy"), "--stats", str(stats)],
+                                capture_output=True, text=True, timeout=600)
+        assert result.returncode == 0, result.stderr
+        return json.loads(stats.read_text())["simd_efficiency_measured"]
+
+
+def check_serial_is_one_lane_of_32(platform):
+    value = measured(platform, "-k", "serial", "--accel", "bvh", "--size", "64x48")
+    assert value == {"intersect": 1 / 32, "traversal": 1 / 32, "both": 1 / 32}, value
+
+
+def check_a_scene_of_misses_keeps_every_lane_busy(platform):
+    # 64x48 pixels in 8x8 work-groups: full warps of 32, each pixel one miss.
+    value = measured(platform, "-k", "naive", "-s", EMPTY, "--size", "64x48", "-w", "8x8")
+    assert value["intersect"] == 1.0, value
+
+
+CHECKS = (check_serial_is_one_lane_of_32, check_a_scene_of_misses_keeps_every_lane_busy)
+
+try:
+    import pytest
+except ImportError:      # run as a script on a GPU machine without pytest
+    pytest = None
+
+if pytest is not None:
+    @pytest.fixture(scope="module")
+    def platform():
+        found = nvidia_platform()
+        if found is None:
+            pytest.skip("needs an NVIDIA OpenCL device (SIMD efficiency is measured "
+                        "only there)")
+        return found
+
+    def test_serial_is_one_lane_of_32(platform):
+        check_serial_is_one_lane_of_32(platform)
+
+    def test_a_scene_of_misses_keeps_every_lane_busy(platform):
+        check_a_scene_of_misses_keeps_every_lane_busy(platform)
+
+
+if __name__ == "__main__":
+    found = nvidia_platform()
+    if found is None:
+        sys.exit("no NVIDIA OpenCL platform: nothing to check")
+    for check in CHECKS:
+        check(found)
+        print(f"passed: {check.__name__}")
