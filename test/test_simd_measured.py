@@ -1,6 +1,7 @@
 """The measured SIMD efficiency at its two ends (docs/RENDERING.md, "SIMD
 efficiency, measured"): the serial kernel, one lane of 32, is 1/32 in every
-phase; a scene in which every pixel is one miss, with full warps, is 100 %.
+phase; a scene in which every pixel is one miss, with full warps, is 100 %; and
+the model's error against it is reported.
 
 Needs an NVIDIA OpenCL device that lets software see its warps (compute
 capability 7.0 or more); skipped elsewhere, which is every CI machine. On a GPU
@@ -29,16 +30,23 @@ def nvidia_platform():
     return match.group(1) if match else None
 
 
-def measured(platform, *args):
-    """Runs one counting render and returns its simd_efficiency_measured."""
+def counted(platform, *args):
+    """Runs one counting render with a schedule map; returns (its --stats, its
+    summary)."""
     with tempfile.TemporaryDirectory() as folder:
-        stats = pathlib.Path(folder) / "stats.json"
-        result = subprocess.run([RTCL, "-p", platform, "-d", "0", *args, "-q", "-o",
-                                 str(pathlib.Path(folder) / "x.ppm"), "--flops",
-                                 str(pathlib.Path(folder) / "f.npy"), "--stats", str(stats)],
+        folder = pathlib.Path(folder)
+        result = subprocess.run([RTCL, "-p", platform, "-d", "0", *args, "-o",
+                                 str(folder / "x.ppm"), "--flops", str(folder / "f.npy"),
+                                 "--schedule-map", str(folder / "s.npy"), "--stats",
+                                 str(folder / "stats.json")],
                                 capture_output=True, text=True, timeout=600)
         assert result.returncode == 0, result.stderr
-        return json.loads(stats.read_text())["simd_efficiency_measured"]
+        return json.loads((folder / "stats.json").read_text()), result.stdout
+
+
+def measured(platform, *args):
+    """Runs one counting render and returns its simd_efficiency_measured."""
+    return counted(platform, *args)[0]["simd_efficiency_measured"]
 
 
 def check_serial_is_one_lane_of_32(platform):
@@ -52,7 +60,17 @@ def check_a_scene_of_misses_keeps_every_lane_busy(platform):
     assert value["intersect"] == 1.0, value
 
 
-CHECKS = (check_serial_is_one_lane_of_32, check_a_scene_of_misses_keeps_every_lane_busy)
+def check_the_model_reports_its_error(platform):
+    stats, summary = counted(platform, "-k", "dynamic", "--accel", "bvh", "--size", "96x64")
+    both = stats["simd_efficiency_measured"]["both"]
+    error = stats["simd_efficiency_model"] - both
+    assert abs(stats["simd_model_error"] - error) < 1e-9, stats
+    assert f"{100 * both:.1f}% in both" in summary, summary
+    assert f"; {100 * error:+.1f} points from the measured)" in summary, summary
+
+
+CHECKS = (check_serial_is_one_lane_of_32, check_a_scene_of_misses_keeps_every_lane_busy,
+          check_the_model_reports_its_error)
 
 try:
     import pytest
@@ -73,6 +91,9 @@ if pytest is not None:
 
     def test_a_scene_of_misses_keeps_every_lane_busy(platform):
         check_a_scene_of_misses_keeps_every_lane_busy(platform)
+
+    def test_the_model_reports_its_error(platform):
+        check_the_model_reports_its_error(platform)
 
 
 if __name__ == "__main__":

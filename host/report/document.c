@@ -185,6 +185,10 @@ json_t *report_document(const struct job *job, const struct record *record)
 	}
 	if (record->simd.modelled) {
 		json_object_set_new(doc, "simd_efficiency_model", json_real(record->simd.efficiency));
+		if (record->counted.simd_measured)
+			json_object_set_new(doc, "simd_model_error",
+					    json_real(record->simd.efficiency -
+						      simd_measured_all(&record->counted)));
 		json_object_set_new(doc, "warp_width", json_integer(record->simd.warp_width));
 		json_object_set_new(doc, "warp_steps",
 				    json_integer((json_int_t)record->simd.warp_steps));

@@ -22,15 +22,19 @@ static void print_simd(FILE *out, const struct record *record)
 		fprintf(out, "%s%.1f%% in %s", shown++ ? ", " : "",
 			100 * simd_measured(c, p), phase[p]);
 	}
-	if (record->simd.modelled)
-		fprintf(out,
-			"; modelled %.1f%% (warps of %d in lock-step, %llu warp-steps); %llu of %zu "
-			"work-items traced pixels\n",
+	if (c->simd_measured)
+		fprintf(out, ", %.1f%% in both", 100 * simd_measured_all(c));
+	if (record->simd.modelled) {
+		fprintf(out, "; modelled %.1f%% (warps of %d in lock-step, %llu warp-steps",
 			100 * record->simd.efficiency, record->simd.warp_width,
-			(unsigned long long)record->simd.warp_steps,
+			(unsigned long long)record->simd.warp_steps);
+		if (c->simd_measured)
+			fprintf(out, "; %+.1f points from the measured",
+				100 * (record->simd.efficiency - simd_measured_all(c)));
+		fprintf(out, "); %llu of %zu work-items traced pixels\n",
 			(unsigned long long)record->simd.items_used,
 			c->global_size[0] * c->global_size[1]);
-	else
+	} else
 		fprintf(out, "; modelled with --schedule-map\n");
 }
 

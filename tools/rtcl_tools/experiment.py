@@ -218,7 +218,7 @@ def draw_figures(out_dir, runs, meta, no_plots=False):
     plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", context)
     drawn = ["speedup.png"]
     for role, name in (("paper", "histograms.png"), ("best", "histograms_best.png")):
-        histograms = [with_items_used(run) for run in runs
+        histograms = [figure_histogram(run) for run in runs
                       if run.role == role and run.histogram]
         if histograms:
             title = f"Flops per work-item (Figure 7), {role} geometries: {context}"
@@ -227,15 +227,22 @@ def draw_figures(out_dir, runs, meta, no_plots=False):
     return drawn, []
 
 
-def with_items_used(run):
-    """Returns run's histogram, its title also saying how many work-items traced
-    pixels (from the schedule map, where the run recorded one): on a CPU the
-    reason for dynamic's and persistent's near-zero parallel efficiency."""
-    cell = table1.used_items_cell(run.stats)
-    if cell == "–":
+def figure_histogram(run):
+    """Returns run's histogram, its title also giving the run's SIMD efficiency
+    (table1.simd_cells: measured, intersection / traversal, and modelled) and how
+    many work-items traced pixels (from the schedule map): on a CPU the reason for
+    dynamic's and persistent's near-zero parallel efficiency."""
+    measured, modelled = table1.simd_cells(run.stats)
+    lines = []
+    if (measured, modelled) != ("–", "–"):
+        lines.append(f"SIMD efficiency measured {measured}, modelled {modelled}")
+    used = table1.used_items_cell(run.stats)
+    if used != "–":
+        lines.append(f"{used} work-items traced pixels")
+    if not lines:
         return run.histogram
     return dataclasses.replace(run.histogram,
-                               label=f"{run.histogram.label}\n{cell} work-items traced pixels")
+                               label="\n".join([run.histogram.label, *lines]))
 
 
 def load_checked_flops(path):
