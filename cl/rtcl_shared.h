@@ -173,18 +173,20 @@ struct rt_bvh_node {
 #define RT_BVH_MAX_DEPTH 64
 
 /* Counts per launched work-item in the counting build: flops, rays, BVH
- * node visits, then, measured on NVIDIA devices (RTCL_SIMD_MEASURE,
+ * node visits, leaf visits and primitive tests in those leaves, then, measured on NVIDIA devices (RTCL_SIMD_MEASURE,
  * docs/RENDERING.md "SIMD efficiency, measured"; 0 elsewhere), for each
  * phase the steps this work-item took and the warp-steps it led. */
 #define RT_ITEM_FLOPS 0
 #define RT_ITEM_RAYS 1
 #define RT_ITEM_NODE_VISITS 2
+#define RT_ITEM_LEAF_VISITS 3
+#define RT_ITEM_PRIM_TESTS 4
 #define RT_SIMD_PHASES 2 /* RT_SIMD_INTERSECT, RT_SIMD_TRAVERSAL */
 #define RT_SIMD_INTERSECT 0 /* a ray or shadow ray's intersection and shading step */
 #define RT_SIMD_TRAVERSAL 1 /* an iteration of the BVH traversal loop */
-#define RT_ITEM_LANE_STEPS(phase) (3 + 2 * (phase))
-#define RT_ITEM_WARP_STEPS(phase) (4 + 2 * (phase))
-#define RT_ITEM_COUNTS (3 + 2 * RT_SIMD_PHASES)
+#define RT_ITEM_LANE_STEPS(phase) (5 + 2 * (phase))
+#define RT_ITEM_WARP_STEPS(phase) (6 + 2 * (phase))
+#define RT_ITEM_COUNTS (5 + 2 * RT_SIMD_PHASES)
 
 /* The probe buffer of the single-pass kernels: with RTCL_COUNT_WRITES (the
  * tests), one write count per pixel; with RTCL_SCHEDULE_MAP (--schedule-map,

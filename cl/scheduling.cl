@@ -42,6 +42,8 @@ static void store_counts(struct tracer *tr, uint item)
 	counts[RT_ITEM_FLOPS] = tr->flops;
 	counts[RT_ITEM_RAYS] = tr->rays;
 	counts[RT_ITEM_NODE_VISITS] = tr->node_visits;
+	counts[RT_ITEM_LEAF_VISITS] = tr->leaf_visits;
+	counts[RT_ITEM_PRIM_TESTS] = tr->prim_tests;
 	for (int p = 0; p < RT_SIMD_PHASES; p++) {
 #ifdef RTCL_SIMD_MEASURE
 		counts[RT_ITEM_LANE_STEPS(p)] = tr->lane_steps[p];

@@ -65,10 +65,14 @@
 #define COUNT_FLOPS(tr, n) ((tr)->flops += (n))
 #define COUNT_RAY(tr) ((tr)->rays++)
 #define COUNT_NODE_VISIT(tr) ((tr)->node_visits++)
+#define COUNT_LEAF_VISIT(tr) ((tr)->leaf_visits++)
+#define COUNT_PRIM_TEST(tr) ((tr)->prim_tests++)
 #else
 #define COUNT_FLOPS(tr, n) ((void)0)
 #define COUNT_RAY(tr) ((void)0)
 #define COUNT_NODE_VISIT(tr) ((void)0)
+#define COUNT_LEAF_VISIT(tr) ((void)0)
+#define COUNT_PRIM_TEST(tr) ((void)0)
 #endif
 
 /* SIMD efficiency, measured (RTCL_SIMD_MEASURE: the counting build on an
@@ -166,6 +170,8 @@ struct tracer {
 	ulong flops;
 	ulong rays;	   /* primary, secondary and shadow rays traced */
 	ulong node_visits; /* BVH nodes visited, every ray's */
+	ulong leaf_visits; /* BVH leaves visited, every ray's */
+	ulong prim_tests;  /* spheres and triangles tested in the leaves visited */
 #endif
 #ifdef RTCL_SIMD_MEASURE
 	ulong lane_steps[RT_SIMD_PHASES]; /* steps this work-item took */
@@ -251,6 +257,8 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 	tr->flops = 0;
 	tr->rays = 0;
 	tr->node_visits = 0;
+	tr->leaf_visits = 0;
+	tr->prim_tests = 0;
 #endif
 #ifdef RTCL_SIMD_MEASURE
 	for (int p = 0; p < RT_SIMD_PHASES; p++)

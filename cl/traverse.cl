@@ -58,6 +58,7 @@ static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float 
 static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
 			   int first, int count, bool any_hit, float *nearest, struct hit *best)
 {
+	COUNT_LEAF_VISIT(tr);
 	if (count & RT_LEAF_SPHERES) {
 		int end = first + (count & RT_LEAF_COUNT_MASK);
 		for (int i = first; i < end; i++) {
@@ -65,6 +66,7 @@ static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, flo
 				return;
 			float4 s = tr->spheres[i].center;
 			float gap = sphere_gap(s, frame);
+			COUNT_PRIM_TEST(tr);
 			COUNT_FLOPS(tr, FLOPS_SPHERE_GAP);
 			sphere_consider(tr, s, gap, o, d, i, any_hit, nearest, best);
 		}
@@ -76,6 +78,7 @@ static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, flo
 		uint ref = tr->refs[k];
 		int index = (int)(ref & RT_PRIM_INDEX_MASK);
 
+		COUNT_PRIM_TEST(tr);
 		if (SCENE_HAS_TRIANGLES && ref >> RT_PRIM_KIND_SHIFT == RT_PRIM_TRIANGLE) {
 			triangle_consider(tr, index, o, d, any_hit, nearest, best);
 			continue;

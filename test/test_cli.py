@@ -476,11 +476,16 @@ def test_accel_bvh_is_the_default_and_matches_none(tmp_path):
         if stats["accel"] == "bvh":
             assert stats["bvh"]["nodes"] == 16 and stats["bvh"]["depth"] >= 4
             assert stats["node_visits"] > 0 and stats["node_visits_per_ray"] > 1
+            # Each leaf visited tests at least one sphere.
+            assert 0 < stats["leaf_visits"] <= stats["primitive_tests"]
+            assert stats["primitive_tests_per_ray"] == pytest.approx(
+                stats["primitive_tests"] / stats["rays"])
             assert "rtcl: BVH of 60 spheres and 0 triangles: 16 nodes" in result.stderr
             assert "-DRTCL_BVH" in stats["build_options"]
             assert "BVH node visits" in result.stdout
         else:
             assert "bvh" not in stats and stats["node_visits"] == 0
+            assert stats["leaf_visits"] == stats["primitive_tests"] == 0
             assert "-DRTCL_BVH" not in stats["build_options"]
             assert "BVH" not in result.stderr + result.stdout
     assert images["bvh"] == images["none"] == images["default"]

@@ -62,6 +62,8 @@ static const char test_kernels[] =
 	"	out[0] = tr.flops;\n"
 	"	out[1] = as_uint(hit.t);\n"
 	"	out[2] = tr.node_visits;\n"
+	"	out[3] = tr.leaf_visits;\n"
+	"	out[4] = tr.prim_tests;\n"
 	"}\n"
 	"__kernel void count_plane(__global const uint4 *scene, __global ulong *out,"
 	"                          float4 o, float4 d)\n"
@@ -121,6 +123,7 @@ struct fixture {
 	cl_program program;
 	cl_mem scene_buffer, out;
 	cl_ulong node_visits; /* what count_sphere counted, by run_kernel */
+	cl_ulong leaf_visits, prim_tests;
 };
 
 /* Builds the test kernels over the scene json, with its BVH and RTCL_BVH
@@ -188,7 +191,7 @@ static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4]
 	cl_int status;
 	cl_kernel kernel = clCreateKernel(f->program, name, &status);
 	size_t one = 1;
-	cl_ulong out[3];
+	cl_ulong out[5];
 	/* A ray's origin, given in world coordinates here, goes in the device's:
 	 * relative to the eye (scene_from_eye). */
 	int a_is_origin = strcmp(name, "count_triangle_normal") != 0 &&
@@ -211,6 +214,8 @@ static cl_ulong run_kernel(struct fixture *f, const char *name, const float a[4]
 	cr_assert_eq(status, CL_SUCCESS);
 	clReleaseKernel(kernel);
 	f->node_visits = out[2];
+	f->leaf_visits = out[3];
+	f->prim_tests = out[4];
 	uint32_t bits = (uint32_t)out[1];
 	memcpy(result, &bits, sizeof(*result));
 	return out[0];
@@ -262,12 +267,16 @@ Test(flops, ray_box_test)
 	 * parallel (5). 23 + 6 + 48 + 66 + 5 = 148, one node visit, t = 4. */
 	cr_expect_eq(run_kernel(&f, "count_sphere", eye, down_axis, &t), 148);
 	cr_expect_eq(f.node_visits, 1);
+	cr_expect_eq(f.leaf_visits, 2); /* the same leaf, from both children */
+	cr_expect_eq(f.prim_tests, 2);
 	cr_expect_float_eq(t, 4.0f, 1e-6f);
 	/* Up the y axis, beside the box in z (the z slab's 0 · inf is NaN or
 	 * -inf, which the min and max pass over): 23 + 6 + 48, no leaf; the
 	 * plane behind (12). 89, t = 0. */
 	cr_expect_eq(run_kernel(&f, "count_sphere", eye, up, &t), 89);
 	cr_expect_eq(f.node_visits, 1);
+	cr_expect_eq(f.leaf_visits, 0);
+	cr_expect_eq(f.prim_tests, 0);
 	cr_expect_eq(t, 0.0f);
 	teardown(&f);
 }

@@ -109,7 +109,8 @@ def test_bvh_counts_add_up_over_two_devices(tmp_path):
                                 env={**os.environ, **(env or {})})
         assert result.returncode == 0, result.stderr
         runs[name] = json.loads((tmp_path / f"{name}.json").read_text())
-    assert runs["two"]["node_visits"] == runs["one"]["node_visits"] > 0
+    for count in ("node_visits", "leaf_visits", "primitive_tests"):
+        assert runs["two"][count] == runs["one"][count] > 0
     assert runs["two"]["total_flops"] == runs["one"]["total_flops"]
     assert runs["two"]["bvh"]["nodes"] == runs["one"]["bvh"]["nodes"] > 0
     assert (tmp_path / "two.ppm").read_bytes() == (tmp_path / "one.ppm").read_bytes()

@@ -29,6 +29,8 @@ void record_count_flops(struct record *record)
 
 	flop_summary_compute(&record->flops, c->item_flops, c->item_count, c->total_rays);
 	record->flops.node_visits = c->total_node_visits;
+	record->flops.leaf_visits = c->total_leaf_visits;
+	record->flops.prim_tests = c->total_prim_tests;
 }
 
 void record_device(struct record *record, const struct device *dev)

@@ -17,6 +17,8 @@ struct flop_summary {
 	double parallel_efficiency; /* mean / max */
 	uint64_t rays;
 	uint64_t node_visits; /* BVH nodes visited by all rays (0: --accel none) */
+	uint64_t leaf_visits; /* BVH leaves visited by all rays */
+	uint64_t prim_tests;  /* spheres and triangles tested in those leaves */
 };
 
 /* The device that rendered, as the summary and --stats name it. */

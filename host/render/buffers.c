@@ -62,11 +62,13 @@ cl_int buffers_add_item_counts(struct device *dev, struct render_buffers *b, cl_
 	for (size_t i = 0; status == CL_SUCCESS && i < items; i++) {
 		const cl_ulong *c = counts + RT_ITEM_COUNTS * i;
 		flops[i] += c[RT_ITEM_FLOPS];
-		b->rays += c[RT_ITEM_RAYS];
-		b->node_visits += c[RT_ITEM_NODE_VISITS];
+		b->counts.rays += c[RT_ITEM_RAYS];
+		b->counts.node_visits += c[RT_ITEM_NODE_VISITS];
+		b->counts.leaf_visits += c[RT_ITEM_LEAF_VISITS];
+		b->counts.prim_tests += c[RT_ITEM_PRIM_TESTS];
 		for (int p = 0; p < RT_SIMD_PHASES; p++) {
-			b->lane_steps[p] += c[RT_ITEM_LANE_STEPS(p)];
-			b->warp_steps[p] += c[RT_ITEM_WARP_STEPS(p)];
+			b->counts.lane_steps[p] += c[RT_ITEM_LANE_STEPS(p)];
+			b->counts.warp_steps[p] += c[RT_ITEM_WARP_STEPS(p)];
 		}
 	}
 	free(counts);
@@ -86,12 +88,14 @@ static cl_int read_counts(struct device *dev, const struct render_settings *s,
 	res->total_flops = 0;
 	for (size_t i = 0; i < res->item_count; i++)
 		res->total_flops += res->item_flops[i];
-	res->total_rays = b->rays;
-	res->total_node_visits = b->node_visits;
+	res->total_rays = b->counts.rays;
+	res->total_node_visits = b->counts.node_visits;
+	res->total_leaf_visits = b->counts.leaf_visits;
+	res->total_prim_tests = b->counts.prim_tests;
 	res->simd_measured = dev->simd_measurable; /* the counting build measured */
 	for (int p = 0; p < RT_SIMD_PHASES; p++) {
-		res->lane_steps[p] = b->lane_steps[p];
-		res->warp_steps[p] = b->warp_steps[p];
+		res->lane_steps[p] = b->counts.lane_steps[p];
+		res->warp_steps[p] = b->counts.warp_steps[p];
 	}
 	return clEnqueueReadBuffer(dev->queue, b->flops, CL_TRUE, 0, pixel_flops_bytes(s),
 				   res->pixel_flops, 0, NULL, NULL);

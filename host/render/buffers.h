@@ -9,6 +9,13 @@
 #include "render/checks.h"
 #include "render/probe.h"
 
+/* What the counting build counts per work-item besides its flops
+ * (RT_ITEM_*), summed. */
+struct trace_counts {
+	uint64_t rays, node_visits, leaf_visits, prim_tests;
+	uint64_t lane_steps[RT_SIMD_PHASES], warp_steps[RT_SIMD_PHASES]; /* simd_measured */
+};
+
 struct render_buffers {
 	cl_program program;
 	void *scene_block; /* the packed scene (launch_setup) */
@@ -18,8 +25,7 @@ struct render_buffers {
 	cl_mem probe;	      /* write counts or the schedule map (probe.h) */
 	uint64_t *item_flops; /* per work-item, as the renderer lays them out */
 	size_t item_count;
-	uint64_t rays, node_visits;
-	uint64_t lane_steps[RT_SIMD_PHASES], warp_steps[RT_SIMD_PHASES]; /* simd_measured */
+	struct trace_counts counts; /* summed over every work-item read back */
 };
 
 /* Creates the scene buffer from b->scene_block, the image, the flop-count

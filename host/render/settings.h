@@ -94,6 +94,8 @@ struct render_result {
 	uint64_t *pixel_flops; /* per pixel, row-major */
 	uint64_t total_flops, total_rays;
 	uint64_t total_node_visits; /* BVH nodes visited by every ray */
+	uint64_t total_leaf_visits; /* BVH leaves visited by every ray */
+	uint64_t total_prim_tests;  /* spheres and triangles tested in them */
 	/* SIMD steps, measured (simd_measured: RT_SIMD_* phases): the steps every
 	 * work-item took, and the warp-steps (docs/RENDERING.md). */
 	int simd_measured;

@@ -253,7 +253,7 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 	size_t local_bytes =
 		r->result->scene_in_local ? r->result->scene_bytes : UNUSED_BUFFER_BYTES;
 	size_t items_before = w->b.item_count;
-	uint64_t rays_before = w->b.rays, visits_before = w->b.node_visits;
+	struct trace_counts counts_before = w->b.counts;
 
 	for (;;) {
 		double attempt = 0;
@@ -272,8 +272,7 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 					w->capacity, 2 * w->capacity);
 			w->capacity *= 2;
 			w->b.item_count = items_before;
-			w->b.rays = rays_before;
-			w->b.node_visits = visits_before;
+			w->b.counts = counts_before;
 			if (create_queues(r->dev, r->settings, w, err, err_size))
 				return -1;
 			continue;

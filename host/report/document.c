@@ -33,6 +33,12 @@ static void add_flop_figures(json_t *doc, const struct record *record)
 	json_object_set_new(doc, "node_visits", json_integer((json_int_t)f->node_visits));
 	json_object_set_new(doc, "node_visits_per_ray",
 			    json_real(f->rays ? (double)f->node_visits / f->rays : 0.0));
+	json_object_set_new(doc, "leaf_visits", json_integer((json_int_t)f->leaf_visits));
+	json_object_set_new(doc, "leaf_visits_per_ray",
+			    json_real(f->rays ? (double)f->leaf_visits / f->rays : 0.0));
+	json_object_set_new(doc, "primitive_tests", json_integer((json_int_t)f->prim_tests));
+	json_object_set_new(doc, "primitive_tests_per_ray",
+			    json_real(f->rays ? (double)f->prim_tests / f->rays : 0.0));
 }
 
 /* --accel and, with a BVH, its size and build. */

@@ -71,9 +71,13 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 		fprintf(out, "rays:    %llu (primary, secondary and shadow), %.1f Mrays/s\n",
 		       (unsigned long long)f->rays, f->rays * 1e-3 / r->kernel_ms_median);
 		if (s->accel == ACCEL_BVH)
-			fprintf(out, "nodes:   %llu BVH node visits, %.2f per ray\n",
-			       (unsigned long long)f->node_visits,
-			       f->rays ? (double)f->node_visits / f->rays : 0.0);
+			fprintf(out,
+				"nodes:   %llu BVH node visits, %.2f per ray; %.2f leaf visits and "
+				"%.2f sphere and triangle tests per ray\n",
+				(unsigned long long)f->node_visits,
+				f->rays ? (double)f->node_visits / f->rays : 0.0,
+				f->rays ? (double)f->leaf_visits / f->rays : 0.0,
+				f->rays ? (double)f->prim_tests / f->rays : 0.0);
 	}
 	if (job->counting)
 		print_simd(out, record);

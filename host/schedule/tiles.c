@@ -359,6 +359,8 @@ static int join_item_counts(const struct tiles_job *t, struct render_result *out
 		out->total_flops += r->total_flops;
 		out->total_rays += r->total_rays;
 		out->total_node_visits += r->total_node_visits;
+		out->total_leaf_visits += r->total_leaf_visits;
+		out->total_prim_tests += r->total_prim_tests;
 		out->simd_measured |= r->simd_measured;
 		for (int p = 0; p < RT_SIMD_PHASES; p++) {
 			out->lane_steps[p] += r->lane_steps[p];
