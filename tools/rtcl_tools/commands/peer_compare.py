@@ -18,12 +18,22 @@ GPU kernels. For every mesh this tool
      compare.csv, and keeps every raw output under raw/.
 
 It runs where the GPU is (NVIDIA's OpenCL; the peer's kernels do not build on
-PoCL) and needs g++ and the OpenCL headers there to build `side`. It writes to
+PoCL) and needs g++ and the OpenCL headers there to build `side`.
+
+--counts counts instead of timing, on any machine and any OpenCL device (PoCL
+too): for every mesh, rtcl's counting build (--flops) gives its BVH node
+visits, leaf visits and sphere and triangle tests per ray, and peer_counts.cpp,
+built here against the peer's tiny_bvh.h, traces the same rays on the host
+through the peer's BVH_GPU layout (its fastest GPU kernel's), built HQ and SAH
+as `side` builds them, counting its loop iterations (interior nodes and leaves)
+and triangle tests per ray. counts.md sets them side by side: where the two
+traversals differ in work, before any difference in speed. It writes to
 -o/--out DIR, by default a new folder rtcl-results/peer-<YYYYmmdd-HHMMSS>; a
 file tracked by git is replaced only with --update-committed.
 
     rtcl-peer-compare ../shared/bench/tinybvh --meshes tetra:8,mount:9,lake -r 10
     rtcl-peer-compare PEER --ply bunny.ply --size 1000x1000
+    rtcl-peer-compare PEER --counts -o counts      # work per ray, no GPU needed
 """
 import argparse
 import json
@@ -43,6 +53,9 @@ from ..usage import (UsageError, add_rtcl_option, add_update_committed, check_po
 DEFAULT_MESHES = "tetra:8,mount:8,mount:9,lake"
 BACKGROUND = (1, 0, 1)
 PEER_SOURCES = ("side.cpp", "tiny_bvh.h", "tiny_ocl.h", "ply2bin.py")
+COUNTER_SOURCE = pathlib.Path(__file__).resolve().parent.parent / "peer_counts.cpp"
+COUNTS_LINE = re.compile(r"^(BVH_GPU \w+): iterations per ray ([\d.]+), triangle tests per "
+                         r"ray ([\d.]+), hits (\d+), nodes (\d+), build ms ([\d.]+)")
 CSV_COLUMNS = ("mesh", "triangles", "side", "kernel", "median_ms", "min_ms", "grays_per_s")
 
 
@@ -72,7 +85,11 @@ def parse_arguments(argv):
                         help="the peer's kernels: letters of side.cpp (default aA: "
                              "BVH_GPU built HQ and SAH)")
     add_rtcl_option(parser)
-    parser.add_argument("-p", "--platform", help="rtcl's OpenCL platform (default: NVIDIA's)")
+    parser.add_argument("-p", "--platform", help="rtcl's OpenCL platform (default: NVIDIA's; "
+                                                 "with --counts, rtcl's default device)")
+    parser.add_argument("--counts", action="store_true",
+                        help="count node visits and triangle tests per ray on both sides "
+                             "instead of timing (counts.md); runs on any machine")
     parser.add_argument("-o", "--out", type=pathlib.Path, metavar="DIR",
                         help="results folder (default: a new rtcl-results/peer-<time>)")
     add_update_committed(parser)
@@ -200,6 +217,107 @@ def time_peer(side_folder, bin_path, scene, width, height, repeat, variants, out
     return triangles, rows
 
 
+def build_counter(peer, out):
+    """Builds peer_counts against the peer's tiny_bvh.h; returns its path."""
+    if not (peer / "tiny_bvh.h").is_file():
+        raise Failure(f"{peer} is not the peer's folder: no tiny_bvh.h")
+    program = out / "peer" / "peer_counts"
+    program.parent.mkdir(parents=True, exist_ok=True)
+    run(["g++", "-O3", "-march=native", "-std=c++20", "-I", peer, COUNTER_SOURCE, "-o",
+         program, "-lpthread"], out / "raw" / "build-peer-counts.txt")
+    return program
+
+
+def mesh_scenes(args, out, width, height):
+    """Yields (name, .bin path, scene dict, primary-ray scene path) for every mesh."""
+    meshes = [genbench_mesh(spec, out) for spec in args.meshes.split(",") if spec]
+    for ply in args.ply:
+        if not ply.is_file():
+            raise Failure(f"--ply {ply}: no such file")
+    for name, ply, scene in meshes + [(ply.stem, ply, None) for ply in args.ply]:
+        bin_path = out / "meshes" / f"{name}.bin"
+        run([sys.executable, args.peer / "ply2bin.py", ply, bin_path],
+            out / "raw" / f"ply2bin-{name}.txt")
+        if scene is None:
+            scene = framing_scene(ply, bin_path)
+        scene_path = out / "meshes" / f"{name}-primary.json"
+        files.write_text(scene_path, json.dumps(primary_scene(scene, ply, width, height),
+                                                indent=1))
+        yield name, bin_path, scene, scene_path
+
+
+def count_rtcl(rtcl, platform, scene_path, out, name):
+    """rtcl's counting run of the persistent kernel: its --stats."""
+    stats = out / "raw" / f"rtcl-counts-{name}.json"
+    device = ["-p", platform] if platform else []
+    run([rtcl, "-q", *device, "-k", "persistent", scene_path, "-o",
+         out / "meshes" / f"rtcl-counts-{name}.ppm", "--flops", out / "meshes" / "f.npy",
+         "--stats", stats], out / "raw" / f"rtcl-counts-{name}.txt")
+    (out / "meshes" / "f.npy").unlink(missing_ok=True)
+    (out / "meshes" / "f.npy.json").unlink(missing_ok=True)
+    return json.loads(stats.read_text())
+
+
+def count_peer(program, bin_path, scene, width, height, out, name):
+    """The peer's counts: {build: (iterations, tests, hits, nodes, build ms)}."""
+    camera = scene["camera"]
+    output = run([program, bin_path.resolve(), width, height, *camera["eye"],
+                  *camera["look_at"], camera.get("fov", 45), *camera.get("up", [0, 1, 0])],
+                 out / "raw" / f"peer-counts-{name}.txt")
+    found = {}
+    for line in output.splitlines():
+        match = COUNTS_LINE.match(line)
+        if match:
+            found[match.group(1)] = (float(match.group(2)), float(match.group(3)),
+                                     int(match.group(4)), int(match.group(5)),
+                                     float(match.group(6)))
+    if not found:
+        raise Failure(f"peer_counts printed no counts ({out / 'raw' / f'peer-counts-{name}.txt'})")
+    found["triangles"] = int(re.search(r"triangles (\d+)", output).group(1))
+    return found
+
+
+def counts(args, rtcl, out):
+    """--counts: work per ray on both sides, into counts.md."""
+    width, height = args.size
+    program = build_counter(args.peer, out)
+    rows = []
+    for name, bin_path, scene, scene_path in mesh_scenes(args, out, width, height):
+        stats = count_rtcl(rtcl, args.platform, scene_path, out, name)
+        peer = count_peer(program, bin_path, scene, width, height, out, name)
+        nodes, leaves = stats["node_visits_per_ray"], stats["leaf_visits_per_ray"]
+        hq = peer["BVH_GPU HQ"]
+        sah = peer.get("BVH_GPU SAH", (None,) * 5)
+        rows.append((name, f"{peer['triangles']:,}", f"{nodes:.2f}", f"{leaves:.2f}", f"{nodes + leaves:.2f}",
+                     f"{stats['primitive_tests_per_ray']:.2f}",
+                     f"{hq[0]:.2f}", f"{hq[1]:.2f}",
+                     f"{sah[0]:.2f}" if sah[0] is not None else "–",
+                     f"{sah[1]:.2f}" if sah[1] is not None else "–",
+                     f"{(nodes + leaves) / hq[0]:.2f}", f"{stats['primitive_tests_per_ray'] / hq[1]:.2f}"
+                     if hq[1] else "–",
+                     f"{stats['bvh']['nodes']:,} / {hq[3]:,}",
+                     f"{stats['bvh']['build_ms']:.0f} / {hq[4]:.0f}"))
+        print(f"{name}: rtcl {nodes + leaves:.2f} iterations, "
+              f"{stats['primitive_tests_per_ray']:.2f} tests per ray; peer HQ {hq[0]:.2f}, "
+              f"{hq[1]:.2f}", flush=True)
+    header = ("mesh", "triangles", "rtcl node visits / ray", "rtcl leaf visits / ray",
+              "rtcl iterations / ray", "rtcl triangle tests / ray",
+              "peer HQ iterations / ray", "peer HQ triangle tests / ray",
+              "peer SAH iterations / ray", "peer SAH triangle tests / ray",
+              "iterations rtcl / peer HQ", "tests rtcl / peer HQ",
+              "nodes: rtcl (2 boxes each) / peer HQ (1 box each)", "build ms rtcl / peer HQ")
+    report = (f"# Work per primary ray: rtcl's BVH against the peer's BVH_GPU\n\n"
+              f"{width}x{height}, one primary ray per pixel (rtcl's camera), every ray "
+              f"counted, hits and misses; rtcl {git_commit() or 'commit unknown'} "
+              f"(its persistent kernel's counting run), {utc_now()}. An iteration is one "
+              "step of the traversal loop: an interior node (both children's boxes "
+              "tested) or a leaf (its triangles tested). Peer: "
+              f"{args.peer}, BVH_GPU::Intersect on the host.\n\n"
+              + markdown_table(header, rows) + "\n")
+    files.write_text(out / "counts.md", report)
+    print(report)
+
+
 def compare(args, rtcl, out):
     width, height = args.size
     repeat = str(check_positive_int("-r/--repeat", args.repeat))
@@ -265,10 +383,11 @@ def main(argv=None):
     try:
         with files.committed_files_allowed(args.update_committed):
             out = args.out or locations.new_results_folder("peer")
-            files.check_not_tracked([out / "compare.md", out / "compare.csv"])
+            files.check_not_tracked([out / "counts.md"] if args.counts
+                                    else [out / "compare.md", out / "compare.csv"])
             rtcl = locations.find_rtcl(args.rtcl)
             (out / "raw").mkdir(parents=True, exist_ok=True)
-            compare(args, rtcl, out)
+            (counts if args.counts else compare)(args, rtcl, out)
     except (Failure, locations.NotFound, UsageError, OSError) as error:
         return report_error(program, one_line(error))
     print(f"{program}: results in {out}", file=sys.stderr)
