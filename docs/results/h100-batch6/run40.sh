@@ -19,7 +19,7 @@ P=$($G/rtcl --list-devices | awk '/^Platform/ && /NVIDIA/ {sub("#","",$2); sub("
 T=$(mktemp -d)
 for m in "tetra 8" "mount 8" "mount 9" "lake"; do
   set -- $m
-  python3 tools/genbench.py $1 -o $T/$1$2 ${2:+--size $2 --triangles ply} > /dev/null
+  python3 tools/genbench.py $1 -o $T/$1${2:-} ${2:+--size $2 --triangles ply} > /dev/null
 done
 python3 - $T <<'PY'
 import json, pathlib, sys
