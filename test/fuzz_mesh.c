@@ -71,7 +71,7 @@ static void pack_and_check(const struct scene *scene)
 	struct mesh_block mesh;
 	size_t bytes;
 
-	if (bvh_build_scene(scene, &bvh) || mesh_block_build(scene, &mesh))
+	if (bvh_build_scene(scene, BVH_TRIANGLE_COST, &bvh) || mesh_block_build(scene, &mesh))
 		abort();
 	void *packed = scene_block_pack(scene, &mesh, &bvh, 4, 4, 2, &bytes);
 	if (!packed || scene_block_problem(packed))

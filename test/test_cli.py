@@ -207,7 +207,7 @@ def test_output_formats_from_extension(tmp_path, ext, magic):
     (["-r", "0"], 2, '-r/--repeat: expected an integer between 1 and 100000, got "0"'),
     (["-r", "two"], 2, '-r/--repeat: expected an integer between 1 and 100000, got "two"'),
     (["-p", "-1"], 2, '-p/--platform: expected an integer between 0 and 1000, got "-1"'),
-    (["--accel", "octree"], 2, '--accel: expected none or bvh, got "octree"'),
+    (["--accel", "octree"], 2, '--accel: expected bvh, bvh-compact or none, got "octree"'),
     (["--accel"], 2, "--accel needs a value (see --help)"),
     (["--bogus"], 2, "unknown option --bogus (see --help)"),
     (["-x"], 2, "unknown option -x (see --help)"),
@@ -462,10 +462,11 @@ def test_interrupted_render_leaves_no_file(tmp_path, signal_name):
 # ---- limits ----------------------------------------------------------------------
 
 def test_accel_bvh_is_the_default_and_matches_none(tmp_path):
-    """--accel bvh (the default) and none give the same image; --stats says which,
-    with the BVH's size, and with --flops the node visits (none for brute force)."""
+    """--accel bvh (the default), bvh-compact and none give the same image; --stats
+    says which, with the BVH's size, and with --flops the node visits (none for
+    brute force)."""
     images = {}
-    for accel in ("bvh", "none", None):
+    for accel in ("bvh", "bvh-compact", "none", None):
         name = accel or "default"
         args = ["--accel", accel] if accel else []
         (tmp_path / name).mkdir()
@@ -473,7 +474,7 @@ def test_accel_bvh_is_the_default_and_matches_none(tmp_path):
                                  "--flops", str(tmp_path / f"{name}.npy"))
         images[name] = (tmp_path / name / "img.ppm").read_bytes()
         assert stats["accel"] == (accel or "bvh")
-        if stats["accel"] == "bvh":
+        if stats["accel"] != "none":   # bvh-compact builds spheres as bvh does
             assert stats["bvh"]["nodes"] == 16 and stats["bvh"]["depth"] >= 4
             assert stats["node_visits"] > 0 and stats["node_visits_per_ray"] > 1
             # Each leaf visited tests at least one sphere.
@@ -488,7 +489,7 @@ def test_accel_bvh_is_the_default_and_matches_none(tmp_path):
             assert stats["leaf_visits"] == stats["primitive_tests"] == 0
             assert "-DRTCL_BVH" not in stats["build_options"]
             assert "BVH" not in result.stderr + result.stdout
-    assert images["bvh"] == images["none"] == images["default"]
+    assert images["bvh"] == images["none"] == images["default"] == images["bvh-compact"]
 
 
 @pytest.mark.parametrize("scene, triangles", [("paper60.json", False),

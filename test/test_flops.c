@@ -143,7 +143,7 @@ static void setup_scene(struct fixture *f, const char *json, int bvh)
 		     err);
 	struct bvh tree;
 	struct mesh_block mesh;
-	cr_assert_eq(bvh_build_scene(&f->scene, &tree), 0);
+	cr_assert_eq(bvh_build_scene(&f->scene, BVH_TRIANGLE_COST, &tree), 0);
 	cr_assert_eq(mesh_block_build(&f->scene, &mesh), 0);
 	void *block = scene_block_pack(&f->scene, &mesh, bvh ? &tree : NULL, 3, 3, 1, &bytes);
 	bvh_free(&tree);

@@ -141,10 +141,11 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
     """--stats' scene_bytes is the device block, bytes_per_triangle that over the
     triangles, vertices the distinct ones (the grid's corners, each stored once),
     bvh.bytes its 64-byte nodes and 4-byte references; -v prints the same; --accel
-    none's block is the same less the BVH. Within issue 11's 64 bytes per triangle."""
+    none's block is the same less the BVH. bvh-compact within issue 11's 64 bytes
+    per triangle, bvh (its leaves of triangles smaller, issue 26) within 80."""
     scene, n = grid_mesh_scene(tmp_path)
     runs = {}
-    for accel in ("bvh", "none"):
+    for accel in ("bvh", "none", "bvh-compact"):
         result = rtcl("-s", str(scene), "-o", str(tmp_path / f"{accel}.ppm"), "--size", "16x16",
                       "-v", "--accel", accel, "--stats", str(tmp_path / f"{accel}.json"))
         assert result.returncode == 0, result.stderr
@@ -158,7 +159,11 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
     # position and normal), the BVH, and a header, one material and one light
     # of less than 1 KiB
     assert 0 < total - (16 * n + 32 * vertices + bvh["bytes"]) < 1024
-    assert stats["bytes_per_triangle"] <= 64
+    assert stats["bytes_per_triangle"] <= 80
+    compact = runs["bvh-compact"][1]
+    assert compact["accel"] == "bvh-compact" and compact["bytes_per_triangle"] <= 64
+    assert compact["bvh"]["nodes"] < bvh["nodes"]
+    assert (tmp_path / "bvh-compact.ppm").read_bytes() == (tmp_path / "bvh.ppm").read_bytes()
     assert runs["none"][1]["scene_bytes"] == total - bvh["bytes"]  # 4 n a multiple of 16
     assert "bvh" not in runs["none"][1]
     assert (f"rtcl: device scene block {total} bytes for {n} triangles: "

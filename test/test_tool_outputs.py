@@ -81,6 +81,8 @@ WRITERS = [
     ("flops_hist.py", "fig.png", ["{npy}", "-o", "{repo}/fig.png"]),
     ("peer_compare.py", "p/compare.md", ["/nonexistent-peer", "--rtcl", "{rtcl}",
                                          "-o", "{repo}/p"]),
+    ("peer_compare.py", "c/counts.md", ["/nonexistent-peer", "--counts", "--rtcl", "{rtcl}",
+                                        "-o", "{repo}/c"]),
 ]
 
 
@@ -199,4 +201,10 @@ def test_peer_compare_names_a_folder_that_is_not_the_peers(tmp_path, marking_rtc
     assert result.stderr.strip().splitlines() == [
         f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no "
         "tiny_bvh.h, tiny_ocl.h, ply2bin.py"]
+    assert not (tmp_path / "rtcl-ran").exists()
+    counts = run_tool("peer_compare.py", tmp_path / "peer", "--counts", "--rtcl", marking_rtcl,
+                      "-o", tmp_path / "out", cwd=tmp_path)
+    assert counts.returncode == 1
+    assert counts.stderr.strip().splitlines() == [
+        f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no tiny_bvh.h"]
     assert not (tmp_path / "rtcl-ran").exists()

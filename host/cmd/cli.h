@@ -33,7 +33,7 @@ struct options {
 	int piece_rows; /* --piece-rows N; 0: chosen (schedule/tiles.h) */
 	int repeat;	/* -r N; 0 when not given */
 	struct output_request outputs; /* -o, --stats, --flops, --work-map, ... */
-	int accel;		       /* --accel: 1 bvh (ACCEL_BVH), 0 none */
+	int accel;		       /* --accel: enum accel (render/settings.h) */
 	int quiet, verbose;
 	int help, version;
 	/* --mesh-time-limit SECONDS, --mesh-memory-limit MIB, or their

@@ -60,7 +60,14 @@ struct builder {
 	struct rt_bvh_node *nodes;
 	int node_count;
 	int depth, max_leaf;
+	double triangle_cost; /* ref_cost's */
 };
+
+/* What testing a primitive costs the SAH, in sphere tests. */
+static double ref_cost(uint32_t ref, double triangle_cost)
+{
+	return ref >> RT_PRIM_KIND_SHIFT == RT_PRIM_TRIANGLE ? triangle_cost : 1.0;
+}
 
 struct split {
 	int axis, bin; /* primitives whose centroid bins below bin go left */
@@ -75,10 +82,12 @@ static int centroid_bin(const struct bvh_prim *p, const struct split *s)
 	return bin < 0 ? 0 : bin >= BVH_BINS ? BVH_BINS - 1 : bin;
 }
 
-/* Primitives binned along one axis: per bin, how many and their box. */
+/* Primitives binned along one axis: per bin, how many, what testing them
+ * costs (ref_cost) and their box. */
 struct axis_bins {
 	struct split s;
 	int counts[BVH_BINS];
+	double costs[BVH_BINS];
 	struct box boxes[BVH_BINS];
 };
 
@@ -90,30 +99,39 @@ static void sweep_axis(const struct axis_bins *a, double parent_area, struct spl
 	struct box left, right;
 	double right_cost[BVH_BINS];
 
+	double cost = 0.0;
+
 	box_empty(&right);
 	for (int b = BVH_BINS - 1, n = 0; b > 0; b--) {
 		n += a->counts[b];
+		cost += a->costs[b];
 		box_grow(&right, a->boxes[b].lo, a->boxes[b].hi);
-		right_cost[b] = n ? box_area(&right) * n : -1.0;
+		right_cost[b] = n ? box_area(&right) * cost : -1.0;
 	}
 	box_empty(&left);
+	cost = 0.0;
 	for (int b = 1, n = 0; b < BVH_BINS; b++) {
 		n += a->counts[b - 1];
+		cost += a->costs[b - 1];
 		box_grow(&left, a->boxes[b - 1].lo, a->boxes[b - 1].hi);
 		if (n == 0 || right_cost[b] < 0.0)
 			continue;
 		s.bin = b;
-		s.cost = BVH_NODE_COST + (box_area(&left) * n + right_cost[b]) / parent_area;
+		s.cost = BVH_NODE_COST + (box_area(&left) * cost + right_cost[b]) / parent_area;
 		if (s.cost < best->cost)
 			*best = s;
 	}
 }
 
 /* Bins the range along every axis whose centroids spread, in one pass over
- * the primitives, and keeps the cheapest split in *best. */
-static void find_split(const struct bvh_prim *prims, int begin, int end,
-		       const struct box *centroids, double parent_area, struct split *best)
+ * the primitives, and keeps the cheapest split in *best. Returns the cost
+ * of testing every primitive of the range. */
+static double find_split(const struct bvh_prim *prims, int begin, int end,
+			 const struct box *centroids, double parent_area, double triangle_cost,
+			 struct split *best)
 {
+	double range_cost = 0.0;
+
 	struct axis_bins bins[3];
 	int axis_count = 0;
 
@@ -125,19 +143,25 @@ static void find_split(const struct bvh_prim *prims, int begin, int end,
 		a->s = (struct split){axis, 0, 0.0, centroids->lo[axis],
 				      (float)(BVH_BINS / extent)};
 		memset(a->counts, 0, sizeof(a->counts));
+		memset(a->costs, 0, sizeof(a->costs));
 		for (int b = 0; b < BVH_BINS; b++)
 			box_empty(&a->boxes[b]);
 		axis_count++;
 	}
 	for (int i = begin; i < end; i++) {
+		double cost = ref_cost(prims[i].ref, triangle_cost);
+
+		range_cost += cost;
 		for (int k = 0; k < axis_count; k++) {
 			int b = centroid_bin(&prims[i], &bins[k].s);
 			bins[k].counts[b]++;
+			bins[k].costs[b] += cost;
 			box_grow(&bins[k].boxes[b], prims[i].lo, prims[i].hi);
 		}
 	}
 	for (int k = 0; k < axis_count; k++)
 		sweep_axis(&bins[k], parent_area, best);
+	return range_cost;
 }
 
 /* Moves the primitives that go left to the front; returns the first that
@@ -170,10 +194,11 @@ static int choose_split(struct builder *b, int begin, int end, const struct box 
 	if (depth >= BVH_SAH_DEPTH)
 		return n > BVH_MAX_LEAF || must_split ? begin + n / 2 : begin;
 	double area = box_area(bounds);
-	find_split(b->prims, begin, end, centroids, area > 0.0 ? area : 1.0, &best);
+	double leaf_cost = find_split(b->prims, begin, end, centroids, area > 0.0 ? area : 1.0,
+				      b->triangle_cost, &best);
 	if (best.cost == DBL_MAX) /* every centroid in one bin: no SAH split */
 		return n > BVH_MAX_LEAF || must_split ? begin + n / 2 : begin;
-	if (n <= BVH_MAX_LEAF && !must_split && best.cost >= n)
+	if (n <= BVH_MAX_LEAF && !must_split && best.cost >= leaf_cost)
 		return begin;
 	return partition(b->prims, begin, end, &best);
 }
@@ -225,7 +250,12 @@ static void build_range(struct builder *b, int begin, int end, int depth, struct
 
 int bvh_build(struct bvh_prim *prims, int count, struct bvh *out)
 {
-	struct builder b = {prims, NULL, 0, 0, 0};
+	return bvh_build_costed(prims, count, BVH_TRIANGLE_COST, out);
+}
+
+int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, struct bvh *out)
+{
+	struct builder b = {prims, NULL, 0, 0, 0, triangle_cost};
 	struct child root;
 
 	memset(out, 0, sizeof(*out));
@@ -261,7 +291,7 @@ int bvh_build(struct bvh_prim *prims, int count, struct bvh *out)
 	out->ref_count = count;
 	out->depth = b.depth;
 	out->max_leaf = b.max_leaf;
-	out->sah_cost = bvh_sah_cost(out);
+	out->sah_cost = bvh_sah_cost(out, triangle_cost);
 	return 0;
 }
 
@@ -327,7 +357,7 @@ void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim 
 	triangle_prim_at(tri->v, i, out);
 }
 
-int bvh_build_scene(const struct scene *scene, struct bvh *out)
+int bvh_build_scene(const struct scene *scene, double triangle_cost, struct bvh *out)
 {
 	int spheres = scene->sphere_count, n = spheres + scene->triangle_count;
 	struct bvh_prim *prims = malloc((size_t)(n ? n : 1) * sizeof(*prims));
@@ -346,7 +376,7 @@ int bvh_build_scene(const struct scene *scene, struct bvh *out)
 			scene_from_eye(scene, scene->triangles[i].v[j], v[j]);
 		triangle_prim_at((const double(*)[3])v, i, &prims[spheres + i]);
 	}
-	int ret = bvh_build(prims, n, out);
+	int ret = bvh_build_costed(prims, n, triangle_cost, out);
 	free(prims);
 	return ret;
 }
@@ -366,8 +396,9 @@ static void load_child(const struct rt_bvh_box *in, struct box *box, int *index,
 }
 
 /* Sum over nodes of their area times BVH_NODE_COST, and over leaves of
- * their area times their primitives, over the root's area. */
-double bvh_sah_cost(const struct bvh *bvh)
+ * their area times their primitives' costs (ref_cost), over the root's
+ * area. */
+double bvh_sah_cost(const struct bvh *bvh, double triangle_cost)
 {
 	struct box root, box;
 	double sum = 0.0;
@@ -381,7 +412,10 @@ double bvh_sah_cost(const struct bvh *bvh)
 			load_child(&bvh->nodes[n].child[k], &box, &index, &count);
 			if (n == 0)
 				box_grow(&root, box.lo, box.hi);
-			sum += box_area(&box) * (count ? count : BVH_NODE_COST);
+			double cost = count ? 0.0 : BVH_NODE_COST;
+			for (int r = 0; r < count; r++)
+				cost += ref_cost(bvh->refs[index + r], triangle_cost);
+			sum += box_area(&box) * cost;
 		}
 	}
 	double area = box_area(&root);

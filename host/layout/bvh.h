@@ -43,10 +43,15 @@ struct bvh {
  * prims is reordered. Returns 0, or -1 when out of memory. */
 int bvh_build(struct bvh_prim *prims, int count, struct bvh *out);
 
+/* bvh_build with a triangle test costing triangle_cost sphere tests in the
+ * SAH (BVH_TRIANGLE_COST for bvh_build). */
+int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, struct bvh *out);
+
 /* The BVH of the scene's spheres and triangles, in one hierarchy, in the
- * device's coordinates: relative to the camera's eye (scene_from_eye).
- * Returns 0, or -1 when out of memory. */
-int bvh_build_scene(const struct scene *scene, struct bvh *out);
+ * device's coordinates: relative to the camera's eye (scene_from_eye), a
+ * triangle test costing triangle_cost sphere tests (BVH_TRIANGLE_COST; 1 for
+ * --accel bvh-compact). Returns 0, or -1 when out of memory. */
+int bvh_build_scene(const struct scene *scene, double triangle_cost, struct bvh *out);
 
 /* Sphere i of the scene as a primitive, its box padded outward (bvh.c says
  * by how much and why), in the sphere's own coordinates (an eye at the
@@ -56,12 +61,21 @@ void bvh_sphere_prim(const struct scene_sphere *sphere, int i, struct bvh_prim *
 /* Triangle i of the scene as a primitive, its box padded outward too. */
 void bvh_triangle_prim(const struct scene_triangle *tri, int i, struct bvh_prim *out);
 
-/* The tree's SAH cost, in units of one primitive test, with a node visit
- * (two box tests) costing BVH_NODE_COST: what a ray through the root's box
- * expects to spend. */
-double bvh_sah_cost(const struct bvh *bvh);
+/* The tree's SAH cost, in units of one sphere test, with a node visit
+ * (two box tests) costing BVH_NODE_COST and a triangle test
+ * BVH_TRIANGLE_COST: what a ray through the root's box expects to spend. */
+double bvh_sah_cost(const struct bvh *bvh, double triangle_cost);
 #ifndef BVH_NODE_COST
 #define BVH_NODE_COST 3.0
+#endif
+/* A triangle test against a sphere test's 1: as dear as a node visit, so
+ * that a range of triangles is split as a node cost of 1 would split it.
+ * On the H100 (docs/bvh.md, batch 40) that tested 2.3 times fewer triangles
+ * per ray on the SPD mount meshes and the lake than BVH_NODE_COST 3 did, and
+ * ran 1.15-1.27 times faster; spheres keep BVH_NODE_COST 3, which a node
+ * cost of 1 made 8 % slower on the default scene. */
+#ifndef BVH_TRIANGLE_COST
+#define BVH_TRIANGLE_COST 3.0
 #endif
 
 void bvh_free(struct bvh *bvh);

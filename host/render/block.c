@@ -28,14 +28,18 @@ int block_check_scene_fits(const struct device *dev, const struct scene *scene,
 	return -1;
 }
 
-/* Builds the BVH of the scene's spheres and triangles into *bvh, with its
- * figures in res. */
-static int build_bvh(const struct scene *scene, struct render_result *res, struct bvh *bvh,
-		     char *err, size_t err_size)
+/* Builds the BVH of the scene's spheres and triangles for --accel (s) into
+ * *bvh, with its figures in res. */
+static int build_bvh(const struct scene *scene, const struct render_settings *s,
+		     struct render_result *res, struct bvh *bvh, char *err, size_t err_size)
 {
 	double lap = timing_now();
 
-	if (bvh_build_scene(scene, bvh)) {
+	/* bvh-compact: triangles priced like spheres, as many per leaf as the
+	 * builder's sphere leaves (docs/bvh.md, "Node cost per kind"). */
+	double triangle_cost = s->accel == ACCEL_BVH_COMPACT ? 1.0 : BVH_TRIANGLE_COST;
+
+	if (bvh_build_scene(scene, triangle_cost, bvh)) {
 		snprintf(err, err_size,
 			 "out of host memory for the BVH of %d spheres and %d triangles",
 			 scene->sphere_count, scene->triangle_count);
@@ -82,7 +86,7 @@ static int pack_scene(struct device *dev, const struct scene *scene,
 		return -1;
 	}
 	res->vertex_count = mesh.vertex_count;
-	if (use_bvh && build_bvh(scene, res, &bvh, err, err_size))
+	if (use_bvh && build_bvh(scene, s, res, &bvh, err, err_size))
 		goto free_mesh;
 	if (block_check_scene_fits(dev, scene, &mesh, use_bvh ? &bvh : NULL, err, err_size))
 		goto free_bvh;
@@ -105,7 +109,7 @@ int block_prepare_scene(struct device *dev, const struct scene *scene,
 			char *err, size_t err_size)
 {
 	int use_bvh =
-		s->accel == ACCEL_BVH && (scene->sphere_count > 0 || scene->triangle_count > 0);
+		s->accel != ACCEL_NONE && (scene->sphere_count > 0 || scene->triangle_count > 0);
 
 	*block = NULL;
 	if (scene_block_check_resolution(scene, err, err_size) ||

@@ -16,6 +16,11 @@
 #include "base/timing.h"
 #include "render/wavefront.h"
 
+const char *accel_name(int accel)
+{
+	return accel == ACCEL_BVH ? "bvh" : accel == ACCEL_BVH_COMPACT ? "bvh-compact" : "none";
+}
+
 const struct kernel_info render_kernels[] = {
 	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0, 0, 0,
 	 &singlepass_ops},

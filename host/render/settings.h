@@ -32,7 +32,12 @@ struct kernel_info {
 enum accel {
 	ACCEL_NONE, /* every sphere tested, the paper's brute force */
 	ACCEL_BVH,  /* a BVH built on the host (host/layout/bvh.c, docs/bvh.md) */
+	ACCEL_BVH_COMPACT, /* the same, its leaves of triangles larger: fewer
+			      nodes, more triangle tests (bvh-compact) */
 };
+
+/* The --accel word of an enum accel: "none", "bvh", "bvh-compact". */
+const char *accel_name(int accel);
 
 struct render_settings {
 	const struct kernel_info *kernel; /* NULL: the CPU reference */
@@ -52,7 +57,7 @@ struct render_settings {
 				   work-group, work-item and ticket (probe.h) */
 	int force_global_scene; /* read the scene from __global memory even if it
 				   would fit in __local memory */
-	int accel;		/* ACCEL_BVH or ACCEL_NONE (--accel) */
+	int accel;		/* enum accel (--accel) */
 	const char *source_dir; /* load cl/ sources from here instead of the
 				   embedded copies (development) */
 	int progress;		/* render() runs the progress line (progress.h) itself;

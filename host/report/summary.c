@@ -70,7 +70,7 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 		       f->min, 100 * f->parallel_efficiency);
 		fprintf(out, "rays:    %llu (primary, secondary and shadow), %.1f Mrays/s\n",
 		       (unsigned long long)f->rays, f->rays * 1e-3 / r->kernel_ms_median);
-		if (s->accel == ACCEL_BVH)
+		if (s->accel != ACCEL_NONE)
 			fprintf(out,
 				"nodes:   %llu BVH node visits, %.2f per ray; %.2f leaf visits and "
 				"%.2f sphere and triangle tests per ray\n",

@@ -89,7 +89,7 @@ static void show_setting(const long long *v, enum job_setting first, char *out, 
 		snprintf(out, size, "--batch %lld", v[JOB_BATCH]);
 		break;
 	case JOB_ACCEL:
-		snprintf(out, size, "--accel %s", v[JOB_ACCEL] ? "bvh" : "none");
+		snprintf(out, size, "--accel %s", accel_name((int)v[JOB_ACCEL]));
 		break;
 	default:
 		snprintf(out, size, "setting %d", (int)first);
