@@ -15,6 +15,6 @@ python3 tools/genbench.py lake -o $T/lake --image 2000x2000 > /dev/null
 for s in "default" "lake:-s $T/lake/lake-10.json" "lake-depth0:-s $T/lake/lake-10.json --depth 0"; do
   name=${s%%:*}; args=${s#*:}; [ "$name" = default ] && args=
   echo "== $name"
-  RTCL_BUILD_OPTIONS=-cl-nv-verbose $R -p $P -k persistent $args --size 256x256 -v -q \
-    -o $T/x.ppm 2>&1 | grep -iE "registers|spill|stack frame|bytes cmem|ptxas info" | sort -u | head -12
+  RTCL_CACHE=0 RTCL_BUILD_OPTIONS=-cl-nv-verbose $R -p $P -k persistent $args --size 256x256 -v \
+    -o $T/x.ppm 2>&1 | grep -iE "registers|spill|stack frame" | sort -u | head -12
 done
