@@ -83,6 +83,8 @@ WRITERS = [
                                          "-o", "{repo}/p"]),
     ("peer_compare.py", "c/counts.md", ["/nonexistent-peer", "--counts", "--rtcl", "{rtcl}",
                                         "-o", "{repo}/c"]),
+    ("peer_compare.py", "u/cpu.md", ["/nonexistent-peer", "--cpu", "--rtcl", "{rtcl}",
+                                     "-o", "{repo}/u"]),
 ]
 
 
@@ -207,4 +209,12 @@ def test_peer_compare_names_a_folder_that_is_not_the_peers(tmp_path, marking_rtc
     assert counts.returncode == 1
     assert counts.stderr.strip().splitlines() == [
         f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no tiny_bvh.h"]
+    on_cpu = run_tool("peer_compare.py", tmp_path / "peer", "--cpu", "--rtcl", marking_rtcl,
+                      "-o", tmp_path / "out", cwd=tmp_path)
+    assert on_cpu.returncode == 1
+    assert on_cpu.stderr.strip().splitlines() == [
+        f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no cside.cpp "
+        "or tiny_bvh.h"]
+    both = run_tool("peer_compare.py", tmp_path / "peer", "--cpu", "--counts", cwd=tmp_path)
+    assert both.returncode == 2 and "not allowed with argument" in both.stderr
     assert not (tmp_path / "rtcl-ran").exists()

@@ -27,13 +27,19 @@ built here against the peer's tiny_bvh.h, traces the same rays on the host
 through the peer's BVH_GPU layout (its fastest GPU kernel's), built HQ and SAH
 as `side` builds them, counting its loop iterations (interior nodes and leaves)
 and triangle tests per ray. counts.md sets them side by side: where the two
-traversals differ in work, before any difference in speed. It writes to
+traversals differ in work, before any difference in speed.
+
+--cpu times the peer's CPU traversals instead (its `cside`: TinyBVH's BVH,
+BVH4_CPU and BVH8_CPU over the same rays on every hardware thread, built here
+with -march=native) against rtcl on a CPU OpenCL device (PoCL; -p, else
+rtcl's default device), into cpu.md: where rtcl stands on a CPU. It writes to
 -o/--out DIR, by default a new folder rtcl-results/peer-<YYYYmmdd-HHMMSS>; a
 file tracked by git is replaced only with --update-committed.
 
     rtcl-peer-compare ../shared/bench/tinybvh --meshes tetra:8,mount:9,lake -r 10
     rtcl-peer-compare PEER --ply bunny.ply --size 1000x1000
     rtcl-peer-compare PEER --counts -o counts      # work per ray, no GPU needed
+    rtcl-peer-compare PEER --cpu --meshes tetra:8,mount:8 -o cpu   # on PoCL
 """
 import argparse
 import json
@@ -87,9 +93,13 @@ def parse_arguments(argv):
     add_rtcl_option(parser)
     parser.add_argument("-p", "--platform", help="rtcl's OpenCL platform (default: NVIDIA's; "
                                                  "with --counts, rtcl's default device)")
-    parser.add_argument("--counts", action="store_true",
-                        help="count node visits and triangle tests per ray on both sides "
-                             "instead of timing (counts.md); runs on any machine")
+    mode = parser.add_mutually_exclusive_group()
+    mode.add_argument("--counts", action="store_true",
+                      help="count node visits and triangle tests per ray on both sides "
+                           "instead of timing (counts.md); runs on any machine")
+    mode.add_argument("--cpu", action="store_true",
+                      help="time the peer's CPU traversals (cside) against rtcl on a CPU "
+                           "OpenCL device (cpu.md)")
     parser.add_argument("-o", "--out", type=pathlib.Path, metavar="DIR",
                         help="results folder (default: a new rtcl-results/peer-<time>)")
     add_update_committed(parser)
@@ -186,7 +196,8 @@ def count_hits(image):
 def time_rtcl(rtcl, platform, scene_path, kernel, repeat, out, name):
     stats = out / "raw" / f"rtcl-{name}-{kernel}.json"
     image = out / "meshes" / f"rtcl-{name}-{kernel}.ppm"
-    run([rtcl, "-q", "-p", platform, "-k", kernel, "-r", repeat, scene_path,
+    device = ["-p", platform] if platform else []
+    run([rtcl, "-q", *device, "-k", kernel, "-r", repeat, scene_path,
          "-o", image, "--stats", stats], out / "raw" / f"rtcl-{name}-{kernel}.txt")
     figures = json.loads(stats.read_text())
     times = figures["kernel_ms_all"]
@@ -277,6 +288,55 @@ def count_peer(program, bin_path, scene, width, height, out, name):
     return found
 
 
+CSIDE_LINE = re.compile(r"^(\S+(?: \(HQ\))?)\s+build\s+([\d.]+) ms\s+trace median\s+([\d.]+) ms"
+                        r".*\((\d+) threads\), hits (\d+)")
+
+
+def cpu(args, rtcl, out):
+    """--cpu: the peer's CPU traversals against rtcl on a CPU device, into cpu.md."""
+    width, height = args.size
+    repeat = str(check_positive_int("-r/--repeat", args.repeat))
+    if not (args.peer / "cside.cpp").is_file() or not (args.peer / "tiny_bvh.h").is_file():
+        raise Failure(f"{args.peer} is not the peer's folder: no cside.cpp or tiny_bvh.h")
+    program = out / "peer" / "cside"
+    program.parent.mkdir(parents=True, exist_ok=True)
+    run(["g++", "-O3", "-march=native", "-std=c++20", "-I", args.peer, args.peer / "cside.cpp",
+         "-o", program, "-lpthread"], out / "raw" / "build-cside.txt")
+    rows, device = [], "?"
+    for name, bin_path, scene, scene_path in mesh_scenes(args, out, width, height):
+        camera = scene["camera"]
+        output = run([program, bin_path.resolve(), width, height, *camera["eye"],
+                      *camera["look_at"], camera.get("fov", 45),
+                      *camera.get("up", [0, 1, 0])], out / "raw" / f"cside-{name}.txt")
+        peer = [match.groups() for match in map(CSIDE_LINE.match, output.splitlines())
+                if match]
+        if not peer:
+            raise Failure(f"cside printed no timing ({out / 'raw' / f'cside-{name}.txt'})")
+        best_peer = min(peer, key=lambda row: float(row[2]))
+        timed = []
+        for kernel in args.kernels.split(","):
+            median, _, figures, hits = time_rtcl(rtcl, args.platform, scene_path, kernel,
+                                                 repeat, out, name)
+            timed.append((median, kernel, hits))
+            device = figures["device"]
+        best = min(timed)
+        rows.append((name, " / ".join(f"{kernel} {ms:.1f}" for ms, kernel, _ in timed),
+                     " / ".join(f"{row[0]} {float(row[2]):.1f}" for row in peer),
+                     f"{float(best_peer[2]) / best[0]:.2f}x", f"{best[2]:,} / {int(best_peer[4]):,}",
+                     best_peer[3]))
+        print(f"{name}: rtcl {best[1]} {best[0]:.1f} ms, peer {best_peer[0]} "
+              f"{float(best_peer[2]):.1f} ms: {float(best_peer[2]) / best[0]:.2f}x", flush=True)
+    header = ("mesh", "rtcl ms (median of -r)", "peer ms (median of 5)",
+              "rtcl / peer's fastest", "hits rtcl / peer", "peer threads")
+    report = (f"# rtcl on a CPU against the peer's CPU traversals, primary rays\n\n"
+              f"rtcl on {device}; the peer's cside (TinyBVH) on every hardware thread of "
+              f"this machine; {width}x{height}, one primary ray per pixel; rtcl "
+              f"{git_commit() or 'commit unknown'}, {utc_now()}. Peer: {args.peer}. "
+              "Above 1, rtcl is faster.\n\n" + markdown_table(header, rows) + "\n")
+    files.write_text(out / "cpu.md", report)
+    print(report)
+
+
 def counts(args, rtcl, out):
     """--counts: work per ray on both sides, into counts.md."""
     width, height = args.size
@@ -323,20 +383,8 @@ def compare(args, rtcl, out):
     repeat = str(check_positive_int("-r/--repeat", args.repeat))
     side_folder = build_peer(args.peer, out)
     platform = args.platform or nvidia_platform(rtcl, out)
-    meshes = [genbench_mesh(spec, out) for spec in args.meshes.split(",") if spec]
-    for ply in args.ply:
-        if not ply.is_file():
-            raise Failure(f"--ply {ply}: no such file")
     table, csv_rows = [], []
-    for name, ply, scene in meshes + [(ply.stem, ply, None) for ply in args.ply]:
-        bin_path = out / "meshes" / f"{name}.bin"
-        run([sys.executable, args.peer / "ply2bin.py", ply, bin_path],
-            out / "raw" / f"ply2bin-{name}.txt")
-        if scene is None:
-            scene = framing_scene(ply, bin_path)
-        scene_path = out / "meshes" / f"{name}-primary.json"
-        files.write_text(scene_path, json.dumps(primary_scene(scene, ply, width, height),
-                                                indent=1))
+    for name, bin_path, scene, scene_path in mesh_scenes(args, out, width, height):
         triangles, peer_rows = time_peer(side_folder, bin_path, scene, width, height, repeat,
                                          args.variants, out, name)
         rtcl_rows = []
@@ -383,11 +431,12 @@ def main(argv=None):
     try:
         with files.committed_files_allowed(args.update_committed):
             out = args.out or locations.new_results_folder("peer")
-            files.check_not_tracked([out / "counts.md"] if args.counts
-                                    else [out / "compare.md", out / "compare.csv"])
+            outputs = ([out / "counts.md"] if args.counts else [out / "cpu.md"] if args.cpu
+                       else [out / "compare.md", out / "compare.csv"])
+            files.check_not_tracked(outputs)
             rtcl = locations.find_rtcl(args.rtcl)
             (out / "raw").mkdir(parents=True, exist_ok=True)
-            (counts if args.counts else compare)(args, rtcl, out)
+            (counts if args.counts else cpu if args.cpu else compare)(args, rtcl, out)
     except (Failure, locations.NotFound, UsageError, OSError) as error:
         return report_error(program, one_line(error))
     print(f"{program}: results in {out}", file=sys.stderr)
