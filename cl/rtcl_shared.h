@@ -173,9 +173,10 @@ struct rt_bvh_node {
 #define RT_BVH_MAX_DEPTH 64
 
 /* Counts per launched work-item in the counting build: flops, rays, BVH
- * node visits, leaf visits and primitive tests in those leaves, then, measured on NVIDIA devices (RTCL_SIMD_MEASURE,
- * docs/RENDERING.md "SIMD efficiency, measured"; 0 elsewhere), for each
- * phase the steps this work-item took and the warp-steps it led. */
+ * node visits, leaf visits and primitive tests in those leaves, then,
+ * measured on NVIDIA devices (RTCL_SIMD_MEASURE, docs/RENDERING.md "SIMD
+ * efficiency, measured"; 0 elsewhere), for each phase the steps this
+ * work-item took and the warp-steps it led. */
 #define RT_ITEM_FLOPS 0
 #define RT_ITEM_RAYS 1
 #define RT_ITEM_NODE_VISITS 2

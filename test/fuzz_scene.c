@@ -38,7 +38,8 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		size_t bytes;
 		struct bvh bvh;
 		struct mesh_block mesh;
-		if (bvh_build_scene(&scene, BVH_TRIANGLE_COST, &bvh) || mesh_block_build(&scene, &mesh))
+		if (bvh_build_scene(&scene, BVH_TRIANGLE_COST, &bvh) ||
+		    mesh_block_build(&scene, &mesh))
 			abort();
 		void *packed = scene_block_pack(&scene, &mesh, &bvh, scene.width, scene.height,
 					     scene.max_depth, &bytes);

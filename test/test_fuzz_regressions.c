@@ -59,7 +59,8 @@ static void check_load(const char *path, const char *json)
 		size_t bytes = 0;
 		struct bvh bvh;
 		struct mesh_block mesh;
-		cr_assert_eq(bvh_build_scene(&s, BVH_TRIANGLE_COST, &bvh), 0, "%s: out of memory", path);
+		cr_assert_eq(bvh_build_scene(&s, BVH_TRIANGLE_COST, &bvh), 0, "%s: out of memory",
+			     path);
 		cr_assert_eq(mesh_block_build(&s, &mesh), 0, "%s: out of memory", path);
 		void *packed =
 			scene_block_pack(&s, &mesh, &bvh, s.width, s.height, s.max_depth, &bytes);

@@ -30,8 +30,8 @@ struct kernel_info {
 
 /* --accel: how the tracer finds a ray's hit among the spheres. */
 enum accel {
-	ACCEL_NONE, /* every sphere tested, the paper's brute force */
-	ACCEL_BVH,  /* a BVH built on the host (host/layout/bvh.c, docs/bvh.md) */
+	ACCEL_NONE,	   /* every sphere tested, the paper's brute force */
+	ACCEL_BVH,	   /* a BVH built on the host (host/layout/bvh.c, docs/bvh.md) */
 	ACCEL_BVH_COMPACT, /* the same, its leaves of triangles larger: fewer
 			      nodes, more triangle tests (bvh-compact) */
 };

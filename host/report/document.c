@@ -46,8 +46,7 @@ static void add_accel_figures(json_t *doc, const struct job *job, const struct r
 {
 	const struct render_result *r = &record->result;
 
-	json_object_set_new(doc, "accel",
-			    json_string(accel_name(job->settings.accel)));
+	json_object_set_new(doc, "accel", json_string(accel_name(job->settings.accel)));
 	/* The device's scene block (none for the CPU reference), and per
 	 * triangle, the figure issue 11 budgets. */
 	if (r->scene_bytes)
