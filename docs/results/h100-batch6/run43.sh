@@ -3,7 +3,7 @@
 # positions inline (48 bytes each after the references; a leaf of triangles a
 # range of them, RT_LEAF_TRIANGLES), the candidate docs/bvh.md names: one
 # dependent load instead of three (reference, index word, vertices). Built
-# from commit 2b83331 of an experiment clone (the patch is
+# from commit 5d015c4 of an experiment clone (the patch is
 # run43-inline-triangles.patch) as .gpu/rtcl-inline, against .gpu/rtcl
 # (f4fe5ee's code, 31877fb's BVH). Persistent, 2000x2000, the peer's
 # primary-ray scenes and Whitted scenes, three interleaved rounds of -r 20,
