@@ -117,13 +117,11 @@ static float intersect_plane(struct tracer *tr, RTCL_SCENE_SPACE const struct rt
  * barycentric coordinates of v1 and v2 in *uv. A ray in the triangle's plane
  * (det 0) misses it. Counts its flops, stage by stage (FLOPS_TRIANGLE_*): the
  * brute-force loop below and an acceleration structure's leaves call it. */
-static bool triangle_hit(struct tracer *tr, int i, float3 o, float3 d, float t_max, float *t,
-			 float2 *uv)
+static bool triangle_hit_at(struct tracer *tr, float3 v0, float3 v1, float3 v2, float3 o,
+			    float3 d, float t_max, float *t, float2 *uv)
 {
-	uint4 index = tr->triangles[i].index;
-	float3 v0 = tr->vertices[index.x].position.xyz;
-	float3 e1 = tr->vertices[index.y].position.xyz - v0;
-	float3 e2 = tr->vertices[index.z].position.xyz - v0;
+	float3 e1 = v1 - v0;
+	float3 e2 = v2 - v0;
 	float3 p = cross3(d, e2);
 	float det = dot3(e1, p);
 
@@ -148,6 +146,17 @@ static bool triangle_hit(struct tracer *tr, int i, float3 o, float3 d, float t_m
 	*t = hit_t;
 	*uv = (float2)(u, v);
 	return true;
+}
+
+/* triangle_hit_at with triangle i's vertices. */
+static inline bool triangle_hit(struct tracer *tr, int i, float3 o, float3 d, float t_max,
+				float *t, float2 *uv)
+{
+	uint4 index = tr->triangles[i].index;
+
+	return triangle_hit_at(tr, tr->vertices[index.x].position.xyz,
+			       tr->vertices[index.y].position.xyz,
+			       tr->vertices[index.z].position.xyz, o, d, t_max, t, uv);
 }
 
 /* Every triangle in turn (--accel none): takes the nearest hit below
@@ -178,6 +187,17 @@ static void triangles_brute_force(struct tracer *tr, float3 o, float3 d, bool an
  * strictly nearer), so that the image is the same: an equal distance goes to
  * a sphere, else to the lower triangle index. With any_hit, once one hit is
  * found, the rest are not looked at. */
+static void triangle_take(int i, float t, float2 uv, float *nearest, struct hit *best)
+{
+	if (t < *nearest || (t == *nearest && best->sphere < 0 && i < best->triangle)) {
+		*nearest = t;
+		best->sphere = -1;
+		best->triangle = i;
+		best->u = uv.x;
+		best->v = uv.y;
+	}
+}
+
 static void triangle_consider(struct tracer *tr, int i, float3 o, float3 d, bool any_hit,
 			      float *nearest, struct hit *best)
 {
@@ -188,15 +208,23 @@ static void triangle_consider(struct tracer *tr, int i, float3 o, float3 d, bool
 		return;
 	/* No bound here: the tie needs t == *nearest, which the test's
 	 * strict t < t_max would drop. */
-	if (!triangle_hit(tr, i, o, d, INFINITY, &t, &uv))
+	if (triangle_hit(tr, i, o, d, INFINITY, &t, &uv))
+		triangle_take(i, t, uv, nearest, best);
+}
+
+/* triangle_consider for leaf triangle k, its vertices inline. */
+static void leaf_triangle_consider(struct tracer *tr, int k, float3 o, float3 d, bool any_hit,
+				   float *nearest, struct hit *best)
+{
+	float t;
+	float2 uv;
+	float4 v0 = tr->leaf_triangles[k].v0;
+
+	if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
 		return;
-	if (t < *nearest || (t == *nearest && best->sphere < 0 && i < best->triangle)) {
-		*nearest = t;
-		best->sphere = -1;
-		best->triangle = i;
-		best->u = uv.x;
-		best->v = uv.y;
-	}
+	if (triangle_hit_at(tr, v0.xyz, tr->leaf_triangles[k].v1.xyz,
+			    tr->leaf_triangles[k].v2.xyz, o, d, INFINITY, &t, &uv))
+		triangle_take(as_int(v0.w), t, uv, nearest, best);
 }
 #endif
 

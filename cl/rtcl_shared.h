@@ -137,6 +137,17 @@ struct rt_scene {
 	rt_uint bvh_node_offset, bvh_ref_offset;
 	rt_int bvh_node_count;
 	rt_uint normal_offset; /* struct rt_vertex_normal, one per vertex */
+	/* The leaves' triangles with their vertices inline, in leaf order
+	   (struct rt_leaf_triangle; a leaf of triangles only names a range of
+	   them, RT_LEAF_TRIANGLES); 0 without (--accel bvh-compact). */
+	rt_uint bvh_triangle_offset;
+	rt_uint pad[3];
+};
+
+/* A triangle of a leaf, its three vertex positions inline: v0.w holds its
+ * scene index (int bits), what a hit names and ties compare. */
+struct rt_leaf_triangle {
+	rt_vec4 v0, v1, v2;
 };
 
 /* A BVH node of two children, both boxes in one 64-byte node so that one
@@ -159,7 +170,8 @@ struct rt_bvh_node {
 
 /* A device leaf of spheres only: the count's flag (see struct rt_bvh_box). */
 #define RT_LEAF_SPHERES 0x40000000
-#define RT_LEAF_COUNT_MASK 0x3fffffff
+#define RT_LEAF_TRIANGLES 0x20000000
+#define RT_LEAF_COUNT_MASK 0x1fffffff
 
 /* A primitive reference: the kind in the top bit, the index into the kind's
  * array below it. */
@@ -248,7 +260,8 @@ _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_triangle) == 16, "rt_triangle layout");
 _Static_assert(sizeof(struct rt_vertex) == 16, "rt_vertex layout");
 _Static_assert(sizeof(struct rt_vertex_normal) == 16, "rt_vertex_normal layout");
-_Static_assert(sizeof(struct rt_scene) == 176, "rt_scene layout");
+_Static_assert(sizeof(struct rt_scene) == 192, "rt_scene layout");
+_Static_assert(sizeof(struct rt_leaf_triangle) == 48, "rt_leaf_triangle layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, triangle_offset) == 148, "rt_scene layout");

@@ -164,6 +164,7 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_vertex_normal *normals;
 	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
 	RTCL_SCENE_SPACE const uint *refs; /* the BVH leaves' primitives (RT_PRIM_*) */
+	RTCL_SCENE_SPACE const struct rt_leaf_triangle *leaf_triangles; /* RT_LEAF_TRIANGLES */
 	__global ulong *item_counts;	   /* RT_ITEM_COUNTS per work-item, when counting */
 	__global ulong *pixel_flops;	   /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
@@ -251,6 +252,8 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 		(RTCL_SCENE_SPACE const struct rt_vertex_normal *)(base + scene->normal_offset);
 	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh_node *)(base + scene->bvh_node_offset);
 	tr->refs = (RTCL_SCENE_SPACE const uint *)(base + scene->bvh_ref_offset);
+	tr->leaf_triangles =
+		(RTCL_SCENE_SPACE const struct rt_leaf_triangle *)(base + scene->bvh_triangle_offset);
 	tr->item_counts = item_counts;
 	tr->pixel_flops = pixel_flops;
 #ifdef RTCL_COUNT_FLOPS

@@ -72,6 +72,16 @@ static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, flo
 		}
 		return;
 	}
+	if (SCENE_HAS_TRIANGLES && (count & RT_LEAF_TRIANGLES)) {
+		int end = first + (count & RT_LEAF_COUNT_MASK);
+		for (int k = first; k < end; k++) {
+			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+				return;
+			COUNT_PRIM_TEST(tr);
+			leaf_triangle_consider(tr, k, o, d, any_hit, nearest, best);
+		}
+		return;
+	}
 	for (int k = first; k < first + count; k++) {
 		if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
 			return;

@@ -59,9 +59,33 @@ static const char *refs_problem(const struct rt_scene *h, const rt_uint *refs, i
 	return NULL;
 }
 
-/* The BVH: every child a later node, a range of spheres (RT_LEAF_SPHERES) or
- * of references within their arrays, naming primitives the scene has; the
- * spheres' scene indices (leaf order, host/layout/scene_block.c) each scene index once. */
+/* A range of leaf triangles (RT_LEAF_TRIANGLES) within their array, each
+ * naming a triangle the scene has, its vertices finite. */
+static const char *leaf_triangles_problem(const struct rt_scene *h, int index, int count)
+{
+	const unsigned char *block = (const void *)h;
+	const struct rt_leaf_triangle *t = (const void *)(block + h->bvh_triangle_offset);
+	size_t slots = (h->total_bytes - h->bvh_triangle_offset) / sizeof(*t);
+
+	if ((size_t)index + (size_t)count > slots)
+		return "BVH triangle leaf out of range";
+	for (int k = index; k < index + count; k++) {
+		int i;
+		memcpy(&i, &t[k].v0.s[3], sizeof(i));
+		if (i < 0 || i >= h->triangle_count)
+			return "leaf triangle naming no triangle";
+		for (int c = 0; c < 3; c++)
+			if (!isfinite(t[k].v0.s[c]) || !isfinite(t[k].v1.s[c]) ||
+			    !isfinite(t[k].v2.s[c]))
+				return "leaf triangle vertex not finite";
+	}
+	return NULL;
+}
+
+/* The BVH: every child a later node, a range of spheres (RT_LEAF_SPHERES), of
+ * leaf triangles (RT_LEAF_TRIANGLES) or of references within their arrays,
+ * naming primitives the scene has; the spheres' scene indices (leaf order,
+ * host/layout/scene_block.c) each scene index once. */
 static const char *bvh_problem(const void *packed)
 {
 	const unsigned char *block = packed;
@@ -69,7 +93,7 @@ static const char *bvh_problem(const void *packed)
 	const struct rt_bvh_node *nodes = (const void *)(block + h->bvh_node_offset);
 	const struct rt_sphere *s = (const void *)(block + h->sphere_offset);
 	const rt_uint *refs = (const void *)(block + h->bvh_ref_offset);
-	int ref_slots = (int)((h->total_bytes - h->bvh_ref_offset) / sizeof(rt_uint));
+	int ref_slots = (int)((h->bvh_triangle_offset - h->bvh_ref_offset) / sizeof(rt_uint));
 	int seen_all = 1;
 	char *seen = calloc((size_t)h->sphere_count + 1, 1);
 
@@ -97,6 +121,12 @@ static const char *bvh_problem(const void *packed)
 				return "BVH child negative";
 			if ((count & RT_LEAF_SPHERES) && index + leaf_count > h->sphere_count)
 				return "BVH sphere leaf out of range";
+			if (count & RT_LEAF_TRIANGLES) {
+				const char *problem = leaf_triangles_problem(h, index, leaf_count);
+				if (problem)
+					return problem;
+				continue;
+			}
 			if (count > 0 && !(count & RT_LEAF_SPHERES)) {
 				if (index + count > ref_slots)
 					return "BVH leaf references out of range";

@@ -292,6 +292,7 @@ int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, st
 	out->depth = b.depth;
 	out->max_leaf = b.max_leaf;
 	out->sah_cost = bvh_sah_cost(out, triangle_cost);
+	out->leaf_triangles = 1;
 	return 0;
 }
 

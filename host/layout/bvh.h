@@ -23,6 +23,10 @@ struct bvh {
 	struct rt_bvh_node *nodes; /* node 0 the root; none for no primitive */
 	int node_count;
 	uint32_t *refs; /* each primitive's reference, exactly once, leaf by leaf */
+	/* Packing (host/layout/scene_block.c): the triangles also in leaf order
+	 * with their vertex positions inline, 48 bytes each (bvh_build sets it;
+	 * --accel bvh-compact clears it). */
+	int leaf_triangles;
 	int ref_count;
 	int depth;	 /* of the deepest leaf, the root's children at 1 */
 	int max_leaf;	 /* most references in one leaf */

@@ -133,57 +133,98 @@ static int *sphere_order(const struct scene *scene, const struct bvh *bvh)
 
 /* A leaf child whose references are all spheres becomes a range of the
  * sphere array: its first device sphere, and its count with
- * RT_LEAF_SPHERES. spheres_before[r]: sphere references before r. */
-static void leaf_to_sphere_range(struct rt_bvh_box *child, const struct bvh *bvh,
-				 const int *spheres_before)
+ * RT_LEAF_SPHERES; one whose references are all triangles a range of the
+ * leaf triangles (RT_LEAF_TRIANGLES). before[r]: references of r's kind
+ * before r. */
+static void leaf_to_range(struct rt_bvh_box *child, const struct bvh *bvh, const int *before)
 {
 	int32_t first, count;
+	int spheres = 0;
 
 	memcpy(&first, &child->lo.s[3], sizeof(first));
 	memcpy(&count, &child->hi.s[3], sizeof(count));
 	if (count <= 0)
 		return;
 	for (int r = first; r < first + count; r++)
-		if (!is_sphere_ref(bvh->refs[r]))
-			return;
-	first = spheres_before[first];
-	count |= RT_LEAF_SPHERES;
+		spheres += is_sphere_ref(bvh->refs[r]);
+	if (spheres != 0 && spheres != count)
+		return;
+	if (spheres == 0 && !bvh->leaf_triangles)
+		return;
+	first = before[first];
+	count |= spheres ? RT_LEAF_SPHERES : RT_LEAF_TRIANGLES;
 	memcpy(&child->lo.s[3], &first, sizeof(first));
 	memcpy(&child->hi.s[3], &count, sizeof(count));
 }
 
+/* Leaf triangle k: triangle i's vertex positions, i in v0.w. */
+static void pack_leaf_triangle(struct rt_leaf_triangle *out, const struct mesh_block *mesh,
+			       int32_t i)
+{
+	const struct rt_triangle *t = &mesh->triangles[i];
+
+	out->v0 = mesh->vertices[t->index.s[0]].position;
+	out->v1 = mesh->vertices[t->index.s[1]].position;
+	out->v2 = mesh->vertices[t->index.s[2]].position;
+	memcpy(&out->v0.s[3], &i, sizeof(i));
+}
+
 /* The BVH's nodes and references, after the triangles (none without a BVH),
  * with the spheres in leaf order (sphere_order): sphere references name
- * device spheres, leaves of spheres are ranges. Returns 0, or -1 when out of
- * memory. */
-static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh)
+ * device spheres, leaves of spheres are ranges; and the triangles in leaf
+ * order with their vertices inline, leaves of triangles ranges of them.
+ * Returns 0, or -1 when out of memory. */
+static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh,
+		    const struct mesh_block *mesh)
 {
 	struct rt_bvh_node *nodes = (struct rt_bvh_node *)(block + header->bvh_node_offset);
 	uint32_t *refs = (uint32_t *)(block + header->bvh_ref_offset);
-	int *spheres_before, k = 0;
+	struct rt_leaf_triangle *leaf_triangles =
+		(struct rt_leaf_triangle *)(block + header->bvh_triangle_offset);
+	int *before, spheres = 0, triangles = 0;
 
 	if (!bvh || bvh->node_count == 0)
 		return 0;
-	spheres_before = malloc((size_t)bvh->ref_count * sizeof(int));
-	if (!spheres_before)
+	before = malloc((size_t)bvh->ref_count * sizeof(int));
+	if (!before)
 		return -1;
 	header->bvh_node_count = bvh->node_count;
 	for (int r = 0; r < bvh->ref_count; r++) {
-		spheres_before[r] = k;
-		refs[r] = is_sphere_ref(bvh->refs[r]) ? (RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT) | k++
-						      : bvh->refs[r];
+		if (is_sphere_ref(bvh->refs[r])) {
+			before[r] = spheres;
+			refs[r] = (RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT) | spheres++;
+		} else {
+			before[r] = triangles;
+			refs[r] = bvh->refs[r];
+			if (bvh->leaf_triangles)
+				pack_leaf_triangle(&leaf_triangles[triangles], mesh,
+						   (int32_t)(bvh->refs[r] & RT_PRIM_INDEX_MASK));
+			triangles++;
+		}
 	}
 	memcpy(nodes, bvh->nodes, (size_t)bvh->node_count * sizeof(*bvh->nodes));
 	for (int n = 0; n < bvh->node_count; n++)
 		for (int c = 0; c < 2; c++)
-			leaf_to_sphere_range(&nodes[n].child[c], bvh, spheres_before);
-	free(spheres_before);
+			leaf_to_range(&nodes[n].child[c], bvh, before);
+	free(before);
 	return 0;
+}
+
+/* The leaf triangles of a BVH: its triangle references, with
+ * bvh->leaf_triangles; none without. */
+static size_t leaf_triangle_count(const struct bvh *bvh)
+{
+	size_t n = 0;
+
+	for (int r = 0; bvh && bvh->leaf_triangles && r < bvh->ref_count; r++)
+		n += !is_sphere_ref(bvh->refs[r]);
+	return n;
 }
 
 /* Where the arrays go in the block (byte offsets) and its size. */
 struct layout {
-	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, total;
+	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, leaf_triangle,
+		total;
 	int sphere_slots;
 };
 
@@ -203,7 +244,8 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	l.normal = l.vertex + (size_t)mesh->vertex_count * sizeof(struct rt_vertex);
 	l.node = l.normal + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal);
 	l.ref = l.node + (bvh ? (size_t)bvh->node_count * sizeof(*bvh->nodes) : 0);
-	l.total = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
+	l.leaf_triangle = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
+	l.total = l.leaf_triangle + leaf_triangle_count(bvh) * sizeof(struct rt_leaf_triangle);
 	return l;
 }
 
@@ -251,8 +293,9 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 	header->triangle_count = scene->triangle_count;
 	header->bvh_node_offset = (rt_uint)l.node;
 	header->bvh_ref_offset = (rt_uint)l.ref;
+	header->bvh_triangle_offset = (rt_uint)l.leaf_triangle;
 	int *order = sphere_order(scene, bvh);
-	if (!order || pack_bvh(block, header, bvh)) {
+	if (!order || pack_bvh(block, header, bvh, mesh)) {
 		free(order);
 		free(block);
 		return NULL;
