@@ -3,13 +3,22 @@
  * the least SAH cost is taken, and the range becomes a leaf when it is small
  * enough (BVH_MAX_LEAF) and no split is cheaper. Nodes are numbered in the
  * order they are made, depth first, so that a node's first child follows it
- * in memory. */
+ * in memory. The top levels' second subtrees are built on threads of their
+ * own (build_parallel), into node arrays of their own that are then appended
+ * in that order: the same tree, node for node, as one thread builds. */
 #include "layout/bvh.h"
 
 #include <float.h>
 #include <math.h>
+#include <pthread.h>
 #include <stdlib.h>
 #include <string.h>
+
+/* Subtrees built on threads of their own: at most 2^BVH_PARALLEL_LEVELS
+ * threads, and only ranges of at least BVH_PARALLEL_MIN primitives (below,
+ * a thread costs more than it saves). */
+#define BVH_PARALLEL_LEVELS 3
+#define BVH_PARALLEL_MIN 65536
 
 /* Below this depth, ranges split by SAH; from it on, at the middle of the
  * range, which ends any tree within RT_BVH_MAX_DEPTH levels: 2^31 primitives
@@ -216,9 +225,57 @@ static void store_child(struct rt_bvh_box *out, const struct child *c)
 	memcpy(&out->hi.s[3], &count, sizeof(count));
 }
 
+static void build_parallel(struct builder *b, int begin, int end, int depth, int levels,
+			   struct child *out);
+
+/* A subtree built on a thread of its own, into nodes of its own numbered
+ * from 0. */
+struct subtree {
+	struct builder b;
+	int begin, end, depth, levels;
+	struct child out;
+};
+
+static void *build_subtree(void *arg)
+{
+	struct subtree *t = arg;
+
+	build_parallel(&t->b, t->begin, t->end, t->depth, t->levels, &t->out);
+	return NULL;
+}
+
+/* Appends subtree t's nodes to b's, renumbered (its node k becomes b's
+ * node_count + k), and renumbers its root child *c the same way. */
+static void append_subtree(struct builder *b, const struct subtree *t, struct child *c)
+{
+	int offset = b->node_count;
+
+	for (int n = 0; n < t->b.node_count; n++) {
+		struct rt_bvh_node *node = &b->nodes[offset + n];
+		*node = t->b.nodes[n];
+		for (int k = 0; k < 2; k++) {
+			int32_t index, count;
+			memcpy(&index, &node->child[k].lo.s[3], sizeof(index));
+			memcpy(&count, &node->child[k].hi.s[3], sizeof(count));
+			if (count == 0) {
+				index += offset;
+				memcpy(&node->child[k].lo.s[3], &index, sizeof(index));
+			}
+		}
+	}
+	if (c->count == 0)
+		c->index += offset;
+	b->node_count += t->b.node_count;
+	b->depth = t->b.depth > b->depth ? t->b.depth : b->depth;
+	b->max_leaf = t->b.max_leaf > b->max_leaf ? t->b.max_leaf : b->max_leaf;
+}
+
 /* Builds range [begin, end) at depth into *out: a leaf, or a node made here
- * with its subtrees. */
-static void build_range(struct builder *b, int begin, int end, int depth, struct child *out)
+ * with its subtrees; the second subtree of each of the top `levels` levels
+ * on a thread of its own when large enough (BVH_PARALLEL_MIN), and where a
+ * thread or its nodes cannot be had, on this thread. */
+static void build_parallel(struct builder *b, int begin, int end, int depth, int levels,
+			   struct child *out)
 {
 	struct box centroids;
 
@@ -240,8 +297,27 @@ static void build_range(struct builder *b, int begin, int end, int depth, struct
 	}
 	int node = b->node_count++;
 	struct child left, right;
-	build_range(b, begin, mid, depth + 1, &left);
-	build_range(b, mid, end, depth + 1, &right);
+	struct subtree t = {.b = *b, .begin = mid, .end = end, .depth = depth + 1,
+			    .levels = levels - 1};
+	int threaded = 0;
+
+	if (levels > 0 && end - mid >= BVH_PARALLEL_MIN) {
+		t.b.nodes = malloc((size_t)(end - mid) * sizeof(*t.b.nodes));
+		t.b.node_count = 0;
+		pthread_t thread;
+		threaded = t.b.nodes && pthread_create(&thread, NULL, build_subtree, &t) == 0;
+		build_parallel(b, begin, mid, depth + 1, levels - 1, &left);
+		if (threaded) {
+			pthread_join(thread, NULL);
+			right = t.out;
+			append_subtree(b, &t, &right);
+		}
+		free(t.b.nodes);
+	} else {
+		build_parallel(b, begin, mid, depth + 1, levels - 1, &left);
+	}
+	if (!threaded)
+		build_parallel(b, mid, end, depth + 1, levels - 1, &right);
 	store_child(&b->nodes[node].child[0], &left);
 	store_child(&b->nodes[node].child[1], &right);
 	out->index = node;
@@ -254,6 +330,12 @@ int bvh_build(struct bvh_prim *prims, int count, struct bvh *out)
 }
 
 int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, struct bvh *out)
+{
+	return bvh_build_threaded(prims, count, triangle_cost, BVH_PARALLEL_LEVELS, out);
+}
+
+int bvh_build_threaded(struct bvh_prim *prims, int count, double triangle_cost, int levels,
+		       struct bvh *out)
 {
 	struct builder b = {prims, NULL, 0, 0, 0, triangle_cost};
 	struct child root;
@@ -282,7 +364,7 @@ int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, st
 		b.node_count = 1;
 		b.depth = b.max_leaf = 1;
 	} else {
-		build_range(&b, 0, count, 0, &root);
+		build_parallel(&b, 0, count, 0, levels, &root);
 	}
 	for (int i = 0; i < count; i++)
 		out->refs[i] = prims[i].ref;

@@ -51,6 +51,12 @@ int bvh_build(struct bvh_prim *prims, int count, struct bvh *out);
  * SAH (BVH_TRIANGLE_COST for bvh_build). */
 int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, struct bvh *out);
 
+/* bvh_build_costed with subtrees on threads of their own down to `levels`
+ * levels (bvh.c: BVH_PARALLEL_LEVELS; 0: one thread). The tree is the same
+ * whatever levels; the tests compare. */
+int bvh_build_threaded(struct bvh_prim *prims, int count, double triangle_cost, int levels,
+		       struct bvh *out);
+
 /* The BVH of the scene's spheres and triangles, in one hierarchy, in the
  * device's coordinates: relative to the camera's eye (scene_from_eye), a
  * triangle test costing triangle_cost sphere tests (BVH_TRIANGLE_COST; 1 for
