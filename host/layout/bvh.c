@@ -107,7 +107,6 @@ static void sweep_axis(const struct axis_bins *a, double parent_area, struct spl
 	struct split s = a->s;
 	struct box left, right;
 	double right_cost[BVH_BINS];
-
 	double cost = 0.0;
 
 	box_empty(&right);
@@ -139,10 +138,9 @@ static double find_split(const struct bvh_prim *prims, int begin, int end,
 			 const struct box *centroids, double parent_area, double triangle_cost,
 			 struct split *best)
 {
-	double range_cost = 0.0;
-
 	struct axis_bins bins[3];
 	int axis_count = 0;
+	double range_cost = 0.0;
 
 	for (int axis = 0; axis < 3; axis++) {
 		double extent = (double)centroids->hi[axis] - centroids->lo[axis];
@@ -270,6 +268,30 @@ static void append_subtree(struct builder *b, const struct subtree *t, struct ch
 	b->max_leaf = t->b.max_leaf > b->max_leaf ? t->b.max_leaf : b->max_leaf;
 }
 
+/* Builds the children [begin, mid) into *left, on this thread, and [mid,
+ * end) into *right on a thread of its own, both at depth with `levels`
+ * levels of threads below. Returns 0, or -1 having built nothing when the
+ * thread or its nodes cannot be had. */
+static int build_children_threaded(struct builder *b, int begin, int mid, int end, int depth,
+				   int levels, struct child *left, struct child *right)
+{
+	struct subtree t = {.b = *b, .begin = mid, .end = end, .depth = depth, .levels = levels};
+	pthread_t thread;
+
+	t.b.node_count = 0;
+	t.b.nodes = malloc((size_t)(end - mid) * sizeof(*t.b.nodes));
+	if (!t.b.nodes || pthread_create(&thread, NULL, build_subtree, &t) != 0) {
+		free(t.b.nodes);
+		return -1;
+	}
+	build_parallel(b, begin, mid, depth, levels, left);
+	pthread_join(thread, NULL);
+	*right = t.out;
+	append_subtree(b, &t, right);
+	free(t.b.nodes);
+	return 0;
+}
+
 /* Builds range [begin, end) at depth into *out: a leaf, or a node made here
  * with its subtrees; the second subtree of each of the top `levels` levels
  * on a thread of its own when large enough (BVH_PARALLEL_MIN), and where a
@@ -297,27 +319,12 @@ static void build_parallel(struct builder *b, int begin, int end, int depth, int
 	}
 	int node = b->node_count++;
 	struct child left, right;
-	struct subtree t = {.b = *b, .begin = mid, .end = end, .depth = depth + 1,
-			    .levels = levels - 1};
-	int threaded = 0;
 
-	if (levels > 0 && end - mid >= BVH_PARALLEL_MIN) {
-		t.b.nodes = malloc((size_t)(end - mid) * sizeof(*t.b.nodes));
-		t.b.node_count = 0;
-		pthread_t thread;
-		threaded = t.b.nodes && pthread_create(&thread, NULL, build_subtree, &t) == 0;
+	if (levels < 1 || end - mid < BVH_PARALLEL_MIN ||
+	    build_children_threaded(b, begin, mid, end, depth + 1, levels - 1, &left, &right)) {
 		build_parallel(b, begin, mid, depth + 1, levels - 1, &left);
-		if (threaded) {
-			pthread_join(thread, NULL);
-			right = t.out;
-			append_subtree(b, &t, &right);
-		}
-		free(t.b.nodes);
-	} else {
-		build_parallel(b, begin, mid, depth + 1, levels - 1, &left);
-	}
-	if (!threaded)
 		build_parallel(b, mid, end, depth + 1, levels - 1, &right);
+	}
 	store_child(&b->nodes[node].child[0], &left);
 	store_child(&b->nodes[node].child[1], &right);
 	out->index = node;
@@ -326,12 +333,7 @@ static void build_parallel(struct builder *b, int begin, int end, int depth, int
 
 int bvh_build(struct bvh_prim *prims, int count, struct bvh *out)
 {
-	return bvh_build_costed(prims, count, BVH_TRIANGLE_COST, out);
-}
-
-int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, struct bvh *out)
-{
-	return bvh_build_threaded(prims, count, triangle_cost, BVH_PARALLEL_LEVELS, out);
+	return bvh_build_threaded(prims, count, BVH_TRIANGLE_COST, BVH_PARALLEL_LEVELS, out);
 }
 
 int bvh_build_threaded(struct bvh_prim *prims, int count, double triangle_cost, int levels,
@@ -459,7 +461,7 @@ int bvh_build_scene(const struct scene *scene, double triangle_cost, struct bvh 
 			scene_from_eye(scene, scene->triangles[i].v[j], v[j]);
 		triangle_prim_at((const double(*)[3])v, i, &prims[spheres + i]);
 	}
-	int ret = bvh_build_costed(prims, n, triangle_cost, out);
+	int ret = bvh_build_threaded(prims, n, triangle_cost, BVH_PARALLEL_LEVELS, out);
 	free(prims);
 	return ret;
 }

@@ -48,12 +48,10 @@ struct bvh {
 int bvh_build(struct bvh_prim *prims, int count, struct bvh *out);
 
 /* bvh_build with a triangle test costing triangle_cost sphere tests in the
- * SAH (BVH_TRIANGLE_COST for bvh_build). */
-int bvh_build_costed(struct bvh_prim *prims, int count, double triangle_cost, struct bvh *out);
-
-/* bvh_build_costed with subtrees on threads of their own down to `levels`
- * levels (bvh.c: BVH_PARALLEL_LEVELS; 0: one thread). The tree is the same
- * whatever levels; the tests compare. */
+ * SAH (BVH_TRIANGLE_COST for bvh_build) and subtrees built on threads of
+ * their own down to `levels` levels (bvh.c: BVH_PARALLEL_LEVELS for
+ * bvh_build; 0: one thread). The tree is the same whatever levels; the tests
+ * compare. */
 int bvh_build_threaded(struct bvh_prim *prims, int count, double triangle_cost, int levels,
 		       struct bvh *out);
 

@@ -13,6 +13,8 @@ import pathlib
 
 import numpy as np
 
+from .report import one_line
+
 FLOPS_DTYPE = np.dtype("<u8")
 NPY_MAGIC = b"\x93NUMPY"
 OUTPUT_FORMATS = ("png", "svg", "pdf")
@@ -108,18 +110,28 @@ def sidecar_path(npy_path):
     return npy_path.with_name(npy_path.name + ".json")
 
 
-def load_flops(path):
-    """Returns the FlopsFile at path; raises FlopsFileError naming what is wrong."""
+def read_npy(path, error):
+    """Returns the array of the .npy file at path (no pickles); raises error (an
+    exception class) with one line naming the file when it is missing, has no
+    NumPy header or cannot be read. rtcl's .npy outputs all come through here."""
     path = pathlib.Path(path)
     if not path.is_file():
-        raise FlopsFileError(f"{path}: no such file")
+        raise error(f"{path}: no such file")
     try:
         with open(path, "rb") as stream:
             if stream.read(len(NPY_MAGIC)) != NPY_MAGIC:
-                raise FlopsFileError(f"{path}: not a .npy file (no NumPy header)")
-        counts = np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as error:
-        raise FlopsFileError(f"{path}: not a readable .npy file ({error})") from None
+                raise error(f"{path}: not a .npy file (no NumPy header)")
+        return np.load(path, allow_pickle=False)
+    except (OSError, ValueError) as failure:
+        if isinstance(failure, error):
+            raise
+        raise error(f"{path}: not a readable .npy file ({one_line(failure)})") from None
+
+
+def load_flops(path):
+    """Returns the FlopsFile at path; raises FlopsFileError naming what is wrong."""
+    path = pathlib.Path(path)
+    counts = read_npy(path, FlopsFileError)
     if counts.dtype != FLOPS_DTYPE:
         raise FlopsFileError(f"{path}: dtype is {counts.dtype.str!r}, expected '<u8'")
     if counts.ndim != 2 or counts.size == 0:

@@ -10,8 +10,7 @@ import pathlib
 
 import numpy as np
 
-from .flops import NPY_MAGIC
-from .report import one_line
+from .flops import read_npy
 
 SCHEDULE_DTYPE = np.dtype("<u4")
 UNSTARTED_GROUP = 0xFFFFFFFF
@@ -25,16 +24,7 @@ def load_map(path):
     """Returns the (height, width, 3) uint32 array of the schedule map at path;
     raises ScheduleMapError naming what is wrong."""
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise ScheduleMapError(f"{path}: no such file")
-    try:
-        with open(path, "rb") as stream:
-            magic = stream.read(len(NPY_MAGIC))
-        array = np.load(path, allow_pickle=False) if magic == NPY_MAGIC else None
-    except (OSError, ValueError) as error:
-        raise ScheduleMapError(f"{path}: cannot read it as .npy: {one_line(error)}") from None
-    if array is None:
-        raise ScheduleMapError(f"{path}: not a .npy file (no NumPy header)")
+    array = read_npy(path, ScheduleMapError)
     if array.dtype != SCHEDULE_DTYPE or array.ndim != 3 or array.shape[2] != 3 \
             or array.size == 0:
         raise ScheduleMapError(f"{path}: not a schedule map (dtype {array.dtype}, shape "

@@ -40,7 +40,7 @@ require("numpy")  # the maps; matplotlib once the options are read (--help needs
 import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
-from ..flops import FLOPS_DTYPE, NPY_MAGIC, flop_unit, output_format  # noqa: E402
+from ..flops import FLOPS_DTYPE, flop_unit, output_format, read_npy  # noqa: E402
 from ..plots import pyplot  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..schedule import ScheduleMapError, load_map, order_started, started  # noqa: E402
@@ -85,16 +85,7 @@ def load_work_map(path):
     """Returns the (height, width) uint64 flops per pixel of the work map at path;
     raises WorkMapError naming what is wrong."""
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise WorkMapError(f"{path}: no such file")
-    try:
-        with open(path, "rb") as stream:
-            magic = stream.read(len(NPY_MAGIC))
-        work = np.load(path, allow_pickle=False) if magic == NPY_MAGIC else None
-    except (OSError, ValueError) as error:
-        raise WorkMapError(f"{path}: cannot read it as .npy: {one_line(error)}") from None
-    if work is None:
-        raise WorkMapError(f"{path}: not a .npy file (no NumPy header)")
+    work = read_npy(path, WorkMapError)
     if work.dtype != FLOPS_DTYPE or work.ndim != 2 or work.size == 0:
         raise WorkMapError(f"{path}: not a work map (dtype {work.dtype}, shape {work.shape}; "
                            "rtcl --work-map FILE.npy writes uint64, height x width)")
