@@ -141,7 +141,10 @@ struct rt_scene {
 	   (struct rt_leaf_triangle; a leaf of triangles only names a range of
 	   them, RT_LEAF_TRIANGLES); 0 without (--accel bvh-compact). */
 	rt_uint bvh_triangle_offset;
-	rt_uint pad[3];
+	/* The thin lens (RENDERING.md, "The thin lens"): its radius A and the
+	   focus distance F, read only in programs built with RTCL_THIN_LENS. */
+	rt_float lens_radius, focus_distance;
+	rt_uint pad[1];
 };
 
 /* A triangle of a leaf, its three vertex positions inline: v0.w holds its

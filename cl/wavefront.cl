@@ -107,7 +107,8 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 		int pixel = y * tr.scene->width + x;
 		struct ray_job ray;
 
-		primary_ray(&tr, x, y, sample_offset(&tr, x, y, sample, piece.samples), &ray);
+		primary_ray(&tr, x, y, sample_offset(&tr, x, y, sample, piece.samples), sample,
+			    piece.samples, &ray);
 		store_ray(queue, dy * piece.width + dx, &ray, pixel);
 		vstore3((float3)(0.0f), pixel, sample_rgb);
 		start_sample_flops(sample_flops, pixel, tracer_flops(&tr)); /* bounces add theirs */

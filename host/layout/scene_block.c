@@ -42,6 +42,8 @@ static void pack_camera(struct rt_scene *out, const struct scene *scene, int wid
 	out->forward = vec4(forward, h);
 	out->right = vec4(right, scene->epsilon);
 	out->up = vec4(up, 0.0);
+	out->lens_radius = (float)cam->aperture;
+	out->focus_distance = (float)cam->focus_distance;
 }
 
 static void pack_material(struct rt_material *out, const struct scene_material *in)

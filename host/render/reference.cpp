@@ -437,7 +437,74 @@ uint32_t sobol_point(uint32_t k, int dimension)
 	return r;
 }
 
+/* Kensler's permute of RENDERING.md ("More dimensions"): where i goes in a
+ * hashed permutation of 0 ... n-1 seeded by p. */
+uint32_t permute(uint32_t i, uint32_t n, uint32_t p)
+{
+	uint32_t w = n - 1;
+
+	for (int shift = 1; shift <= 16; shift *= 2)
+		w |= w >> shift;
+	do {
+		i ^= p;
+		i *= 0xe170893du;
+		i ^= p >> 16;
+		i ^= (i & w) >> 4;
+		i ^= p >> 8;
+		i *= 0x0929eb3fu;
+		i ^= p >> 23;
+		i ^= (i & w) >> 1;
+		i *= 1u | p >> 27;
+		i *= 0x6935fa69u;
+		i ^= (i & w) >> 11;
+		i *= 0x74dcb303u;
+		i ^= (i & w) >> 2;
+		i *= 0x9e501cc3u;
+		i ^= (i & w) >> 2;
+		i *= 0xc860a3dfu;
+		i &= w;
+		i ^= i >> 5;
+	} while (i >= n);
+	return (i + p) % n;
+}
+
+/* RENDERING.md's concentric mapping of [0, 1)^2 onto the unit disk. */
+glm::dvec2 concentric_disk(double s, double t)
+{
+	double x = 2.0 * s - 1.0, y = 2.0 * t - 1.0;
+
+	if (x == 0.0 && y == 0.0)
+		return glm::dvec2(0.0);
+	if (std::fabs(x) > std::fabs(y)) {
+		double phi = M_PI / 4.0 * (y / x);
+		return glm::dvec2(x * std::cos(phi), x * std::sin(phi));
+	}
+	double phi = M_PI / 2.0 - M_PI / 4.0 * (x / y);
+	return glm::dvec2(y * std::cos(phi), y * std::sin(phi));
+}
+
+/* A point of the unit disk for dimension pair `pair` of sample k of pixel
+ * (x, y) out of n. */
+glm::dvec2 sample_disk(int x, int y, int k, int n, int pair)
+{
+	double st[2];
+
+	reference_sample_pair(x, y, k, n, pair, st);
+	return concentric_disk(st[0], st[1]);
+}
+
 } // namespace
+
+extern "C" void reference_sample_pair(int x, int y, int k, int n, int pair, double st[2])
+{
+	uint32_t scramble_u = sample_hash(sample_hash((uint32_t)x) ^ (uint32_t)y);
+	uint32_t seed = sample_hash(scramble_u ^ sample_hash((uint32_t)pair));
+	uint32_t a = sample_hash(seed), b = sample_hash(a);
+	uint32_t i = permute((uint32_t)k, (uint32_t)n, seed);
+
+	st[0] = std::ldexp((double)((sobol_point(i, 0) ^ a) >> 8), -24);
+	st[1] = std::ldexp((double)((sobol_point(i, 1) ^ b) >> 8), -24);
+}
 
 extern "C" void reference_sample_position(int x, int y, int k, int n, double uv[2])
 {
@@ -481,8 +548,18 @@ int reference_render_samples(const struct scene *scene, int width, int height, i
 					reference_sample_position(x, y, k, samples, uv);
 					double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
 					double sy = (1.0 - 2.0 * (y + uv[1]) / height) * h;
-					dvec3 dir = glm::normalize(f + sx * r + sy * u);
-					sum += tr.trace(eye, dir, 0);
+					dvec3 q = f + sx * r + sy * u;
+					if (cam.aperture > 0) {
+						/* RENDERING.md, "The thin lens" */
+						glm::dvec2 lens = sample_disk(x, y, k, samples, 1);
+						dvec3 on_lens = cam.aperture * lens.x * r +
+								cam.aperture * lens.y * u;
+						dvec3 dir = glm::normalize(cam.focus_distance * q -
+									   on_lens);
+						sum += tr.trace(eye + on_lens, dir, 0);
+						continue;
+					}
+					sum += tr.trace(eye, glm::normalize(q), 0);
 				}
 				dvec3 c = sum / (double)samples;
 				float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);

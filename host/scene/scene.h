@@ -64,6 +64,18 @@ struct scene_camera {
 	double look_at[3];
 	double up[3];
 	double fov; /* vertical, degrees */
+	double aperture;       /* the lens radius; 0: a pinhole */
+	double focus_distance; /* > 0: camera.focus_distance, else |look_at - eye| */
+	int focus_given;       /* focus_distance was given, not taken from look_at */
+};
+
+/* The camera as the command line changes it (--eye, --look-at, --fov,
+ * --aperture, --focus-distance): each value replaces the scene's where its
+ * flag is set. */
+struct camera_override {
+	int eye_given, look_at_given, fov_given, aperture_given, focus_given;
+	double eye[3], look_at[3];
+	double fov, aperture, focus_distance;
 };
 
 /* A file the scene was read from. No output may replace one (output/plan.h). */
@@ -113,6 +125,13 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		      size_t err_size);
 
 void scene_free(struct scene *scene);
+
+/* Applies the command line's camera to a loaded scene, and checks the
+ * camera again as the loader does (the eye and look_at must differ, up not
+ * parallel to them). Returns 0, or -1 with one message naming the options
+ * in err. */
+int scene_override_camera(struct scene *scene, const struct camera_override *o, char *err,
+			  size_t err_size);
 
 /* p relative to the camera's eye, in double: the device renders the scene
  * translated so that the eye is its origin (camera-relative rendering,

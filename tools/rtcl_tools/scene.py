@@ -71,11 +71,15 @@ def read_header(doc):
 
 
 def read_camera(doc):
-    cam = check_keys(required(doc, "camera", ""), "camera", ("eye", "look_at", "up", "fov"))
+    cam = check_keys(required(doc, "camera", ""), "camera",
+                     ("eye", "look_at", "up", "fov", "aperture", "focus_distance"))
     camera = {"eye": vec3(required(cam, "eye", "camera"), "camera.eye"),
               "look_at": vec3(required(cam, "look_at", "camera"), "camera.look_at"),
               "up": optional(cam, "up", "camera", vec3, (0.0, 1.0, 0.0)),
-              "fov": optional(cam, "fov", "camera", number, 45.0, "fov")}
+              "fov": optional(cam, "fov", "camera", number, 45.0, "fov"),
+              "aperture": optional(cam, "aperture", "camera", number, 0.0, "non-negative"),
+              "focus_distance": optional(cam, "focus_distance", "camera", number, None,
+                                         "positive")}
     # Halved first so that the difference cannot overflow.
     d = scale_to_unit_max([b / 2 - a / 2 for a, b in zip(camera["eye"], camera["look_at"])])
     if d is None:
@@ -88,6 +92,9 @@ def read_camera(doc):
     if length(cross) <= PARALLEL_SINE * length(u) * length(d):
         fail("camera.up", f"must not be parallel to look_at - eye, got "
                           f"{format_vector(camera['up'])}")
+    if camera["focus_distance"] is None:
+        camera["focus_distance"] = 2 * length([b / 2 - a / 2 for a, b in
+                                               zip(camera["eye"], camera["look_at"])])
     return camera
 
 
