@@ -82,8 +82,13 @@ struct rt_plane {
 };
 
 struct rt_light {
-	rt_vec4 position;
-	rt_vec4 color;
+	rt_vec4 position; /* relative to the eye, or for a directional light the
+			     unit direction towards it; w: a sphere light's
+			     radius, or tan of a directional light's angular
+			     radius (0: a point, or a sharp directional light) */
+	rt_vec4 color;	  /* w: 1 for a directional light, else 0. The w lanes
+			     are read only in programs built with
+			     RTCL_AREA_LIGHTS (RENDERING.md, "Light samples") */
 };
 
 /* A triangle: the indices of its three vertices in the vertex array and, in

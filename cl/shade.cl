@@ -37,6 +37,9 @@ struct shading {
 	float light_distance;
 	float diffuse, specular;
 	int light;
+#ifdef RTCL_AREA_LIGHTS
+	int depth; /* of the ray being shaded: which pairs its light samples take */
+#endif
 };
 
 /* RENDERING.md step 2 on a smooth triangle: the shading normal, interpolated
@@ -128,8 +131,75 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	sh->color = material_ambient(sh->m->color) * sh->base * scene->ambient.xyz;
 	sh->shadow_origin = sh->p + scene_epsilon(scene) * sh->n_face;
 	sh->next_light = 0;
+#ifdef RTCL_AREA_LIGHTS
+	sh->depth = ray->depth;
+#endif
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
+
+#ifdef RTCL_AREA_LIGHTS
+/* Light i's sample for the hit (RENDERING.md, "Light samples"): the point of
+ * the disk of radius `size` across unit w at offset, given by the pair of the
+ * sample that belongs to the light and the depth of the ray shaded, through
+ * Duff et al.'s frame across w. Returns size·a·b1 + size·b·b2. */
+static float3 light_disk_offset(struct tracer *tr, const struct shading *sh, int i, float3 w,
+				float size)
+{
+	uint pair = 2u + (uint)sh->depth * (uint)tr->scene->light_count + (uint)i;
+	float2 disk = sample_disk(
+		tr, sample_pair(tr, tr->pixel_x, tr->pixel_y, tr->sample, tr->samples, pair));
+	float sign = copysign(1.0f, w.z);
+	float e = -1.0f / (sign + w.z);
+	float g = w.x * w.y * e;
+	float3 b1 = (float3)(1.0f + sign * w.x * w.x * e, sign * g, -sign * w.x);
+	float3 b2 = (float3)(g, sign + w.y * w.y * e, -w.y);
+
+	/* the frame: e 2, g 2, b1 6, b2 3; size·a, size·b; the two scaled
+	 * vectors and their sum */
+	COUNT_FLOPS(tr, 13 + 2 + FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3);
+	return (size * disk.x) * b1 + (size * disk.y) * b2;
+}
+
+/* Where light i's shadow ray goes from the hit: the unit direction *l and
+ * the distance to the light (INFINITY for a directional light). A point light
+ * is computed as without RTCL_AREA_LIGHTS, bit for bit. Returns false when
+ * the light adds nothing (the hit at a sphere light's centre). */
+static bool light_direction(struct tracer *tr, const struct shading *sh, int i, float3 *l,
+			    float *distance)
+{
+	float4 position = tr->lights[i].position;
+	float size = position.w; /* a sphere's radius, or tan(angle) */
+
+	if (tr->lights[i].color.w != 0.0f) { /* directional: xyz the unit way to it */
+		*distance = INFINITY;
+		*l = position.xyz;
+		if (size > 0.0f) {
+			*l = normalize3(*l + light_disk_offset(tr, sh, i, position.xyz, size));
+			COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_NORMALIZE3);
+		}
+		return true;
+	}
+	float3 target = position.xyz;
+	if (size > 0.0f) {
+		float3 to_centre = target - sh->p;
+		float length2 = dot3(to_centre, to_centre);
+		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3);
+		if (length2 == 0.0f)
+			return false;
+		COUNT_FLOPS(tr, 1 + FLOPS_MUL3);
+		target += light_disk_offset(tr, sh, i, to_centre * rsqrt(length2), size);
+		COUNT_FLOPS(tr, FLOPS_ADD3);
+	}
+	float3 to_light = target - sh->p;
+	float distance2 = dot3(to_light, to_light);
+	float inv_distance = rsqrt(distance2);
+	*distance = distance2 * inv_distance;
+	*l = to_light * inv_distance;
+	/* to_light, distance2, rsqrt, distance, l */
+	COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3 + 1 + 1 + FLOPS_MUL3);
+	return true;
+}
+#endif
 
 /* Moves on to the next light that needs a shadow ray: computes its
  * Blinn-Phong terms and returns true, or returns false when no light is left.
@@ -139,6 +209,14 @@ static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
 	while (sh->next_light < tr->scene->light_count) {
 		int i = sh->next_light++;
 		RTCL_SCENE_SPACE const struct rt_material *m = sh->m;
+#ifdef RTCL_AREA_LIGHTS
+		float3 l;
+		float distance;
+		if (!light_direction(tr, sh, i, &l, &distance))
+			continue;
+		float diffuse = m->diffuse * fmax(0.0f, dot3(sh->n, l));
+		COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
+#else
 		float3 to_light = tr->lights[i].position.xyz - sh->p;
 		float distance2 = dot3(to_light, to_light);
 		float inv_distance = rsqrt(distance2);
@@ -147,6 +225,7 @@ static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
 		float diffuse = m->diffuse * fmax(0.0f, dot3(sh->n, l));
 		/* to_light, distance2, rsqrt, distance, l, diffuse */
 		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3 + 1 + 1 + FLOPS_MUL3 + FLOPS_DOT3 + 2);
+#endif
 
 		float specular = 0.0f;
 		float3 half_vector = l - d;

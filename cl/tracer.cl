@@ -178,6 +178,12 @@ struct tracer {
 	ulong lane_steps[RT_SIMD_PHASES]; /* steps this work-item took */
 	ulong warp_steps[RT_SIMD_PHASES]; /* of them, those it led for its warp */
 #endif
+#ifdef RTCL_AREA_LIGHTS
+	/* The sample being traced, whose further pairs place the light samples
+	   (tracer_set_sample). */
+	int pixel_x, pixel_y;
+	uint sample, samples;
+#endif
 };
 
 struct ray_job {
@@ -266,6 +272,24 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 #ifdef RTCL_SIMD_MEASURE
 	for (int p = 0; p < RT_SIMD_PHASES; p++)
 		tr->lane_steps[p] = tr->warp_steps[p] = 0;
+#endif
+}
+
+/* Sets the sample being traced: sample k of n of pixel (x, y). Only the
+ * light samples need it (RTCL_AREA_LIGHTS). */
+static inline void tracer_set_sample(struct tracer *tr, int x, int y, uint k, uint n)
+{
+#ifdef RTCL_AREA_LIGHTS
+	tr->pixel_x = x;
+	tr->pixel_y = y;
+	tr->sample = k;
+	tr->samples = n;
+#else
+	(void)tr;
+	(void)x;
+	(void)y;
+	(void)k;
+	(void)n;
 #endif
 }
 

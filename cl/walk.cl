@@ -170,6 +170,7 @@ static inline void primary_ray(struct tracer *tr, int x, int y, float2 offset, u
 static void walk_start(struct tracer *tr, struct walk *w, int x, int y, float2 offset, uint k,
 		       uint n)
 {
+	tracer_set_sample(tr, x, y, k, n);
 	primary_ray(tr, x, y, offset, k, n, &w->rp.ray);
 	w->top = 0;
 	w->rp.shadow = false;

@@ -148,14 +148,16 @@ __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local u
 
 /* One work-item per queued ray (1D NDRange, rounded up); image and
  * pixel_flops are the sample's (sample_rgb, sample_flops), and each ray
- * carries its pixel, so the bounce needs no piece. Spawned rays go to
+ * carries its pixel, so the bounce needs no piece: only which sample of how
+ * many it traces, for the light samples. Spawned rays go to
  * next[atomic_inc(next_count)]; one that finds the queue full sets *overflow
  * and is dropped, and the host renders the frame again with larger queues. */
 __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4 *scene_local,
 			       __global const struct rt_ray *queue, uint queued,
 			       __global struct rt_ray *next, __global uint *next_count,
 			       uint capacity, __global uint *overflow, __global float *image,
-			       __global ulong *item_counts, __global ulong *pixel_flops)
+			       __global ulong *item_counts, __global ulong *pixel_flops,
+			       uint sample, uint samples)
 {
 	struct tracer tr;
 	uint i = get_global_id(0);
@@ -168,6 +170,9 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 		int pixel = queue[i].pixel;
 		struct ray_job children[2];
 		int spawned;
+
+		tracer_set_sample(&tr, pixel % tr.scene->width, pixel / tr.scene->width, sample,
+				  samples);
 
 		add_to_pixel(image, pixel, trace_one(&tr, &ray, children, &spawned));
 		COUNT_FLOPS(&tr, FLOPS_ADD3);

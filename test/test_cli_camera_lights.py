@@ -116,3 +116,21 @@ def test_bad_camera_option(tmp_path, args, message):
     assert len(lines) == 1 and lines[0].startswith("rtcl: ") and message in lines[0], lines
     assert result.stdout == ""
     assert os.listdir(out) == [], "a refused run left files behind"
+
+
+def test_radius_0_is_the_point_light_program_and_image(tmp_path):
+    """Lights of radius 0 build without light samples (-DRTCL_AREA_LIGHTS): the image of
+    point lights, byte for byte; a radius or a directional light samples them."""
+    scene = str(ROOT / "scenes" / "two_balls.json")
+    lights = json.loads((ROOT / "scenes" / "two_balls.json").read_text())["lights"]
+    zero = write_scene(tmp_path, "zero.json", lights=[dict(li, radius=0) for li in lights])
+    sphere = write_scene(tmp_path, "sphere.json",
+                         lights=[dict(lights[0], radius=1), lights[1]])
+    sun = write_scene(tmp_path, "sun.json",
+                      lights=[lights[0], {"direction": [-1, -2, 1], "angle": 2}])
+    plain = render(tmp_path, "plain.pfm", scene, "--spp", "2")
+    assert render(tmp_path, "zero.pfm", zero, "--spp", "2") == plain
+    assert "RTCL_AREA_LIGHTS" not in build_options(tmp_path, zero)
+    for name, path in (("sphere", sphere), ("sun", sun)):
+        assert "RTCL_AREA_LIGHTS" in build_options(tmp_path, path)
+        assert render(tmp_path, name + ".pfm", path, "--spp", "2") != plain

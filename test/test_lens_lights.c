@@ -242,6 +242,98 @@ Test(lens_lights, scene_digest_covers_the_new_fields)
 	unsigned long long lens = scene_digest(&scene);
 	cr_assert_neq(lens, plain, "camera.aperture");
 	scene.camera.focus_distance *= 2;
-	cr_assert_neq(scene_digest(&scene), lens, "camera.focus_distance");
+	unsigned long long focus = scene_digest(&scene);
+	cr_assert_neq(focus, lens, "camera.focus_distance");
+	scene.lights[0].radius = 1;
+	unsigned long long radius = scene_digest(&scene);
+	cr_assert_neq(radius, focus, "lights[0].radius");
+	scene.lights[0].directional = 1;
+	cr_assert_neq(scene_digest(&scene), radius, "lights[0].direction");
+	scene_free(&scene);
+}
+
+/* two_balls.json with its key light a sphere of radius 1.5 and its fill
+ * light the sun, 4 degrees across. */
+static void load_soft_lights(struct scene *scene)
+{
+	load(scene, "scenes/two_balls.json");
+	scene->lights[0].radius = 1.5;
+	scene->lights[1].directional = 1;
+	scene->lights[1].direction[0] = -0.4082482904638631;
+	scene->lights[1].direction[1] = -0.8164965809277261;
+	scene->lights[1].direction[2] = 0.4082482904638631;
+	scene->lights[1].angle = 4;
+}
+
+Test(lens_lights, soft_lights_same_in_every_kernel_and_near_the_reference, .timeout = 600)
+{
+	struct scene scene;
+
+	load_soft_lights(&scene);
+	check_kernels_and_reference(&scene, "two_balls, sphere and sun lights", 40, 30, 3);
+	scene_free(&scene);
+}
+
+/* The pixels of a white floor, lit from above past a red ball, whose green
+ * (the floor's only: the ball has none) lies strictly between 20 % and 90 %
+ * of the floor's without the ball: the penumbra (the umbra keeps the ambient
+ * 0.05, about 5 %). */
+static int penumbra_pixels(struct scene *scene, int width, int height, int samples)
+{
+	float *shadowed = reference_image(scene, width, height, 0, samples);
+	int count = scene->sphere_count, penumbra = 0;
+
+	scene->sphere_count = 0;
+	float *lit = reference_image(scene, width, height, 0, samples);
+	scene->sphere_count = count;
+	for (int i = 0; i < width * height; i++) {
+		const float *s = shadowed + 3 * i, *l = lit + 3 * i;
+		if (s[0] != s[1])
+			continue; /* the ball */
+		double share = s[1] / l[1];
+		penumbra += share > 0.2 && share < 0.9;
+	}
+	free(lit);
+	free(shadowed);
+	return penumbra;
+}
+
+/* RENDERING.md, "Light samples": a point light casts a hard shadow (a
+ * penumbra only where a pixel's samples straddle its edge), a sphere light a
+ * soft one, wider with the radius, and so does the sun with an angle. */
+Test(lens_lights, sphere_and_sun_lights_cast_penumbrae, .timeout = 300)
+{
+	static const char *const json =
+		"{\"format\": \"rtcl-scene\", \"version\": 1,"
+		" \"camera\": {\"eye\": [0, 20, 0], \"look_at\": [0, 0, 0], \"up\": [0, 0, 1],"
+		"  \"fov\": 30},"
+		" \"ambient\": [0.05, 0.05, 0.05], \"max_depth\": 0,"
+		" \"lights\": [{\"position\": [4, 10, 0]}],"
+		" \"spheres\": [{\"center\": [0, 3, 0], \"radius\": 1,"
+		"  \"material\": {\"color\": [1, 0, 0], \"ambient\": 1, \"specular\": 0}}],"
+		" \"planes\": [{\"point\": [0, 0, 0], \"normal\": [0, 1, 0],"
+		"  \"material\": {\"diffuse\": 1, \"specular\": 0}}]}";
+	const int w = 48, h = 48, n = 16;
+	struct scene scene;
+
+	load_string(&scene, json);
+	int hard = penumbra_pixels(&scene, w, h, n);
+	scene.lights[0].radius = 0.75;
+	int soft = penumbra_pixels(&scene, w, h, n);
+	scene.lights[0].radius = 1.5;
+	int softer = penumbra_pixels(&scene, w, h, n);
+	scene.lights[0].radius = 0;
+	scene.lights[0].directional = 1;
+	scene.lights[0].direction[0] = -0.3713906763541037; /* (-4, -10, 0) */
+	scene.lights[0].direction[1] = -0.9284766908852593;
+	scene.lights[0].direction[2] = 0;
+	int sun = penumbra_pixels(&scene, w, h, n);
+	scene.lights[0].angle = 8;
+	int wide_sun = penumbra_pixels(&scene, w, h, n);
+	fprintf(stderr, "penumbra pixels: point %d, radius 0.75 %d, 1.5 %d; sun %d, 8 degrees %d\n",
+		hard, soft, softer, sun, wide_sun);
+	cr_expect_gt(soft, 2 * hard);
+	cr_expect_gt(softer, soft);
+	cr_expect_gt(wide_sun, 2 * sun + 5);
 	scene_free(&scene);
 }

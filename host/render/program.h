@@ -16,6 +16,7 @@ struct program_features {
 	int use_bvh;	    /* traverse the scene's BVH (else test every primitive) */
 	int has_triangles;  /* without, the triangle code is left out */
 	int thin_lens;	    /* an aperture > 0: primary rays start on the lens */
+	int area_lights;    /* a sphere or directional light: lights are sampled */
 };
 
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads

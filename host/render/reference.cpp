@@ -55,8 +55,22 @@ struct triangle {
 };
 
 struct light {
-	dvec3 position;
+	dvec3 position; /* a point or sphere light's centre */
 	dvec3 color;
+	double radius;	  /* a sphere light's; 0: a point light */
+	bool directional; /* then: */
+	dvec3 toward;	  /* the unit direction towards the light */
+	double tan_angle; /* tan of its angular radius */
+};
+
+/* A point of the unit disk for dimension pair `pair` of sample k of pixel
+ * (x, y) out of n (defined with the samples, below). */
+glm::dvec2 sample_disk(int x, int y, int k, int n, int pair);
+
+/* The sample being traced: sample k of n of pixel (x, y), whose further
+ * pairs place the light samples (RENDERING.md, "Light samples"). */
+struct sample_id {
+	int x, y, k, n;
 };
 
 /* The nearest hit of a ray: exactly one of sphere, triangle and plane is
@@ -141,17 +155,20 @@ class tracer
 	/* May throw std::bad_alloc. */
 	tracer(const struct scene &sc, int max_depth);
 
-	dvec3 trace(const dvec3 &o, const dvec3 &d, int depth) const;
+	dvec3 trace(const dvec3 &o, const dvec3 &d, int depth, const sample_id &sample) const;
 
       private:
 	bool nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const;
 	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
 	dvec3 base_color(const hit &h, const dvec3 &p) const;
 	dvec3 local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
-			  const dvec3 &n_face, const dvec3 &d) const;
+			  const dvec3 &n_face, const dvec3 &d, int depth,
+			  const sample_id &sample) const;
+	bool light_point(const light &li, int index, const dvec3 &p, int depth,
+			 const sample_id &sample, dvec3 *point) const;
 	void secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
 			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
-			      dvec3 *reflected, dvec3 *refracted) const;
+			      const sample_id &sample, dvec3 *reflected, dvec3 *refracted) const;
 
 	std::vector<material> materials;
 	std::vector<sphere> spheres;
@@ -197,7 +214,9 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 	}
 	for (int i = 0; i < sc.light_count; i++) {
 		const scene_light &l = sc.lights[i];
-		lights.push_back({to_dvec3(l.position), to_dvec3(l.color)});
+		lights.push_back({to_dvec3(l.position), to_dvec3(l.color), l.radius,
+				  l.directional != 0, -to_dvec3(l.direction),
+				  std::tan(glm::radians(l.angle))});
 	}
 }
 
@@ -294,7 +313,7 @@ dvec3 shading_normal(const triangle &tri, double u, double v, const dvec3 &n_fac
 	return glm::dot(n, n_face) < 0.0 ? -n : n;
 }
 
-dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
+dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth, const sample_id &sample) const
 {
 	/* 1. */
 	hit h;
@@ -324,12 +343,13 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 	dvec3 c = base_color(h, p);
 
 	/* 4. */
-	dvec3 color = local_color(m, c, p, n, n_face, d);
+	dvec3 color = local_color(m, c, p, n, n_face, d, depth, sample);
 
 	/* 5. (in the order of the sums before this function was split) */
 	if (depth < max_depth) {
 		dvec3 reflected, refracted;
-		secondary_colors(m, p, n, n_face, d, inside, depth, &reflected, &refracted);
+		secondary_colors(m, p, n, n_face, d, inside, depth, sample, &reflected,
+				 &refracted);
 		color += reflected;
 		color += refracted;
 	}
@@ -338,23 +358,75 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 	return color;
 }
 
+/* RENDERING.md, "Light samples": the offset size*(a*b1 + b*b2) of the
+ * sample's point on the disk across unit w, (a, b) from the pair of light
+ * `index` at this depth. */
+dvec3 disk_offset(const dvec3 &w, double size, int pair, const sample_id &sample)
+{
+	glm::dvec2 disk = sample_disk(sample.x, sample.y, sample.k, sample.n, pair);
+	double sign = std::copysign(1.0, w.z);
+	double e = -1.0 / (sign + w.z);
+	double g = w.x * w.y * e;
+	dvec3 b1(1.0 + sign * w.x * w.x * e, sign * g, -sign * w.x);
+	dvec3 b2(g, sign + w.y * w.y * e, -w.y);
+	return size * disk.x * b1 + size * disk.y * b2;
+}
+
+/* The point of light li that the sample's shadow ray from p goes to: the
+ * position itself for a point light, a point of the disk of a sphere light
+ * facing p; for a directional light, p plus the sampled unit direction
+ * towards it. Returns false when the light adds nothing (p at a sphere
+ * light's centre). */
+bool tracer::light_point(const light &li, int index, const dvec3 &p, int depth,
+			 const sample_id &sample, dvec3 *point) const
+{
+	int pair = 2 + depth * (int)lights.size() + index;
+
+	if (li.directional) {
+		dvec3 L = li.toward;
+		if (li.tan_angle > 0)
+			L = glm::normalize(L + disk_offset(L, li.tan_angle, pair, sample));
+		*point = p + L;
+		return true;
+	}
+	*point = li.position;
+	if (li.radius > 0) {
+		if (li.position == p)
+			return false;
+		*point += disk_offset(glm::normalize(li.position - p), li.radius, pair, sample);
+	}
+	return true;
+}
+
 /* RENDERING.md trace step 4: ambient, then each light not in shadow. */
 dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
-			  const dvec3 &n_face, const dvec3 &d) const
+			  const dvec3 &n_face, const dvec3 &d, int depth,
+			  const sample_id &sample) const
 {
 	dvec3 color = m.ka * c * ambient;
 	/* Off the surface along the geometric normal (n itself but on a smooth
 	 * triangle), so that the shadow ray starts on the ray's side of it. */
 	dvec3 shadow_origin = p + epsilon * n_face;
-	for (const light &li : lights) {
-		/* The shadow ray runs from shadow_origin straight to the light, and
-		 * t is measured along it, so "distance" is from shadow_origin. */
-		dvec3 to_light = li.position - shadow_origin;
-		double distance = glm::length(to_light);
-		if (distance > 0.0 && blocked(shadow_origin, to_light / distance, distance))
+	for (size_t i = 0; i < lights.size(); i++) {
+		const light &li = lights[i];
+		dvec3 point;
+		if (!light_point(li, (int)i, p, depth, sample, &point))
 			continue;
+		if (li.directional) {
+			/* No distance: anything along the way shadows p. */
+			if (blocked(shadow_origin, point - p, HUGE_VAL))
+				continue;
+		} else {
+			/* The shadow ray runs from shadow_origin straight to the
+			 * light, and t is measured along it, so "distance" is from
+			 * shadow_origin. */
+			dvec3 to_light = point - shadow_origin;
+			double distance = glm::length(to_light);
+			if (distance > 0.0 && blocked(shadow_origin, to_light / distance, distance))
+				continue;
+		}
 
-		dvec3 surface_to_light = li.position - p;
+		dvec3 surface_to_light = point - p;
 		if (surface_to_light == dvec3(0.0))
 			continue; /* light exactly at p: L is undefined */
 		dvec3 L = glm::normalize(surface_to_light);
@@ -382,7 +454,7 @@ dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, con
  * depth 20. Normalising each new direction keeps the error at 1 ulp. */
 void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
 			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
-			      dvec3 *reflected, dvec3 *refracted) const
+			      const sample_id &sample, dvec3 *reflected, dvec3 *refracted) const
 {
 	double reflect_weight = m.kr;
 
@@ -400,12 +472,12 @@ void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
 			 * cancel (with ior 1e18 at normal incidence the written
 			 * order gives 1e18*d - 1e18*d = 0, and no direction). */
 			dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
-			*refracted = m.kt * trace(p - epsilon * n_face, T, depth + 1);
+			*refracted = m.kt * trace(p - epsilon * n_face, T, depth + 1, sample);
 		}
 	}
 	if (reflect_weight > 0.0) {
 		dvec3 R = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
-		*reflected = reflect_weight * trace(p + epsilon * n_face, R, depth + 1);
+		*reflected = reflect_weight * trace(p + epsilon * n_face, R, depth + 1, sample);
 	}
 }
 
@@ -483,8 +555,6 @@ glm::dvec2 concentric_disk(double s, double t)
 	return glm::dvec2(y * std::cos(phi), y * std::sin(phi));
 }
 
-/* A point of the unit disk for dimension pair `pair` of sample k of pixel
- * (x, y) out of n. */
 glm::dvec2 sample_disk(int x, int y, int k, int n, int pair)
 {
 	double st[2];
@@ -544,6 +614,7 @@ int reference_render_samples(const struct scene *scene, int width, int height, i
 			for (int x = 0; x < width; x++) {
 				dvec3 sum(0.0);
 				for (int k = 0; k < samples; k++) {
+					const sample_id sample = {x, y, k, samples};
 					double uv[2];
 					reference_sample_position(x, y, k, samples, uv);
 					double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
@@ -556,10 +627,10 @@ int reference_render_samples(const struct scene *scene, int width, int height, i
 								cam.aperture * lens.y * u;
 						dvec3 dir = glm::normalize(cam.focus_distance * q -
 									   on_lens);
-						sum += tr.trace(eye + on_lens, dir, 0);
+						sum += tr.trace(eye + on_lens, dir, 0, sample);
 						continue;
 					}
-					sum += tr.trace(eye, glm::normalize(q), 0);
+					sum += tr.trace(eye, glm::normalize(q), 0, sample);
 				}
 				dvec3 c = sum / (double)samples;
 				float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);

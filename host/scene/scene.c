@@ -242,9 +242,54 @@ static int read_image_and_globals(struct loader *ld, json_t *doc)
 	return 0;
 }
 
+/* A directional light's direction (normalised; the way its light travels)
+ * and angle, or a point or sphere light's position and radius: the one pair
+ * the light gives, each field refused on a light of the other kind. */
+static int read_light_kind(struct loader *ld, const struct path *item, json_t *obj,
+			   struct scene_light *l)
+{
+	int has_position = json_object_get(obj, "position") != NULL;
+	int has_direction = json_object_get(obj, "direction") != NULL;
+	struct path radius = child_key(item, "radius"), angle = child_key(item, "angle");
+	struct path direction = child_key(item, "direction");
+	double scaled[3];
+
+	if (has_position == has_direction)
+		return loader_fail(ld, item,
+				   has_position ? "has both \"position\" and \"direction\": give one"
+						: "needs \"position\" (a point or sphere light) or "
+						  "\"direction\" (a directional light)");
+	l->directional = has_direction;
+	if (has_position) {
+		if (json_object_get(obj, "angle"))
+			return loader_fail(ld, &angle, "a point or sphere light has no angle; "
+						       "give its \"radius\"");
+		return loader_read_vec3(ld, item, obj, "position", REQUIRED, ANY, l->position) ||
+		       loader_read_number(ld, item, obj, "radius", OPTIONAL, NON_NEGATIVE,
+					  &l->radius);
+	}
+	if (json_object_get(obj, "radius"))
+		return loader_fail(ld, &radius,
+				   "a directional light has no radius; give its \"angle\"");
+	if (loader_read_vec3(ld, item, obj, "direction", REQUIRED, DIRECTION, l->direction) ||
+	    loader_read_number(ld, item, obj, "angle", OPTIONAL, NON_NEGATIVE, &l->angle))
+		return -1;
+	if (!loader_scale_to_unit_max(l->direction, scaled))
+		return loader_fail(ld, &direction, "must be non-zero");
+	for (int i = 0; i < 3; i++)
+		l->direction[i] = scaled[i] / loader_length3(scaled);
+	if (l->angle >= 90) {
+		char buf[32];
+		return loader_fail(ld, &angle, "must be >= 0 and < 90, got %s",
+				   loader_fmt_num(l->angle, buf));
+	}
+	return 0;
+}
+
 static int read_lights(struct loader *ld, json_t *array)
 {
-	static const char *const keys[] = {"position", "color", NULL};
+	static const char *const keys[] = {"position", "direction", "color", "radius", "angle",
+					   NULL};
 	struct path p = child_key(&root_path, "lights");
 	struct scene *s = ld->scene;
 
@@ -255,7 +300,7 @@ static int read_lights(struct loader *ld, json_t *array)
 
 		l->color[0] = l->color[1] = l->color[2] = 1;
 		if (loader_expect_object(ld, &item, obj, keys) ||
-		    loader_read_vec3(ld, &item, obj, "position", REQUIRED, ANY, l->position) ||
+		    read_light_kind(ld, &item, obj, l) ||
 		    loader_read_vec3(ld, &item, obj, "color", OPTIONAL, NON_NEGATIVE, l->color))
 			return -1;
 		s->light_count++;
@@ -604,8 +649,13 @@ unsigned long long scene_digest(const struct scene *scene)
 	}
 	digest_int(&h, scene->light_count);
 	for (int i = 0; i < scene->light_count; i++) {
-		digest_doubles(&h, scene->lights[i].position, 3);
-		digest_doubles(&h, scene->lights[i].color, 3);
+		const struct scene_light *l = &scene->lights[i];
+		digest_doubles(&h, l->position, 3);
+		digest_doubles(&h, l->color, 3);
+		digest_doubles(&h, &l->radius, 1);
+		digest_int(&h, l->directional);
+		digest_doubles(&h, l->direction, 3);
+		digest_doubles(&h, &l->angle, 1);
 	}
 	digest_int(&h, scene->triangle_count);
 	for (int i = 0; i < scene->triangle_count; i++) {

@@ -54,9 +54,15 @@ struct scene_triangle {
 	int smooth; /* the shading normals are interpolated */
 };
 
+/* A point light (radius 0), a sphere light (radius > 0) or a directional
+ * light (docs/SCENE.md, "Lights"). */
 struct scene_light {
-	double position[3];
+	double position[3]; /* a point or sphere light's centre */
 	double color[3];
+	double radius;	     /* a sphere light's; 0: a point light */
+	int directional;     /* the light is the sun: direction and angle, no position */
+	double direction[3]; /* unit: the way a directional light's light travels */
+	double angle;	     /* a directional light's angular radius, degrees, 0 ... < 90 */
 };
 
 struct scene_camera {
@@ -111,6 +117,16 @@ struct scene {
 	int triangle_count;
 	long skipped_triangles; /* zero-area triangles of mesh files, left out */
 };
+
+/* Whether a light of the scene is sampled (RENDERING.md, "Light samples"):
+ * a sphere light of radius > 0 or a directional light. */
+static inline int scene_has_area_lights(const struct scene *scene)
+{
+	for (int i = 0; i < scene->light_count; i++)
+		if (scene->lights[i].radius > 0 || scene->lights[i].directional)
+			return 1;
+	return 0;
+}
 
 /* Loads and validates a scene file. Returns 0 on success; otherwise writes
  * one message (formatted as in SCENE.md, "FILE: PATH: what is wrong" or

@@ -24,7 +24,7 @@ import os
 import stat
 
 from .scene_check import (SceneError, Written, _escaped, check_keys, child, did_you_mean, fail,
-                          format_vector, integer, length, number, optional,
+                          format_number, format_vector, integer, length, number, optional,
                           required, scale_to_unit_max, type_name, vec3)
 from .vector import normalize
 
@@ -137,15 +137,38 @@ def material_of(obj, path, materials):
     return read_material(value, where)
 
 
+def read_light_kind(value, path):
+    """Returns the position and radius of a point or sphere light, or the direction
+    (normalised: the way its light travels) and angle of a directional one."""
+    has_position, has_direction = "position" in value, "direction" in value
+    if has_position == has_direction:
+        fail(path, 'has both "position" and "direction": give one' if has_position else
+             'needs "position" (a point or sphere light) or "direction" (a directional light)')
+    if has_position:
+        if "angle" in value:
+            fail(child(path, "angle"), 'a point or sphere light has no angle; give its "radius"')
+        return {"directional": False,
+                "position": vec3(value["position"], child(path, "position")),
+                "radius": optional(value, "radius", path, number, 0.0, "non-negative")}
+    if "radius" in value:
+        fail(child(path, "radius"), 'a directional light has no radius; give its "angle"')
+    direction = vec3(value["direction"], child(path, "direction"), "direction")
+    angle = optional(value, "angle", path, number, 0.0, "non-negative")
+    if scale_to_unit_max(direction) is None:
+        fail(child(path, "direction"), "must be non-zero")
+    if angle >= 90:
+        fail(child(path, "angle"), f"must be >= 0 and < 90, got {format_number(angle)}")
+    return {"directional": True, "direction": normalize(direction), "angle": angle}
+
+
 def read_lights(items):
     lights = []
     for i, value in enumerate(items):
         path = child("lights", i)
-        check_keys(value, path, ("position", "color"))
-        lights.append({"position": vec3(required(value, "position", path),
-                                        child(path, "position")),
-                       "color": optional(value, "color", path, vec3, (1.0, 1.0, 1.0),
-                                         "non-negative")})
+        check_keys(value, path, ("position", "direction", "color", "radius", "angle"))
+        light = read_light_kind(value, path)
+        light["color"] = optional(value, "color", path, vec3, (1.0, 1.0, 1.0), "non-negative")
+        lights.append(light)
     return lights
 
 
