@@ -48,8 +48,14 @@ struct rt_material {
 	rt_float transmit;  /* kt */
 	rt_float ior;
 	rt_float inv_ior; /* 1/ior, the eta of a ray entering the object */
-	rt_float pad;
+	rt_int fresnel;	  /* RT_FRESNEL_*: read only in programs built with
+			     RTCL_FRESNEL (RENDERING.md, "Fresnel") */
 };
+
+/* A material's Fresnel term (SCENE.md's "fresnel"). */
+#define RT_FRESNEL_OFF 0
+#define RT_FRESNEL_DIELECTRIC 1
+#define RT_FRESNEL_CONDUCTOR 2
 
 /* The tracer tests spheres this many at a time. */
 #define RT_SPHERE_GROUP 4
@@ -236,7 +242,9 @@ struct rt_ray {
 	rt_vec4 dir;	/* unit */
 	rt_int pixel;	/* y * width + x */
 	rt_int depth;
-	rt_int pad0, pad1;
+	rt_float weight_green, weight_blue; /* with colour weights (RTCL_FRESNEL):
+					       the weight's other channels, red
+					       in origin.w */
 };
 
 /* What one launch (or one wavefront pass) renders: a rectangle of the image

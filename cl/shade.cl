@@ -257,6 +257,49 @@ static void shading_add_light(struct tracer *tr, struct shading *sh)
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
 
+#ifdef RTCL_FRESNEL
+/* Schlick's (1 - c)^5 (RENDERING.md, "Fresnel"): 1 - c and four products. */
+static inline float schlick_power(struct tracer *tr, float c)
+{
+	float x = 1.0f - c;
+
+	COUNT_FLOPS(tr, 5);
+	return x * x * x * x * x;
+}
+
+/* A Fresnel dielectric where the ray refracts: moves the share F of kt
+ * that the surface reflects to *reflect_weight and leaves the rest in
+ * *transmit_weight. c = -d·n; k as in the refraction (k >= 0). */
+static void dielectric_fresnel(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_material *m,
+			       float eta, float c, float k, float *reflect_weight,
+			       float *transmit_weight)
+{
+	float r0 = (m->ior - 1.0f) / (m->ior + 1.0f);
+
+	r0 = r0 * r0;
+	COUNT_FLOPS(tr, 4);
+	if (eta > 1.0f) { /* leaving the denser side: the refracted ray's cosine */
+		c = sqrt(k);
+		COUNT_FLOPS(tr, 1);
+	}
+	float f = r0 + (1.0f - r0) * schlick_power(tr, c);
+	*reflect_weight += f * m->transmit;
+	*transmit_weight = (1.0f - f) * m->transmit;
+	COUNT_FLOPS(tr, 3 + 4);
+}
+
+/* A Fresnel conductor's reflectance at the hit, a colour: the base colour
+ * head-on, white at grazing angles. */
+static float3 conductor_fresnel(struct tracer *tr, const struct shading *sh, float3 d)
+{
+	float power = schlick_power(tr, -dot3(d, sh->n));
+
+	/* c; 1 - C, its product and the sum */
+	COUNT_FLOPS(tr, FLOPS_DOT3 + 3 * FLOPS_ADD3);
+	return sh->base + (1.0f - sh->base) * power;
+}
+#endif
+
 /* What shading_spawn spawned: a bit per ray. */
 #define SPAWNED_REFRACTED 1
 #define SPAWNED_REFLECTED 2
@@ -278,7 +321,7 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 	/* Secondary directions are renormalised: in float, |d| drifts from 1
 	 * over a chain of bounces, and the intersection tests assume a unit d
 	 * (without it, 0.16% of tir.json's pixels stray from the reference). */
-	float reflect_weight = m->reflect;
+	float reflect_weight = m->reflect, transmit_weight = m->transmit;
 	if (m->transmit > 0.0f) {
 		float eta = sh->inside ? m->ior : m->inv_ior;
 		float c = -dot3(ray->dir, n);
@@ -289,23 +332,36 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 			reflect_weight += m->transmit;
 			COUNT_FLOPS(tr, 1);
 		} else {
+#ifdef RTCL_FRESNEL
+			if (m->fresnel == RT_FRESNEL_DIELECTRIC)
+				dielectric_fresnel(tr, m, eta, c, k, &reflect_weight,
+						   &transmit_weight);
+#endif
 			float3 t_dir = normalize3(eta * ray->dir + (eta * c - sqrt(k)) * n);
 			*refracted = (struct ray_job){sh->p - epsilon * sh->n_face, t_dir,
-						      ray->weight * m->transmit, ray->depth + 1};
+						      ray->weight * transmit_weight, ray->depth + 1};
 			spawned |= SPAWNED_REFRACTED;
 			/* t_dir before normalizing: eta d, eta c − sqrt(k) (3), × n, + */
 			COUNT_FLOPS(tr, FLOPS_MUL3 + 3 + FLOPS_MUL3 + FLOPS_ADD3 +
-						FLOPS_NORMALIZE3 + FLOPS_MUL3 + FLOPS_ADD3 + 1);
+						FLOPS_NORMALIZE3 + FLOPS_MUL3 + FLOPS_ADD3 +
+						FLOPS_WEIGHT);
 		}
 	}
 	if (reflect_weight > 0.0f) {
 		float3 r_dir = normalize3(ray->dir - 2.0f * dot3(ray->dir, n) * n);
-		*reflected = (struct ray_job){sh->p + epsilon * sh->n_face, r_dir,
-					      ray->weight * reflect_weight, ray->depth + 1};
+		ray_weight_t weight = ray->weight * reflect_weight;
+#ifdef RTCL_FRESNEL
+		if (m->fresnel == RT_FRESNEL_CONDUCTOR) {
+			weight *= conductor_fresnel(tr, sh, ray->dir);
+			COUNT_FLOPS(tr, FLOPS_MUL3);
+		}
+#endif
+		*reflected = (struct ray_job){sh->p + epsilon * sh->n_face, r_dir, weight,
+					      ray->depth + 1};
 		spawned |= SPAWNED_REFLECTED;
 		/* r_dir before normalizing: d·n, 2×, × n, d − */
 		COUNT_FLOPS(tr, FLOPS_DOT3 + 1 + FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_NORMALIZE3 +
-					FLOPS_MUL3 + FLOPS_ADD3 + 1);
+					FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_WEIGHT);
 	}
 	return spawned;
 }

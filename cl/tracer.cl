@@ -186,10 +186,21 @@ struct tracer {
 #endif
 };
 
+/* A ray's weight, the product of the kr and kt along its path: a colour
+ * where a Fresnel conductor tints reflections (RTCL_FRESNEL), else a number,
+ * as before Fresnel existed. A product with a weight counts FLOPS_WEIGHT. */
+#ifdef RTCL_FRESNEL
+typedef float3 ray_weight_t;
+#define FLOPS_WEIGHT 3
+#else
+typedef float ray_weight_t;
+#define FLOPS_WEIGHT 1
+#endif
+
 struct ray_job {
 	float3 origin;
 	float3 dir; /* unit length */
-	float weight;
+	ray_weight_t weight;
 	int depth;
 };
 

@@ -157,11 +157,12 @@ static inline void primary_ray(struct tracer *tr, int x, int y, float2 offset, u
 	COUNT_FLOPS(tr, 2 + FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_MUL3 + FLOPS_ADD3 +
 				FLOPS_ADD3);
 	*ray = (struct ray_job){scene->eye.xyz + on_lens,
-				normalize3(scene->focus_distance * q - on_lens), 1.0f, 0};
+				normalize3(scene->focus_distance * q - on_lens), (ray_weight_t)(1.0f),
+				0};
 #else
 	(void)k;
 	(void)n;
-	*ray = (struct ray_job){scene->eye.xyz, normalize3(q), 1.0f, 0};
+	*ray = (struct ray_job){scene->eye.xyz, normalize3(q), (ray_weight_t)(1.0f), 0};
 #endif
 }
 

@@ -51,8 +51,15 @@ static void add_to_pixel(__global float *image, int pixel, float3 color)
 static void store_ray(__global struct rt_ray *queue, uint slot, const struct ray_job *ray,
 		      int pixel)
 {
-	/* The weight rides in the origin's w lane (ray_weight). */
+	/* The weight rides in the origin's w lane (ray_weight); a colour's
+	 * other channels in weight_green and weight_blue. */
+#ifdef RTCL_FRESNEL
+	queue[slot].origin = (float4)(ray->origin, ray->weight.x);
+	queue[slot].weight_green = ray->weight.y;
+	queue[slot].weight_blue = ray->weight.z;
+#else
 	queue[slot].origin = (float4)(ray->origin, ray->weight);
+#endif
 	queue[slot].dir = (float4)(ray->dir, 0.0f);
 	queue[slot].pixel = pixel;
 	queue[slot].depth = ray->depth;
@@ -165,8 +172,13 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
 	if (i < queued) {
 		float4 origin = queue[i].origin;
-		struct ray_job ray = {origin.xyz, queue[i].dir.xyz, ray_weight(origin),
-				      queue[i].depth};
+#ifdef RTCL_FRESNEL
+		ray_weight_t weight = (float3)(ray_weight(origin), queue[i].weight_green,
+					       queue[i].weight_blue);
+#else
+		ray_weight_t weight = ray_weight(origin);
+#endif
+		struct ray_job ray = {origin.xyz, queue[i].dir.xyz, weight, queue[i].depth};
 		int pixel = queue[i].pixel;
 		struct ray_job children[2];
 		int spawned;

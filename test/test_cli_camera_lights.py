@@ -134,3 +134,25 @@ def test_radius_0_is_the_point_light_program_and_image(tmp_path):
     for name, path in (("sphere", sphere), ("sun", sun)):
         assert "RTCL_AREA_LIGHTS" in build_options(tmp_path, path)
         assert render(tmp_path, name + ".pfm", path, "--spp", "2") != plain
+
+
+def test_fresnel_false_is_the_program_and_image_of_before(tmp_path):
+    """Without a Fresnel material the program keeps numbers for weights (no
+    -DRTCL_FRESNEL) and the image is byte for byte the one of before."""
+    scene = str(ROOT / "scenes" / "two_balls.json")
+    materials = json.loads((ROOT / "scenes" / "two_balls.json").read_text())["materials"]
+    off = write_scene(tmp_path, "off.json",
+                      materials={k: dict(v, fresnel=False) for k, v in materials.items()})
+    on = write_scene(tmp_path, "on.json",
+                     materials={k: dict(v, fresnel="dielectric") for k, v in materials.items()})
+    plain = render(tmp_path, "plain.pfm", scene)
+    assert render(tmp_path, "off.pfm", off) == plain
+    assert "RTCL_FRESNEL" not in build_options(tmp_path, off)
+    assert "RTCL_FRESNEL" in build_options(tmp_path, on)
+    assert render(tmp_path, "on.pfm", on) != plain
+
+
+def test_studio_renders_with_every_kernel(tmp_path):
+    for kernel in ("dynamic", "wavefront", "reference"):
+        assert render(tmp_path, kernel + ".png", str(ROOT / "scenes" / "studio.json"),
+                      "-k", kernel, "--spp", "2")

@@ -248,7 +248,10 @@ Test(lens_lights, scene_digest_covers_the_new_fields)
 	unsigned long long radius = scene_digest(&scene);
 	cr_assert_neq(radius, focus, "lights[0].radius");
 	scene.lights[0].directional = 1;
-	cr_assert_neq(scene_digest(&scene), radius, "lights[0].direction");
+	unsigned long long directional = scene_digest(&scene);
+	cr_assert_neq(directional, radius, "lights[0].direction");
+	scene.materials[0].fresnel = SCENE_FRESNEL_DIELECTRIC;
+	cr_assert_neq(scene_digest(&scene), directional, "materials[0].fresnel");
 	scene_free(&scene);
 }
 
@@ -335,5 +338,67 @@ Test(lens_lights, sphere_and_sun_lights_cast_penumbrae, .timeout = 300)
 	cr_expect_gt(soft, 2 * hard);
 	cr_expect_gt(softer, soft);
 	cr_expect_gt(wide_sun, 2 * sun + 5);
+	scene_free(&scene);
+}
+
+/* scenes/studio.json, the shipped scene of all three: a lens, sphere and
+ * sun lights, a Fresnel dielectric and a Fresnel conductor. */
+Test(lens_lights, studio_same_in_every_kernel_and_near_the_reference, .timeout = 600)
+{
+	struct scene scene;
+
+	load(&scene, "scenes/studio.json");
+	check_kernels_and_reference(&scene, "studio", 40, 25, 2);
+	scene_free(&scene);
+}
+
+/* RENDERING.md, "Fresnel", on a glass floor (kr 0, kt 1, ior 1.5) over a
+ * black one, under a white sky, at depth 1: a pixel is the weight of its
+ * reflected ray, what the sky gives, since the refracted ray meets black.
+ * Without Fresnel that is 0; with it, F: about F0 = 0.04 looking steeply
+ * down, more towards the horizon. A mirror floor (kr 1) that is a Fresnel
+ * conductor of colour (1, 0.5, 0.2) reflects the sky tinted by its colour
+ * looking down, and whiter towards the horizon. */
+Test(lens_lights, fresnel_reflects_at_grazing_angles_and_tints_metals, .timeout = 300)
+{
+	static const char *const json =
+		"{\"format\": \"rtcl-scene\", \"version\": 1,"
+		" \"camera\": {\"eye\": [0, 1, 0], \"look_at\": [0, -1, 2], \"fov\": 60},"
+		" \"background\": [1, 1, 1], \"ambient\": [0, 0, 0], \"max_depth\": 1,"
+		" \"planes\": [{\"point\": [0, 0, 0], \"normal\": [0, 1, 0], \"material\": {"
+		"  \"color\": [1, 0.5, 0.2], \"ambient\": 0, \"diffuse\": 0, \"specular\": 0,"
+		"  \"transmit\": 1, \"ior\": 1.5}},"
+		"  {\"point\": [0, -1, 0], \"normal\": [0, 1, 0], \"material\": {"
+		"  \"ambient\": 0, \"diffuse\": 0, \"specular\": 0}}]}";
+	const int w = 9, h = 31;
+	struct scene scene;
+
+	load_string(&scene, json);
+	/* The bottom row looks steeply down, the top row's rays graze the floor. */
+	int steep = 3 * ((h - 1) * w + w / 2), grazing = 3 * (1 * w + w / 2);
+	float *plain = reference_image(&scene, w, h, 1, 1);
+	cr_assert_float_eq(plain[steep + 1], 0.0f, 1e-6, "no Fresnel: nothing reflected");
+	scene.materials[0].fresnel = SCENE_FRESNEL_DIELECTRIC;
+	float *glass = reference_image(&scene, w, h, 1, 1);
+	fprintf(stderr, "Fresnel glass: steep %g, grazing %g\n", glass[steep + 1],
+		glass[grazing + 1]);
+	cr_expect(glass[steep + 1] > 0.039f && glass[steep + 1] < 0.1f, "steep: %g",
+		  glass[steep + 1]);
+	cr_expect_gt(glass[grazing + 1], 2 * glass[steep + 1], "grazing reflects more");
+
+	scene.materials[0].fresnel = SCENE_FRESNEL_CONDUCTOR;
+	scene.materials[0].transmit = 0;
+	scene.materials[0].reflect = 1;
+	float *metal = reference_image(&scene, w, h, 1, 1);
+	double tint_steep = metal[steep + 2] / metal[steep];
+	double tint_grazing = metal[grazing + 2] / metal[grazing];
+	fprintf(stderr, "Fresnel metal: blue/red steep %g, grazing %g\n", tint_steep,
+		tint_grazing);
+	cr_expect_float_eq(metal[steep], 1.0f, 1e-6, "red: C is 1");
+	cr_expect_lt(tint_steep, 0.5, "tinted head-on");
+	cr_expect_gt(tint_grazing, tint_steep + 0.1, "whiter at grazing angles");
+	free(plain);
+	free(glass);
+	free(metal);
 	scene_free(&scene);
 }

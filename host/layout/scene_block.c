@@ -56,6 +56,7 @@ static void pack_material(struct rt_material *out, const struct scene_material *
 	out->transmit = (float)in->transmit;
 	out->ior = (float)in->ior;
 	out->inv_ior = (float)(1.0 / in->ior);
+	out->fresnel = in->fresnel;
 }
 
 static void pack_sphere(struct rt_sphere *out, const struct scene *scene,

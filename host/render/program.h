@@ -17,6 +17,7 @@ struct program_features {
 	int has_triangles;  /* without, the triangle code is left out */
 	int thin_lens;	    /* an aperture > 0: primary rays start on the lens */
 	int area_lights;    /* a sphere or directional light: lights are sampled */
+	int fresnel;	    /* a Fresnel material: ray weights are colours */
 };
 
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads

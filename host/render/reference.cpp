@@ -27,6 +27,7 @@ dvec3 to_dvec3(const double v[3])
 struct material {
 	dvec3 color;
 	double ka, kd, ks, shininess, kr, kt, ior;
+	int fresnel; /* SCENE_FRESNEL_* */
 };
 
 struct sphere {
@@ -166,7 +167,7 @@ class tracer
 			  const sample_id &sample) const;
 	bool light_point(const light &li, int index, const dvec3 &p, int depth,
 			 const sample_id &sample, dvec3 *point) const;
-	void secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+	void secondary_colors(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
 			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
 			      const sample_id &sample, dvec3 *reflected, dvec3 *refracted) const;
 
@@ -188,7 +189,7 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 	for (int i = 0; i < sc.material_count; i++) {
 		const scene_material &m = sc.materials[i];
 		materials.push_back({to_dvec3(m.color), m.ambient, m.diffuse, m.specular,
-				     m.shininess, m.reflect, m.transmit, m.ior});
+				     m.shininess, m.reflect, m.transmit, m.ior, m.fresnel});
 	}
 	for (int i = 0; i < sc.sphere_count; i++) {
 		const scene_sphere &s = sc.spheres[i];
@@ -348,7 +349,7 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth, const sample_id &
 	/* 5. (in the order of the sums before this function was split) */
 	if (depth < max_depth) {
 		dvec3 reflected, refracted;
-		secondary_colors(m, p, n, n_face, d, inside, depth, sample, &reflected,
+		secondary_colors(m, c, p, n, n_face, d, inside, depth, sample, &reflected,
 				 &refracted);
 		color += reflected;
 		color += refracted;
@@ -452,11 +453,11 @@ dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, con
  * two_balls.json), hits landed off the surfaces, the normals
  * (p - center)/radius lost unit length and the colours went to inf past
  * depth 20. Normalising each new direction keeps the error at 1 ulp. */
-void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+void tracer::secondary_colors(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
 			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
 			      const sample_id &sample, dvec3 *reflected, dvec3 *refracted) const
 {
-	double reflect_weight = m.kr;
+	double reflect_weight = m.kr, transmit_weight = m.kt;
 
 	*reflected = *refracted = dvec3(0.0);
 	if (m.kt > 0.0) {
@@ -471,13 +472,23 @@ void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
 			 * the surface, of length sin(i), so no two large terms
 			 * cancel (with ior 1e18 at normal incidence the written
 			 * order gives 1e18*d - 1e18*d = 0, and no direction). */
+			if (m.fresnel == SCENE_FRESNEL_DIELECTRIC) {
+				/* RENDERING.md, "Fresnel": the cosine on the thinner side */
+				double r0 = (m.ior - 1.0) / (m.ior + 1.0);
+				double cos_thin = eta > 1.0 ? std::sqrt(k) : cos_i;
+				double f = r0 * r0 + (1.0 - r0 * r0) * std::pow(1.0 - cos_thin, 5.0);
+				reflect_weight += f * m.kt;
+				transmit_weight = (1.0 - f) * m.kt;
+			}
 			dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
-			*refracted = m.kt * trace(p - epsilon * n_face, T, depth + 1, sample);
+			*refracted = transmit_weight * trace(p - epsilon * n_face, T, depth + 1, sample);
 		}
 	}
 	if (reflect_weight > 0.0) {
 		dvec3 R = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
 		*reflected = reflect_weight * trace(p + epsilon * n_face, R, depth + 1, sample);
+		if (m.fresnel == SCENE_FRESNEL_CONDUCTOR) /* tinted by C head-on */
+			*reflected *= c + (1.0 - c) * std::pow(1.0 - -glm::dot(d, n), 5.0);
 	}
 }
 

@@ -630,6 +630,7 @@ unsigned long long scene_digest(const struct scene *scene)
 				   m->reflect, m->transmit, m->ior};
 		digest_doubles(&h, m->color, 3);
 		digest_doubles(&h, fields, sizeof(fields) / sizeof(fields[0]));
+		digest_int(&h, m->fresnel);
 	}
 	digest_int(&h, scene->sphere_count);
 	for (int i = 0; i < scene->sphere_count; i++) {

@@ -26,7 +26,20 @@ struct scene_material {
 	double reflect;	  /* kr */
 	double transmit;  /* kt */
 	double ior;
+	int fresnel; /* SCENE_FRESNEL_*: RENDERING.md, "Fresnel" */
 };
+
+/* A material's "fresnel" (the same numbers as cl/rtcl_shared.h's RT_FRESNEL_*). */
+enum { SCENE_FRESNEL_OFF, SCENE_FRESNEL_DIELECTRIC, SCENE_FRESNEL_CONDUCTOR };
+
+/* Whether a material of the scene has a Fresnel term. */
+static inline int scene_has_fresnel(const struct scene_material *materials, int count)
+{
+	for (int i = 0; i < count; i++)
+		if (materials[i].fresnel != SCENE_FRESNEL_OFF)
+			return 1;
+	return 0;
+}
 
 struct scene_sphere {
 	double center[3];

@@ -40,7 +40,7 @@ VERSION_2_KEYS = ("meshes", "triangles")
 MESH_KEYS = ("file", "material", "scale", "rotate", "translate", "smooth")
 MATERIAL_DEFAULTS = {"color": (1.0, 1.0, 1.0), "ambient": 1.0, "diffuse": 0.7,
                      "specular": 0.3, "shininess": 32.0, "reflect": 0.0,
-                     "transmit": 0.0, "ior": 1.5}
+                     "transmit": 0.0, "ior": 1.5, "fresnel": False}
 # Material fields in rtcl's order, each with its range.
 MATERIAL_RANGES = (("ambient", "non-negative"), ("diffuse", "non-negative"),
                    ("specular", "non-negative"), ("shininess", "non-negative"),
@@ -120,6 +120,12 @@ def read_material(value, path):
     material["color"] = optional(value, "color", path, vec3, material["color"], "non-negative")
     for key, kind in MATERIAL_RANGES:
         material[key] = optional(value, key, path, number, material[key], kind)
+    fresnel = value.get("fresnel", False)
+    if fresnel is not False and fresnel not in ("dielectric", "conductor"):
+        got = f'"{_escaped(fresnel)}"' if isinstance(fresnel, str) else \
+            "true" if fresnel is True else type_name(fresnel)
+        fail(child(path, "fresnel"), f'must be "dielectric", "conductor" or false, got {got}')
+    material["fresnel"] = fresnel
     return material
 
 
