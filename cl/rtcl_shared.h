@@ -48,8 +48,14 @@ struct rt_material {
 	rt_float transmit;  /* kt */
 	rt_float ior;
 	rt_float inv_ior; /* 1/ior, the eta of a ray entering the object */
-	rt_float pad;
+	rt_int fresnel;	  /* RT_FRESNEL_*: read only in programs built with
+			     RTCL_FRESNEL (RENDERING.md, "Fresnel") */
 };
+
+/* A material's Fresnel term (SCENE.md's "fresnel"). */
+#define RT_FRESNEL_OFF 0
+#define RT_FRESNEL_DIELECTRIC 1
+#define RT_FRESNEL_CONDUCTOR 2
 
 /* The tracer tests spheres this many at a time. */
 #define RT_SPHERE_GROUP 4
@@ -82,8 +88,13 @@ struct rt_plane {
 };
 
 struct rt_light {
-	rt_vec4 position;
-	rt_vec4 color;
+	rt_vec4 position; /* relative to the eye, or for a directional light the
+			     unit direction towards it; w: a sphere light's
+			     radius, or tan of a directional light's angular
+			     radius (0: a point, or a sharp directional light) */
+	rt_vec4 color;	  /* w: 1 for a directional light, else 0. The w lanes
+			     are read only in programs built with
+			     RTCL_AREA_LIGHTS (RENDERING.md, "Light samples") */
 };
 
 /* A triangle: the indices of its three vertices in the vertex array and, in
@@ -141,7 +152,10 @@ struct rt_scene {
 	   (struct rt_leaf_triangle; a leaf of triangles only names a range of
 	   them, RT_LEAF_TRIANGLES); 0 without (--accel bvh-compact). */
 	rt_uint bvh_triangle_offset;
-	rt_uint pad[3];
+	/* The thin lens (RENDERING.md, "The thin lens"): its radius A and the
+	   focus distance F, read only in programs built with RTCL_THIN_LENS. */
+	rt_float lens_radius, focus_distance;
+	rt_uint pad[1];
 };
 
 /* A triangle of a leaf, its three vertex positions inline: v0.w holds its
@@ -228,7 +242,9 @@ struct rt_ray {
 	rt_vec4 dir;	/* unit */
 	rt_int pixel;	/* y * width + x */
 	rt_int depth;
-	rt_int pad0, pad1;
+	rt_float weight_green, weight_blue; /* with colour weights (RTCL_FRESNEL):
+					       the weight's other channels, red
+					       in origin.w */
 };
 
 /* What one launch (or one wavefront pass) renders: a rectangle of the image

@@ -108,3 +108,80 @@ static inline float3 sample_finish(struct tracer *tr, float3 sum, const struct r
 	COUNT_FLOPS(tr, 3); /* one division per channel */
 	return sum / (float)piece->samples;
 }
+
+/* Kensler's hashed permutation of 0 ... n-1 ("Correlated Multi-Jittered
+ * Sampling", 2013): returns where i goes under the permutation seeded by p.
+ * The rounds are a bijection of 0 ... w (w + 1 a power of two), walked until
+ * the result falls below n: less than two rounds on average. */
+static inline uint sample_permute(uint i, uint n, uint p)
+{
+	uint w = n - 1;
+
+	w |= w >> 1;
+	w |= w >> 2;
+	w |= w >> 4;
+	w |= w >> 8;
+	w |= w >> 16;
+	do {
+		i ^= p;
+		i *= 0xe170893du;
+		i ^= p >> 16;
+		i ^= (i & w) >> 4;
+		i ^= p >> 8;
+		i *= 0x0929eb3fu;
+		i ^= p >> 23;
+		i ^= (i & w) >> 1;
+		i *= 1u | p >> 27;
+		i *= 0x6935fa69u;
+		i ^= (i & w) >> 11;
+		i *= 0x74dcb303u;
+		i ^= (i & w) >> 2;
+		i *= 0x9e501cc3u;
+		i ^= (i & w) >> 2;
+		i *= 0xc860a3dfu;
+		i &= w;
+		i ^= i >> 5;
+	} while (i >= n);
+	return (i + p) % n;
+}
+
+/* Returns dimension pair `pair` (>= 1: the lens, the lights) of sample k of
+ * pixel (x, y) out of n, in [0, 1)^2 (RENDERING.md, "More dimensions"): the
+ * same scrambled (0,2)-sequence as the pixel position, its samples shuffled
+ * per pixel and pair so that the pairs do not move together. Counted 2, the
+ * two scalings. */
+static inline float2 sample_pair(struct tracer *tr, int x, int y, uint k, uint n, uint pair)
+{
+	uint seed = sample_hash(sample_hash(sample_hash((uint)x) ^ (uint)y) ^ sample_hash(pair));
+	uint a = sample_hash(seed), b = sample_hash(a);
+	uint i = sample_permute(k, n, seed);
+	uint2 bits = (uint2)((sobol_dim0(i) ^ a) >> (32 - SAMPLE_BITS),
+			     (sobol_dim1(i) ^ b) >> (32 - SAMPLE_BITS));
+
+	COUNT_FLOPS(tr, 2);
+	return convert_float2(bits) * 0x1p-24f;
+}
+
+/* Shirley and Chiu's concentric mapping of [0, 1)^2 onto the unit disk
+ * (RENDERING.md, "The thin lens"): squares go to rings, so the strata of the
+ * sequence stay compact on the disk. Counted 4, then 7, or 8 in the third
+ * case, or nothing more at the centre. */
+static inline float2 sample_disk(struct tracer *tr, float2 st)
+{
+	float x = 2.0f * st.x - 1.0f, y = 2.0f * st.y - 1.0f;
+	float radius, phi;
+
+	COUNT_FLOPS(tr, 4);
+	if (x == 0.0f && y == 0.0f)
+		return (float2)(0.0f);
+	if (fabs(x) > fabs(y)) {
+		radius = x;
+		phi = M_PI_4_F * (y / x);
+		COUNT_FLOPS(tr, 7);
+	} else {
+		radius = y;
+		phi = M_PI_2_F - M_PI_4_F * (x / y);
+		COUNT_FLOPS(tr, 8);
+	}
+	return (float2)(radius * cos(phi), radius * sin(phi));
+}

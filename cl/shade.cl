@@ -37,6 +37,9 @@ struct shading {
 	float light_distance;
 	float diffuse, specular;
 	int light;
+#ifdef RTCL_AREA_LIGHTS
+	int depth; /* of the ray being shaded: which pairs its light samples take */
+#endif
 };
 
 /* RENDERING.md step 2 on a smooth triangle: the shading normal, interpolated
@@ -128,8 +131,75 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	sh->color = material_ambient(sh->m->color) * sh->base * scene->ambient.xyz;
 	sh->shadow_origin = sh->p + scene_epsilon(scene) * sh->n_face;
 	sh->next_light = 0;
+#ifdef RTCL_AREA_LIGHTS
+	sh->depth = ray->depth;
+#endif
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
+
+#ifdef RTCL_AREA_LIGHTS
+/* Light i's sample for the hit (RENDERING.md, "Light samples"): the point of
+ * the disk of radius `size` across unit w at offset, given by the pair of the
+ * sample that belongs to the light and the depth of the ray shaded, through
+ * Duff et al.'s frame across w. Returns size·a·b1 + size·b·b2. */
+static float3 light_disk_offset(struct tracer *tr, const struct shading *sh, int i, float3 w,
+				float size)
+{
+	uint pair = 2u + (uint)sh->depth * (uint)tr->scene->light_count + (uint)i;
+	float2 disk = sample_disk(
+		tr, sample_pair(tr, tr->pixel_x, tr->pixel_y, tr->sample, tr->samples, pair));
+	float sign = copysign(1.0f, w.z);
+	float e = -1.0f / (sign + w.z);
+	float g = w.x * w.y * e;
+	float3 b1 = (float3)(1.0f + sign * w.x * w.x * e, sign * g, -sign * w.x);
+	float3 b2 = (float3)(g, sign + w.y * w.y * e, -w.y);
+
+	/* the frame: e 2, g 2, b1 6, b2 3; size·a, size·b; the two scaled
+	 * vectors and their sum */
+	COUNT_FLOPS(tr, 13 + 2 + FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3);
+	return (size * disk.x) * b1 + (size * disk.y) * b2;
+}
+
+/* Where light i's shadow ray goes from the hit: the unit direction *l and
+ * the distance to the light (INFINITY for a directional light). A point light
+ * is computed as without RTCL_AREA_LIGHTS, bit for bit. Returns false when
+ * the light adds nothing (the hit at a sphere light's centre). */
+static bool light_direction(struct tracer *tr, const struct shading *sh, int i, float3 *l,
+			    float *distance)
+{
+	float4 position = tr->lights[i].position;
+	float size = position.w; /* a sphere's radius, or tan(angle) */
+
+	if (tr->lights[i].color.w != 0.0f) { /* directional: xyz the unit way to it */
+		*distance = INFINITY;
+		*l = position.xyz;
+		if (size > 0.0f) {
+			*l = normalize3(*l + light_disk_offset(tr, sh, i, position.xyz, size));
+			COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_NORMALIZE3);
+		}
+		return true;
+	}
+	float3 target = position.xyz;
+	if (size > 0.0f) {
+		float3 to_centre = target - sh->p;
+		float length2 = dot3(to_centre, to_centre);
+		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3);
+		if (length2 == 0.0f)
+			return false;
+		COUNT_FLOPS(tr, 1 + FLOPS_MUL3);
+		target += light_disk_offset(tr, sh, i, to_centre * rsqrt(length2), size);
+		COUNT_FLOPS(tr, FLOPS_ADD3);
+	}
+	float3 to_light = target - sh->p;
+	float distance2 = dot3(to_light, to_light);
+	float inv_distance = rsqrt(distance2);
+	*distance = distance2 * inv_distance;
+	*l = to_light * inv_distance;
+	/* to_light, distance2, rsqrt, distance, l */
+	COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3 + 1 + 1 + FLOPS_MUL3);
+	return true;
+}
+#endif
 
 /* Moves on to the next light that needs a shadow ray: computes its
  * Blinn-Phong terms and returns true, or returns false when no light is left.
@@ -139,6 +209,14 @@ static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
 	while (sh->next_light < tr->scene->light_count) {
 		int i = sh->next_light++;
 		RTCL_SCENE_SPACE const struct rt_material *m = sh->m;
+#ifdef RTCL_AREA_LIGHTS
+		float3 l;
+		float distance;
+		if (!light_direction(tr, sh, i, &l, &distance))
+			continue;
+		float diffuse = m->diffuse * fmax(0.0f, dot3(sh->n, l));
+		COUNT_FLOPS(tr, FLOPS_DOT3 + 2);
+#else
 		float3 to_light = tr->lights[i].position.xyz - sh->p;
 		float distance2 = dot3(to_light, to_light);
 		float inv_distance = rsqrt(distance2);
@@ -147,6 +225,7 @@ static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
 		float diffuse = m->diffuse * fmax(0.0f, dot3(sh->n, l));
 		/* to_light, distance2, rsqrt, distance, l, diffuse */
 		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_DOT3 + 1 + 1 + FLOPS_MUL3 + FLOPS_DOT3 + 2);
+#endif
 
 		float specular = 0.0f;
 		float3 half_vector = l - d;
@@ -178,6 +257,49 @@ static void shading_add_light(struct tracer *tr, struct shading *sh)
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_MUL3 + FLOPS_ADD3);
 }
 
+#ifdef RTCL_FRESNEL
+/* Schlick's (1 - c)^5 (RENDERING.md, "Fresnel"): 1 - c and four products. */
+static inline float schlick_power(struct tracer *tr, float c)
+{
+	float x = 1.0f - c;
+
+	COUNT_FLOPS(tr, 5);
+	return x * x * x * x * x;
+}
+
+/* A Fresnel dielectric where the ray refracts: moves the share F of kt
+ * that the surface reflects to *reflect_weight and leaves the rest in
+ * *transmit_weight. c = -d·n; k as in the refraction (k >= 0). */
+static void dielectric_fresnel(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_material *m,
+			       float eta, float c, float k, float *reflect_weight,
+			       float *transmit_weight)
+{
+	float r0 = (m->ior - 1.0f) / (m->ior + 1.0f);
+
+	r0 = r0 * r0;
+	COUNT_FLOPS(tr, 4);
+	if (eta > 1.0f) { /* leaving the denser side: the refracted ray's cosine */
+		c = sqrt(k);
+		COUNT_FLOPS(tr, 1);
+	}
+	float f = r0 + (1.0f - r0) * schlick_power(tr, c);
+	*reflect_weight += f * m->transmit;
+	*transmit_weight = (1.0f - f) * m->transmit;
+	COUNT_FLOPS(tr, 3 + 4);
+}
+
+/* A Fresnel conductor's reflectance at the hit, a colour: the base colour
+ * head-on, white at grazing angles. */
+static float3 conductor_fresnel(struct tracer *tr, const struct shading *sh, float3 d)
+{
+	float power = schlick_power(tr, -dot3(d, sh->n));
+
+	/* c; 1 - C, its product and the sum */
+	COUNT_FLOPS(tr, FLOPS_DOT3 + 3 * FLOPS_ADD3);
+	return sh->base + (1.0f - sh->base) * power;
+}
+#endif
+
 /* What shading_spawn spawned: a bit per ray. */
 #define SPAWNED_REFRACTED 1
 #define SPAWNED_REFLECTED 2
@@ -199,7 +321,7 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 	/* Secondary directions are renormalised: in float, |d| drifts from 1
 	 * over a chain of bounces, and the intersection tests assume a unit d
 	 * (without it, 0.16% of tir.json's pixels stray from the reference). */
-	float reflect_weight = m->reflect;
+	float reflect_weight = m->reflect, transmit_weight = m->transmit;
 	if (m->transmit > 0.0f) {
 		float eta = sh->inside ? m->ior : m->inv_ior;
 		float c = -dot3(ray->dir, n);
@@ -210,23 +332,36 @@ static int shading_spawn(struct tracer *tr, const struct ray_job *ray, const str
 			reflect_weight += m->transmit;
 			COUNT_FLOPS(tr, 1);
 		} else {
+#ifdef RTCL_FRESNEL
+			if (m->fresnel == RT_FRESNEL_DIELECTRIC)
+				dielectric_fresnel(tr, m, eta, c, k, &reflect_weight,
+						   &transmit_weight);
+#endif
 			float3 t_dir = normalize3(eta * ray->dir + (eta * c - sqrt(k)) * n);
 			*refracted = (struct ray_job){sh->p - epsilon * sh->n_face, t_dir,
-						      ray->weight * m->transmit, ray->depth + 1};
+						      ray->weight * transmit_weight, ray->depth + 1};
 			spawned |= SPAWNED_REFRACTED;
 			/* t_dir before normalizing: eta d, eta c − sqrt(k) (3), × n, + */
 			COUNT_FLOPS(tr, FLOPS_MUL3 + 3 + FLOPS_MUL3 + FLOPS_ADD3 +
-						FLOPS_NORMALIZE3 + FLOPS_MUL3 + FLOPS_ADD3 + 1);
+						FLOPS_NORMALIZE3 + FLOPS_MUL3 + FLOPS_ADD3 +
+						FLOPS_WEIGHT);
 		}
 	}
 	if (reflect_weight > 0.0f) {
 		float3 r_dir = normalize3(ray->dir - 2.0f * dot3(ray->dir, n) * n);
-		*reflected = (struct ray_job){sh->p + epsilon * sh->n_face, r_dir,
-					      ray->weight * reflect_weight, ray->depth + 1};
+		ray_weight_t weight = ray->weight * reflect_weight;
+#ifdef RTCL_FRESNEL
+		if (m->fresnel == RT_FRESNEL_CONDUCTOR) {
+			weight *= conductor_fresnel(tr, sh, ray->dir);
+			COUNT_FLOPS(tr, FLOPS_MUL3);
+		}
+#endif
+		*reflected = (struct ray_job){sh->p + epsilon * sh->n_face, r_dir, weight,
+					      ray->depth + 1};
 		spawned |= SPAWNED_REFLECTED;
 		/* r_dir before normalizing: d·n, 2×, × n, d − */
 		COUNT_FLOPS(tr, FLOPS_DOT3 + 1 + FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_NORMALIZE3 +
-					FLOPS_MUL3 + FLOPS_ADD3 + 1);
+					FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_WEIGHT);
 	}
 	return spawned;
 }

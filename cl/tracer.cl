@@ -178,12 +178,29 @@ struct tracer {
 	ulong lane_steps[RT_SIMD_PHASES]; /* steps this work-item took */
 	ulong warp_steps[RT_SIMD_PHASES]; /* of them, those it led for its warp */
 #endif
+#ifdef RTCL_AREA_LIGHTS
+	/* The sample being traced, whose further pairs place the light samples
+	   (tracer_set_sample). */
+	int pixel_x, pixel_y;
+	uint sample, samples;
+#endif
 };
+
+/* A ray's weight, the product of the kr and kt along its path: a colour
+ * where a Fresnel conductor tints reflections (RTCL_FRESNEL), else a number,
+ * as before Fresnel existed. A product with a weight counts FLOPS_WEIGHT. */
+#ifdef RTCL_FRESNEL
+typedef float3 ray_weight_t;
+#define FLOPS_WEIGHT 3
+#else
+typedef float ray_weight_t;
+#define FLOPS_WEIGHT 1
+#endif
 
 struct ray_job {
 	float3 origin;
 	float3 dir; /* unit length */
-	float weight;
+	ray_weight_t weight;
 	int depth;
 };
 
@@ -266,6 +283,24 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 #ifdef RTCL_SIMD_MEASURE
 	for (int p = 0; p < RT_SIMD_PHASES; p++)
 		tr->lane_steps[p] = tr->warp_steps[p] = 0;
+#endif
+}
+
+/* Sets the sample being traced: sample k of n of pixel (x, y). Only the
+ * light samples need it (RTCL_AREA_LIGHTS). */
+static inline void tracer_set_sample(struct tracer *tr, int x, int y, uint k, uint n)
+{
+#ifdef RTCL_AREA_LIGHTS
+	tr->pixel_x = x;
+	tr->pixel_y = y;
+	tr->sample = k;
+	tr->samples = n;
+#else
+	(void)tr;
+	(void)x;
+	(void)y;
+	(void)k;
+	(void)n;
 #endif
 }
 

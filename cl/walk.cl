@@ -121,9 +121,10 @@ struct walk {
 	float3 color;
 };
 
-/* Returns the unit direction of pixel (x, y)'s primary ray through the point
- * offset (in [0, 1)^2, from the pixel's top-left corner; 0.5 is the centre). */
-static float3 primary_direction(struct tracer *tr, int x, int y, float2 offset)
+/* Returns the direction of pixel (x, y)'s pinhole ray through the point
+ * offset (in [0, 1)^2, from the pixel's top-left corner; 0.5 is the centre),
+ * before normalising: its component along forward is 1. */
+static float3 pinhole_direction(struct tracer *tr, int x, int y, float2 offset)
 {
 	scene_ptr scene = tr->scene;
 	float sx = (2.0f * ((float)x + offset.x) / (float)scene->width - 1.0f) *
@@ -131,24 +132,47 @@ static float3 primary_direction(struct tracer *tr, int x, int y, float2 offset)
 	float sy = (1.0f - 2.0f * ((float)y + offset.y) / (float)scene->height) *
 		   scene_half_height(scene);
 
-	/* sx and sy 5 each, by hand; two scaled vectors added; the normalize */
-	COUNT_FLOPS(tr, 10 + 2 * (FLOPS_MUL3 + FLOPS_ADD3) + FLOPS_NORMALIZE3);
-	return normalize3(scene->forward.xyz + sx * scene->right.xyz + sy * scene->up.xyz);
+	/* sx and sy 5 each, by hand; two scaled vectors added */
+	COUNT_FLOPS(tr, 10 + 2 * (FLOPS_MUL3 + FLOPS_ADD3));
+	return scene->forward.xyz + sx * scene->right.xyz + sy * scene->up.xyz;
 }
 
-/* Sets *ray to pixel (x, y)'s primary ray through offset. (Written in place:
+/* Sets *ray to sample k (of n) of pixel (x, y): the primary ray through
+ * offset, from the eye, or with a lens (RTCL_THIN_LENS) from the point of the
+ * lens that the sample's pair 1 gives, through the point of the pinhole ray
+ * on the focus plane (RENDERING.md, "The thin lens"). (Written in place:
  * returning the struct cost the walk a store in NVPTX code.) */
-static inline void primary_ray(struct tracer *tr, int x, int y, float2 offset,
+static inline void primary_ray(struct tracer *tr, int x, int y, float2 offset, uint k, uint n,
 			       struct ray_job *ray)
 {
-	*ray = (struct ray_job){tr->scene->eye.xyz, primary_direction(tr, x, y, offset), 1.0f, 0};
+	scene_ptr scene = tr->scene;
+	float3 q = pinhole_direction(tr, x, y, offset);
+
+	COUNT_FLOPS(tr, FLOPS_NORMALIZE3);
+#ifdef RTCL_THIN_LENS
+	float2 lens = sample_disk(tr, sample_pair(tr, x, y, k, n, 1));
+	float3 on_lens = (scene->lens_radius * lens.x) * scene->right.xyz +
+			 (scene->lens_radius * lens.y) * scene->up.xyz;
+	/* A·a, A·b; the offset; F·q and its difference; the origin */
+	COUNT_FLOPS(tr, 2 + FLOPS_MUL3 + FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_MUL3 + FLOPS_ADD3 +
+				FLOPS_ADD3);
+	*ray = (struct ray_job){scene->eye.xyz + on_lens,
+				normalize3(scene->focus_distance * q - on_lens), (ray_weight_t)(1.0f),
+				0};
+#else
+	(void)k;
+	(void)n;
+	*ray = (struct ray_job){scene->eye.xyz, normalize3(q), (ray_weight_t)(1.0f), 0};
+#endif
 }
 
-/* Starts the walk of pixel (x, y)'s sample at offset; the pixel must lie
- * inside the image. */
-static void walk_start(struct tracer *tr, struct walk *w, int x, int y, float2 offset)
+/* Starts the walk of pixel (x, y)'s sample k of n at offset; the pixel must
+ * lie inside the image. */
+static void walk_start(struct tracer *tr, struct walk *w, int x, int y, float2 offset, uint k,
+		       uint n)
 {
-	primary_ray(tr, x, y, offset, &w->rp.ray);
+	tracer_set_sample(tr, x, y, k, n);
+	primary_ray(tr, x, y, offset, k, n, &w->rp.ray);
 	w->top = 0;
 	w->rp.shadow = false;
 	w->color = (float3)(0.0f);
@@ -242,7 +266,7 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 	/* One sample per pixel (the host builds --spp 1 with RTCL_ONE_SAMPLE):
 	 * what the loop below does for it, the centre stored as it is, with no
 	 * sum or sample index live across the trace (fewer registers). */
-	walk_start(tr, &w, x, y, (float2)(0.5f));
+	walk_start(tr, &w, x, y, (float2)(0.5f), 0, 1);
 	while (!walk_step(tr, &w, waiting))
 		;
 	vstore3(w.color, pixel, image);
@@ -251,7 +275,8 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 	float3 sum = piece->sample_begin > 0 ? vload3(pixel, image) : (float3)(0.0f);
 
 	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
-		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples));
+		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples), k,
+			   piece->samples);
 		while (!walk_step(tr, &w, waiting))
 			;
 		sum = sample_add(tr, sum, w.color, k);

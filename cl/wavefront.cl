@@ -51,8 +51,15 @@ static void add_to_pixel(__global float *image, int pixel, float3 color)
 static void store_ray(__global struct rt_ray *queue, uint slot, const struct ray_job *ray,
 		      int pixel)
 {
-	/* The weight rides in the origin's w lane (ray_weight). */
+	/* The weight rides in the origin's w lane (ray_weight); a colour's
+	 * other channels in weight_green and weight_blue. */
+#ifdef RTCL_FRESNEL
+	queue[slot].origin = (float4)(ray->origin, ray->weight.x);
+	queue[slot].weight_green = ray->weight.y;
+	queue[slot].weight_blue = ray->weight.z;
+#else
 	queue[slot].origin = (float4)(ray->origin, ray->weight);
+#endif
 	queue[slot].dir = (float4)(ray->dir, 0.0f);
 	queue[slot].pixel = pixel;
 	queue[slot].depth = ray->depth;
@@ -107,7 +114,8 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 		int pixel = y * tr.scene->width + x;
 		struct ray_job ray;
 
-		primary_ray(&tr, x, y, sample_offset(&tr, x, y, sample, piece.samples), &ray);
+		primary_ray(&tr, x, y, sample_offset(&tr, x, y, sample, piece.samples), sample,
+			    piece.samples, &ray);
 		store_ray(queue, dy * piece.width + dx, &ray, pixel);
 		vstore3((float3)(0.0f), pixel, sample_rgb);
 		start_sample_flops(sample_flops, pixel, tracer_flops(&tr)); /* bounces add theirs */
@@ -147,14 +155,16 @@ __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local u
 
 /* One work-item per queued ray (1D NDRange, rounded up); image and
  * pixel_flops are the sample's (sample_rgb, sample_flops), and each ray
- * carries its pixel, so the bounce needs no piece. Spawned rays go to
+ * carries its pixel, so the bounce needs no piece: only which sample of how
+ * many it traces, for the light samples. Spawned rays go to
  * next[atomic_inc(next_count)]; one that finds the queue full sets *overflow
  * and is dropped, and the host renders the frame again with larger queues. */
 __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4 *scene_local,
 			       __global const struct rt_ray *queue, uint queued,
 			       __global struct rt_ray *next, __global uint *next_count,
 			       uint capacity, __global uint *overflow, __global float *image,
-			       __global ulong *item_counts, __global ulong *pixel_flops)
+			       __global ulong *item_counts, __global ulong *pixel_flops,
+			       uint sample, uint samples)
 {
 	struct tracer tr;
 	uint i = get_global_id(0);
@@ -162,11 +172,19 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
 	if (i < queued) {
 		float4 origin = queue[i].origin;
-		struct ray_job ray = {origin.xyz, queue[i].dir.xyz, ray_weight(origin),
-				      queue[i].depth};
+#ifdef RTCL_FRESNEL
+		ray_weight_t weight = (float3)(ray_weight(origin), queue[i].weight_green,
+					       queue[i].weight_blue);
+#else
+		ray_weight_t weight = ray_weight(origin);
+#endif
+		struct ray_job ray = {origin.xyz, queue[i].dir.xyz, weight, queue[i].depth};
 		int pixel = queue[i].pixel;
 		struct ray_job children[2];
 		int spawned;
+
+		tracer_set_sample(&tr, pixel % tr.scene->width, pixel / tr.scene->width, sample,
+				  samples);
 
 		add_to_pixel(image, pixel, trace_one(&tr, &ray, children, &spawned));
 		COUNT_FLOPS(&tr, FLOPS_ADD3);

@@ -430,7 +430,7 @@ static const struct {
 	/* Lights. */
 	{SCENE(", \"lights\": {}"), "t.json: lights: must be an array, got an object"},
 	{SCENE(", \"lights\": [{\"color\": [1, 1, 1]}]"),
-	 "t.json: lights[0].position: required field is missing"},
+	 "t.json: lights[0]: needs \"position\" (a point or sphere light) or \"direction\" (a directional light)"},
 	{SCENE(", \"lights\": [{\"position\": [0, 0, 0], \"color\": [1, -1, 1]}]"),
 	 "t.json: lights[0].color[1]: must be >= 0, got -1"},
 	{SCENE(", \"lights\": [{\"position\": [0, 0, 0], \"intensity\": 1}]"),

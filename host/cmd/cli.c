@@ -2,6 +2,7 @@
 
 #include <getopt.h>
 #include <limits.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
@@ -36,6 +37,11 @@ enum long_only_option {
 	OPT_PIECE_ROWS,
 	OPT_MESH_TIME_LIMIT,
 	OPT_MESH_MEMORY_LIMIT,
+	OPT_EYE,
+	OPT_LOOK_AT,
+	OPT_FOV,
+	OPT_APERTURE,
+	OPT_FOCUS_DISTANCE,
 };
 
 static const struct option long_options[] = {
@@ -48,6 +54,11 @@ static const struct option long_options[] = {
 	{"size", required_argument, NULL, OPT_SIZE},
 	{"depth", required_argument, NULL, OPT_DEPTH},
 	{"spp", required_argument, NULL, OPT_SPP},
+	{"eye", required_argument, NULL, OPT_EYE},
+	{"look-at", required_argument, NULL, OPT_LOOK_AT},
+	{"fov", required_argument, NULL, OPT_FOV},
+	{"aperture", required_argument, NULL, OPT_APERTURE},
+	{"focus-distance", required_argument, NULL, OPT_FOCUS_DISTANCE},
 	{"platform", required_argument, NULL, 'p'},
 	{"device", required_argument, NULL, 'd'},
 	{"type", required_argument, NULL, 't'},
@@ -109,6 +120,16 @@ static void print_help_after_kernels(FILE *out)
 		"      --spp N            samples per pixel, overriding image.samples (1..%d;\n"
 		"                         default 1, the pixel centre): antialiasing with a\n"
 		"                         box filter, traced in passes with progress\n"
+		"      --eye X,Y,Z        the camera's eye, overriding camera.eye\n"
+		"      --look-at X,Y,Z    the point the camera looks at, overriding\n"
+		"                         camera.look_at\n"
+		"      --fov DEG          vertical field of view, 0 < DEG < 180, overriding\n"
+		"                         camera.fov\n"
+		"      --aperture A       lens radius in world units (>= 0), overriding\n"
+		"                         camera.aperture: > 0 gives depth of field, which\n"
+		"                         converges with --spp\n"
+		"      --focus-distance F distance of the sharp plane (> 0), overriding\n"
+		"                         camera.focus_distance (default: eye to look_at)\n"
 		"      --encoding srgb|linear  how 8-bit formats (PNG, JPEG, TIFF, PPM...) store\n"
 		"                         the linear colours: the sRGB curve (default), or\n"
 		"                         round(255 c) as in the paper; EXR, HDR and PFM are\n"
@@ -283,6 +304,63 @@ static int parse_bounded(const char *option, const char *text, long min, long ma
 	return 0;
 }
 
+/* Parses a number of the scene's rules (SCENE.md): finite, and 0 or of a
+ * magnitude between 1e-18 and 1e18 (rtcl computes in float). Returns 0, or
+ * -1 when text is not such a number. */
+static int parse_scene_number(const char *text, size_t len, double *out)
+{
+	char buf[64], *end;
+
+	if (len == 0 || len >= sizeof(buf) || strchr(" \t\n", text[0]))
+		return -1;
+	memcpy(buf, text, len);
+	buf[len] = '\0';
+	*out = strtod(buf, &end);
+	if (*end != '\0' || !isfinite(*out))
+		return -1;
+	return *out == 0 || (fabs(*out) >= 1e-18 && fabs(*out) <= 1e18) ? 0 : -1;
+}
+
+/* --eye X,Y,Z and --look-at X,Y,Z: three numbers of the scene's rules. */
+static int parse_point(const char *option, const char *text, double out[3], int *given,
+		       char *err, size_t err_size)
+{
+	const char *part = text;
+
+	for (int i = 0; i < 3; i++) {
+		size_t len = strcspn(part, ",");
+		if ((part[len] == ',') != (i < 2) || parse_scene_number(part, len, &out[i])) {
+			snprintf(err, err_size,
+				 "%s: expected X,Y,Z, three numbers each 0 or of a magnitude "
+				 "between 1e-18 and 1e18 (e.g. 0,6,-24), got \"%s\"",
+				 option, quote_text(text));
+			return -1;
+		}
+		part += len + 1;
+	}
+	*given = 1;
+	return 0;
+}
+
+/* --fov, --aperture, --focus-distance: one number of the scene's rules, with
+ * what it must be (min < x < max, or min <= x with min_inclusive). */
+static int parse_camera_number(const char *option, const char *text, double min, double max,
+			       int min_inclusive, const char *rule, double *out, int *given,
+			       char *err, size_t err_size)
+{
+	double v;
+
+	if (parse_scene_number(text, strlen(text), &v) || v < min || (v == min && !min_inclusive) ||
+	    v >= max) {
+		snprintf(err, err_size, "%s: expected %s, got \"%s\"", option, rule,
+			 quote_text(text));
+		return -1;
+	}
+	*out = v;
+	*given = 1;
+	return 0;
+}
+
 /* A mesh import limit (mesh.h) from `source` (an option or an environment
  * variable): a whole number, 0 for none, at most `max`. */
 static int parse_limit(const char *source, const char *text, const char *unit, long max,
@@ -451,6 +529,26 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return parse_bounded("--depth", arg, 0, SCENE_MAX_DEPTH, &o->depth, err, err_size);
 	case OPT_SPP:
 		return parse_bounded("--spp", arg, 1, SCENE_MAX_SAMPLES, &o->spp, err, err_size);
+	case OPT_EYE:
+		return parse_point("--eye", arg, o->camera.eye, &o->camera.eye_given, err, err_size);
+	case OPT_LOOK_AT:
+		return parse_point("--look-at", arg, o->camera.look_at, &o->camera.look_at_given,
+				   err, err_size);
+	case OPT_FOV:
+		return parse_camera_number("--fov", arg, 0, 180, 0,
+					   "degrees, a number greater than 0 and less than 180",
+					   &o->camera.fov, &o->camera.fov_given, err, err_size);
+	case OPT_APERTURE:
+		return parse_camera_number("--aperture", arg, 0, HUGE_VAL, 1,
+					   "the lens radius, a number >= 0 (0: a pinhole; else "
+					   "between 1e-18 and 1e18)",
+					   &o->camera.aperture, &o->camera.aperture_given, err,
+					   err_size);
+	case OPT_FOCUS_DISTANCE:
+		return parse_camera_number("--focus-distance", arg, 0, HUGE_VAL, 0,
+					   "a distance > 0 (between 1e-18 and 1e18)",
+					   &o->camera.focus_distance, &o->camera.focus_given, err,
+					   err_size);
 	case 'p':
 		return parse_bounded("-p/--platform", arg, 0, 1000, &o->devices.platform, err, err_size);
 	case 'd':

@@ -9,6 +9,7 @@
 #include "device/devices.h"
 #include "job/job.h"
 #include "output/plan.h"
+#include "scene/scene.h"
 
 
 /* The options, composed of what each layer reads: the devices (job.h), the
@@ -23,6 +24,7 @@ struct options {
 	int size[2];		/* --size WxH; 0x0 when not given */
 	int depth;		/* --depth N; -1 when not given */
 	int spp;		/* --spp N; 0 when not given */
+	struct camera_override camera; /* --eye, --look-at, --fov, --aperture, --focus-distance */
 	struct device_choice devices; /* -p, -d (-1 when not given), -t, --devices */
 	int list_devices;
 	int split_static; /* --split static */

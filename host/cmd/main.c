@@ -205,6 +205,11 @@ int main(int argc, char **argv)
 		fprintf(stderr, "%s\n", err);
 		return EXIT_FAILED;
 	}
+	if (scene_override_camera(&scene, &opt.camera, err, sizeof(err))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		scene_free(&scene);
+		return EXIT_USAGE;
+	}
 	if (opt.verbose)
 		print_scene_bounds(&scene);
 	make_job(&job, &opt, &scene);

@@ -42,6 +42,8 @@ static void pack_camera(struct rt_scene *out, const struct scene *scene, int wid
 	out->forward = vec4(forward, h);
 	out->right = vec4(right, scene->epsilon);
 	out->up = vec4(up, 0.0);
+	out->lens_radius = (float)cam->aperture;
+	out->focus_distance = (float)cam->focus_distance;
 }
 
 static void pack_material(struct rt_material *out, const struct scene_material *in)
@@ -54,6 +56,7 @@ static void pack_material(struct rt_material *out, const struct scene_material *
 	out->transmit = (float)in->transmit;
 	out->ior = (float)in->ior;
 	out->inv_ior = (float)(1.0 / in->ior);
+	out->fresnel = in->fresnel;
 }
 
 static void pack_sphere(struct rt_sphere *out, const struct scene *scene,
@@ -100,6 +103,24 @@ static void pack_plane(struct rt_plane *out, const struct scene *scene,
 	out->has_checker = in->has_checker;
 	out->checker_s_axis = drop == 0 ? 1 : 0;
 	out->checker_t_axis = drop == 2 ? 1 : 2;
+}
+
+/* A light as the tracer reads it (cl/rtcl_shared.h): a directional light as
+ * the unit way towards it, which the eye's translation leaves as it is. */
+static void pack_light(struct rt_light *out, const struct scene *scene,
+		       const struct scene_light *in)
+{
+	double position[3];
+
+	if (in->directional) {
+		double toward[3] = {-in->direction[0], -in->direction[1], -in->direction[2]};
+		out->position = vec4(toward, tan(in->angle * M_PI / 180.0));
+		out->color = vec4(in->color, 1.0);
+		return;
+	}
+	scene_from_eye(scene, in->position, position);
+	out->position = vec4(position, in->radius);
+	out->color = vec4(in->color, 0.0);
 }
 
 static int is_sphere_ref(uint32_t ref)
@@ -318,12 +339,8 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 		pack_plane(&planes[i], scene, &scene->planes[i]);
 
 	struct rt_light *lights = (struct rt_light *)(block + light_offset);
-	for (int i = 0; i < scene->light_count; i++) {
-		double position[3];
-		scene_from_eye(scene, scene->lights[i].position, position);
-		lights[i].position = vec4(position, 0.0);
-		lights[i].color = vec4(scene->lights[i].color, 0.0);
-	}
+	for (int i = 0; i < scene->light_count; i++)
+		pack_light(&lights[i], scene, &scene->lights[i]);
 
 	if (scene->triangle_count > 0) { /* else the arrays are NULL, which memcpy may not take */
 		memcpy(block + l.triangle, mesh->triangles,

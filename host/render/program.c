@@ -191,10 +191,16 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "", f->use_bvh ? " -DRTCL_BVH" : "",
 		 f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
+		 /* Pinhole scenes build without the lens: the same program, the same bits. */
+		 f->thin_lens ? " -DRTCL_THIN_LENS" : "",
+		 /* Point lights only: the program of before light samples. */
+		 f->area_lights ? " -DRTCL_AREA_LIGHTS" : "",
+		 /* Without Fresnel, weights stay numbers: the program of before. */
+		 f->fresnel ? " -DRTCL_FRESNEL" : "",
 		 s->samples > 1 ? "" : " -DRTCL_ONE_SAMPLE",
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 /* SIMD efficiency, measured where the device lets software see it. */

@@ -27,6 +27,7 @@ dvec3 to_dvec3(const double v[3])
 struct material {
 	dvec3 color;
 	double ka, kd, ks, shininess, kr, kt, ior;
+	int fresnel; /* SCENE_FRESNEL_* */
 };
 
 struct sphere {
@@ -55,8 +56,22 @@ struct triangle {
 };
 
 struct light {
-	dvec3 position;
+	dvec3 position; /* a point or sphere light's centre */
 	dvec3 color;
+	double radius;	  /* a sphere light's; 0: a point light */
+	bool directional; /* then: */
+	dvec3 toward;	  /* the unit direction towards the light */
+	double tan_angle; /* tan of its angular radius */
+};
+
+/* A point of the unit disk for dimension pair `pair` of sample k of pixel
+ * (x, y) out of n (defined with the samples, below). */
+glm::dvec2 sample_disk(int x, int y, int k, int n, int pair);
+
+/* The sample being traced: sample k of n of pixel (x, y), whose further
+ * pairs place the light samples (RENDERING.md, "Light samples"). */
+struct sample_id {
+	int x, y, k, n;
 };
 
 /* The nearest hit of a ray: exactly one of sphere, triangle and plane is
@@ -141,17 +156,20 @@ class tracer
 	/* May throw std::bad_alloc. */
 	tracer(const struct scene &sc, int max_depth);
 
-	dvec3 trace(const dvec3 &o, const dvec3 &d, int depth) const;
+	dvec3 trace(const dvec3 &o, const dvec3 &d, int depth, const sample_id &sample) const;
 
       private:
 	bool nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const;
 	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
 	dvec3 base_color(const hit &h, const dvec3 &p) const;
 	dvec3 local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
-			  const dvec3 &n_face, const dvec3 &d) const;
-	void secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+			  const dvec3 &n_face, const dvec3 &d, int depth,
+			  const sample_id &sample) const;
+	bool light_point(const light &li, int index, const dvec3 &p, int depth,
+			 const sample_id &sample, dvec3 *point) const;
+	void secondary_colors(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
 			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
-			      dvec3 *reflected, dvec3 *refracted) const;
+			      const sample_id &sample, dvec3 *reflected, dvec3 *refracted) const;
 
 	std::vector<material> materials;
 	std::vector<sphere> spheres;
@@ -171,7 +189,7 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 	for (int i = 0; i < sc.material_count; i++) {
 		const scene_material &m = sc.materials[i];
 		materials.push_back({to_dvec3(m.color), m.ambient, m.diffuse, m.specular,
-				     m.shininess, m.reflect, m.transmit, m.ior});
+				     m.shininess, m.reflect, m.transmit, m.ior, m.fresnel});
 	}
 	for (int i = 0; i < sc.sphere_count; i++) {
 		const scene_sphere &s = sc.spheres[i];
@@ -197,7 +215,9 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 	}
 	for (int i = 0; i < sc.light_count; i++) {
 		const scene_light &l = sc.lights[i];
-		lights.push_back({to_dvec3(l.position), to_dvec3(l.color)});
+		lights.push_back({to_dvec3(l.position), to_dvec3(l.color), l.radius,
+				  l.directional != 0, -to_dvec3(l.direction),
+				  std::tan(glm::radians(l.angle))});
 	}
 }
 
@@ -294,7 +314,7 @@ dvec3 shading_normal(const triangle &tri, double u, double v, const dvec3 &n_fac
 	return glm::dot(n, n_face) < 0.0 ? -n : n;
 }
 
-dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
+dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth, const sample_id &sample) const
 {
 	/* 1. */
 	hit h;
@@ -324,12 +344,13 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 	dvec3 c = base_color(h, p);
 
 	/* 4. */
-	dvec3 color = local_color(m, c, p, n, n_face, d);
+	dvec3 color = local_color(m, c, p, n, n_face, d, depth, sample);
 
 	/* 5. (in the order of the sums before this function was split) */
 	if (depth < max_depth) {
 		dvec3 reflected, refracted;
-		secondary_colors(m, p, n, n_face, d, inside, depth, &reflected, &refracted);
+		secondary_colors(m, c, p, n, n_face, d, inside, depth, sample, &reflected,
+				 &refracted);
 		color += reflected;
 		color += refracted;
 	}
@@ -338,23 +359,75 @@ dvec3 tracer::trace(const dvec3 &o, const dvec3 &d, int depth) const
 	return color;
 }
 
+/* RENDERING.md, "Light samples": the offset size*(a*b1 + b*b2) of the
+ * sample's point on the disk across unit w, (a, b) from the pair of light
+ * `index` at this depth. */
+dvec3 disk_offset(const dvec3 &w, double size, int pair, const sample_id &sample)
+{
+	glm::dvec2 disk = sample_disk(sample.x, sample.y, sample.k, sample.n, pair);
+	double sign = std::copysign(1.0, w.z);
+	double e = -1.0 / (sign + w.z);
+	double g = w.x * w.y * e;
+	dvec3 b1(1.0 + sign * w.x * w.x * e, sign * g, -sign * w.x);
+	dvec3 b2(g, sign + w.y * w.y * e, -w.y);
+	return size * disk.x * b1 + size * disk.y * b2;
+}
+
+/* The point of light li that the sample's shadow ray from p goes to: the
+ * position itself for a point light, a point of the disk of a sphere light
+ * facing p; for a directional light, p plus the sampled unit direction
+ * towards it. Returns false when the light adds nothing (p at a sphere
+ * light's centre). */
+bool tracer::light_point(const light &li, int index, const dvec3 &p, int depth,
+			 const sample_id &sample, dvec3 *point) const
+{
+	int pair = 2 + depth * (int)lights.size() + index;
+
+	if (li.directional) {
+		dvec3 L = li.toward;
+		if (li.tan_angle > 0)
+			L = glm::normalize(L + disk_offset(L, li.tan_angle, pair, sample));
+		*point = p + L;
+		return true;
+	}
+	*point = li.position;
+	if (li.radius > 0) {
+		if (li.position == p)
+			return false;
+		*point += disk_offset(glm::normalize(li.position - p), li.radius, pair, sample);
+	}
+	return true;
+}
+
 /* RENDERING.md trace step 4: ambient, then each light not in shadow. */
 dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
-			  const dvec3 &n_face, const dvec3 &d) const
+			  const dvec3 &n_face, const dvec3 &d, int depth,
+			  const sample_id &sample) const
 {
 	dvec3 color = m.ka * c * ambient;
 	/* Off the surface along the geometric normal (n itself but on a smooth
 	 * triangle), so that the shadow ray starts on the ray's side of it. */
 	dvec3 shadow_origin = p + epsilon * n_face;
-	for (const light &li : lights) {
-		/* The shadow ray runs from shadow_origin straight to the light, and
-		 * t is measured along it, so "distance" is from shadow_origin. */
-		dvec3 to_light = li.position - shadow_origin;
-		double distance = glm::length(to_light);
-		if (distance > 0.0 && blocked(shadow_origin, to_light / distance, distance))
+	for (size_t i = 0; i < lights.size(); i++) {
+		const light &li = lights[i];
+		dvec3 point;
+		if (!light_point(li, (int)i, p, depth, sample, &point))
 			continue;
+		if (li.directional) {
+			/* No distance: anything along the way shadows p. */
+			if (blocked(shadow_origin, point - p, HUGE_VAL))
+				continue;
+		} else {
+			/* The shadow ray runs from shadow_origin straight to the
+			 * light, and t is measured along it, so "distance" is from
+			 * shadow_origin. */
+			dvec3 to_light = point - shadow_origin;
+			double distance = glm::length(to_light);
+			if (distance > 0.0 && blocked(shadow_origin, to_light / distance, distance))
+				continue;
+		}
 
-		dvec3 surface_to_light = li.position - p;
+		dvec3 surface_to_light = point - p;
 		if (surface_to_light == dvec3(0.0))
 			continue; /* light exactly at p: L is undefined */
 		dvec3 L = glm::normalize(surface_to_light);
@@ -380,11 +453,11 @@ dvec3 tracer::local_color(const material &m, const dvec3 &c, const dvec3 &p, con
  * two_balls.json), hits landed off the surfaces, the normals
  * (p - center)/radius lost unit length and the colours went to inf past
  * depth 20. Normalising each new direction keeps the error at 1 ulp. */
-void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
+void tracer::secondary_colors(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
 			      const dvec3 &n_face, const dvec3 &d, bool inside, int depth,
-			      dvec3 *reflected, dvec3 *refracted) const
+			      const sample_id &sample, dvec3 *reflected, dvec3 *refracted) const
 {
-	double reflect_weight = m.kr;
+	double reflect_weight = m.kr, transmit_weight = m.kt;
 
 	*reflected = *refracted = dvec3(0.0);
 	if (m.kt > 0.0) {
@@ -399,13 +472,23 @@ void tracer::secondary_colors(const material &m, const dvec3 &p, const dvec3 &n,
 			 * the surface, of length sin(i), so no two large terms
 			 * cancel (with ior 1e18 at normal incidence the written
 			 * order gives 1e18*d - 1e18*d = 0, and no direction). */
+			if (m.fresnel == SCENE_FRESNEL_DIELECTRIC) {
+				/* RENDERING.md, "Fresnel": the cosine on the thinner side */
+				double r0 = (m.ior - 1.0) / (m.ior + 1.0);
+				double cos_thin = eta > 1.0 ? std::sqrt(k) : cos_i;
+				double f = r0 * r0 + (1.0 - r0 * r0) * std::pow(1.0 - cos_thin, 5.0);
+				reflect_weight += f * m.kt;
+				transmit_weight = (1.0 - f) * m.kt;
+			}
 			dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
-			*refracted = m.kt * trace(p - epsilon * n_face, T, depth + 1);
+			*refracted = transmit_weight * trace(p - epsilon * n_face, T, depth + 1, sample);
 		}
 	}
 	if (reflect_weight > 0.0) {
 		dvec3 R = glm::normalize(d - 2.0 * glm::dot(d, n) * n);
-		*reflected = reflect_weight * trace(p + epsilon * n_face, R, depth + 1);
+		*reflected = reflect_weight * trace(p + epsilon * n_face, R, depth + 1, sample);
+		if (m.fresnel == SCENE_FRESNEL_CONDUCTOR) /* tinted by C head-on */
+			*reflected *= c + (1.0 - c) * std::pow(1.0 - -glm::dot(d, n), 5.0);
 	}
 }
 
@@ -437,7 +520,72 @@ uint32_t sobol_point(uint32_t k, int dimension)
 	return r;
 }
 
+/* Kensler's permute of RENDERING.md ("More dimensions"): where i goes in a
+ * hashed permutation of 0 ... n-1 seeded by p. */
+uint32_t permute(uint32_t i, uint32_t n, uint32_t p)
+{
+	uint32_t w = n - 1;
+
+	for (int shift = 1; shift <= 16; shift *= 2)
+		w |= w >> shift;
+	do {
+		i ^= p;
+		i *= 0xe170893du;
+		i ^= p >> 16;
+		i ^= (i & w) >> 4;
+		i ^= p >> 8;
+		i *= 0x0929eb3fu;
+		i ^= p >> 23;
+		i ^= (i & w) >> 1;
+		i *= 1u | p >> 27;
+		i *= 0x6935fa69u;
+		i ^= (i & w) >> 11;
+		i *= 0x74dcb303u;
+		i ^= (i & w) >> 2;
+		i *= 0x9e501cc3u;
+		i ^= (i & w) >> 2;
+		i *= 0xc860a3dfu;
+		i &= w;
+		i ^= i >> 5;
+	} while (i >= n);
+	return (i + p) % n;
+}
+
+/* RENDERING.md's concentric mapping of [0, 1)^2 onto the unit disk. */
+glm::dvec2 concentric_disk(double s, double t)
+{
+	double x = 2.0 * s - 1.0, y = 2.0 * t - 1.0;
+
+	if (x == 0.0 && y == 0.0)
+		return glm::dvec2(0.0);
+	if (std::fabs(x) > std::fabs(y)) {
+		double phi = M_PI / 4.0 * (y / x);
+		return glm::dvec2(x * std::cos(phi), x * std::sin(phi));
+	}
+	double phi = M_PI / 2.0 - M_PI / 4.0 * (x / y);
+	return glm::dvec2(y * std::cos(phi), y * std::sin(phi));
+}
+
+glm::dvec2 sample_disk(int x, int y, int k, int n, int pair)
+{
+	double st[2];
+
+	reference_sample_pair(x, y, k, n, pair, st);
+	return concentric_disk(st[0], st[1]);
+}
+
 } // namespace
+
+extern "C" void reference_sample_pair(int x, int y, int k, int n, int pair, double st[2])
+{
+	uint32_t scramble_u = sample_hash(sample_hash((uint32_t)x) ^ (uint32_t)y);
+	uint32_t seed = sample_hash(scramble_u ^ sample_hash((uint32_t)pair));
+	uint32_t a = sample_hash(seed), b = sample_hash(a);
+	uint32_t i = permute((uint32_t)k, (uint32_t)n, seed);
+
+	st[0] = std::ldexp((double)((sobol_point(i, 0) ^ a) >> 8), -24);
+	st[1] = std::ldexp((double)((sobol_point(i, 1) ^ b) >> 8), -24);
+}
 
 extern "C" void reference_sample_position(int x, int y, int k, int n, double uv[2])
 {
@@ -477,12 +625,23 @@ int reference_render_samples(const struct scene *scene, int width, int height, i
 			for (int x = 0; x < width; x++) {
 				dvec3 sum(0.0);
 				for (int k = 0; k < samples; k++) {
+					const sample_id sample = {x, y, k, samples};
 					double uv[2];
 					reference_sample_position(x, y, k, samples, uv);
 					double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
 					double sy = (1.0 - 2.0 * (y + uv[1]) / height) * h;
-					dvec3 dir = glm::normalize(f + sx * r + sy * u);
-					sum += tr.trace(eye, dir, 0);
+					dvec3 q = f + sx * r + sy * u;
+					if (cam.aperture > 0) {
+						/* RENDERING.md, "The thin lens" */
+						glm::dvec2 lens = sample_disk(x, y, k, samples, 1);
+						dvec3 on_lens = cam.aperture * lens.x * r +
+								cam.aperture * lens.y * u;
+						dvec3 dir = glm::normalize(cam.focus_distance * q -
+									   on_lens);
+						sum += tr.trace(eye + on_lens, dir, 0, sample);
+						continue;
+					}
+					sum += tr.trace(eye, glm::normalize(q), 0, sample);
 				}
 				dvec3 c = sum / (double)samples;
 				float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);

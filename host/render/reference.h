@@ -30,6 +30,11 @@ int reference_render_samples(const struct scene *scene, int width, int height, i
  * [0, 1)^2 from its top-left corner, as RENDERING.md defines it. */
 void reference_sample_position(int x, int y, int k, int n, double uv[2]);
 
+/* Sets st to dimension pair `pair` (>= 1: 1 the lens, 2 + depth * lights +
+ * light a light's sample) of sample k of pixel (x, y) out of n, in [0, 1)^2,
+ * as RENDERING.md ("More dimensions") defines it. */
+void reference_sample_pair(int x, int y, int k, int n, int pair, double st[2]);
+
 #ifdef __cplusplus
 }
 #endif

@@ -74,7 +74,7 @@ struct render_times {
 };
 
 /* Room for rtcl's own build options and RTCL_BUILD_OPTIONS (program.h). */
-#define BUILD_OPTIONS_SIZE 512
+#define BUILD_OPTIONS_SIZE 576
 
 struct render_result {
 	float *rgb; /* width*height*3 linear floats, row 0 at the top */

@@ -207,12 +207,13 @@ static cl_int launch_accumulate(struct renderer *r, struct wavefront *w, size_t 
 		status = append_counts(r->dev, w, global[0] * global[1]);
 	return status;
 }
-/* Traces the *queued rays of queue bounce % 2, appending the rays they spawn
- * to the other queue, and sets *queued to their number. Returns CL_SUCCESS,
+/* Traces the *queued rays of queue bounce % 2, sample `sample` of `samples`,
+ * appending the rays they spawn to the other queue, and sets *queued to their
+ * number. Returns CL_SUCCESS,
  * FRAME_OVERFLOWED, or an OpenCL error. */
 static cl_int launch_bounce(struct device *dev, const struct render_settings *s,
 			    struct wavefront *w, size_t local_bytes, int bounce, cl_uint *queued,
-			    double *ms)
+			    cl_uint sample, cl_uint samples, double *ms)
 {
 	cl_mem in = w->queues[bounce % 2], out = w->queues[(bounce + 1) % 2];
 	size_t global = (*queued + w->bounce_local - 1) / w->bounce_local * w->bounce_local;
@@ -221,15 +222,16 @@ static cl_int launch_bounce(struct device *dev, const struct render_settings *s,
 	const void *args[] = {
 		&w->b.scene,	 NULL,	    &in,	  queued,	  &out,
 		&w->next_count,	 &capacity, &w->overflow, &w->sample_rgb, &w->item_counts,
-		&w->sample_flops};
-	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem),	 sizeof(cl_uint),
-				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_uint), sizeof(cl_mem),
-				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem)};
+		&w->sample_flops, &sample,  &samples};
+	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	 sizeof(cl_mem),  sizeof(cl_uint),
+				sizeof(cl_mem), sizeof(cl_mem),	 sizeof(cl_uint), sizeof(cl_mem),
+				sizeof(cl_mem), sizeof(cl_mem),	 sizeof(cl_mem),  sizeof(cl_uint),
+				sizeof(cl_uint)};
 	cl_int status = clEnqueueFillBuffer(dev->queue, w->next_count, &zero, sizeof(zero), 0,
 					    sizeof(zero), 0, NULL, NULL);
 
 	if (status == CL_SUCCESS)
-		status = set_kernel_args(w->bounce, args, sizes, 11);
+		status = set_kernel_args(w->bounce, args, sizes, 13);
 	if (status == CL_SUCCESS)
 		status = launch_run(dev, w->bounce, 1, &global, &w->bounce_local, NULL, ms, &call);
 	if (status == CL_SUCCESS && s->count_flops)
@@ -263,7 +265,7 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 
 		for (; status == CL_SUCCESS && queued > 0; bounce++)
 			status = launch_bounce(r->dev, r->settings, w, local_bytes, bounce, &queued,
-					       &attempt);
+					       sample, (cl_uint)piece->samples, &attempt);
 		if (status == FRAME_OVERFLOWED) {
 			if (r->settings->verbose)
 				fprintf(stderr,

@@ -96,41 +96,113 @@ static int read_header(struct loader *ld, json_t *doc)
 	return 0;
 }
 
+/* The view direction (look_at - eye) and up of cam, checked: NULL when
+ * the camera is well defined, else what is wrong, with *field the field at
+ * fault ("look_at" or "up"); buf holds the values quoted. */
+static const char *camera_problem(const struct scene_camera *cam, const char **field,
+				  char buf[200])
+{
+	double dir[3], d[3], u[3], cross[3];
+	char vec[100];
+
+	/* Halved first so that the difference cannot overflow. */
+	for (int i = 0; i < 3; i++)
+		dir[i] = cam->look_at[i] / 2 - cam->eye[i] / 2;
+	*field = "look_at";
+	if (!loader_scale_to_unit_max(dir, d)) {
+		snprintf(buf, 200, "must differ from camera.eye, both are %s",
+			 loader_fmt_vec3(cam->eye, vec));
+		return buf;
+	}
+	*field = "up";
+	if (!loader_scale_to_unit_max(cam->up, u))
+		return "must be non-zero";
+	cross[0] = u[1] * d[2] - u[2] * d[1];
+	cross[1] = u[2] * d[0] - u[0] * d[2];
+	cross[2] = u[0] * d[1] - u[1] * d[0];
+	if (loader_length3(cross) <= SCENE_PARALLEL_SINE * loader_length3(u) * loader_length3(d)) {
+		snprintf(buf, 200, "must not be parallel to look_at - eye, got %s",
+			 loader_fmt_vec3(cam->up, vec));
+		return buf;
+	}
+	return NULL;
+}
+
+/* camera.focus_distance when not given: the distance from the eye to
+ * look_at (halved first, so that the difference cannot overflow). */
+static void default_focus(struct scene_camera *cam)
+{
+	double half[3];
+
+	if (cam->focus_given)
+		return;
+	for (int i = 0; i < 3; i++)
+		half[i] = cam->look_at[i] / 2 - cam->eye[i] / 2;
+	cam->focus_distance = 2 * loader_length3(half);
+}
+
 static int read_camera(struct loader *ld, json_t *doc)
 {
-	static const char *const keys[] = {"eye", "look_at", "up", "fov", NULL};
+	static const char *const keys[] = {"eye", "look_at",  "up", "fov", "aperture",
+					   "focus_distance", NULL};
 	struct path p = child_key(&root_path, "camera");
-	struct path look_at = child_key(&p, "look_at");
-	struct path up = child_key(&p, "up");
 	struct scene_camera *cam = &ld->scene->camera;
-	double dir[3], d[3], u[3], cross[3];
-	char buf[100];
+	const char *field, *problem;
+	char buf[200];
 	json_t *obj;
 
 	cam->up[0] = 0, cam->up[1] = 1, cam->up[2] = 0;
 	cam->fov = 45;
+	cam->aperture = 0;
+	cam->focus_distance = 0;
 	if (loader_get_field(ld, &root_path, doc, "camera", REQUIRED, &obj) ||
 	    loader_expect_object(ld, &p, obj, keys) ||
 	    loader_read_vec3(ld, &p, obj, "eye", REQUIRED, ANY, cam->eye) ||
 	    loader_read_vec3(ld, &p, obj, "look_at", REQUIRED, ANY, cam->look_at) ||
 	    loader_read_vec3(ld, &p, obj, "up", OPTIONAL, ANY, cam->up) ||
-	    loader_read_number(ld, &p, obj, "fov", OPTIONAL, FOV, &cam->fov))
+	    loader_read_number(ld, &p, obj, "fov", OPTIONAL, FOV, &cam->fov) ||
+	    loader_read_number(ld, &p, obj, "aperture", OPTIONAL, NON_NEGATIVE, &cam->aperture) ||
+	    loader_read_number(ld, &p, obj, "focus_distance", OPTIONAL, POSITIVE,
+			       &cam->focus_distance))
 		return -1;
+	cam->focus_given = json_object_get(obj, "focus_distance") != NULL;
 
-	/* Halved first so that the difference cannot overflow. */
-	for (int i = 0; i < 3; i++)
-		dir[i] = cam->look_at[i] / 2 - cam->eye[i] / 2;
-	if (!loader_scale_to_unit_max(dir, d))
-		return loader_fail(ld, &look_at, "must differ from camera.eye, both are %s",
-				   loader_fmt_vec3(cam->eye, buf));
-	if (!loader_scale_to_unit_max(cam->up, u))
-		return loader_fail(ld, &up, "must be non-zero");
-	cross[0] = u[1] * d[2] - u[2] * d[1];
-	cross[1] = u[2] * d[0] - u[0] * d[2];
-	cross[2] = u[0] * d[1] - u[1] * d[0];
-	if (loader_length3(cross) <= SCENE_PARALLEL_SINE * loader_length3(u) * loader_length3(d))
-		return loader_fail(ld, &up, "must not be parallel to look_at - eye, got %s",
-				   loader_fmt_vec3(cam->up, buf));
+	problem = camera_problem(cam, &field, buf);
+	if (problem) {
+		struct path at = child_key(&p, field);
+		return loader_fail(ld, &at, "%s", problem);
+	}
+	default_focus(cam);
+	return 0;
+}
+
+int scene_override_camera(struct scene *scene, const struct camera_override *o, char *err,
+			  size_t err_size)
+{
+	struct scene_camera *cam = &scene->camera;
+	const char *field, *problem;
+	char buf[200];
+
+	if (o->eye_given)
+		memcpy(cam->eye, o->eye, sizeof(cam->eye));
+	if (o->look_at_given)
+		memcpy(cam->look_at, o->look_at, sizeof(cam->look_at));
+	if (o->fov_given)
+		cam->fov = o->fov;
+	if (o->aperture_given)
+		cam->aperture = o->aperture;
+	if (o->focus_given) {
+		cam->focus_distance = o->focus_distance;
+		cam->focus_given = 1;
+	}
+	problem = camera_problem(cam, &field, buf);
+	if (problem) {
+		snprintf(err, err_size, "%s%s%s: camera.%s %s", o->eye_given ? "--eye" : "",
+			 o->eye_given && o->look_at_given ? " and " : "",
+			 o->look_at_given ? "--look-at" : "", field, problem);
+		return -1;
+	}
+	default_focus(cam);
 	return 0;
 }
 
@@ -170,9 +242,54 @@ static int read_image_and_globals(struct loader *ld, json_t *doc)
 	return 0;
 }
 
+/* A directional light's direction (normalised; the way its light travels)
+ * and angle, or a point or sphere light's position and radius: the one pair
+ * the light gives, each field refused on a light of the other kind. */
+static int read_light_kind(struct loader *ld, const struct path *item, json_t *obj,
+			   struct scene_light *l)
+{
+	int has_position = json_object_get(obj, "position") != NULL;
+	int has_direction = json_object_get(obj, "direction") != NULL;
+	struct path radius = child_key(item, "radius"), angle = child_key(item, "angle");
+	struct path direction = child_key(item, "direction");
+	double scaled[3];
+
+	if (has_position == has_direction)
+		return loader_fail(ld, item,
+				   has_position ? "has both \"position\" and \"direction\": give one"
+						: "needs \"position\" (a point or sphere light) or "
+						  "\"direction\" (a directional light)");
+	l->directional = has_direction;
+	if (has_position) {
+		if (json_object_get(obj, "angle"))
+			return loader_fail(ld, &angle, "a point or sphere light has no angle; "
+						       "give its \"radius\"");
+		return loader_read_vec3(ld, item, obj, "position", REQUIRED, ANY, l->position) ||
+		       loader_read_number(ld, item, obj, "radius", OPTIONAL, NON_NEGATIVE,
+					  &l->radius);
+	}
+	if (json_object_get(obj, "radius"))
+		return loader_fail(ld, &radius,
+				   "a directional light has no radius; give its \"angle\"");
+	if (loader_read_vec3(ld, item, obj, "direction", REQUIRED, DIRECTION, l->direction) ||
+	    loader_read_number(ld, item, obj, "angle", OPTIONAL, NON_NEGATIVE, &l->angle))
+		return -1;
+	if (!loader_scale_to_unit_max(l->direction, scaled))
+		return loader_fail(ld, &direction, "must be non-zero");
+	for (int i = 0; i < 3; i++)
+		l->direction[i] = scaled[i] / loader_length3(scaled);
+	if (l->angle >= 90) {
+		char buf[32];
+		return loader_fail(ld, &angle, "must be >= 0 and < 90, got %s",
+				   loader_fmt_num(l->angle, buf));
+	}
+	return 0;
+}
+
 static int read_lights(struct loader *ld, json_t *array)
 {
-	static const char *const keys[] = {"position", "color", NULL};
+	static const char *const keys[] = {"position", "direction", "color", "radius", "angle",
+					   NULL};
 	struct path p = child_key(&root_path, "lights");
 	struct scene *s = ld->scene;
 
@@ -183,7 +300,7 @@ static int read_lights(struct loader *ld, json_t *array)
 
 		l->color[0] = l->color[1] = l->color[2] = 1;
 		if (loader_expect_object(ld, &item, obj, keys) ||
-		    loader_read_vec3(ld, &item, obj, "position", REQUIRED, ANY, l->position) ||
+		    read_light_kind(ld, &item, obj, l) ||
 		    loader_read_vec3(ld, &item, obj, "color", OPTIONAL, NON_NEGATIVE, l->color))
 			return -1;
 		s->light_count++;
@@ -500,6 +617,8 @@ unsigned long long scene_digest(const struct scene *scene)
 	digest_doubles(&h, c->look_at, 3);
 	digest_doubles(&h, c->up, 3);
 	digest_doubles(&h, &c->fov, 1);
+	digest_doubles(&h, &c->aperture, 1);
+	digest_doubles(&h, &c->focus_distance, 1);
 	digest_doubles(&h, scene->background, 3);
 	digest_doubles(&h, scene->ambient, 3);
 	digest_doubles(&h, &scene->epsilon, 1);
@@ -511,6 +630,7 @@ unsigned long long scene_digest(const struct scene *scene)
 				   m->reflect, m->transmit, m->ior};
 		digest_doubles(&h, m->color, 3);
 		digest_doubles(&h, fields, sizeof(fields) / sizeof(fields[0]));
+		digest_int(&h, m->fresnel);
 	}
 	digest_int(&h, scene->sphere_count);
 	for (int i = 0; i < scene->sphere_count; i++) {
@@ -530,8 +650,13 @@ unsigned long long scene_digest(const struct scene *scene)
 	}
 	digest_int(&h, scene->light_count);
 	for (int i = 0; i < scene->light_count; i++) {
-		digest_doubles(&h, scene->lights[i].position, 3);
-		digest_doubles(&h, scene->lights[i].color, 3);
+		const struct scene_light *l = &scene->lights[i];
+		digest_doubles(&h, l->position, 3);
+		digest_doubles(&h, l->color, 3);
+		digest_doubles(&h, &l->radius, 1);
+		digest_int(&h, l->directional);
+		digest_doubles(&h, l->direction, 3);
+		digest_doubles(&h, &l->angle, 1);
 	}
 	digest_int(&h, scene->triangle_count);
 	for (int i = 0; i < scene->triangle_count; i++) {

@@ -26,7 +26,20 @@ struct scene_material {
 	double reflect;	  /* kr */
 	double transmit;  /* kt */
 	double ior;
+	int fresnel; /* SCENE_FRESNEL_*: RENDERING.md, "Fresnel" */
 };
+
+/* A material's "fresnel" (the same numbers as cl/rtcl_shared.h's RT_FRESNEL_*). */
+enum { SCENE_FRESNEL_OFF, SCENE_FRESNEL_DIELECTRIC, SCENE_FRESNEL_CONDUCTOR };
+
+/* Whether a material of the scene has a Fresnel term. */
+static inline int scene_has_fresnel(const struct scene_material *materials, int count)
+{
+	for (int i = 0; i < count; i++)
+		if (materials[i].fresnel != SCENE_FRESNEL_OFF)
+			return 1;
+	return 0;
+}
 
 struct scene_sphere {
 	double center[3];
@@ -54,9 +67,15 @@ struct scene_triangle {
 	int smooth; /* the shading normals are interpolated */
 };
 
+/* A point light (radius 0), a sphere light (radius > 0) or a directional
+ * light (docs/SCENE.md, "Lights"). */
 struct scene_light {
-	double position[3];
+	double position[3]; /* a point or sphere light's centre */
 	double color[3];
+	double radius;	     /* a sphere light's; 0: a point light */
+	int directional;     /* the light is the sun: direction and angle, no position */
+	double direction[3]; /* unit: the way a directional light's light travels */
+	double angle;	     /* a directional light's angular radius, degrees, 0 ... < 90 */
 };
 
 struct scene_camera {
@@ -64,6 +83,18 @@ struct scene_camera {
 	double look_at[3];
 	double up[3];
 	double fov; /* vertical, degrees */
+	double aperture;       /* the lens radius; 0: a pinhole */
+	double focus_distance; /* > 0: camera.focus_distance, else |look_at - eye| */
+	int focus_given;       /* focus_distance was given, not taken from look_at */
+};
+
+/* The camera as the command line changes it (--eye, --look-at, --fov,
+ * --aperture, --focus-distance): each value replaces the scene's where its
+ * flag is set. */
+struct camera_override {
+	int eye_given, look_at_given, fov_given, aperture_given, focus_given;
+	double eye[3], look_at[3];
+	double fov, aperture, focus_distance;
 };
 
 /* A file the scene was read from. No output may replace one (output/plan.h). */
@@ -100,6 +131,16 @@ struct scene {
 	long skipped_triangles; /* zero-area triangles of mesh files, left out */
 };
 
+/* Whether a light of the scene is sampled (RENDERING.md, "Light samples"):
+ * a sphere light of radius > 0 or a directional light. */
+static inline int scene_has_area_lights(const struct scene *scene)
+{
+	for (int i = 0; i < scene->light_count; i++)
+		if (scene->lights[i].radius > 0 || scene->lights[i].directional)
+			return 1;
+	return 0;
+}
+
 /* Loads and validates a scene file. Returns 0 on success; otherwise writes
  * one message (formatted as in SCENE.md, "FILE: PATH: what is wrong" or
  * "FILE:LINE:COLUMN: what is wrong", without a trailing newline) into
@@ -113,6 +154,13 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		      size_t err_size);
 
 void scene_free(struct scene *scene);
+
+/* Applies the command line's camera to a loaded scene, and checks the
+ * camera again as the loader does (the eye and look_at must differ, up not
+ * parallel to them). Returns 0, or -1 with one message naming the options
+ * in err. */
+int scene_override_camera(struct scene *scene, const struct camera_override *o, char *err,
+			  size_t err_size);
 
 /* p relative to the camera's eye, in double: the device renders the scene
  * translated so that the eye is its origin (camera-relative rendering,

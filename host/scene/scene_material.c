@@ -2,6 +2,7 @@
  * and an object's reference to one by name or inline. */
 #include <jansson.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "scene/scene_loader.h"
 #include "base/suggest.h"
@@ -15,14 +16,37 @@ const struct scene_material loader_default_material = {
 	.reflect = 0,
 	.transmit = 0,
 	.ior = 1.5,
+	.fresnel = SCENE_FRESNEL_OFF,
 };
+
+/* "fresnel": "dielectric", "conductor" or false (SCENE.md, "Material"). */
+static int read_fresnel(struct loader *ld, const struct path *p, json_t *obj, int *fresnel)
+{
+	struct path field = child_key(p, "fresnel");
+	json_t *v = json_object_get(obj, "fresnel");
+	const char *rule = "must be \"dielectric\", \"conductor\" or false, got ";
+
+	if (!v || json_is_false(v))
+		return 0;
+	if (json_is_string(v) && strcmp(json_string_value(v), "dielectric") == 0)
+		*fresnel = SCENE_FRESNEL_DIELECTRIC;
+	else if (json_is_string(v) && strcmp(json_string_value(v), "conductor") == 0)
+		*fresnel = SCENE_FRESNEL_CONDUCTOR;
+	else if (json_is_string(v))
+		return loader_fail_quoted(ld, &field, rule, json_string_value(v));
+	else
+		return loader_fail(ld, &field, "%s%s", rule,
+				   json_is_true(v) ? "true" : loader_type_name(v));
+	return 0;
+}
 
 static int read_material_fields(struct loader *ld, const struct path *p, json_t *obj,
 				struct scene_material *m)
 {
 	static const char *const keys[] = {"color",    "ambient",   "diffuse",
 					   "specular", "shininess", "reflect",
-					   "transmit", "ior",	    NULL};
+					   "transmit", "ior",	    "fresnel",
+					   NULL};
 
 	*m = loader_default_material;
 	if (loader_expect_object(ld, p, obj, keys) ||
@@ -33,7 +57,8 @@ static int read_material_fields(struct loader *ld, const struct path *p, json_t 
 	    loader_read_number(ld, p, obj, "shininess", OPTIONAL, NON_NEGATIVE, &m->shininess) ||
 	    loader_read_number(ld, p, obj, "reflect", OPTIONAL, UNIT, &m->reflect) ||
 	    loader_read_number(ld, p, obj, "transmit", OPTIONAL, UNIT, &m->transmit) ||
-	    loader_read_number(ld, p, obj, "ior", OPTIONAL, POSITIVE, &m->ior))
+	    loader_read_number(ld, p, obj, "ior", OPTIONAL, POSITIVE, &m->ior) ||
+	    read_fresnel(ld, p, obj, &m->fresnel))
 		return -1;
 	return 0;
 }

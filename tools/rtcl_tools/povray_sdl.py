@@ -135,8 +135,15 @@ def to_sdl(scene, size, depth, source="", shadow_clones=True):
     w("  direction %s" % vec(direction))
     w("}")
     for light in scene["lights"]:
-        w("light_source { %s color rgb %s }" % (vec(mirror(light["position"])),
-                                                 vec(light["color"])))
+        # Point lights only: a sphere light goes as its centre, a directional one
+        # as a parallel light from far along its way (POV-Ray's hard shadows).
+        if light.get("directional"):
+            far = [-1e6 * x for x in light["direction"]]
+            w("light_source { %s color rgb %s parallel point_at <0, 0, 0> }"
+              % (vec(mirror(far)), vec(light["color"])))
+        else:
+            w("light_source { %s color rgb %s }" % (vec(mirror(light["position"])),
+                                                     vec(light["color"])))
     iors = pov_iors(scene)
     for s, ior in zip(scene["spheres"], iors):
         m = s["material"]

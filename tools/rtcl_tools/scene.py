@@ -24,7 +24,7 @@ import os
 import stat
 
 from .scene_check import (SceneError, Written, _escaped, check_keys, child, did_you_mean, fail,
-                          format_vector, integer, length, number, optional,
+                          format_number, format_vector, integer, length, number, optional,
                           required, scale_to_unit_max, type_name, vec3)
 from .vector import normalize
 
@@ -40,7 +40,7 @@ VERSION_2_KEYS = ("meshes", "triangles")
 MESH_KEYS = ("file", "material", "scale", "rotate", "translate", "smooth")
 MATERIAL_DEFAULTS = {"color": (1.0, 1.0, 1.0), "ambient": 1.0, "diffuse": 0.7,
                      "specular": 0.3, "shininess": 32.0, "reflect": 0.0,
-                     "transmit": 0.0, "ior": 1.5}
+                     "transmit": 0.0, "ior": 1.5, "fresnel": False}
 # Material fields in rtcl's order, each with its range.
 MATERIAL_RANGES = (("ambient", "non-negative"), ("diffuse", "non-negative"),
                    ("specular", "non-negative"), ("shininess", "non-negative"),
@@ -71,11 +71,15 @@ def read_header(doc):
 
 
 def read_camera(doc):
-    cam = check_keys(required(doc, "camera", ""), "camera", ("eye", "look_at", "up", "fov"))
+    cam = check_keys(required(doc, "camera", ""), "camera",
+                     ("eye", "look_at", "up", "fov", "aperture", "focus_distance"))
     camera = {"eye": vec3(required(cam, "eye", "camera"), "camera.eye"),
               "look_at": vec3(required(cam, "look_at", "camera"), "camera.look_at"),
               "up": optional(cam, "up", "camera", vec3, (0.0, 1.0, 0.0)),
-              "fov": optional(cam, "fov", "camera", number, 45.0, "fov")}
+              "fov": optional(cam, "fov", "camera", number, 45.0, "fov"),
+              "aperture": optional(cam, "aperture", "camera", number, 0.0, "non-negative"),
+              "focus_distance": optional(cam, "focus_distance", "camera", number, None,
+                                         "positive")}
     # Halved first so that the difference cannot overflow.
     d = scale_to_unit_max([b / 2 - a / 2 for a, b in zip(camera["eye"], camera["look_at"])])
     if d is None:
@@ -88,6 +92,9 @@ def read_camera(doc):
     if length(cross) <= PARALLEL_SINE * length(u) * length(d):
         fail("camera.up", f"must not be parallel to look_at - eye, got "
                           f"{format_vector(camera['up'])}")
+    if camera["focus_distance"] is None:
+        camera["focus_distance"] = 2 * length([b / 2 - a / 2 for a, b in
+                                               zip(camera["eye"], camera["look_at"])])
     return camera
 
 
@@ -113,6 +120,12 @@ def read_material(value, path):
     material["color"] = optional(value, "color", path, vec3, material["color"], "non-negative")
     for key, kind in MATERIAL_RANGES:
         material[key] = optional(value, key, path, number, material[key], kind)
+    fresnel = value.get("fresnel", False)
+    if fresnel is not False and fresnel not in ("dielectric", "conductor"):
+        got = f'"{_escaped(fresnel)}"' if isinstance(fresnel, str) else \
+            "true" if fresnel is True else type_name(fresnel)
+        fail(child(path, "fresnel"), f'must be "dielectric", "conductor" or false, got {got}')
+    material["fresnel"] = fresnel
     return material
 
 
@@ -130,15 +143,38 @@ def material_of(obj, path, materials):
     return read_material(value, where)
 
 
+def read_light_kind(value, path):
+    """Returns the position and radius of a point or sphere light, or the direction
+    (normalised: the way its light travels) and angle of a directional one."""
+    has_position, has_direction = "position" in value, "direction" in value
+    if has_position == has_direction:
+        fail(path, 'has both "position" and "direction": give one' if has_position else
+             'needs "position" (a point or sphere light) or "direction" (a directional light)')
+    if has_position:
+        if "angle" in value:
+            fail(child(path, "angle"), 'a point or sphere light has no angle; give its "radius"')
+        return {"directional": False,
+                "position": vec3(value["position"], child(path, "position")),
+                "radius": optional(value, "radius", path, number, 0.0, "non-negative")}
+    if "radius" in value:
+        fail(child(path, "radius"), 'a directional light has no radius; give its "angle"')
+    direction = vec3(value["direction"], child(path, "direction"), "direction")
+    angle = optional(value, "angle", path, number, 0.0, "non-negative")
+    if scale_to_unit_max(direction) is None:
+        fail(child(path, "direction"), "must be non-zero")
+    if angle >= 90:
+        fail(child(path, "angle"), f"must be >= 0 and < 90, got {format_number(angle)}")
+    return {"directional": True, "direction": normalize(direction), "angle": angle}
+
+
 def read_lights(items):
     lights = []
     for i, value in enumerate(items):
         path = child("lights", i)
-        check_keys(value, path, ("position", "color"))
-        lights.append({"position": vec3(required(value, "position", path),
-                                        child(path, "position")),
-                       "color": optional(value, "color", path, vec3, (1.0, 1.0, 1.0),
-                                         "non-negative")})
+        check_keys(value, path, ("position", "direction", "color", "radius", "angle"))
+        light = read_light_kind(value, path)
+        light["color"] = optional(value, "color", path, vec3, (1.0, 1.0, 1.0), "non-negative")
+        lights.append(light)
     return lights
 
 
