@@ -6,6 +6,7 @@ import base64
 import json
 import os
 import pathlib
+import re
 import struct
 import subprocess
 
@@ -141,7 +142,7 @@ def test_material_forces_one_on_the_whole_mesh(tmp_path):
                         "-v")
     for i in range(3):
         assert quad(image, i)[2] > quad(image, i)[0] + 60, quad(image, i)
-    assert 'meshes[0] "quads.obj": 2 materials, 0 textures; replaced by its "material"' in err
+    assert 'meshes[0] "quads.obj": 2 materials (2 used), 0 textures; replaced by its "material"' in err
 
 
 def test_materials_replace_the_files_by_name(tmp_path):
@@ -197,7 +198,7 @@ def test_a_material_number_that_is_not_finite_is_refused(tmp_path):
 def test_verbose_reports_materials_textures_and_what_was_not_understood(tmp_path):
     _, err = render(tmp_path, scene(tmp_path, {}, mtl=MTL + "map_Kd brick.png\nmap_bump b.png\n"),
                     "-v")
-    assert ('rtcl: meshes[0] "quads.obj": 2 materials, 1 texture (not applied yet); '
+    assert ('rtcl: meshes[0] "quads.obj": 2 materials (2 used), 1 texture (not applied yet); '
             "not understood: emissive, Height texture") in err, err
 
 
@@ -247,7 +248,7 @@ def test_gltf_base_colour_metallic_and_roughness(tmp_path):
     assert red[0] > 200 and red[1] < 110 and red[2] < 110, red
     assert plain[0] == plain[1] == plain[2] and plain[0] > 150, plain
     # the background (black) mirrored, plus the light's highlight off a metal of ks 1
-    assert 'meshes[0] "m.gltf": 2 materials, 0 textures' in err
+    assert 'meshes[0] "m.gltf": 2 materials (2 used), 0 textures' in err
     forced, _ = render(tmp_path, gltf_scene(tmp_path, doc, {"materials": {"#1": {
         "color": [0.5, 0.5, 0.5], "diffuse": 0, "ambient": 0, "specular": 1,
         "shininess": 19998, "reflect": 1}}}), name="forced.ppm")
@@ -300,6 +301,31 @@ def test_the_engine_keeps_its_parts_colours(tmp_path):
     out = tmp_path / "o.ppm"
     result = rtcl(path, "-o", out, "--size", "32x24", "-v")
     assert result.returncode == 0, result.stderr
-    assert "2CylinderEngine.glb\": 34 materials, 0 textures" in result.stderr
+    assert "2CylinderEngine.glb\": 34 materials (34 used), 0 textures" in result.stderr
     colours = {p for row in read_ppm(out) for p in row}
     assert any(b > 2 * r + 20 and b > 2 * g + 20 for r, g, b in colours)  # the blue parts
+
+
+FUZZ_SEEDS = ROOT / "test" / "fuzz_mesh_materials"
+
+
+@pytest.mark.parametrize("seed", sorted(p.name for p in FUZZ_SEEDS.iterdir()
+                                        if p.suffix in (".obj", ".gltf")))
+def test_broken_material_references_are_one_message_or_a_picture(tmp_path, seed):
+    """The mesh fuzzer's seeds for materials (test/fuzz_mesh_materials/README.md):
+    missing, huge, malformed, out of range, textures outside the folder. Each is
+    rendered or refused with one message, and then nothing is written."""
+    doc = {"format": "rtcl-scene", "version": 2,
+           "camera": {"eye": [0.3, 0.3, 3], "look_at": [0.3, 0.3, 0]},
+           "meshes": [{"file": str(FUZZ_SEEDS / seed)}]}
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(doc))
+    out = tmp_path / "o.ppm"
+    result = rtcl(path, "-o", out, "--size", "8x8", "-q")
+    expected = FUZZ_SEEDS.joinpath("README.md").read_text()
+    if result.returncode == 0:
+        assert out.exists() and re.search(rf"- `{re.escape(seed)}`[^:]*: rendered", expected)
+    else:
+        assert result.returncode == 1 and not out.exists()
+        assert result.stderr.count("\n") == 1 and result.stderr.startswith(f"{path}: meshes[0]")
+        assert re.search(rf"- `{re.escape(seed)}`[^:]*: refused", expected)

@@ -253,8 +253,17 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 {
 	struct scene *s = ld->scene;
 	char line[1200], notes[700] = "", where[200], text[MESSAGE_TEXT_MAX];
-	size_t materials = 0, textures = 0;
+	size_t materials = 0, used = 0, textures = 0;
 	char **grown;
+	char *has = calloc(mesh->material_count ? mesh->material_count : 1, 1);
+
+	if (!has) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	for (size_t t = 0; t < mesh->triangle_count; t++)
+		if (mesh->triangle_materials[t] != MESH_NO_MATERIAL)
+			has[mesh->triangle_materials[t]] = 1;
 
 	for (size_t i = 0; i < mesh->material_count; i++) {
 		const struct mesh_material *m = &mesh->materials[i];
@@ -263,6 +272,7 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 		if (m->kind == MESH_MATERIAL_MISSING)
 			continue;
 		materials++;
+		used += has[i];
 		textures += m->textures;
 		/* each note once over the materials */
 		for (const char *end; *n; n = *end ? end + 2 : end) {
@@ -281,9 +291,10 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 					 have ? ", " : "", one);
 		}
 	}
+	free(has);
 	loader_format_path(item, where, sizeof(where));
-	snprintf(line, sizeof(line), "%s \"%s\": %zu material%s, %zu texture%s%s%s%s%s", where,
-		 one_line(name, text), materials, materials == 1 ? "" : "s", textures,
+	snprintf(line, sizeof(line), "%s \"%s\": %zu material%s (%zu used), %zu texture%s%s%s%s%s",
+		 where, one_line(name, text), materials, materials == 1 ? "" : "s", used, textures,
 		 textures == 1 ? "" : "s", textures ? " (not applied yet)" : "",
 		 forced ? "; replaced by its \"material\"" : "",
 		 notes[0] && !forced ? "; not understood: " : "",
@@ -300,6 +311,16 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 	return 0;
 }
 
+/* A material's name in a message: cut after 64 bytes ("abc..."), as the
+ * scene's own names are (scene_check.c). */
+static const char *short_name(const char *name, char buf[MESSAGE_TEXT_MAX])
+{
+	one_line(name, buf);
+	if (strlen(buf) > 64)
+		snprintf(buf + 64, MESSAGE_TEXT_MAX - 64, "...");
+	return buf;
+}
+
 /* "FILE has no material "NAME"; its materials are ...", at field. */
 static int fail_unknown_file_material(struct loader *ld, const struct path *field, const char *name,
 				      const struct mesh_data *mesh, const char *key)
@@ -314,25 +335,52 @@ static int fail_unknown_file_material(struct loader *ld, const struct path *fiel
 			seen |= strcmp(mesh->materials[j].name, n) == 0;
 		if (seen)
 			continue;
-		if (have + strlen(n) + 8 >= sizeof(known)) {
+		if (have + 64 + 12 >= sizeof(known)) {
 			snprintf(known + have, sizeof(known) - have, ", ...");
 			break;
 		}
-		snprintf(known + have, sizeof(known) - have, "%s\"%s\"", have ? ", " : "", n);
+		char cut[MESSAGE_TEXT_MAX];
+		snprintf(known + have, sizeof(known) - have, "%s\"%s\"", have ? ", " : "",
+			 short_name(n, cut));
 		have = strlen(known);
 	}
 	if (!have)
 		return loader_fail(ld, field, "\"%s\" has no material \"%s\"; it has no materials",
-				   one_line(name, text), one_line(key, quoted));
+				   one_line(name, text), short_name(key, quoted));
 	return loader_fail(ld, field, "\"%s\" has no material \"%s\"; its materials are %s",
-			   one_line(name, text), one_line(key, quoted), known);
+			   one_line(name, text), short_name(key, quoted), known);
 }
+
+static int map_materials(struct loader *ld, const struct path *item, const char *name,
+			 const struct mesh_data *mesh, json_t *overrides, int *map,
+			 const char *used);
 
 /* The scene material of each of the file's materials (-1: the default
  * material), into map: "materials" (overrides, an object or NULL) by name,
- * else the file's own by RENDERING.md's rule. */
+ * else the file's own by RENDERING.md's rule; a material no triangle has is
+ * left out. */
 static int map_file_materials(struct loader *ld, const struct path *item, const char *name,
 			      const struct mesh_data *mesh, json_t *overrides, int *map)
+{
+
+	char *used = calloc(mesh->material_count ? mesh->material_count : 1, 1);
+
+	if (!used) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	/* Only the materials some triangle has go to the device. */
+	for (size_t t = 0; t < mesh->triangle_count; t++)
+		if (mesh->triangle_materials[t] != MESH_NO_MATERIAL)
+			used[mesh->triangle_materials[t]] = 1;
+	int ret = map_materials(ld, item, name, mesh, overrides, map, used);
+	free(used);
+	return ret;
+}
+
+static int map_materials(struct loader *ld, const struct path *item, const char *name,
+			 const struct mesh_data *mesh, json_t *overrides, int *map,
+			 const char *used)
 {
 	struct path field = child_key(item, "materials");
 	char text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX];
@@ -363,13 +411,13 @@ static int map_file_materials(struct loader *ld, const struct path *item, const 
 
 		if (map[i] != INT_MIN)
 			continue;
-		if (in->kind == MESH_MATERIAL_MISSING) {
+		if (!used[i] || in->kind == MESH_MATERIAL_MISSING) {
 			map[i] = -1;
 			continue;
 		}
 		if ((bad = loader_material_from_mesh(in, &m)))
 			return loader_fail(ld, item, "\"%s\": material \"%s\": %s is not finite",
-					   one_line(name, text), one_line(in->name, quoted), bad);
+					   one_line(name, text), short_name(in->name, quoted), bad);
 		if ((map[i] = loader_append_material(ld, &m)) < 0)
 			return -1;
 	}
