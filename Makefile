@@ -285,7 +285,8 @@ fuzz: $(FUZZ_DIR)/fuzz_scene
 fuzz-mesh: $(FUZZ_DIR)/fuzz_mesh
 	mkdir -p $(FUZZ_DIR)/mesh_corpus $(FUZZ_DIR)/artifacts
 	cp $(filter-out %.md,$(wildcard test/meshes/*.obj test/meshes/*.ply scenes/models/icosphere.obj \
-		test/fuzz_mesh_regressions/*)) $(FUZZ_DIR)/mesh_corpus/
+		test/fuzz_mesh_regressions/* test/fuzz_mesh_materials/*.obj \
+		test/fuzz_mesh_materials/*.gltf)) $(FUZZ_DIR)/mesh_corpus/
 	$(FUZZ_DIR)/fuzz_mesh -max_total_time=$(FUZZ_SECONDS) -max_len=16384 -timeout=10 \
 		-dict=test/fuzz_mesh.dict \
 		-rss_limit_mb=2048 -print_final_stats=1 \

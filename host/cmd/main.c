@@ -63,6 +63,13 @@ static void print_scene_bounds(const struct scene *scene)
 		planes);
 }
 
+/* What each mesh file brought: materials, textures, what was not understood. */
+static void print_mesh_reports(const struct scene *scene)
+{
+	for (int i = 0; i < scene->mesh_report_count; i++)
+		fprintf(stderr, "rtcl: %s\n", scene->mesh_reports[i]);
+}
+
 /* Whether the progress line is shown: on a terminal, unless -q. Under
  * mpirun a rank's stderr is a pipe even when mpirun's is a terminal, which
  * the rank's stdout (a pseudo-terminal then) tells; other ranks than 0 turn
@@ -210,8 +217,10 @@ int main(int argc, char **argv)
 		scene_free(&scene);
 		return EXIT_USAGE;
 	}
-	if (opt.verbose)
+	if (opt.verbose) {
+		print_mesh_reports(&scene);
 		print_scene_bounds(&scene);
+	}
 	make_job(&job, &opt, &scene);
 	memset(&record, 0, sizeof(record));
 	record.start = start;

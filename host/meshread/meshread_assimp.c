@@ -13,6 +13,7 @@
 #include <unistd.h>
 
 #include <assimp/cfileio.h>
+#include <assimp/material.h>
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
@@ -165,6 +166,246 @@ static int obj_polygon_too_large(const char *path, char *reason, size_t reason_s
 	return too_large;
 }
 
+/* ---- Materials (docs/SCENE.md, "Materials from mesh files") ----
+ * Read from Assimp's property list directly, key by key, so that every
+ * property is either used or named in not_understood. */
+
+/* The property key of semantic 0 (not a texture's), or NULL. */
+static const struct aiMaterialProperty *property(const struct aiMaterial *mat, const char *key)
+{
+	for (unsigned p = 0; p < mat->mNumProperties; p++) {
+		const struct aiMaterialProperty *prop = mat->mProperties[p];
+		if (prop->mSemantic == 0 && strcmp(prop->mKey.data, key) == 0)
+			return prop;
+	}
+	return NULL;
+}
+
+/* Up to n numbers of the property key into out; returns how many (0: none). */
+static unsigned numbers(const struct aiMaterial *mat, const char *key, double *out, unsigned n)
+{
+	const struct aiMaterialProperty *prop = property(mat, key);
+	unsigned got = 0;
+
+	if (!prop)
+		return 0;
+	for (; got < n; got++) {
+		if (prop->mType == aiPTI_Float && (got + 1) * sizeof(float) <= prop->mDataLength) {
+			float f;
+			memcpy(&f, prop->mData + got * sizeof(float), sizeof(f));
+			out[got] = f;
+		} else if (prop->mType == aiPTI_Double &&
+			   (got + 1) * sizeof(double) <= prop->mDataLength) {
+			memcpy(&out[got], prop->mData + got * sizeof(double), sizeof(double));
+		} else if (prop->mType == aiPTI_Integer &&
+			   (got + 1) * sizeof(int32_t) <= prop->mDataLength) {
+			int32_t i;
+			memcpy(&i, prop->mData + got * sizeof(i), sizeof(i));
+			out[got] = i;
+		} else {
+			break;
+		}
+	}
+	return got;
+}
+
+/* The string property key (an aiString: a 32-bit length, then the bytes), or "". */
+static void string_of(const struct aiMaterial *mat, const char *key, char *out, size_t size)
+{
+	const struct aiMaterialProperty *prop = property(mat, key);
+	uint32_t length;
+
+	out[0] = '\0';
+	if (!prop || prop->mType != aiPTI_String || prop->mDataLength < sizeof(length))
+		return;
+	memcpy(&length, prop->mData, sizeof(length));
+	if (length > prop->mDataLength - sizeof(length))
+		length = prop->mDataLength - (uint32_t)sizeof(length);
+	if (length >= size)
+		length = (uint32_t)size - 1;
+	memcpy(out, prop->mData + sizeof(length), length);
+	out[length] = '\0';
+	for (char *c = out; *c; c++) /* names go into messages on one line */
+		if ((unsigned char)*c < 0x20 || *c == 0x7f)
+			*c = '?';
+}
+
+/* Adds what (once) to the comma-separated notes. */
+static void note(struct mesh_material *m, const char *what)
+{
+	char *notes = m->not_understood;
+	size_t n = strlen(notes), w = strlen(what);
+
+	for (const char *at = notes; (at = strstr(at, what)); at += w)
+		if ((at == notes || at[-1] == ' ') && (at[w] == ',' || at[w] == '\0'))
+			return;
+	if (n + w + 3 < MESH_NOTES_MAX)
+		snprintf(notes + n, MESH_NOTES_MAX - n, "%s%s", n ? ", " : "", what);
+}
+
+/* The properties rtcl reads or may leave aside without loss. */
+static int understood(const char *key, int metallic_roughness)
+{
+	static const char *const always[] = {
+		"?mat.name",	 "$mat.shadingm", "$mat.twosided",	   "$clr.transparent",
+		"$mat.refracti", "$clr.emissive", "$mat.anisotropyFactor", NULL};
+	static const char *const phong[] = {"$clr.diffuse",
+					    "$clr.specular",
+					    "$clr.ambient",
+					    "$mat.shininess",
+					    "$mat.opacity",
+					    "$mat.illum",
+					    NULL};
+	/* Assimp's glTF reader repeats the base colour as $clr.diffuse and
+	 * the alpha as $mat.opacity, and derives $mat.shininess. */
+	static const char *const pbr[] = {"$clr.base",
+					  "$mat.metallicFactor",
+					  "$mat.roughnessFactor",
+					  "$mat.gltf.alphaMode",
+					  "$mat.gltf.alphaCutoff",
+					  "$mat.transmission.factor",
+					  "$clr.diffuse",
+					  "$mat.opacity",
+					  "$mat.shininess",
+					  NULL};
+	const char *const *lists[] = {always, metallic_roughness ? pbr : phong};
+
+	for (int l = 0; l < 2; l++)
+		for (const char *const *k = lists[l]; *k; k++)
+			if (strcmp(key, *k) == 0)
+				return 1;
+	return 0;
+}
+
+/* The texture kinds rtcl reads: base colour and (cut-out) opacity. */
+static int texture_read(unsigned semantic)
+{
+	return semantic == aiTextureType_DIFFUSE || semantic == aiTextureType_BASE_COLOR ||
+	       semantic == aiTextureType_OPACITY;
+}
+
+/* Counts the textures rtcl reads and notes the properties it does not
+ * understand. */
+static void survey(const struct aiMaterial *mat, struct mesh_material *m)
+{
+	int metallic_roughness = m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS;
+	double emissive[3] = {0, 0, 0}, anisotropy = 0;
+	char what[160];
+
+	for (unsigned p = 0; p < mat->mNumProperties; p++) {
+		const struct aiMaterialProperty *prop = mat->mProperties[p];
+		const char *key = prop->mKey.data;
+
+		if (strncmp(key, "$tex.", 5) == 0) {
+			if (strcmp(key, "$tex.file") != 0)
+				continue; /* the file's mapping, wrap modes ... */
+			/* glTF's base colour texture comes as diffuse and base colour */
+			if (texture_read(prop->mSemantic))
+				m->textures +=
+					!(prop->mSemantic == aiTextureType_BASE_COLOR &&
+					  aiGetMaterialTextureCount(mat, aiTextureType_DIFFUSE));
+			else {
+				snprintf(
+					what, sizeof(what), "%s texture",
+					aiTextureTypeToString((enum aiTextureType)prop->mSemantic));
+				note(m, what);
+			}
+			continue;
+		}
+		if (prop->mSemantic != 0 || !understood(key, metallic_roughness)) {
+			snprintf(what, sizeof(what), "%.120s", key);
+			note(m, what);
+		}
+	}
+	if (numbers(mat, "$clr.emissive", emissive, 3) &&
+	    (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0))
+		note(m, "emissive");
+	if (numbers(mat, "$mat.anisotropyFactor", &anisotropy, 1) && anisotropy != 0)
+		note(m, "anisotropy");
+}
+
+static void read_phong(const struct aiMaterial *mat, struct mesh_material *m)
+{
+	double illum = 2;
+
+	m->kind = MESH_MATERIAL_PHONG;
+	m->opacity = 1;
+	m->ior = 1;
+	numbers(mat, "$clr.diffuse", m->diffuse, 3);
+	numbers(mat, "$clr.specular", m->specular, 3);
+	numbers(mat, "$clr.ambient", m->ambient, 3);
+	numbers(mat, "$mat.shininess", &m->shininess, 1);
+	numbers(mat, "$mat.opacity", &m->opacity, 1);
+	numbers(mat, "$mat.refracti", &m->ior, 1);
+	numbers(mat, "$mat.illum", &illum, 1);
+	m->illum = illum >= 0 && illum <= 10 ? (uint32_t)illum : 2;
+}
+
+static void read_metallic_roughness(const struct aiMaterial *mat, struct mesh_material *m)
+{
+	char mode[16];
+
+	m->kind = MESH_MATERIAL_METALLIC_ROUGHNESS;
+	m->base[0] = m->base[1] = m->base[2] = m->base[3] = 1;
+	m->metallic = m->roughness = 1;
+	m->alpha_cutoff = 0.5;
+	numbers(mat, "$clr.base", m->base, 4);
+	numbers(mat, "$mat.metallicFactor", &m->metallic, 1);
+	numbers(mat, "$mat.roughnessFactor", &m->roughness, 1);
+	numbers(mat, "$mat.transmission.factor", &m->transmission, 1);
+	numbers(mat, "$mat.gltf.alphaCutoff", &m->alpha_cutoff, 1);
+	m->has_ior = numbers(mat, "$mat.refracti", &m->ior, 1) == 1;
+	string_of(mat, "$mat.gltf.alphaMode", mode, sizeof(mode));
+	m->alpha_mode = strcmp(mode, "BLEND") == 0  ? MESH_ALPHA_BLEND
+			: strcmp(mode, "MASK") == 0 ? MESH_ALPHA_MASK
+						    : MESH_ALPHA_OPAQUE;
+}
+
+/* Whether m is what Assimp puts where the file has no material: one named
+ * AI_DEFAULT_MATERIAL_NAME, an unnamed one with only its format's defaults
+ * (PLY's white, glTF's white metallic 1 roughness 1, opaque), or an OBJ
+ * material its MTL library does not define (SCENE.md says which). */
+static int missing(const struct mesh_material *m, int named)
+{
+	if (strcmp(m->name, AI_DEFAULT_MATERIAL_NAME) == 0)
+		return 1;
+	if (m->textures)
+		return 0;
+	if (m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+		return !named && m->base[0] == 1 && m->base[1] == 1 && m->base[2] == 1 &&
+		       m->base[3] == 1 && m->metallic == 1 && m->roughness == 1 &&
+		       m->transmission == 0 && !m->has_ior && m->alpha_mode == MESH_ALPHA_OPAQUE;
+	/* Assimp's OBJ reader fills a material its MTL library does not define
+	 * (or a library that is missing) with these. */
+	if (!named)
+		return m->diffuse[0] == 1 && m->diffuse[1] == 1 && m->diffuse[2] == 1;
+	for (int i = 0; i < 3; i++)
+		if (m->diffuse[i] != 0.6f || m->specular[i] != 0 || m->ambient[i] != 0)
+			return 0;
+	return m->kind == MESH_MATERIAL_PHONG && m->shininess == 0 && m->opacity == 1 &&
+	       m->ior == 1 && m->illum == 1 && !m->not_understood[0];
+}
+
+static void read_material(const struct aiMaterial *mat, unsigned index, struct mesh_material *m)
+{
+	double metallic;
+
+	memset(m, 0, sizeof(*m));
+	string_of(mat, "?mat.name", m->name, sizeof(m->name));
+	int named = m->name[0] != '\0';
+	if (!named)
+		snprintf(m->name, sizeof(m->name), "#%u", index);
+	if (numbers(mat, "$mat.metallicFactor", &metallic, 1))
+		read_metallic_roughness(mat, m);
+	else
+		read_phong(mat, m);
+	survey(mat, m);
+	if (missing(m, named)) {
+		m->kind = MESH_MATERIAL_MISSING;
+		m->not_understood[0] = '\0';
+	}
+}
+
 /* The vertices and triangles to expect, counting only triangle meshes. */
 static void count(const struct aiScene *sc, size_t *vertices, size_t *triangles, int *has_normals)
 {
@@ -182,7 +423,8 @@ static void count(const struct aiScene *sc, size_t *vertices, size_t *triangles,
 	}
 }
 
-/* Appends the triangle meshes of sc to out, which has room for them.
+/* Appends the triangle meshes of sc to out, which has room for them, each
+ * triangle with its mesh's material.
  * Returns -1, with why in reason, for a face that names a vertex its mesh
  * does not have (Assimp does not check: found by test/fuzz_mesh.c). */
 static int gather(const struct aiScene *sc, struct mesh_data *out, char *reason, size_t reason_size)
@@ -190,6 +432,8 @@ static int gather(const struct aiScene *sc, struct mesh_data *out, char *reason,
 	for (unsigned m = 0; m < sc->mNumMeshes; m++) {
 		const struct aiMesh *mesh = sc->mMeshes[m];
 		size_t base = out->vertex_count;
+		uint32_t material = mesh->mMaterialIndex < sc->mNumMaterials ? mesh->mMaterialIndex
+									     : MESH_NO_MATERIAL;
 
 		if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE))
 			continue;
@@ -221,6 +465,7 @@ static int gather(const struct aiScene *sc, struct mesh_data *out, char *reason,
 				out->indices[3 * out->triangle_count + k] =
 					base + face->mIndices[k];
 			}
+			out->triangle_materials[out->triangle_count] = material;
 			out->triangle_count++;
 		}
 	}
@@ -253,7 +498,10 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	out->positions = malloc((vertices ? vertices : 1) * 3 * sizeof(double));
 	out->normals = has_normals ? malloc((vertices ? vertices : 1) * 3 * sizeof(double)) : NULL;
 	out->indices = malloc((triangles ? triangles : 1) * 3 * sizeof(size_t));
-	if (!out->positions || (has_normals && !out->normals) || !out->indices) {
+	out->triangle_materials = malloc((triangles ? triangles : 1) * sizeof(uint32_t));
+	out->materials = calloc(sc->mNumMaterials ? sc->mNumMaterials : 1, sizeof(*out->materials));
+	if (!out->positions || (has_normals && !out->normals) || !out->indices ||
+	    !out->triangle_materials || !out->materials) {
 		snprintf(reason, reason_size, "out of memory for %zu triangles", triangles);
 		mesh_data_free(out);
 		goto out_release_scene;
@@ -262,6 +510,9 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 		mesh_data_free(out);
 		goto out_release_scene;
 	}
+	for (unsigned m = 0; m < sc->mNumMaterials; m++)
+		read_material(sc->mMaterials[m], m, &out->materials[m]);
+	out->material_count = sc->mNumMaterials;
 	ret = 0;
 out_release_scene:
 	if (sc)

@@ -12,12 +12,50 @@
 #define RTCL_MESH_H
 
 #include <stddef.h>
+#include <stdint.h>
+
+/* A material of the file as the importer reads it, before rtcl's rule turns
+ * it into a scene material (docs/RENDERING.md, "Materials from mesh files";
+ * host/scene/mesh_material.c). Fixed-size so that it crosses the pipe as it is. */
+#define MESH_NAME_MAX 128 /* a longer name is cut */
+#define MESH_NOTES_MAX 256
+
+enum mesh_material_kind {
+	MESH_MATERIAL_MISSING,		 /* the importer's stand-in for no material */
+	MESH_MATERIAL_PHONG,		 /* OBJ/MTL and the other formats */
+	MESH_MATERIAL_METALLIC_ROUGHNESS /* glTF 2.0 */
+};
+
+enum mesh_alpha_mode { MESH_ALPHA_OPAQUE, MESH_ALPHA_BLEND, MESH_ALPHA_MASK };
+
+struct mesh_material {
+	char name[MESH_NAME_MAX]; /* "#N" where the file gives none */
+	uint32_t kind;		  /* enum mesh_material_kind */
+	uint32_t illum;		  /* Phong: MTL's illumination model, 2 when not given */
+	uint32_t alpha_mode;	  /* metallic-roughness: enum mesh_alpha_mode */
+	uint32_t has_ior;	  /* metallic-roughness: KHR_materials_ior was given */
+	uint32_t textures;	  /* base colour and opacity textures named */
+	uint32_t pad;
+	/* Phong: Kd, Ks, Ka, Ns, d (1 - Tr), Ni. */
+	double diffuse[3], specular[3], ambient[3], shininess, opacity, ior;
+	/* Metallic-roughness: the base colour factor (rgba), metallic, roughness,
+	 * KHR_materials_transmission's factor (0 without), alphaCutoff; ior above. */
+	double base[4], metallic, roughness, transmission, alpha_cutoff;
+	/* What rtcl does not understand, comma-separated: "emissive", "normal
+	 * texture", an unknown property's key. */
+	char not_understood[MESH_NOTES_MAX];
+};
+
+/* A triangle whose file gives no material index. */
+#define MESH_NO_MATERIAL UINT32_MAX
 
 struct mesh_data {
-	double *positions; /* 3 per vertex */
-	double *normals;   /* 3 per vertex, or NULL where the file has none */
-	size_t *indices;   /* 3 per triangle, into the vertices */
-	size_t vertex_count, triangle_count;
+	double *positions;	      /* 3 per vertex */
+	double *normals;	      /* 3 per vertex, or NULL where the file has none */
+	size_t *indices;	      /* 3 per triangle, into the vertices */
+	uint32_t *triangle_materials; /* 1 per triangle, into materials, or MESH_NO_MATERIAL */
+	struct mesh_material *materials;
+	size_t vertex_count, triangle_count, material_count;
 };
 
 /* What mesh_import returns besides 0. */

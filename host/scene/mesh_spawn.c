@@ -35,10 +35,11 @@
 extern char **environ;
 
 /* The header of the helper's answer: the import's outcome and the arrays'
- * sizes, then (ok) the arrays or (!ok) reason_length bytes of reason. */
+ * sizes, then (ok) the arrays (positions, normals, indices, the triangles'
+ * materials, the materials) or (!ok) reason_length bytes of reason. */
 struct reply {
 	uint32_t magic, ok, has_normals, reason_length;
-	uint64_t vertex_count, triangle_count;
+	uint64_t vertex_count, triangle_count, material_count;
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
 #define REASON_MAX 1024
@@ -121,11 +122,14 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	r.has_normals = mesh->normals != NULL;
 	r.vertex_count = mesh->vertex_count;
 	r.triangle_count = mesh->triangle_count;
+	r.material_count = mesh->material_count;
 	if (write_all(fd, &r, sizeof(r)) ||
 	    write_all(fd, mesh->positions, 3 * mesh->vertex_count * sizeof(double)) ||
 	    (mesh->normals &&
 	     write_all(fd, mesh->normals, 3 * mesh->vertex_count * sizeof(double))) ||
-	    write_all(fd, mesh->indices, 3 * mesh->triangle_count * sizeof(size_t)))
+	    write_all(fd, mesh->indices, 3 * mesh->triangle_count * sizeof(size_t)) ||
+	    write_all(fd, mesh->triangle_materials, mesh->triangle_count * sizeof(uint32_t)) ||
+	    write_all(fd, mesh->materials, mesh->material_count * sizeof(struct mesh_material)))
 		return -1;
 	return 0;
 }
@@ -135,6 +139,8 @@ void mesh_data_free(struct mesh_data *mesh)
 	free(mesh->positions);
 	free(mesh->normals);
 	free(mesh->indices);
+	free(mesh->triangle_materials);
+	free(mesh->materials);
 	memset(mesh, 0, sizeof(*mesh));
 }
 
@@ -178,23 +184,42 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->positions = alloc_array(r.vertex_count, 3 * sizeof(double));
 	out->normals = r.has_normals ? alloc_array(r.vertex_count, 3 * sizeof(double)) : NULL;
 	out->indices = alloc_array(r.triangle_count, 3 * sizeof(size_t));
-	if (!out->positions || (r.has_normals && !out->normals) || !out->indices) {
+	out->triangle_materials = alloc_array(r.triangle_count, sizeof(uint32_t));
+	out->materials = alloc_array(r.material_count, sizeof(struct mesh_material));
+	if (!out->positions || (r.has_normals && !out->normals) || !out->indices ||
+	    !out->triangle_materials || !out->materials) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
 			 (unsigned long long)r.triangle_count);
 		return OUT_OF_MEMORY;
 	}
 	out->vertex_count = (size_t)r.vertex_count;
 	out->triangle_count = (size_t)r.triangle_count;
+	out->material_count = (size_t)r.material_count;
 	got = read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double));
 	if (!got && r.has_normals)
 		got = read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double));
 	if (!got)
 		got = read_all(fd, out->indices, 3 * out->triangle_count * sizeof(size_t));
+	if (!got)
+		got = read_all(fd, out->triangle_materials, out->triangle_count * sizeof(uint32_t));
+	if (!got)
+		got = read_all(fd, out->materials,
+			       out->material_count * sizeof(struct mesh_material));
 	if (got)
 		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	for (size_t i = 0; i < 3 * out->triangle_count; i++)
 		if (out->indices[i] >= out->vertex_count)
 			return NONSENSE;
+	for (size_t i = 0; i < out->triangle_count; i++)
+		if (out->triangle_materials[i] != MESH_NO_MATERIAL &&
+		    out->triangle_materials[i] >= out->material_count)
+			return NONSENSE;
+	for (size_t i = 0; i < out->material_count; i++) {
+		struct mesh_material *m = &out->materials[i];
+		m->name[MESH_NAME_MAX - 1] = m->not_understood[MESH_NOTES_MAX - 1] = '\0';
+		if (m->kind > MESH_MATERIAL_METALLIC_ROUGHNESS || m->alpha_mode > MESH_ALPHA_MASK)
+			return NONSENSE;
+	}
 	return 0;
 }
 

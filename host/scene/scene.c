@@ -407,6 +407,7 @@ static int read_scene(struct loader *ld, json_t *doc)
 	material_capacity = (json_is_object(named) ? json_object_size(named) : 0) + sphere_count +
 			    plane_count + mesh_count + triangle_count + 1;
 	s->materials = calloc(material_capacity, sizeof(*s->materials));
+	ld->material_capacity = material_capacity;
 	s->lights = calloc(light_count ? light_count : 1, sizeof(*s->lights));
 	s->spheres = calloc(sphere_count ? sphere_count : 1, sizeof(*s->spheres));
 	s->planes = calloc(plane_count ? plane_count : 1, sizeof(*s->planes));
@@ -422,9 +423,10 @@ static int read_scene(struct loader *ld, json_t *doc)
 		return -1;
 
 	if (ld->default_used) {
-		int index = s->material_count++;
+		int index = loader_append_material(ld, &loader_default_material);
 
-		s->materials[index] = loader_default_material;
+		if (index < 0)
+			return -1;
 		for (int i = 0; i < s->sphere_count; i++)
 			if (s->spheres[i].material < 0)
 				s->spheres[i].material = index;
@@ -549,6 +551,9 @@ void scene_free(struct scene *scene)
 	for (int i = 0; i < scene->input_count; i++)
 		free(scene->inputs[i].path);
 	free(scene->inputs);
+	for (int i = 0; i < scene->mesh_report_count; i++)
+		free(scene->mesh_reports[i]);
+	free(scene->mesh_reports);
 	free(scene->materials);
 	free(scene->spheres);
 	free(scene->planes);

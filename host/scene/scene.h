@@ -129,6 +129,10 @@ struct scene {
 	struct scene_triangle *triangles;
 	int triangle_count;
 	long skipped_triangles; /* zero-area triangles of mesh files, left out */
+	/* What -v says of each mesh file that keeps its materials (SCENE.md,
+	 * "Materials from mesh files"): one line each, without "rtcl: ". */
+	char **mesh_reports;
+	int mesh_report_count;
 };
 
 /* Whether a light of the scene is sampled (RENDERING.md, "Light samples"):

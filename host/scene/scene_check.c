@@ -100,6 +100,14 @@ static void sb_path(struct sbuf *sb, const struct path *p)
 
 const struct path root_path = {NULL, NULL, 0};
 
+void loader_format_path(const struct path *p, char *out, size_t size)
+{
+	struct sbuf sb = {out, size, 0};
+
+	out[0] = '\0';
+	sb_path(&sb, p);
+}
+
 void loader_write_err(struct loader *ld, const char *fmt, ...)
 {
 	struct sbuf sb = {ld->err, ld->err_size, 0};

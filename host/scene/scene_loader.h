@@ -40,6 +40,7 @@ struct loader {
 	int version;		  /* the file's "version" */
 	const char *base_dir;	  /* mesh files are relative to it; NULL: the working folder */
 	size_t triangle_capacity; /* room in scene->triangles */
+	size_t material_capacity; /* room in scene->materials */
 };
 
 /* A key below `parent`; top-level keys get a root-less path. */
@@ -75,6 +76,9 @@ void loader_write_err(struct loader *ld, const char *fmt, ...);
 /* Records path (malloc'd; the scene takes it, also on a failure) as a file
  * the scene was read from. Returns 0, or -1 with one message. */
 int loader_add_input(struct loader *ld, char *path, const char *kind);
+
+/* PATH as messages write it (spheres[3].radius) into out[size]. */
+void loader_format_path(const struct path *p, char *out, size_t size);
 
 /* "FILE: PATH: message"; always returns -1 so callers can `return loader_fail(...)`. */
 int loader_fail(struct loader *ld, const struct path *p, const char *fmt, ...);
@@ -136,6 +140,20 @@ int loader_read_named_materials(struct loader *ld, json_t *doc);
 /* An object's "material": a name, an inline object (appended after the
  * named ones), or absent (-1 until the default material gets its index). */
 int loader_read_material_ref(struct loader *ld, const struct path *p, json_t *obj, int *index);
+
+/* A material value at field: a name or an inline object (appended). */
+int loader_read_material_value(struct loader *ld, const struct path *field, json_t *v, int *index);
+
+/* Appends m to scene->materials, growing it. Returns its index, or -1 with
+ * one message. */
+int loader_append_material(struct loader *ld, const struct scene_material *m);
+
+struct mesh_material;
+/* A mesh file's material (not a missing one) as a scene material, by the
+ * rule of RENDERING.md "Materials from mesh files". Returns NULL, or the
+ * name (as the file's format writes it) of the first number that is not
+ * finite. */
+const char *loader_material_from_mesh(const struct mesh_material *in, struct scene_material *m);
 
 /* Version 2 (scene_mesh.c): the "meshes" and the inline "triangles",
  * appended to scene->triangles in that order. */

@@ -1,10 +1,13 @@
 /* The scene loader's materials (docs/SCENE.md, "Material"): the named ones,
  * and an object's reference to one by name or inline. */
 #include <jansson.h>
+#include <limits.h>
+#include <math.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "scene/scene_loader.h"
+#include "scene/mesh.h"
 #include "base/suggest.h"
 
 const struct scene_material loader_default_material = {
@@ -63,6 +66,28 @@ static int read_material_fields(struct loader *ld, const struct path *p, json_t 
 	return 0;
 }
 
+int loader_append_material(struct loader *ld, const struct scene_material *m)
+{
+	struct scene *s = ld->scene;
+
+	if ((size_t)s->material_count >= ld->material_capacity) {
+		size_t capacity = ld->material_capacity * 2 + 16;
+		struct scene_material *grown =
+			capacity <= INT_MAX ? realloc(s->materials, capacity * sizeof(*grown))
+					    : NULL;
+
+		if (!grown) {
+			loader_write_err(ld, "%s: out of memory for %zu materials", ld->source,
+					 capacity);
+			return -1;
+		}
+		s->materials = grown;
+		ld->material_capacity = capacity;
+	}
+	s->materials[s->material_count] = *m;
+	return s->material_count++;
+}
+
 /* "unknown material "NAME"", with the nearest named material suggested. */
 static int fail_unknown_material(struct loader *ld, const struct path *p, const char *name)
 {
@@ -86,7 +111,6 @@ static int fail_unknown_material(struct loader *ld, const struct path *p, const 
 int loader_read_material_ref(struct loader *ld, const struct path *p, json_t *obj, int *index)
 {
 	struct path field = child_key(p, "material");
-	struct scene *s = ld->scene;
 	json_t *v = json_object_get(obj, "material");
 
 	if (!v) {
@@ -94,27 +118,33 @@ int loader_read_material_ref(struct loader *ld, const struct path *p, json_t *ob
 		*index = -1;
 		return 0;
 	}
+	return loader_read_material_value(ld, &field, v, index);
+}
+
+int loader_read_material_value(struct loader *ld, const struct path *field, json_t *v, int *index)
+{
+	struct scene_material m;
+
 	if (json_is_string(v)) {
 		json_t *named = json_object_get(ld->name_index, json_string_value(v));
 
 		if (!named)
-			return fail_unknown_material(ld, &field, json_string_value(v));
+			return fail_unknown_material(ld, field, json_string_value(v));
 		*index = (int)json_integer_value(named);
 		return 0;
 	}
 	if (!json_is_object(v))
-		return loader_fail(ld, &field, "must be a material name or an object, got %s",
+		return loader_fail(ld, field, "must be a material name or an object, got %s",
 				   loader_type_name(v));
-	if (read_material_fields(ld, &field, v, &s->materials[s->material_count]))
+	if (read_material_fields(ld, field, v, &m))
 		return -1;
-	*index = s->material_count++;
-	return 0;
+	*index = loader_append_material(ld, &m);
+	return *index < 0 ? -1 : 0;
 }
 
 int loader_read_named_materials(struct loader *ld, json_t *doc)
 {
 	struct path p = child_key(&root_path, "materials");
-	struct scene *s = ld->scene;
 	const char *name;
 	json_t *named, *value;
 
@@ -127,14 +157,115 @@ int loader_read_named_materials(struct loader *ld, json_t *doc)
 	json_object_foreach(named, name, value)
 	{
 		struct path m = child_key(&p, name);
+		struct scene_material material;
+		int index;
 
-		if (read_material_fields(ld, &m, value, &s->materials[s->material_count]))
+		if (read_material_fields(ld, &m, value, &material) ||
+		    (index = loader_append_material(ld, &material)) < 0)
 			return -1;
-		if (json_object_set_new(ld->name_index, name, json_integer(s->material_count))) {
+		if (json_object_set_new(ld->name_index, name, json_integer(index))) {
 			loader_write_err(ld, "%s: out of memory", ld->source);
 			return -1;
 		}
-		s->material_count++;
 	}
 	return 0;
+}
+
+/* ---- A mesh file's material: RENDERING.md, "Materials from mesh files" ---- */
+
+static double mean3(const double v[3])
+{
+	return (v[0] + v[1] + v[2]) / 3;
+}
+
+/* x within what SCENE.md allows a material's number: [lo, hi], magnitudes
+ * below SCENE_MIN_MAGNITUDE taken as 0. */
+static double allowed(double x, double lo, double hi)
+{
+	x = x < lo ? lo : x > hi ? hi : x;
+	return fabs(x) < SCENE_MIN_MAGNITUDE ? 0 : x;
+}
+
+static void from_phong(const struct mesh_material *in, struct scene_material *m)
+{
+	double ka = mean3(in->ambient);
+	int highlight = in->illum != 0, reflection = in->illum >= 3 && in->illum <= 7;
+
+	memcpy(m->color, in->diffuse, sizeof(m->color));
+	m->diffuse = in->opacity;
+	m->ambient = ka > 0 ? ka : 1;
+	m->specular = highlight ? mean3(in->specular) : 0;
+	m->shininess = in->shininess;
+	m->reflect = reflection ? mean3(in->specular) : 0;
+	m->transmit = 1 - in->opacity;
+	m->ior = in->ior > 0 ? in->ior : 1;
+}
+
+static void from_metallic_roughness(const struct mesh_material *in, struct scene_material *m)
+{
+	double metal = allowed(in->metallic, 0, 1), rough = allowed(in->roughness, 0, 1);
+	double t = allowed(in->transmission, 0, 1);
+	double alpha = in->alpha_mode == MESH_ALPHA_BLEND ? allowed(in->base[3], 0, 1) : 1;
+	double r4 = rough * rough * rough * rough;
+
+	memcpy(m->color, in->base, sizeof(m->color));
+	m->diffuse = (1 - metal) * (1 - t) * alpha;
+	m->ambient = m->diffuse;
+	m->specular = (0.04 * (1 - metal) + metal) * (1 - rough) * alpha;
+	m->shininess = 2 / (r4 > 1e-4 ? r4 : 1e-4) - 2;
+	m->reflect = metal * (1 - rough) * alpha;
+	m->transmit = 1 - alpha * (1 - (1 - metal) * t);
+	m->ior = in->has_ior ? in->ior : t > 0 ? 1.5 : 1;
+}
+
+/* The first number of in the rule reads that is not finite: its name as
+ * the file's format writes it, or NULL. */
+static const char *not_finite(const struct mesh_material *in)
+{
+	static const char *const phong[] = {"Kd", "Kd", "Kd", "Ks", "Ks", "Ks",
+					    "Ka", "Ka", "Ka", "Ns", "d",  "Ni"};
+	static const char *const pbr[] = {
+		"baseColorFactor", "baseColorFactor", "baseColorFactor",    "baseColorFactor",
+		"metallicFactor",  "roughnessFactor", "transmissionFactor", "ior"};
+	const double phong_values[] = {in->diffuse[0],	in->diffuse[1],	 in->diffuse[2],
+				       in->specular[0], in->specular[1], in->specular[2],
+				       in->ambient[0],	in->ambient[1],	 in->ambient[2],
+				       in->shininess,	in->opacity,	 in->ior};
+	const double pbr_values[] = {in->base[0],  in->base[1],	  in->base[2],	    in->base[3],
+				     in->metallic, in->roughness, in->transmission, in->ior};
+
+	if (in->kind == MESH_MATERIAL_PHONG) {
+		for (size_t i = 0; i < sizeof(phong_values) / sizeof(phong_values[0]); i++)
+			if (!isfinite(phong_values[i]))
+				return phong[i];
+	} else {
+		for (size_t i = 0; i < sizeof(pbr_values) / sizeof(pbr_values[0]); i++)
+			if (!isfinite(pbr_values[i]))
+				return pbr[i];
+	}
+	return NULL;
+}
+
+const char *loader_material_from_mesh(const struct mesh_material *in, struct scene_material *m)
+{
+	const char *bad = not_finite(in);
+
+	if (bad)
+		return bad;
+	if (in->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+		from_metallic_roughness(in, m);
+	else
+		from_phong(in, m);
+	for (int i = 0; i < 3; i++)
+		m->color[i] = allowed(m->color[i], 0, SCENE_MAX_MAGNITUDE);
+	m->ambient = allowed(m->ambient, 0, SCENE_MAX_MAGNITUDE);
+	m->diffuse = allowed(m->diffuse, 0, SCENE_MAX_MAGNITUDE);
+	m->specular = allowed(m->specular, 0, SCENE_MAX_MAGNITUDE);
+	m->shininess = allowed(m->shininess, 0, SCENE_MAX_MAGNITUDE);
+	m->reflect = allowed(m->reflect, 0, 1);
+	m->transmit = allowed(m->transmit, 0, 1);
+	m->ior = allowed(m->ior, 0, SCENE_MAX_MAGNITUDE);
+	if (m->ior == 0)
+		m->ior = 1;
+	return NULL;
 }

@@ -90,9 +90,12 @@ static int place_vertices(struct loader *ld, const struct path *p, const char *n
 
 /* Appends the mesh's triangles with area (after placement), in the vertex
  * order that keeps their normals outward under a mirroring scale; counts
- * the others in scene->skipped_triangles. vn: the vertex normals, or NULL. */
+ * the others in scene->skipped_triangles. vn: the vertex normals, or NULL.
+ * Each triangle gets materials[its file material] (-1: the default
+ * material), or material where materials is NULL. */
 static void append_triangles(struct scene *s, const struct mesh_data *mesh, const double *placed,
-			     const double *vn, const struct placement *pl, int material)
+			     const double *vn, const struct placement *pl, int material,
+			     const int *materials)
 {
 	static const int straight[3] = {0, 1, 2}, mirrored[3] = {0, 2, 1};
 	const int *order = pl->mirrored ? mirrored : straight;
@@ -116,6 +119,10 @@ static void append_triangles(struct scene *s, const struct mesh_data *mesh, cons
 			       sizeof(tri->normal[k]));
 		}
 		tri->material = material;
+		if (materials)
+			tri->material = mesh->triangle_materials[t] == MESH_NO_MATERIAL
+						? -1
+						: materials[mesh->triangle_materials[t]];
 		tri->smooth = vn != NULL;
 		s->triangle_count++;
 	}
@@ -185,9 +192,11 @@ static char *mesh_path(const struct loader *ld, const char *name)
 	return path;
 }
 
-/* Places the imported mesh and appends its triangles. */
+/* Places the imported mesh and appends its triangles, with material or,
+ * where materials is not NULL, their file materials' (append_triangles). */
 static int place_mesh(struct loader *ld, const struct path *file, const char *name,
-		      const struct mesh_data *mesh, const struct placement *pl, int material)
+		      const struct mesh_data *mesh, const struct placement *pl, int material,
+		      const int *materials)
 {
 	size_t values = 3 * (mesh->vertex_count ? mesh->vertex_count : 1);
 	double *placed = malloc(values * sizeof(double));
@@ -210,7 +219,10 @@ static int place_mesh(struct loader *ld, const struct path *file, const char *na
 		goto out_free;
 	}
 	int before = ld->scene->triangle_count;
-	append_triangles(ld->scene, mesh, placed, vn, pl, material);
+	append_triangles(ld->scene, mesh, placed, vn, pl, material, materials);
+	for (int t = before; t < ld->scene->triangle_count; t++)
+		if (ld->scene->triangles[t].material < 0)
+			ld->default_used = 1;
 	/* Nothing to see, and most likely not a mesh at all (random bytes that
 	 * an importer read as one): issue 24 finding 10. */
 	if (ld->scene->triangle_count == before) {
@@ -232,18 +244,198 @@ out_free:
 	return ret;
 }
 
+/* ---- The file's materials (SCENE.md, "Materials from mesh files") ---- */
+
+/* Appends what -v says of the mesh at item (file name) to scene->mesh_reports:
+ * the materials and textures it brought, what rtcl did not understand. */
+static int report_mesh(struct loader *ld, const struct path *item, const char *name,
+		       const struct mesh_data *mesh, int forced)
+{
+	struct scene *s = ld->scene;
+	char line[1200], notes[700] = "", where[200], text[MESSAGE_TEXT_MAX];
+	size_t materials = 0, used = 0, textures = 0;
+	char **grown;
+	char *has = calloc(mesh->material_count ? mesh->material_count : 1, 1);
+
+	if (!has) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	for (size_t t = 0; t < mesh->triangle_count; t++)
+		if (mesh->triangle_materials[t] != MESH_NO_MATERIAL)
+			has[mesh->triangle_materials[t]] = 1;
+
+	for (size_t i = 0; i < mesh->material_count; i++) {
+		const struct mesh_material *m = &mesh->materials[i];
+		const char *n = m->not_understood;
+
+		if (m->kind == MESH_MATERIAL_MISSING)
+			continue;
+		materials++;
+		used += has[i];
+		textures += m->textures;
+		/* each note once over the materials */
+		for (const char *end; *n; n = *end ? end + 2 : end) {
+			char one[MESH_NOTES_MAX];
+			size_t len, have = strlen(notes);
+			end = strstr(n, ", ");
+			end = end ? end : n + strlen(n);
+			len = (size_t)(end - n);
+			snprintf(one, sizeof(one), "%.*s", (int)len, n);
+			int seen = 0;
+			for (const char *at = notes; !seen && (at = strstr(at, one)); at += len)
+				seen = (at == notes || at[-1] == ' ') &&
+				       (at[len] == ',' || at[len] == '\0');
+			if (!seen && have + len + 3 < sizeof(notes))
+				snprintf(notes + have, sizeof(notes) - have, "%s%s",
+					 have ? ", " : "", one);
+		}
+	}
+	free(has);
+	loader_format_path(item, where, sizeof(where));
+	snprintf(line, sizeof(line), "%s \"%s\": %zu material%s (%zu used), %zu texture%s%s%s%s%s",
+		 where, one_line(name, text), materials, materials == 1 ? "" : "s", used, textures,
+		 textures == 1 ? "" : "s", textures ? " (not applied yet)" : "",
+		 forced ? "; replaced by its \"material\"" : "",
+		 notes[0] && !forced ? "; not understood: " : "",
+		 forced ? "" : one_line(notes, notes));
+	grown = realloc(s->mesh_reports, (size_t)(s->mesh_report_count + 1) * sizeof(*grown));
+	if (!grown || !(grown[s->mesh_report_count] = strdup(line))) {
+		if (grown)
+			s->mesh_reports = grown;
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	s->mesh_reports = grown;
+	s->mesh_report_count++;
+	return 0;
+}
+
+/* A material's name in a message: cut after 64 bytes ("abc..."), as the
+ * scene's own names are (scene_check.c). */
+static const char *short_name(const char *name, char buf[MESSAGE_TEXT_MAX])
+{
+	one_line(name, buf);
+	if (strlen(buf) > 64)
+		snprintf(buf + 64, MESSAGE_TEXT_MAX - 64, "...");
+	return buf;
+}
+
+/* "FILE has no material "NAME"; its materials are ...", at field. */
+static int fail_unknown_file_material(struct loader *ld, const struct path *field, const char *name,
+				      const struct mesh_data *mesh, const char *key)
+{
+	char known[600] = "", text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX];
+	size_t have = 0;
+
+	for (size_t i = 0; i < mesh->material_count; i++) {
+		const char *n = mesh->materials[i].name;
+		int seen = 0;
+		for (size_t j = 0; j < i; j++)
+			seen |= strcmp(mesh->materials[j].name, n) == 0;
+		if (seen)
+			continue;
+		if (have + 64 + 12 >= sizeof(known)) {
+			snprintf(known + have, sizeof(known) - have, ", ...");
+			break;
+		}
+		char cut[MESSAGE_TEXT_MAX];
+		snprintf(known + have, sizeof(known) - have, "%s\"%s\"", have ? ", " : "",
+			 short_name(n, cut));
+		have = strlen(known);
+	}
+	if (!have)
+		return loader_fail(ld, field, "\"%s\" has no material \"%s\"; it has no materials",
+				   one_line(name, text), short_name(key, quoted));
+	return loader_fail(ld, field, "\"%s\" has no material \"%s\"; its materials are %s",
+			   one_line(name, text), short_name(key, quoted), known);
+}
+
+static int map_materials(struct loader *ld, const struct path *item, const char *name,
+			 const struct mesh_data *mesh, json_t *overrides, int *map,
+			 const char *used);
+
+/* The scene material of each of the file's materials (-1: the default
+ * material), into map: "materials" (overrides, an object or NULL) by name,
+ * else the file's own by RENDERING.md's rule; a material no triangle has is
+ * left out. */
+static int map_file_materials(struct loader *ld, const struct path *item, const char *name,
+			      const struct mesh_data *mesh, json_t *overrides, int *map)
+{
+
+	char *used = calloc(mesh->material_count ? mesh->material_count : 1, 1);
+
+	if (!used) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	/* Only the materials some triangle has go to the device. */
+	for (size_t t = 0; t < mesh->triangle_count; t++)
+		if (mesh->triangle_materials[t] != MESH_NO_MATERIAL)
+			used[mesh->triangle_materials[t]] = 1;
+	int ret = map_materials(ld, item, name, mesh, overrides, map, used);
+	free(used);
+	return ret;
+}
+
+static int map_materials(struct loader *ld, const struct path *item, const char *name,
+			 const struct mesh_data *mesh, json_t *overrides, int *map,
+			 const char *used)
+{
+	struct path field = child_key(item, "materials");
+	char text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX];
+	const char *key;
+	json_t *value;
+
+	for (size_t i = 0; i < mesh->material_count; i++)
+		map[i] = INT_MIN; /* not yet */
+	json_object_foreach(overrides, key, value)
+	{
+		struct path entry = child_key(&field, key);
+		int index, found = 0;
+
+		if (loader_read_material_value(ld, &entry, value, &index))
+			return -1;
+		for (size_t i = 0; i < mesh->material_count; i++)
+			if (strcmp(mesh->materials[i].name, key) == 0) {
+				map[i] = index;
+				found = 1;
+			}
+		if (!found)
+			return fail_unknown_file_material(ld, &field, name, mesh, key);
+	}
+	for (size_t i = 0; i < mesh->material_count; i++) {
+		const struct mesh_material *in = &mesh->materials[i];
+		struct scene_material m;
+		const char *bad;
+
+		if (map[i] != INT_MIN)
+			continue;
+		if (!used[i] || in->kind == MESH_MATERIAL_MISSING) {
+			map[i] = -1;
+			continue;
+		}
+		if ((bad = loader_material_from_mesh(in, &m)))
+			return loader_fail(ld, item, "\"%s\": material \"%s\": %s is not finite",
+					   one_line(name, text), short_name(in->name, quoted), bad);
+		if ((map[i] = loader_append_material(ld, &m)) < 0)
+			return -1;
+	}
+	return 0;
+}
+
 static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 {
-	static const char *const keys[] = {"file",	"material", "scale", "rotate",
-					   "translate", "smooth",   NULL};
+	static const char *const keys[] = {"file",   "material",  "materials", "scale",
+					   "rotate", "translate", "smooth",    NULL};
 	struct path file = child_key(item, "file");
 	char reason[MESSAGE_TEXT_MAX], text[MESSAGE_TEXT_MAX];
 	struct mesh_data mesh;
 	struct placement pl;
 	const char *name;
-	int material, ret;
+	int material = -1, ret, *map = NULL;
 	char *path;
-	json_t *v;
+	json_t *v, *forced, *overrides;
 
 	if (loader_expect_object(ld, item, obj, keys) ||
 	    loader_get_field(ld, item, obj, "file", REQUIRED, &v))
@@ -253,7 +445,19 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	name = json_string_value(v);
 	if (!name[0])
 		return loader_fail(ld, &file, "must name a file, got \"\"");
-	if (loader_read_material_ref(ld, item, obj, &material) ||
+	forced = json_object_get(obj, "material");
+	overrides = json_object_get(obj, "materials");
+	if (forced && overrides)
+		return loader_fail(
+			ld, item,
+			"\"material\" (one for the whole mesh) and \"materials\" (by the "
+			"file's names) exclude each other");
+	if (overrides && !json_is_object(overrides)) {
+		struct path field = child_key(item, "materials");
+		return loader_fail(ld, &field, "must be an object, got %s",
+				   loader_type_name(overrides));
+	}
+	if ((forced && loader_read_material_ref(ld, item, obj, &material)) ||
 	    read_placement(ld, item, obj, &pl))
 		return -1;
 	path = mesh_path(ld, name);
@@ -270,10 +474,25 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	if (ret)
 		return loader_fail(ld, &file, "cannot read \"%s\": %s", one_line(name, text),
 				   one_line(reason, reason));
-	if (mesh.triangle_count == 0)
+	if (mesh.triangle_count == 0) {
 		ret = loader_fail(ld, &file, "\"%s\" holds no triangles", one_line(name, text));
-	else
-		ret = place_mesh(ld, &file, name, &mesh, &pl, material);
+		goto out_free;
+	}
+	if (!forced) {
+		map = malloc((mesh.material_count ? mesh.material_count : 1) * sizeof(*map));
+		if (!map) {
+			loader_write_err(ld, "%s: out of memory", ld->source);
+			ret = -1;
+			goto out_free;
+		}
+		if ((ret = map_file_materials(ld, item, name, &mesh, overrides, map)))
+			goto out_free;
+	}
+	ret = report_mesh(ld, item, name, &mesh, forced != NULL) ||
+	      place_mesh(ld, &file, name, &mesh, &pl, material, map);
+	ret = ret ? -1 : 0;
+out_free:
+	free(map);
 	mesh_data_free(&mesh);
 	return ret;
 }

@@ -37,7 +37,7 @@ VERSIONS = (1, 2)
 TOP_KEYS = ("format", "version", "image", "camera", "background", "ambient", "max_depth",
             "epsilon", "materials", "lights", "spheres", "planes")
 VERSION_2_KEYS = ("meshes", "triangles")
-MESH_KEYS = ("file", "material", "scale", "rotate", "translate", "smooth")
+MESH_KEYS = ("file", "material", "materials", "scale", "rotate", "translate", "smooth")
 MATERIAL_DEFAULTS = {"color": (1.0, 1.0, 1.0), "ambient": 1.0, "diffuse": 0.7,
                      "specular": 0.3, "shininess": 32.0, "reflect": 0.0,
                      "transmit": 0.0, "ior": 1.5, "fresnel": False}
@@ -286,6 +286,25 @@ def read_meshes(items, materials, base_dir):
         check_keys(value, path, MESH_KEYS)
         where = child(path, "file")
         name = mesh_name(required(value, "file", path), where)
+        # The file's own materials (SCENE.md, "Materials from mesh files") are
+        # rtcl's to read; the tools convert only the PLY meshes tools/genbench.py
+        # writes, which have none: a mesh without "material" is the default one.
+        if "material" in value and "materials" in value:
+            fail(path, '"material" (one for the whole mesh) and "materials" (by the '
+                 "file's names) exclude each other")
+        overrides = value.get("materials", {})
+        if not isinstance(overrides, dict):
+            fail(child(path, "materials"), f"must be an object, got {type_name(overrides)}")
+        for key, material in overrides.items():
+            where = child(child(path, "materials"), key)
+            if isinstance(material, str):
+                if material not in materials:
+                    fail(where, f'unknown material "{_escaped(material)}"'
+                         + did_you_mean(material, materials))
+            elif isinstance(material, dict):
+                read_material(material, where)
+            else:
+                fail(where, f"must be a material name or an object, got {type_name(material)}")
         mesh = {"material": material_of(value, path, materials),
                 "scale": optional(value, "scale", path, read_scale, (1.0, 1.0, 1.0)),
                 "rotate": optional(value, "rotate", path, vec3, (0.0, 0.0, 0.0)),
