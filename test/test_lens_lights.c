@@ -34,8 +34,8 @@ static void load_string(struct scene *scene, const char *json)
 	cr_assert_eq(scene_load_string(scene, json, "test.json", err, sizeof(err)), 0, "%s", err);
 }
 
-static struct render_settings settings_for(const char *kernel, int width, int height,
-					   int max_depth, int samples)
+static struct render_settings settings_for(const char *kernel, int width, int height, int max_depth,
+					   int samples)
 {
 	struct render_settings s;
 
@@ -114,8 +114,8 @@ static void check_kernels_and_reference(const struct scene *scene, const char *w
 		unsigned char *got = render_8bit(&dev, scene, &s, name);
 		for (size_t i = 0; i < pixels * 3; i++)
 			cr_assert_leq(abs(got[i] - want[i]), slack,
-				      "%s: pixel (%zu, %zu) channel %zu is %u, serial gave %u", name,
-				      i / 3 % width, i / 3 / width, i % 3, got[i], want[i]);
+				      "%s: pixel (%zu, %zu) channel %zu is %u, serial gave %u",
+				      name, i / 3 % width, i / 3 / width, i % 3, got[i], want[i]);
 		free(got);
 	}
 
@@ -204,8 +204,9 @@ static double sharpness(const float *rgb, int width, int x0, int x1, int y0, int
 }
 
 /* Two white balls on black, one 6 units from the eye (on the image's right:
- * looking along +z with y up, -x is to the right) and one 30 (left): focused on the near one, the near one's edges stay sharp
- * and the far one's blur; focused on the far one, the other way round. */
+ * looking along +z with y up, -x is to the right) and one 30 (left): focused on the near one, the
+ * near one's edges stay sharp and the far one's blur; focused on the far one, the other way round.
+ */
 Test(lens_lights, thin_lens_keeps_the_focus_plane_sharp_and_blurs_the_rest, .timeout = 300)
 {
 	static const char *const json =
@@ -400,8 +401,7 @@ Test(lens_lights, fresnel_reflects_at_grazing_angles_and_tints_metals, .timeout 
 	float *metal = reference_image(&scene, w, h, 1, 1);
 	double tint_steep = metal[steep + 2] / metal[steep];
 	double tint_grazing = metal[grazing + 2] / metal[grazing];
-	fprintf(stderr, "Fresnel metal: blue/red steep %g, grazing %g\n", tint_steep,
-		tint_grazing);
+	fprintf(stderr, "Fresnel metal: blue/red steep %g, grazing %g\n", tint_steep, tint_grazing);
 	cr_expect_float_eq(metal[steep], 1.0f, 1e-6, "red: C is 1");
 	cr_expect_lt(tint_steep, 0.5, "tinted head-on");
 	cr_expect_gt(tint_grazing, tint_steep + 0.1, "whiter at grazing angles");
@@ -409,4 +409,85 @@ Test(lens_lights, fresnel_reflects_at_grazing_angles_and_tints_metals, .timeout 
 	free(glass);
 	free(metal);
 	scene_free(&scene);
+}
+
+/* What the counting build counts on the 1x1 image of a plane seen from
+ * above, every sample's ray hitting it, with one light, at depth 0. */
+static uint64_t counted_flops(struct device *dev, const char *json, int samples)
+{
+	struct scene scene;
+	struct render_result res;
+
+	load_string(&scene, json);
+	struct render_settings s = settings_for("serial", 1, 1, 0, samples);
+	s.count_flops = 1;
+	cr_assert_eq(render(dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
+	uint64_t flops = res.total_flops;
+	render_result_free(&res);
+	scene_free(&scene);
+	return flops;
+}
+
+/* The concentric disk mapping's count for pixel (0, 0)'s sample k of n in
+ * pair `pair` (RENDERING.md: 4, then 7, or 8 in the third case, or nothing
+ * more at the centre), from the reference's copy of the sequence: the
+ * pair's values are multiples of 2^-24, so that 2s - 1 is exact in float and
+ * the kernel takes the same case. */
+static int disk_flops(int k, int n, int pair)
+{
+	double st[2];
+
+	reference_sample_pair(0, 0, k, n, pair, st);
+	double x = 2 * st[0] - 1, y = 2 * st[1] - 1;
+	if (x == 0 && y == 0)
+		return 4;
+	return fabs(x) > fabs(y) ? 4 + 7 : 4 + 8;
+}
+
+#define FLOPS_PLANE_SCENE(CAMERA, LIGHT)                                                           \
+	"{\"format\": \"rtcl-scene\", \"version\": 2,"                                             \
+	" \"camera\": {\"eye\": [0, 5, 0], \"look_at\": [0, 0, 0], \"up\": [0, 0, 1],"             \
+	" \"fov\": 40" CAMERA "}, \"max_depth\": 0, \"lights\": [" LIGHT "],"                      \
+	" \"planes\": [{\"point\": [0, 0, 0], \"normal\": [0, 1, 0]}]}"
+
+/* RENDERING.md's flop rules for the lens and the light samples, by
+ * difference from the same scene without them: per sample, the lens adds 22
+ * and its disk (the pair 2, A·a and A·b 2, the offset 9, F·q 3, minus the
+ * offset 3, the origin 3; its normalize replaces the pinhole's); a sphere
+ * light adds 41 and its disk over a point light at its centre (w 12, the
+ * frame 13, the pair 2, R·a and R·b 2, the point 12); a directional light
+ * of angle > 0 adds 25 and its disk (the frame 13, the pair 2, 2, the offset
+ * and its sum 12, the normalize 9, less the point light's 13 it does not
+ * need). The light's pair at depth 0 is 2, the lens's 1. */
+Test(lens_lights, lens_and_light_samples_count_by_the_rules, .timeout = 300)
+{
+	const int n = 8;
+	struct device dev;
+	uint64_t lens = 0, light = 0;
+
+	for (int k = 0; k < n; k++) {
+		lens += 22 + disk_flops(k, n, 1);
+		light += disk_flops(k, n, 2);
+	}
+	open_device(&dev);
+	uint64_t point = counted_flops(&dev, FLOPS_PLANE_SCENE("", "{\"position\": [1, 4, 1]}"), n);
+	uint64_t with_lens =
+		counted_flops(&dev,
+			      FLOPS_PLANE_SCENE(", \"aperture\": 0.3, \"focus_distance\": 5",
+						"{\"position\": [1, 4, 1]}"),
+			      n);
+	uint64_t sphere = counted_flops(
+		&dev, FLOPS_PLANE_SCENE("", "{\"position\": [1, 4, 1], \"radius\": 0.5}"), n);
+	uint64_t sun = counted_flops(
+		&dev, FLOPS_PLANE_SCENE("", "{\"direction\": [0.1, -1, 0.2], \"angle\": 5}"), n);
+	cr_assert_gt(point, 0);
+	cr_expect_eq(with_lens - point, lens, "the lens: %llu more, the rules say %llu",
+		     (unsigned long long)(with_lens - point), (unsigned long long)lens);
+	cr_expect_eq(sphere - point, 41 * n + light,
+		     "a sphere light: %llu more, the rules say %llu",
+		     (unsigned long long)(sphere - point), (unsigned long long)(41 * n + light));
+	cr_expect_eq(sun - point, 25 * n + light,
+		     "a directional light: %llu more, the rules say %llu",
+		     (unsigned long long)(sun - point), (unsigned long long)(25 * n + light));
+	device_close(&dev);
 }
