@@ -291,10 +291,6 @@ static void pack_textures(unsigned char *block, struct rt_scene *header, const s
 	float *table = (float *)(block + l->texture_table);
 	size_t texel = l->texel;
 
-	header->uv_offset = (rt_uint)l->uv;
-	header->material_map_offset = (rt_uint)l->material_map;
-	header->texture_offset = (rt_uint)l->texture;
-	header->texture_table_offset = (rt_uint)l->texture_table;
 	header->texture_count = scene->texture_count;
 	if (mesh->uvs)
 		memcpy(block + l->uv, mesh->uvs,
@@ -369,6 +365,11 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 	header->bvh_node_offset = (rt_uint)l.node;
 	header->bvh_ref_offset = (rt_uint)l.ref;
 	header->bvh_triangle_offset = (rt_uint)l.leaf_triangle;
+	/* Where the textures' arrays are, also empty ones: the leaf triangles end there. */
+	header->uv_offset = (rt_uint)l.uv;
+	header->material_map_offset = (rt_uint)l.material_map;
+	header->texture_offset = (rt_uint)l.texture;
+	header->texture_table_offset = (rt_uint)l.texture_table;
 	int *order = sphere_order(scene, bvh);
 	if (!order || pack_bvh(block, header, bvh, mesh)) {
 		free(order);
