@@ -376,3 +376,22 @@ def test_the_spider_loads_with_its_textures(tmp_path):
     out, err = render(path, "--size", "32x24", "-v", name="o.ppm")
     assert 'texture ".\\SpiderTex.jpg": 249x250 8-bit sRGB, repeat/repeat, 249000 bytes' in err
     assert "warning" not in err
+
+
+def test_flops_of_a_texture_lookup_and_a_cut_out_test(tmp_path):
+    """RENDERING.md's rules: a textured hit adds 12 (coordinates) + 43 (lookup) + 3
+    (C ⊙ T) = 58 to its shading; a cut-out test with an alpha texture 12 + 43 + 1 =
+    56 where a hit would be taken (twice where a ray meets both triangles of the
+    quad on their shared edge at one t)."""
+    import numpy
+    path = quad_scene(tmp_path, clamp=True, extra_mtl="map_d t.png\n")
+    doc = json.loads(path.read_text())
+    maps = {}
+    for name, mesh in (("plain", {"material": {"color": [1, 1, 1]}}), ("textured", {})):
+        path.write_text(json.dumps(dict(doc, meshes=[dict(doc["meshes"][0], **mesh)])))
+        render(path, "--work-map", tmp_path / f"{name}.npy", name=f"{name}.pfm")
+        maps[name] = numpy.load(tmp_path / f"{name}.npy").astype(numpy.int64)
+    extra = maps["textured"] - maps["plain"]
+    off_diagonal = numpy.fliplr(~numpy.eye(SIDE, dtype=bool))
+    assert set(numpy.unique(extra[off_diagonal])) == {58 + 56}
+    assert set(numpy.unique(extra[~off_diagonal])) <= {58 + 56, 58 + 2 * 56}
