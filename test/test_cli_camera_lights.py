@@ -152,6 +152,9 @@ def test_fresnel_false_is_the_program_and_image_of_before(tmp_path):
     assert render(tmp_path, "on.pfm", on) != plain
 
 
+# make test-long: test_lens_lights.c's studio test renders it with every kernel
+# and the reference in make test.
+@pytest.mark.slow
 def test_studio_renders_with_every_kernel(tmp_path):
     for kernel in ("dynamic", "wavefront", "reference"):
         assert render(tmp_path, kernel + ".png", str(ROOT / "scenes" / "studio.json"),

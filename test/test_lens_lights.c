@@ -6,6 +6,7 @@
 #include <criterion/criterion.h>
 
 #include <math.h>
+#include <stdbool.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -83,15 +84,22 @@ static float *reference_image(const struct scene *scene, int width, int height, 
 }
 
 /* Every kernel the same bytes as serial (the wavefront, which adds a pixel's
- * rays in no fixed order, within 1/255), and dynamic close to the reference:
+ * rays in no fixed order, within 1/255), or with every_kernel false only the
+ * dynamic and the wavefront (the stack walk's and the wavefront's paths; the
+ * studio scene, which uses every feature at once, checks all of them, so that
+ * make test compiles each kernel's program once more, not three times), and
+ * serial close to the reference:
  * PSNR >= 40 dB, at most 0.5 % of the pixels off by more than 2/255 (the
  * tests of test_kernels.c allow 0.1 % on larger images; here one pixel of
  * 1200 is 0.08 %). */
 static void check_kernels_and_reference(const struct scene *scene, const char *what, int width,
-					int height, int samples)
+					int height, int samples, bool every_kernel)
 {
-	static const char *const kernels[] = {"naive", "cyclic", "dynamic", "persistent",
-					      "wavefront"};
+	static const char *const every[] = {"naive", "cyclic", "dynamic", "persistent",
+					    "wavefront"};
+	static const char *const two[] = {"dynamic", "wavefront"};
+	const char *const *kernels = every_kernel ? every : two;
+	size_t kernel_count = every_kernel ? sizeof(every) / sizeof(every[0]) : 2;
 	size_t pixels = (size_t)width * height;
 	char name[256];
 	struct device dev;
@@ -99,7 +107,7 @@ static void check_kernels_and_reference(const struct scene *scene, const char *w
 	open_device(&dev);
 	struct render_settings s = settings_for("serial", width, height, scene->max_depth, samples);
 	unsigned char *want = render_8bit(&dev, scene, &s, what);
-	for (size_t k = 0; k < sizeof(kernels) / sizeof(kernels[0]); k++) {
+	for (size_t k = 0; k < kernel_count; k++) {
 		int slack = strcmp(kernels[k], "wavefront") == 0;
 		snprintf(name, sizeof(name), "%s, %s", what, kernels[k]);
 		s = settings_for(kernels[k], width, height, scene->max_depth, samples);
@@ -169,12 +177,12 @@ static void load_thin_lens(struct scene *scene)
 	scene->camera.focus_distance = 7.7;
 }
 
-Test(lens_lights, thin_lens_same_in_every_kernel_and_near_the_reference, .timeout = 600)
+Test(lens_lights, thin_lens_same_in_the_walk_and_wavefront_and_near_the_reference, .timeout = 600)
 {
 	struct scene scene;
 
 	load_thin_lens(&scene);
-	check_kernels_and_reference(&scene, "two_balls, aperture 0.25", 40, 30, 3);
+	check_kernels_and_reference(&scene, "two_balls, aperture 0.25", 40, 30, 3, false);
 	scene_free(&scene);
 }
 
@@ -268,12 +276,12 @@ static void load_soft_lights(struct scene *scene)
 	scene->lights[1].angle = 4;
 }
 
-Test(lens_lights, soft_lights_same_in_every_kernel_and_near_the_reference, .timeout = 600)
+Test(lens_lights, soft_lights_same_in_the_walk_and_wavefront_and_near_the_reference, .timeout = 600)
 {
 	struct scene scene;
 
 	load_soft_lights(&scene);
-	check_kernels_and_reference(&scene, "two_balls, sphere and sun lights", 40, 30, 3);
+	check_kernels_and_reference(&scene, "two_balls, sphere and sun lights", 40, 30, 3, false);
 	scene_free(&scene);
 }
 
@@ -348,7 +356,7 @@ Test(lens_lights, studio_same_in_every_kernel_and_near_the_reference, .timeout =
 	struct scene scene;
 
 	load(&scene, "scenes/studio.json");
-	check_kernels_and_reference(&scene, "studio", 40, 25, 2);
+	check_kernels_and_reference(&scene, "studio", 40, 25, 2, true);
 	scene_free(&scene);
 }
 

@@ -112,7 +112,8 @@ Test(multidev, efficiency_is_mean_over_max_busy_time)
 
 Test(multidev, orbit_turns_the_eye_about_up_through_look_at)
 {
-	struct scene_camera c = {{0, 6, -24}, {0, 1, 0}, {0, 1, 0}, 45}, out;
+	struct scene_camera c = {.eye = {0, 6, -24}, .look_at = {0, 1, 0}, .up = {0, 1, 0}, .fov = 45},
+			    out;
 
 	frames_orbit(&c, 3, 3, 6, &out); /* frame A: the scene's camera, exactly */
 	cr_assert(memcmp(&out, &c, sizeof(c)) == 0);
