@@ -168,7 +168,7 @@ static void triangles_brute_force(struct tracer *tr, float3 o, float3 d, bool an
 		float t;
 		float2 uv;
 
-		if (!triangle_hit(tr, i, o, d, *nearest, &t, &uv))
+		if (!triangle_hit(tr, i, o, d, *nearest, &t, &uv) || triangle_cut_out(tr, i, uv))
 			continue;
 		*nearest = t;
 		best->sphere = -1;
@@ -185,11 +185,14 @@ static void triangles_brute_force(struct tracer *tr, float3 o, float3 d, bool an
  * takes it as the nearest hit by the rule brute force's order gives
  * (triangles_brute_force after the spheres, each replacing the hit only when
  * strictly nearer), so that the image is the same: an equal distance goes to
- * a sphere, else to the lower triangle index. With any_hit, once one hit is
- * found, the rest are not looked at. */
-static void triangle_take(int i, float t, float2 uv, float *nearest, struct hit *best)
+ * a sphere, else to the lower triangle index; a triangle cut out there is
+ * not taken (asked only of a hit that would be). With any_hit, once one hit
+ * is found, the rest are not looked at. */
+static void triangle_take(struct tracer *tr, int i, float t, float2 uv, float *nearest,
+			  struct hit *best)
 {
-	if (t < *nearest || (t == *nearest && best->sphere < 0 && i < best->triangle)) {
+	if ((t < *nearest || (t == *nearest && best->sphere < 0 && i < best->triangle)) &&
+	    !triangle_cut_out(tr, i, uv)) {
 		*nearest = t;
 		best->sphere = -1;
 		best->triangle = i;
@@ -209,7 +212,7 @@ static void triangle_consider(struct tracer *tr, int i, float3 o, float3 d, bool
 	/* No bound here: the tie needs t == *nearest, which the test's
 	 * strict t < t_max would drop. */
 	if (triangle_hit(tr, i, o, d, INFINITY, &t, &uv))
-		triangle_take(i, t, uv, nearest, best);
+		triangle_take(tr, i, t, uv, nearest, best);
 }
 
 /* triangle_consider for leaf triangle k, its vertices inline. */
@@ -224,7 +227,7 @@ static void leaf_triangle_consider(struct tracer *tr, int k, float3 o, float3 d,
 		return;
 	if (triangle_hit_at(tr, v0.xyz, tr->leaf_triangles[k].v1.xyz,
 			    tr->leaf_triangles[k].v2.xyz, o, d, INFINITY, &t, &uv))
-		triangle_take(as_int(v0.w), t, uv, nearest, best);
+		triangle_take(tr, as_int(v0.w), t, uv, nearest, best);
 }
 #endif
 

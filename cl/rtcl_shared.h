@@ -120,6 +120,42 @@ struct rt_vertex_normal {
 	rt_vec4 normal;
 };
 
+/* Textures (RENDERING.md, "Textures" and "Alpha cut-out"), in the block only
+ * when a material has a texture or a cut-out, and read only in programs built
+ * with RTCL_TEXTURES: a vertex's texture coordinates (vertex i's are element
+ * i, read only at a hit of a textured or cut-out triangle, like the vertex
+ * normals; 8 bytes, two to a 16-byte unit, the array padded to a whole
+ * unit); per material what it takes from textures; per texture where its
+ * texels are; the decode table of 8-bit texels (RT_TEXTURE_TABLE floats:
+ * sRGB[i] = E^-1(i/255), then linear[i] = i/255); and the texels, each
+ * texture's rows top first, 16-byte aligned. */
+struct rt_vertex_uv {
+	rt_float u, v;
+};
+
+struct rt_material_map {
+	rt_int texture;	       /* the base colour texture's index, or -1 */
+	rt_int alpha_texture;  /* the cut-out's alpha texture's index, or -1 */
+	rt_float alpha_cutoff; /* > 0: a hit of alpha below it is cut out; 0: none */
+	rt_float alpha_scale;  /* the factor the texture's alpha is multiplied by */
+};
+
+struct rt_texture {
+	rt_uint offset;	      /* of the texels, in bytes from the block's start */
+	rt_int width, height; /* in texels */
+	rt_uint flags;	      /* wrap_s | wrap_t << RT_WRAP_T_SHIFT | RT_TEXTURE_FLOAT */
+};
+
+#define RT_WRAP_REPEAT 0u
+#define RT_WRAP_CLAMP 1u
+#define RT_WRAP_MIRROR 2u
+#define RT_WRAP_MASK 3u
+#define RT_WRAP_T_SHIFT 2
+/* Texels of 4 floats, linear (16-bit and float images); else 4 bytes, RGB
+ * sRGB-encoded and alpha linear, decoded through the table. */
+#define RT_TEXTURE_FLOAT 16u
+#define RT_TEXTURE_TABLE 512
+
 struct rt_scene {
 	/* Camera, per docs/RENDERING.md: forward f, right r, up u. */
 	rt_vec4 eye;	 /* w: a·h, the horizontal half-extent at distance 1 */
@@ -155,7 +191,12 @@ struct rt_scene {
 	/* The thin lens (RENDERING.md, "The thin lens"): its radius A and the
 	   focus distance F, read only in programs built with RTCL_THIN_LENS. */
 	rt_float lens_radius, focus_distance;
-	rt_uint pad[1];
+	/* Textures (struct rt_texture above), read only in programs built with
+	   RTCL_TEXTURES: struct rt_vertex_uv per vertex, struct rt_material_map
+	   per material, texture_count struct rt_texture, the decode table. */
+	rt_uint uv_offset;
+	rt_uint material_map_offset, texture_offset, texture_table_offset;
+	rt_int texture_count;
 };
 
 /* A triangle of a leaf, its three vertex positions inline: v0.w holds its
@@ -276,7 +317,11 @@ _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_triangle) == 16, "rt_triangle layout");
 _Static_assert(sizeof(struct rt_vertex) == 16, "rt_vertex layout");
 _Static_assert(sizeof(struct rt_vertex_normal) == 16, "rt_vertex_normal layout");
-_Static_assert(sizeof(struct rt_scene) == 192, "rt_scene layout");
+_Static_assert(sizeof(struct rt_scene) == 208, "rt_scene layout");
+_Static_assert(offsetof(struct rt_scene, uv_offset) == 188, "rt_scene layout");
+_Static_assert(sizeof(struct rt_vertex_uv) == 8, "rt_vertex_uv layout");
+_Static_assert(sizeof(struct rt_material_map) == 16, "rt_material_map layout");
+_Static_assert(sizeof(struct rt_texture) == 16, "rt_texture layout");
 _Static_assert(sizeof(struct rt_leaf_triangle) == 48, "rt_leaf_triangle layout");
 _Static_assert(offsetof(struct rt_scene, width) == 96, "rt_scene layout");
 _Static_assert(offsetof(struct rt_scene, material_offset) == 128, "rt_scene layout");

@@ -99,6 +99,9 @@ static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, float3 d,
 		normal = triangle_normal(tr, index, d);
 		sh->m = &tr->materials[triangle_material(index)];
 		sh->base = sh->m->color.xyz;
+#ifdef RTCL_TEXTURES
+		sh->base = triangle_base_color(tr, index, (float2)(hit.u, hit.v), sh->base);
+#endif
 	} else {
 		RTCL_SCENE_SPACE const struct rt_plane *pl = &tr->planes[hit.plane];
 		normal = pl->normal.xyz;

@@ -1,10 +1,11 @@
 /* The tracer: what a pixel is (docs/RENDERING.md), written once and used by
  * every scheduling kernel. OpenCL C 1.2.
  *
- * The tracer is seven files, built in this order before the kernel file
+ * The tracer is eight files, built in this order before the kernel file
  * (host/render/program.c lists them) and read best in the same order:
  *   tracer.cl      counting, the scene as the tracer sees it, vector helpers
  *   sample.cl      where a pixel's samples lie
+ *   texture.cl     texture lookups and alpha cut-outs (RTCL_TEXTURES)
  *   intersect.cl   the nearest (or any) hit over spheres, triangles and planes
  *   traverse.cl    the same over the spheres and triangles through the BVH
  *                  (RTCL_BVH)
@@ -21,6 +22,7 @@
  *                       without it the tracer reads it from __global memory
  *   RTCL_BVH            find sphere hits through the scene's BVH rather than
  *                       by testing every sphere (--accel bvh)
+ *   RTCL_TEXTURES       a material has a texture or an alpha cut-out
  *   RTCL_COUNT_FLOPS    count floating-point operations, rays and BVH node
  *                       visits per work-item
  *   RTCL_COUNT_WRITES   count writes per pixel (tests only)
@@ -165,6 +167,12 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
 	RTCL_SCENE_SPACE const uint *refs; /* the BVH leaves' primitives (RT_PRIM_*) */
 	RTCL_SCENE_SPACE const struct rt_leaf_triangle *leaf_triangles; /* RT_LEAF_TRIANGLES */
+#ifdef RTCL_TEXTURES
+	RTCL_SCENE_SPACE const struct rt_vertex_uv *uvs;
+	RTCL_SCENE_SPACE const struct rt_material_map *material_maps;
+	RTCL_SCENE_SPACE const struct rt_texture *textures;
+	RTCL_SCENE_SPACE const float *texture_table; /* RT_TEXTURE_TABLE */
+#endif
 	__global ulong *item_counts;	   /* RT_ITEM_COUNTS per work-item, when counting */
 	__global ulong *pixel_flops;	   /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
@@ -271,6 +279,13 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 	tr->refs = (RTCL_SCENE_SPACE const uint *)(base + scene->bvh_ref_offset);
 	tr->leaf_triangles =
 		(RTCL_SCENE_SPACE const struct rt_leaf_triangle *)(base + scene->bvh_triangle_offset);
+#ifdef RTCL_TEXTURES
+	tr->uvs = (RTCL_SCENE_SPACE const struct rt_vertex_uv *)(base + scene->uv_offset);
+	tr->material_maps =
+		(RTCL_SCENE_SPACE const struct rt_material_map *)(base + scene->material_map_offset);
+	tr->textures = (RTCL_SCENE_SPACE const struct rt_texture *)(base + scene->texture_offset);
+	tr->texture_table = (RTCL_SCENE_SPACE const float *)(base + scene->texture_table_offset);
+#endif
 	tr->item_counts = item_counts;
 	tr->pixel_flops = pixel_flops;
 #ifdef RTCL_COUNT_FLOPS

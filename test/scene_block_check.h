@@ -65,7 +65,7 @@ static const char *leaf_triangles_problem(const struct rt_scene *h, int index, i
 {
 	const unsigned char *block = (const void *)h;
 	const struct rt_leaf_triangle *t = (const void *)(block + h->bvh_triangle_offset);
-	size_t slots = (h->total_bytes - h->bvh_triangle_offset) / sizeof(*t);
+	size_t slots = (h->uv_offset - h->bvh_triangle_offset) / sizeof(*t);
 
 	if ((size_t)index + (size_t)count > slots)
 		return "BVH triangle leaf out of range";
@@ -138,6 +138,60 @@ static const char *bvh_problem(const void *packed)
 	return NULL;
 }
 
+/* The textures' arrays (RENDERING.md, "Textures"): in order after the
+ * leaf triangles, empty or a coordinate pair per vertex, a map per material
+ * naming textures the block has, each texture's texels inside the block and
+ * after the decode table, whose entries lie in 0 ... 1. */
+static const char *textures_problem(const struct rt_scene *h)
+{
+	const unsigned char *block = (const void *)h;
+	size_t vertices = (h->normal_offset - h->vertex_offset) / sizeof(struct rt_vertex);
+
+	if (h->uv_offset < h->bvh_triangle_offset || h->material_map_offset < h->uv_offset ||
+	    h->texture_offset < h->material_map_offset ||
+	    h->texture_table_offset < h->texture_offset || h->total_bytes < h->texture_table_offset)
+		return "texture arrays out of order";
+	if (h->material_map_offset == h->uv_offset) /* no textures */
+		return h->total_bytes == h->uv_offset && h->texture_count == 0
+			       ? NULL
+			       : "texture arrays without their maps";
+	const struct rt_vertex_uv *uv = (const void *)(block + h->uv_offset);
+	const struct rt_material_map *map = (const void *)(block + h->material_map_offset);
+	const struct rt_texture *t = (const void *)(block + h->texture_offset);
+	const float *table = (const void *)(block + h->texture_table_offset);
+	size_t texels = h->texture_table_offset + RT_TEXTURE_TABLE * sizeof(float);
+
+	if (h->material_map_offset - h->uv_offset < vertices * sizeof(*uv) ||
+	    h->texture_offset - h->material_map_offset !=
+		    (size_t)h->material_count * sizeof(*map) ||
+	    h->texture_table_offset - h->texture_offset != (size_t)h->texture_count * sizeof(*t) ||
+	    h->total_bytes < texels)
+		return "texture arrays of the wrong size";
+	for (size_t i = 0; i < vertices; i++)
+		if (!isfinite(uv[i].u) || !isfinite(uv[i].v))
+			return "texture coordinates not finite";
+	for (int i = 0; i < h->material_count; i++)
+		if (map[i].texture < -1 || map[i].texture >= h->texture_count ||
+		    map[i].alpha_texture < -1 || map[i].alpha_texture >= h->texture_count ||
+		    !(map[i].alpha_cutoff >= 0) || !isfinite(map[i].alpha_cutoff) ||
+		    !(map[i].alpha_scale >= 0 && map[i].alpha_scale <= 1))
+			return "material map out of range";
+	for (int i = 0; i < RT_TEXTURE_TABLE; i++)
+		if (!(table[i] >= 0 && table[i] <= 1))
+			return "texture decode table out of 0 ... 1";
+	for (int i = 0; i < h->texture_count; i++) {
+		size_t size = t[i].flags & RT_TEXTURE_FLOAT ? 16 : 4;
+		if (t[i].width < 1 || t[i].height < 1 || t[i].width > 16384 ||
+		    t[i].height > 16384 || (t[i].flags & RT_WRAP_MASK) > RT_WRAP_MIRROR ||
+		    ((t[i].flags >> RT_WRAP_T_SHIFT) & RT_WRAP_MASK) > RT_WRAP_MIRROR)
+			return "texture size or wrap mode out of range";
+		if (t[i].offset % 16 || t[i].offset < texels ||
+		    t[i].offset + (size_t)t[i].width * t[i].height * size > h->total_bytes)
+			return "texture texels outside the block";
+	}
+	return NULL;
+}
+
 /* Returns NULL when the packed scene is usable, else what is wrong. */
 static const char *scene_block_problem(const void *packed)
 {
@@ -183,6 +237,8 @@ static const char *scene_block_problem(const void *packed)
 		if (!vec4_finite(l[i].position) || !vec4_finite(l[i].color))
 			return "light not finite";
 	const char *problem = triangles_problem(packed);
+	if (!problem)
+		problem = textures_problem(h);
 	return problem ? problem : bvh_problem(packed);
 }
 

@@ -196,10 +196,13 @@ def test_a_material_number_that_is_not_finite_is_refused(tmp_path):
 
 
 def test_verbose_reports_materials_textures_and_what_was_not_understood(tmp_path):
-    _, err = render(tmp_path, scene(tmp_path, {}, mtl=MTL + "map_Kd brick.png\nmap_bump b.png\n"),
-                    "-v")
-    assert ('rtcl: meshes[0] "quads.obj": 2 materials (2 used), 1 texture (not applied yet); '
+    _, err = render(tmp_path, scene(tmp_path, {"missing_textures": "warn"},
+                                    mtl=MTL + "map_Kd brick.png\nmap_bump b.png\n"), "-v")
+    assert ('rtcl: meshes[0] "quads.obj": 2 materials (2 used), 1 texture; '
             "not understood: emissive, Height texture") in err, err
+    assert ('rtcl: warning: %s: meshes[0].file: "quads.obj": material "green": cannot read '
+            'texture "brick.png": No such file or directory; its material renders without it'
+            % (tmp_path / "s.json")) in err, err
 
 
 def gltf(materials, primitives):

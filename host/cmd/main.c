@@ -217,6 +217,8 @@ int main(int argc, char **argv)
 		scene_free(&scene);
 		return EXIT_USAGE;
 	}
+	for (int i = 0; i < scene.warning_count; i++)
+		fprintf(stderr, "rtcl: warning: %s\n", scene.warnings[i]);
 	if (opt.verbose) {
 		print_mesh_reports(&scene);
 		print_scene_bounds(&scene);

@@ -12,12 +12,15 @@ struct mesh_block {
 	struct rt_triangle *triangles;	  /* scene->triangle_count of them */
 	struct rt_vertex *vertices;	  /* vertex_count of them */
 	struct rt_vertex_normal *normals; /* vertex i's is normals[i] */
+	struct rt_vertex_uv *uvs;	  /* vertex i's is uvs[i]; NULL without
+					     textures (scene_has_textures) */
 	int vertex_count;
 };
 
 /* Fills *mesh from the scene's triangles: vertices relative to the eye
- * (scene_from_eye) and normals, rounded to float, those equal in position and (on smooth triangles)
- * normal merged. Returns 0, or -1 when out of memory (then *mesh holds nothing to free). */
+ * (scene_from_eye), normals and, in a scene with textures, texture
+ * coordinates, rounded to float, those equal in position, (on smooth
+ * triangles) normal and texture coordinates merged. Returns 0, or -1 when out of memory (then *mesh holds nothing to free). */
 int mesh_block_build(const struct scene *scene, struct mesh_block *mesh);
 
 void mesh_block_free(struct mesh_block *mesh);

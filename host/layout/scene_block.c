@@ -242,10 +242,12 @@ static size_t leaf_triangle_count(const struct bvh *bvh)
 	return n;
 }
 
-/* Where the arrays go in the block (byte offsets) and its size. */
+/* Where the arrays go in the block (byte offsets) and its size. The
+ * textures' arrays (uv ... texel) only in a scene with textures
+ * (scene_has_textures), else they are empty at the end. */
 struct layout {
 	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, leaf_triangle,
-		total;
+		uv, material_map, texture, texture_table, texel, total;
 	int sphere_slots;
 };
 
@@ -266,8 +268,56 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	l.node = l.normal + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal);
 	l.ref = l.node + (bvh ? (size_t)bvh->node_count * sizeof(*bvh->nodes) : 0);
 	l.leaf_triangle = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
-	l.total = l.leaf_triangle + leaf_triangle_count(bvh) * sizeof(struct rt_leaf_triangle);
+	l.uv = l.leaf_triangle + leaf_triangle_count(bvh) * sizeof(struct rt_leaf_triangle);
+	l.material_map = l.texture = l.texture_table = l.texel = l.total = l.uv;
+	if (!scene_has_textures(scene))
+		return l;
+	l.material_map = round16(l.uv + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_uv));
+	l.texture = l.material_map + (size_t)scene->material_count * sizeof(struct rt_material_map);
+	l.texture_table = l.texture + (size_t)scene->texture_count * sizeof(struct rt_texture);
+	l.texel = l.texture_table + RT_TEXTURE_TABLE * sizeof(float);
+	l.total = l.texel + scene_texture_bytes(scene);
 	return l;
+}
+
+/* The textures' arrays (RENDERING.md, "Textures"): the vertices' texture
+ * coordinates, what each material takes from textures, each texture's
+ * header and texels, and the decode table of 8-bit texels. */
+static void pack_textures(unsigned char *block, struct rt_scene *header, const struct layout *l,
+			  const struct scene *scene, const struct mesh_block *mesh)
+{
+	struct rt_material_map *maps = (struct rt_material_map *)(block + l->material_map);
+	struct rt_texture *textures = (struct rt_texture *)(block + l->texture);
+	float *table = (float *)(block + l->texture_table);
+	size_t texel = l->texel;
+
+	header->texture_count = scene->texture_count;
+	if (mesh->uvs)
+		memcpy(block + l->uv, mesh->uvs,
+		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_uv));
+	for (int i = 0; i < scene->material_count; i++) {
+		const struct scene_material *m = &scene->materials[i];
+		maps[i].texture = m->texture - 1;
+		maps[i].alpha_texture = m->alpha_texture - 1;
+		maps[i].alpha_cutoff = (float)m->alpha_cutoff;
+		maps[i].alpha_scale = (float)m->alpha_scale;
+	}
+	for (int i = 0; i < scene->texture_count; i++) {
+		const struct scene_texture *t = &scene->textures[i];
+		textures[i].offset = (rt_uint)texel;
+		textures[i].width = t->width;
+		textures[i].height = t->height;
+		textures[i].flags = (rt_uint)t->wrap_s | (rt_uint)t->wrap_t << RT_WRAP_T_SHIFT |
+				    (t->is_float ? RT_TEXTURE_FLOAT : 0u);
+		memcpy(block + texel, t->texels, t->bytes);
+		texel += round16(t->bytes);
+	}
+	/* Computed in double, rounded once to float. */
+	for (int i = 0; i < 256; i++) {
+		double x = i / 255.0;
+		table[i] = (float)(x <= 0.04045 ? x / 12.92 : pow((x + 0.055) / 1.055, 2.4));
+		table[256 + i] = (float)x;
+	}
 }
 
 size_t scene_block_bytes(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh)
@@ -315,6 +365,11 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 	header->bvh_node_offset = (rt_uint)l.node;
 	header->bvh_ref_offset = (rt_uint)l.ref;
 	header->bvh_triangle_offset = (rt_uint)l.leaf_triangle;
+	/* Where the textures' arrays are, also empty ones: the leaf triangles end there. */
+	header->uv_offset = (rt_uint)l.uv;
+	header->material_map_offset = (rt_uint)l.material_map;
+	header->texture_offset = (rt_uint)l.texture;
+	header->texture_table_offset = (rt_uint)l.texture_table;
 	int *order = sphere_order(scene, bvh);
 	if (!order || pack_bvh(block, header, bvh, mesh)) {
 		free(order);
@@ -350,6 +405,8 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 		memcpy(block + l.normal, mesh->normals,
 		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal));
 	}
+	if (scene_has_textures(scene))
+		pack_textures(block, header, &l, scene, mesh);
 
 	*bytes = total;
 	return block;

@@ -19,6 +19,7 @@
 #include <assimp/scene.h>
 
 #include "meshread/ply_check.h"
+#include "meshread/texture_read.h"
 
 /* Polygons become triangles; SortByPType splits points and lines off into meshes of
  * their own, which are skipped; PreTransformVertices applies the node
@@ -391,6 +392,7 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 	double metallic;
 
 	memset(m, 0, sizeof(*m));
+	m->base_texture = m->opacity_texture = -1;
 	string_of(mat, "?mat.name", m->name, sizeof(m->name));
 	int named = m->name[0] != '\0';
 	if (!named)
@@ -472,6 +474,190 @@ static int gather(const struct aiScene *sc, struct mesh_data *out, char *reason,
 	return 0;
 }
 
+/* ---- Textures (docs/SCENE.md, "Textures") ---- */
+
+/* Assimp's wrap mode as the mesh protocol's (Assimp's "decal", no texture
+ * outside 0 ... 1, is clamped). */
+static uint32_t wrap_of(enum aiTextureMapMode mode)
+{
+	return mode == aiTextureMapMode_Mirror	? MESH_WRAP_MIRROR
+	       : mode == aiTextureMapMode_Clamp || mode == aiTextureMapMode_Decal ? MESH_WRAP_CLAMP
+										   : MESH_WRAP_REPEAT;
+}
+
+/* Appends t's texels to out->texels at a 16-byte boundary. Returns 0, or
+ * -1 when out of memory (reason in t). */
+static int append_texels(struct mesh_data *out, struct mesh_texture *t, unsigned char *texels)
+{
+	size_t at = (out->texel_bytes + 15) / 16 * 16;
+	unsigned char *grown = realloc(out->texels, at + (size_t)t->bytes);
+
+	if (!grown) {
+		snprintf(t->reason, sizeof(t->reason), "out of memory for its %llu bytes",
+			 (unsigned long long)t->bytes);
+		return -1;
+	}
+	memset(grown + out->texel_bytes, 0, at - out->texel_bytes);
+	memcpy(grown + at, texels, (size_t)t->bytes);
+	out->texels = grown;
+	t->offset = at;
+	out->texel_bytes = at + (size_t)t->bytes;
+	return 0;
+}
+
+/* An embedded texture that Assimp holds uncompressed (mHeight > 0): its
+ * aiTexel are BGRA, 8 bits each, rows top first. */
+static unsigned char *raw_texels(const struct aiTexture *tex, struct mesh_texture *t)
+{
+	size_t count = (size_t)tex->mWidth * tex->mHeight;
+	unsigned char *texels;
+
+	if (tex->mWidth > MESH_TEXTURE_MAX_SIDE || tex->mHeight > MESH_TEXTURE_MAX_SIDE) {
+		snprintf(t->reason, sizeof(t->reason),
+			 "it is %ux%u texels, more than the %d a side rtcl reads", tex->mWidth,
+			 tex->mHeight, MESH_TEXTURE_MAX_SIDE);
+		return NULL;
+	}
+	texels = malloc(count * 4);
+	if (!texels) {
+		snprintf(t->reason, sizeof(t->reason), "out of memory");
+		return NULL;
+	}
+	for (size_t i = 0; i < count; i++) {
+		const struct aiTexel *x = &tex->pcData[i];
+		texels[4 * i] = x->r, texels[4 * i + 1] = x->g, texels[4 * i + 2] = x->b;
+		texels[4 * i + 3] = t->role == MESH_TEXTURE_OPACITY ? x->r : x->a;
+	}
+	t->format = MESH_TEXELS_8;
+	t->width = tex->mWidth;
+	t->height = tex->mHeight;
+	t->bytes = (uint64_t)count * 4;
+	return texels;
+}
+
+/* Reads texture t (its name and role set): embedded ("*N") or a file beside
+ * the mesh. Its reason says why when it could not be read. */
+static void read_texture(const struct aiScene *sc, const char *path, struct mesh_data *out,
+			 struct mesh_texture *t)
+{
+	unsigned char *bytes = NULL, *texels = NULL;
+	size_t size = 0;
+
+	if (t->name[0] == '*') {
+		char *end;
+		unsigned long i = strtoul(t->name + 1, &end, 10);
+		const struct aiTexture *tex;
+
+		if (*end || i >= sc->mNumTextures || !sc->mTextures[i]) {
+			snprintf(t->reason, sizeof(t->reason), "the file has no embedded texture %.40s",
+				 t->name);
+			return;
+		}
+		tex = sc->mTextures[i];
+		if (tex->mHeight > 0) {
+			texels = raw_texels(tex, t);
+		} else if (!texture_decode((const unsigned char *)tex->pcData, tex->mWidth, t,
+					   &texels)) {
+			/* decoded */
+		}
+	} else if (!texture_file_bytes(path, t->name, &bytes, &size, t->reason,
+				       sizeof(t->reason))) {
+		texture_decode(bytes, size, t, &texels);
+	}
+	free(bytes);
+	if (texels && !t->reason[0])
+		append_texels(out, t, texels);
+	free(texels);
+}
+
+/* The index in out->textures of texture `type` of mat, read in `role`
+ * (each name and role once), or -1 where mat has none. */
+static int32_t texture_of(const struct aiScene *sc, const char *path,
+			  const struct aiMaterial *mat, enum aiTextureType type, uint32_t role,
+			  struct mesh_data *out)
+{
+	enum aiTextureMapMode modes[3] = {aiTextureMapMode_Wrap, aiTextureMapMode_Wrap,
+					  aiTextureMapMode_Wrap};
+	struct aiString name;
+	struct mesh_texture *t, *grown;
+
+	if (aiGetMaterialTextureCount(mat, type) == 0 ||
+	    aiGetMaterialTexture(mat, type, 0, &name, NULL, NULL, NULL, NULL, modes, NULL) !=
+		    aiReturn_SUCCESS)
+		return -1;
+	for (size_t i = 0; i < out->texture_count; i++)
+		if (out->textures[i].role == role && out->textures[i].wrap_s == wrap_of(modes[0]) &&
+		    out->textures[i].wrap_t == wrap_of(modes[1]) &&
+		    strncmp(out->textures[i].name, name.data, MESH_TEXTURE_NAME_MAX - 1) == 0)
+			return (int32_t)i;
+	grown = realloc(out->textures, (out->texture_count + 1) * sizeof(*grown));
+	if (!grown)
+		return -1;
+	out->textures = grown;
+	t = &out->textures[out->texture_count];
+	memset(t, 0, sizeof(*t));
+	snprintf(t->name, sizeof(t->name), "%.*s", (int)sizeof(t->name) - 1, name.data);
+	for (char *c = t->name; *c; c++) /* names go into messages on one line */
+		if ((unsigned char)*c < 0x20 || *c == 0x7f)
+			*c = '?';
+	t->role = role;
+	t->wrap_s = wrap_of(modes[0]);
+	t->wrap_t = wrap_of(modes[1]);
+	read_texture(sc, path, out, t);
+	return (int32_t)out->texture_count++;
+}
+
+/* The textures of the materials some triangle has (the others are not
+ * read), and then the vertices' texture coordinates. Returns 0, or -1 when
+ * out of memory. */
+static int read_textures(const struct aiScene *sc, const char *path, struct mesh_data *out)
+{
+	char *used = calloc(out->material_count ? out->material_count : 1, 1);
+	int textured = 0;
+
+	if (!used)
+		return -1;
+	for (size_t t = 0; t < out->triangle_count; t++)
+		if (out->triangle_materials[t] != MESH_NO_MATERIAL)
+			used[out->triangle_materials[t]] = 1;
+	for (size_t i = 0; i < out->material_count; i++) {
+		struct mesh_material *m = &out->materials[i];
+		const struct aiMaterial *mat = sc->mMaterials[i];
+
+		if (!used[i] || m->kind == MESH_MATERIAL_MISSING)
+			continue;
+		/* glTF's base colour texture comes as base colour and diffuse */
+		m->base_texture = texture_of(sc, path, mat,
+					     aiGetMaterialTextureCount(mat, aiTextureType_BASE_COLOR)
+						     ? aiTextureType_BASE_COLOR
+						     : aiTextureType_DIFFUSE,
+					     MESH_TEXTURE_COLOR, out);
+		if (m->kind == MESH_MATERIAL_PHONG)
+			m->opacity_texture = texture_of(sc, path, mat, aiTextureType_OPACITY,
+							MESH_TEXTURE_OPACITY, out);
+		textured |= m->base_texture >= 0 || m->opacity_texture >= 0;
+	}
+	free(used);
+	if (!textured)
+		return 0;
+	out->uvs = calloc(out->vertex_count ? out->vertex_count : 1, 2 * sizeof(double));
+	if (!out->uvs)
+		return -1;
+	size_t base = 0;
+	for (unsigned m = 0; m < sc->mNumMeshes; m++) {
+		const struct aiMesh *mesh = sc->mMeshes[m];
+
+		if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE))
+			continue;
+		for (unsigned v = 0; mesh->mTextureCoords[0] && v < mesh->mNumVertices; v++) {
+			out->uvs[2 * (base + v)] = mesh->mTextureCoords[0][v].x;
+			out->uvs[2 * (base + v) + 1] = mesh->mTextureCoords[0][v].y;
+		}
+		base += mesh->mNumVertices;
+	}
+	return 0;
+}
+
 int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
 {
 	struct aiFileIO io = {file_open, file_close, NULL};
@@ -513,6 +699,11 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	for (unsigned m = 0; m < sc->mNumMaterials; m++)
 		read_material(sc->mMaterials[m], m, &out->materials[m]);
 	out->material_count = sc->mNumMaterials;
+	if (read_textures(sc, path, out)) {
+		snprintf(reason, reason_size, "out of memory for its textures");
+		mesh_data_free(out);
+		goto out_release_scene;
+	}
 	ret = 0;
 out_release_scene:
 	if (sc)

@@ -17,12 +17,18 @@ int block_check_scene_fits(const struct device *dev, const struct scene *scene,
 					   ? (unsigned long long)dev->max_alloc_size
 					   : (unsigned long long)DEVSCENE_MAX_BYTES;
 
+	char textures[80] = "";
+
 	if (bytes <= limit)
 		return 0;
+	if (scene->texture_count)
+		snprintf(textures, sizeof(textures), ", %d texture%s of %zu bytes",
+			 scene->texture_count, scene->texture_count == 1 ? "" : "s",
+			 scene_texture_bytes(scene));
 	snprintf(err, err_size,
-		 "%s: the scene (%d triangles) needs %zu bytes of device "
+		 "%s: the scene (%d triangles%s) needs %zu bytes of device "
 		 "memory, more than the limit of %llu bytes in one buffer on %s (%s)",
-		 quote_text(scene->source), scene->triangle_count, bytes, limit, dev->name,
+		 quote_text(scene->source), scene->triangle_count, textures, bytes, limit, dev->name,
 		 limit == dev->max_alloc_size ? "CL_DEVICE_MAX_MEM_ALLOC_SIZE"
 					      : "rtcl's 32-bit scene offsets");
 	return -1;

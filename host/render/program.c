@@ -15,9 +15,9 @@
 
 /* The tracer's sources, in the order the compiler sees them; the kernel's own
  * cl/NAME.cl follows. */
-const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl",    "sample.cl",
-					      "intersect.cl",  "traverse.cl",  "shade.cl",
-					      "walk.cl",       "scheduling.cl"};
+const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl", "sample.cl",
+					      "texture.cl",    "intersect.cl", "traverse.cl",
+					      "shade.cl",      "walk.cl",   "scheduling.cl"};
 const int program_tracer_source_count =
 	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
 
@@ -191,7 +191,7 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "", f->use_bvh ? " -DRTCL_BVH" : "",
 		 f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
@@ -201,6 +201,8 @@ static int format_options(const struct device *dev, const struct render_settings
 		 f->area_lights ? " -DRTCL_AREA_LIGHTS" : "",
 		 /* Without Fresnel, weights stay numbers: the program of before. */
 		 f->fresnel ? " -DRTCL_FRESNEL" : "",
+		 /* Without textures or cut-outs: the program of before textures. */
+		 f->textures ? " -DRTCL_TEXTURES" : "",
 		 s->samples > 1 ? "" : " -DRTCL_ONE_SAMPLE",
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 /* SIMD efficiency, measured where the device lets software see it. */

@@ -18,6 +18,7 @@ struct program_features {
 	int thin_lens;	    /* an aperture > 0: primary rays start on the lens */
 	int area_lights;    /* a sphere or directional light: lights are sampled */
 	int fresnel;	    /* a Fresnel material: ray weights are colours */
+	int textures;	    /* a texture or an alpha cut-out (scene_has_textures) */
 };
 
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads

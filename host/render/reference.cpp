@@ -27,7 +27,17 @@ dvec3 to_dvec3(const double v[3])
 struct material {
 	dvec3 color;
 	double ka, kd, ks, shininess, kr, kt, ior;
-	int fresnel; /* SCENE_FRESNEL_* */
+	int fresnel;	     /* SCENE_FRESNEL_* */
+	int texture;	     /* an index into the textures, or -1 */
+	int alpha_texture;   /* the cut-out's, or -1 */
+	double alpha_cutoff; /* > 0: a cut-out */
+	double alpha_scale;
+};
+
+/* A texture as RENDERING.md ("Textures") reads it. */
+struct texture {
+	const struct scene_texture *t;
+	int width, height, wrap_s, wrap_t;
 };
 
 struct sphere {
@@ -53,6 +63,7 @@ struct triangle {
 	dvec3 normal[3]; /* unit shading normals at the vertices */
 	bool smooth;
 	int material;
+	glm::dvec2 uv[3]; /* texture coordinates at the vertices */
 };
 
 struct light {
@@ -94,6 +105,53 @@ int largest_axis(const dvec3 &n)
 	if (std::fabs(n.z) > std::fabs(n[axis]))
 		axis = 2;
 	return axis;
+}
+
+/* RENDERING.md, "Textures": E^-1, the sRGB curve's inverse. */
+double srgb_to_linear(double x)
+{
+	return x <= 0.04045 ? x / 12.92 : std::pow((x + 0.055) / 1.055, 2.4);
+}
+
+/* Index k of an axis of n texels under a wrap mode. */
+int wrap_index(long long k, int n, int mode)
+{
+	if (mode == SCENE_WRAP_CLAMP)
+		return (int)std::min<long long>(std::max<long long>(k, 0), n - 1);
+	if (mode == SCENE_WRAP_MIRROR) {
+		long long m = ((k % (2LL * n)) + 2LL * n) % (2LL * n);
+		return (int)(m < n ? m : 2LL * n - 1 - m);
+	}
+	return (int)(((k % n) + n) % n);
+}
+
+/* Texel (i, j), rows top first, linear RGBA. */
+glm::dvec4 texel(const texture &tex, int i, int j)
+{
+	size_t at = 4 * ((size_t)j * (size_t)tex.width + (size_t)i);
+
+	if (tex.t->is_float) {
+		const float *f = (const float *)tex.t->texels + at;
+		return glm::dvec4(f[0], f[1], f[2], f[3]);
+	}
+	const unsigned char *c = (const unsigned char *)tex.t->texels + at;
+	return glm::dvec4(srgb_to_linear(c[0] / 255.0), srgb_to_linear(c[1] / 255.0),
+			  srgb_to_linear(c[2] / 255.0), c[3] / 255.0);
+}
+
+/* The bilinear lookup at uv, texel centres at half-integers. */
+glm::dvec4 lookup(const texture &tex, const glm::dvec2 &uv)
+{
+	const double limit = 16777216.0; /* 2^24 */
+	double x = std::clamp(uv.x * tex.width - 0.5, -limit, limit);
+	double y = std::clamp((1.0 - uv.y) * tex.height - 0.5, -limit, limit);
+	double fi = std::floor(x), fj = std::floor(y), fx = x - fi, fy = y - fj;
+	long long i = (long long)fi, j = (long long)fj;
+	int i0 = wrap_index(i, tex.width, tex.wrap_s), i1 = wrap_index(i + 1, tex.width, tex.wrap_s);
+	int j0 = wrap_index(j, tex.height, tex.wrap_t), j1 = wrap_index(j + 1, tex.height, tex.wrap_t);
+	glm::dvec4 top = glm::mix(texel(tex, i0, j0), texel(tex, i1, j0), fx);
+	glm::dvec4 bottom = glm::mix(texel(tex, i0, j1), texel(tex, i1, j1), fx);
+	return glm::mix(top, bottom, fy);
 }
 
 /* Returns the smallest t > 0 where the ray meets the sphere (the far root
@@ -160,6 +218,7 @@ class tracer
 
       private:
 	bool nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const;
+	bool cut_out(const triangle &tri, double u, double v) const;
 	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
 	dvec3 base_color(const hit &h, const dvec3 &p) const;
 	dvec3 local_color(const material &m, const dvec3 &c, const dvec3 &p, const dvec3 &n,
@@ -176,6 +235,7 @@ class tracer
 	std::vector<triangle> triangles;
 	std::vector<plane> planes;
 	std::vector<light> lights;
+	std::vector<texture> textures;
 	dvec3 background;
 	dvec3 ambient;
 	double epsilon;
@@ -189,7 +249,13 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 	for (int i = 0; i < sc.material_count; i++) {
 		const scene_material &m = sc.materials[i];
 		materials.push_back({to_dvec3(m.color), m.ambient, m.diffuse, m.specular,
-				     m.shininess, m.reflect, m.transmit, m.ior, m.fresnel});
+				     m.shininess, m.reflect, m.transmit, m.ior, m.fresnel,
+				     m.texture - 1, m.alpha_texture - 1, m.alpha_cutoff,
+				     m.alpha_scale});
+	}
+	for (int i = 0; i < sc.texture_count; i++) {
+		const scene_texture &t = sc.textures[i];
+		textures.push_back({&t, t.width, t.height, t.wrap_s, t.wrap_t});
 	}
 	for (int i = 0; i < sc.sphere_count; i++) {
 		const scene_sphere &s = sc.spheres[i];
@@ -211,7 +277,12 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 			 glm::normalize(glm::cross(v1 - v0, v2 - v0)),
 			 {to_dvec3(t.normal[0]), to_dvec3(t.normal[1]), to_dvec3(t.normal[2])},
 			 t.smooth != 0,
-			 t.material});
+			 t.material,
+			 {}});
+		if (sc.triangle_uvs)
+			for (int k = 0; k < 3; k++)
+				triangles.back().uv[k] = glm::dvec2(sc.triangle_uvs[i].uv[k][0],
+								    sc.triangle_uvs[i].uv[k][1]);
 	}
 	for (int i = 0; i < sc.light_count; i++) {
 		const scene_light &l = sc.lights[i];
@@ -234,7 +305,7 @@ bool tracer::nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const
 	}
 	for (const triangle &tri : triangles) {
 		double u, v, t = intersect_triangle(tri, o, d, &u, &v);
-		if (t > 0.0 && (best.t == 0.0 || t < best.t))
+		if (t > 0.0 && (best.t == 0.0 || t < best.t) && !cut_out(tri, u, v))
 			best = {t, nullptr, nullptr, &tri, u, v};
 	}
 	for (const plane &p : planes) {
@@ -256,7 +327,7 @@ bool tracer::blocked(const dvec3 &o, const dvec3 &d, double distance) const
 	}
 	for (const triangle &tri : triangles) {
 		double u, v, t = intersect_triangle(tri, o, d, &u, &v);
-		if (t > 0.0 && t < distance)
+		if (t > 0.0 && t < distance && !cut_out(tri, u, v))
 			return true;
 	}
 	for (const plane &p : planes) {
@@ -267,14 +338,38 @@ bool tracer::blocked(const dvec3 &o, const dvec3 &d, double distance) const
 	return false;
 }
 
-/* Step 3: the material colour, or the checker colour on the odd squares of a
- * checkered plane. */
+/* RENDERING.md, "Textures": the texture coordinates at barycentric (u, v). */
+glm::dvec2 triangle_uv(const triangle &tri, double u, double v)
+{
+	return (1.0 - u - v) * tri.uv[0] + u * tri.uv[1] + v * tri.uv[2];
+}
+
+/* RENDERING.md, "Alpha cut-out": whether the triangle's material leaves it
+ * out at barycentric (u, v). */
+bool tracer::cut_out(const triangle &tri, double u, double v) const
+{
+	const material &m = materials[tri.material];
+
+	if (!(m.alpha_cutoff > 0))
+		return false;
+	double alpha = m.alpha_scale;
+	if (m.alpha_texture >= 0)
+		alpha *= lookup(textures[m.alpha_texture], triangle_uv(tri, u, v)).a;
+	return alpha < m.alpha_cutoff;
+}
+
+/* Step 3: the material colour (times its texture on a triangle), or the
+ * checker colour on the odd squares of a checkered plane. */
 dvec3 tracer::base_color(const hit &h, const dvec3 &p) const
 {
 	if (h.sphere)
 		return materials[h.sphere->material].color;
-	if (h.tri)
-		return materials[h.tri->material].color;
+	if (h.tri) {
+		const material &m = materials[h.tri->material];
+		if (m.texture < 0)
+			return m.color;
+		return m.color * dvec3(lookup(textures[m.texture], triangle_uv(*h.tri, h.u, h.v)));
+	}
 
 	const plane &pl = *h.plane;
 	if (!pl.has_checker)

@@ -41,6 +41,29 @@ static void add_flop_figures(json_t *doc, const struct record *record)
 			    json_real(f->rays ? (double)f->prim_tests / f->rays : 0.0));
 }
 
+/* The textures that go to the device and the memory each takes there
+ * (SCENE.md, "Textures"); nothing in a scene without. */
+static void add_textures(json_t *doc, const struct scene *scene)
+{
+	static const char *const wraps[] = {"repeat", "clamp", "mirror"};
+	json_t *list;
+
+	if (scene->texture_count == 0)
+		return;
+	list = json_array();
+	for (int i = 0; i < scene->texture_count; i++) {
+		const struct scene_texture *t = &scene->textures[i];
+		json_array_append_new(
+			list, json_pack("{s:i, s:s, s:i, s:i, s:s, s:s, s:s, s:I}", "mesh", t->mesh,
+					"name", t->name, "width", t->width, "height", t->height,
+					"format", t->is_float ? "float linear" : "8-bit sRGB",
+					"wrap_s", wraps[t->wrap_s], "wrap_t", wraps[t->wrap_t],
+					"bytes", (json_int_t)t->bytes));
+	}
+	json_object_set_new(doc, "textures", list);
+	json_object_set_new(doc, "texture_bytes", json_integer((json_int_t)scene_texture_bytes(scene)));
+}
+
 /* --accel and, with a BVH, its size and build. */
 static void add_accel_figures(json_t *doc, const struct job *job, const struct record *record)
 {
@@ -56,6 +79,7 @@ static void add_accel_figures(json_t *doc, const struct job *job, const struct r
 				    json_real((double)r->scene_bytes / job->scene->triangle_count));
 		json_object_set_new(doc, "vertices", json_integer(r->vertex_count));
 	}
+	add_textures(doc, job->scene);
 	if (r->bvh_nodes == 0)
 		return;
 	json_object_set_new(doc, "bvh",

@@ -35,7 +35,11 @@ struct mesh_material {
 	uint32_t alpha_mode;	  /* metallic-roughness: enum mesh_alpha_mode */
 	uint32_t has_ior;	  /* metallic-roughness: KHR_materials_ior was given */
 	uint32_t textures;	  /* base colour and opacity textures named */
-	uint32_t pad;
+	int32_t base_texture;	  /* the base colour texture (map_Kd, glTF's
+				     baseColorTexture): an index into the mesh's
+				     textures, or -1 */
+	int32_t opacity_texture;  /* MTL's map_d: an index, or -1 */
+	uint32_t pad[3];
 	/* Phong: Kd, Ks, Ka, Ns, d (1 - Tr), Ni. */
 	double diffuse[3], specular[3], ambient[3], shininess, opacity, ior;
 	/* Metallic-roughness: the base colour factor (rgba), metallic, roughness,
@@ -49,6 +53,35 @@ struct mesh_material {
 /* A triangle whose file gives no material index. */
 #define MESH_NO_MATERIAL UINT32_MAX
 
+/* A texture a used material names, decoded by the helper (stb_image) into
+ * RGBA texels (docs/RENDERING.md, "Textures"), or why it could not be read.
+ * Fixed-size so that it crosses the pipe as it is. */
+#define MESH_TEXTURE_NAME_MAX 256
+#define MESH_TEXTURE_REASON_MAX 256
+#define MESH_TEXTURE_MAX_SIDE 16384 /* texels a side */
+
+enum mesh_texels {
+	MESH_TEXELS_8,	  /* 4 bytes: RGB sRGB-encoded, alpha linear */
+	MESH_TEXELS_FLOAT /* 4 floats, linear (16-bit and float images) */
+};
+
+/* Which channel a texture's alpha comes from, as its role asks: a base colour
+ * texture's alpha is its alpha channel (1 without); an opacity texture's
+ * (map_d) is its alpha channel, or its first where it has none. */
+enum mesh_texture_role { MESH_TEXTURE_COLOR, MESH_TEXTURE_OPACITY };
+
+enum mesh_wrap { MESH_WRAP_REPEAT, MESH_WRAP_CLAMP, MESH_WRAP_MIRROR };
+
+struct mesh_texture {
+	char name[MESH_TEXTURE_NAME_MAX];     /* as the file names it ("*0": embedded) */
+	char reason[MESH_TEXTURE_REASON_MAX]; /* "" when read, else why not */
+	uint32_t role;			      /* enum mesh_texture_role */
+	uint32_t format;		      /* enum mesh_texels */
+	uint32_t width, height;
+	uint32_t wrap_s, wrap_t; /* enum mesh_wrap */
+	uint64_t offset, bytes;	 /* its texels in mesh_data.texels */
+};
+
 struct mesh_data {
 	double *positions;	      /* 3 per vertex */
 	double *normals;	      /* 3 per vertex, or NULL where the file has none */
@@ -56,6 +89,11 @@ struct mesh_data {
 	uint32_t *triangle_materials; /* 1 per triangle, into materials, or MESH_NO_MATERIAL */
 	struct mesh_material *materials;
 	size_t vertex_count, triangle_count, material_count;
+	double *uvs; /* 2 per vertex (the first set of texture coordinates), or
+			NULL where no used material has a texture */
+	struct mesh_texture *textures; /* texture_count of them */
+	unsigned char *texels;	       /* every read texture's texels */
+	size_t texture_count, texel_bytes;
 };
 
 /* What mesh_import returns besides 0. */

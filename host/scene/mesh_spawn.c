@@ -40,6 +40,8 @@ extern char **environ;
 struct reply {
 	uint32_t magic, ok, has_normals, reason_length;
 	uint64_t vertex_count, triangle_count, material_count;
+	uint32_t has_uvs, pad;
+	uint64_t texture_count, texel_bytes; /* then the uvs, textures and texels */
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
 #define REASON_MAX 1024
@@ -123,13 +125,19 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	r.vertex_count = mesh->vertex_count;
 	r.triangle_count = mesh->triangle_count;
 	r.material_count = mesh->material_count;
+	r.has_uvs = mesh->uvs != NULL;
+	r.texture_count = mesh->texture_count;
+	r.texel_bytes = mesh->texel_bytes;
 	if (write_all(fd, &r, sizeof(r)) ||
 	    write_all(fd, mesh->positions, 3 * mesh->vertex_count * sizeof(double)) ||
 	    (mesh->normals &&
 	     write_all(fd, mesh->normals, 3 * mesh->vertex_count * sizeof(double))) ||
 	    write_all(fd, mesh->indices, 3 * mesh->triangle_count * sizeof(size_t)) ||
 	    write_all(fd, mesh->triangle_materials, mesh->triangle_count * sizeof(uint32_t)) ||
-	    write_all(fd, mesh->materials, mesh->material_count * sizeof(struct mesh_material)))
+	    write_all(fd, mesh->materials, mesh->material_count * sizeof(struct mesh_material)) ||
+	    (mesh->uvs && write_all(fd, mesh->uvs, 2 * mesh->vertex_count * sizeof(double))) ||
+	    write_all(fd, mesh->textures, mesh->texture_count * sizeof(struct mesh_texture)) ||
+	    write_all(fd, mesh->texels, mesh->texel_bytes))
 		return -1;
 	return 0;
 }
@@ -141,6 +149,9 @@ void mesh_data_free(struct mesh_data *mesh)
 	free(mesh->indices);
 	free(mesh->triangle_materials);
 	free(mesh->materials);
+	free(mesh->uvs);
+	free(mesh->textures);
+	free(mesh->texels);
 	memset(mesh, 0, sizeof(*mesh));
 }
 
@@ -186,8 +197,12 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->indices = alloc_array(r.triangle_count, 3 * sizeof(size_t));
 	out->triangle_materials = alloc_array(r.triangle_count, sizeof(uint32_t));
 	out->materials = alloc_array(r.material_count, sizeof(struct mesh_material));
+	out->uvs = r.has_uvs ? alloc_array(r.vertex_count, 2 * sizeof(double)) : NULL;
+	out->textures = alloc_array(r.texture_count, sizeof(struct mesh_texture));
+	out->texels = alloc_array(r.texel_bytes, 1);
 	if (!out->positions || (r.has_normals && !out->normals) || !out->indices ||
-	    !out->triangle_materials || !out->materials) {
+	    !out->triangle_materials || !out->materials || (r.has_uvs && !out->uvs) ||
+	    !out->textures || !out->texels) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
 			 (unsigned long long)r.triangle_count);
 		return OUT_OF_MEMORY;
@@ -195,6 +210,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->vertex_count = (size_t)r.vertex_count;
 	out->triangle_count = (size_t)r.triangle_count;
 	out->material_count = (size_t)r.material_count;
+	out->texture_count = (size_t)r.texture_count;
+	out->texel_bytes = (size_t)r.texel_bytes;
 	got = read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double));
 	if (!got && r.has_normals)
 		got = read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double));
@@ -205,6 +222,12 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	if (!got)
 		got = read_all(fd, out->materials,
 			       out->material_count * sizeof(struct mesh_material));
+	if (!got && r.has_uvs)
+		got = read_all(fd, out->uvs, 2 * out->vertex_count * sizeof(double));
+	if (!got)
+		got = read_all(fd, out->textures, out->texture_count * sizeof(struct mesh_texture));
+	if (!got)
+		got = read_all(fd, out->texels, out->texel_bytes);
 	if (got)
 		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	for (size_t i = 0; i < 3 * out->triangle_count; i++)
@@ -217,7 +240,23 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	for (size_t i = 0; i < out->material_count; i++) {
 		struct mesh_material *m = &out->materials[i];
 		m->name[MESH_NAME_MAX - 1] = m->not_understood[MESH_NOTES_MAX - 1] = '\0';
-		if (m->kind > MESH_MATERIAL_METALLIC_ROUGHNESS || m->alpha_mode > MESH_ALPHA_MASK)
+		if (m->kind > MESH_MATERIAL_METALLIC_ROUGHNESS || m->alpha_mode > MESH_ALPHA_MASK ||
+		    m->base_texture < -1 || m->base_texture >= (int64_t)out->texture_count ||
+		    m->opacity_texture < -1 || m->opacity_texture >= (int64_t)out->texture_count)
+			return NONSENSE;
+	}
+	for (size_t i = 0; i < out->texture_count; i++) {
+		struct mesh_texture *t = &out->textures[i];
+		uint64_t texel_size = t->format == MESH_TEXELS_FLOAT ? 16 : 4;
+		t->name[MESH_TEXTURE_NAME_MAX - 1] = t->reason[MESH_TEXTURE_REASON_MAX - 1] = '\0';
+		if (t->reason[0])
+			continue;
+		if (t->format > MESH_TEXELS_FLOAT || t->role > MESH_TEXTURE_OPACITY ||
+		    t->wrap_s > MESH_WRAP_MIRROR || t->wrap_t > MESH_WRAP_MIRROR || t->width == 0 ||
+		    t->height == 0 || t->width > MESH_TEXTURE_MAX_SIDE ||
+		    t->height > MESH_TEXTURE_MAX_SIDE ||
+		    t->bytes != (uint64_t)t->width * t->height * texel_size ||
+		    t->offset > out->texel_bytes || t->bytes > out->texel_bytes - t->offset)
 			return NONSENSE;
 	}
 	return 0;

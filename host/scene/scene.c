@@ -554,6 +554,15 @@ void scene_free(struct scene *scene)
 	for (int i = 0; i < scene->mesh_report_count; i++)
 		free(scene->mesh_reports[i]);
 	free(scene->mesh_reports);
+	for (int i = 0; i < scene->warning_count; i++)
+		free(scene->warnings[i]);
+	free(scene->warnings);
+	for (int i = 0; i < scene->texture_count; i++) {
+		free(scene->textures[i].name);
+		free(scene->textures[i].texels);
+	}
+	free(scene->textures);
+	free(scene->triangle_uvs);
 	free(scene->materials);
 	free(scene->spheres);
 	free(scene->planes);
@@ -636,7 +645,24 @@ unsigned long long scene_digest(const struct scene *scene)
 		digest_doubles(&h, m->color, 3);
 		digest_doubles(&h, fields, sizeof(fields) / sizeof(fields[0]));
 		digest_int(&h, m->fresnel);
+		digest_int(&h, m->texture);
+		digest_int(&h, m->alpha_texture);
+		digest_doubles(&h, &m->alpha_cutoff, 1);
+		digest_doubles(&h, &m->alpha_scale, 1);
 	}
+	digest_int(&h, scene->texture_count);
+	for (int i = 0; i < scene->texture_count; i++) {
+		const struct scene_texture *t = &scene->textures[i];
+		digest_int(&h, t->width);
+		digest_int(&h, t->height);
+		digest_int(&h, t->is_float);
+		digest_int(&h, t->wrap_s);
+		digest_int(&h, t->wrap_t);
+		digest_bytes(&h, t->texels, t->bytes);
+	}
+	digest_int(&h, scene->triangle_uvs != NULL);
+	for (int i = 0; scene->triangle_uvs && i < scene->triangle_count; i++)
+		digest_doubles(&h, &scene->triangle_uvs[i].uv[0][0], 6);
 	digest_int(&h, scene->sphere_count);
 	for (int i = 0; i < scene->sphere_count; i++) {
 		digest_doubles(&h, scene->spheres[i].center, 3);

@@ -27,6 +27,13 @@ struct scene_material {
 	double transmit;  /* kt */
 	double ior;
 	int fresnel; /* SCENE_FRESNEL_*: RENDERING.md, "Fresnel" */
+	/* Textures (RENDERING.md, "Textures", "Alpha cut-out"), only a mesh
+	 * file's material has them. 1 + an index into scene.textures, 0 for
+	 * none, so that a material set to zeros has none. */
+	int texture;	     /* the base colour texture */
+	int alpha_texture;   /* the cut-out's alpha texture */
+	double alpha_cutoff; /* > 0: hits of alpha below it are cut out; 0: none */
+	double alpha_scale;  /* the factor of the texture's alpha (glTF's b.a) */
 };
 
 /* A material's "fresnel" (the same numbers as cl/rtcl_shared.h's RT_FRESNEL_*). */
@@ -65,6 +72,27 @@ struct scene_triangle {
 	double normal[3][3];
 	int material;
 	int smooth; /* the shading normals are interpolated */
+};
+
+/* A texture a mesh material uses, decoded (RENDERING.md, "Textures"):
+ * width × height texels, rows top first, 4 bytes each (RGB sRGB-encoded,
+ * alpha linear) or with is_float 4 floats (linear). */
+enum { SCENE_WRAP_REPEAT, SCENE_WRAP_CLAMP, SCENE_WRAP_MIRROR };
+
+struct scene_texture {
+	char *name; /* as the mesh file names it */
+	int mesh;   /* the index of the mesh (meshes[i]) that brought it */
+	int width, height;
+	int is_float;
+	int wrap_s, wrap_t; /* SCENE_WRAP_* */
+	void *texels;
+	size_t bytes;
+};
+
+/* A triangle's texture coordinates at its three vertices (in the vertex
+ * order of scene_triangle.v). */
+struct scene_triangle_uv {
+	double uv[3][2];
 };
 
 /* A point light (radius 0), a sphere light (radius > 0) or a directional
@@ -129,10 +157,19 @@ struct scene {
 	struct scene_triangle *triangles;
 	int triangle_count;
 	long skipped_triangles; /* zero-area triangles of mesh files, left out */
+	/* Textures: the ones the materials use, and each triangle's texture
+	 * coordinates (NULL when no material has a texture or a cut-out). */
+	struct scene_texture *textures;
+	int texture_count;
+	struct scene_triangle_uv *triangle_uvs;
 	/* What -v says of each mesh file that keeps its materials (SCENE.md,
 	 * "Materials from mesh files"): one line each, without "rtcl: ". */
 	char **mesh_reports;
 	int mesh_report_count;
+	/* Warnings to print whatever -v says (a texture left out under
+	 * "missing_textures": "warn"): one line each, without "rtcl: warning: ". */
+	char **warnings;
+	int warning_count;
 };
 
 /* Whether a light of the scene is sampled (RENDERING.md, "Light samples"):
@@ -143,6 +180,27 @@ static inline int scene_has_area_lights(const struct scene *scene)
 		if (scene->lights[i].radius > 0 || scene->lights[i].directional)
 			return 1;
 	return 0;
+}
+
+/* Whether a material of the scene has a texture or a cut-out: the device
+ * then gets texture coordinates and textures (RTCL_TEXTURES). */
+static inline int scene_has_textures(const struct scene *scene)
+{
+	for (int i = 0; i < scene->material_count; i++)
+		if (scene->materials[i].texture || scene->materials[i].alpha_texture ||
+		    scene->materials[i].alpha_cutoff > 0)
+			return 1;
+	return 0;
+}
+
+/* The device bytes of the scene's texels (each texture's, 16-byte aligned). */
+static inline size_t scene_texture_bytes(const struct scene *scene)
+{
+	size_t bytes = 0;
+
+	for (int i = 0; i < scene->texture_count; i++)
+		bytes += (scene->textures[i].bytes + 15) / 16 * 16;
+	return bytes;
 }
 
 /* Loads and validates a scene file. Returns 0 on success; otherwise writes

@@ -216,6 +216,12 @@ static void from_metallic_roughness(const struct mesh_material *in, struct scene
 	m->reflect = metal * (1 - rough) * alpha;
 	m->transmit = 1 - alpha * (1 - (1 - metal) * t);
 	m->ior = in->has_ior ? in->ior : t > 0 ? 1.5 : 1;
+	/* RENDERING.md, "Alpha cut-out": a = b.a times the texture's alpha;
+	 * the texture is the scene loader's to give (scene_mesh.c). */
+	if (in->alpha_mode == MESH_ALPHA_MASK) {
+		m->alpha_cutoff = allowed(in->alpha_cutoff, 0, SCENE_MAX_MAGNITUDE);
+		m->alpha_scale = allowed(in->base[3], 0, 1);
+	}
 }
 
 /* The first number of in the rule reads that is not finite: its name as
@@ -226,13 +232,14 @@ static const char *not_finite(const struct mesh_material *in)
 					    "Ka", "Ka", "Ka", "Ns", "d",  "Ni"};
 	static const char *const pbr[] = {
 		"baseColorFactor", "baseColorFactor", "baseColorFactor",    "baseColorFactor",
-		"metallicFactor",  "roughnessFactor", "transmissionFactor", "ior"};
+		"metallicFactor",  "roughnessFactor", "transmissionFactor", "ior", "alphaCutoff"};
 	const double phong_values[] = {in->diffuse[0],	in->diffuse[1],	 in->diffuse[2],
 				       in->specular[0], in->specular[1], in->specular[2],
 				       in->ambient[0],	in->ambient[1],	 in->ambient[2],
 				       in->shininess,	in->opacity,	 in->ior};
 	const double pbr_values[] = {in->base[0],  in->base[1],	  in->base[2],	    in->base[3],
-				     in->metallic, in->roughness, in->transmission, in->ior};
+				     in->metallic, in->roughness, in->transmission, in->ior,
+				     in->alpha_cutoff};
 
 	if (in->kind == MESH_MATERIAL_PHONG) {
 		for (size_t i = 0; i < sizeof(phong_values) / sizeof(phong_values[0]); i++)
@@ -252,6 +259,9 @@ const char *loader_material_from_mesh(const struct mesh_material *in, struct sce
 
 	if (bad)
 		return bad;
+	/* The fields the rules leave (fresnel off, no texture) as a scene
+	 * material's defaults. */
+	*m = loader_default_material;
 	if (in->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
 		from_metallic_roughness(in, m);
 	else

@@ -56,7 +56,34 @@ static int reserve(struct loader *ld, const struct path *p, size_t more)
 		return -1;
 	}
 	s->triangles = grown;
+	if (s->triangle_uvs) {
+		struct scene_triangle_uv *uvs =
+			realloc(s->triangle_uvs, capacity * sizeof(*s->triangle_uvs));
+		if (!uvs) {
+			loader_write_err(ld, "%s: out of memory for %zu triangles", ld->source,
+					 need);
+			return -1;
+		}
+		s->triangle_uvs = uvs;
+	}
 	ld->triangle_capacity = capacity;
+	return 0;
+}
+
+/* Gives the scene texture coordinates for every triangle (0 for those so
+ * far), once a mesh brings a texture. */
+static int start_triangle_uvs(struct loader *ld)
+{
+	struct scene *s = ld->scene;
+
+	if (s->triangle_uvs)
+		return 0;
+	s->triangle_uvs = calloc(ld->triangle_capacity ? ld->triangle_capacity : 1,
+				 sizeof(*s->triangle_uvs));
+	if (!s->triangle_uvs) {
+		loader_write_err(ld, "%s: out of memory for texture coordinates", ld->source);
+		return -1;
+	}
 	return 0;
 }
 
@@ -74,6 +101,14 @@ static int place_vertices(struct loader *ld, const struct path *p, const char *n
 		if (!isfinite(in[0]) || !isfinite(in[1]) || !isfinite(in[2]))
 			return loader_fail(ld, p, "\"%s\": vertex %zu is not finite, got %s",
 					   one_line(name, text), v, loader_fmt_vec3(in, buf));
+		if (mesh->uvs && (!isfinite(mesh->uvs[2 * v]) || !isfinite(mesh->uvs[2 * v + 1]))) {
+			char u[32], w[32];
+			return loader_fail(ld, p,
+					   "\"%s\": vertex %zu's texture coordinates are not finite, "
+					   "got [%s, %s]",
+					   one_line(name, text), v, loader_fmt_num(mesh->uvs[2 * v], u),
+					   loader_fmt_num(mesh->uvs[2 * v + 1], w));
+		}
 		place_point(pl, in, out);
 		for (int i = 0; i < 3; i++) {
 			if (!(fabs(out[i]) <= SCENE_MAX_MAGNITUDE))
@@ -124,6 +159,21 @@ static void append_triangles(struct scene *s, const struct mesh_data *mesh, cons
 						? -1
 						: materials[mesh->triangle_materials[t]];
 		tri->smooth = vn != NULL;
+		if (s->triangle_uvs) {
+			struct scene_triangle_uv *uv = &s->triangle_uvs[s->triangle_count];
+			for (int k = 0; k < 3; k++)
+				for (int c = 0; c < 2; c++) {
+					double x = mesh->uvs ? mesh->uvs[2 * mesh->indices
+										 [3 * t + order[k]] +
+									 c]
+							     : 0.0;
+					/* beyond 1e18: 1e18 (the device's float keeps
+					   any product of it finite) */
+					uv->uv[k][c] = x > SCENE_MAX_MAGNITUDE	  ? SCENE_MAX_MAGNITUDE
+						       : x < -SCENE_MAX_MAGNITUDE ? -SCENE_MAX_MAGNITUDE
+										  : x;
+				}
+		}
 		s->triangle_count++;
 	}
 }
@@ -209,7 +259,8 @@ static int place_mesh(struct loader *ld, const struct path *file, const char *na
 		goto out_free;
 	}
 	if (place_vertices(ld, file, name, mesh, pl, placed) ||
-	    reserve(ld, file, mesh->triangle_count))
+	    reserve(ld, file, mesh->triangle_count) ||
+	    (mesh->uvs && materials && start_triangle_uvs(ld)))
 		goto out_free;
 	if (vn && mesh->normals)
 		place_file_normals(mesh, pl, vn);
@@ -246,6 +297,22 @@ out_free:
 
 /* ---- The file's materials (SCENE.md, "Materials from mesh files") ---- */
 
+/* Appends a copy of line to *lines. Returns 0, or -1 with one message. */
+static int add_line(struct loader *ld, char ***lines, int *count, const char *line)
+{
+	char **grown = realloc(*lines, (size_t)(*count + 1) * sizeof(*grown));
+
+	if (!grown || !(grown[*count] = strdup(line))) {
+		if (grown)
+			*lines = grown;
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	*lines = grown;
+	(*count)++;
+	return 0;
+}
+
 /* Appends what -v says of the mesh at item (file name) to scene->mesh_reports:
  * the materials and textures it brought, what rtcl did not understand. */
 static int report_mesh(struct loader *ld, const struct path *item, const char *name,
@@ -254,7 +321,6 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 	struct scene *s = ld->scene;
 	char line[1200], notes[700] = "", where[200], text[MESSAGE_TEXT_MAX];
 	size_t materials = 0, used = 0, textures = 0;
-	char **grown;
 	char *has = calloc(mesh->material_count ? mesh->material_count : 1, 1);
 
 	if (!has) {
@@ -293,22 +359,13 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 	}
 	free(has);
 	loader_format_path(item, where, sizeof(where));
-	snprintf(line, sizeof(line), "%s \"%s\": %zu material%s (%zu used), %zu texture%s%s%s%s%s",
+	snprintf(line, sizeof(line), "%s \"%s\": %zu material%s (%zu used), %zu texture%s%s%s%s",
 		 where, one_line(name, text), materials, materials == 1 ? "" : "s", used, textures,
-		 textures == 1 ? "" : "s", textures ? " (not applied yet)" : "",
+		 textures == 1 ? "" : "s",
 		 forced ? "; replaced by its \"material\"" : "",
 		 notes[0] && !forced ? "; not understood: " : "",
 		 forced ? "" : one_line(notes, notes));
-	grown = realloc(s->mesh_reports, (size_t)(s->mesh_report_count + 1) * sizeof(*grown));
-	if (!grown || !(grown[s->mesh_report_count] = strdup(line))) {
-		if (grown)
-			s->mesh_reports = grown;
-		loader_write_err(ld, "%s: out of memory", ld->source);
-		return -1;
-	}
-	s->mesh_reports = grown;
-	s->mesh_report_count++;
-	return 0;
+	return add_line(ld, &s->mesh_reports, &s->mesh_report_count, line);
 }
 
 /* A material's name in a message: cut after 64 bytes ("abc..."), as the
@@ -351,16 +408,128 @@ static int fail_unknown_file_material(struct loader *ld, const struct path *fiel
 			   one_line(name, text), short_name(key, quoted), known);
 }
 
+/* The textures of one mesh file as its materials are mapped: which of them
+ * went into the scene (SCENE.md, "Textures"). */
+struct mesh_textures {
+	const struct path *file; /* meshes[i].file, where messages point */
+	const char *name;	 /* the file's name as the scene gives it */
+	const struct mesh_data *mesh;
+	int *scene_index; /* per texture of the file: 0 not yet used, -1 left
+			     out (warned), else 1 + its index in scene.textures */
+	int warn;	  /* "missing_textures": "warn" */
+};
+
+static const char *const wrap_names[] = {"repeat", "clamp", "mirror"};
+
+/* Copies the file's texture i into scene.textures and says so for -v.
+ * Returns 1 + its index, or -1 with one message. */
+static int add_texture(struct loader *ld, struct mesh_textures *mt, int i)
+{
+	const struct mesh_texture *in = &mt->mesh->textures[i];
+	struct scene *s = ld->scene;
+	struct scene_texture *grown, *t;
+	char line[1200], where[200], text[MESSAGE_TEXT_MAX], tex[MESSAGE_TEXT_MAX];
+
+	grown = realloc(s->textures, (size_t)(s->texture_count + 1) * sizeof(*grown));
+	if (!grown) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	s->textures = grown;
+	t = &s->textures[s->texture_count];
+	memset(t, 0, sizeof(*t));
+	t->name = strdup(in->name);
+	t->texels = malloc(in->bytes ? (size_t)in->bytes : 1);
+	if (!t->name || !t->texels) {
+		free(t->name);
+		free(t->texels);
+		loader_write_err(ld, "%s: out of memory for texture \"%s\"", ld->source,
+				 one_line(in->name, tex));
+		return -1;
+	}
+	memcpy(t->texels, mt->mesh->texels + in->offset, (size_t)in->bytes);
+	t->bytes = (size_t)in->bytes;
+	t->mesh = (int)mt->file->parent->index;
+	t->width = (int)in->width;
+	t->height = (int)in->height;
+	t->is_float = in->format == MESH_TEXELS_FLOAT;
+	t->wrap_s = (int)in->wrap_s;
+	t->wrap_t = (int)in->wrap_t;
+	s->texture_count++;
+	loader_format_path(mt->file->parent, where, sizeof(where));
+	snprintf(line, sizeof(line), "%s \"%s\": texture \"%s\": %dx%d %s, %s/%s, %zu bytes", where,
+		 one_line(mt->name, text), one_line(in->name, tex), t->width, t->height,
+		 t->is_float ? "float linear" : "8-bit sRGB", wrap_names[t->wrap_s],
+		 wrap_names[t->wrap_t], t->bytes);
+	if (add_line(ld, &s->mesh_reports, &s->mesh_report_count, line))
+		return -1;
+	return s->texture_count;
+}
+
+/* The file's texture i as a material's field (1 + its index in
+ * scene.textures, added at its first use), or 0 where it cannot be read and
+ * missing_textures is "warn" (then a warning, once); -1 with one message
+ * where it cannot be read. material: the file's material's name. */
+static int use_texture(struct loader *ld, struct mesh_textures *mt, const char *material, int i)
+{
+	const struct mesh_texture *t = &mt->mesh->textures[i];
+	char text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX], tex[MESSAGE_TEXT_MAX];
+	char warning[1400];
+
+	if (mt->scene_index[i])
+		return mt->scene_index[i] < 0 ? 0 : mt->scene_index[i];
+	if (!t->reason[0])
+		return mt->scene_index[i] = add_texture(ld, mt, i);
+	loader_fail(ld, mt->file, "\"%s\": material \"%s\": cannot read texture \"%s\": %s",
+		    one_line(mt->name, text), short_name(material, quoted), one_line(t->name, tex),
+		    t->reason);
+	if (!mt->warn)
+		return -1;
+	snprintf(warning, sizeof(warning), "%s; its material renders without it", ld->err);
+	if (add_line(ld, &ld->scene->warnings, &ld->scene->warning_count, warning))
+		return -1;
+	mt->scene_index[i] = -1;
+	return 0;
+}
+
+/* Gives the scene material made from the file's material in its textures
+ * and cut-out (RENDERING.md, "Textures", "Alpha cut-out"). Returns 0, or -1
+ * with one message. */
+static int attach_textures(struct loader *ld, struct mesh_textures *mt,
+			   const struct mesh_material *in, struct scene_material *m)
+{
+	int base = 0, opacity = 0;
+
+	if (in->base_texture >= 0 && (base = use_texture(ld, mt, in->name, in->base_texture)) < 0)
+		return -1;
+	if (in->opacity_texture >= 0 &&
+	    (opacity = use_texture(ld, mt, in->name, in->opacity_texture)) < 0)
+		return -1;
+	m->texture = base;
+	if (in->opacity_texture >= 0) { /* MTL's map_d: cut out below 0.5 */
+		m->alpha_texture = opacity;
+		m->alpha_cutoff = 0.5;
+		m->alpha_scale = 1;
+	} else if (m->alpha_cutoff > 0) { /* glTF's MASK: the base colour's alpha */
+		m->alpha_texture = base;
+	}
+	/* Nothing to cut where the alpha is one number at or above the cutoff. */
+	if (!m->alpha_texture && m->alpha_scale >= m->alpha_cutoff)
+		m->alpha_cutoff = 0;
+	return 0;
+}
+
 static int map_materials(struct loader *ld, const struct path *item, const char *name,
 			 const struct mesh_data *mesh, json_t *overrides, int *map,
-			 const char *used);
+			 const char *used, struct mesh_textures *mt);
 
 /* The scene material of each of the file's materials (-1: the default
  * material), into map: "materials" (overrides, an object or NULL) by name,
  * else the file's own by RENDERING.md's rule; a material no triangle has is
  * left out. */
 static int map_file_materials(struct loader *ld, const struct path *item, const char *name,
-			      const struct mesh_data *mesh, json_t *overrides, int *map)
+			      const struct mesh_data *mesh, json_t *overrides, int *map,
+			      struct mesh_textures *mt)
 {
 
 	char *used = calloc(mesh->material_count ? mesh->material_count : 1, 1);
@@ -373,14 +542,14 @@ static int map_file_materials(struct loader *ld, const struct path *item, const 
 	for (size_t t = 0; t < mesh->triangle_count; t++)
 		if (mesh->triangle_materials[t] != MESH_NO_MATERIAL)
 			used[mesh->triangle_materials[t]] = 1;
-	int ret = map_materials(ld, item, name, mesh, overrides, map, used);
+	int ret = map_materials(ld, item, name, mesh, overrides, map, used, mt);
 	free(used);
 	return ret;
 }
 
 static int map_materials(struct loader *ld, const struct path *item, const char *name,
 			 const struct mesh_data *mesh, json_t *overrides, int *map,
-			 const char *used)
+			 const char *used, struct mesh_textures *mt)
 {
 	struct path field = child_key(item, "materials");
 	char text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX];
@@ -418,22 +587,48 @@ static int map_materials(struct loader *ld, const struct path *item, const char 
 		if ((bad = loader_material_from_mesh(in, &m)))
 			return loader_fail(ld, item, "\"%s\": material \"%s\": %s is not finite",
 					   one_line(name, text), short_name(in->name, quoted), bad);
-		if ((map[i] = loader_append_material(ld, &m)) < 0)
+		if ((map[i] = loader_append_material(ld, &m)) < 0 ||
+		    attach_textures(ld, mt, in, &ld->scene->materials[map[i]]))
 			return -1;
 	}
 	return 0;
 }
 
+/* "missing_textures": "error" (the default) or "warn", into *warn. */
+static int read_missing_textures(struct loader *ld, const struct path *item, json_t *obj,
+				 int *warn)
+{
+	struct path field = child_key(item, "missing_textures");
+	json_t *v = json_object_get(obj, "missing_textures");
+
+	*warn = 0;
+	if (!v)
+		return 0;
+	if (json_is_string(v) && strcmp(json_string_value(v), "error") == 0)
+		return 0;
+	if (json_is_string(v) && strcmp(json_string_value(v), "warn") == 0) {
+		*warn = 1;
+		return 0;
+	}
+	if (json_is_string(v))
+		return loader_fail_quoted(ld, &field, "must be \"error\" or \"warn\", got ",
+					  json_string_value(v));
+	return loader_fail(ld, &field, "must be \"error\" or \"warn\", got %s",
+			   loader_type_name(v));
+}
+
 static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 {
-	static const char *const keys[] = {"file",   "material",  "materials", "scale",
-					   "rotate", "translate", "smooth",    NULL};
+	static const char *const keys[] = {"file",	 "material", "materials",
+					   "scale",	 "rotate",   "translate",
+					   "smooth",	 "missing_textures", NULL};
 	struct path file = child_key(item, "file");
 	char reason[MESSAGE_TEXT_MAX], text[MESSAGE_TEXT_MAX];
 	struct mesh_data mesh;
 	struct placement pl;
 	const char *name;
-	int material = -1, ret, *map = NULL;
+	int material = -1, ret, *map = NULL, warn;
+	struct mesh_textures mt = {.file = &file, .name = NULL};
 	char *path;
 	json_t *v, *forced, *overrides;
 
@@ -458,7 +653,7 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 				   loader_type_name(overrides));
 	}
 	if ((forced && loader_read_material_ref(ld, item, obj, &material)) ||
-	    read_placement(ld, item, obj, &pl))
+	    read_placement(ld, item, obj, &pl) || read_missing_textures(ld, item, obj, &warn))
 		return -1;
 	path = mesh_path(ld, name);
 	if (!path) {
@@ -480,19 +675,26 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	}
 	if (!forced) {
 		map = malloc((mesh.material_count ? mesh.material_count : 1) * sizeof(*map));
-		if (!map) {
+		mt.scene_index = calloc(mesh.texture_count ? mesh.texture_count : 1, sizeof(int));
+		if (!map || !mt.scene_index) {
 			loader_write_err(ld, "%s: out of memory", ld->source);
 			ret = -1;
 			goto out_free;
 		}
-		if ((ret = map_file_materials(ld, item, name, &mesh, overrides, map)))
+		mt.name = name;
+		mt.mesh = &mesh;
+		mt.warn = warn;
+		/* The -v line of the mesh before those of its textures. */
+		if ((ret = report_mesh(ld, item, name, &mesh, 0)) ||
+		    (ret = map_file_materials(ld, item, name, &mesh, overrides, map, &mt)))
 			goto out_free;
+	} else if ((ret = report_mesh(ld, item, name, &mesh, 1))) {
+		goto out_free;
 	}
-	ret = report_mesh(ld, item, name, &mesh, forced != NULL) ||
-	      place_mesh(ld, &file, name, &mesh, &pl, material, map);
-	ret = ret ? -1 : 0;
+	ret = place_mesh(ld, &file, name, &mesh, &pl, material, map) ? -1 : 0;
 out_free:
 	free(map);
+	free(mt.scene_index);
 	mesh_data_free(&mesh);
 	return ret;
 }
@@ -550,6 +752,8 @@ static int read_triangle(struct loader *ld, const struct path *item, json_t *obj
 	for (int k = 0; k < 3; k++)
 		memcpy(tri->normal[k], n, sizeof(n));
 	tri->smooth = 0;
+	if (s->triangle_uvs)
+		memset(&s->triangle_uvs[s->triangle_count], 0, sizeof(*s->triangle_uvs));
 	if (loader_read_material_ref(ld, item, obj, &tri->material))
 		return -1;
 	s->triangle_count++;
