@@ -513,7 +513,13 @@ def test_mpi_rank_that_dies_mid_image_fails_the_run_with_no_output(tmp_path, kil
 MEDIUM = ["--size", "96x64"]
 
 
-@pytest.mark.parametrize("kernel", KERNELS)
+# The split is the host's and the same for every kernel; each kernel's handling
+# of pieces is checked in make test by test_kernels.c (check_pieces). Here the
+# stack walk's dynamic and the wavefront's own passes in make test, the other
+# four in make test-long.
+@pytest.mark.parametrize("kernel", [k if k in ("dynamic", "wavefront")
+                                    else pytest.param(k, marks=pytest.mark.slow)
+                                    for k in KERNELS])
 def test_adaptive_rectangles_match_one_device_byte_for_byte(tmp_path, kernel):
     common = [*MEDIUM, "-k", kernel, "--spp", "4"]
     image_run(tmp_path, "one", *common, "-p", "0", "-d", "0")
