@@ -235,7 +235,7 @@ def test_a_helper_that_answers_nothing_is_reported(tmp_path):
 
 
 def test_a_helper_that_answers_nonsense_is_reported(tmp_path):
-    helper = write_helper(tmp_path, "head -c 64 /dev/zero")
+    helper = write_helper(tmp_path, "head -c 4096 /dev/zero")  # more than a header
     assert render_with_helper(tmp_path, helper) == (
         "the mesh importer failed: its answer makes no sense")
 

@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -17,11 +18,13 @@
 #include <assimp/cimport.h>
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
+#include <assimp/version.h>
 
 #include "meshread/ply_check.h"
 #include "meshread/texture_read.h"
 
-/* Polygons become triangles; SortByPType splits points and lines off into meshes of
+/* The import reads the file (cameras are taken from its node hierarchy
+ * then), and these steps run after. Polygons become triangles; SortByPType splits points and lines off into meshes of
  * their own, which are skipped; PreTransformVertices applies the node
  * hierarchy (glTF nodes, OBJ groups) to the vertices and normals, so every
  * mesh is in the file's world space before rtcl's placement. */
@@ -658,6 +661,120 @@ static int read_textures(const struct aiScene *sc, const char *path, struct mesh
 	return 0;
 }
 
+/* ---- Cameras (docs/SCENE.md, "The camera from a mesh file") ---- */
+
+/* The node called name, depth first (Assimp's FindNode), or NULL. */
+static const struct aiNode *find_node(const struct aiNode *node, const struct aiString *name)
+{
+	if (node->mName.length == name->length &&
+	    memcmp(node->mName.data, name->data, name->length) == 0)
+		return node;
+	for (unsigned i = 0; i < node->mNumChildren; i++) {
+		const struct aiNode *found = find_node(node->mChildren[i], name);
+		if (found)
+			return found;
+	}
+	return NULL;
+}
+
+/* The node's global transform, its parents' applied, in double (rows of
+ * a 3x4 matrix: p' = M [p 1]). */
+static void global_transform(const struct aiNode *node, double m[3][4])
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			m[i][j] = i == j;
+	for (; node; node = node->mParent) {
+		const struct aiMatrix4x4 *t = &node->mTransformation;
+		const double p[3][4] = {{t->a1, t->a2, t->a3, t->a4},
+					{t->b1, t->b2, t->b3, t->b4},
+					{t->c1, t->c2, t->c3, t->c4}};
+		double r[3][4];
+
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 4; j++)
+				r[i][j] = p[i][0] * m[0][j] + p[i][1] * m[1][j] + p[i][2] * m[2][j] +
+					  (j == 3 ? p[i][3] : 0);
+		memcpy(m, r, sizeof(r));
+	}
+}
+
+/* Whether the file was read by Assimp's glTF 2.0 importer (its metadata
+ * "SourceAsset_Format" says "glTF2 Importer"). */
+static int from_gltf2(const struct aiScene *sc)
+{
+	const struct aiMetadata *meta = sc->mMetaData;
+
+	for (unsigned i = 0; meta && i < meta->mNumProperties; i++)
+		if (strcmp(meta->mKeys[i].data, "SourceAsset_Format") == 0 &&
+		    meta->mValues[i].mType == AI_AISTRING && meta->mValues[i].mData)
+			return strncmp(((const struct aiString *)meta->mValues[i].mData)->data,
+				       "glTF2", 5) == 0;
+	return 0;
+}
+
+/* A glTF camera's yfov in degrees from what Assimp's glTF 2.0 importer
+ * keeps: up to Assimp 5.2, mHorizontalFOV = yfov * aspectRatio; from 5.3
+ * (assimp pull request 4886), 2 atan(tan(yfov / 2) aspectRatio); yfov
+ * itself where the file gives no aspectRatio (mAspect 0). Not the half
+ * angle that aiCamera's documentation names. */
+static double gltf_yfov_degrees(const struct aiCamera *cam)
+{
+	double h = cam->mHorizontalFOV, aspect = cam->mAspect, yfov = h;
+
+	if (aspect > 0)
+		yfov = aiGetVersionMajor() < 5 || (aiGetVersionMajor() == 5 && aiGetVersionMinor() <= 2)
+			       ? h / aspect
+			       : 2 * atan(tan(h / 2) / aspect);
+	return yfov * (180.0 / 3.14159265358979323846);
+}
+
+/* The cameras that a node places, in the file's world space. A glTF camera
+ * sits at its node's origin looking down its -z, +y up (glTF 2.0, "Cameras"):
+ * Assimp 5.2 also copies the node's translation into mPosition, which the
+ * node's transform applies again, so mPosition is not used. Cameras of
+ * other formats are listed, not read. Returns -1 when out of memory. */
+static int read_cameras(const struct aiScene *sc, struct mesh_data *out)
+{
+	int gltf = from_gltf2(sc);
+
+	out->cameras = calloc(sc->mNumCameras ? sc->mNumCameras : 1, sizeof(*out->cameras));
+	if (!out->cameras)
+		return -1;
+	for (unsigned i = 0; i < sc->mNumCameras; i++) {
+		const struct aiCamera *cam = sc->mCameras[i];
+		const struct aiNode *node =
+			cam && cam->mName.length && sc->mRootNode ? find_node(sc->mRootNode, &cam->mName)
+								  : NULL;
+		struct mesh_camera *c = &out->cameras[out->camera_count];
+		double m[3][4];
+
+		if (!node)
+			continue; /* no node places it */
+		snprintf(c->name, sizeof(c->name), "%.*s", (int)sizeof(c->name) - 1,
+			 cam->mName.data);
+		for (char *ch = c->name; *ch; ch++) /* names go into messages on one line */
+			if ((unsigned char)*ch < 0x20 || *ch == 0x7f)
+				*ch = '?';
+		out->camera_count++;
+		if (!gltf) {
+			c->kind = MESH_CAMERA_NOT_GLTF;
+			continue;
+		}
+		c->kind = cam->mHorizontalFOV == 0 ? MESH_CAMERA_ORTHOGRAPHIC
+						   : MESH_CAMERA_PERSPECTIVE;
+		global_transform(node, m);
+		for (int k = 0; k < 3; k++) {
+			c->position[k] = m[k][3];
+			c->direction[k] = -m[k][2];
+			c->up[k] = m[k][1];
+		}
+		c->fov = gltf_yfov_degrees(cam);
+		c->aspect = cam->mAspect;
+	}
+	return 0;
+}
+
 int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
 {
 	struct aiFileIO io = {file_open, file_close, NULL};
@@ -670,7 +787,14 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	if (ply_check(path, reason, reason_size) ||
 	    obj_polygon_too_large(path, reason, reason_size))
 		return -1;
-	sc = aiImportFileEx(path, IMPORT_FLAGS, &io);
+	sc = aiImportFileEx(path, 0, &io);
+	if (sc && read_cameras(sc, out)) {
+		snprintf(reason, reason_size, "out of memory for its %u cameras", sc->mNumCameras);
+		goto out_release_scene;
+	}
+	/* aiApplyPostProcessing releases the scene when a step fails. */
+	if (sc && !refused_file[0])
+		sc = aiApplyPostProcessing(sc, IMPORT_FLAGS);
 	if (refused_file[0]) {
 		snprintf(reason, reason_size, "it names \"%s\", which is not a regular file",
 			 refused_file);
@@ -678,6 +802,7 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	}
 	if (!sc) {
 		snprintf(reason, reason_size, "%s", aiGetErrorString());
+		mesh_data_free(out);
 		return -1;
 	}
 	count(sc, &vertices, &triangles, &has_normals);
@@ -706,6 +831,8 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	}
 	ret = 0;
 out_release_scene:
+	if (ret)
+		mesh_data_free(out);
 	if (sc)
 		aiReleaseImport(sc);
 	return ret;

@@ -82,6 +82,24 @@ struct mesh_texture {
 	uint64_t offset, bytes;	 /* its texels in mesh_data.texels */
 };
 
+/* A camera of the file (docs/SCENE.md, "The camera from a mesh file"), in
+ * the file's world space: its node's transform and those of the node's
+ * parents applied. Fixed-size so that it crosses the pipe as it is. */
+enum mesh_camera_kind {
+	MESH_CAMERA_PERSPECTIVE,
+	MESH_CAMERA_ORTHOGRAPHIC,
+	MESH_CAMERA_NOT_GLTF /* a camera of another format: not read */
+};
+
+struct mesh_camera {
+	char name[MESH_NAME_MAX]; /* its node's name: Assimp names a camera by its node */
+	uint32_t kind;		  /* enum mesh_camera_kind */
+	uint32_t pad;
+	double position[3], direction[3], up[3]; /* direction and up not unit */
+	double fov;				 /* vertical, degrees */
+	double aspect;				 /* the file's aspect ratio; 0: not given */
+};
+
 struct mesh_data {
 	double *positions;	      /* 3 per vertex */
 	double *normals;	      /* 3 per vertex, or NULL where the file has none */
@@ -94,6 +112,8 @@ struct mesh_data {
 	struct mesh_texture *textures; /* texture_count of them */
 	unsigned char *texels;	       /* every read texture's texels */
 	size_t texture_count, texel_bytes;
+	struct mesh_camera *cameras; /* the cameras that a node of the file places */
+	size_t camera_count;
 };
 
 /* What mesh_import returns besides 0. */

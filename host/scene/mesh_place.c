@@ -68,6 +68,15 @@ void place_point(const struct placement *pl, const double in[3], double out[3])
 		out[i] += pl->translate[i];
 }
 
+void place_vector(const struct placement *pl, const double in[3], double out[3])
+{
+	double scaled[3];
+
+	for (int i = 0; i < 3; i++)
+		scaled[i] = pl->scale[i] * in[i];
+	apply(pl->rotation, scaled, out);
+}
+
 int place_unit(double v[3])
 {
 	double scaled[3], length;

@@ -24,6 +24,9 @@ void place_set_rotation(struct placement *pl, const double degrees[3]);
 /* p' = R (s p) + t. */
 void place_point(const struct placement *pl, const double in[3], double out[3]);
 
+/* v' = R (s v): a direction (a camera's) placed, not normalised. */
+void place_vector(const struct placement *pl, const double in[3], double out[3]);
+
 /* Scales v to unit length; returns 0 (v untouched) for a zero or non-finite v. */
 int place_unit(double v[3]);
 

@@ -42,6 +42,7 @@ struct reply {
 	uint64_t vertex_count, triangle_count, material_count;
 	uint32_t has_uvs, pad;
 	uint64_t texture_count, texel_bytes; /* then the uvs, textures and texels */
+	uint64_t camera_count;		     /* then the cameras */
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
 #define REASON_MAX 1024
@@ -128,6 +129,7 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	r.has_uvs = mesh->uvs != NULL;
 	r.texture_count = mesh->texture_count;
 	r.texel_bytes = mesh->texel_bytes;
+	r.camera_count = mesh->camera_count;
 	if (write_all(fd, &r, sizeof(r)) ||
 	    write_all(fd, mesh->positions, 3 * mesh->vertex_count * sizeof(double)) ||
 	    (mesh->normals &&
@@ -137,7 +139,8 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	    write_all(fd, mesh->materials, mesh->material_count * sizeof(struct mesh_material)) ||
 	    (mesh->uvs && write_all(fd, mesh->uvs, 2 * mesh->vertex_count * sizeof(double))) ||
 	    write_all(fd, mesh->textures, mesh->texture_count * sizeof(struct mesh_texture)) ||
-	    write_all(fd, mesh->texels, mesh->texel_bytes))
+	    write_all(fd, mesh->texels, mesh->texel_bytes) ||
+	    write_all(fd, mesh->cameras, mesh->camera_count * sizeof(struct mesh_camera)))
 		return -1;
 	return 0;
 }
@@ -152,6 +155,7 @@ void mesh_data_free(struct mesh_data *mesh)
 	free(mesh->uvs);
 	free(mesh->textures);
 	free(mesh->texels);
+	free(mesh->cameras);
 	memset(mesh, 0, sizeof(*mesh));
 }
 
@@ -200,7 +204,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->uvs = r.has_uvs ? alloc_array(r.vertex_count, 2 * sizeof(double)) : NULL;
 	out->textures = alloc_array(r.texture_count, sizeof(struct mesh_texture));
 	out->texels = alloc_array(r.texel_bytes, 1);
-	if (!out->positions || (r.has_normals && !out->normals) || !out->indices ||
+	out->cameras = alloc_array(r.camera_count, sizeof(struct mesh_camera));
+	if (!out->cameras || !out->positions || (r.has_normals && !out->normals) || !out->indices ||
 	    !out->triangle_materials || !out->materials || (r.has_uvs && !out->uvs) ||
 	    !out->textures || !out->texels) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
@@ -212,6 +217,7 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->material_count = (size_t)r.material_count;
 	out->texture_count = (size_t)r.texture_count;
 	out->texel_bytes = (size_t)r.texel_bytes;
+	out->camera_count = (size_t)r.camera_count;
 	got = read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double));
 	if (!got && r.has_normals)
 		got = read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double));
@@ -228,6 +234,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 		got = read_all(fd, out->textures, out->texture_count * sizeof(struct mesh_texture));
 	if (!got)
 		got = read_all(fd, out->texels, out->texel_bytes);
+	if (!got)
+		got = read_all(fd, out->cameras, out->camera_count * sizeof(struct mesh_camera));
 	if (got)
 		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	for (size_t i = 0; i < 3 * out->triangle_count; i++)
@@ -257,6 +265,12 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 		    t->height > MESH_TEXTURE_MAX_SIDE ||
 		    t->bytes != (uint64_t)t->width * t->height * texel_size ||
 		    t->offset > out->texel_bytes || t->bytes > out->texel_bytes - t->offset)
+			return NONSENSE;
+	}
+	/* The numbers are the file's: the scene loader checks them. */
+	for (size_t i = 0; i < out->camera_count; i++) {
+		out->cameras[i].name[MESH_NAME_MAX - 1] = '\0';
+		if (out->cameras[i].kind > MESH_CAMERA_NOT_GLTF)
 			return NONSENSE;
 	}
 	return 0;

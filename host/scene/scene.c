@@ -99,7 +99,7 @@ static int read_header(struct loader *ld, json_t *doc)
 /* The view direction (look_at - eye) and up of cam, checked: NULL when
  * the camera is well defined, else what is wrong, with *field the field at
  * fault ("look_at" or "up"); buf holds the values quoted. */
-static const char *camera_problem(const struct scene_camera *cam, const char **field,
+const char *loader_camera_problem(const struct scene_camera *cam, const char **field,
 				  char buf[200])
 {
 	double dir[3], d[3], u[3], cross[3];
@@ -130,7 +130,7 @@ static const char *camera_problem(const struct scene_camera *cam, const char **f
 
 /* camera.focus_distance when not given: the distance from the eye to
  * look_at (halved first, so that the difference cannot overflow). */
-static void default_focus(struct scene_camera *cam)
+void loader_default_focus(struct scene_camera *cam)
 {
 	double half[3];
 
@@ -141,12 +141,54 @@ static void default_focus(struct scene_camera *cam)
 	cam->focus_distance = 2 * loader_length3(half);
 }
 
+/* The first mesh entry that takes its file's camera ("camera" there, and
+ * not false), or -1. */
+static long camera_mesh_entry(json_t *doc)
+{
+	json_t *meshes = json_object_get(doc, "meshes");
+
+	for (size_t i = 0; i < json_array_size(meshes); i++) {
+		json_t *v = json_object_get(json_array_get(meshes, i), "camera");
+		if (v && !json_is_false(v))
+			return (long)i;
+	}
+	return -1;
+}
+
+/* The camera's lens where the view comes from a mesh file's camera
+ * (scene_mesh.c sets the view): "camera" may be left out, and gives only
+ * "aperture" and "focus_distance". */
+static int read_lens_only(struct loader *ld, const struct path *p, json_t *obj, long mesh)
+{
+	static const char *const view[] = {"eye", "look_at", "up", "fov", NULL};
+	struct scene_camera *cam = &ld->scene->camera;
+
+	if (!obj)
+		return 0;
+	for (int i = 0; view[i]; i++)
+		if (json_object_get(obj, view[i])) {
+			struct path at = child_key(p, view[i]);
+			return loader_fail(ld, &at,
+					   "the view comes from the camera of meshes[%ld]'s file; "
+					   "the scene's \"camera\" may give only \"aperture\" and "
+					   "\"focus_distance\" then",
+					   mesh);
+		}
+	if (loader_read_number(ld, p, obj, "aperture", OPTIONAL, NON_NEGATIVE, &cam->aperture) ||
+	    loader_read_number(ld, p, obj, "focus_distance", OPTIONAL, POSITIVE,
+			       &cam->focus_distance))
+		return -1;
+	cam->focus_given = json_object_get(obj, "focus_distance") != NULL;
+	return 0;
+}
+
 static int read_camera(struct loader *ld, json_t *doc)
 {
 	static const char *const keys[] = {"eye", "look_at",  "up", "fov", "aperture",
 					   "focus_distance", NULL};
 	struct path p = child_key(&root_path, "camera");
 	struct scene_camera *cam = &ld->scene->camera;
+	long from_mesh = camera_mesh_entry(doc);
 	const char *field, *problem;
 	char buf[200];
 	json_t *obj;
@@ -155,9 +197,13 @@ static int read_camera(struct loader *ld, json_t *doc)
 	cam->fov = 45;
 	cam->aperture = 0;
 	cam->focus_distance = 0;
-	if (loader_get_field(ld, &root_path, doc, "camera", REQUIRED, &obj) ||
-	    loader_expect_object(ld, &p, obj, keys) ||
-	    loader_read_vec3(ld, &p, obj, "eye", REQUIRED, ANY, cam->eye) ||
+	if (loader_get_field(ld, &root_path, doc, "camera", from_mesh >= 0 ? OPTIONAL : REQUIRED,
+			     &obj) ||
+	    (obj && loader_expect_object(ld, &p, obj, keys)))
+		return -1;
+	if (from_mesh >= 0)
+		return read_lens_only(ld, &p, obj, from_mesh);
+	if (loader_read_vec3(ld, &p, obj, "eye", REQUIRED, ANY, cam->eye) ||
 	    loader_read_vec3(ld, &p, obj, "look_at", REQUIRED, ANY, cam->look_at) ||
 	    loader_read_vec3(ld, &p, obj, "up", OPTIONAL, ANY, cam->up) ||
 	    loader_read_number(ld, &p, obj, "fov", OPTIONAL, FOV, &cam->fov) ||
@@ -167,12 +213,12 @@ static int read_camera(struct loader *ld, json_t *doc)
 		return -1;
 	cam->focus_given = json_object_get(obj, "focus_distance") != NULL;
 
-	problem = camera_problem(cam, &field, buf);
+	problem = loader_camera_problem(cam, &field, buf);
 	if (problem) {
 		struct path at = child_key(&p, field);
 		return loader_fail(ld, &at, "%s", problem);
 	}
-	default_focus(cam);
+	loader_default_focus(cam);
 	return 0;
 }
 
@@ -195,14 +241,14 @@ int scene_override_camera(struct scene *scene, const struct camera_override *o, 
 		cam->focus_distance = o->focus_distance;
 		cam->focus_given = 1;
 	}
-	problem = camera_problem(cam, &field, buf);
+	problem = loader_camera_problem(cam, &field, buf);
 	if (problem) {
 		snprintf(err, err_size, "%s%s%s: camera.%s %s", o->eye_given ? "--eye" : "",
 			 o->eye_given && o->look_at_given ? " and " : "",
 			 o->look_at_given ? "--look-at" : "", field, problem);
 		return -1;
 	}
-	default_focus(cam);
+	loader_default_focus(cam);
 	return 0;
 }
 

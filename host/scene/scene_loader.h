@@ -41,6 +41,8 @@ struct loader {
 	const char *base_dir;	  /* mesh files are relative to it; NULL: the working folder */
 	size_t triangle_capacity; /* room in scene->triangles */
 	size_t material_capacity; /* room in scene->materials */
+	size_t camera_mesh;	  /* 1 + the index of the mesh entry whose file
+				     gave the camera; 0: none did */
 };
 
 /* A key below `parent`; top-level keys get a root-less path. */
@@ -128,6 +130,16 @@ int loader_check_vec3(struct loader *ld, const struct path *p, json_t *v, enum r
 /* A vec3 (range ANY or DIRECTION) or a color (range NON_NEGATIVE). */
 int loader_read_vec3(struct loader *ld, const struct path *p, json_t *obj, const char *key,
 		     enum presence presence, enum range range, double out[3]);
+
+/* The view direction (look_at - eye) and up of cam, checked: NULL when
+ * the camera is well defined, else what is wrong, with *field the field at
+ * fault ("look_at" or "up"); buf holds the values quoted. */
+const char *loader_camera_problem(const struct scene_camera *cam, const char **field,
+				  char buf[200]);
+
+/* Sets camera.focus_distance, where not given, to the distance from the
+ * eye to look_at. */
+void loader_default_focus(struct scene_camera *cam);
 
 /* SCENE.md's material defaults, for fields left out and for objects without
  * a material. */

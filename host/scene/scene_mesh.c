@@ -617,11 +617,143 @@ static int read_missing_textures(struct loader *ld, const struct path *item, jso
 			   loader_type_name(v));
 }
 
+/* ---- The file's camera (SCENE.md, "The camera from a mesh file") ---- */
+
+/* "camera": true (the file's first camera), a camera's name, or false;
+ * *request is NULL where the entry takes no camera. */
+static int read_camera_request(struct loader *ld, const struct path *item, json_t *obj,
+			       json_t **request)
+{
+	struct path field = child_key(item, "camera");
+	json_t *v = json_object_get(obj, "camera");
+
+	*request = NULL;
+	if (!v || json_is_false(v))
+		return 0;
+	if (!json_is_true(v) && !json_is_string(v))
+		return loader_fail(ld, &field,
+				   "must be true, false or the name of a camera of the file, got %s",
+				   loader_type_name(v));
+	if (json_is_string(v) && !json_string_value(v)[0])
+		return loader_fail(ld, &field, "must name a camera of the file, got \"\"");
+	if (ld->camera_mesh)
+		return loader_fail(ld, &field,
+				   "meshes[%zu] gives the camera already; one mesh at most may",
+				   ld->camera_mesh - 1);
+	*request = v;
+	return 0;
+}
+
+/* "FILE has no camera "NAME"; its cameras are ...", at field. */
+static int fail_unknown_camera(struct loader *ld, const struct path *field, const char *name,
+			       const struct mesh_data *mesh, const char *wanted)
+{
+	char known[600] = "", text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX];
+	size_t have = 0;
+
+	for (size_t i = 0; i < mesh->camera_count; i++) {
+		char cut[MESSAGE_TEXT_MAX];
+		if (have + 64 + 12 >= sizeof(known)) {
+			snprintf(known + have, sizeof(known) - have, ", ...");
+			break;
+		}
+		snprintf(known + have, sizeof(known) - have, "%s\"%s\"", have ? ", " : "",
+			 short_name(mesh->cameras[i].name, cut));
+		have = strlen(known);
+	}
+	return loader_fail(ld, field, "\"%s\" has no camera \"%s\"; its cameras are %s",
+			   one_line(name, text), short_name(wanted, quoted), known);
+}
+
+static int finite3(const double v[3])
+{
+	return isfinite(v[0]) && isfinite(v[1]) && isfinite(v[2]);
+}
+
+/* Makes the file's camera (the first, or the one request names) the
+ * scene's view, placed as the mesh is: eye its position, look_at one unit
+ * along its view direction, up its up (unit), fov its vertical one. */
+static int take_camera(struct loader *ld, const struct path *item, const char *name,
+		       const struct mesh_data *mesh, const struct placement *pl, json_t *request)
+{
+	struct path field = child_key(item, "camera");
+	struct scene_camera *cam = &ld->scene->camera;
+	const struct mesh_camera *c = NULL;
+	char text[MESSAGE_TEXT_MAX], cname[MESSAGE_TEXT_MAX], buf[200], a[100], b[100], u[100],
+		f[32], where[200], line[900];
+	double dir[3], up[3];
+	const char *problem, *which;
+
+	one_line(name, text);
+	if (mesh->camera_count == 0)
+		return loader_fail(ld, &field, "\"%s\" has no camera", text);
+	if (json_is_string(request)) {
+		for (size_t i = 0; !c && i < mesh->camera_count; i++)
+			if (strcmp(mesh->cameras[i].name, json_string_value(request)) == 0)
+				c = &mesh->cameras[i];
+		if (!c)
+			return fail_unknown_camera(ld, &field, name, mesh,
+						   json_string_value(request));
+	} else {
+		c = &mesh->cameras[0];
+	}
+	short_name(c->name, cname);
+	if (c->kind == MESH_CAMERA_NOT_GLTF)
+		return loader_fail(ld, &field,
+				   "\"%s\": camera \"%s\": rtcl reads cameras from glTF 2.0 files "
+				   "only",
+				   text, cname);
+	if (c->kind == MESH_CAMERA_ORTHOGRAPHIC)
+		return loader_fail(ld, &field,
+				   "\"%s\": camera \"%s\" is orthographic; rtcl renders only "
+				   "perspective cameras",
+				   text, cname);
+	if (!finite3(c->position) || !finite3(c->direction) || !finite3(c->up) ||
+	    !isfinite(c->fov))
+		return loader_fail(ld, &field, "\"%s\": camera \"%s\" is not finite", text, cname);
+	if (!(c->fov > 0 && c->fov < 180))
+		return loader_fail(ld, &field,
+				   "\"%s\": camera \"%s\": its vertical field of view is %s "
+				   "degrees; rtcl needs 0 < fov < 180",
+				   text, cname, loader_fmt_num(c->fov, f));
+	place_point(pl, c->position, cam->eye);
+	place_vector(pl, c->direction, dir);
+	place_vector(pl, c->up, up);
+	for (int i = 0; i < 3; i++)
+		if (!(fabs(cam->eye[i]) <= SCENE_MAX_MAGNITUDE))
+			return loader_fail(ld, &field,
+					   "\"%s\": camera \"%s\" is at %s after placement, beyond "
+					   "%g in magnitude (rtcl computes in float)",
+					   text, cname, loader_fmt_vec3(cam->eye, a),
+					   SCENE_MAX_MAGNITUDE);
+	if (!place_unit(dir) || !place_unit(up))
+		return loader_fail(ld, &field,
+				   "\"%s\": camera \"%s\" has no %s (its node's scale is 0)", text,
+				   cname, place_unit(dir) ? "up direction" : "view direction");
+	for (int i = 0; i < 3; i++) {
+		cam->look_at[i] = cam->eye[i] + dir[i];
+		cam->up[i] = up[i];
+	}
+	cam->fov = c->fov;
+	problem = loader_camera_problem(cam, &which, buf);
+	if (problem)
+		return loader_fail(ld, &field, "\"%s\": camera \"%s\": after placement, camera.%s %s",
+				   text, cname, which, problem);
+	loader_default_focus(cam);
+	ld->camera_mesh = item->index + 1;
+	loader_format_path(item, where, sizeof(where));
+	snprintf(line, sizeof(line),
+		 "%s \"%s\": camera \"%s\": eye %s, look_at %s, up %s, fov %s", where, text,
+		 cname, loader_fmt_vec3(cam->eye, a), loader_fmt_vec3(cam->look_at, b),
+		 loader_fmt_vec3(cam->up, u), loader_fmt_num(cam->fov, f));
+	return add_line(ld, &ld->scene->mesh_reports, &ld->scene->mesh_report_count, line);
+}
+
 static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 {
 	static const char *const keys[] = {"file",	 "material", "materials",
 					   "scale",	 "rotate",   "translate",
-					   "smooth",	 "missing_textures", NULL};
+					   "smooth",	 "missing_textures", "camera", NULL};
 	struct path file = child_key(item, "file");
 	char reason[MESSAGE_TEXT_MAX], text[MESSAGE_TEXT_MAX];
 	struct mesh_data mesh;
@@ -630,7 +762,7 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	int material = -1, ret, *map = NULL, warn;
 	struct mesh_textures mt = {.file = &file, .name = NULL};
 	char *path;
-	json_t *v, *forced, *overrides;
+	json_t *v, *forced, *overrides, *camera;
 
 	if (loader_expect_object(ld, item, obj, keys) ||
 	    loader_get_field(ld, item, obj, "file", REQUIRED, &v))
@@ -653,7 +785,8 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 				   loader_type_name(overrides));
 	}
 	if ((forced && loader_read_material_ref(ld, item, obj, &material)) ||
-	    read_placement(ld, item, obj, &pl) || read_missing_textures(ld, item, obj, &warn))
+	    read_placement(ld, item, obj, &pl) || read_missing_textures(ld, item, obj, &warn) ||
+	    read_camera_request(ld, item, obj, &camera))
 		return -1;
 	path = mesh_path(ld, name);
 	if (!path) {
@@ -691,7 +824,10 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	} else if ((ret = report_mesh(ld, item, name, &mesh, 1))) {
 		goto out_free;
 	}
-	ret = place_mesh(ld, &file, name, &mesh, &pl, material, map) ? -1 : 0;
+	ret = place_mesh(ld, &file, name, &mesh, &pl, material, map) ||
+			      (camera && take_camera(ld, item, name, &mesh, &pl, camera))
+		      ? -1
+		      : 0;
 out_free:
 	free(map);
 	free(mt.scene_index);

@@ -37,7 +37,8 @@ VERSIONS = (1, 2)
 TOP_KEYS = ("format", "version", "image", "camera", "background", "ambient", "max_depth",
             "epsilon", "materials", "lights", "spheres", "planes")
 VERSION_2_KEYS = ("meshes", "triangles")
-MESH_KEYS = ("file", "material", "materials", "scale", "rotate", "translate", "smooth")
+MESH_KEYS = ("file", "material", "materials", "scale", "rotate", "translate", "smooth",
+             "missing_textures", "camera")
 MATERIAL_DEFAULTS = {"color": (1.0, 1.0, 1.0), "ambient": 1.0, "diffuse": 0.7,
                      "specular": 0.3, "shininess": 32.0, "reflect": 0.0,
                      "transmit": 0.0, "ior": 1.5, "fresnel": False}
@@ -70,7 +71,34 @@ def read_header(doc):
     return version
 
 
+def camera_mesh(doc):
+    """The index of the first mesh entry that takes its file's camera, or None."""
+    meshes = doc.get("meshes")
+    for i, value in enumerate(meshes if isinstance(meshes, list) else []):
+        if isinstance(value, dict) and value.get("camera", False) is not False:
+            return i
+    return None
+
+
+def read_lens_only(doc, mesh):
+    """The scene's camera where the view comes from a mesh file's camera (SCENE.md,
+    "The camera from a mesh file"): only the lens, the view left to rtcl (None)."""
+    cam = check_keys(doc.get("camera", {}), "camera",
+                     ("eye", "look_at", "up", "fov", "aperture", "focus_distance"))
+    for key in ("eye", "look_at", "up", "fov"):
+        if key in cam:
+            fail(f"camera.{key}", f"the view comes from the camera of meshes[{mesh}]'s file; "
+                 'the scene\'s "camera" may give only "aperture" and "focus_distance" then')
+    return {"eye": None, "look_at": None, "up": None, "fov": None, "from_mesh": mesh,
+            "aperture": optional(cam, "aperture", "camera", number, 0.0, "non-negative"),
+            "focus_distance": optional(cam, "focus_distance", "camera", number, None,
+                                       "positive")}
+
+
 def read_camera(doc):
+    mesh = camera_mesh(doc)
+    if mesh is not None:
+        return read_lens_only(doc, mesh)
     cam = check_keys(required(doc, "camera", ""), "camera",
                      ("eye", "look_at", "up", "fov", "aperture", "focus_distance"))
     camera = {"eye": vec3(required(cam, "eye", "camera"), "camera.eye"),
@@ -280,7 +308,7 @@ def mesh_file(name, path, base_dir):
 def read_meshes(items, materials, base_dir):
     """The meshes in rtcl's order: the file's name, the material and placement, and
     only then the file itself."""
-    meshes = []
+    meshes, camera_from = [], None
     for i, value in enumerate(items):
         path = child("meshes", i)
         check_keys(value, path, MESH_KEYS)
@@ -305,12 +333,29 @@ def read_meshes(items, materials, base_dir):
                 read_material(material, where)
             else:
                 fail(where, f"must be a material name or an object, got {type_name(material)}")
+        missing = value.get("missing_textures", "error")
+        if missing not in ("error", "warn"):
+            fail(child(path, "missing_textures"), 'must be "error" or "warn", got '
+                 + (f'"{_escaped(missing)}"' if isinstance(missing, str) else type_name(missing)))
+        camera = value.get("camera", False)
+        if camera is not False:
+            if camera is not True and not isinstance(camera, str):
+                fail(child(path, "camera"), "must be true, false or the name of a camera of "
+                     f"the file, got {type_name(camera)}")
+            if camera == "":
+                fail(child(path, "camera"), 'must name a camera of the file, got ""')
+            if camera_from is not None:
+                fail(child(path, "camera"), f"meshes[{camera_from}] gives the camera already; "
+                     "one mesh at most may")
         mesh = {"material": material_of(value, path, materials),
                 "scale": optional(value, "scale", path, read_scale, (1.0, 1.0, 1.0)),
                 "rotate": optional(value, "rotate", path, vec3, (0.0, 0.0, 0.0)),
                 "translate": optional(value, "translate", path, vec3, (0.0, 0.0, 0.0)),
                 "smooth": optional(value, "smooth", path, boolean, True)}
         mesh["file"] = mesh_file(name, where, base_dir)
+        if camera is not False:
+            mesh["camera"] = camera
+            camera_from = i
         meshes.append(mesh)
     return meshes
 
