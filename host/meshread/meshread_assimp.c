@@ -23,8 +23,7 @@
 #include "meshread/ply_check.h"
 #include "meshread/texture_read.h"
 
-/* The import reads the file (cameras are taken from its node hierarchy
- * then), and these steps run after. Polygons become triangles; SortByPType splits points and lines off into meshes of
+/* Polygons become triangles; SortByPType splits points and lines off into meshes of
  * their own, which are skipped; PreTransformVertices applies the node
  * hierarchy (glTF nodes, OBJ groups) to the vertices and normals, so every
  * mesh is in the file's world space before rtcl's placement. */
@@ -775,6 +774,23 @@ static int read_cameras(const struct aiScene *sc, struct mesh_data *out)
 	return 0;
 }
 
+/* The cameras of a file that has some, from a second import without
+ * post-processing: PreTransformVertices renames every camera "cam_N" and
+ * flattens the node hierarchy, and applying the steps to a scene already
+ * imported (aiApplyPostProcessing) frees it twice in Assimp 5.2 when a step
+ * fails (found by test/fuzz_mesh.c). Only files with cameras are read twice.
+ * Returns -1 when out of memory; a second import that fails leaves the file
+ * without cameras. */
+static int import_cameras(const char *path, struct aiFileIO *io, struct mesh_data *out)
+{
+	const struct aiScene *sc = aiImportFileEx(path, 0, io);
+	int ret = sc ? read_cameras(sc, out) : 0;
+
+	if (sc)
+		aiReleaseImport(sc);
+	return ret;
+}
+
 int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size_t reason_size)
 {
 	struct aiFileIO io = {file_open, file_close, NULL};
@@ -787,14 +803,7 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	if (ply_check(path, reason, reason_size) ||
 	    obj_polygon_too_large(path, reason, reason_size))
 		return -1;
-	sc = aiImportFileEx(path, 0, &io);
-	if (sc && read_cameras(sc, out)) {
-		snprintf(reason, reason_size, "out of memory for its %u cameras", sc->mNumCameras);
-		goto out_release_scene;
-	}
-	/* aiApplyPostProcessing releases the scene when a step fails. */
-	if (sc && !refused_file[0])
-		sc = aiApplyPostProcessing(sc, IMPORT_FLAGS);
+	sc = aiImportFileEx(path, IMPORT_FLAGS, &io);
 	if (refused_file[0]) {
 		snprintf(reason, reason_size, "it names \"%s\", which is not a regular file",
 			 refused_file);
@@ -802,7 +811,6 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	}
 	if (!sc) {
 		snprintf(reason, reason_size, "%s", aiGetErrorString());
-		mesh_data_free(out);
 		return -1;
 	}
 	count(sc, &vertices, &triangles, &has_normals);
@@ -828,6 +836,14 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 		snprintf(reason, reason_size, "out of memory for its textures");
 		mesh_data_free(out);
 		goto out_release_scene;
+	}
+	if (sc->mNumCameras) {
+		aiReleaseImport(sc);
+		sc = NULL;
+		if (import_cameras(path, &io, out)) {
+			snprintf(reason, reason_size, "out of memory for its cameras");
+			goto out_release_scene;
+		}
 	}
 	ret = 0;
 out_release_scene:
