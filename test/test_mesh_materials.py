@@ -338,3 +338,27 @@ def test_broken_material_references_are_one_message_or_a_picture(tmp_path, seed)
         assert result.returncode == 1 and not out.exists()
         assert result.stderr.count("\n") == 1 and result.stderr.startswith(f"{path}: meshes[0]")
         assert re.search(rf"- `{re.escape(seed)}`[^:]*: refused", expected)
+
+
+CLEARCOAT = MODELS / "glTF2" / "ClearCoat-glTF" / "ClearCoatTest.gltf"
+
+
+@pytest.mark.skipif(not CLEARCOAT.is_file(), reason="Debian's assimp-testmodels is not installed")
+def test_a_textured_gltf_keeps_its_materials_and_its_texture(tmp_path):
+    """Issue 27's textured glTF of several materials from assimp-testmodels:
+    its 19 materials and its base-colour texture reach the device (-v), and
+    its red and blue spheres render red and blue."""
+    doc = {"format": "rtcl-scene", "version": 2,
+           "camera": {"eye": [-2.1, 0.3, 22], "look_at": [-2.1, 0.3, 0.5]},
+           "lights": [{"position": [5, 5, 20]}],
+           "meshes": [{"file": str(CLEARCOAT)}]}
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(doc))
+    out = tmp_path / "o.ppm"
+    result = rtcl(path, "-o", out, "--size", "40x50", "-v")
+    assert result.returncode == 0, result.stderr
+    assert 'ClearCoatTest.gltf": 19 materials (19 used), 1 texture' in result.stderr
+    assert 'texture "PartialCoating_Alpha.png": 256x256 8-bit sRGB' in result.stderr
+    colours = {p for row in read_ppm(out) for p in row}
+    assert any(r > g + 80 and r > b + 80 for r, g, b in colours)  # the red row
+    assert any(b > r + 30 and b > g + 30 for r, g, b in colours)  # the blue rows
