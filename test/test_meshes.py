@@ -95,6 +95,30 @@ def test_mesh_scene_renders_through_the_bvh_by_default(tmp_path):
     assert (tmp_path / "default.ppm").read_bytes() == (tmp_path / "none.ppm").read_bytes()
 
 
+def test_a_scene_without_spheres_builds_leaves_of_triangles_only(tmp_path):
+    """glass_mesh (meshes and a plane, no sphere) with --accel bvh builds with
+    RTCL_LEAF_TRIANGLES_ONLY (traverse.cl: only the leaf triangles' loop) and gives
+    the image of bvh-compact and of brute force, which build without it, as does a
+    scene with a sphere."""
+    runs = {}
+    for accel in ("bvh", "bvh-compact", "none"):
+        result = rtcl("-s", "scenes/glass_mesh.json", "-o", str(tmp_path / f"{accel}.ppm"),
+                      "--size", "24x16", "--accel", accel, "--stats",
+                      str(tmp_path / f"{accel}.json"))
+        assert result.returncode == 0, result.stderr
+        runs[accel] = json.loads((tmp_path / f"{accel}.json").read_text())
+    assert "-DRTCL_LEAF_TRIANGLES_ONLY" in runs["bvh"]["build_options"]
+    assert "-DRTCL_LEAF_TRIANGLES_ONLY" not in runs["bvh-compact"]["build_options"]
+    assert "-DRTCL_LEAF_TRIANGLES_ONLY" not in runs["none"]["build_options"]
+    for accel in ("bvh-compact", "none"):
+        assert (tmp_path / "bvh.ppm").read_bytes() == (tmp_path / f"{accel}.ppm").read_bytes()
+    with_sphere = rtcl("-s", str(MESH_SCENE), "-o", str(tmp_path / "s.ppm"), "--size", "8x8",
+                       "--stats", str(tmp_path / "s.json"))
+    assert with_sphere.returncode == 0, with_sphere.stderr
+    stats = json.loads((tmp_path / "s.json").read_text())
+    assert "-DRTCL_LEAF_TRIANGLES_ONLY" not in stats["build_options"]
+
+
 def test_bvh_counts_add_up_over_two_devices(tmp_path):
     """One image in row bands over two PoCL devices (--devices) counts the same
     flops and BVH node visits as one device, and --stats has the BVH's figures."""

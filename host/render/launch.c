@@ -199,7 +199,10 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);
 	struct program_features features = {res->scene_in_local, res->bvh_nodes > 0,
-					    scene->triangle_count > 0, scene->camera.aperture > 0,
+					    scene->triangle_count > 0,
+					    res->bvh_nodes > 0 && scene->sphere_count == 0 &&
+						    s->accel == ACCEL_BVH,
+					    scene->camera.aperture > 0,
 					    scene_has_area_lights(scene),
 					    scene_has_fresnel(scene->materials, scene->material_count),
 					    scene_has_textures(scene)};

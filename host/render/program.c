@@ -191,10 +191,12 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "", f->use_bvh ? " -DRTCL_BVH" : "",
 		 f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
+		 /* Meshes without spheres: leaves of leaf triangles only (traverse.cl). */
+		 f->leaf_triangles_only ? " -DRTCL_LEAF_TRIANGLES_ONLY" : "",
 		 /* Pinhole scenes build without the lens: the same program, the same bits. */
 		 f->thin_lens ? " -DRTCL_THIN_LENS" : "",
 		 /* Point lights only: the program of before light samples. */

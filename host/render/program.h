@@ -15,6 +15,9 @@ struct program_features {
 	int scene_in_local; /* the scene block in __local memory */
 	int use_bvh;	    /* traverse the scene's BVH (else test every primitive) */
 	int has_triangles;  /* without, the triangle code is left out */
+	int leaf_triangles_only; /* every BVH leaf a range of leaf triangles (no
+				    spheres, --accel bvh): the leaves' other
+				    code is left out */
 	int thin_lens;	    /* an aperture > 0: primary rays start on the lens */
 	int area_lights;    /* a sphere or directional light: lights are sampled */
 	int fresnel;	    /* a Fresnel material: ray weights are colours */
