@@ -52,6 +52,22 @@ static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float 
 	return enter <= leave;
 }
 
+/* Tests leaf triangles [first, first + count) of a leaf of triangles
+ * (RT_LEAF_TRIANGLES); with any_hit, up to the first hit. */
+static inline void leaf_triangles_intersect(struct tracer *tr, int first, int count, float3 o,
+					    float3 d, bool any_hit, float *nearest,
+					    struct hit *best)
+{
+	int end = first + (count & RT_LEAF_COUNT_MASK);
+
+	for (int k = first; k < end; k++) {
+		if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+			return;
+		COUNT_PRIM_TEST(tr);
+		leaf_triangle_consider(tr, k, o, d, any_hit, nearest, best);
+	}
+}
+
 /* Tests a leaf's primitives: spheres [first, first + count) of a leaf of
  * spheres (RT_LEAF_SPHERES, no reference to read), leaf triangles [first,
  * first + count) of a leaf of triangles (RT_LEAF_TRIANGLES), else references
@@ -66,13 +82,7 @@ static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, flo
 	COUNT_LEAF_VISIT(tr);
 #ifdef RTCL_LEAF_TRIANGLES_ONLY
 	(void)frame;
-	int end = first + (count & RT_LEAF_COUNT_MASK);
-	for (int k = first; k < end; k++) {
-		if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
-			return;
-		COUNT_PRIM_TEST(tr);
-		leaf_triangle_consider(tr, k, o, d, any_hit, nearest, best);
-	}
+	leaf_triangles_intersect(tr, first, count, o, d, any_hit, nearest, best);
 #else
 	if (count & RT_LEAF_SPHERES) {
 		int end = first + (count & RT_LEAF_COUNT_MASK);
@@ -88,13 +98,7 @@ static void leaf_intersect(struct tracer *tr, const struct ray_frame *frame, flo
 		return;
 	}
 	if (SCENE_HAS_TRIANGLES && (count & RT_LEAF_TRIANGLES)) {
-		int end = first + (count & RT_LEAF_COUNT_MASK);
-		for (int k = first; k < end; k++) {
-			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
-				return;
-			COUNT_PRIM_TEST(tr);
-			leaf_triangle_consider(tr, k, o, d, any_hit, nearest, best);
-		}
+		leaf_triangles_intersect(tr, first, count, o, d, any_hit, nearest, best);
 		return;
 	}
 	for (int k = first; k < first + count; k++) {
