@@ -292,18 +292,40 @@ struct rt_ray {
  * and a range of each of its pixels' samples. A plain render is one or more
  * pieces covering the whole image; a multi-device render hands pieces to
  * several devices. The kernels write the full-image buffers at the pixels'
- * own positions, y * width + x. */
+ * own positions, y * width + x, where y is the image row of the rectangle's
+ * row (rt_piece_row). */
 struct rt_piece {
-	rt_int x0, y0, width, height;	 /* a rectangle of the image, in pixels */
+	rt_int x0, y0, width, height;	 /* a rectangle of split rows (rt_piece_row),
+					    in pixels */
 	rt_int sample_begin, sample_end; /* the samples of each pixel traced now:
 					    [begin, end) */
 	rt_int samples;			 /* N, samples per pixel of the whole render */
-	rt_int pad;
+	rt_int row_band;		 /* 0: split row v is image row v; else the
+					    height of the bands rt_piece_row spreads */
+	rt_int row_bands;		 /* the image's whole bands of row_band rows */
+	rt_int row_step;		 /* the stride that spreads them, coprime to
+					    row_bands */
 };
+
+/* The image row of split row v of a piece (docs/GUIDE.md, "How the rows are
+ * ordered"): with row_band 0, v itself; else split band b = v / row_band is
+ * image band (b * row_step) mod row_bands, the rows after the last whole band
+ * staying where they are. Consecutive split bands land about row_bands / phi^2
+ * bands apart, so any run of them is spread over the whole image. Shared by the
+ * kernels and the host (which copies and checks pieces by it). */
+static inline rt_int rt_piece_row(const struct rt_piece *p, rt_int v)
+{
+	if (p->row_band == 0 || v >= p->row_band * p->row_bands)
+		return v;
+	rt_int b = v / p->row_band;
+	/* b, row_step < row_bands <= 32768: the product fits in 32 bits */
+	rt_uint band = ((rt_uint)b * (rt_uint)p->row_step) % (rt_uint)p->row_bands;
+	return (rt_int)band * p->row_band + (v - b * p->row_band);
+}
 
 #ifndef __OPENCL_VERSION__
 #include <stddef.h>
-_Static_assert(sizeof(struct rt_piece) == 32, "rt_piece layout");
+_Static_assert(sizeof(struct rt_piece) == 40, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, sample_begin) == 16, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, samples) == 24, "rt_piece layout");
 _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");

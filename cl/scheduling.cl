@@ -109,8 +109,8 @@ static inline uint chunk_count(const struct chunk_grid *g)
 	return g->across * g->down;
 }
 
-/* Returns pixel (dx, dy) of the chunk in column cx and row cy of the grid,
- * in image coordinates. */
+/* Returns pixel (dx, dy) of the chunk in column cx and row cy of the grid:
+ * its image column and split row (rt_piece_row). */
 static inline int2 chunk_pixel(const struct chunk_grid *g, uint cx, uint cy, uint dx, uint dy)
 {
 	return (int2)(g->x0 + (int)(cx * g->chunk_w + dx), g->y0 + (int)(cy * g->chunk_h + dy));
@@ -122,12 +122,12 @@ static inline int2 numbered_chunk_pixel(const struct chunk_grid *g, uint chunk, 
 	return chunk_pixel(g, chunk % g->across, chunk / g->across, dx, dy);
 }
 
-/* Traces and stores pixel p (image coordinates) if it lies inside the
- * piece's rectangle. */
+/* Traces and stores pixel p (x and the split row, rt_piece_row) if it lies
+ * inside the piece's rectangle. */
 static inline void render_pixel_if_inside(struct tracer *tr, const struct rt_piece *piece,
 					  __global float *image, __global uint *probe,
 					  int2 p)
 {
 	if (p.x < piece->x0 + piece->width && p.y < piece->y0 + piece->height)
-		render_pixel(tr, piece, image, probe, p.x, p.y);
+		render_pixel(tr, piece, image, probe, p.x, rt_piece_row(piece, p.y));
 }

@@ -10,7 +10,7 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
 	for (int y = piece.y0; y < piece.y0 + piece.height; y++) {
 		for (int x = piece.x0; x < piece.x0 + piece.width; x++)
-			render_pixel(&tr, &piece, image, probe, x, y);
+			render_pixel(&tr, &piece, image, probe, x, rt_piece_row(&piece, y));
 		progress_chunk_done(work_counter, (uint)piece.width); /* a row of 1x1 chunks */
 	}
 	store_counts(&tr, global_item());

@@ -98,7 +98,8 @@ static inline void start_sample_flops(__global ulong *sample_flops, int pixel, u
  *
  * wavefront_start: one work-item per pixel of the piece (2D NDRange over its
  * rectangle, rounded up): the primary rays of sample `sample`, in pixel order
- * within the piece, queue[(y - y0) * width + (x - x0)]; the sample's colour
+ * within the piece, queue[dy * width + dx] for its pixel (dx, dy) (split row
+ * y0 + dy, rt_piece_row); the sample's colour
  * cleared. */
 __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 *scene_local,
 			      __global struct rt_ray *queue, __global ulong *item_counts,
@@ -110,7 +111,7 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, sample_flops);
 	if (dx < piece.width && dy < piece.height) {
-		int x = piece.x0 + dx, y = piece.y0 + dy;
+		int x = piece.x0 + dx, y = rt_piece_row(&piece, piece.y0 + dy);
 		int pixel = y * tr.scene->width + x;
 		struct ray_job ray;
 
@@ -138,7 +139,7 @@ __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local u
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
 	if (dx < piece.width && dy < piece.height) {
-		int pixel = (piece.y0 + dy) * tr.scene->width + piece.x0 + dx;
+		int pixel = rt_piece_row(&piece, piece.y0 + dy) * tr.scene->width + piece.x0 + dx;
 		float3 sum = sample > 0 ? vload3(pixel, image) : (float3)(0.0f);
 
 		sum = sample_add(&tr, sum, vload3(pixel, sample_rgb), (int)sample);

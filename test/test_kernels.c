@@ -650,9 +650,13 @@ static int tile_pieces(struct rt_piece *out, int w, int h, int sx, int sy, int b
 
 	for (int j = 0; j < 2; j++)
 		for (int i = 0; i < 2; i++)
-			out[count++] = (struct rt_piece){
-				xs[i], ys[j], xs[i + 1] - xs[i], ys[j + 1] - ys[j], begin, end,
-				n,     0};
+			out[count++] = (struct rt_piece){.x0 = xs[i],
+							 .y0 = ys[j],
+							 .width = xs[i + 1] - xs[i],
+							 .height = ys[j + 1] - ys[j],
+							 .sample_begin = begin,
+							 .sample_end = end,
+							 .samples = n};
 	return count;
 }
 
@@ -661,13 +665,19 @@ static int band_pieces(struct rt_piece *out, int w, int h, int band, int begin, 
 	int count = 0;
 
 	for (int y = 0; y < h; y += band)
-		out[count++] =
-			(struct rt_piece){0, y, w, h - y < band ? h - y : band, begin, end, n, 0};
+		out[count++] = (struct rt_piece){.y0 = y,
+						 .width = w,
+						 .height = h - y < band ? h - y : band,
+						 .sample_begin = begin,
+						 .sample_end = end,
+						 .samples = n};
 	return count;
 }
 
-/* Every kernel, rendering the image as 4 odd tiles and as row bands (given
- * bottom band first, to show the order does not matter), and with several
+/* Every kernel, rendering the image as 4 odd tiles, as row bands (given
+ * bottom band first, to show the order does not matter) and as bands of
+ * split rows spread over the image (--row-order spread: bands of 4 rows, so
+ * a piece of 10 split rows ends inside a band), and with several
  * samples as tiles over the first half of the samples then bands over the
  * rest, gives the serial kernel's whole-image render: the same bytes (the
  * wavefront within its documented 1/255), the same flops per pixel, and every
@@ -689,11 +699,15 @@ static void check_pieces(const char *path, int w, int h, int samples)
 		&dev, &scene, &s, (struct rt_piece[]){renderer_whole_image(&s, 0, samples)}, 1,
 		"serial, whole image");
 	for (int k = 0; k < 6; k++) {
-		for (int layout = 0; layout < (samples > 1 ? 3 : 2); layout++) {
+		for (int layout = 0; layout < 4; layout++) {
 			char what[256];
-			int count = layout == 1 ? band_pieces(pieces, w, h, 10, 0, samples, samples)
-						: tile_pieces(pieces, w, h, 23, 17, 0, samples,
-							      samples);
+			if (layout == 2 && samples == 1)
+				continue;
+			int count = layout == 1 || layout == 3
+					    ? band_pieces(pieces, w, h, 10, 0, samples, samples)
+					    : tile_pieces(pieces, w, h, 23, 17, 0, samples, samples);
+			for (int i = 0; layout == 3 && i < count; i++)
+				renderer_spread_rows(&pieces[i], h, 4);
 			uint32_t writes = 1;
 			if (layout == 2) { /* tiles for the first half of the samples, bands
 					      for the rest */
@@ -715,9 +729,10 @@ static void check_pieces(const char *path, int w, int h, int samples)
 			s.count_flops = 1;
 			snprintf(what, sizeof(what), "%s %s %dx%d spp %d as %d %s", path,
 				 kernels[k], w, h, samples, count,
-				 layout == 2 ? "tiles, then bands"
-				 : layout    ? "row bands"
-					     : "tiles");
+				 layout == 3   ? "spread row bands"
+				 : layout == 2 ? "tiles, then bands"
+				 : layout      ? "row bands"
+					       : "tiles");
 			struct pieces_result got =
 				render_pieces(&dev, &scene, &s, pieces, count, what);
 			for (size_t i = 0; i < (size_t)w * h; i++) {
@@ -753,6 +768,59 @@ Test(kernels, pieces_give_the_whole_image, .timeout = 600)
 Test(kernels, pieces_give_the_whole_image_at_4_spp, .timeout = 600)
 {
 	check_pieces("scenes/two_balls.json", 37, 29, 4);
+}
+
+/* A piece of split rows (--row-order spread) writes exactly the image rows
+ * rt_piece_row gives it, with the pixels the whole image has there: every
+ * kernel, one piece alone (all the pieces together would hide a kernel that
+ * ignored the map: they cover every row either way). The settings are
+ * check_pieces's, so the programs are the ones it built. */
+Test(kernels, spread_pieces_write_their_own_rows, .timeout = 600)
+{
+	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
+					      "dynamic", "persistent", "wavefront"};
+	const int w = 61, h = 47;
+	struct device dev;
+	struct scene scene;
+	struct rt_piece pieces[8];
+
+	open_device(&dev);
+	load(&scene, "scenes/paper60.json");
+	struct render_settings s = settings_for("serial", w, h, 1, 1, scene.max_depth);
+	s.samples = 1;
+	s.count_flops = 1;
+	struct pieces_result want = render_pieces(
+		&dev, &scene, &s, (struct rt_piece[]){renderer_whole_image(&s, 0, 1)}, 1,
+		"serial, whole image");
+	band_pieces(pieces, w, h, 10, 0, 1, 1);
+	renderer_spread_rows(&pieces[1], h, 4); /* split rows 10..19: 11 bands of 4 */
+	for (int k = 0; k < 6; k++) {
+		char what[128];
+		int mine[47] = {0};
+		for (int v = pieces[1].y0; v < pieces[1].y0 + pieces[1].height; v++)
+			mine[rt_piece_row(&pieces[1], v)] = 1;
+		cr_assert_eq(mine[12], 0); /* split row 12 is not image row 12 */
+		s = settings_for(kernels[k], w, h, 8, 4, scene.max_depth);
+		s.samples = 1;
+		s.count_flops = 1;
+		snprintf(what, sizeof(what), "%s, split rows 10..19 spread", kernels[k]);
+		struct pieces_result got = render_pieces(&dev, &scene, &s, &pieces[1], 1, what);
+		for (int y = 0; y < h; y++)
+			for (int x = 0; x < w; x++) {
+				size_t i = (size_t)y * w + x;
+				cr_assert_eq(got.write_counts[i], (uint32_t)mine[y],
+					     "%s: pixel (%d, %d) written %u times", what, x, y,
+					     got.write_counts[i]);
+				for (int c = 0; mine[y] && c < 3; c++)
+					cr_assert_leq(abs(got.bytes[3 * i + c] - want.bytes[3 * i + c]),
+						      k == 5 ? 1 : 0, "%s: pixel (%d, %d)", what, x,
+						      y);
+			}
+		pieces_free(&got);
+	}
+	pieces_free(&want);
+	scene_free(&scene);
+	device_close(&dev);
 }
 
 /* Every kernel at 7 samples per pixel, in one pass and in passes of 3, 3 and

@@ -124,6 +124,12 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--piece-rows", "4"], "--piece-rows cuts one image into bands for the devices of"),
     # Like --piece-rows: refused, not silently ignored, without several devices.
     (["--split", "static"], "--split chooses how pieces go to the devices of --devices or --mpi"),
+    (["--row-order", "scan"], "--row-order orders the rows that pieces of one image take on"),
+    (["--devices", "0:0,0:1", "--frames", "0:1", "--row-order", "spread"],
+     "--row-order orders the rows that pieces of one image take on the devices of --devices or "
+     "--mpi; it does not apply to --frames"),
+    (["--devices", "0:0,0:1", "--row-order", "zigzag"],
+     "--row-order: expected spread or scan, got \"zigzag\""),
     (["--split", "dynamic", "--frames", "0:1"], "--split chooses how pieces go"),
     (["--devices", "all", "--frames", "0:1", "--piece-rows", "4"],
      "it does not apply to --frames"),
@@ -375,10 +381,10 @@ def test_help_and_man_page_teach_the_options():
     help_text = run("--help").stdout
     man = (ROOT / "docs" / "rtcl.1").read_text()
     for option in ["--devices LIST|all", "--split dynamic|static", "--frames A:B", "--mpi",
-                   "out_0000.png", "--piece-rows N"]:
+                   "out_0000.png", "--piece-rows N", "--row-order spread|scan"]:
         assert option in help_text, option
     for option in [r"\-\-devices", r"\-\-split", r"\-\-frames", r"\-\-mpi",
-                   r"\-\-piece\-rows"]:
+                   r"\-\-piece\-rows", r"\-\-row\-order"]:
         assert option in man, option
 
 
@@ -433,6 +439,50 @@ def test_bands_on_one_device_match_its_whole_image(tmp_path):
     assert md["device_efficiency"] == 1.0
 
 
+# 12 bands of 4 rows (-w 8x4): enough for --row-order spread to move them
+# (stride 5); at 32x24 in bands of 8 there are 3, which it leaves in place.
+TALL = ["--size", "24x48", "-w", "8x4"]
+
+
+def image_row(v, md):
+    """Split row v's image row: rt_piece_row (cl/rtcl_shared.h) as
+    docs/GUIDE.md states it, from the map --stats reports."""
+    band, bands, step = md["row_band"], md["row_bands"], md["row_step"]
+    if band == 0 or v >= band * bands:
+        return v
+    return (v // band * step) % bands * band + v % band
+
+
+@pytest.mark.parametrize("order, pieces", [
+    ("spread", []), ("scan", []), ("spread", ["--piece-rows", "5"]),
+    pytest.param("spread", ["--split", "static", "--piece-rows", "8"], marks=pytest.mark.slow)])
+def test_row_orders_match_one_device_and_their_pieces_cover_the_image_once(tmp_path, order,
+                                                                           pieces):
+    common = [*TALL, "--spp", "2", "-k", "persistent"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = run(*common, "--devices", "0:0,0:1", "--row-order", order, *pieces, "-o",
+                 str(tmp_path / "two.ppm"), "--stats", str(tmp_path / "s.json"), env=CHECK)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert md["row_order"] == order
+    assert (md["row_band"], md["row_bands"], md["row_step"]) == \
+        ((4, 12, 5) if order == "spread" else (0, 0, 0))
+    covered = [[0] * 24 for _ in range(48)]
+    scattered = 0
+    for p in md["pieces"]:
+        rows = [image_row(v, md) for v in range(p["y0"], p["y0"] + p["height"])]
+        scattered += rows != list(range(rows[0], rows[0] + len(rows)))
+        for y in rows:
+            for x in range(p["x0"], p["x0"] + p["width"]):
+                covered[y][x] += 1
+        assert 0 <= p["start_ms"] <= p["end_ms"] and p["kernel_ms"] > 0
+        assert p["device"] in (0, 1)
+    assert all(c == 1 for row in covered for c in row), covered
+    assert (scattered > 0) == (order == "spread")
+
+
 def test_write_count_check_catches_a_band_written_twice(tmp_path):
     # The hook's own check: a band rendered again on a second device (the
     # test-only RTCL_TEST_DOUBLE_BAND) must fail the run, naming the pixel.
@@ -482,6 +532,8 @@ def test_a_device_failing_on_a_band_writes_nothing(tmp_path):
 @needs_mpi
 @pytest.mark.parametrize("spp", ["1", "4"])
 def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, spp):
+    # 32x24 in bands of 8 rows: 3 bands, which --row-order spread leaves in
+    # place (test_mpi_spread_bands_match_one_process moves them).
     image_run(tmp_path, "one", "--spp", spp, "-d", "0", "-k", "persistent")
     result = mpi_run(*SMALL, "--spp", spp, "-k", "persistent", "--piece-rows", "3", "-o",
                      str(tmp_path / "ranks.ppm"), "--stats", str(tmp_path / "s.json"),
@@ -493,6 +545,23 @@ def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, s
     assert md["bands"] == 8 and md["ranks"] == 3
     assert sum(d["pieces"] for d in md["devices"]) == 8
     assert sum(d["pixels"] for d in md["devices"]) == 32 * 24
+
+
+@needs_mpi
+@pytest.mark.parametrize("order", ["spread", pytest.param("scan", marks=pytest.mark.slow)])
+def test_mpi_spread_bands_match_one_process(tmp_path, order):
+    # Bands of split rows go to rank 0 packed, in split-row order, and are
+    # placed by the row map: the image is the one process's.
+    common = [*TALL, "-k", "persistent"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = mpi_run(*common, "--piece-rows", "5", "--row-order", order, "-o",
+                     str(tmp_path / "ranks.ppm"), "--stats", str(tmp_path / "s.json"), env=CHECK)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert md["row_order"] == order and md["bands"] == 10
+    assert sum(d["pixels"] for d in md["devices"]) == 24 * 48
 
 
 @needs_mpi

@@ -35,6 +35,7 @@ enum long_only_option {
 	OPT_MPI,
 	OPT_ACCEL,
 	OPT_PIECE_ROWS,
+	OPT_ROW_ORDER,
 	OPT_MESH_TIME_LIMIT,
 	OPT_MESH_MEMORY_LIMIT,
 	OPT_EYE,
@@ -68,6 +69,7 @@ static const struct option long_options[] = {
 	{"frames", required_argument, NULL, OPT_FRAMES},
 	{"mpi", no_argument, NULL, OPT_MPI},
 	{"piece-rows", required_argument, NULL, OPT_PIECE_ROWS},
+	{"row-order", required_argument, NULL, OPT_ROW_ORDER},
 	{"repeat", required_argument, NULL, 'r'},
 	{"stats", required_argument, NULL, OPT_STATS},
 	{"flops", required_argument, NULL, OPT_FLOPS},
@@ -168,6 +170,10 @@ static void print_help_after_kernels(FILE *out)
 		"                         --split static and --mpi: about 32 bands per device);\n"
 		"                         with one device (--devices P:D) it measures what\n"
 		"                         bands of N rows cost that device\n"
+		"      --row-order spread|scan  which image rows a piece of split rows takes:\n"
+		"                         bands of a work-group's height spread over the\n"
+		"                         image (default: every piece costs about its share),\n"
+		"                         or the rows in order (contiguous pieces)\n"
 		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
@@ -595,6 +601,10 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_MESH_MEMORY_LIMIT:
 		return parse_limit("--mesh-memory-limit", arg, "MiB", MESH_MEMORY_LIMIT_MAX,
 				   &o->mesh_memory_limit, err, err_size);
+	case OPT_ROW_ORDER:
+		o->row_order_given = 1;
+		return parse_choice("--row-order", arg, "spread", "scan", &o->row_order_scan, err,
+				    err_size);
 	case OPT_PIECE_ROWS:
 		return parse_bounded("--piece-rows", arg, 1, SCENE_MAX_IMAGE_SIDE, &o->piece_rows,
 				     err, err_size);
@@ -702,6 +712,14 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 		snprintf(err, err_size,
 			 "--piece-rows cuts one image into bands for the devices of --devices or "
 			 "--mpi (one device too: --devices P:D); it does not apply to %s",
+			 o->frames_given ? "--frames, whose pieces are whole frames"
+					 : "a render without them");
+		return -1;
+	}
+	if (o->row_order_given && (!(o->devices.list_given || o->mpi) || o->frames_given)) {
+		snprintf(err, err_size,
+			 "--row-order orders the rows that pieces of one image take on the devices "
+			 "of --devices or --mpi; it does not apply to %s",
 			 o->frames_given ? "--frames, whose pieces are whole frames"
 					 : "a render without them");
 		return -1;

@@ -29,6 +29,8 @@ struct options {
 	int list_devices;
 	int split_static; /* --split static */
 	int split_given;  /* --split given */
+	int row_order_scan;  /* --row-order scan */
+	int row_order_given; /* --row-order given */
 	int frames[2];	  /* --frames A:B */
 	int frames_given;
 	int mpi;	/* --mpi: rank 0 hands out the pieces (run/mpi_render.h) */

@@ -9,6 +9,7 @@
 #include "render/settings.h"
 #include "scene/scene.h"
 #include "schedule/multidev.h"
+#include "schedule/tiles.h"
 
 /* Which devices: -p/-d (and -t), or the --devices list. */
 struct device_choice {
@@ -26,6 +27,7 @@ struct job {
 	struct device_choice devices;
 	enum split split;	    /* --split */
 	int piece_rows;		    /* --piece-rows; 0: chosen (tiles.h) */
+	enum row_order row_order;   /* --row-order */
 	int animation;		    /* --frames given */
 	int first_frame, last_frame; /* --frames A:B */
 	int mpi;		    /* --mpi */

@@ -137,6 +137,9 @@ void render_result_free(struct render_result *res)
 	free(res->pixel_flops);
 	free(res->write_counts);
 	free(res->schedule);
+	free(res->pieces);
+	res->pieces = NULL;
+	res->piece_count = 0;
 	res->pixel_flops = NULL;
 	res->schedule = NULL;
 	res->rgb = NULL;

@@ -76,6 +76,15 @@ struct render_times {
 /* Room for rtcl's own build options and RTCL_BUILD_OPTIONS (program.h). */
 #define BUILD_OPTIONS_SIZE 576
 
+/* One piece of an image over several devices (schedule/tiles.h), as the
+ * --stats document shows it: the schedule over devices made visible. */
+struct piece_record {
+	struct rt_piece piece; /* its split rows and samples */
+	int device;	       /* index into the job's devices */
+	double start_ms, end_ms; /* taken and done, from the frame's start */
+	double kernel_ms;	 /* its launches' profiled time */
+};
+
 struct render_result {
 	float *rgb; /* width*height*3 linear floats, row 0 at the top */
 	double kernel_ms_median, kernel_ms_min, kernel_ms_max;
@@ -117,6 +126,11 @@ struct render_result {
 	/* With check_writes. */
 	uint32_t *write_counts; /* per pixel */
 	int guards_intact;	/* no byte outside the image was written */
+
+	/* One image over several devices in this process: the last frame's
+	 * pieces, in the order they were handed out. */
+	struct piece_record *pieces;
+	int piece_count;
 };
 
 /* Samples per pixel, 0 counting as 1. */

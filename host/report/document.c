@@ -173,7 +173,31 @@ static json_t *shares_document(const struct device_shares *d)
 	}
 	if (doc && d->ranks_count)
 		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
+	if (doc && d->row_order_given) {
+		json_object_set_new(doc, "row_order",
+				    json_string(d->rows.row_band ? "spread" : "scan"));
+		json_object_set_new(doc, "row_band", json_integer(d->rows.row_band));
+		json_object_set_new(doc, "row_bands", json_integer(d->rows.row_bands));
+		json_object_set_new(doc, "row_step", json_integer(d->rows.row_step));
+	}
 	return doc;
+}
+
+/* The last frame's pieces of one image over several devices of this
+ * process: where each went and when. */
+static json_t *pieces_document(const struct render_result *r)
+{
+	json_t *list = json_array();
+
+	for (int b = 0; b < r->piece_count && list; b++) {
+		const struct piece_record *p = &r->pieces[b];
+		json_array_append_new(
+			list, json_pack("{s:i, s:i, s:i, s:i, s:i, s:f, s:f, s:f}", "device",
+					p->device, "x0", p->piece.x0, "y0", p->piece.y0, "width",
+					p->piece.width, "height", p->piece.height, "start_ms",
+					p->start_ms, "end_ms", p->end_ms, "kernel_ms", p->kernel_ms));
+	}
+	return list;
 }
 
 /* The --stats document of an animation. */
@@ -226,8 +250,12 @@ json_t *report_document(const struct job *job, const struct record *record)
 	}
 	add_device_figures(doc, record);
 	add_accel_figures(doc, job, record);
-	if (record->shares.count)
-		json_object_set_new(doc, "multidevice", shares_document(&record->shares));
+	if (record->shares.count) {
+		json_t *shares = shares_document(&record->shares);
+		if (shares && record->result.pieces)
+			json_object_set_new(shares, "pieces", pieces_document(&record->result));
+		json_object_set_new(doc, "multidevice", shares);
+	}
 	return doc;
 }
 

@@ -252,16 +252,15 @@ static int open_rank_device(void *context, int device, char *err, size_t err_siz
 	return tiles_open(&j->tiles, device, err, err_size);
 }
 
-/* Rank 0: band b's rows, rgb, into the image. */
+/* Rank 0: band b's rows, rgb (packed, in split-row order), into the image. */
 static void place_band(struct mpi_job *j, int band, const float *rgb)
 {
-	struct rt_piece p = tiles_band(&j->settings, j->tiles.rows, band, 0, 1);
+	struct rt_piece p = tiles_job_band(&j->tiles, band, 0, 1);
 
 	pthread_mutex_lock(&j->lock);
 	j->arrived[band]++;
 	pthread_mutex_unlock(&j->lock);
-	memcpy(j->record->result.rgb + 3 * (size_t)p.y0 * p.width, rgb,
-	       image_float_bytes(p.width, p.height));
+	tiles_pack_piece(&p, j->settings.width, rgb, j->record->result.rgb, 1);
 }
 
 /* Image: the device is done: reads it back once (checking its write counts
@@ -276,11 +275,21 @@ static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
 	for (int b = 0; b < t->bands; b++) {
 		if (t->owner[b] != device)
 			continue;
-		struct rt_piece p = tiles_band(t->settings, t->rows, b, 0, 1);
-		const float *rows = t->dev[device].result.rgb + 3 * (size_t)p.y0 * p.width;
+		struct rt_piece p = tiles_job_band(t, b, 0, 1);
+		size_t bytes = image_float_bytes(p.width, p.height);
+		float *rows = malloc(bytes);
+		int failed = 0;
+		if (!rows) {
+			snprintf(err, err_size, "out of host memory for a band of %zu bytes", bytes);
+			return -1;
+		}
+		tiles_pack_piece(&p, t->settings->width, t->dev[device].result.rgb, rows, 0);
 		if (j->rank == ROOT)
 			place_band(j, b, rows);
-		else if (send_result(b, rows, image_float_bytes(p.width, p.height), err, err_size))
+		else
+			failed = send_result(b, rows, bytes, err, err_size);
+		free(rows);
+		if (failed)
 			return -1;
 	}
 	return 0;
@@ -329,7 +338,7 @@ static double piece_work(const struct mpi_job *j, int piece)
 
 	if (!j->image)
 		return repeats_image_work(s);
-	struct rt_piece p = tiles_band(s, j->tiles.rows, piece, 0, 1);
+	struct rt_piece p = tiles_job_band(&j->tiles, piece, 0, 1);
 	return (double)p.width * p.height * p.samples;
 }
 
@@ -360,7 +369,7 @@ static size_t piece_bytes(const struct mpi_job *j, int piece)
 
 	if (!j->image)
 		return image_float_bytes(s->width, s->height);
-	p = tiles_band(s, j->tiles.rows, piece, 0, 1);
+	p = tiles_job_band(&j->tiles, piece, 0, 1);
 	return image_float_bytes(p.width, p.height);
 }
 
@@ -535,7 +544,7 @@ static int choose_pieces(struct mpi_job *j, int total)
 		return 0;
 	}
 	if (tiles_job_init(&j->tiles, job->scene, s, tiles_band_rows(s, job->piece_rows, total), 0,
-			   j->devs, j->count, err, sizeof(err)))
+			   job->row_order, j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
 	if (j->rank != ROOT)
@@ -632,7 +641,10 @@ static int finish_root(struct mpi_job *j)
 		.split = j->job->split,
 		.piece = j->image ? "band" : "frame",
 		.wall_ms = j->wall_ms,
+		.row_order_given = j->image,
 	};
+	if (j->image)
+		renderer_spread_rows(&j->record->shares.rows, j->settings.height, j->tiles.row_band);
 	if (!j->failed && j->image)
 		assemble_image(j, j->wall_ms);
 	else if (!j->failed && output_plan_check_held(j->plan, err, sizeof(err)))

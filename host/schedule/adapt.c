@@ -119,7 +119,7 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 /* A rectangle of cells: columns [col, col + cols) of rows [row, row + rows). */
 static struct rt_piece cell_rect(const struct adapt *a, int col, int row, int cols, int rows)
 {
-	struct rt_piece p;
+	struct rt_piece p = {0};
 
 	p.x0 = col * a->cell_w;
 	p.y0 = row * a->cell_h;
@@ -127,7 +127,6 @@ static struct rt_piece cell_rect(const struct adapt *a, int col, int row, int co
 	p.height = (int)min_d(rows * a->cell_h, a->height - p.y0);
 	p.sample_begin = 0;
 	p.sample_end = p.samples = a->samples;
-	p.pad = 0;
 	return p;
 }
 

@@ -26,6 +26,11 @@ int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices
 	return rows < s->height ? rows : s->height;
 }
 
+int tiles_spread_band(const struct render_settings *s)
+{
+	return s->workgroup[1] > 0 ? s->workgroup[1] : 8;
+}
+
 int tiles_band_count(int height, int rows)
 {
 	return (height + rows - 1) / rows;
@@ -37,6 +42,29 @@ struct rt_piece tiles_band(const struct render_settings *s, int rows, int index,
 	int height = s->height - y0 < rows ? s->height - y0 : rows;
 
 	return renderer_rows(s, y0, height, begin, end);
+}
+
+struct rt_piece tiles_job_band(const struct tiles_job *t, int index, int begin, int end)
+{
+	struct rt_piece p = tiles_band(t->settings, t->rows, index, begin, end);
+
+	renderer_spread_rows(&p, t->settings->height, t->row_band);
+	return p;
+}
+
+void tiles_pack_piece(const struct rt_piece *p, int image_width, const float *from, float *to,
+		      int unpack)
+{
+	size_t row_bytes = 3 * (size_t)p->width * sizeof(float);
+
+	for (int j = 0; j < p->height; j++) {
+		size_t image = 3 * ((size_t)rt_piece_row(p, p->y0 + j) * image_width + p->x0);
+		size_t packed = 3 * (size_t)j * p->width;
+		if (unpack)
+			memcpy(to + image, from + packed, row_bytes);
+		else
+			memcpy(to + packed, from + image, row_bytes);
+	}
 }
 
 int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece)
@@ -83,8 +111,8 @@ static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
 }
 
 int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
-		   int rows, int adaptive, struct device *devs, int count, char *err,
-		   size_t err_size)
+		   int rows, int adaptive, enum row_order order, struct device *devs, int count,
+		   char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
 
@@ -96,6 +124,7 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	t->rows = rows;
 	t->bands = tiles_band_count(s->height, rows);
 	t->adaptive = adaptive;
+	t->row_band = order == ROWS_SPREAD ? tiles_spread_band(s) : 0;
 	t->piece_cap = t->piece_count = t->bands;
 	if (adaptive)
 		init_adaptive(t, s);
@@ -103,13 +132,14 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	pthread_cond_init(&t->asked, NULL);
 	t->pieces = malloc((size_t)t->piece_cap * sizeof(*t->pieces));
 	t->owner = malloc((size_t)t->piece_cap * sizeof(int));
+	t->piece_ms = calloc((size_t)t->piece_cap * 3, sizeof(double));
 	t->expected = s->check_writes ? calloc(pixels, sizeof(uint32_t)) : NULL;
-	if (!t->pieces || !t->owner || (s->check_writes && !t->expected)) {
+	if (!t->pieces || !t->owner || !t->piece_ms || (s->check_writes && !t->expected)) {
 		snprintf(err, err_size, "out of host memory for %d pieces", t->piece_cap);
 		return -1;
 	}
 	for (int b = 0; b < t->piece_count; b++) {
-		t->pieces[b] = tiles_band(s, rows, b, 0, settings_samples(s));
+		t->pieces[b] = tiles_job_band(t, b, 0, settings_samples(s));
 		t->owner[b] = -1;
 	}
 	return 0;
@@ -140,6 +170,7 @@ int tiles_take_piece(struct tiles_job *t, int k)
 	pthread_mutex_lock(&t->lock);
 	wait_for_fronts(t, k);
 	if (t->piece_count < t->piece_cap && adapt_take(&t->adapt, k, timing_now() * 1e3, &piece)) {
+		renderer_spread_rows(&piece, t->settings->height, t->row_band);
 		index = t->piece_count++;
 		t->pieces[index] = piece;
 		t->owner[index] = k;
@@ -159,6 +190,8 @@ void tiles_job_free(struct tiles_job *t)
 	}
 	free(t->owner);
 	free(t->pieces);
+	free(t->piece_ms);
+	t->piece_ms = NULL;
 	free(t->expected);
 	t->owner = NULL;
 	t->pieces = NULL;
@@ -185,9 +218,9 @@ static void expect_writes(struct tiles_job *t, const struct rt_piece *p, int sig
 {
 	int launches = tiles_piece_launches(t->settings, p) * sign;
 
-	for (int y = p->y0; t->expected && y < p->y0 + p->height; y++)
+	for (int v = p->y0; t->expected && v < p->y0 + p->height; v++)
 		for (int x = p->x0; x < p->x0 + p->width; x++)
-			t->expected[(size_t)y * t->settings->width + x] += launches;
+			t->expected[(size_t)rt_piece_row(p, v) * t->settings->width + x] += launches;
 }
 
 int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
@@ -205,10 +238,14 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 		return -1;
 	}
 	whole = t->pieces[band];
+	double start = timing_now();
 	/* Every sample of the piece on this device, in order: the running
 	 * sums stay in its buffer. */
 	if (renderer_all_samples(&t->dev[k].renderer, &whole, &out, err, err_size))
 		return -1;
+	t->piece_ms[3 * band] = (start - t->frame_start) * 1e3;
+	t->piece_ms[3 * band + 1] = (timing_now() - t->frame_start) * 1e3;
+	t->piece_ms[3 * band + 2] = out.kernel_ms;
 	done->kernel_ms += out.kernel_ms;
 	done->launches += out.launches;
 	t->owner[band] = k; /* pieces are distinct: no two threads write one */
@@ -238,8 +275,8 @@ void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_
 {
 	const struct rt_piece *p = &t->pieces[piece];
 
-	for (int y = p->y0; y < p->y0 + p->height; y++) {
-		size_t first = (size_t)y * t->settings->width + p->x0;
+	for (int v = p->y0; v < p->y0 + p->height; v++) {
+		size_t first = (size_t)rt_piece_row(p, v) * t->settings->width + p->x0;
 		memcpy(to->rgb + 3 * first, from->rgb + 3 * first,
 		       3 * (size_t)p->width * sizeof(float));
 		if (from->pixel_flops && to->pixel_flops)
@@ -288,8 +325,9 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	for (int b = 0; counts && b < t->piece_count; b++) {
 		const struct rt_piece *p = &t->pieces[b];
 		uint32_t expected = t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p) : 0;
-		for (int y = p->y0; y < p->y0 + p->height; y++)
-			if (tiles_check_counts(counts + (size_t)y * s->width + p->x0, p->width, 1,
+		for (int v = p->y0; v < p->y0 + p->height; v++)
+			if (tiles_check_counts(counts + (size_t)rt_piece_row(p, v) * s->width + p->x0,
+					       p->width, 1,
 					       expected, err, err_size))
 				return -1;
 	}
@@ -387,6 +425,22 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
 	to->bvh_bytes = from->bvh_bytes;
 }
 
+/* The last frame's pieces into out (render_result's piece records). */
+static int record_pieces(const struct tiles_job *t, struct render_result *out)
+{
+	out->pieces = calloc((size_t)(t->piece_count ? t->piece_count : 1), sizeof(*out->pieces));
+	if (!out->pieces)
+		return -1;
+	for (int b = 0; b < t->piece_count; b++)
+		out->pieces[b] = (struct piece_record){.piece = t->pieces[b],
+						       .device = t->owner[b],
+						       .start_ms = t->piece_ms[3 * b],
+						       .end_ms = t->piece_ms[3 * b + 1],
+						       .kernel_ms = t->piece_ms[3 * b + 2]};
+	out->piece_count = t->piece_count;
+	return 0;
+}
+
 /* Reads every device back and assembles the image (and counts) in out. */
 static int assemble(struct tiles_job *t, struct render_result *out, char *err, size_t err_size)
 {
@@ -409,6 +463,10 @@ static int assemble(struct tiles_job *t, struct render_result *out, char *err, s
 		tiles_copy_piece(t, b, &t->dev[t->owner[b]].result, out);
 	if (s->count_flops && join_item_counts(t, out)) {
 		snprintf(err, err_size, "out of host memory for the flop counts");
+		return -1;
+	}
+	if (record_pieces(t, out)) {
+		snprintf(err, err_size, "out of host memory for %d pieces' records", t->piece_count);
 		return -1;
 	}
 	out->guards_intact = 1;
@@ -448,6 +506,7 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 		repeats_progress_begin(t->settings, frames, devices);
 	for (int f = 0; f < frames; f++) {
 		double start = timing_now();
+		t->frame_start = start;
 		repeats_progress_step(t->settings, out, f, frames);
 		if (t->adaptive) {
 			adapt_new_frame(&t->adapt);
@@ -473,8 +532,8 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	int rows = tiles_band_rows(s, r->piece_rows, r->count), frames;
 
 	memset(out, 0, sizeof(*out));
-	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows), r->devs,
-			   r->count, err, err_size))
+	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows),
+			   r->row_order, r->devs, r->count, err, err_size))
 		return -1;
 	if (open_all(&t, setup, err, err_size))
 		goto out_free;

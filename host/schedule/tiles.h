@@ -40,6 +40,20 @@
  * only a bound. */
 #define TILES_FRONT_WAIT_MS 200
 
+/* The order in which pieces take the image's rows (--row-order;
+ * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
+ * rows, and split row v is image row rt_piece_row(v) (cl/rtcl_shared.h).
+ *  ROWS_SPREAD: bands of a work-group's height spread over the image by a
+ *               golden-ratio stride, so that every piece, however cut, takes
+ *               rows from the whole image and costs about its share of it;
+ *  ROWS_SCAN:   split row v is image row v: contiguous pieces. */
+enum row_order { ROWS_SPREAD, ROWS_SCAN };
+
+/* The height of the bands ROWS_SPREAD spreads: the work-group's height (8
+ * when the device chooses it), which is also the adaptive dispenser's cell
+ * height, so that a cell row is one band. */
+int tiles_spread_band(const struct render_settings *s);
+
 /* Rows per band: piece_rows when given (> 0), else about height / (32 ×
  * devices) rounded up to a multiple of the work-group height. */
 int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices);
@@ -67,8 +81,12 @@ struct tiles_job {
 	int count;
 	int rows, bands;
 	int adaptive;		 /* pieces from `adapt`, not bands */
+	int row_band;		 /* ROWS_SPREAD: tiles_spread_band; ROWS_SCAN: 0 */
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
+	double *piece_ms;	 /* each piece's start, end (from frame_start) and
+				    kernel time, 3 per piece */
+	double frame_start;	 /* the frame's start (timing_now, seconds) */
 	int piece_count, piece_cap;
 	uint32_t *expected; /* check_writes: each pixel's launches so far, all frames */
 	struct adapt adapt;
@@ -78,10 +96,21 @@ struct tiles_job {
 };
 
 /* Returns 0, or -1 with one message in err (out of memory). With adaptive,
- * rows is ignored and the pieces are cut per frame. */
+ * rows is ignored and the pieces are cut per frame. Every piece takes its
+ * rows in `order`. */
 int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
-		   int rows, int adaptive, struct device *devs, int count, char *err,
-		   size_t err_size);
+		   int rows, int adaptive, enum row_order order, struct device *devs, int count,
+		   char *err, size_t err_size);
+
+/* The job's band `index` (tiles_band of its rows) with its row order,
+ * samples [begin, end). */
+struct rt_piece tiles_job_band(const struct tiles_job *t, int index, int begin, int end);
+
+/* Copies the pixels of piece p (x0.. of each split row, in order) from the
+ * full-size image `from` to the packed rows `to` (p->width * p->height
+ * pixels), or back when unpack is set. */
+void tiles_pack_piece(const struct rt_piece *p, int image_width, const float *from, float *to,
+		      int unpack);
 
 /* Adaptive: the next piece for device k (its previous one done), added to
  * the job's pieces; returns its index, or -1 when there is none for k. */
@@ -128,6 +157,7 @@ struct tiles_request {
 	int count;
 	enum split split; /* SPLIT_STATIC: bands, handed out statically */
 	int piece_rows;	  /* --piece-rows: bands of this height; 0: chosen */
+	enum row_order row_order; /* --row-order */
 };
 
 /* Whether the pieces come from the adaptive dispenser (multidev.h): unless
