@@ -301,31 +301,50 @@ struct rt_piece {
 					    [begin, end) */
 	rt_int samples;			 /* N, samples per pixel of the whole render */
 	rt_int row_band;		 /* 0: split row v is image row v; else the
-					    height of the bands rt_piece_row spreads */
+					    height of the bands rt_piece_row moves */
 	rt_int row_bands;		 /* the image's whole bands of row_band rows */
-	rt_int row_step;		 /* the stride that spreads them, coprime to
-					    row_bands */
+	rt_int row_step;		 /* spread: the stride, coprime to row_bands */
+	rt_int row_classes;		 /* interleave: the classes; 0: spread */
 };
 
 /* The image row of split row v of a piece (docs/GUIDE.md, "How the rows are
  * ordered"): with row_band 0, v itself; else split band b = v / row_band is
- * image band (b * row_step) mod row_bands, the rows after the last whole band
- * staying where they are. Consecutive split bands land about row_bands / phi^2
- * bands apart, so any run of them is spread over the whole image. Shared by the
- * kernels and the host (which copies and checks pieces by it). */
+ * moved, whole, to another image band, the rows after the last whole band
+ * staying where they are.
+ *  interleave (row_classes S > 0): the split bands are the image's bands
+ *    of class 0 (0, S, 2S, ..), then those of class 1 (1, S + 1, ..), and so
+ *    on, each class top to bottom; F = qS + r bands: the first r classes
+ *    have q + 1. So a run of F/S split bands is every S-th band of the image.
+ *  spread (row_classes 0): image band (b * row_step) mod row_bands;
+ *    consecutive split bands land about row_bands / phi^2 bands apart, so
+ *    any run of them is spread over the whole image.
+ * Shared by the kernels and the host (which copies and checks pieces by it). */
 static inline rt_int rt_piece_row(const struct rt_piece *p, rt_int v)
 {
 	if (p->row_band == 0 || v >= p->row_band * p->row_bands)
 		return v;
-	rt_int b = v / p->row_band;
-	/* b, row_step < row_bands <= 32768: the product fits in 32 bits */
-	rt_uint band = ((rt_uint)b * (rt_uint)p->row_step) % (rt_uint)p->row_bands;
-	return (rt_int)band * p->row_band + (v - b * p->row_band);
+	rt_int b = v / p->row_band, band;
+	if (p->row_classes > 0) {
+		rt_int q = p->row_bands / p->row_classes, r = p->row_bands % p->row_classes;
+		rt_int c, k;
+		if (b < r * (q + 1)) {
+			c = b / (q + 1);
+			k = b - c * (q + 1);
+		} else {
+			c = r + (b - r * (q + 1)) / q;
+			k = b - r * (q + 1) - (c - r) * q;
+		}
+		band = c + k * p->row_classes;
+	} else {
+		/* b, row_step < row_bands <= 32768: the product fits in 32 bits */
+		band = (rt_int)(((rt_uint)b * (rt_uint)p->row_step) % (rt_uint)p->row_bands);
+	}
+	return band * p->row_band + (v - b * p->row_band);
 }
 
 #ifndef __OPENCL_VERSION__
 #include <stddef.h>
-_Static_assert(sizeof(struct rt_piece) == 40, "rt_piece layout");
+_Static_assert(sizeof(struct rt_piece) == 44, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, sample_begin) == 16, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, samples) == 24, "rt_piece layout");
 _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");

@@ -219,8 +219,10 @@ static void min_pieces(const struct device *devs, int count, int width, int heig
 	struct tiles_job t;
 	char err[256];
 
+	struct rt_piece map = {0};
+	tiles_row_map(&map, &s, ROWS_INTERLEAVE, 0, count);
 	cr_assert_eq(
-		tiles_job_init(&t, NULL, &s, 8, 1, ROWS_SPREAD, (struct device *)devs, count, err,
+		tiles_job_init(&t, NULL, &s, 8, 1, &map, (struct device *)devs, count, err,
 			       sizeof(err)),
 		0, "%s", err);
 	for (int k = 0; k < count; k++)
@@ -268,36 +270,67 @@ Test(multidev, bands_cover_every_row_once_with_all_samples)
 		cr_assert_eq(covered[y], 1, "row %d", y);
 }
 
-/* --row-order spread (docs/GUIDE.md, "How the rows are ordered"): for
- * every image height and band height, split rows map onto image rows one to
- * one, whole bands stay whole, the rows after the last whole band stay where
- * they are, and fewer than three bands (or band 0) leave every row in place. */
-Test(multidev, spread_rows_are_a_permutation_of_whole_bands)
+/* A row map (docs/GUIDE.md, "How the rows are ordered") maps split rows
+ * onto image rows one to one, whole bands stay whole, the rows after the last
+ * whole band stay where they are, and a map that moves nothing leaves every
+ * row in place. */
+static void check_permutation(const struct rt_piece *map, int height, int band, int moved)
 {
 	static int seen[2100];
+	int bands = band ? height / band : 0;
+	const struct rt_piece p = *map;
 
+	cr_assert_eq(p.row_band, moved ? band : 0, "height %d band %d", height, band);
+	memset(seen, 0, sizeof(seen));
+	for (int v = 0; v < height; v++) {
+		int y = rt_piece_row(&p, v);
+		cr_assert(y >= 0 && y < height, "height %d band %d: row %d -> %d", height, band, v,
+			  y);
+		seen[y]++;
+		if (!moved || v >= bands * band)
+			cr_assert_eq(y, v, "height %d band %d: row %d moved", height, band, v);
+		else /* a band's rows stay together, in order */
+			cr_assert_eq(y % band, v % band);
+	}
+	for (int y = 0; y < height; y++)
+		cr_assert_eq(seen[y], 1, "height %d band %d: row %d taken %d times", height, band, y,
+			     seen[y]);
+}
+
+/* --row-order interleave:S: the same, and class c's bands (c, c + S, ..) come
+ * in order, the classes one after the other, the first F mod S one band
+ * longer. */
+Test(multidev, interleaved_rows_are_the_classes_in_order)
+{
+	for (int height = 1; height <= 700; height += height < 80 ? 1 : 31) {
+		for (int band = 1; band <= 9; band++) {
+			for (int classes = 1; classes <= 7; classes++) {
+				struct rt_piece p = {0};
+				int bands = height / band, v = 0;
+				renderer_interleave_rows(&p, height, band, classes);
+				int moved = classes >= 2 && bands >= classes;
+				check_permutation(&p, height, band, moved);
+				for (int c = 0; moved && c < classes; c++)
+					for (int b = c; b < bands; b += classes, v += band)
+						cr_assert_eq(rt_piece_row(&p, v), b * band,
+							     "height %d band %d classes %d: split "
+							     "row %d",
+							     height, band, classes, v);
+			}
+		}
+	}
+}
+
+/* --row-order spread: for every image height and band height; fewer than
+ * three bands (or band 0) move nothing. */
+Test(multidev, spread_rows_are_a_permutation_of_whole_bands)
+{
 	for (int height = 1; height <= 2100; height += height < 80 ? 1 : 97) {
 		for (int band = 0; band <= 16; band++) {
 			struct rt_piece p = {0};
 			int bands = band ? height / band : 0;
 			renderer_spread_rows(&p, height, band);
-			cr_assert_eq(p.row_band, bands >= 3 ? band : 0, "height %d band %d", height,
-				     band);
-			memset(seen, 0, sizeof(seen));
-			for (int v = 0; v < height; v++) {
-				int y = rt_piece_row(&p, v);
-				cr_assert(y >= 0 && y < height, "height %d band %d: row %d -> %d",
-					  height, band, v, y);
-				seen[y]++;
-				if (bands < 3 || v >= bands * band)
-					cr_assert_eq(y, v, "height %d band %d: row %d moved", height,
-						     band, v);
-				else /* a band's rows stay together, in order */
-					cr_assert_eq(y % band, v % band);
-			}
-			for (int y = 0; y < height; y++)
-				cr_assert_eq(seen[y], 1, "height %d band %d: row %d taken %d times",
-					     height, band, y, seen[y]);
+			check_permutation(&p, height, band, bands >= 3);
 		}
 	}
 }

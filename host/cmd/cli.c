@@ -170,10 +170,11 @@ static void print_help_after_kernels(FILE *out)
 		"                         --split static and --mpi: about 32 bands per device);\n"
 		"                         with one device (--devices P:D) it measures what\n"
 		"                         bands of N rows cost that device\n"
-		"      --row-order spread|scan  which image rows a piece of split rows takes:\n"
-		"                         bands of a work-group's height spread over the\n"
-		"                         image (default: every piece costs about its share),\n"
-		"                         or the rows in order (contiguous pieces)\n"
+		"      --row-order interleave[:S]|spread|scan  which image rows the pieces\n"
+		"                         take, in bands of a work-group's height: dealt to\n"
+		"                         S classes (default S: the devices), so an equal\n"
+		"                         share is every S-th band; spread over the image by\n"
+		"                         a golden-ratio stride; or in order (contiguous)\n"
 		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
@@ -454,6 +455,35 @@ static int parse_choice(const char *option, const char *text, const char *first,
 	return 0;
 }
 
+/* --row-order interleave[:S]|spread|scan into o (enum row_order, S). */
+static int parse_row_order(const char *text, struct options *o, char *err, size_t err_size)
+{
+	static const char interleave[] = "interleave";
+	long classes;
+
+	o->row_classes = 0;
+	if (strcmp(text, "spread") == 0 || strcmp(text, "scan") == 0) {
+		o->row_order = strcmp(text, "spread") == 0 ? ROWS_SPREAD : ROWS_SCAN;
+		return 0;
+	}
+	if (strncmp(text, interleave, sizeof(interleave) - 1) == 0) {
+		const char *rest = text + sizeof(interleave) - 1;
+		o->row_order = ROWS_INTERLEAVE;
+		if (*rest == '\0')
+			return 0;
+		if (*rest == ':' && parse_decimal(rest + 1, strlen(rest + 1), 1, ROWS_CLASSES_MAX,
+						  &classes) == 0) {
+			o->row_classes = (int)classes;
+			return 0;
+		}
+	}
+	snprintf(err, err_size,
+		 "--row-order: expected interleave, interleave:S (S classes, 1..%d), spread or "
+		 "scan, got \"%s\"",
+		 ROWS_CLASSES_MAX, quote_text(text));
+	return -1;
+}
+
 /* --accel none|bvh|bvh-compact into *accel (enum accel). */
 static int parse_accel(const char *text, int *accel, char *err, size_t err_size)
 {
@@ -603,8 +633,7 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 				   &o->mesh_memory_limit, err, err_size);
 	case OPT_ROW_ORDER:
 		o->row_order_given = 1;
-		return parse_choice("--row-order", arg, "spread", "scan", &o->row_order_scan, err,
-				    err_size);
+		return parse_row_order(arg, o, err, err_size);
 	case OPT_PIECE_ROWS:
 		return parse_bounded("--piece-rows", arg, 1, SCENE_MAX_IMAGE_SIDE, &o->piece_rows,
 				     err, err_size);

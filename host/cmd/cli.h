@@ -29,7 +29,8 @@ struct options {
 	int list_devices;
 	int split_static; /* --split static */
 	int split_given;  /* --split given */
-	int row_order_scan;  /* --row-order scan */
+	int row_order;	     /* --row-order: enum row_order (schedule/tiles.h) */
+	int row_classes;     /* --row-order interleave:S; 0: the devices */
 	int row_order_given; /* --row-order given */
 	int frames[2];	  /* --frames A:B */
 	int frames_given;

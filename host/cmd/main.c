@@ -105,7 +105,8 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	job->devices = opt->devices;
 	job->split = opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC;
 	job->piece_rows = opt->piece_rows;
-	job->row_order = opt->row_order_scan ? ROWS_SCAN : ROWS_SPREAD;
+	job->row_order = (enum row_order)opt->row_order;
+	job->row_classes = opt->row_classes;
 	job->animation = opt->frames_given;
 	job->first_frame = opt->frames[0];
 	job->last_frame = opt->frames[1];

@@ -28,6 +28,7 @@ struct job {
 	enum split split;	    /* --split */
 	int piece_rows;		    /* --piece-rows; 0: chosen (tiles.h) */
 	enum row_order row_order;   /* --row-order */
+	int row_classes;	    /* --row-order interleave:S; 0: the devices */
 	int animation;		    /* --frames given */
 	int first_frame, last_frame; /* --frames A:B */
 	int mpi;		    /* --mpi */

@@ -82,6 +82,12 @@ struct rt_piece renderer_rows(const struct render_settings *s, int y0, int heigh
  * is coprime to bands, the next one up. */
 void renderer_spread_rows(struct rt_piece *p, int height, int band);
 
+/* Sets piece's row map to interleave the bands of `band` rows of an image
+ * `height` rows high in `classes` classes (band b in class b mod classes),
+ * each class's bands top to bottom, class after class; fewer than 2 classes,
+ * or more classes than bands: scan order. */
+void renderer_interleave_rows(struct rt_piece *p, int height, int band, int classes);
+
 /* Returns the piece of the whole image with samples [begin, end). */
 struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end);
 

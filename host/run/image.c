@@ -106,8 +106,9 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	}
 	struct render_settings s = job->settings;
 	s.check_writes |= hook_count_writes();
-	d->tiles = (struct tiles_request){job->scene, d->devs, d->count, job->split,
-					  job->piece_rows, job->row_order};
+	d->tiles = (struct tiles_request){job->scene,	  d->devs,	    d->count,
+					  job->split,	  job->piece_rows, job->row_order,
+					  job->row_classes};
 	record_devices(record, d->devs, d->count);
 	int adaptive = tiles_adaptive(job->split, job->piece_rows);
 	int rows = tiles_band_rows(&s, job->piece_rows, d->count);
@@ -121,8 +122,7 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 		.bands = adaptive ? 0 : tiles_band_count(s.height, rows),
 		.row_order_given = 1,
 	};
-	renderer_spread_rows(&record->shares.rows, s.height,
-			     job->row_order == ROWS_SPREAD ? tiles_spread_band(&s) : 0);
+	tiles_row_map(&record->shares.rows, &s, job->row_order, job->row_classes, d->count);
 	return render_counted(d, job, &s, render_pieces, record, err, err_size);
 }
 

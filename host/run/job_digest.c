@@ -25,6 +25,7 @@ void job_digest_fill(const struct job *job, struct job_digest *d)
 	v[JOB_PIECE_ROWS] = job->piece_rows;
 	v[JOB_SPLIT_STATIC] = job->split == SPLIT_STATIC;
 	v[JOB_ROW_ORDER] = job->row_order;
+	v[JOB_ROW_CLASSES] = job->row_classes;
 	v[JOB_KERNEL] = s->kernel ? s->kernel - render_kernels : -1;
 	v[JOB_WORKGROUP_X] = s->workgroup[0];
 	v[JOB_WORKGROUP_Y] = s->workgroup[1];
@@ -41,7 +42,7 @@ static const struct {
 	int count;
 } job_options[] = {
 	{JOB_WIDTH, 2},	     {JOB_SAMPLES, 1},	    {JOB_DEPTH, 1},  {JOB_FRAMES_GIVEN, 3},
-	{JOB_PIECE_ROWS, 1}, {JOB_SPLIT_STATIC, 1}, {JOB_ROW_ORDER, 1}, {JOB_KERNEL, 1}, {JOB_WORKGROUP_X, 2},
+	{JOB_PIECE_ROWS, 1}, {JOB_SPLIT_STATIC, 1}, {JOB_ROW_ORDER, 2}, {JOB_KERNEL, 1}, {JOB_WORKGROUP_X, 2},
 	{JOB_GROUPS_X, 2},   {JOB_BATCH, 1},	    {JOB_ACCEL, 1},
 };
 
@@ -75,7 +76,13 @@ static void show_setting(const long long *v, enum job_setting first, char *out, 
 		snprintf(out, size, "--split %s", v[JOB_SPLIT_STATIC] ? "static" : "dynamic");
 		break;
 	case JOB_ROW_ORDER:
-		snprintf(out, size, "--row-order %s", v[JOB_ROW_ORDER] == ROWS_SCAN ? "scan" : "spread");
+		if (v[JOB_ROW_ORDER] == ROWS_INTERLEAVE && v[JOB_ROW_CLASSES])
+			snprintf(out, size, "--row-order interleave:%lld", v[JOB_ROW_CLASSES]);
+		else
+			snprintf(out, size, "--row-order %s",
+				 v[JOB_ROW_ORDER] == ROWS_SCAN	   ? "scan"
+				 : v[JOB_ROW_ORDER] == ROWS_SPREAD ? "spread"
+								   : "interleave");
 		break;
 	case JOB_KERNEL:
 		snprintf(out, size, "-k %s",

@@ -543,8 +543,10 @@ static int choose_pieces(struct mpi_job *j, int total)
 		j->pieces = job_frame_count(job);
 		return 0;
 	}
+	struct rt_piece map = {0};
+	tiles_row_map(&map, s, job->row_order, job->row_classes, total);
 	if (tiles_job_init(&j->tiles, job->scene, s, tiles_band_rows(s, job->piece_rows, total), 0,
-			   job->row_order, j->devs, j->count, err, sizeof(err)))
+			   &map, j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
 	if (j->rank != ROOT)
@@ -644,7 +646,7 @@ static int finish_root(struct mpi_job *j)
 		.row_order_given = j->image,
 	};
 	if (j->image)
-		renderer_spread_rows(&j->record->shares.rows, j->settings.height, j->tiles.row_band);
+		j->record->shares.rows = j->tiles.row_map;
 	if (!j->failed && j->image)
 		assemble_image(j, j->wall_ms);
 	else if (!j->failed && output_plan_check_held(j->plan, err, sizeof(err)))

@@ -31,6 +31,28 @@ int tiles_spread_band(const struct render_settings *s)
 	return s->workgroup[1] > 0 ? s->workgroup[1] : 8;
 }
 
+void tiles_row_map(struct rt_piece *map, const struct render_settings *s, enum row_order order,
+		   int classes, int devices)
+{
+	int band = tiles_spread_band(s);
+
+	if (order == ROWS_SPREAD)
+		renderer_spread_rows(map, s->height, band);
+	else if (order == ROWS_INTERLEAVE)
+		renderer_interleave_rows(map, s->height, band, classes > 0 ? classes : devices);
+	else
+		renderer_spread_rows(map, s->height, 0);
+}
+
+/* Gives p the job's row map. */
+static void apply_rows(const struct tiles_job *t, struct rt_piece *p)
+{
+	p->row_band = t->row_map.row_band;
+	p->row_bands = t->row_map.row_bands;
+	p->row_step = t->row_map.row_step;
+	p->row_classes = t->row_map.row_classes;
+}
+
 int tiles_band_count(int height, int rows)
 {
 	return (height + rows - 1) / rows;
@@ -48,7 +70,7 @@ struct rt_piece tiles_job_band(const struct tiles_job *t, int index, int begin, 
 {
 	struct rt_piece p = tiles_band(t->settings, t->rows, index, begin, end);
 
-	renderer_spread_rows(&p, t->settings->height, t->row_band);
+	apply_rows(t, &p);
 	return p;
 }
 
@@ -111,8 +133,8 @@ static void init_adaptive(struct tiles_job *t, const struct render_settings *s)
 }
 
 int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
-		   int rows, int adaptive, enum row_order order, struct device *devs, int count,
-		   char *err, size_t err_size)
+		   int rows, int adaptive, const struct rt_piece *map, struct device *devs,
+		   int count, char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
 
@@ -124,7 +146,7 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	t->rows = rows;
 	t->bands = tiles_band_count(s->height, rows);
 	t->adaptive = adaptive;
-	t->row_band = order == ROWS_SPREAD ? tiles_spread_band(s) : 0;
+	t->row_map = *map;
 	t->piece_cap = t->piece_count = t->bands;
 	if (adaptive)
 		init_adaptive(t, s);
@@ -170,7 +192,7 @@ int tiles_take_piece(struct tiles_job *t, int k)
 	pthread_mutex_lock(&t->lock);
 	wait_for_fronts(t, k);
 	if (t->piece_count < t->piece_cap && adapt_take(&t->adapt, k, timing_now() * 1e3, &piece)) {
-		renderer_spread_rows(&piece, t->settings->height, t->row_band);
+		apply_rows(t, &piece);
 		index = t->piece_count++;
 		t->pieces[index] = piece;
 		t->owner[index] = k;
@@ -530,10 +552,12 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	struct device_work setup[DEVICES_MAX];
 	struct tiles_job t;
 	int rows = tiles_band_rows(s, r->piece_rows, r->count), frames;
+	struct rt_piece map = {0};
 
 	memset(out, 0, sizeof(*out));
-	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows),
-			   r->row_order, r->devs, r->count, err, err_size))
+	tiles_row_map(&map, s, r->row_order, r->row_classes, r->count);
+	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows), &map,
+			   r->devs, r->count, err, err_size))
 		return -1;
 	if (open_all(&t, setup, err, err_size))
 		goto out_free;

@@ -43,16 +43,27 @@
 /* The order in which pieces take the image's rows (--row-order;
  * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
  * rows, and split row v is image row rt_piece_row(v) (cl/rtcl_shared.h).
- *  ROWS_SPREAD: bands of a work-group's height spread over the image by a
- *               golden-ratio stride, so that every piece, however cut, takes
- *               rows from the whole image and costs about its share of it;
+ *  ROWS_INTERLEAVE: bands of a work-group's height dealt to S classes
+ *               (S: the devices, or --row-order interleave:S), a class's
+ *               bands top to bottom: an equal share is every S-th band;
+ *  ROWS_SPREAD: the bands spread over the image by a golden-ratio stride,
+ *               so that every piece, however cut, takes rows from the whole
+ *               image;
  *  ROWS_SCAN:   split row v is image row v: contiguous pieces. */
-enum row_order { ROWS_SPREAD, ROWS_SCAN };
+enum row_order { ROWS_INTERLEAVE, ROWS_SPREAD, ROWS_SCAN };
 
-/* The height of the bands ROWS_SPREAD spreads: the work-group's height (8
+/* The most classes --row-order interleave:S takes. */
+#define ROWS_CLASSES_MAX 4096
+
+/* The height of the bands the row orders move: the work-group's height (8
  * when the device chooses it), which is also the adaptive dispenser's cell
  * height, so that a cell row is one band. */
 int tiles_spread_band(const struct render_settings *s);
+
+/* Sets map's row map (its row_* fields) for an image of settings s in
+ * `order`; classes: interleave's S, 0 for the count of devices. */
+void tiles_row_map(struct rt_piece *map, const struct render_settings *s, enum row_order order,
+		   int classes, int devices);
 
 /* Rows per band: piece_rows when given (> 0), else about height / (32 ×
  * devices) rounded up to a multiple of the work-group height. */
@@ -81,7 +92,7 @@ struct tiles_job {
 	int count;
 	int rows, bands;
 	int adaptive;		 /* pieces from `adapt`, not bands */
-	int row_band;		 /* ROWS_SPREAD: tiles_spread_band; ROWS_SCAN: 0 */
+	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
 	double *piece_ms;	 /* each piece's start, end (from frame_start) and
@@ -97,10 +108,10 @@ struct tiles_job {
 
 /* Returns 0, or -1 with one message in err (out of memory). With adaptive,
  * rows is ignored and the pieces are cut per frame. Every piece takes its
- * rows in `order`. */
+ * rows by map's row map (tiles_row_map). */
 int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct render_settings *s,
-		   int rows, int adaptive, enum row_order order, struct device *devs, int count,
-		   char *err, size_t err_size);
+		   int rows, int adaptive, const struct rt_piece *map, struct device *devs,
+		   int count, char *err, size_t err_size);
 
 /* The job's band `index` (tiles_band of its rows) with its row order,
  * samples [begin, end). */
@@ -158,6 +169,7 @@ struct tiles_request {
 	enum split split; /* SPLIT_STATIC: bands, handed out statically */
 	int piece_rows;	  /* --piece-rows: bands of this height; 0: chosen */
 	enum row_order row_order; /* --row-order */
+	int row_classes;	  /* --row-order interleave:S; 0: the devices */
 };
 
 /* Whether the pieces come from the adaptive dispenser (multidev.h): unless
