@@ -301,45 +301,35 @@ struct rt_piece {
 					    [begin, end) */
 	rt_int samples;			 /* N, samples per pixel of the whole render */
 	rt_int row_band;		 /* 0: split row v is image row v; else the
-					    height of the bands rt_piece_row moves */
+					    height of the bands rt_piece_row deals */
 	rt_int row_bands;		 /* the image's whole bands of row_band rows */
-	rt_int row_step;		 /* spread: the stride, coprime to row_bands */
-	rt_int row_classes;		 /* interleave: the classes; 0: spread */
+	rt_int row_classes;		 /* the classes they are dealt to (>= 2) */
+	rt_int pad;
 };
 
 /* The image row of split row v of a piece (docs/GUIDE.md, "How the rows are
- * ordered"): with row_band 0, v itself; else split band b = v / row_band is
- * moved, whole, to another image band, the rows after the last whole band
- * staying where they are.
- *  interleave (row_classes S > 0): the split bands are the image's bands
- *    of class 0 (0, S, 2S, ..), then those of class 1 (1, S + 1, ..), and so
- *    on, each class top to bottom; F = qS + r bands: the first r classes
- *    have q + 1. So a run of F/S split bands is every S-th band of the image.
- *  spread (row_classes 0): image band (b * row_step) mod row_bands;
- *    consecutive split bands land about row_bands / phi^2 bands apart, so
- *    any run of them is spread over the whole image.
+ * ordered"): with row_band 0, v itself. Else the image's whole bands of
+ * row_band rows are dealt to S = row_classes classes (band i to class
+ * i mod S), and the split bands are class 0's bands top to bottom (0, S, 2S,
+ * ..), then class 1's (1, S + 1, ..), and so on: with F = qS + r bands, the
+ * first r classes have q + 1. A run of F/S split bands is thus every S-th
+ * band of the image; the rows after the last whole band stay where they are.
  * Shared by the kernels and the host (which copies and checks pieces by it). */
 static inline rt_int rt_piece_row(const struct rt_piece *p, rt_int v)
 {
 	if (p->row_band == 0 || v >= p->row_band * p->row_bands)
 		return v;
-	rt_int b = v / p->row_band, band;
-	if (p->row_classes > 0) {
-		rt_int q = p->row_bands / p->row_classes, r = p->row_bands % p->row_classes;
-		rt_int c, k;
-		if (b < r * (q + 1)) {
-			c = b / (q + 1);
-			k = b - c * (q + 1);
-		} else {
-			c = r + (b - r * (q + 1)) / q;
-			k = b - r * (q + 1) - (c - r) * q;
-		}
-		band = c + k * p->row_classes;
+	rt_int b = v / p->row_band;
+	rt_int q = p->row_bands / p->row_classes, r = p->row_bands % p->row_classes;
+	rt_int c, k; /* split band b is band k of class c */
+	if (b < r * (q + 1)) {
+		c = b / (q + 1);
+		k = b - c * (q + 1);
 	} else {
-		/* b, row_step < row_bands <= 32768: the product fits in 32 bits */
-		band = (rt_int)(((rt_uint)b * (rt_uint)p->row_step) % (rt_uint)p->row_bands);
+		c = r + (b - r * (q + 1)) / q;
+		k = b - r * (q + 1) - (c - r) * q;
 	}
-	return band * p->row_band + (v - b * p->row_band);
+	return (c + k * p->row_classes) * p->row_band + (v - b * p->row_band);
 }
 
 #ifndef __OPENCL_VERSION__

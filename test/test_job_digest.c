@@ -137,6 +137,10 @@ static void scan_rows(struct job *j)
 {
 	j->row_order = ROWS_SCAN;
 }
+static void three_classes(struct job *j)
+{
+	j->row_classes = 3;
+}
 static void cyclic(struct job *j)
 {
 	j->settings.kernel = render_find_kernel("cyclic");
@@ -171,7 +175,8 @@ Test(job_digest, each_setting_is_named_as_the_option)
 		{animated, "--frames 0:2 against rank 0's one image (no --frames)"},
 		{in_bands, "--piece-rows 3 against rank 0's no --piece-rows"},
 		{static_split, "--split static against rank 0's --split dynamic"},
-		{scan_rows, "--row-order scan against rank 0's --row-order spread"},
+		{scan_rows, "--row-order scan against rank 0's --row-order interleave"},
+		{three_classes, "--row-order interleave:3 against rank 0's --row-order interleave"},
 		{cyclic, "-k cyclic against rank 0's -k dynamic"},
 		{wide_groups, "-w 16x8 against rank 0's -w 8x8"},
 		{some_groups, "--groups 4x4 against rank 0's --groups 0x0"},

@@ -676,8 +676,8 @@ static int band_pieces(struct rt_piece *out, int w, int h, int band, int begin, 
 
 /* Every kernel, rendering the image as 4 odd tiles, as row bands (given
  * bottom band first, to show the order does not matter) and as bands of
- * split rows spread over the image (--row-order spread: bands of 4 rows, so
- * a piece of 10 split rows ends inside a band), and with several
+ * split rows interleaved (--row-order interleave:3: bands of 4 rows dealt to
+ * 3 classes, so a piece of 10 split rows ends inside a band), and with several
  * samples as tiles over the first half of the samples then bands over the
  * rest, gives the serial kernel's whole-image render: the same bytes (the
  * wavefront within its documented 1/255), the same flops per pixel, and every
@@ -707,7 +707,7 @@ static void check_pieces(const char *path, int w, int h, int samples)
 					    ? band_pieces(pieces, w, h, 10, 0, samples, samples)
 					    : tile_pieces(pieces, w, h, 23, 17, 0, samples, samples);
 			for (int i = 0; layout == 3 && i < count; i++)
-				renderer_spread_rows(&pieces[i], h, 4);
+				renderer_interleave_rows(&pieces[i], h, 4, 3);
 			uint32_t writes = 1;
 			if (layout == 2) { /* tiles for the first half of the samples, bands
 					      for the rest */
@@ -729,7 +729,7 @@ static void check_pieces(const char *path, int w, int h, int samples)
 			s.count_flops = 1;
 			snprintf(what, sizeof(what), "%s %s %dx%d spp %d as %d %s", path,
 				 kernels[k], w, h, samples, count,
-				 layout == 3   ? "spread row bands"
+				 layout == 3   ? "interleaved row bands"
 				 : layout == 2 ? "tiles, then bands"
 				 : layout      ? "row bands"
 					       : "tiles");
@@ -770,12 +770,12 @@ Test(kernels, pieces_give_the_whole_image_at_4_spp, .timeout = 600)
 	check_pieces("scenes/two_balls.json", 37, 29, 4);
 }
 
-/* A piece of split rows (--row-order spread) writes exactly the image rows
+/* A piece of split rows (--row-order interleave) writes exactly the image rows
  * rt_piece_row gives it, with the pixels the whole image has there: every
  * kernel, one piece alone (all the pieces together would hide a kernel that
  * ignored the map: they cover every row either way). The settings are
  * check_pieces's, so the programs are the ones it built. */
-Test(kernels, spread_pieces_write_their_own_rows, .timeout = 600)
+Test(kernels, interleaved_pieces_write_their_own_rows, .timeout = 600)
 {
 	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
 					      "dynamic", "persistent", "wavefront"};
@@ -793,7 +793,8 @@ Test(kernels, spread_pieces_write_their_own_rows, .timeout = 600)
 		&dev, &scene, &s, (struct rt_piece[]){renderer_whole_image(&s, 0, 1)}, 1,
 		"serial, whole image");
 	band_pieces(pieces, w, h, 10, 0, 1, 1);
-	renderer_spread_rows(&pieces[1], h, 4); /* split rows 10..19: 11 bands of 4 */
+	/* split rows 10..19: image rows 26-27, 36-39 and 4-7 */
+	renderer_interleave_rows(&pieces[1], h, 4, 3);
 	for (int k = 0; k < 6; k++) {
 		char what[128];
 		int mine[47] = {0};
@@ -803,7 +804,7 @@ Test(kernels, spread_pieces_write_their_own_rows, .timeout = 600)
 		s = settings_for(kernels[k], w, h, 8, 4, scene.max_depth);
 		s.samples = 1;
 		s.count_flops = 1;
-		snprintf(what, sizeof(what), "%s, split rows 10..19 spread", kernels[k]);
+		snprintf(what, sizeof(what), "%s, split rows 10..19 interleaved", kernels[k]);
 		struct pieces_result got = render_pieces(&dev, &scene, &s, &pieces[1], 1, what);
 		for (int y = 0; y < h; y++)
 			for (int x = 0; x < w; x++) {

@@ -220,7 +220,7 @@ static void min_pieces(const struct device *devs, int count, int width, int heig
 	char err[256];
 
 	struct rt_piece map = {0};
-	tiles_row_map(&map, &s, ROWS_INTERLEAVE, 0, count);
+	tiles_row_map(&map, &s, ROWS_INTERLEAVE, tiles_row_classes(devs, count));
 	cr_assert_eq(
 		tiles_job_init(&t, NULL, &s, 8, 1, &map, (struct device *)devs, count, err,
 			       sizeof(err)),
@@ -321,63 +321,33 @@ Test(multidev, interleaved_rows_are_the_classes_in_order)
 	}
 }
 
-/* --row-order spread: for every image height and band height; fewer than
- * three bands (or band 0) move nothing. */
-Test(multidev, spread_rows_are_a_permutation_of_whole_bands)
+/* The point of interleaving: S devices that each take an equal run of the
+ * split rows each get every S-th band, so their pieces cost the same however
+ * the cost is laid out over the image. With a cost growing from 1 to 2 down
+ * the image (the default scene's bottom half costs about 1.7x its top), each
+ * of S equal runs costs within 1.5 % (S = 2), 2.5 % (3) or 3.5 % (4) of its
+ * share, for every image height from 240 to 2200 rows in bands of 8 (the
+ * remainder: a class one band longer than another); in scan order two
+ * halves differ by a third. */
+Test(multidev, interleaved_runs_cost_their_share_of_the_image)
 {
-	for (int height = 1; height <= 2100; height += height < 80 ? 1 : 97) {
-		for (int band = 0; band <= 16; band++) {
+	static const double bound[] = {0, 0, 0.015, 0.025, 0.035};
+
+	for (int height = 240; height <= 2200; height += height % 8 ? 7 : 1) {
+		double total = 0;
+		for (int y = 0; y < height; y++)
+			total += 1 + (double)y / height;
+		for (int classes = 2; classes <= 4; classes++) {
 			struct rt_piece p = {0};
-			int bands = band ? height / band : 0;
-			renderer_spread_rows(&p, height, band);
-			check_permutation(&p, height, band, bands >= 3);
-		}
-	}
-}
-
-/* The point of spreading: any even split of the split rows takes about its
- * share of every part of the image. With a cost that grows down the image
- * from 1 to 2 (the default scene's bottom half costs about 1.7x its top),
- * the two halves of the split bands each cost within 2 % of half the image,
- * and runs of a quarter within 4 % (of an eighth, within 7 %) at the heights
- * of common images (bands of 8 rows) and the H100 benchmarks' 2000 rows; in
- * scan order the halves differ by a third. And for every count of bands from
- * 64 to 2048, each half, quarter and eighth of them holds between a third
- * and two thirds of its bands in the image's top half (scan order: all or
- * none). */
-Test(multidev, spread_rows_give_every_run_its_share_of_the_image)
-{
-	static const int heights[] = {480, 600, 720, 1080, 2000, 2160};
-
-	for (int f = 64; f <= 2048; f++) {
-		struct rt_piece p = {0};
-		renderer_spread_rows(&p, f * 8, 8);
-		for (int parts = 2; parts <= 8; parts *= 2) {
-			for (int k = 0; k < parts; k++) {
-				int a = f * k / parts, b = f * (k + 1) / parts, top = 0;
+			renderer_interleave_rows(&p, height, 8, classes);
+			for (int k = 0; k < classes; k++) {
+				int a = height * k / classes, b = height * (k + 1) / classes;
+				double cost = 0, share = total * (b - a) / height;
 				for (int v = a; v < b; v++)
-					top += rt_piece_row(&p, v * 8) / 8 < f / 2.0;
-				double share = (double)top / (b - a);
-				cr_assert(share >= 1 / 3.0 && share <= 2 / 3.0,
-					  "%d bands, run %d of %d: %.3f of its bands in the top half",
-					  f, k, parts, share);
-			}
-		}
-	}
-	for (size_t h = 0; h < sizeof(heights) / sizeof(heights[0]); h++) {
-		struct rt_piece p = {0};
-		int f = heights[h] / 8;
-		renderer_spread_rows(&p, heights[h], 8);
-		for (int parts = 2; parts <= 8; parts *= 2) {
-			double bound = parts == 2 ? 0.02 : parts == 4 ? 0.04 : 0.07;
-			for (int k = 0; k < parts; k++) {
-				int a = f * k / parts, b = f * (k + 1) / parts;
-				double cost = 0, share = (b - a) * (1 + (f - 1) / (2.0 * f));
-				for (int v = a; v < b; v++)
-					cost += 1 + (double)(rt_piece_row(&p, v * 8) / 8) / f;
-				cr_assert(fabs(cost / share - 1) <= bound,
-					  "height %d, run %d of %d costs %.4f of its share",
-					  heights[h], k, parts, cost / share);
+					cost += 1 + (double)rt_piece_row(&p, v) / height;
+				cr_assert(fabs(cost / share - 1) <= bound[classes],
+					  "height %d, run %d of %d costs %.4f of its share", height,
+					  k, classes, cost / share);
 			}
 		}
 	}

@@ -125,11 +125,14 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     # Like --piece-rows: refused, not silently ignored, without several devices.
     (["--split", "static"], "--split chooses how pieces go to the devices of --devices or --mpi"),
     (["--row-order", "scan"], "--row-order orders the rows that pieces of one image take on"),
-    (["--devices", "0:0,0:1", "--frames", "0:1", "--row-order", "spread"],
+    (["--devices", "0:0,0:1", "--frames", "0:1", "--row-order", "interleave"],
      "--row-order orders the rows that pieces of one image take on the devices of --devices or "
      "--mpi; it does not apply to --frames"),
     (["--devices", "0:0,0:1", "--row-order", "zigzag"],
-     "--row-order: expected spread or scan, got \"zigzag\""),
+     "--row-order: expected interleave, interleave:S (S classes, 1..4096) or scan, got "
+     "\"zigzag\""),
+    (["--devices", "0:0,0:1", "--row-order", "interleave:0"], "--row-order: expected"),
+    (["--devices", "0:0,0:1", "--row-order", "interleave:"], "--row-order: expected"),
     (["--split", "dynamic", "--frames", "0:1"], "--split chooses how pieces go"),
     (["--devices", "all", "--frames", "0:1", "--piece-rows", "4"],
      "it does not apply to --frames"),
@@ -381,7 +384,7 @@ def test_help_and_man_page_teach_the_options():
     help_text = run("--help").stdout
     man = (ROOT / "docs" / "rtcl.1").read_text()
     for option in ["--devices LIST|all", "--split dynamic|static", "--frames A:B", "--mpi",
-                   "out_0000.png", "--piece-rows N", "--row-order spread|scan"]:
+                   "out_0000.png", "--piece-rows N", "--row-order interleave[:S]|scan"]:
         assert option in help_text, option
     for option in [r"\-\-devices", r"\-\-split", r"\-\-frames", r"\-\-mpi",
                    r"\-\-piece\-rows", r"\-\-row\-order"]:
@@ -439,25 +442,27 @@ def test_bands_on_one_device_match_its_whole_image(tmp_path):
     assert md["device_efficiency"] == 1.0
 
 
-# 12 bands of 4 rows (-w 8x4): enough for --row-order spread to move them
-# (stride 5); at 32x24 in bands of 8 there are 3, which it leaves in place.
+# 12 bands of 4 rows (-w 8x4) to deal to the classes.
 TALL = ["--size", "24x48", "-w", "8x4"]
 
 
 def image_row(v, md):
     """Split row v's image row: rt_piece_row (cl/rtcl_shared.h) as
-    docs/GUIDE.md states it, from the map --stats reports."""
-    band, bands, step = md["row_band"], md["row_bands"], md["row_step"]
+    docs/GUIDE.md states it, from the map --stats reports: the bands dealt
+    to S classes, class after class, each top to bottom."""
+    band, bands, classes = md["row_band"], md["row_bands"], md["row_classes"]
     if band == 0 or v >= band * bands:
         return v
-    return (v // band * step) % bands * band + v % band
+    order = [b for c in range(classes) for b in range(c, bands, classes)]
+    return order[v // band] * band + v % band
 
 
-@pytest.mark.parametrize("order, pieces", [
-    ("spread", []), ("scan", []), ("spread", ["--piece-rows", "5"]),
-    pytest.param("spread", ["--split", "static", "--piece-rows", "8"], marks=pytest.mark.slow)])
+@pytest.mark.parametrize("order, pieces, classes", [
+    ("interleave", [], 2), ("scan", [], 0), ("interleave:5", ["--piece-rows", "5"], 5),
+    pytest.param("interleave", ["--split", "static", "--piece-rows", "8"], 2,
+                 marks=pytest.mark.slow)])
 def test_row_orders_match_one_device_and_their_pieces_cover_the_image_once(tmp_path, order,
-                                                                           pieces):
+                                                                           pieces, classes):
     common = [*TALL, "--spp", "2", "-k", "persistent"]
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
     assert one.returncode == 0, one.stderr
@@ -466,9 +471,9 @@ def test_row_orders_match_one_device_and_their_pieces_cover_the_image_once(tmp_p
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
     md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
-    assert md["row_order"] == order
-    assert (md["row_band"], md["row_bands"], md["row_step"]) == \
-        ((4, 12, 5) if order == "spread" else (0, 0, 0))
+    assert md["row_order"] == order.split(":")[0]
+    assert (md["row_band"], md["row_bands"], md["row_classes"]) == \
+        ((4, 12, classes) if classes else (0, 0, 0))
     covered = [[0] * 24 for _ in range(48)]
     scattered = 0
     for p in md["pieces"]:
@@ -480,7 +485,7 @@ def test_row_orders_match_one_device_and_their_pieces_cover_the_image_once(tmp_p
         assert 0 <= p["start_ms"] <= p["end_ms"] and p["kernel_ms"] > 0
         assert p["device"] in (0, 1)
     assert all(c == 1 for row in covered for c in row), covered
-    assert (scattered > 0) == (order == "spread")
+    assert (scattered > 0) == (classes > 0)
 
 
 def test_write_count_check_catches_a_band_written_twice(tmp_path):
@@ -532,8 +537,8 @@ def test_a_device_failing_on_a_band_writes_nothing(tmp_path):
 @needs_mpi
 @pytest.mark.parametrize("spp", ["1", "4"])
 def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, spp):
-    # 32x24 in bands of 8 rows: 3 bands, which --row-order spread leaves in
-    # place (test_mpi_spread_bands_match_one_process moves them).
+    # (test_mpi_interleaved_bands_match_one_process: bands that the row
+    # order moves)
     image_run(tmp_path, "one", "--spp", spp, "-d", "0", "-k", "persistent")
     result = mpi_run(*SMALL, "--spp", spp, "-k", "persistent", "--piece-rows", "3", "-o",
                      str(tmp_path / "ranks.ppm"), "--stats", str(tmp_path / "s.json"),
@@ -548,10 +553,11 @@ def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, s
 
 
 @needs_mpi
-@pytest.mark.parametrize("order", ["spread", pytest.param("scan", marks=pytest.mark.slow)])
-def test_mpi_spread_bands_match_one_process(tmp_path, order):
+@pytest.mark.parametrize("order", ["interleave", pytest.param("scan", marks=pytest.mark.slow)])
+def test_mpi_interleaved_bands_match_one_process(tmp_path, order):
     # Bands of split rows go to rank 0 packed, in split-row order, and are
-    # placed by the row map: the image is the one process's.
+    # placed by the row map: the image is the one process's. The classes are
+    # every rank's devices, 3.
     common = [*TALL, "-k", "persistent"]
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
     assert one.returncode == 0, one.stderr
@@ -561,6 +567,7 @@ def test_mpi_spread_bands_match_one_process(tmp_path, order):
     assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
     md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
     assert md["row_order"] == order and md["bands"] == 10
+    assert md["row_classes"] == (3 if order == "interleave" else 0)
     assert sum(d["pixels"] for d in md["devices"]) == 24 * 48
 
 

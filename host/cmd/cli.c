@@ -170,11 +170,11 @@ static void print_help_after_kernels(FILE *out)
 		"                         --split static and --mpi: about 32 bands per device);\n"
 		"                         with one device (--devices P:D) it measures what\n"
 		"                         bands of N rows cost that device\n"
-		"      --row-order interleave[:S]|spread|scan  which image rows the pieces\n"
-		"                         take, in bands of a work-group's height: dealt to\n"
-		"                         S classes (default S: the devices), so an equal\n"
-		"                         share is every S-th band; spread over the image by\n"
-		"                         a golden-ratio stride; or in order (contiguous)\n"
+		"      --row-order interleave[:S]|scan  which image rows the pieces take:\n"
+		"                         bands of a work-group's height dealt to S classes\n"
+		"                         (default S: the GPUs, else the devices; under --mpi\n"
+		"                         every rank's devices), so an equal share of the\n"
+		"                         image is every S-th band; or the rows in order\n"
 		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
@@ -455,15 +455,15 @@ static int parse_choice(const char *option, const char *text, const char *first,
 	return 0;
 }
 
-/* --row-order interleave[:S]|spread|scan into o (enum row_order, S). */
+/* --row-order interleave[:S]|scan into o (enum row_order, S). */
 static int parse_row_order(const char *text, struct options *o, char *err, size_t err_size)
 {
 	static const char interleave[] = "interleave";
 	long classes;
 
 	o->row_classes = 0;
-	if (strcmp(text, "spread") == 0 || strcmp(text, "scan") == 0) {
-		o->row_order = strcmp(text, "spread") == 0 ? ROWS_SPREAD : ROWS_SCAN;
+	if (strcmp(text, "scan") == 0) {
+		o->row_order = ROWS_SCAN;
 		return 0;
 	}
 	if (strncmp(text, interleave, sizeof(interleave) - 1) == 0) {
@@ -478,8 +478,8 @@ static int parse_row_order(const char *text, struct options *o, char *err, size_
 		}
 	}
 	snprintf(err, err_size,
-		 "--row-order: expected interleave, interleave:S (S classes, 1..%d), spread or "
-		 "scan, got \"%s\"",
+		 "--row-order: expected interleave, interleave:S (S classes, 1..%d) or scan, got "
+		 "\"%s\"",
 		 ROWS_CLASSES_MAX, quote_text(text));
 	return -1;
 }

@@ -43,7 +43,7 @@ struct device_shares {
 	const char *piece; /* what a piece is: "band", "rectangle", "frame" */
 	int band_rows, bands; /* bands of fixed rows; 0 for other pieces */
 	struct rt_piece rows; /* one image: the row map every piece has (its
-				 row_band, row_bands, row_step); frames: 0 */
+				 row_band, row_bands, row_classes); frames: 0 */
 	int row_order_given;  /* one image: rows holds the job's row order */
 	double wall_ms;	      /* an animation: all its frames */
 };

@@ -35,10 +35,8 @@ int renderer_piece(struct renderer *r, const struct rt_piece *p, struct piece_re
 	if (p->x0 < 0 || p->y0 < 0 || p->width < 1 || p->height < 1 ||
 	    p->width > s->width - p->x0 || p->height > s->height - p->y0 || p->samples != samples ||
 	    p->sample_begin < 0 || p->sample_end <= p->sample_begin || p->sample_end > samples ||
-	    (p->row_band &&
-	     (p->row_band < 1 || p->row_bands < 2 || p->row_bands > s->height / p->row_band ||
-	      (p->row_classes ? p->row_classes < 2 || p->row_classes > p->row_bands
-			      : p->row_step < 1 || p->row_step >= p->row_bands)))) {
+	    (p->row_band && (p->row_band < 1 || p->row_bands > s->height / p->row_band ||
+			     p->row_classes < 2 || p->row_classes > p->row_bands))) {
 		snprintf(err, err_size,
 			 "internal error: piece %dx%d at (%d, %d), samples [%d, %d) of %d, does "
 			 "not fit a %dx%d image of %d samples per pixel",
@@ -78,42 +76,12 @@ struct rt_piece renderer_rows(const struct render_settings *s, int y0, int heigh
 	return p;
 }
 
-/* The golden ratio's conjugate squared, 1 - 1/phi: a stride of this fraction
- * of the bands spreads consecutive ones as evenly as any stride can (the
- * three-distance theorem). */
-#define SPREAD_FRACTION 0.3819660112501051
-
-static int gcd(int a, int b)
-{
-	while (b) {
-		int t = a % b;
-		a = b;
-		b = t;
-	}
-	return a;
-}
-
-void renderer_spread_rows(struct rt_piece *p, int height, int band)
-{
-	int bands = band > 0 ? height / band : 0;
-
-	p->row_band = p->row_bands = p->row_step = p->row_classes = 0;
-	if (bands < 3) /* one or two bands: spreading leaves them in place */
-		return;
-	int step = (int)(bands * SPREAD_FRACTION + 0.5);
-	while (gcd(step, bands) != 1)
-		step++;
-	p->row_band = band;
-	p->row_bands = bands;
-	p->row_step = step;
-}
-
 void renderer_interleave_rows(struct rt_piece *p, int height, int band, int classes)
 {
 	int bands = band > 0 ? height / band : 0;
 
-	p->row_band = p->row_bands = p->row_step = p->row_classes = 0;
-	if (classes < 2 || bands < classes) /* nothing to interleave */
+	p->row_band = p->row_bands = p->row_classes = 0;
+	if (classes < 2 || bands < classes) /* nothing to deal */
 		return;
 	p->row_band = band;
 	p->row_bands = bands;

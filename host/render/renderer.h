@@ -75,17 +75,10 @@ void renderer_close(struct renderer *r);
 struct rt_piece renderer_rows(const struct render_settings *s, int y0, int height, int begin,
 			      int end);
 
-/* Sets piece's row map (rt_piece_row, cl/rtcl_shared.h) to spread the
- * bands of `band` rows of an image `height` rows high (docs/GUIDE.md, "How
- * the rows are ordered"); band 0, or fewer than three bands: scan order, split
- * row v is image row v. The stride is the integer nearest bands / phi^2 that
- * is coprime to bands, the next one up. */
-void renderer_spread_rows(struct rt_piece *p, int height, int band);
-
-/* Sets piece's row map to interleave the bands of `band` rows of an image
- * `height` rows high in `classes` classes (band b in class b mod classes),
- * each class's bands top to bottom, class after class; fewer than 2 classes,
- * or more classes than bands: scan order. */
+/* Sets piece's row map (rt_piece_row, cl/rtcl_shared.h; docs/GUIDE.md,
+ * "How the rows are ordered") to deal the whole bands of `band` rows of an
+ * image `height` rows high to `classes` classes; fewer than 2 classes, band 0
+ * or more classes than bands: scan order, split row v is image row v. */
 void renderer_interleave_rows(struct rt_piece *p, int height, int band, int classes);
 
 /* Returns the piece of the whole image with samples [begin, end). */

@@ -175,12 +175,9 @@ static json_t *shares_document(const struct device_shares *d)
 		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
 	if (doc && d->row_order_given) {
 		json_object_set_new(doc, "row_order",
-				    json_string(!d->rows.row_band	 ? "scan"
-						: d->rows.row_classes ? "interleave"
-								      : "spread"));
+				    json_string(d->rows.row_band ? "interleave" : "scan"));
 		json_object_set_new(doc, "row_band", json_integer(d->rows.row_band));
 		json_object_set_new(doc, "row_bands", json_integer(d->rows.row_bands));
-		json_object_set_new(doc, "row_step", json_integer(d->rows.row_step));
 		json_object_set_new(doc, "row_classes", json_integer(d->rows.row_classes));
 	}
 	return doc;

@@ -122,7 +122,8 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 		.bands = adaptive ? 0 : tiles_band_count(s.height, rows),
 		.row_order_given = 1,
 	};
-	tiles_row_map(&record->shares.rows, &s, job->row_order, job->row_classes, d->count);
+	tiles_row_map(&record->shares.rows, &s, job->row_order,
+		      job->row_classes ? job->row_classes : tiles_row_classes(d->devs, d->count));
 	return render_counted(d, job, &s, render_pieces, record, err, err_size);
 }
 

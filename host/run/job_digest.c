@@ -80,9 +80,7 @@ static void show_setting(const long long *v, enum job_setting first, char *out, 
 			snprintf(out, size, "--row-order interleave:%lld", v[JOB_ROW_CLASSES]);
 		else
 			snprintf(out, size, "--row-order %s",
-				 v[JOB_ROW_ORDER] == ROWS_SCAN	   ? "scan"
-				 : v[JOB_ROW_ORDER] == ROWS_SPREAD ? "spread"
-								   : "interleave");
+				 v[JOB_ROW_ORDER] == ROWS_SCAN ? "scan" : "interleave");
 		break;
 	case JOB_KERNEL:
 		snprintf(out, size, "-k %s",

@@ -26,22 +26,25 @@ int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices
 	return rows < s->height ? rows : s->height;
 }
 
-int tiles_spread_band(const struct render_settings *s)
+int tiles_row_band(const struct render_settings *s)
 {
 	return s->workgroup[1] > 0 ? s->workgroup[1] : 8;
 }
 
-void tiles_row_map(struct rt_piece *map, const struct render_settings *s, enum row_order order,
-		   int classes, int devices)
+int tiles_row_classes(const struct device *devs, int count)
 {
-	int band = tiles_spread_band(s);
+	int gpus = 0;
 
-	if (order == ROWS_SPREAD)
-		renderer_spread_rows(map, s->height, band);
-	else if (order == ROWS_INTERLEAVE)
-		renderer_interleave_rows(map, s->height, band, classes > 0 ? classes : devices);
-	else
-		renderer_spread_rows(map, s->height, 0);
+	for (int k = 0; k < count; k++)
+		gpus += devs[k].is_gpu != 0;
+	return gpus > 0 ? gpus : count;
+}
+
+void tiles_row_map(struct rt_piece *map, const struct render_settings *s, enum row_order order,
+		   int classes)
+{
+	renderer_interleave_rows(map, s->height, order == ROWS_INTERLEAVE ? tiles_row_band(s) : 0,
+				 classes);
 }
 
 /* Gives p the job's row map. */
@@ -49,7 +52,6 @@ static void apply_rows(const struct tiles_job *t, struct rt_piece *p)
 {
 	p->row_band = t->row_map.row_band;
 	p->row_bands = t->row_map.row_bands;
-	p->row_step = t->row_map.row_step;
 	p->row_classes = t->row_map.row_classes;
 }
 
@@ -555,7 +557,8 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	struct rt_piece map = {0};
 
 	memset(out, 0, sizeof(*out));
-	tiles_row_map(&map, s, r->row_order, r->row_classes, r->count);
+	tiles_row_map(&map, s, r->row_order,
+		      r->row_classes ? r->row_classes : tiles_row_classes(r->devs, r->count));
 	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows), &map,
 			   r->devs, r->count, err, err_size))
 		return -1;

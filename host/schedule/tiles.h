@@ -44,26 +44,29 @@
  * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
  * rows, and split row v is image row rt_piece_row(v) (cl/rtcl_shared.h).
  *  ROWS_INTERLEAVE: bands of a work-group's height dealt to S classes
- *               (S: the devices, or --row-order interleave:S), a class's
+ *               (tiles_row_classes, or --row-order interleave:S), a class's
  *               bands top to bottom: an equal share is every S-th band;
- *  ROWS_SPREAD: the bands spread over the image by a golden-ratio stride,
- *               so that every piece, however cut, takes rows from the whole
- *               image;
  *  ROWS_SCAN:   split row v is image row v: contiguous pieces. */
-enum row_order { ROWS_INTERLEAVE, ROWS_SPREAD, ROWS_SCAN };
+enum row_order { ROWS_INTERLEAVE, ROWS_SCAN };
 
 /* The most classes --row-order interleave:S takes. */
 #define ROWS_CLASSES_MAX 4096
 
-/* The height of the bands the row orders move: the work-group's height (8
- * when the device chooses it), which is also the adaptive dispenser's cell
+/* The height of the bands ROWS_INTERLEAVE deals: the work-group's height
+ * (8 when the device chooses it), which is also the adaptive dispenser's cell
  * height, so that a cell row is one band. */
-int tiles_spread_band(const struct render_settings *s);
+int tiles_row_band(const struct render_settings *s);
+
+/* The classes ROWS_INTERLEAVE deals to by default: the GPUs among devs (the
+ * devices that take an equal share each; a CPU beside them takes small
+ * pieces from the image's end), else every device. */
+int tiles_row_classes(const struct device *devs, int count);
 
 /* Sets map's row map (its row_* fields) for an image of settings s in
- * `order`; classes: interleave's S, 0 for the count of devices. */
+ * `order`, dealing to `classes` classes (interleave:S, else
+ * tiles_row_classes). */
 void tiles_row_map(struct rt_piece *map, const struct render_settings *s, enum row_order order,
-		   int classes, int devices);
+		   int classes);
 
 /* Rows per band: piece_rows when given (> 0), else about height / (32 ×
  * devices) rounded up to a multiple of the work-group height. */
