@@ -488,6 +488,24 @@ def test_row_orders_match_one_device_and_their_pieces_cover_the_image_once(tmp_p
     assert (scattered > 0) == (classes > 0)
 
 
+def test_interleaved_split_gives_a_slowed_device_less_of_the_image(tmp_path):
+    # Issue 28's simulation of unequal devices: the default split (adaptive
+    # rectangles of interleaved rows) over two PoCL devices, one slowed: it
+    # renders fewer pixels, every pixel is written once, the image is one
+    # device's.
+    common = [*TALL, "--spp", "2"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = run(*common, "--devices", "0:0,0:1", "-o", str(tmp_path / "two.ppm"), "--stats",
+                 str(tmp_path / "s.json"), env={**CHECK, "RTCL_TEST_SLOW_DEVICE": "1:200"})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert md["row_order"] == "interleave" and md["row_classes"] == 2
+    pixels = [d["pixels"] for d in md["devices"]]
+    assert sum(pixels) == 24 * 48 and pixels[1] < pixels[0], pixels
+
+
 def test_write_count_check_catches_a_band_written_twice(tmp_path):
     # The hook's own check: a band rendered again on a second device (the
     # test-only RTCL_TEST_DOUBLE_BAND) must fail the run, naming the pixel.
