@@ -4,10 +4,11 @@
  * take_piece (multidev.h).
  *
  * The policy (guided self-scheduling weighted by measured throughput):
- *  - the image is cut, in scan order, into cells of one work-group
- *    (cell_w x cell_h pixels); a piece is a run of whole cells that stays a
- *    rectangle: part of one cell row, or whole cell rows (a full-width band)
- *    when it starts at a row's beginning. Every piece carries all the samples
+ *  - the image is cut, in scan order of its split rows (tiles.h's row
+ *    order: a cell row is one band of the interleaved order), into cells of
+ *    one work-group (cell_w x cell_h pixels); a piece is a run of whole
+ *    cells that stays a rectangle: part of one cell row, or whole cell rows
+ *    (a full-width band) when it starts at a row's beginning. Every piece carries all the samples
  *    of its pixels, so the image stays byte-identical to one device's.
  *  - a device whose rate is not yet known gets a probe: at most
  *    ADAPT_PROBE_PIXEL_SAMPLES and at most 1/16 of a device's fair share,

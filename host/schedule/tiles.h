@@ -2,7 +2,9 @@
  * image cut into pieces (renderer.h), each carrying every sample of its
  * pixels: with the dynamic split in one process, rectangles sized per device
  * by adapt.h's policy; with --split static, --piece-rows or
- * --mpi, row bands handed out by dispenser.h. Each device opens
+ * --mpi, row bands handed out by dispenser.h. Rectangles and bands are of
+ * split rows, which the row order (--row-order, below) maps to image rows, so
+ * that equal devices get pieces of equal cost. Each device opens
  * its renderer once, renders the bands it is given into its own full-size
  * buffers, reads them back once at the end; the host copies each band from
  * the device that rendered it. A band's samples all run on one device, in
