@@ -61,6 +61,7 @@ def failing_rtcl(tmp_path):
     ("none", None, "pocl-amd-epyc"),                      # the paper's study: as before
     ("bvh", None, "pocl-amd-epyc-bvh-paper60"),
     ("bvh", "/tmp/lake/lake-10.json", "pocl-amd-epyc-bvh-lake-10"),
+    ("bvh-compact", "/tmp/lake/lake-10.json", "pocl-amd-epyc-bvh-compact-lake-10"),
     ("none", "scenes/my scene.json", "pocl-amd-epyc-none-my-scene"),
 ])
 def test_results_folder_names_accel_and_scene(accel, scene, folder):

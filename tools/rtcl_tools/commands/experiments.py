@@ -109,11 +109,12 @@ def parse_arguments(argv):
                         help="scene file (default: rtcl's built-in paper60); its stem "
                              "names the results folder, e.g. lake-10 for "
                              "tools/genbench.py lake's lake-10.json")
-    parser.add_argument("--accel", choices=("none", "bvh"), default="none",
+    parser.add_argument("--accel", choices=("none", "bvh", "bvh-compact"), default="none",
                         help="how rays find what they hit, passed to every rtcl run: "
                              "none (default) tests every object, the paper's brute force, "
                              "so Table 1 compares with the paper's; bvh traverses rtcl's "
-                             "BVH, the study of divergent traversal (issue 11 item 8)")
+                             "BVH, the study of divergent traversal (issue 11 item 8); "
+                             "bvh-compact its compact layout (docs/bvh.md)")
     parser.add_argument("--size", help=f"image size WxH (default: the scene's; "
                                        f"{QUICK_SIZE} with --quick)")
     parser.add_argument("--depth", type=int, help="maximum ray depth (default: the scene's)")
