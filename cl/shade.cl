@@ -209,6 +209,13 @@ static bool light_direction(struct tracer *tr, const struct shading *sh, int i, 
  * A light whose terms add nothing needs no shadow ray. d: the ray's direction. */
 static bool shading_next_light(struct tracer *tr, struct shading *sh, float3 d)
 {
+#ifdef RTCL_NO_LIGHTS
+	/* experiment (batch 55): a scene without lights */
+	(void)tr;
+	(void)sh;
+	(void)d;
+	return false;
+#endif
 	while (sh->next_light < tr->scene->light_count) {
 		int i = sh->next_light++;
 		RTCL_SCENE_SPACE const struct rt_material *m = sh->m;
