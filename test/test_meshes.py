@@ -119,6 +119,35 @@ def test_a_scene_without_spheres_builds_leaves_of_triangles_only(tmp_path):
     assert "-DRTCL_LEAF_TRIANGLES_ONLY" not in stats["build_options"]
 
 
+@pytest.mark.parametrize("scene, kernel", [
+    (ROOT / "scenes" / "two_balls.json", "dynamic"),
+    # The same rule: make test-long.
+    pytest.param(ROOT / "scenes" / "two_balls.json", "wavefront", marks=pytest.mark.slow),
+    pytest.param(MESH_SCENE, "persistent", marks=pytest.mark.slow)])
+def test_a_scene_without_lights_builds_without_shadow_rays(tmp_path, scene, kernel):
+    """A scene with no light builds with RTCL_NO_LIGHTS (shade.cl: no light to
+    take, so the shadow rays' code is left out) and gives the image of the same
+    scene with one black light, which builds without it and traces the shadow
+    rays for nothing."""
+    data = json.loads(scene.read_text())
+    for mesh in data.get("meshes", []):
+        mesh["file"] = str((scene.parent / mesh["file"]).resolve())
+    runs = {}
+    for name, lights in (("none", []), ("black", [{"position": [-6, 9, -7],
+                                                     "color": [0, 0, 0]}])):
+        path = tmp_path / f"{name}.json"
+        path.write_text(json.dumps({**data, "lights": lights}))
+        result = rtcl("-s", str(path), "-k", kernel, "--size", "24x16", "--spp", "2", "-o",
+                      str(tmp_path / f"{name}.ppm"), "--stats", str(tmp_path / f"{name}.s.json"))
+        assert result.returncode == 0, result.stderr
+        runs[name] = json.loads((tmp_path / f"{name}.s.json").read_text())
+    assert "-DRTCL_NO_LIGHTS" in runs["none"]["build_options"]
+    assert "-DRTCL_NO_LIGHTS" not in runs["black"]["build_options"]
+    pixels = 24 * 16 * 3  # the header names the scene file
+    assert (tmp_path / "none.ppm").read_bytes()[-pixels:] == \
+        (tmp_path / "black.ppm").read_bytes()[-pixels:]
+
+
 def test_bvh_counts_add_up_over_two_devices(tmp_path):
     """One image in row bands over two PoCL devices (--devices) counts the same
     flops and BVH node visits as one device, and --stats has the BVH's figures."""

@@ -191,7 +191,7 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "", f->use_bvh ? " -DRTCL_BVH" : "",
 		 f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
@@ -205,6 +205,8 @@ static int format_options(const struct device *dev, const struct render_settings
 		 f->fresnel ? " -DRTCL_FRESNEL" : "",
 		 /* Without textures or cut-outs: the program of before textures. */
 		 f->textures ? " -DRTCL_TEXTURES" : "",
+		 /* No light, no shadow rays: their code is left out. */
+		 f->no_lights ? " -DRTCL_NO_LIGHTS" : "",
 		 s->samples > 1 ? "" : " -DRTCL_ONE_SAMPLE",
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 /* SIMD efficiency, measured where the device lets software see it. */

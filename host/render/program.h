@@ -22,6 +22,7 @@ struct program_features {
 	int area_lights;    /* a sphere or directional light: lights are sampled */
 	int fresnel;	    /* a Fresnel material: ray weights are colours */
 	int textures;	    /* a texture or an alpha cut-out (scene_has_textures) */
+	int no_lights;	    /* no light: the shadow rays' code is left out */
 };
 
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads
