@@ -27,14 +27,9 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	barrier(CLK_LOCAL_MEM_FENCE);
 	uint chunk = group_chunk;
 	while (chunk < chunks) {
-#ifdef RTCL_X_REVERSE /* experiment (batch 57): the chunks bottom to top */
-		uint order = chunks - 1 - chunk;
-#else
-		uint order = chunk;
-#endif
 		render_pixel_if_inside(
 			&tr, &piece, image, probe,
-			numbered_chunk_pixel(&grid, order, get_local_id(0), get_local_id(1)));
+			numbered_chunk_pixel(&grid, chunk, get_local_id(0), get_local_id(1)));
 		/* Everyone has read group_chunk before it is replaced. */
 		barrier(CLK_LOCAL_MEM_FENCE);
 		if (first_item)

@@ -33,13 +33,8 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 		uint end = min(first + RTCL_BATCH, pixels);
 		for (uint i = first; i < end; i++) {
 			uint within = i % chunk_pixels;
-#ifdef RTCL_X_REVERSE /* experiment (batch 57): the chunks bottom to top */
-			uint order = chunk_count(&grid) - 1 - i / chunk_pixels;
-#else
-			uint order = i / chunk_pixels;
-#endif
 			render_pixel_if_inside(&tr, &piece, image, probe,
-					       numbered_chunk_pixel(&grid, order,
+					       numbered_chunk_pixel(&grid, i / chunk_pixels,
 								    within % grid.chunk_w,
 								    within / grid.chunk_w));
 		}
