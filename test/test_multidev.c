@@ -204,12 +204,16 @@ Test(multidev, band_rows_default_to_whole_work_groups_and_several_bands_per_devi
 	struct render_settings s = band_settings(800, 600, 1);
 
 	/* 600 / 64 = 9.4 -> 10 -> 16, a multiple of 8: 38 bands for 2 devices. */
-	cr_assert_eq(tiles_band_rows(&s, 0, 2), 16);
-	cr_assert_eq(tiles_band_rows(&s, 0, 1), 24); /* 18.75 -> 19 -> 24 */
-	cr_assert_eq(tiles_band_rows(&s, 7, 2), 7);  /* --piece-rows as given */
-	cr_assert_eq(tiles_band_rows(&s, 5000, 2), 600);
+	cr_assert_eq(tiles_band_rows(&s, 0, 2, SPLIT_DYNAMIC), 16);
+	cr_assert_eq(tiles_band_rows(&s, 0, 1, SPLIT_DYNAMIC), 24); /* 18.75 -> 19 -> 24 */
+	cr_assert_eq(tiles_band_rows(&s, 7, 2, SPLIT_DYNAMIC), 7);  /* --piece-rows as given */
+	cr_assert_eq(tiles_band_rows(&s, 5000, 2, SPLIT_DYNAMIC), 600);
+	/* Static: one band per device, its share. */
+	cr_assert_eq(tiles_band_rows(&s, 0, 2, SPLIT_STATIC), 304); /* 300 -> 304 */
+	cr_assert_eq(tiles_band_rows(&s, 0, 7, SPLIT_STATIC), 88); /* 85.7 -> 86 -> 88 */
+	cr_assert_eq(tiles_band_rows(&s, 7, 2, SPLIT_STATIC), 7);
 	s.height = 5; /* never more than the image */
-	cr_assert_eq(tiles_band_rows(&s, 0, 4), 5);
+	cr_assert_eq(tiles_band_rows(&s, 0, 4, SPLIT_DYNAMIC), 5);
 }
 
 /* The smallest adaptive piece tiles_job_init gives each of devs. */

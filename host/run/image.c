@@ -111,7 +111,7 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 					  job->row_classes};
 	record_devices(record, d->devs, d->count);
 	int adaptive = tiles_adaptive(job->split, job->piece_rows);
-	int rows = tiles_band_rows(&s, job->piece_rows, d->count);
+	int rows = tiles_band_rows(&s, job->piece_rows, d->count, job->split);
 	record->shares = (struct device_shares){
 		.devs = d->devs,
 		.work = d->work,

@@ -546,7 +546,7 @@ static int choose_pieces(struct mpi_job *j, int total)
 	struct rt_piece map = {0};
 	/* Every rank's devices: the ranks do not tell each other their kinds. */
 	tiles_row_map(&map, s, job->row_order, job->row_classes ? job->row_classes : total);
-	if (tiles_job_init(&j->tiles, job->scene, s, tiles_band_rows(s, job->piece_rows, total), 0,
+	if (tiles_job_init(&j->tiles, job->scene, s, tiles_band_rows(s, job->piece_rows, total, job->split), 0,
 			   &map, j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;

@@ -11,10 +11,11 @@
 #include "render/render.h"
 #include "base/timing.h"
 
-int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices)
+int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices,
+		    enum split split)
 {
 	int unit = s->workgroup[1] > 0 ? s->workgroup[1] : 1;
-	int wanted = TILES_PER_DEVICE * (devices > 0 ? devices : 1);
+	int wanted = (split == SPLIT_STATIC ? 1 : TILES_PER_DEVICE) * (devices > 0 ? devices : 1);
 	int rows;
 
 	if (piece_rows > 0)
@@ -553,7 +554,7 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 {
 	struct device_work setup[DEVICES_MAX];
 	struct tiles_job t;
-	int rows = tiles_band_rows(s, r->piece_rows, r->count), frames;
+	int rows = tiles_band_rows(s, r->piece_rows, r->count, r->split), frames;
 	struct rt_piece map = {0};
 
 	memset(out, 0, sizeof(*out));

@@ -71,8 +71,12 @@ void tiles_row_map(struct rt_piece *map, const struct render_settings *s, enum r
 		   int classes);
 
 /* Rows per band: piece_rows when given (> 0), else about height / (32 ×
- * devices) rounded up to a multiple of the work-group height. */
-int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices);
+ * devices) for the dynamic split, height / devices for the static one (each
+ * device takes its share in one band: more bands would only add launches,
+ * smaller ones, and with the rows interleaved one band is one device's
+ * class), rounded up to a multiple of the work-group height. */
+int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices,
+		    enum split split);
 
 /* Band `index` of bands of `rows` rows (the last may be shorter), samples
  * [begin, end). */
