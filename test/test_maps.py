@@ -17,6 +17,7 @@ TOOLS = ROOT / "tools"
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 sys.path.insert(0, str(TOOLS))
 
+from rtcl_tools import pieces as pieces_module  # noqa: E402
 from rtcl_tools import schedule  # noqa: E402
 from rtcl_tools.commands import maps  # noqa: E402
 
@@ -207,7 +208,8 @@ def test_a_figure_tracked_by_git_is_replaced_only_with_update_committed(inputs):
 def test_without_a_map_it_is_a_usage_error(inputs):
     result = run_maps("-o", "m.png", cwd=inputs)
     assert result.returncode == 2
-    assert "give --work WORK.npy, --schedule SCHED.npy or both" in result.stderr
+    assert "give --work WORK.npy, --schedule SCHED.npy, --pieces STATS.json or several" \
+        in result.stderr
     assert not (inputs / "m.png").exists()
 
 
@@ -226,3 +228,89 @@ def test_the_maps_of_one_rtcl_run_in_one_figure(tmp_path):
     # Every pixel was started: nothing masked, the order from 0 to 1.
     shares = order.images[0].get_array()
     assert shares.count() == 48 * 64 and shares.min() == 0 and shares.max() == 1
+
+
+# ---- --pieces: one image over several devices (rtcl --devices --stats) -----------------
+
+def pieces_stats(band=2, bands=3, classes=2):
+    """A --stats document of an 8x6 image in two pieces of three split rows each, the
+    rows in bands of 2 dealt to 2 classes: device 0 takes image bands 0 and 2 (rows
+    0-1, 4-5), device 1 band 1 (rows 2-3)... in split rows 0-2 and 3-5."""
+    return {"width": WIDTH, "height": HEIGHT, "multidevice": {
+        "row_order": "interleave", "row_band": band, "row_bands": bands,
+        "row_classes": classes,
+        "devices": [{"device": "CPU A (PoCL)"}, {"device": "CPU B (PoCL)"}],
+        "pieces": [
+            {"device": 0, "x0": 0, "y0": 0, "width": WIDTH, "height": 4, "start_ms": 0.5,
+             "end_ms": 3.0, "kernel_ms": 2.0},
+            {"device": 1, "x0": 0, "y0": 4, "width": WIDTH, "height": 2, "start_ms": 0.7,
+             "end_ms": 2.0, "kernel_ms": 1.0}]}}
+
+
+def test_the_device_map_follows_the_row_map():
+    owner = pieces_module.device_map(pieces_stats())
+    # Split rows 0-3 are bands 0 and 2 (class 0): image rows 0-1 and 4-5.
+    assert owner[:, 0].tolist() == [0, 0, 1, 1, 0, 0]
+    # In scan order the same pieces are contiguous.
+    scan = pieces_stats(band=0, bands=0, classes=0)
+    assert pieces_module.device_map(scan)[:, 0].tolist() == [0, 0, 0, 0, 1, 1]
+    # rt_piece_row's rule, with a remainder: 11 bands of 4 in 3 classes.
+    assert [pieces_module.image_row(v, 4, 11, 3) for v in range(10, 20)] == \
+        [26, 27, 36, 37, 38, 39, 4, 5, 6, 7]
+
+
+def test_pieces_that_overlap_or_leave_the_image_are_refused(tmp_path):
+    import json
+    stats = pieces_stats()
+    stats["multidevice"]["pieces"][1]["y0"] = 3  # split row 3 twice
+    (tmp_path / "twice.json").write_text(json.dumps(stats))
+    assert_refused(run_maps("--pieces", "twice.json", "-o", "m.png", cwd=tmp_path), tmp_path,
+                   "m.png", "twice.json: piece 1 covers pixels another piece covers")
+    stats["multidevice"]["pieces"][1]["y0"] = 5
+    (tmp_path / "out.json").write_text(json.dumps(stats))
+    assert_refused(run_maps("--pieces", "out.json", "-o", "m.png", cwd=tmp_path), tmp_path,
+                   "m.png", "out.json: piece 1 (8x2 at 0, 5) leaves the 8x6 image")
+    (tmp_path / "plain.json").write_text(json.dumps({"width": 8, "height": 6}))
+    assert_refused(run_maps("--pieces", "plain.json", "-o", "m.png", cwd=tmp_path), tmp_path,
+                   "m.png", "plain.json: no pieces of an image; write them with rtcl --devices")
+    (tmp_path / "bad.json").write_text("{")
+    assert_refused(run_maps("--pieces", "bad.json", "-o", "m.png", cwd=tmp_path), tmp_path,
+                   "m.png", "bad.json: not rtcl --stats JSON")
+
+
+def test_pieces_of_another_size_than_the_maps_are_refused(inputs):
+    import json
+    stats = pieces_stats()
+    stats["height"] = 4
+    (inputs / "p.json").write_text(json.dumps(stats))
+    assert_refused(run_maps("--work", "w.npy", "--pieces", "p.json", "-o", "m.png",
+                            cwd=inputs), inputs, "m.png",
+                   "the work map w.npy is 6x8 (height x width) but the pieces of p.json is 4x8")
+
+
+def test_the_pieces_panels_show_devices_and_time():
+    figure, images = drawn(pieces=pieces_stats())
+    [devices] = images
+    assert devices.get_title() == "device per pixel"
+    assert colour_bar_label(devices) == "device"
+    assert devices.images[0].get_array()[:, 0].tolist() == [0, 0, 1, 1, 0, 0]
+    [timeline] = [axes for axes in figure.axes if axes.get_title() == "pieces over time"]
+    assert timeline.get_xlabel() == "ms from the frame's start"
+    labels = [label.get_text() for label in timeline.get_yticklabels()]
+    assert labels == ["0: CPU A (PoCL)", "1: CPU B (PoCL)"]
+    extents = [path.get_extents() for bars in timeline.collections for path in bars.get_paths()]
+    bars = sorted((round(box.x0, 3), round(box.width, 3)) for box in extents)
+    assert bars == [(0.5, 2.5), (0.7, 1.3)]
+
+
+def test_the_pieces_of_one_rtcl_run(tmp_path):
+    render = subprocess.run([RTCL, "--devices", "0:0,0:1", "--size", "24x48", "-w", "8x4",
+                             "-q", "-o", "img.ppm", "--stats", "s.json"],
+                            capture_output=True, text=True, cwd=tmp_path, timeout=300,
+                            env={**os.environ, "POCL_DEVICES": "pthread pthread"})
+    assert render.returncode == 0, render.stderr
+    result = run_maps("--pieces", "s.json", "-o", "maps.png", cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "maps.png").read_bytes().startswith(PNG_SIGNATURE)
+    owner = pieces_module.device_map(pieces_module.load_pieces(tmp_path / "s.json"))
+    assert owner.shape == (48, 24) and (owner >= 0).all()

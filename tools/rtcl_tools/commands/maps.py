@@ -21,9 +21,21 @@ pixels):
    ticket as a share of the started pixels, 0 the first and 1 the last (colour bar
    "order started (share of pixels)").
 
-A pixel that no work-item started is grey in panels 2 and 3.  Give --work,
---schedule or both; with both, the two maps must be of the same render (the same
-height x width).  A file that is missing, not a .npy or not such an array is an
+A pixel that no work-item started is grey in panels 2 and 3.
+
+With --pieces (`rtcl --devices LIST --stats FILE`: one image over several
+devices of one process; docs/GUIDE.md, "How the rows are ordered"), two more
+panels show the schedule over the devices:
+
+4. the device that rendered each pixel (colour bar "device", the index of
+   multidevice.devices), its pieces placed through the row map, so that
+   interleaved rows show as the bands each device took;
+5. each device's pieces over the frame's time (x: ms from the frame's start,
+   y: the device, named on the axis), one bar per piece, from when the device
+   took it to when it was done.
+
+Give --work, --schedule, --pieces or any of them together; the maps and the
+pieces must be of the same render (the same height x width).  A file that is missing, not a .npy or not such an array is an
 error: one line on stderr, exit status 1, and no output file; so is an output
 that is not .png, .svg or .pdf, or one tracked by git (unless --update-committed).
 The figure is written to a temporary file and renamed.  Needs numpy and
@@ -41,6 +53,7 @@ import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
 from ..flops import FLOPS_DTYPE, flop_unit, output_format, read_npy  # noqa: E402
+from ..pieces import NO_DEVICE, PiecesError, device_map, device_names, load_pieces  # noqa: E402
 from ..plots import pyplot  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..schedule import ScheduleMapError, load_map, order_started, started  # noqa: E402
@@ -50,6 +63,8 @@ UNSTARTED_COLOUR = "0.6"  # grey, on none of the colour maps' ends
 WORK_LABEL = "flops per pixel"
 GROUP_LABEL = "work-group"
 ORDER_LABEL = "order started (share of pixels)"
+DEVICE_LABEL = "device"
+TIME_LABEL = "ms from the frame's start"
 PANEL_WIDTH = 5.2  # inches, the colour bar included
 PANEL_HEIGHT = 4.6
 
@@ -68,6 +83,10 @@ def parse_arguments(argv):
     parser.add_argument("--schedule", metavar="SCHED.npy",
                         help="work-group, work-item and ticket per pixel, written by rtcl "
                              "--schedule-map FILE.npy")
+    parser.add_argument("--pieces", metavar="STATS.json",
+                        help="the pieces of one image over several devices, written by rtcl "
+                             "--devices LIST --stats FILE: the device per pixel and each "
+                             "device's pieces over time")
     parser.add_argument("-o", "--output", default="maps.png",
                         help="figure to write: .png, .svg or .pdf (default %(default)s)")
     parser.add_argument("--log", action="store_true",
@@ -76,8 +95,9 @@ def parse_arguments(argv):
     parser.add_argument("--title", help="title over the whole figure")
     add_update_committed(parser)
     arguments = parser.parse_args(argv)
-    if arguments.work is None and arguments.schedule is None:
-        parser.error("give --work WORK.npy, --schedule SCHED.npy or both")
+    if arguments.work is None and arguments.schedule is None and arguments.pieces is None:
+        parser.error("give --work WORK.npy, --schedule SCHED.npy, --pieces STATS.json or "
+                     "several")
     return arguments
 
 
@@ -92,29 +112,32 @@ def load_work_map(path):
     return work
 
 
-def check_same_render(work_path, work, schedule_path, schedule):
-    """Raises ValueError when the two maps are not of one image size."""
-    if work.shape != schedule.shape[:2]:
-        raise ValueError(f"the work map {work_path} is {work.shape[0]}x{work.shape[1]} "
-                         f"(height x width) but the schedule map {schedule_path} is "
-                         f"{schedule.shape[0]}x{schedule.shape[1]}: give the maps of one "
-                         "render")
+def check_same_render(first_name, first_shape, second_name, second_shape):
+    """Raises ValueError when two inputs are not of one image size ((height,
+    width) each)."""
+    if tuple(first_shape) != tuple(second_shape):
+        raise ValueError(f"{first_name} is {first_shape[0]}x{first_shape[1]} (height x "
+                         f"width) but {second_name} is {second_shape[0]}x{second_shape[1]}: "
+                         "give the maps of one render")
 
 
-def panel_count(work, schedule):
-    return (work is not None) + 2 * (schedule is not None)
+def panel_count(work, schedule, pieces=None):
+    return (work is not None) + 2 * (schedule is not None) + 2 * (pieces is not None)
 
 
-def draw_maps(figure, work=None, schedule=None, *, log=False, title=None):
-    """Draws the panels of work (flops per pixel) and schedule (a schedule map) onto
-    figure, side by side, each with its colour bar."""
-    count = panel_count(work, schedule)
+def draw_maps(figure, work=None, schedule=None, *, pieces=None, log=False, title=None):
+    """Draws the panels of work (flops per pixel), schedule (a schedule map) and
+    pieces (a --stats document of --devices) onto figure, side by side."""
+    count = panel_count(work, schedule, pieces)
     axes = list(np.atleast_1d(figure.subplots(1, count)))
     if work is not None:
         _draw_work(figure, axes.pop(0), work, log)
     if schedule is not None:
         _draw_groups(figure, axes.pop(0), schedule)
         _draw_order(figure, axes.pop(0), schedule)
+    if pieces is not None:
+        _draw_devices(figure, axes.pop(0), pieces)
+        _draw_timeline(axes.pop(0), pieces)
     if title:
         figure.suptitle(title)
 
@@ -169,14 +192,51 @@ def _draw_order(figure, axes, schedule):
            cmap=_colour_map("plasma"), vmin=0, vmax=1)
 
 
-def plot_maps(out_path, work=None, schedule=None, *, log=False, title=None):
+def _device_colours(count):
+    """One colour per device, the timeline's: tab10's, repeated past ten."""
+    from matplotlib import colormaps
+    from matplotlib.colors import ListedColormap
+    colours = ListedColormap([colormaps["tab10"](k % 10) for k in range(count)])
+    colours.set_bad(UNSTARTED_COLOUR)
+    return colours
+
+
+def _draw_devices(figure, axes, stats):
+    owner = device_map(stats)
+    devices = np.ma.masked_where(owner == NO_DEVICE, owner.astype(np.float64))
+    count = max(len(device_names(stats)), int(owner.max()) + 1, 1)
+    # nearest: resampling between two devices' numbers would show a third.
+    _image(figure, axes, devices, "device per pixel", DEVICE_LABEL, ticks=range(count),
+           cmap=_device_colours(count), vmin=-0.5, vmax=count - 0.5,
+           interpolation="nearest")
+
+
+def _draw_timeline(axes, stats):
+    pieces = stats["multidevice"]["pieces"]
+    names = device_names(stats)
+    count = max(len(names), max(int(p["device"]) for p in pieces) + 1)
+    colours = _device_colours(count)
+    for piece in pieces:
+        k = int(piece["device"])
+        start, end = float(piece["start_ms"]), float(piece["end_ms"])
+        axes.broken_barh([(start, max(end - start, 0.0))], (k - 0.4, 0.8),
+                         facecolors=colours(k), edgecolors="black", linewidth=0.5)
+    axes.set_yticks(range(count))
+    axes.set_yticklabels([f"{k}: {names[k][:28]}" if k < len(names) else str(k)
+                          for k in range(count)])
+    axes.set_ylim(count - 0.5, -0.5)
+    axes.set_xlabel(TIME_LABEL)
+    axes.set_title("pieces over time")
+
+
+def plot_maps(out_path, work=None, schedule=None, *, pieces=None, log=False, title=None):
     """Draws the maps into one figure and writes it to out_path (png, svg or pdf)."""
     file_format = output_format(out_path)
     plt = pyplot()
-    count = panel_count(work, schedule)
+    count = panel_count(work, schedule, pieces)
     figure = plt.figure(figsize=(PANEL_WIDTH * count, PANEL_HEIGHT), layout="constrained")
     try:
-        draw_maps(figure, work, schedule, log=log, title=title)
+        draw_maps(figure, work, schedule, pieces=pieces, log=log, title=title)
         files.save_figure(figure, out_path, file_format)
     finally:
         plt.close(figure)
@@ -188,9 +248,19 @@ def draw(arguments):
     files.check_not_tracked([arguments.output])
     work = load_work_map(arguments.work) if arguments.work else None
     schedule = load_map(arguments.schedule) if arguments.schedule else None
-    if work is not None and schedule is not None:
-        check_same_render(arguments.work, work, arguments.schedule, schedule)
-    plot_maps(arguments.output, work, schedule, log=arguments.log, title=arguments.title)
+    pieces = load_pieces(arguments.pieces) if arguments.pieces else None
+    shapes = [(f"the work map {arguments.work}", work.shape) if work is not None else None,
+              (f"the schedule map {arguments.schedule}", schedule.shape[:2])
+              if schedule is not None else None,
+              (f"the pieces of {arguments.pieces}", (int(pieces["height"]), int(pieces["width"])))
+              if pieces is not None else None]
+    shapes = [shape for shape in shapes if shape]
+    for other in shapes[1:]:
+        check_same_render(*shapes[0], *other)
+    if pieces is not None:
+        device_map(pieces, arguments.pieces)  # pieces that do not tile the image: refused
+    plot_maps(arguments.output, work, schedule, pieces=pieces, log=arguments.log,
+              title=arguments.title)
 
 
 def main(argv=None):
@@ -200,6 +270,6 @@ def main(argv=None):
     try:
         with files.committed_files_allowed(arguments.update_committed):
             draw(arguments)
-    except (WorkMapError, ScheduleMapError, ValueError, OSError) as error:
+    except (WorkMapError, ScheduleMapError, PiecesError, ValueError, OSError) as error:
         return report_error(program, one_line(error))
     return 0
