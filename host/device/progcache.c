@@ -78,6 +78,7 @@ void progcache_init(struct progcache *cache, const struct device *dev, const cha
 
 	memset(cache, 0, sizeof(*cache));
 	cache->verbose = verbose;
+	cache->options = options;
 	cache->enabled = !(setting && strcmp(setting, "0") == 0);
 	key = hash_text(key, "rtcl " RTCL_VERSION);
 	key = hash_text(key, dev->platform_name);
@@ -165,7 +166,7 @@ cl_program progcache_load(const struct progcache *cache, const struct device *de
 					    &binary_status, &status);
 	free(binary);
 	if (status == CL_SUCCESS && binary_status == CL_SUCCESS &&
-	    clBuildProgram(program, 1, &dev->id, NULL, NULL, NULL) == CL_SUCCESS)
+	    clBuildProgram(program, 1, &dev->id, cache->options, NULL, NULL) == CL_SUCCESS)
 		return program;
 	if (status == CL_SUCCESS)
 		clReleaseProgram(program);

@@ -16,7 +16,8 @@
 struct progcache {
 	int enabled;
 	int verbose;
-	uint64_t key;	 /* the hash of the build's inputs */
+	uint64_t key;	     /* the hash of the build's inputs */
+	const char *options; /* the build options, kept: a binary is built with them too */
 	char path[4096]; /* DIR/KEY.bin; empty when there is no folder to use */
 };
 
@@ -24,8 +25,12 @@ struct progcache {
 void progcache_init(struct progcache *cache, const struct device *dev, const char *const *texts,
 		    int count, const char *options, int verbose);
 
-/* A program made from the cached binary and built, or NULL (none cached,
- * or it did not load: then the caller builds from source). */
+/* A program made from the cached binary and built with the same options as
+ * from source, or NULL (none cached, or it did not load: then the caller
+ * builds from source). The options matter for a binary too: NVIDIA's is PTX,
+ * whose compilation to the GPU's code reads them (-cl-nv-maxrregcount); a
+ * cached program built without them ran 7-16 % slower on an H200 (batch 59,
+ * docs/results/multidevice). */
 cl_program progcache_load(const struct progcache *cache, const struct device *dev);
 
 /* Saves the binary of a program built from source; failures are only
