@@ -4,7 +4,6 @@
 #include "render/renderer.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <stdio.h>
 #include <string.h>
 
@@ -97,10 +96,9 @@ struct rt_piece renderer_whole_image(const struct render_settings *s, int begin,
 int renderer_pass_samples(const struct render_settings *s, long long pixels)
 {
 	int samples = settings_samples(s);
-	const char *x = getenv("RTCL_X_PASS_SAMPLES"); /* batch 59 experiment */
-	double per_pass = s->samples_per_pass > 0 ? s->samples_per_pass
-			  : x && *x		  ? atoi(x)
-						  : floor(RENDER_PASS_PIXEL_SAMPLES / (double)pixels);
+	double per_pass = s->samples_per_pass > 0
+				  ? s->samples_per_pass
+				  : floor(RENDER_PASS_PIXEL_SAMPLES / (double)pixels);
 
 	return per_pass < 1 ? 1 : per_pass > samples ? samples : (int)per_pass;
 }
