@@ -174,28 +174,51 @@ static int take_rank_piece(void *context, int device)
 
 /* Sends a piece's pixels (a frame, or a band) to rank 0: the piece number,
  * then the floats. */
-static int send_result(int piece, const float *rgb, size_t bytes, char *err, size_t err_size)
+/* A message to rank 0 of a piece's number and bytes of pixels, the pixels
+ * left for the caller to write at result_pixels(message); NULL (with err
+ * set) when it cannot be made. */
+static char *result_message(int piece, size_t bytes, char *err, size_t err_size)
 {
 	char *message = bytes + sizeof(int) <= INT_MAX ? malloc(sizeof(int) + bytes) : NULL;
-	int status;
 
 	if (!message) {
 		snprintf(err, err_size,
 			 "cannot send a piece of %zu bytes to rank 0 (at most 2 GiB, and host "
 			 "memory for a copy)",
 			 bytes);
-		return -1;
+		return NULL;
 	}
 	memcpy(message, &piece, sizeof(int));
-	memcpy(message + sizeof(int), rgb, bytes);
-	status = MPI_Send(message, (int)(sizeof(int) + bytes), MPI_BYTE, ROOT, TAG_RESULT,
-			  MPI_COMM_WORLD);
+	return message;
+}
+
+static float *result_pixels(char *message)
+{
+	return (float *)(message + sizeof(int));
+}
+
+/* Sends and frees a result_message of `bytes` bytes of pixels. */
+static int send_message(char *message, size_t bytes, char *err, size_t err_size)
+{
+	int status = MPI_Send(message, (int)(sizeof(int) + bytes), MPI_BYTE, ROOT, TAG_RESULT,
+			      MPI_COMM_WORLD);
+
 	free(message);
 	if (status != MPI_SUCCESS) {
 		snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)", status);
 		return -1;
 	}
 	return 0;
+}
+
+static int send_result(int piece, const float *rgb, size_t bytes, char *err, size_t err_size)
+{
+	char *message = result_message(piece, bytes, err, err_size);
+
+	if (!message)
+		return -1;
+	memcpy(result_pixels(message), rgb, bytes);
+	return send_message(message, bytes, err, err_size);
 }
 
 /* Rank 0: keeps a frame's pixels (malloc'd, taken) until every frame has
@@ -263,8 +286,26 @@ static void place_band(struct mpi_job *j, int band, const float *rgb)
 	tiles_pack_piece(&p, j->settings.width, rgb, j->record->result.rgb, 1);
 }
 
+/* Rank 0's own device: band b's rows straight from the device's image (rows
+ * where the image has them) into the image, one copy. */
+static void place_own_band(struct mpi_job *j, int band, const float *device_rgb)
+{
+	struct rt_piece p = tiles_job_band(&j->tiles, band, 0, 1);
+	size_t row_bytes = 3 * (size_t)p.width * sizeof(float);
+	float *image = j->record->result.rgb;
+
+	pthread_mutex_lock(&j->lock);
+	j->arrived[band]++;
+	pthread_mutex_unlock(&j->lock);
+	for (int v = p.y0; v < p.y0 + p.height; v++) {
+		size_t first = 3 * ((size_t)rt_piece_row(&p, v) * j->settings.width + p.x0);
+		memcpy(image + first, device_rgb + first, row_bytes);
+	}
+}
+
 /* Image: the device is done: reads it back once (checking its write counts
- * under check_writes) and places or sends rank 0 the bands it rendered. */
+ * under check_writes) and places (rank 0) or sends rank 0 the bands it
+ * rendered, each packed once, straight into the message. */
 static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
 {
 	struct tiles_job *t = &j->tiles;
@@ -272,24 +313,21 @@ static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
 	if (tiles_collect(t, device, err, err_size) ||
 	    (t->settings->check_writes && tiles_check_device(t, device, err, err_size)))
 		return -1;
+	const float *rgb = t->dev[device].result.rgb;
 	for (int b = 0; b < t->bands; b++) {
 		if (t->owner[b] != device)
 			continue;
+		if (j->rank == ROOT) {
+			place_own_band(j, b, rgb);
+			continue;
+		}
 		struct rt_piece p = tiles_job_band(t, b, 0, 1);
 		size_t bytes = image_float_bytes(p.width, p.height);
-		float *rows = malloc(bytes);
-		int failed = 0;
-		if (!rows) {
-			snprintf(err, err_size, "out of host memory for a band of %zu bytes", bytes);
+		char *message = result_message(b, bytes, err, err_size);
+		if (!message)
 			return -1;
-		}
-		tiles_pack_piece(&p, t->settings->width, t->dev[device].result.rgb, rows, 0);
-		if (j->rank == ROOT)
-			place_band(j, b, rows);
-		else
-			failed = send_result(b, rows, bytes, err, err_size);
-		free(rows);
-		if (failed)
+		tiles_pack_piece(&p, t->settings->width, rgb, result_pixels(message), 0);
+		if (send_message(message, bytes, err, err_size))
 			return -1;
 	}
 	return 0;
