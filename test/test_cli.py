@@ -118,6 +118,12 @@ def test_stats_has_every_figure(tmp_path):
     assert sorted(stats["kernel_ms_all"])[1] == stats["kernel_ms"]
     assert stats["device"] in result.stdout
     assert "median of 3 launches" in result.stdout
+    # Each frame's wall time holds its launches' kernel time (the host's
+    # clock around the profiled launches; 0.5 ms for the two clocks' reading).
+    assert len(stats["frame_ms_all"]) == 3
+    assert sorted(stats["frame_ms_all"])[1] == stats["frame_ms"]
+    assert all(wall >= kernels - 0.5
+               for wall, kernels in zip(stats["frame_ms_all"], stats["kernel_ms_all"]))
 
 
 def test_stats_has_the_devices_compute_units_and_clock(tmp_path):

@@ -523,6 +523,8 @@ def test_bands_with_repeats_work_map_and_static_split(tmp_path):
     # Per-pixel flops assemble like the image.
     assert (tmp_path / "one.npy").read_bytes() == (tmp_path / "two.npy").read_bytes()
     assert stats["repeat"] == 3 and len(stats["kernel_ms_all"]) == 3
+    # Over several devices a frame's time is its wall time: the two agree.
+    assert stats["frame_ms_all"] == stats["kernel_ms_all"]
     assert stats["multidevice"]["split"] == "static"
     assert "median of 3" in result.stdout and "device-level efficiency" in result.stdout
     assert result.stdout.count(" bands, ") + result.stdout.count(" band, ") == 2

@@ -70,9 +70,10 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 		struct piece_result out;
 		if (s->progress)
 			repeats_progress_step(s, res, frame, frames);
+		double start = timing_now();
 		if (renderer_all_samples(&r, &whole, &out, err, err_size))
 			goto out_close;
-		repeats_record(res, frame, frames, out.kernel_ms);
+		repeats_record(res, frame, frames, out.kernel_ms, (timing_now() - start) * 1e3);
 	}
 	if (s->progress)
 		progress_end();
@@ -133,6 +134,7 @@ void render_result_free(struct render_result *res)
 {
 	free(res->rgb);
 	free(res->kernel_ms);
+	free(res->frame_ms);
 	free(res->item_flops);
 	free(res->pixel_flops);
 	free(res->write_counts);
@@ -144,6 +146,7 @@ void render_result_free(struct render_result *res)
 	res->schedule = NULL;
 	res->rgb = NULL;
 	res->kernel_ms = NULL;
+	res->frame_ms = NULL;
 	res->item_flops = NULL;
 	res->write_counts = NULL;
 }

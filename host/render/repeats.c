@@ -14,7 +14,8 @@ int repeats_begin(const struct render_settings *s, struct render_result *res, ch
 	int warm_up = !settings_instrumented(s) && s->warm_up;
 
 	res->kernel_ms = calloc((size_t)timed, sizeof(double));
-	if (!res->kernel_ms) {
+	res->frame_ms = calloc((size_t)timed, sizeof(double));
+	if (!res->kernel_ms || !res->frame_ms) {
 		snprintf(err, err_size, "out of host memory");
 		return -1;
 	}
@@ -23,18 +24,24 @@ int repeats_begin(const struct render_settings *s, struct render_result *res, ch
 	return res->launches;
 }
 
-void repeats_record(struct render_result *res, int frame, int frames, double ms)
+void repeats_record(struct render_result *res, int frame, int frames, double ms, double wall_ms)
 {
 	int slot = frame - (frames - res->repeat);
 
-	if (slot >= 0)
+	if (slot >= 0) {
 		res->kernel_ms[slot] = ms;
+		res->frame_ms[slot] = wall_ms;
+	}
 }
 
 int repeats_end(struct render_result *res, char *err, size_t err_size)
 {
+	double min, max;
+
 	return timing_summarize(res->kernel_ms, res->repeat, &res->kernel_ms_median,
-				&res->kernel_ms_min, &res->kernel_ms_max, err, err_size);
+				&res->kernel_ms_min, &res->kernel_ms_max, err, err_size) ||
+	       timing_summarize(res->frame_ms, res->repeat, &res->frame_ms_median, &min, &max, err,
+				err_size);
 }
 
 void repeats_progress_begin(const struct render_settings *s, int frames, const char *devices)

@@ -6,16 +6,19 @@
 
 #include "render/settings.h"
 
-/* Allocates result->kernel_ms for the timed frames and returns how many
+/* Allocates result->kernel_ms and frame_ms for the timed frames and returns how many
  * frames to render in all (a warm-up, then the timed ones; one for a counting
  * run), or -1 with a message. */
 int repeats_begin(const struct render_settings *settings, struct render_result *result, char *err,
 		  size_t err_size);
 
-/* Records frame `frame` of `frames` as taking ms; the warm-up is dropped. */
-void repeats_record(struct render_result *result, int frame, int frames, double ms);
+/* Records frame `frame` of `frames` as taking ms (kernel_ms) and wall_ms
+ * (frame_ms); the warm-up is dropped. */
+void repeats_record(struct render_result *result, int frame, int frames, double ms,
+		    double wall_ms);
 
-/* Sets the median, min and max of the recorded frames. */
+/* Sets the median, min and max of the recorded frames, and frame_ms's
+ * median. */
 int repeats_end(struct render_result *result, char *err, size_t err_size);
 
 /* Starts the progress line (progress.h) of `frames` frames of the whole

@@ -87,8 +87,17 @@ struct piece_record {
 
 struct render_result {
 	float *rgb; /* width*height*3 linear floats, row 0 at the top */
+	/* Each timed frame's time, in order, and their median, min and max: on
+	 * one device the sum of its launches' profiled kernel times; over
+	 * several devices (--devices) the frame's wall time. */
 	double kernel_ms_median, kernel_ms_min, kernel_ms_max;
-	double *kernel_ms; /* each timed launch, in order */
+	double *kernel_ms;
+	/* Each timed frame's wall time on the host, from its first launch to the
+	 * end of its last, the gaps between launches included, and their
+	 * median: what --devices times, so that one device and several compare
+	 * alike (docs/GUIDE.md, "Measuring"). */
+	double *frame_ms;
+	double frame_ms_median;
 	int repeat;
 	int launches; /* frames rendered: the timed ones and any warm-up */
 	int passes;   /* passes per frame, each a range of the samples */

@@ -213,6 +213,20 @@ static json_t *frames_document(const struct job *job, const struct record *recor
 			 shares_document(&record->shares));
 }
 
+/* Each timed frame's wall time (frame_ms in settings.h), where it was kept. */
+static void add_frame_times(json_t *doc, const struct render_result *r)
+{
+	json_t *times;
+
+	if (!r->frame_ms || r->repeat < 1)
+		return;
+	times = json_array();
+	for (int i = 0; i < r->repeat; i++)
+		json_array_append_new(times, json_real(r->frame_ms[i]));
+	json_object_set_new(doc, "frame_ms", json_real(r->frame_ms_median));
+	json_object_set_new(doc, "frame_ms_all", times);
+}
+
 json_t *report_document(const struct job *job, const struct record *record)
 {
 	if (job->animation)
@@ -223,6 +237,7 @@ json_t *report_document(const struct job *job, const struct record *record)
 		return NULL;
 	json_object_set_new(doc, "time_breakdown_ms", times_document(record));
 	json_object_set_new(doc, "build_cached", json_boolean(record->result.build_cached));
+	add_frame_times(doc, &record->result);
 	if (job->counting)
 		add_flop_figures(doc, record);
 	if (job->counting) {

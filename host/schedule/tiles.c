@@ -539,7 +539,8 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 		}
 		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
 			return -1;
-		repeats_record(out, f, frames, (timing_now() - start) * 1e3);
+		double wall_ms = (timing_now() - start) * 1e3;
+		repeats_record(out, f, frames, wall_ms, wall_ms);
 	}
 	return frames;
 }
