@@ -241,3 +241,12 @@ def test_the_same_meaning_has_the_same_short_option(tool):
         for long, short in SHORT_FOR.items():
             if long in names:
                 assert short in names, f"{tool}: {line}"
+
+
+def test_the_multidevice_bench_times_a_frame_by_its_wall_time():
+    """One device's frame_ms (its launches and the gaps between them) is set
+    beside several devices' wall time, not its kernel time alone; an rtcl
+    without frame_ms gives kernel_ms."""
+    from rtcl_tools.commands import multidevice_bench
+    assert multidevice_bench.image_time({"kernel_ms": 1861.0, "frame_ms": 1932.0}) == 1932.0
+    assert multidevice_bench.image_time({"kernel_ms": 1052.0}) == 1052.0
