@@ -5,7 +5,9 @@
 # the build options. OLD = .gpu/rtcl-old (eeb26f3, built with none), NEW =
 # .gpu/rtcl (the options passed). "fresh" = RTCL_CACHE=0 (built from source
 # every run), "cached" = from the cache, primed first. Then two GPUs against
-# one, all from the cache, default scene 2048 spp. Median of -r 3, kernel ms.
+# one, all from the cache, default scene 2048 spp. Median of -r 3, kernel ms,
+# and one device's frame wall time (frame_ms, d7eae24), which is what two
+# devices' figure is.
 #   COMMIT=<commit> bash docs/results/multidevice/h200x2/run60.sh
 set -u
 echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
@@ -21,7 +23,7 @@ declare -A S=([default]="-k dynamic --size 2000x2000 --spp 1024" [lake]="-k dyna
 show() { python3 -c "
 import json, sys
 d = json.load(open(sys.argv[1]))
-print('median %.1f ms (min %.1f, max %.1f), build_cached %s' % (d['kernel_ms'], d['kernel_ms_min'], d['kernel_ms_max'], d.get('build_cached')))" $1; }
+print('median %.1f ms (min %.1f, max %.1f), frame wall %.1f ms, build_cached %s' % (d['kernel_ms'], d['kernel_ms_min'], d['kernel_ms_max'], d.get('frame_ms', float('nan')), d.get('build_cached')))" $1; }
 one() { # tag, binary, cache (0 = off), scene, extra...
   local tag=$1 bin=$2 cache=$3 s=$4; shift 4
   RTCL_CACHE=$cache $bin -p $P -d 0 ${S[$s]} -r 3 -q -o $T/$tag.ppm --stats $O/$tag.json "$@"
