@@ -3,7 +3,7 @@
 # (nvidia-h200-x2; not lent when this was written, 2026-11-25): one image
 # over two GPUs against one, median of 3 whole renders (-r 3 times the whole
 # multi-device image after a warm-up), both row orders, the default scene at
-# 1024 spp and the lake (1.1 M triangles) at 256 spp, 2000x2000, dynamic.
+# 1024 spp and the lake (2.1 M triangles) at 256 spp, 2000x2000, dynamic.
 # Run: COMMIT=<commit> bash docs/results/multidevice/h200x2/run55.sh
 set -u
 echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd

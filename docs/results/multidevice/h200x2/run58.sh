@@ -3,7 +3,7 @@
 # split landed. One image over two GPUs against one, in one process
 # (--devices) and as two MPI ranks with one GPU each, both row orders; the
 # default scene at 2048 spp (about 1.8 s on one GPU: the issue asks for
-# renders of >= 1 s) and the lake (1.1 M triangles) at 256 spp, 2000x2000,
+# renders of >= 1 s) and the lake (2.1 M triangles) at 256 spp, 2000x2000,
 # kernel dynamic. In-process figures are the median of -r 3 whole images after
 # a warm-up; MPI allows no -r, so each MPI figure is one whole run
 # (set-up included), three runs, against MPI with one rank and one GPU.
