@@ -573,6 +573,28 @@ def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, s
 
 
 @needs_mpi
+def test_mpi_gpus_alone_take_a_class_each_under_the_dynamic_split(tmp_path):
+    # GPUs alone (RTCL_TEST_AS_GPUS: the PoCL devices report as GPUs) take one
+    # band per device, a class each, as --split static gives them: smaller
+    # bands starved two H200s (6.57 s against 1.16 s). With CPUs, about 32
+    # bands per device: 48 rows in bands of 4 (the work-group's height).
+    common = [*TALL, "-k", "persistent"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    for gpus, bands in (("1", 3), ("0", 12)):
+        result = mpi_run(*common, "-o", str(tmp_path / f"ranks{gpus}.ppm"), "--stats",
+                         str(tmp_path / f"s{gpus}.json"),
+                         env={**CHECK, "RTCL_TEST_AS_GPUS": gpus})
+        assert result.returncode == 0, result.stderr
+        assert (tmp_path / "one.ppm").read_bytes() == \
+            (tmp_path / f"ranks{gpus}.ppm").read_bytes()
+        md = json.loads((tmp_path / f"s{gpus}.json").read_text())["multidevice"]
+        assert md["split"] == "dynamic" and md["bands"] == bands, md
+        assert sum(d["pieces"] for d in md["devices"]) == bands
+        assert md["row_classes"] == 3
+
+
+@needs_mpi
 @pytest.mark.parametrize("order", ["interleave", pytest.param("scan", marks=pytest.mark.slow)])
 def test_mpi_interleaved_bands_match_one_process(tmp_path, order):
     # Bands of split rows go to rank 0 packed, in split-row order, and are

@@ -94,6 +94,11 @@ int hook_count_writes(void)
 	return env_is_one("RTCL_TEST_CHECK_WRITES");
 }
 
+int hook_devices_as_gpus(void)
+{
+	return env_is_one("RTCL_TEST_AS_GPUS");
+}
+
 int hook_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");

@@ -2,7 +2,7 @@
  * variables, as a real device, rank, cache or file system would produce them
  * and as no test can provoke on demand. Each is off unless its variable is
  * set: RTCL_TEST_DEVICE_FAULT, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE,
- * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_DOUBLE_BAND,
+ * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_AS_GPUS, RTCL_TEST_DOUBLE_BAND,
  * RTCL_TEST_FAIL_RENAME, RTCL_TEST_SLOW_CACHE_WRITE, RTCL_TEST_COMMIT_DELAY. */
 #ifndef RTCL_TEST_HOOKS_H
 #define RTCL_TEST_HOOKS_H
@@ -37,6 +37,11 @@ int hook_rank_dies(int rank, int taken, int none_left);
  * (tiles.h) counts every pixel's writes on every device and fails the run
  * unless each pixel was written once per launch of its band. */
 int hook_count_writes(void);
+
+/* RTCL_TEST_AS_GPUS=1: under --mpi every rank reports its devices as GPUs
+ * when the ranks choose their bands (host/run/mpi_render.c), so that PoCL's
+ * CPU devices take the bands two GPU ranks would. */
+int hook_devices_as_gpus(void);
 
 /* RTCL_TEST_DOUBLE_BAND=1: several devices in one process render band 0 a
  * second time on another device, which the write-count check must catch. */
