@@ -169,6 +169,10 @@ Test(fuzz, issue_24_mesh_files_are_refused)
 		{"obj-all-area-zero.obj", "have area 0 (after placement)"},
 		{"ply-element-line-with-count-in-name.ply",
 		 "line 7 of the PLY header: an element line must be \"element NAME COUNT\""},
+		{"assimp-abort-ply-header-twice.ply",
+		 "line 9 of the PLY header: \"ply\" again: a header starts once"},
+		{"ply-header-twice-bad-free.ply",
+		 "line 9 of the PLY header: \"ply\" again: a header starts once"},
 	};
 
 	for (size_t i = 0; i < sizeof(refused) / sizeof(refused[0]); i++) {

@@ -106,11 +106,12 @@ static int split(char *line, char **words, int max)
 /* Reads the header from f. Returns 1 when it is one this check understands,
  * 0 when not (or not PLY at all), -1 with why in reason when an element line
  * is malformed: Assimp reads a count out of the words it finds there (the mesh
- * fuzzer: "element 4294967295perty list ..." made it allocate 103 GB). */
+ * fuzzer: "element 4294967295perty list ..." made it allocate 103 GB); or
+ * when the header starts again ("ply", or a second "format"). */
 static int read_ply_header(FILE *f, struct header *h, char *reason, size_t reason_size)
 {
 	char line[LINE_MAX_BYTES], *words[8];
-	int n, line_number = 1;
+	int n, line_number = 1, formats = 0;
 
 	memset(h, 0, sizeof(*h));
 	if (!fgets(line, sizeof(line), f) || split(line, words, 8) != 1 ||
@@ -126,6 +127,19 @@ static int read_ply_header(FILE *f, struct header *h, char *reason, size_t reaso
 		if (strcmp(words[0], "end_header") == 0) {
 			h->body_start = ftello(f);
 			return 1;
+		}
+		/* A header that starts again: Assimp 5.2 aborted, or freed memory
+		 * it had not allocated, on these (the mesh fuzzer). */
+		if (strcmp(words[0], "ply") == 0) {
+			snprintf(reason, reason_size,
+				 "line %d of the PLY header: \"ply\" again: a header starts once",
+				 line_number);
+			return -1;
+		}
+		if (strcmp(words[0], "format") == 0 && formats++) {
+			snprintf(reason, reason_size,
+				 "line %d of the PLY header: a second \"format\" line", line_number);
+			return -1;
 		}
 		if (strcmp(words[0], "format") == 0 && n >= 2) {
 			if (strcmp(words[1], "ascii") == 0)
