@@ -8,6 +8,9 @@
 # one, all from the cache, default scene 2048 spp. Median of -r 3, kernel ms,
 # and one device's frame wall time (frame_ms, d7eae24), which is what two
 # devices' figure is.
+# Before (here): make OIIO=0 MPI=0 BUILD=/tmp/gb BIN=.gpu/rtcl; for OLD,
+#   git worktree add /tmp/old eeb26f3 && make -C /tmp/old OIIO=0 MPI=0 \
+#     BUILD=/tmp/gbo BIN=$PWD/.gpu/rtcl-old; and .gpu/lib, .gpu/rtcl-meshread.
 #   COMMIT=<commit> bash docs/results/multidevice/h200x2/run60.sh
 set -u
 echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
