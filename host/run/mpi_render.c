@@ -172,8 +172,6 @@ static int take_rank_piece(void *context, int device)
 	return piece;
 }
 
-/* Sends a piece's pixels (a frame, or a band) to rank 0: the piece number,
- * then the floats. */
 /* A message to rank 0 of a piece's number and bytes of pixels, the pixels
  * left for the caller to write at result_pixels(message); NULL (with err
  * set) when it cannot be made. */
@@ -211,6 +209,8 @@ static int send_message(char *message, size_t bytes, char *err, size_t err_size)
 	return 0;
 }
 
+/* Sends a piece's pixels (a frame, or a band) to rank 0: the piece number,
+ * then the floats. */
 static int send_result(int piece, const float *rgb, size_t bytes, char *err, size_t err_size)
 {
 	char *message = result_message(piece, bytes, err, err_size);
@@ -587,7 +587,7 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 		return 0;
 	}
 	struct rt_piece map = {0};
-	/* Every rank's devices: the ranks do not tell each other their kinds. */
+	/* One class per device of every rank (--row-order's S). */
 	tiles_row_map(&map, s, job->row_order, job->row_classes ? job->row_classes : total);
 	enum split bands = gpus == total ? SPLIT_STATIC : job->split;
 	if (tiles_job_init(&j->tiles, job->scene, s, tiles_band_rows(s, job->piece_rows, total, bands),
