@@ -59,6 +59,16 @@ def test_other_build_options_are_another_program(tmp_path):
     assert render(tmp_path, tmp_path / "cache", "--depth", "2")[0] is True
 
 
+def test_other_pocl_build_flags_are_another_program(tmp_path):
+    """PoCL's build settings from the environment change the binary: make test
+    builds without LLVM's optimiser, make test-long with it, in one cache."""
+    flags = {"POCL_EXTRA_BUILD_FLAGS": "-cl-opt-disable"}
+    assert render(tmp_path, tmp_path / "cache", **flags)[0] is False
+    cached, _, _ = render(tmp_path, tmp_path / "cache", POCL_EXTRA_BUILD_FLAGS="")
+    assert cached is False and len(cache_files(tmp_path / "cache")) == 2
+    assert render(tmp_path, tmp_path / "cache", **flags)[0] is True
+
+
 def damage_truncate(data):
     return data[:len(data) // 2]
 

@@ -31,6 +31,11 @@
 /* The file's first bytes; a new layout gets a new one. */
 static const char magic[8] = {'r', 't', 'c', 'l', 'b', 'i', 'n', '1'};
 
+/* Environment variables of OpenCL drivers that change the binary a build
+ * makes: part of the key. */
+static const char *const driver_settings[] = {"POCL_EXTRA_BUILD_FLAGS",
+					      "POCL_WORK_GROUP_SPECIALIZATION"};
+
 /* No program binary is larger (PoCL's are about 1 MB, PTX a few hundred kB). */
 #define MAX_BINARY_BYTES ((size_t)256 << 20)
 
@@ -86,6 +91,12 @@ void progcache_init(struct progcache *cache, const struct device *dev, const cha
 	key = hash_text(key, dev->version);
 	key = hash_text(key, dev->driver);
 	key = hash_text(key, options);
+	/* PoCL's build settings from the environment change its binary
+	 * (make test builds without LLVM's optimiser, make test-long with it). */
+	for (size_t i = 0; i < sizeof(driver_settings) / sizeof(driver_settings[0]); i++) {
+		const char *value = getenv(driver_settings[i]);
+		key = hash_text(key, value ? value : "");
+	}
 	for (int i = 0; i < count; i++)
 		key = hash_text(key, texts[i]);
 	cache->key = key;
