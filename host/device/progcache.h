@@ -3,7 +3,8 @@
  * named by a hash of everything that changes it: the platform, the device and
  * its driver and OpenCL versions, rtcl's version, every source text, the
  * build options and PoCL's build settings from the environment
- * (POCL_EXTRA_BUILD_FLAGS, POCL_WORK_GROUP_SPECIALIZATION). RTCL_CACHE=0 turns it off. Any trouble with the cache (a
+ * (POCL_EXTRA_BUILD_FLAGS, POCL_WORK_GROUP_SPECIALIZATION). RTCL_CACHE=0
+ * turns it off. Any trouble with the cache (a
  * missing, short, corrupt or foreign file, a device that refuses the binary,
  * a folder that cannot be written) means a build from source, never an
  * error; with -v it is said once on stderr. */

@@ -291,16 +291,11 @@ static void place_band(struct mpi_job *j, int band, const float *rgb)
 static void place_own_band(struct mpi_job *j, int band, const float *device_rgb)
 {
 	struct rt_piece p = tiles_job_band(&j->tiles, band, 0, 1);
-	size_t row_bytes = 3 * (size_t)p.width * sizeof(float);
-	float *image = j->record->result.rgb;
 
 	pthread_mutex_lock(&j->lock);
 	j->arrived[band]++;
 	pthread_mutex_unlock(&j->lock);
-	for (int v = p.y0; v < p.y0 + p.height; v++) {
-		size_t first = 3 * ((size_t)rt_piece_row(&p, v) * j->settings.width + p.x0);
-		memcpy(image + first, device_rgb + first, row_bytes);
-	}
+	tiles_copy_rows(&p, j->settings.width, device_rgb, j->record->result.rgb);
 }
 
 /* Image: the device is done: reads it back once (checking its write counts

@@ -295,18 +295,26 @@ int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size)
 	return 0;
 }
 
+void tiles_copy_rows(const struct rt_piece *p, int image_width, const float *from, float *to)
+{
+	for (int v = p->y0; v < p->y0 + p->height; v++) {
+		size_t first = 3 * ((size_t)rt_piece_row(p, v) * image_width + p->x0);
+		memcpy(to + first, from + first, 3 * (size_t)p->width * sizeof(float));
+	}
+}
+
 void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_result *from,
 		      struct render_result *to)
 {
 	const struct rt_piece *p = &t->pieces[piece];
 
+	tiles_copy_rows(p, t->settings->width, from->rgb, to->rgb);
+	if (!from->pixel_flops || !to->pixel_flops)
+		return;
 	for (int v = p->y0; v < p->y0 + p->height; v++) {
 		size_t first = (size_t)rt_piece_row(p, v) * t->settings->width + p->x0;
-		memcpy(to->rgb + 3 * first, from->rgb + 3 * first,
-		       3 * (size_t)p->width * sizeof(float));
-		if (from->pixel_flops && to->pixel_flops)
-			memcpy(to->pixel_flops + first, from->pixel_flops + first,
-			       (size_t)p->width * sizeof(uint64_t));
+		memcpy(to->pixel_flops + first, from->pixel_flops + first,
+		       (size_t)p->width * sizeof(uint64_t));
 	}
 }
 

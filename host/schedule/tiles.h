@@ -153,6 +153,10 @@ int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size);
 
 /* Copies piece's pixels of from's image (and per-pixel flops when both hold
  * them) into to. */
+/* Copies the pixels of piece p from the full-size image `from` to the
+ * full-size image `to`, each row where the row map puts it. */
+void tiles_copy_rows(const struct rt_piece *p, int image_width, const float *from, float *to);
+
 void tiles_copy_piece(const struct tiles_job *t, int piece, const struct render_result *from,
 		      struct render_result *to);
 
