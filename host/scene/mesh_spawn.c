@@ -277,7 +277,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 }
 
 /* The line of the helper's stderr (captured in f) that says most: the first
- * that is not blank or a rule of '=' (a sanitizer report opens with one).
+ * that is not blank, a rule of '=' (a sanitizer report opens with one) or
+ * AddressSanitizer's line that a signal came before its report.
  * "" when it said nothing. */
 static void helper_said(FILE *f, char *line, size_t size)
 {
@@ -286,17 +287,42 @@ static void helper_said(FILE *f, char *line, size_t size)
 		return;
 	while (fgets(line, (int)size, f)) {
 		line[strcspn(line, "\r\n")] = '\0';
-		if (line[strspn(line, " \t=")] != '\0')
+		if (line[strspn(line, " \t=")] != '\0' && !strstr(line, "Sanitizer:DEADLYSIGNAL"))
 			return;
 	}
 	line[0] = '\0';
 }
 
 /* Whether the helper's words come from a sanitizer (a test build's check
- * that failed in rtcl's code, not the file's fault). */
+ * that failed, in rtcl's code unless sanitizer_blames_assimp). */
 static int sanitizer_report(const char *said)
 {
 	return strstr(said, "Sanitizer") || strstr(said, "runtime error:");
+}
+
+/* Whether a sanitizer report (captured in f) puts the fault inside Assimp:
+ * its first stack frame in code that is not the sanitizer's own is in
+ * libassimp, not in rtcl's sources (host/...c, symbolized from the test
+ * build's debug information). Frames of the sanitizer runtime name only
+ * the helper binary. A SEGV or a bad free in Assimp is the file's fault,
+ * as the plain helper's crash is; a report in rtcl's code, or one without
+ * frames (UBSan's), is not. */
+static int sanitizer_blames_assimp(FILE *f)
+{
+	char line[1024];
+
+	if (!f || fseek(f, 0, SEEK_SET))
+		return 0;
+	while (fgets(line, (int)sizeof(line), f)) {
+		const char *p = line + strspn(line, " \t");
+		if (p[0] != '#' || p[1] < '0' || p[1] > '9')
+			continue;
+		if (strstr(p, "libassimp"))
+			return 1;
+		if (strstr(p, "/host/") && strstr(p, ".c:"))
+			return 0;
+	}
+	return 0;
 }
 
 /* Waits for the helper, then turns what happened into the outcome: the
@@ -338,12 +364,20 @@ static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t r
 			 "the mesh importer failed: its answer makes no sense");
 		return MESH_IMPORTER_FAILED;
 	}
+	/* A sanitized helper (test builds) ends with exit status 1, or a
+	 * signal, after its report. */
+	if ((WIFSIGNALED(status) || code != 0) && sanitizer_report(said)) {
+		if (sanitizer_blames_assimp(said_file)) {
+			snprintf(reason, reason_size,
+				 "the importer (Assimp) crashed on it%s; the file is malformed",
+				 paren);
+			return MESH_REFUSED;
+		}
+		snprintf(reason, reason_size, "the mesh importer failed%s", paren);
+		return MESH_IMPORTER_FAILED;
+	}
 	if (WIFSIGNALED(status)) {
 		int sig = WTERMSIG(status);
-		if (sanitizer_report(said)) {
-			snprintf(reason, reason_size, "the mesh importer failed%s", paren);
-			return MESH_IMPORTER_FAILED;
-		}
 		if (sig == SIGINT || sig == SIGTERM || sig == SIGHUP || sig == SIGKILL) {
 			snprintf(reason, reason_size,
 				 "the mesh importer was stopped by a signal (%s)", strsignal(sig));
