@@ -262,12 +262,33 @@ static void check_every_kernel_at_depth_64(const char *path, int width, int heig
 					    width, height, 64, 1);
 }
 
+/* make test's share of it: the stack walk once (the four parallel kernels
+ * run its very code; kernels::identical_* hold them to serial's bytes) and
+ * the wavefront, whose bounces are its own; the depth-64 programs cost 3 s
+ * each unoptimised on two_balls' ray trees. kernels_slow runs all six. */
+static void check_walk_and_wavefront_at_depth_64(const char *path, int width, int height)
+{
+	static const char *const kernels[] = {"dynamic", "wavefront"};
+	check_kernels_against_reference_spp(path, kernels, sizeof(kernels) / sizeof(kernels[0]),
+					    width, height, 64, 1);
+}
+
 Test(kernels, depth_64_matches_reference_two_balls, .timeout = 600)
+{
+	check_walk_and_wavefront_at_depth_64("scenes/two_balls.json", 8, 6);
+}
+
+Test(kernels, depth_64_matches_reference_paper60, .timeout = 600)
+{
+	check_walk_and_wavefront_at_depth_64("scenes/paper60.json", 16, 12);
+}
+
+Test(kernels_slow, depth_64_every_kernel_matches_reference_two_balls, .timeout = 900)
 {
 	check_every_kernel_at_depth_64("scenes/two_balls.json", 8, 6);
 }
 
-Test(kernels, depth_64_matches_reference_paper60, .timeout = 600)
+Test(kernels_slow, depth_64_every_kernel_matches_reference_paper60, .timeout = 600)
 {
 	check_every_kernel_at_depth_64("scenes/paper60.json", 16, 12);
 }
@@ -385,8 +406,13 @@ Test(kernels, global_scene_matches_local, .timeout = 600)
  * sphere test, ties to the lower index, boxes padded beyond rounding
  * (docs/bvh.md). The wavefront adds a pixel's rays in no fixed order
  * (atomics), so its image may differ from the stack walk's, with either
- * --accel, by 1/255 at most (wavefront_matches_the_stack_walk). */
-static void check_bvh_matches_brute_force(const char *path, int width, int height)
+ * --accel, by 1/255 at most (wavefront_matches_the_stack_walk).
+ * every_kernel_global: the __global scene in every kernel too, not only in
+ * dynamic and the wavefront (the single-pass kernels read the scene through
+ * the same code; each program costs about half a second to build in make
+ * test, so make test leaves the others to kernels_slow). */
+static void check_bvh_matches_brute_force_in(const char *path, int width, int height,
+					     int every_kernel_global)
 {
 	static const char *const kernels[] = {"serial",	 "naive",      "cyclic",
 					      "dynamic", "persistent", "wavefront"};
@@ -402,6 +428,9 @@ static void check_bvh_matches_brute_force(const char *path, int width, int heigh
 	unsigned char *want = render_checked(&dev, &scene, &s, what);
 	for (size_t k = 0; k < sizeof(kernels) / sizeof(kernels[0]); k++) {
 		for (int global = 0; global < 2; global++) {
+			if (global && !every_kernel_global && strcmp(kernels[k], "dynamic") != 0 &&
+			    strcmp(kernels[k], "wavefront") != 0)
+				continue;
 			s = settings_for(kernels[k], width, height, 8, 8, scene.max_depth);
 			s.force_global_scene = global;
 			snprintf(what, sizeof(what), "%s %s --accel bvh, scene in %s", path,
@@ -422,6 +451,11 @@ static void check_bvh_matches_brute_force(const char *path, int width, int heigh
 	device_close(&dev);
 }
 
+static void check_bvh_matches_brute_force(const char *path, int width, int height)
+{
+	check_bvh_matches_brute_force_in(path, width, height, 0);
+}
+
 Test(kernels, bvh_matches_brute_force_paper60, .timeout = 600)
 {
 	check_bvh_matches_brute_force("scenes/paper60.json", 97, 61);
@@ -429,10 +463,10 @@ Test(kernels, bvh_matches_brute_force_paper60, .timeout = 600)
 
 Test(kernels_slow, bvh_matches_brute_force_small_scenes, .timeout = 600)
 {
-	check_bvh_matches_brute_force("scenes/two_balls.json", 64, 48);
-	check_bvh_matches_brute_force("scenes/tir.json", 64, 48);
-	check_bvh_matches_brute_force("scenes/empty.json", 32, 24);
-	check_bvh_matches_brute_force("test/scenes/mirror_corridor.json", 24, 16);
+	check_bvh_matches_brute_force_in("scenes/two_balls.json", 64, 48, 1);
+	check_bvh_matches_brute_force_in("scenes/tir.json", 64, 48, 1);
+	check_bvh_matches_brute_force_in("scenes/empty.json", 32, 24, 1);
+	check_bvh_matches_brute_force_in("test/scenes/mirror_corridor.json", 24, 16, 1);
 }
 
 /* 40 pairs of coincident spheres, the red ones first in the file and the blue
@@ -457,6 +491,13 @@ Test(kernels, bvh_matches_brute_force_meshes, .timeout = 900)
 {
 	check_bvh_matches_brute_force("test/meshes/mesh_scene.json", 96, 72);
 	check_bvh_matches_brute_force("scenes/glass_mesh.json", 80, 60);
+}
+
+Test(kernels_slow, bvh_matches_brute_force_every_kernel_in_global_memory, .timeout = 900)
+{
+	check_bvh_matches_brute_force_in("scenes/paper60.json", 97, 61, 1);
+	check_bvh_matches_brute_force_in("test/meshes/mesh_scene.json", 96, 72, 1);
+	check_bvh_matches_brute_force_in("scenes/glass_mesh.json", 80, 60, 1);
 }
 
 /* Triangles flat in axis planes, a ray in the floor's plane and the middle
@@ -541,7 +582,9 @@ Test(kernels, depth_64_matches_reference, .timeout = 600)
  * are traced, so its float sums may differ from the stack walk's in the last
  * bits (docs/wavefront.md): at most 1/255 on at most 0.01% of the pixels, over
  * every shipped scene, the awkward sizes and the work-group shapes. */
-Test(kernels, wavefront_matches_the_stack_walk, .timeout = 900)
+/* The wavefront against serial on the sample scenes at `size_count` of the
+ * sizes: each pixel within 1/255, and at most 0.01 % of them off at all. */
+static void check_wavefront_matches_the_stack_walk(int size_count)
 {
 	static const char *const scenes[] = {"scenes/paper60.json", "scenes/two_balls.json",
 					     "scenes/tir.json", "scenes/empty.json"};
@@ -554,7 +597,7 @@ Test(kernels, wavefront_matches_the_stack_walk, .timeout = 900)
 	for (int i = 0; i < 4; i++) {
 		struct scene scene;
 		load(&scene, scenes[i]);
-		for (int z = 0; z < 4; z++) {
+		for (int z = 0; z < size_count; z++) {
 			int w = sizes[z][0], h = sizes[z][1];
 			char what[256];
 			struct render_settings s =
@@ -588,6 +631,18 @@ Test(kernels, wavefront_matches_the_stack_walk, .timeout = 900)
 		differing, pixels, 100.0 * differing / pixels);
 	cr_expect_leq(100.0 * differing / pixels, 0.01);
 	device_close(&dev);
+}
+
+/* make test: the three small sizes (0.55 M pixels compared); the 400x300
+ * one, three times that again, in kernels_slow. */
+Test(kernels, wavefront_matches_the_stack_walk, .timeout = 900)
+{
+	check_wavefront_matches_the_stack_walk(3);
+}
+
+Test(kernels_slow, wavefront_matches_the_stack_walk_at_400x300, .timeout = 900)
+{
+	check_wavefront_matches_the_stack_walk(4);
 }
 
 /* A render as pieces (renderer.h): the image, per-pixel flops and write

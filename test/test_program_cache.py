@@ -4,6 +4,7 @@ a build from source, never a failure (issue 12 item 3)."""
 import json
 import os
 import pathlib
+import shutil
 import signal
 import subprocess
 import time
@@ -38,6 +39,26 @@ def render(tmp_path, cache_home, *args, **env):
 def cache_files(cache_home):
     folder = cache_home / "rtcl"
     return sorted(folder.iterdir()) if folder.exists() else []
+
+
+@pytest.fixture(scope="module")
+def primed_template(tmp_path_factory):
+    """One cold render's cache folder and image, built once for the tests
+    that only need a cache holding the program (a build costs about a
+    second here; the tests that watch the first build make their own)."""
+    where = tmp_path_factory.mktemp("primed")
+    cached, image, _ = render(where, where / "cache")
+    assert cached is False and len(cache_files(where / "cache")) == 1
+    return where / "cache", image
+
+
+@pytest.fixture
+def primed(tmp_path, primed_template):
+    """A copy of primed_template's cache under tmp_path / "cache", and the
+    image it rendered."""
+    folder, image = primed_template
+    shutil.copytree(folder, tmp_path / "cache")
+    return tmp_path / "cache", image
 
 
 def test_the_second_render_loads_the_cached_program(tmp_path):
@@ -90,8 +111,8 @@ def damage_garbage_with_a_good_hash(data):
 
 @pytest.mark.parametrize("damage", [damage_truncate, damage_flip,
                                     damage_garbage_with_a_good_hash, lambda data: b""])
-def test_a_damaged_cache_file_means_a_build_from_source(tmp_path, damage):
-    _, image, _ = render(tmp_path, tmp_path / "cache")
+def test_a_damaged_cache_file_means_a_build_from_source(tmp_path, primed, damage):
+    _, image = primed
     path = cache_files(tmp_path / "cache")[0]
     path.write_bytes(damage(path.read_bytes()))
     cached, again, stderr = render(tmp_path, tmp_path / "cache")
@@ -111,20 +132,22 @@ def test_an_unwritable_cache_folder_still_renders(tmp_path):
     assert len(warnings) == 1 and "cannot write" in warnings[0], stderr
 
 
-def test_rtcl_cache_0_turns_it_off(tmp_path):
+def test_rtcl_cache_0_turns_it_off(tmp_path, primed_template):
     for _ in range(2):
         cached, _, _ = render(tmp_path, tmp_path / "cache", RTCL_CACHE="0")
         assert cached is False
     assert cache_files(tmp_path / "cache") == []
-    render(tmp_path, tmp_path / "cache")
+    shutil.rmtree(tmp_path / "cache", ignore_errors=True)
+    shutil.copytree(primed_template[0], tmp_path / "cache")
+    assert render(tmp_path, tmp_path / "cache")[0] is True
     assert render(tmp_path, tmp_path / "cache", RTCL_CACHE="0")[0] is False
 
 
-def test_a_cache_entry_that_is_a_fifo_is_a_miss_not_a_hang(tmp_path):
+def test_a_cache_entry_that_is_a_fifo_is_a_miss_not_a_hang(tmp_path, primed):
     """Issue 24 finding 7: a FIFO in place of the cache file hung every render
     (fopen waited for a writer). Now it is opened without blocking, refused as
     not a regular file (said with -v), and the build's binary replaces it."""
-    _, image, _ = render(tmp_path, tmp_path / "cache")
+    _, image = primed
     path = cache_files(tmp_path / "cache")[0]
     path.unlink()
     os.mkfifo(path)
@@ -138,12 +161,11 @@ def test_a_cache_entry_that_is_a_fifo_is_a_miss_not_a_hang(tmp_path):
     assert path.is_file() and render(tmp_path, tmp_path / "cache")[0] is True
 
 
-def test_temporary_files_of_writers_that_are_gone_are_removed(tmp_path):
+def test_temporary_files_of_writers_that_are_gone_are_removed(tmp_path, primed):
     """A writer killed between its temporary file and the rename (SIGKILL) left
     <key>.bin.tmp-* behind for good; a save now removes those whose writer is
     gone (its pid no longer runs; without a pid, older than an hour) and keeps
     those of a running writer."""
-    render(tmp_path, tmp_path / "cache")
     entry = cache_files(tmp_path / "cache")[0]
     gone = subprocess.Popen(["true"])
     gone.wait()

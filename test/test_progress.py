@@ -42,11 +42,16 @@ def test_progress_moves_during_a_single_pass(tmp_path):
 
 
 def test_no_progress_off_a_terminal_or_with_quiet(tmp_path):
-    result = subprocess.run([RTCL, *ONE_PASS, "-o", str(tmp_path / "x.ppm")], cwd=ROOT,
+    # A render short enough to be cheap, but one that shows progress on a
+    # terminal (checked first), so that its silence below means something.
+    short = ["--size", "100x75", "--spp", "16"]
+    shown, lines = on_terminal(*short, "-o", str(tmp_path / "w.ppm"))
+    assert shown.returncode == 0 and shares(lines), lines
+    result = subprocess.run([RTCL, *short, "-o", str(tmp_path / "x.ppm")], cwd=ROOT,
                             capture_output=True, text=True, timeout=120)
     assert result.returncode == 0
     assert result.stderr == ""
-    quiet, lines = on_terminal(*ONE_PASS, "-q", "-o", str(tmp_path / "y.ppm"))
+    quiet, lines = on_terminal(*short, "-q", "-o", str(tmp_path / "y.ppm"))
     assert quiet.returncode == 0 and quiet.stdout == ""
     assert lines == []
 
