@@ -137,7 +137,7 @@ int program_stage_dump(struct staged_file *file, char *err, size_t err_size)
 #define NV_REGISTER_CAP "-cl-nv-maxrregcount=80"
 
 /* RTCL_BUILD_OPTIONS may add this many characters: rtcl's own options take at
- * most about 150 of the BUILD_OPTIONS_SIZE (512) in render_result. */
+ * most about 260 of the BUILD_OPTIONS_SIZE (576) in render_result. */
 #define BUILD_OPTIONS_EXTRA_MAX 256
 
 /* The tracer's sources and cl/KERNEL.cl, in build order. */
@@ -191,8 +191,11 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
+		 /* A CPU device: the box test in its vector unit's way
+		  * (cl/traverse.cl, box_pair_hit); the same numbers. */
+		 dev->is_gpu ? "" : " -DRTCL_CPU",
 		 f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "", f->use_bvh ? " -DRTCL_BVH" : "",
 		 f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
 		 /* Meshes without spheres: leaves of leaf triangles only (traverse.cl). */
