@@ -425,13 +425,16 @@ def compare(args, rtcl, out):
                       f"{figures.get('bytes_per_triangle', 0):.1f}",
                       f"{figures['bvh']['build_ms']:.0f}", f"{best_peer[3]:.0f}",
                       f"{best_rtcl[4]:,} / {best_peer[4]:,}" if best_peer[4] is not None
-                      else f"{best_rtcl[4]:,} / ?"))
+                      else f"{best_rtcl[4]:,} / ?",
+                      # A program from rtcl's cache ran 7-16 % slower on NVIDIA
+                      # before f3ae66c: say which this was.
+                      "from the cache" if figures.get("build_cached") else "built"))
         print(f"{name}: rtcl {best_rtcl[0]} {best_rtcl[1]:.3f} ms, peer {best_peer[0]} "
               f"{best_peer[1]:.3f} ms: {best_peer[1] / best_rtcl[1]:.2f}x", flush=True)
     device = json.loads(next((out / "raw").glob("rtcl-*.json")).read_text())["device"]
     header = ("mesh", "triangles", "rtcl fastest (ms)", "rtcl G rays/s", "peer fastest (ms)",
               "peer G rays/s", "rtcl / peer", "rtcl bytes/tri", "rtcl build ms",
-              "peer build ms", "hits rtcl / peer")
+              "peer build ms", "hits rtcl / peer", "rtcl program")
     report = (f"# rtcl against the peer on primary rays\n\n{device}, {width}x{height}, one "
               f"primary ray per pixel, median of {repeat} launches (OpenCL profiling "
               f"events) on each side; rtcl {git_commit() or 'commit unknown'}, {utc_now()}.\n"
