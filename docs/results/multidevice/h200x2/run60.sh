@@ -51,4 +51,6 @@ if [ $(nvidia-smi -L | wc -l) -ge 2 ]; then
 fi
 RTCL_CACHE=0 $NEW -p $P -d 0 ${S[default]} -r 3 -q -o $T/onef.ppm --stats $O/one2048f.json
 echo "default 2048 spp one GPU (fresh, NEW): $(show $O/one2048f.json)"
+# Do two queues' kernels overlap on this GPU? (hiding a launch's idle end, README)
+cc -O2 -o $T/queue_overlap tools/device/queue_overlap.c -lOpenCL && $T/queue_overlap $P 0
 tar czf $OUT/batch60-json.tgz -C $T json
