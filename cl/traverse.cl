@@ -37,20 +37,7 @@ static struct box_ray box_ray(struct tracer *tr, float3 o, float3 d)
 	return r;
 }
 
-/* The box test's minimum and maximum. Its operands are never NaN (box_ray's
- * clamp keeps the slab distances finite; nearest is at most +inf), and for
- * such operands a comparison and a select give fmin's and fmax's value (a
- * zero's sign aside, which no comparison below sees). On a CPU (RTCL_CPU)
- * that is one instruction (x86's minps/maxps) where fmin and fmax add a NaN
- * test and a blend each; GPUs keep fmin and fmax, one instruction there. */
-#ifdef RTCL_CPU
-#define BOX_MIN(a, b) select((b), (a), (a) < (b))
-#define BOX_MAX(a, b) select((b), (a), (a) > (b))
-#else
-#define BOX_MIN(a, b) fmin((a), (b))
-#define BOX_MAX(a, b) fmax((a), (b))
-#endif
-
+#ifndef RTCL_CPU
 /* Returns whether the ray meets the box lo..hi somewhere in [0, nearest], and
  * where it enters it in *entry. The caller counts FLOPS_BOX_TEST. */
 static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float nearest,
@@ -58,21 +45,29 @@ static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float 
 {
 	float3 a = fma(lo.xyz, r->inv_d, -r->o_inv_d);
 	float3 b = fma(hi.xyz, r->inv_d, -r->o_inv_d);
-	float3 near = BOX_MIN(a, b), far = BOX_MAX(a, b);
-	float enter = BOX_MAX(BOX_MAX(near.x, near.y), BOX_MAX(near.z, 0.0f));
-	float leave = BOX_MIN(BOX_MIN(far.x, far.y), BOX_MIN(far.z, nearest));
+	float3 near = fmin(a, b), far = fmax(a, b);
+	float enter = fmax(fmax(near.x, near.y), fmax(near.z, 0.0f));
+	float leave = fmin(fmin(far.x, far.y), fmin(far.z, nearest));
 
 	*entry = enter;
 	return enter <= leave;
 }
+#else
+/* The box test's minimum and maximum on a CPU: a comparison and a select,
+ * one instruction (x86's minps/maxps), where fmin and fmax add a NaN test and
+ * a blend each. The operands are never NaN (box_ray's clamp keeps the slab
+ * distances finite; nearest is at most +inf), and for such operands this is
+ * fmin's and fmax's value (a zero's sign aside, which no comparison sees). */
+#define BOX_MIN(a, b) select((b), (a), (a) < (b))
+#define BOX_MAX(a, b) select((b), (a), (a) > (b))
 
-#ifdef RTCL_CPU
-/* box_hit for a node's two children at once, in the eight lanes of a CPU's
- * vector unit (AVX: one instruction per step for both boxes, where box_hit's
- * float3 steps use three lanes of four and shuffle for the rest). Lanes 0-2
- * are child 0's x, y, z, lanes 4-6 child 1's; lanes 3 and 7, which hold the
- * child's index and count bits, are zeroed before any arithmetic. The same
- * fma, minima and maxima as box_hit, in another order: the same numbers. */
+/* box_hit (above, for GPUs) for a node's two children at once, in the eight
+ * lanes of a CPU's vector unit (AVX: one instruction per step for both
+ * boxes, where box_hit's float3 steps use three lanes of four and shuffle for
+ * the rest). Lanes 0-2 are child 0's x, y, z, lanes 4-6 child 1's; lanes 3
+ * and 7, which hold the child's index and count bits, are zeroed before any
+ * arithmetic. The same fma, minima and maxima as box_hit, in another order:
+ * the same numbers. */
 static inline int2 box_pair_hit(float4 lo0, float4 hi0, float4 lo1, float4 hi1,
 				const struct box_ray *r, float nearest, float *entry0,
 				float *entry1)
