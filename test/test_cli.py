@@ -57,7 +57,7 @@ def test_help_teaches_every_option():
                    "--size", "--depth", "-p, --platform", "-d, --device", "--list-devices",
                    "-r, --repeat", "--stats", "-q, --quiet", "-v, --verbose", "-h, --help",
                    "--version", "serial", "naive", "cyclic", "dynamic", "persistent", "wavefront",
-                   "reference", "--batch", "--flops", "--work-map",
+                   "reference", "--batch", "--queues", "--flops", "--work-map",
                    "Examples:"]:
         assert option in result.stdout, option
     assert rtcl("-h").stdout == result.stdout
@@ -123,6 +123,17 @@ def test_stats_has_every_figure(tmp_path):
     assert len(stats["frame_ms_all"]) == 3
     assert sorted(stats["frame_ms_all"])[1] == stats["frame_ms"]
     assert all(wall >= kernels - 0.5
+               for wall, kernels in zip(stats["frame_ms_all"], stats["kernel_ms_all"]))
+    assert stats["queues"] == 1  # a CPU's default
+
+
+def test_stats_on_several_queues_count_overlapping_launches_once(tmp_path):
+    # --queues 3: three launches a pass, which may overlap; a frame's kernel
+    # time is the time any of them ran, so never more than its wall time.
+    _, stats = stats_of(tmp_path, *SMALL, "-k", "dynamic", "--queues", "3", "--spp", "4",
+                        "-r", "3")
+    assert stats["queues"] == 3
+    assert all(0 < kernels <= wall + 0.5
                for wall, kernels in zip(stats["frame_ms_all"], stats["kernel_ms_all"]))
 
 
@@ -201,6 +212,9 @@ def test_output_formats_from_extension(tmp_path, ext, magic):
     (["-k", "bogus"], 2, '-k/--kernel: unknown kernel "bogus" (choose from serial, naive, cyclic,'
                          ' dynamic, persistent, wavefront, reference)'),
     (["--batch", "0"], 2, '--batch: expected an integer between 1 and 4096, got "0"'),
+    (["--queues", "0"], 2, '--queues: expected an integer between 1 and 4, got "0"'),
+    (["--queues", "5"], 2, '--queues: expected an integer between 1 and 4, got "5"'),
+    (["--queues", "two"], 2, '--queues: expected an integer between 1 and 4, got "two"'),
     (["-k", "reference", "--flops", "f.npy"], 2, "the reference renderer does not count"),
     (["-w", "0x8"], 2, "-w/--workgroup: each size must be between 1 and 65536, got 0x8"),
     (["-w", "8"], 2, '-w/--workgroup: expected WxH (e.g. 8x8), got "8"'),

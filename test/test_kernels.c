@@ -18,6 +18,7 @@
 #include "render/block.h"
 #include "render/reference.h"
 #include "render/render.h"
+#include "render/launch.h"
 #include "render/renderer.h"
 #include "scene/scene.h"
 
@@ -913,6 +914,93 @@ Test(kernels, passes_give_the_image_of_one_pass, .timeout = 600)
 	free(want);
 	scene_free(&scene);
 	device_close(&dev);
+}
+
+/* --queues (renderer.h): the columns in parts, one per queue, launches
+ * alternating. Every kernel that uses them, on 2 to 4 queues, gives the
+ * same floats as on one, with every pixel written once per pass and
+ * nothing outside the image; widths of 8 work-groups and more, of 2 (fewer
+ * parts than queues) and of 1 (one part: the plain passes); 7 samples in
+ * passes of 3, so that the parts' last launches take fewer samples. */
+Test(kernels, queues_give_the_same_image)
+{
+	static const char *const kernels[] = {"naive", "cyclic", "dynamic", "persistent"};
+	static const int sizes[][2] = {{61, 23}, {13, 9}, {7, 5}};
+	struct device dev;
+	struct scene scene;
+
+	open_device(&dev);
+	load(&scene, "scenes/paper60.json");
+	for (int z = 0; z < 3; z++) {
+		int w = sizes[z][0], h = sizes[z][1];
+		for (int k = 0; k < 4; k++) {
+			struct render_settings s = settings_for(kernels[k], w, h, 8, 8, 5);
+			struct render_result one;
+			s.samples = 7;
+			s.samples_per_pass = 3;
+			s.queues = 1;
+			cr_assert_eq(renderer_queues(&s, &dev), 1);
+			cr_assert_eq(render(&dev, &scene, &s, &one, err, sizeof(err)), 0, "%s", err);
+			for (int q = 2; q <= RENDER_MAX_QUEUES; q++) {
+				char what[128];
+				struct render_result res;
+				snprintf(what, sizeof(what), "%s %dx%d on %d queues", kernels[k], w, h,
+					 q);
+				s.queues = q;
+				cr_assert_eq(renderer_queues(&s, &dev), q, "%s", what);
+				cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0,
+					     "%s: %s", what, err);
+				cr_assert(res.guards_intact, "%s: wrote outside the image", what);
+				cr_assert_eq(res.passes, 3, "%s", what);
+				for (int i = 0; i < w * h; i++)
+					cr_assert_eq(res.write_counts[i], 3u,
+						     "%s: pixel (%d, %d) written %u times", what,
+						     i % w, i / w, res.write_counts[i]);
+				cr_assert(memcmp(one.rgb, res.rgb, image_float_bytes(w, h)) == 0,
+					  "%s: the image differs from one queue's", what);
+				cr_assert_gt(res.kernel_ms_median, 0, "%s", what);
+				render_result_free(&res);
+			}
+			render_result_free(&one);
+		}
+	}
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+/* A piece's kernel time on several queues: the time any of its launches
+ * ran, overlaps counted once, in any order of the spans. */
+Test(kernels, busy_time_is_the_union_of_the_launches)
+{
+	struct launch_span spans[] = {{8000000, 9000000}, {0, 4000000}, {8200000, 8500000},
+				      {2000000, 6000000}, {6000000, 6000000}};
+
+	cr_assert_float_eq(launch_busy_ms(spans, 5), 7.0, 1e-9);
+	cr_assert_float_eq(launch_busy_ms(spans, 0), 0.0, 1e-9);
+}
+
+/* Which renders use several queues: a GPU by default, a CPU when asked;
+ * never serial, wavefront, or the counting and recording builds. */
+Test(kernels, queues_where_they_apply)
+{
+	struct device cpu = {.is_gpu = 0}, gpu = {.is_gpu = 1};
+	struct render_settings s = settings_for("dynamic", 8, 8, 8, 8, 5);
+
+	cr_assert_eq(renderer_queues(&s, &gpu), RENDER_GPU_QUEUES);
+	cr_assert_eq(renderer_queues(&s, &cpu), 1);
+	s.queues = 3;
+	cr_assert_eq(renderer_queues(&s, &cpu), 3);
+	s.count_flops = 1;
+	cr_assert_eq(renderer_queues(&s, &gpu), 1);
+	s.count_flops = 0;
+	s.record_schedule = 1;
+	cr_assert_eq(renderer_queues(&s, &gpu), 1);
+	static const char *const one[] = {"serial", "wavefront"};
+	for (int k = 0; k < 2; k++) {
+		s = settings_for(one[k], 8, 8, 8, 8, 5);
+		s.queues = 2;
+		cr_assert_eq(renderer_queues(&s, &gpu), 1, "%s", one[k]);
+	}
 }
 
 Test(kernels, matches_reference_at_16_spp_paper60, .timeout = 600)

@@ -397,7 +397,7 @@ static struct adapt_view view(double remaining, double rate, double others_rate)
 			       .rate = rate,
 			       .others_rate = others_rate,
 			       .devices = 2,
-			       .fastest = rate >= others_rate};
+			       .others_fastest = others_rate};
 	return v;
 }
 
@@ -461,9 +461,11 @@ Test(multidev, adaptive_slow_device_never_holds_the_tail)
 	cr_assert_eq(adapt_piece_cells(&slow), 1);
 	slow.remaining = 1e6; /* planned end 0.5 ms: no cell fits */
 	cr_assert_eq(adapt_piece_cells(&slow), 0);
-	slow.fastest = 1; /* the fastest never retires: ADAPT_FLOOR_MS of its time */
+	slow.others_fastest = 1e3; /* the fastest never retires: ADAPT_FLOOR_MS of its time */
 	cr_assert_eq(adapt_piece_cells(&slow), (long long)(1e3 * ADAPT_FLOOR_MS / 1000));
-	slow.fastest = 0;
+	slow.others_fastest = 1.9e3; /* nor one under ADAPT_TAIL_SLOWER times slower */
+	cr_assert_eq(adapt_piece_cells(&slow), (long long)(1e3 * ADAPT_FLOOR_MS / 1000));
+	slow.others_fastest = 1e6;
 	slow.others_backlog = 1e6; /* the others still busy 1 ms: one cell fits */
 	cr_assert_eq(adapt_piece_cells(&slow), 1);
 }
@@ -622,8 +624,7 @@ Test(multidev, adaptive_piece_leaves_no_rest_smaller_than_its_smallest)
 			       .total = 1.05e9,
 			       .unit = 1000,
 			       .devices = 2,
-			       .min_size = 1e9,
-			       .fastest = 1};
+			       .min_size = 1e9};
 
 	cr_assert_eq(adapt_piece_cells(&v), 1050000);
 	v.remaining = 2.5e9; /* a rest of at least its smallest piece stays */
@@ -651,6 +652,39 @@ Test(multidev, adaptive_pieces_grow_at_most_twice_the_largest_so_far)
 
 	v.largest = 3000;
 	cr_assert_eq(adapt_piece_cells(&v), ADAPT_GROWTH * 3);
+}
+
+/* Two GPUs whose measured rates differ by 8 % (batch 60, two H200s: the
+ * rates come from other pixels and frames), each with its smallest piece
+ * its share of the image (tiles.c's set_min_pieces): frame after frame each
+ * takes one piece, and no rest is left for a latency-bound sliver. */
+Test(multidev, adaptive_gpus_of_about_one_speed_take_one_piece_each)
+{
+	double rates[2] = {2000.0 * 2000 * 2048 / 1733, 0.92 * 2000.0 * 2000 * 2048 / 1733};
+	struct adapt a;
+	struct rt_piece p;
+
+	adapt_init(&a, 2000, 2000, 2048, 8, 8, 2);
+	for (int k = 0; k < 2; k++)
+		adapt_set_min_pixels(&a, k, 2000.0 * 2000 / 2);
+	for (int frame = 0; frame < 3; frame++) {
+		double free_at[2] = {0, 0};
+		int pieces[2] = {0, 0}, active[2] = {1, 1};
+		adapt_new_frame(&a);
+		while (active[0] || active[1]) {
+			int k = !active[0] || (active[1] && free_at[1] < free_at[0]);
+			if (!adapt_take(&a, k, free_at[k], &p)) {
+				active[k] = 0;
+				continue;
+			}
+			free_at[k] += (double)p.width * p.height * 2048 / rates[k];
+			pieces[k]++;
+		}
+		if (frame > 0) /* the first frame probes */
+			for (int k = 0; k < 2; k++)
+				cr_assert_eq(pieces[k], 1, "frame %d: GPU %d took %d pieces", frame,
+					     k, pieces[k]);
+	}
 }
 
 Test(multidev, adaptive_equal_devices_share_the_image)

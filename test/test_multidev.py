@@ -560,7 +560,9 @@ def test_mpi_bands_match_one_process_and_every_pixel_is_written_once(tmp_path, s
     # (test_mpi_interleaved_bands_match_one_process: bands that the row
     # order moves)
     image_run(tmp_path, "one", "--spp", spp, "-d", "0", "-k", "persistent")
-    result = mpi_run(*SMALL, "--spp", spp, "-k", "persistent", "--piece-rows", "3", "-o",
+    # 4 spp on two queues a device (--queues 2): the same image
+    queues = ["--queues", "2"] if spp == "4" else []
+    result = mpi_run(*SMALL, "--spp", spp, "-k", "persistent", "--piece-rows", "3", *queues, "-o",
                      str(tmp_path / "ranks.ppm"), "--stats", str(tmp_path / "s.json"),
                      env=CHECK)
     assert result.returncode == 0, result.stderr
@@ -651,6 +653,21 @@ def test_adaptive_rectangles_match_one_device_byte_for_byte(tmp_path, kernel):
     assert "bands" not in md
     assert sum(d["pixels"] for d in md["devices"]) == 96 * 64
     assert all(d["pieces"] >= 1 for d in md["devices"])
+
+
+def test_adaptive_rectangles_on_two_queues_each_match_one_device(tmp_path):
+    # --queues 2: each piece's columns in two parts on two queues of its
+    # device, launches alternating; every pixel still written once a pass.
+    common = [*MEDIUM, "-k", "persistent", "--spp", "4"]
+    image_run(tmp_path, "one", *common, "-p", "0", "-d", "0")
+    _, stats = image_run(tmp_path, "two", *common, "--devices", "0:0,0:1", "--queues", "2",
+                         "-r", "2", env={**CHECK, "RTCL_TEST_SLOW_DEVICE": "1:x4"})
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    assert stats["queues"] == 2
+    md = stats["multidevice"]
+    for d in md["devices"]:  # two launches a pass, their time counted once
+        assert d["launches"] >= 2 * d["pieces"]
+        assert d["kernel_ms"] <= d["busy_ms"]
 
 
 def test_adaptive_repeats_and_work_map_match_one_device(tmp_path):

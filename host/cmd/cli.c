@@ -17,6 +17,7 @@
 enum long_only_option {
 	OPT_GROUPS = 256,
 	OPT_BATCH,
+	OPT_QUEUES,
 	OPT_SIZE,
 	OPT_DEPTH,
 	OPT_LIST_DEVICES,
@@ -50,6 +51,7 @@ static const struct option long_options[] = {
 	{"workgroup", required_argument, NULL, 'w'},
 	{"groups", required_argument, NULL, OPT_GROUPS},
 	{"batch", required_argument, NULL, OPT_BATCH},
+	{"queues", required_argument, NULL, OPT_QUEUES},
 	{"scene", required_argument, NULL, 's'},
 	{"output", required_argument, NULL, 'o'},
 	{"size", required_argument, NULL, OPT_SIZE},
@@ -102,6 +104,12 @@ static void print_help_after_kernels(FILE *out)
 		"      --batch N          pixels a work-item of the persistent kernel fetches\n"
 		"                         at a time (default 1); the image's pixels plus N per\n"
 		"                         work-item must stay below 2^32\n"
+		"      --queues N         in-order queues a device renders with, 1 to 4: the\n"
+		"                         image's columns in N parts whose launches alternate,\n"
+		"                         so that one fills the device while another ends\n"
+		"                         (default 2 on a GPU, 1 on a CPU; the image is the\n"
+		"                         same; wavefront, serial and the counting run of\n"
+		"                         --flops use 1)\n"
 		"      --accel bvh|bvh-compact|none  how a ray finds the spheres and\n"
 		"                         triangles it hits: through a BVH built on the host\n"
 		"                         (default); bvh-compact, one with larger leaves of\n"
@@ -556,6 +564,9 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return parse_shape("--groups", arg, 65536, o->groups, err, err_size);
 	case OPT_BATCH:
 		return parse_bounded("--batch", arg, 1, 4096, &o->batch, err, err_size);
+	case OPT_QUEUES:
+		return parse_bounded("--queues", arg, 1, RENDER_MAX_QUEUES, &o->queues, err,
+				     err_size);
 	case 's':
 		return take_file_name("-s/--scene", arg, &o->scene_path, err, err_size);
 	case 'o':

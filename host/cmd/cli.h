@@ -20,6 +20,7 @@ struct options {
 	int workgroup[2];	/* -w WxH */
 	int groups[2];		/* --groups GXxGY; 0x0 when not given */
 	int batch;		/* --batch N for the persistent kernel */
+	int queues;		/* --queues N (0: the default) */
 	const char *scene_path; /* -s or the argument; NULL: the built-in paper60 scene */
 	int size[2];		/* --size WxH; 0x0 when not given */
 	int depth;		/* --depth N; -1 when not given */

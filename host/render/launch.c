@@ -3,6 +3,7 @@
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
+#include <stdlib.h>
 
 #include "render/block.h"
 #include "render/program.h"
@@ -184,6 +185,28 @@ cl_int launch_run(struct device *dev, cl_kernel kernel, cl_uint dims, const size
 	*ms += (double)(end - start) * 1e-6;
 	clReleaseEvent(event);
 	return status;
+}
+
+static int by_start(const void *a, const void *b)
+{
+	const struct launch_span *x = a, *y = b;
+
+	return x->start < y->start ? -1 : x->start > y->start;
+}
+
+double launch_busy_ms(struct launch_span *spans, int count)
+{
+	cl_ulong busy = 0, covered = 0; /* covered: the end of the union so far */
+
+	qsort(spans, (size_t)count, sizeof(*spans), by_start);
+	for (int i = 0; i < count; i++) {
+		cl_ulong start = spans[i].start > covered ? spans[i].start : covered;
+		if (spans[i].end > start)
+			busy += spans[i].end - start;
+		if (spans[i].end > covered)
+			covered = spans[i].end;
+	}
+	return (double)busy * 1e-6;
 }
 
 int launch_setup(struct device *dev, const struct scene *scene, const struct render_settings *s,

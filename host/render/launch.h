@@ -51,4 +51,14 @@ cl_int launch_run(struct device *dev, cl_kernel kernel, cl_uint dims, const size
 		  const size_t *local, const struct launch_watch *watch, double *ms,
 		  const char **call);
 
+/* One launch's profiled interval on the device's clock, in nanoseconds. */
+struct launch_span {
+	cl_ulong start, end;
+};
+
+/* The time in ms during which at least one of the launches ran: the union of
+ * their intervals, which may overlap (launches on several queues of one
+ * device). Sorts spans. */
+double launch_busy_ms(struct launch_span *spans, int count);
+
 #endif

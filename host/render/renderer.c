@@ -20,6 +20,7 @@ int renderer_open(struct renderer *r, struct device *dev, const struct scene *sc
 	r->dev = dev;
 	r->settings = s;
 	r->result = res;
+	r->queues = res->queues = renderer_queues(s, dev);
 	if (r->ops->open(r, scene, err, err_size) == 0)
 		return 0;
 	r->ops->close(r);
@@ -110,12 +111,47 @@ int renderer_pass_count(const struct render_settings *s, const struct rt_piece *
 	return (piece->samples + per_pass - 1) / per_pass;
 }
 
+int renderer_queues(const struct render_settings *s, const struct device *dev)
+{
+	const struct kernel_info *k = s->kernel;
+
+	if (!k || !k->ops->passes || k->single_item || s->count_flops || s->record_schedule)
+		return 1;
+	return s->queues > 0 ? s->queues : dev->is_gpu ? RENDER_GPU_QUEUES : 1;
+}
+
+/* Cuts piece's columns into at most r->queues parts of whole work-groups
+ * (the last takes the rest); returns how many. */
+static int split_columns(const struct renderer *r, const struct rt_piece *piece,
+			 struct rt_piece parts[RENDER_MAX_QUEUES])
+{
+	int group = (int)r->result->local_size[0];
+	int groups = (piece->width + group - 1) / group;
+	int count = r->queues < groups ? r->queues : groups;
+	int x = piece->x0;
+
+	for (int i = 0; i < count; i++) {
+		int width = (groups * (i + 1) / count - groups * i / count) * group;
+		parts[i] = *piece;
+		parts[i].x0 = x;
+		parts[i].width = i == count - 1 ? piece->x0 + piece->width - x : width;
+		x += width;
+	}
+	return count;
+}
+
 int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struct piece_result *out,
 			 char *err, size_t err_size)
 {
 	int per_pass =
 		renderer_pass_samples(r->settings, (long long)whole->width * whole->height);
 
+	if (r->queues > 1) {
+		struct rt_piece parts[RENDER_MAX_QUEUES];
+		int count = split_columns(r, whole, parts);
+		if (count > 1)
+			return r->ops->passes(r, parts, count, per_pass, out, err, err_size);
+	}
 	out->kernel_ms = 0;
 	out->launches = 0;
 	for (int begin = 0; begin < whole->samples; begin += per_pass) {

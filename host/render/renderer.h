@@ -32,9 +32,14 @@ struct piece_result {
 	int launches;
 };
 
+/* The most in-order queues one device renders with (--queues). */
+#define RENDER_MAX_QUEUES 4
+
 struct renderer {
 	const struct renderer_ops *ops; /* the kernel's: singlepass or wavefront */
 	struct device *dev;
+	int queues;			/* renderer_queues(): 1, or the lanes of
+					   renderer_all_samples */
 	const struct render_settings *settings;
 	struct render_result *result; /* the plan, scene and build facts; read_back
 					 fills the image and counts */
@@ -47,6 +52,10 @@ struct renderer_ops {
 	int (*open)(struct renderer *r, const struct scene *scene, char *err, size_t err_size);
 	int (*piece)(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
 		     char *err, size_t err_size);
+	/* Every sample of `count` (<= r->queues) disjoint pieces, piece i on
+	 * queue i, in passes of per_pass samples; NULL: one queue only. */
+	int (*passes)(struct renderer *r, const struct rt_piece *pieces, int count, int per_pass,
+		      struct piece_result *out, char *err, size_t err_size);
 	int (*read_back)(struct renderer *r, char *err, size_t err_size);
 	void (*close)(struct renderer *r);
 };
@@ -87,10 +96,26 @@ struct rt_piece renderer_whole_image(const struct render_settings *s, int begin,
 /* Returns how many passes renderer_all_samples() makes over piece. */
 int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece);
 
+/* Returns how many in-order queues a renderer of settings on dev uses:
+ * settings->queues if given, else RENDER_GPU_QUEUES on a GPU and 1 on other
+ * devices; 1 for a kernel of one work-item (serial), a renderer without
+ * `passes` (wavefront), and the counting and recording builds, whose counts
+ * are read after every launch. */
+int renderer_queues(const struct render_settings *settings, const struct device *dev);
+
+/* The queues a GPU renders with by default (docs/GUIDE.md, "Queues"). */
+#define RENDER_GPU_QUEUES 2
+
 /* Renders every sample of piece's pixels (its sample range is ignored) in
  * passes of renderer_pass_samples() samples, in sample order on this one
  * renderer, so that the running sums stay in its buffer; sets *out to the
- * sum of the passes' kernel times and launches. */
+ * passes' kernel time and launches. With several queues (r->queues) the
+ * piece's columns are cut into that many parts of whole work-groups, each
+ * rendered on its own queue, launches alternating: a queue's next launch
+ * fills the device while another's ends, and the host enqueues ahead
+ * instead of waiting between passes. A pixel's samples still come in order,
+ * so the image is the same; kernel_ms is then the time any launch of the
+ * piece ran (launch_busy_ms), not the sum of the launches' times. */
 int renderer_all_samples(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
 			 char *err, size_t err_size);
 

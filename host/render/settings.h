@@ -50,6 +50,8 @@ struct render_settings {
 	int repeat;		/* timed frames */
 	int warm_up;		/* one untimed launch first (-r given) */
 	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
+	int queues;		/* in-order queues per device (--queues; 0: the
+				   default, renderer_queues()) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
 	int check_writes;	/* tests: count writes per pixel, poison the image and
 				   surround it with guard zones (checks.h) */
@@ -109,6 +111,7 @@ struct render_result {
 	int vertex_count; /* the triangles' distinct vertices (host/layout/mesh_block.h) */
 	char build_options[BUILD_OPTIONS_SIZE];
 	int build_cached; /* the program came from rtcl's cache (progcache.h) */
+	int queues;	  /* the in-order queues it rendered with (renderer_queues) */
 
 	/* With count_flops: per launched work-item, row-major over the global
 	 * NDRange. */

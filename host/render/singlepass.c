@@ -28,6 +28,15 @@ enum render_arg {
 	RENDER_ARGS
 };
 
+/* A further in-order queue of the device with its own kernel object and
+ * work counter (renderer.h, "Queues"); lane 0 is the device's queue,
+ * st->kernel and st->work_counter. */
+struct lane {
+	cl_command_queue queue;
+	cl_kernel kernel;
+	struct work_counter work_counter;
+};
+
 /* Everything one render holds on the device, released in reverse order. */
 struct launch_state {
 	/* b.flops: flops per pixel, then RT_ITEM_COUNTS per work-item;
@@ -35,10 +44,19 @@ struct launch_state {
 	struct render_buffers b;
 	cl_kernel kernel;
 	struct work_counter work_counter; /* cl/rtcl_shared.h, RT_COUNTER_* */
+	struct lane lanes[RENDER_MAX_QUEUES]; /* [1, r->queues) */
 };
 
 static void release_state(struct launch_state *st)
 {
+	for (int i = RENDER_MAX_QUEUES - 1; i > 0; i--) {
+		struct lane *l = &st->lanes[i];
+		watch_release_counter(&l->work_counter);
+		if (l->kernel)
+			clReleaseKernel(l->kernel);
+		if (l->queue)
+			clReleaseCommandQueue(l->queue);
+	}
 	watch_release_counter(&st->work_counter);
 	if (st->kernel)
 		clReleaseKernel(st->kernel);
@@ -61,13 +79,15 @@ static size_t pixel_counts_bytes(const struct render_settings *s)
 	return (size_t)s->width * s->height * sizeof(cl_ulong);
 }
 
-static int set_args(const struct launch_state *st, const struct render_result *res, char *err,
-		    size_t err_size)
+/* Sets every argument of kernel but the piece, with counter as its work
+ * counter. */
+static int set_args(const struct launch_state *st, cl_kernel kernel, const struct work_counter *counter,
+		    const struct render_result *res, char *err, size_t err_size)
 {
 	const cl_mem *buffers[RENDER_ARGS] = {
 		[ARG_SCENE] = &st->b.scene,
 		[ARG_IMAGE] = &st->b.image.image,
-		[ARG_WORK_COUNTER] = &st->work_counter.buffer,
+		[ARG_WORK_COUNTER] = &counter->buffer,
 		[ARG_COUNTS] = &st->b.flops,
 		[ARG_PROBE] = &st->b.probe,
 	};
@@ -78,10 +98,10 @@ static int set_args(const struct launch_state *st, const struct render_result *r
 			continue; /* set per piece */
 		if (i == ARG_SCENE_LOCAL)
 			status = clSetKernelArg(
-				st->kernel, i,
-				res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES, NULL);
+				kernel, i, res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES,
+				NULL);
 		else
-			status = clSetKernelArg(st->kernel, i, sizeof(cl_mem), buffers[i]);
+			status = clSetKernelArg(kernel, i, sizeof(cl_mem), buffers[i]);
 		if (status != CL_SUCCESS) {
 			snprintf(err, err_size, "clSetKernelArg(%u) failed: %s", i,
 				 cl_error_name(status));
@@ -97,11 +117,39 @@ static int create_buffers(struct device *dev, const struct render_settings *s,
 {
 	if (buffers_create(dev, s, res, &st->b, (size_t)counts_bytes(s, res), "flop counts", err,
 			   err_size) ||
-	    watch_create_counter(dev, progress_enabled(), &st->work_counter, err, err_size))
+	    watch_create_counter(dev, dev->queue, progress_enabled(), &st->work_counter, err,
+				 err_size))
 		return -1;
 	res->item_count = res->global_size[0] * res->global_size[1];
 	st->b.item_count = res->item_count;
-	return set_args(st, res, err, err_size);
+	return set_args(st, st->kernel, &st->work_counter, res, err, err_size);
+}
+
+/* Opens lanes 1 .. queues - 1: a queue each, with profiling, a kernel object
+ * of the program and a work counter (not watched: the progress line moves
+ * launch by launch). */
+static int open_lanes(struct renderer *r, int queues, char *err, size_t err_size)
+{
+	struct device *dev = r->dev;
+	struct launch_state *st = r->state;
+
+	for (int i = 1; i < queues; i++) {
+		struct lane *l = &st->lanes[i];
+		cl_int status;
+		l->queue = clCreateCommandQueue(dev->context, dev->id, CL_QUEUE_PROFILING_ENABLE,
+						&status);
+		if (status != CL_SUCCESS) {
+			snprintf(err, err_size, "clCreateCommandQueue failed for queue %d of %s: %s",
+				 i + 1, dev->name, cl_error_name(status));
+			return -1;
+		}
+		l->kernel = program_create_kernel(st->b.program, "render", err, err_size);
+		if (!l->kernel ||
+		    watch_create_counter(dev, l->queue, 0, &l->work_counter, err, err_size) ||
+		    set_args(st, l->kernel, &l->work_counter, r->result, err, err_size))
+			return -1;
+	}
+	return 0;
 }
 
 /* The NDRange of piece: the plan's, except the naive kernel's, which covers
@@ -186,6 +234,125 @@ static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 	return 0;
 }
 
+/* One launch in flight on a lane: its event and its pixel samples. */
+struct in_flight {
+	cl_event event;
+	double work;
+};
+
+/* Waits for f's launch, adds its profiled interval to spans and its work
+ * to the progress line. */
+static cl_int finish_launch(struct renderer *r, struct in_flight *f, struct launch_span *spans,
+			    int *span_count)
+{
+	cl_ulong start = 0, end = 0;
+	cl_int status = clWaitForEvents(1, &f->event);
+
+	if (status == CL_SUCCESS)
+		status = clGetEventProfilingInfo(f->event, CL_PROFILING_COMMAND_START,
+						 sizeof(start), &start, NULL);
+	if (status == CL_SUCCESS)
+		status = clGetEventProfilingInfo(f->event, CL_PROFILING_COMMAND_END, sizeof(end),
+						 &end, NULL);
+	clReleaseEvent(f->event);
+	f->event = NULL;
+	spans[(*span_count)++] = (struct launch_span){start, end};
+	progress_add(r->dev, f->work);
+	progress_draw();
+	return status;
+}
+
+/* Renders every sample of the disjoint parts, part i on lane i, in passes of
+ * per_pass samples: each lane's launches are enqueued LANE_DEPTH ahead of
+ * the host, so that a lane's next launch is waiting when its last one ends
+ * and another lane's launch can fill the device while one ends. */
+#define LANE_DEPTH 2
+static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, int count,
+			     int per_pass, struct piece_result *out, char *err, size_t err_size)
+{
+	const struct render_settings *s = r->settings;
+	struct launch_state *st = r->state;
+	struct in_flight flight[RENDER_MAX_QUEUES][LANE_DEPTH] = {{{0}}};
+	int samples = parts[0].samples, passes = (samples + per_pass - 1) / per_pass;
+	struct launch_span *spans = malloc((size_t)passes * count * sizeof(*spans));
+	int span_count = 0;
+	const char *call = "malloc";
+	cl_int status = spans ? CL_SUCCESS : CL_OUT_OF_HOST_MEMORY;
+
+	/* What the device's queue holds (the image cleared, the scene
+	 * uploaded, the last piece's launches) comes before every lane's
+	 * launches: queues are in order only within themselves. */
+	if (status == CL_SUCCESS) {
+		call = "clFinish";
+		status = clFinish(r->dev->queue);
+	}
+
+	for (int pass = 0; pass < passes && status == CL_SUCCESS; pass++) {
+		for (int i = 0; i < count && status == CL_SUCCESS; i++) {
+			cl_command_queue queue = i ? st->lanes[i].queue : r->dev->queue;
+			cl_kernel kernel = i ? st->lanes[i].kernel : st->kernel;
+			struct work_counter *counter = i ? &st->lanes[i].work_counter
+							 : &st->work_counter;
+			struct in_flight *f = &flight[i][pass % LANE_DEPTH];
+			struct rt_piece piece = parts[i];
+			size_t global[2];
+			piece.sample_begin = pass * per_pass;
+			piece.sample_end = samples - piece.sample_begin > per_pass
+						   ? piece.sample_begin + per_pass
+						   : samples;
+			piece_global_size(s, r->result, &piece, global);
+			call = "waiting for the kernel";
+			if (f->event)
+				status = finish_launch(r, f, spans, &span_count);
+			if (status == CL_SUCCESS) {
+				call = "clEnqueueFillBuffer";
+				status = watch_reset_counter(counter);
+			}
+			if (status == CL_SUCCESS) {
+				call = "clSetKernelArg";
+				status = clSetKernelArg(kernel, ARG_PIECE, sizeof(piece), &piece);
+			}
+			if (status == CL_SUCCESS) {
+				call = "clEnqueueNDRangeKernel";
+				status = clEnqueueNDRangeKernel(queue, kernel, 2, NULL, global,
+								r->result->local_size, 0, NULL,
+								&f->event);
+			}
+			if (status == CL_SUCCESS) {
+				call = "clFlush";
+				f->work = (double)piece.width * piece.height *
+					  (piece.sample_end - piece.sample_begin);
+				status = clFlush(queue);
+			}
+		}
+	}
+	/* Every launch still in flight, in the order they were enqueued. */
+	for (int pass = passes; pass < passes + LANE_DEPTH; pass++)
+		for (int i = 0; i < count; i++) {
+			struct in_flight *f = &flight[i][pass % LANE_DEPTH];
+			if (!f->event)
+				continue;
+			cl_int done = finish_launch(r, f, spans, &span_count);
+			if (status == CL_SUCCESS) {
+				call = "waiting for the kernel";
+				status = done;
+			}
+		}
+	if (status == CL_SUCCESS && hook_device_fault()) {
+		call = "waiting for the kernel";
+		status = CL_OUT_OF_RESOURCES;
+	}
+	out->launches = span_count;
+	out->kernel_ms = spans ? launch_busy_ms(spans, span_count) : 0;
+	free(spans);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "%s failed (kernel '%s' on %s, %d queues): %s", call,
+			 s->kernel->name, r->dev->name, count, cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
 static int singlepass_read_back(struct renderer *r, char *err, size_t err_size)
 {
 	struct launch_state *st = r->state;
@@ -217,7 +384,8 @@ static int singlepass_open(struct renderer *r, const struct scene *scene, char *
 	    launch_check_kernel(dev, st->kernel, res, s->kernel->name, err, err_size))
 		return -1;
 	double lap = timing_now();
-	if (create_buffers(dev, s, st, res, err, err_size))
+	if (create_buffers(dev, s, st, res, err, err_size) ||
+	    open_lanes(r, r->queues, err, err_size))
 		return -1;
 	st->b.item_flops = calloc(res->item_count, sizeof(uint64_t));
 	if (!st->b.item_flops) {
@@ -238,5 +406,5 @@ static void singlepass_close(struct renderer *r)
 	r->state = NULL;
 }
 
-const struct renderer_ops singlepass_ops = {singlepass_open, singlepass_piece, singlepass_read_back,
-					    singlepass_close};
+const struct renderer_ops singlepass_ops = {singlepass_open, singlepass_piece, singlepass_passes,
+					    singlepass_read_back, singlepass_close};

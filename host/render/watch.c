@@ -7,15 +7,15 @@
 
 #include "base/progress.h"
 
-int watch_create_counter(struct device *dev, int watched, struct work_counter *c, char *err,
-			 size_t err_size)
+int watch_create_counter(struct device *dev, cl_command_queue queue, int watched,
+			 struct work_counter *c, char *err, size_t err_size)
 {
 	size_t bytes = RT_COUNTER_WORDS * sizeof(cl_uint);
 	int in_place = watched && dev->host_unified;
 	cl_int status = CL_SUCCESS;
 
 	memset(c, 0, sizeof(*c));
-	c->queue = dev->queue;
+	c->queue = queue;
 	c->watched = watched;
 	c->buffer = device_create_buffer(dev,
 					 CL_MEM_READ_WRITE | (in_place ? CL_MEM_ALLOC_HOST_PTR : 0),
@@ -23,7 +23,7 @@ int watch_create_counter(struct device *dev, int watched, struct work_counter *c
 	if (!c->buffer)
 		return -1;
 	if (in_place)
-		c->mapped = clEnqueueMapBuffer(dev->queue, c->buffer, CL_TRUE, CL_MAP_READ, 0,
+		c->mapped = clEnqueueMapBuffer(queue, c->buffer, CL_TRUE, CL_MAP_READ, 0,
 					       bytes, 0, NULL, NULL, &status);
 	else if (watched)
 		c->side_queue = clCreateCommandQueue(dev->context, dev->id, 0, &status);

@@ -17,7 +17,7 @@
  * runs, at most once per PROGRESS_TICK_MS: 8 bytes, next to nothing. */
 struct work_counter {
 	cl_mem buffer;
-	cl_command_queue queue;		/* the device's, which zeroes it */
+	cl_command_queue queue;		/* the one its launches run on, which zeroes it */
 	int watched;			/* read during launches */
 	cl_uint *mapped;		/* unified memory: the words in place */
 	cl_command_queue side_queue;	/* else: the reads' queue */
@@ -26,10 +26,10 @@ struct work_counter {
 	cl_uint copy[RT_COUNTER_WORDS]; /* what the last finished read brought */
 };
 
-/* Creates c's buffer on dev, watched (readable during launches) or not.
- * Returns 0, or -1 with one message in err. */
-int watch_create_counter(struct device *dev, int watched, struct work_counter *c, char *err,
-			 size_t err_size);
+/* Creates c's buffer on dev for the launches of queue, watched (readable
+ * during launches) or not. Returns 0, or -1 with one message in err. */
+int watch_create_counter(struct device *dev, cl_command_queue queue, int watched,
+			 struct work_counter *c, char *err, size_t err_size);
 
 /* Zeroes the counter before a launch. */
 cl_int watch_reset_counter(struct work_counter *c);

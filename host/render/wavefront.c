@@ -361,5 +361,5 @@ static void wavefront_close(struct renderer *r)
 	r->state = NULL;
 }
 
-const struct renderer_ops wavefront_ops = {wavefront_open, wavefront_piece, wavefront_read_back,
+const struct renderer_ops wavefront_ops = {wavefront_open, wavefront_piece, NULL, wavefront_read_back,
 					   wavefront_close};

@@ -237,6 +237,8 @@ json_t *report_document(const struct job *job, const struct record *record)
 		return NULL;
 	json_object_set_new(doc, "time_breakdown_ms", times_document(record));
 	json_object_set_new(doc, "build_cached", json_boolean(record->result.build_cached));
+	if (record->device.on_device)
+		json_object_set_new(doc, "queues", json_integer(record->result.queues));
 	add_frame_times(doc, &record->result);
 	if (job->counting)
 		add_flop_figures(doc, record);

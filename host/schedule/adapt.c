@@ -42,9 +42,10 @@ long long adapt_piece_cells(const struct adapt_view *v)
 		size = v->remaining;
 	if (v->rate > 0 && v->front_unknown)
 		return 0;
-	if (v->rate > 0 && !v->fastest && v->others_rate > 0) {
-		/* The tail rule: done no later than the others could be
-		 * with all the rest, with a margin for the pixels' costs. */
+	if (v->rate > 0 && v->rate * ADAPT_TAIL_SLOWER < v->others_fastest && v->others_rate > 0) {
+		/* The tail rule, for a much slower device: done no later than
+		 * the others could be with all the rest, with a margin for the
+		 * pixels' costs. */
 		double others_done_ms = (v->remaining + v->others_backlog) / v->others_rate;
 		size = min_d(size, ADAPT_TAIL_MARGIN * v->rate * others_done_ms);
 		if (min_d(v->unit, v->remaining) > size)
@@ -92,8 +93,7 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 	struct adapt_view v = {.total = (double)a->width * a->height * a->samples,
 			       .unit = (double)a->cell_w * a->cell_h * a->samples,
 			       .rate = rate_of(&a->dev[k]),
-			       .largest = a->dev[k].largest,
-			       .fastest = 1};
+			       .largest = a->dev[k].largest};
 
 	v.min_size = a->dev[k].min_pixels * a->samples;
 
@@ -107,9 +107,9 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 		if (j == k)
 			continue;
 		v.others_rate += r;
+		v.others_fastest = r > v.others_fastest ? r : v.others_fastest;
 		v.unknown += r <= 0;
 		v.front_unknown |= r <= 0 && d->min_pixels > a->dev[k].min_pixels;
-		v.fastest &= r <= v.rate;
 		if (d->inflight > 0 && r > 0) /* what it has left of its piece */
 			v.others_backlog += fmax(0, d->inflight - r * (now_ms - d->start_ms));
 	}

@@ -28,12 +28,12 @@
  *    the end of a cell row must not stop the growth): a rate measured early (a first launch's
  *    set-up, a fast device whose first large piece is still running) must
  *    not hand a slow device a huge piece.
- *  - the tail rule: a device that is not the fastest still working never
- *    gets a piece it would finish after the others could have finished all
- *    the remaining work (their work in flight included) without it; its
- *    piece shrinks to what it can finish by then, and when not even one cell
- *    fits it retires for this frame. The fastest device never retires, so
- *    every cell is handed out. Until every device that keeps more pixels
+ *  - the tail rule: a device more than ADAPT_TAIL_SLOWER times slower than
+ *    the fastest other still working never gets a piece it would finish
+ *    after the others could have finished all the remaining work (their
+ *    work in flight included) without it; its piece shrinks to what it can
+ *    finish by then, and when not even one cell fits it retires for this
+ *    frame. The fastest device never retires, so every cell is handed out. Until every device that keeps more pixels
  *    in flight (a GPU, whose first piece may be most of the image) has a
  *    rate, a device with a rate gets nothing more: nothing tells when the
  *    GPU will be done, and a CPU piece of a second or more would hold the
@@ -56,6 +56,13 @@
  * H100's Xeon the image's end cost 1.5 times what its probe had
  * (docs/results/h100-batch6). */
 #define ADAPT_TAIL_MARGIN 0.5
+/* The tail rule holds back only a device this many times slower than the
+ * fastest other (a CPU beside a GPU): between devices of about one speed
+ * the rates, measured on other pixels, differ by a few per cent, and the
+ * rule cut one GPU's share of two short and left a rest that took both
+ * GPUs latency-bound pieces (two H200s, batch 60: 1188-1253 ms against
+ * 1050 in one piece each). */
+#define ADAPT_TAIL_SLOWER 2.0
 
 /* What the sizing of one device's next piece sees. */
 struct adapt_view {
@@ -64,11 +71,11 @@ struct adapt_view {
 	double unit;	       /* pixel-samples of one cell (the smallest piece) */
 	double rate;	       /* this device's pixel-samples per ms; 0: unknown */
 	double others_rate;    /* the sum of the other working devices' known rates */
+	double others_fastest; /* the highest of them */
 	double others_backlog; /* pixel-samples the others still have in flight */
 	int unknown;	       /* other working devices with no rate yet */
 	double largest;	       /* this device's largest piece so far; 0: none */
 	int devices;	       /* working devices, this one included */
-	int fastest;	       /* no working device has a higher known rate */
 	double min_size;       /* pixel-samples of the smallest piece that keeps
 				  this device busy (adapt_set_min_pixels); 0: none */
 	int front_unknown;     /* a working device that keeps more pixels in flight

@@ -447,6 +447,7 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
 	memcpy(to->global_size, from->global_size, sizeof(to->global_size));
 	memcpy(to->local_size, from->local_size, sizeof(to->local_size));
 	to->scene_in_local = from->scene_in_local;
+	to->queues = from->queues;
 	to->scene_bytes = from->scene_bytes;
 	memcpy(to->build_options, from->build_options, sizeof(to->build_options));
 	to->times.build = from->times.build;
