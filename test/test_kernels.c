@@ -968,6 +968,39 @@ Test(kernels, queues_give_the_same_image)
 	device_close(&dev);
 }
 
+/* By default (no --queues) a GPU takes two queues for a render of several
+ * passes and one for a single pass, whose launch then keeps the kernel's
+ * schedule over the whole image; --queues applies to either. (A PoCL
+ * device that says it is a GPU.) */
+Test(kernels, a_gpu_takes_two_queues_for_several_passes_only)
+{
+	struct device dev;
+	struct scene scene;
+	struct render_result res;
+
+	open_device(&dev);
+	dev.is_gpu = 1;
+	load(&scene, "scenes/paper60.json");
+	struct render_settings s = settings_for("dynamic", 40, 24, 8, 8, 5);
+	s.samples = 4;
+	cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(res.passes, 1);
+	cr_assert_eq(res.queues, 1, "one pass: one launch");
+	render_result_free(&res);
+	s.samples_per_pass = 2;
+	cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(res.passes, 2);
+	cr_assert_eq(res.queues, RENDER_GPU_QUEUES);
+	render_result_free(&res);
+	s.samples_per_pass = 0;
+	s.queues = 3;
+	cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(res.queues, 3, "--queues 3 on one pass");
+	render_result_free(&res);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
 /* A piece's kernel time on several queues: the time any of its launches
  * ran, overlaps counted once, in any order of the spans. */
 Test(kernels, busy_time_is_the_union_of_the_launches)

@@ -20,7 +20,8 @@ int renderer_open(struct renderer *r, struct device *dev, const struct scene *sc
 	r->dev = dev;
 	r->settings = s;
 	r->result = res;
-	r->queues = res->queues = renderer_queues(s, dev);
+	r->queues = renderer_queues(s, dev);
+	res->queues = 1;
 	if (r->ops->open(r, scene, err, err_size) == 0)
 		return 0;
 	r->ops->close(r);
@@ -146,9 +147,16 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 	int per_pass =
 		renderer_pass_samples(r->settings, (long long)whole->width * whole->height);
 
-	if (r->queues > 1) {
+	/* By default only a piece of several passes takes several queues: a
+	 * launch then fills the end of the one before it. One pass stays one
+	 * launch with the kernel's schedule over the whole piece (the paper's
+	 * measurements are of single passes). */
+	int passes = (whole->samples + per_pass - 1) / per_pass;
+	if (r->queues > 1 && (r->settings->queues > 0 || passes > 1)) {
 		struct rt_piece parts[RENDER_MAX_QUEUES];
 		int count = split_columns(r, whole, parts);
+		if (count > r->result->queues)
+			r->result->queues = count;
 		if (count > 1)
 			return r->ops->passes(r, parts, count, per_pass, out, err, err_size);
 	}

@@ -38,8 +38,8 @@ struct piece_result {
 struct renderer {
 	const struct renderer_ops *ops; /* the kernel's: singlepass or wavefront */
 	struct device *dev;
-	int queues;			/* renderer_queues(): 1, or the lanes of
-					   renderer_all_samples */
+	int queues;			/* renderer_queues(): the queues open, 1 or
+					   the most parts of renderer_all_samples */
 	const struct render_settings *settings;
 	struct render_result *result; /* the plan, scene and build facts; read_back
 					 fills the image and counts */
@@ -109,7 +109,8 @@ int renderer_queues(const struct render_settings *settings, const struct device 
 /* Renders every sample of piece's pixels (its sample range is ignored) in
  * passes of renderer_pass_samples() samples, in sample order on this one
  * renderer, so that the running sums stay in its buffer; sets *out to the
- * passes' kernel time and launches. With several queues (r->queues) the
+ * passes' kernel time and launches. With several queues (r->queues, and
+ * by default only for a piece of two passes or more) the
  * piece's columns are cut into that many parts of whole work-groups, each
  * rendered on its own queue, launches alternating: a queue's next launch
  * fills the device while another's ends, and the host enqueues ahead

@@ -111,7 +111,8 @@ struct render_result {
 	int vertex_count; /* the triangles' distinct vertices (host/layout/mesh_block.h) */
 	char build_options[BUILD_OPTIONS_SIZE];
 	int build_cached; /* the program came from rtcl's cache (progcache.h) */
-	int queues;	  /* the in-order queues it rendered with (renderer_queues) */
+	int queues;	  /* the most in-order queues a piece rendered with
+			     (renderer_all_samples) */
 
 	/* With count_flops: per launched work-item, row-major over the global
 	 * NDRange. */
