@@ -17,11 +17,18 @@ static double probe_size(const struct adapt_view *v)
 /* Guided: 1/ADAPT_GUIDE of the device's share of what is left, not under
  * ADAPT_FLOOR_MS of its time. A device still probing counts as fast as this
  * one, so the first to know its rate does not take half the image. */
-static double guided_size(const struct adapt_view *v)
+/* The device's rate-weighted share of what is left and of the others'
+ * work in flight; a device still probing counts as fast as this one. */
+static double rate_share(const struct adapt_view *v)
 {
 	double all = v->rate * (1 + v->unknown) + v->others_rate;
-	double share = (v->remaining + v->others_backlog) * v->rate / all;
-	double size = share / ADAPT_GUIDE;
+
+	return (v->remaining + v->others_backlog) * v->rate / all;
+}
+
+static double guided_size(const struct adapt_view *v)
+{
+	double size = rate_share(v) / ADAPT_GUIDE;
 
 	return size > v->rate * ADAPT_FLOOR_MS ? size : v->rate * ADAPT_FLOOR_MS;
 }
@@ -36,9 +43,12 @@ long long adapt_piece_cells(const struct adapt_view *v)
 	size = v->rate > 0 ? guided_size(v) : probe_size(v);
 	if (v->largest > 0)
 		size = min_d(size, ADAPT_GROWTH * v->largest);
-	if (size < v->min_size)
-		size = v->min_size;
-	if (v->remaining - size < v->min_size) /* no rest smaller than its smallest piece */
+	double least = v->min_size;
+	if (v->rate > 0 && v->fill_size > 0)
+		least = min_d(v->fill_size, rate_share(v));
+	if (size < least)
+		size = least;
+	if (v->remaining - size < ADAPT_REST_FRACTION * v->min_size) /* no sliver left */
 		size = v->remaining;
 	if (v->rate > 0 && v->front_unknown)
 		return 0;
@@ -96,6 +106,7 @@ static struct adapt_view adapt_view_of(const struct adapt *a, int k, double now_
 			       .largest = a->dev[k].largest};
 
 	v.min_size = a->dev[k].min_pixels * a->samples;
+	v.fill_size = a->dev[k].fill_pixels * a->samples;
 
 	v.remaining = v.total - a->handed;
 	for (int j = 0; j < a->devices; j++) {
@@ -189,6 +200,11 @@ int adapt_fronts_asked(const struct adapt *a, int k)
 void adapt_set_min_pixels(struct adapt *a, int k, double pixels)
 {
 	a->dev[k].min_pixels = pixels;
+}
+
+void adapt_set_fill_pixels(struct adapt *a, int k, double pixels)
+{
+	a->dev[k].fill_pixels = pixels;
 }
 
 int adapt_take(struct adapt *a, int k, double now_ms, struct rt_piece *piece)

@@ -19,10 +19,13 @@
  *    what is left (remaining work plus the others' work in flight, times
  *    r / R): large pieces first, shrinking towards the end; never less than
  *    ADAPT_FLOOR_MS of its own time (launch overhead and a GPU's occupancy:
- *    on an H200 that is about 10 M pixel-samples), never less than a cell,
- *    never past the remaining work, never leaving a rest smaller than the
- *    device's smallest piece (it takes that rest too: a GPU given a few
- *    leftover rows at 1024 spp spent 80 ms on them, latency-bound), and
+ *    on an H200 that is about 10 M pixel-samples), never less than the
+ *    device's smallest piece (or, with rates known, the lesser of what
+ *    fills it over several launches and its rate-weighted share), never less
+ *    than a cell, never past the remaining work, never leaving a rest under
+ *    ADAPT_REST_FRACTION of the device's smallest piece (it takes that rest
+ *    too: a GPU given a few leftover rows at 1024 spp spent 80 ms on them,
+ *    latency-bound), and
  *    never more than ADAPT_GROWTH times
  *    the device's largest piece so far (not its last: a piece cut short at
  *    the end of a cell row must not stop the growth): a rate measured early (a first launch's
@@ -63,6 +66,10 @@
  * GPUs latency-bound pieces (two H200s, batch 60: 1188-1253 ms against
  * 1050 in one piece each). */
 #define ADAPT_TAIL_SLOWER 2.0
+/* A device takes the rest of the image too when that rest would be less
+ * than this fraction of its smallest piece: a GPU given a few leftover rows
+ * at 1024 spp spent 80 ms on them, latency-bound. */
+#define ADAPT_REST_FRACTION 0.25
 
 /* What the sizing of one device's next piece sees. */
 struct adapt_view {
@@ -78,6 +85,8 @@ struct adapt_view {
 	int devices;	       /* working devices, this one included */
 	double min_size;       /* pixel-samples of the smallest piece that keeps
 				  this device busy (adapt_set_min_pixels); 0: none */
+	double fill_size;      /* pixel-samples that keep it busy over several
+				  launches (adapt_set_fill_pixels); 0: none */
 	int front_unknown;     /* a working device that keeps more pixels in flight
 				  (a GPU beside this CPU) has no rate yet */
 };
@@ -95,6 +104,7 @@ struct adapt_device {
 	int retired;	      /* the tail rule stopped it for this frame */
 	int asked;	      /* it has asked for a piece this frame */
 	double min_pixels;    /* the pixels one launch keeps in flight on it */
+	double fill_pixels;   /* adapt_set_fill_pixels */
 };
 
 struct adapt {
@@ -116,6 +126,15 @@ void adapt_new_frame(struct adapt *a);
  * tiles.c sets it from what the device keeps in flight (TILES_GPU_LAUNCHES:
  * small pieces leave a GPU idle at each launch's end). */
 void adapt_set_min_pixels(struct adapt *a, int k, double pixels);
+
+/* Sets the pixels that keep device k busy over several launches, which may
+ * be more than its smallest piece (tiles.c caps that at the device's equal
+ * share, so that several GPUs all get work). Once its rate is known, its
+ * piece is at least min(these, its rate-weighted share of what is left),
+ * not the equal share: of two GPUs whose halves differ in cost, the faster
+ * takes more (batch 63: the default scene's odd bands cost 1.8 % more than
+ * its even ones, and each GPU took exactly its half). */
+void adapt_set_fill_pixels(struct adapt *a, int k, double pixels);
 
 /* Whether every device that keeps more pixels in flight than device k has
  * asked for a piece this frame. A CPU waits for that (tiles.c) before its

@@ -119,6 +119,7 @@ static void set_min_pieces(struct tiles_job *t, int group)
 		double share = pixels * resident / all;
 		adapt_set_min_pixels(&t->adapt, k,
 				     launches * resident < share ? launches * resident : share);
+		adapt_set_fill_pixels(&t->adapt, k, launches * resident);
 	}
 }
 
