@@ -916,6 +916,77 @@ Test(kernels, passes_give_the_image_of_one_pass, .timeout = 600)
 	device_close(&dev);
 }
 
+/* renderer_read_rows: a piece's pixels only, straight from the device, at
+ * their places in the image or packed row after row; here a rectangle of
+ * split rows under a row map (image rows 4-7, 26-27, 36-39 of split rows
+ * 10..19) that starts at column 5, for dynamic and the wavefront's own
+ * buffers. Each must equal the whole image read back, and nothing else may
+ * be written. */
+Test(kernels, read_rows_reads_a_piece_in_place_and_packed)
+{
+	static const char *const kernels[] = {"dynamic", "wavefront"};
+	const int w = 29, h = 47;
+	struct device dev;
+	struct scene scene;
+
+	open_device(&dev);
+	load(&scene, "scenes/paper60.json");
+	struct rt_piece piece = {.x0 = 5, .y0 = 10, .width = 19, .height = 10};
+	renderer_interleave_rows(&piece, h, 4, 3);
+	for (int k = 0; k < 2; k++) {
+		struct render_settings s = settings_for(kernels[k], w, h, 8, 4, 5);
+		struct renderer r;
+		struct render_result res;
+		struct piece_result out;
+		struct rt_piece whole = renderer_whole_image(&s, 0, 1);
+		size_t floats = 3 * (size_t)w * h;
+		float *placed = malloc(floats * sizeof(float));
+		float *packed = malloc(3 * (size_t)piece.width * piece.height * sizeof(float));
+		cr_assert(placed && packed);
+		for (size_t i = 0; i < floats; i++)
+			placed[i] = -1;
+		piece.samples = piece.sample_end = 1;
+		cr_assert_eq(renderer_open(&r, &dev, &scene, &s, &res, err, sizeof(err)), 0, "%s",
+			     err);
+		cr_assert_eq(renderer_all_samples(&r, &whole, &out, err, sizeof(err)), 0, "%s", err);
+		cr_assert_eq(renderer_read_rows(&r, &piece, placed, 0, err, sizeof(err)), 0, "%s",
+			     err);
+		cr_assert_eq(renderer_read_rows(&r, &piece, packed, 1, err, sizeof(err)), 0, "%s",
+			     err);
+		cr_assert_eq(renderer_read_back(&r, err, sizeof(err)), 0, "%s", err);
+		renderer_close(&r);
+		for (int y = 0, rows = 0; y < h; y++) {
+			int v = -1;
+			for (int j = piece.y0; j < piece.y0 + piece.height; j++)
+				if (rt_piece_row(&piece, j) == y)
+					v = j;
+			rows += v >= 0;
+			for (int x = 0; x < w; x++)
+				for (int c = 0; c < 3; c++) {
+					size_t i = 3 * ((size_t)y * w + x) + c;
+					int inside = v >= 0 && x >= piece.x0 &&
+						     x < piece.x0 + piece.width;
+					cr_assert_eq(placed[i], inside ? res.rgb[i] : -1.0f,
+						     "%s: pixel (%d, %d)", kernels[k], x, y);
+					if (inside)
+						cr_assert_eq(packed[3 * ((size_t)(v - piece.y0) *
+									 piece.width +
+								 x - piece.x0) +
+								c],
+							     res.rgb[i], "%s: packed pixel (%d, %d)",
+							     kernels[k], x, y);
+				}
+			if (y == h - 1)
+				cr_assert_eq(rows, piece.height);
+		}
+		render_result_free(&res);
+		free(placed);
+		free(packed);
+	}
+	scene_free(&scene);
+	device_close(&dev);
+}
+
 /* --queues (renderer.h): the columns in parts, one per queue, launches
  * alternating. Every kernel that uses them, on 2 to 4 queues, gives the
  * same floats as on one, with every pixel written once per pass and

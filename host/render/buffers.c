@@ -127,6 +127,38 @@ int buffers_read_back(struct device *dev, const struct render_settings *s, struc
 	return 0;
 }
 
+int buffers_read_rows(struct device *dev, const struct render_settings *s,
+		      const struct render_buffers *b, const struct rt_piece *p, float *to,
+		      int packed, char *err, size_t err_size)
+{
+	size_t pixel = 3 * sizeof(float), image_row = (size_t)s->width * pixel;
+	cl_int status = CL_SUCCESS;
+
+	for (int v = p->y0; v < p->y0 + p->height && status == CL_SUCCESS;) {
+		int y = rt_piece_row(p, v), rows = 1;
+		while (v + rows < p->y0 + p->height && rt_piece_row(p, v + rows) == y + rows)
+			rows++;
+		size_t buffer_origin[3] = {(size_t)p->x0 * pixel, (size_t)y, 0};
+		size_t host_origin[3] = {packed ? 0 : (size_t)p->x0 * pixel,
+					 packed ? (size_t)(v - p->y0) : (size_t)y, 0};
+		size_t region[3] = {(size_t)p->width * pixel, (size_t)rows, 1};
+		size_t host_row = packed ? (size_t)p->width * pixel : image_row;
+		status = clEnqueueReadBufferRect(dev->queue, b->image.image, CL_FALSE, buffer_origin,
+						 host_origin, region, image_row, 0, host_row, 0, to,
+						 0, NULL, NULL);
+		v += rows;
+	}
+	cl_int done = clFinish(dev->queue);
+	if (status == CL_SUCCESS)
+		status = done;
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "reading the image back failed (%s): %s", dev->name,
+			 cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
 void buffers_release(struct render_buffers *b)
 {
 	cl_mem buffers[] = {b->probe, b->flops, b->scene};

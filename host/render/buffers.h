@@ -53,6 +53,15 @@ cl_int buffers_add_item_counts(struct device *dev, struct render_buffers *b, cl_
 int buffers_read_back(struct device *dev, const struct render_settings *s, struct render_buffers *b,
 		      struct render_result *res, char *err, size_t err_size);
 
+/* Reads piece's pixels (its rectangle of split rows, rt_piece_row) from the
+ * device's image into to: at their places in an image of the render's size,
+ * or packed, row after row of the piece (packed != 0). One read per run of
+ * rows that lie one after another in the image. Returns 0, or -1 with one
+ * message in err. */
+int buffers_read_rows(struct device *dev, const struct render_settings *s,
+		      const struct render_buffers *b, const struct rt_piece *piece, float *to,
+		      int packed, char *err, size_t err_size);
+
 /* Releases what b holds, the program last. */
 void buffers_release(struct render_buffers *b);
 

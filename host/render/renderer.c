@@ -58,6 +58,12 @@ int renderer_read_back(struct renderer *r, char *err, size_t err_size)
 	return r->ops->read_back(r, err, err_size);
 }
 
+int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *to, int packed,
+		       char *err, size_t err_size)
+{
+	return r->ops->read_rows(r, piece, to, packed, err, err_size);
+}
+
 void renderer_close(struct renderer *r)
 {
 	if (r->ops)

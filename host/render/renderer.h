@@ -57,6 +57,8 @@ struct renderer_ops {
 	int (*passes)(struct renderer *r, const struct rt_piece *pieces, int count, int per_pass,
 		      struct piece_result *out, char *err, size_t err_size);
 	int (*read_back)(struct renderer *r, char *err, size_t err_size);
+	int (*read_rows)(struct renderer *r, const struct rt_piece *piece, float *to, int packed,
+			 char *err, size_t err_size);
 	void (*close)(struct renderer *r);
 };
 
@@ -76,6 +78,12 @@ int renderer_piece(struct renderer *r, const struct rt_piece *piece, struct piec
 /* Reads the whole image (result->rgb) and, when counting or checking, the
  * counts accumulated since open into the result. */
 int renderer_read_back(struct renderer *r, char *err, size_t err_size);
+
+/* Reads only piece's pixels back, straight into to: at their places in an
+ * image of the render's size, or packed row after row (buffers_read_rows);
+ * for a piece that goes elsewhere without the whole image read first. */
+int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *to, int packed,
+		       char *err, size_t err_size);
 
 void renderer_close(struct renderer *r);
 
@@ -103,7 +111,7 @@ int renderer_pass_count(const struct render_settings *s, const struct rt_piece *
  * are read after every launch. */
 int renderer_queues(const struct render_settings *settings, const struct device *dev);
 
-/* The queues a GPU renders with by default (docs/GUIDE.md, "Queues"). */
+/* The queues a GPU renders with by default (docs/GUIDE.md, --queues). */
 #define RENDER_GPU_QUEUES 2
 
 /* Renders every sample of piece's pixels (its sample range is ignored) in

@@ -29,7 +29,7 @@ enum render_arg {
 };
 
 /* A further in-order queue of the device with its own kernel object and
- * work counter (renderer.h, "Queues"); lane 0 is the device's queue,
+ * work counter (renderer.h, renderer_all_samples); lane 0 is the device's queue,
  * st->kernel and st->work_counter. */
 struct lane {
 	cl_command_queue queue;
@@ -317,6 +317,8 @@ static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, i
 				status = clEnqueueNDRangeKernel(queue, kernel, 2, NULL, global,
 								r->result->local_size, 0, NULL,
 								&f->event);
+				if (status != CL_SUCCESS)
+					f->event = NULL; /* none was made */
 			}
 			if (status == CL_SUCCESS) {
 				call = "clFlush";
@@ -358,6 +360,14 @@ static int singlepass_read_back(struct renderer *r, char *err, size_t err_size)
 	struct launch_state *st = r->state;
 
 	return buffers_read_back(r->dev, r->settings, &st->b, r->result, err, err_size);
+}
+
+static int singlepass_read_rows(struct renderer *r, const struct rt_piece *piece, float *to,
+				int packed, char *err, size_t err_size)
+{
+	struct launch_state *st = r->state;
+
+	return buffers_read_rows(r->dev, r->settings, &st->b, piece, to, packed, err, err_size);
 }
 
 static int singlepass_open(struct renderer *r, const struct scene *scene, char *err,
@@ -406,5 +416,6 @@ static void singlepass_close(struct renderer *r)
 	r->state = NULL;
 }
 
-const struct renderer_ops singlepass_ops = {singlepass_open, singlepass_piece, singlepass_passes,
-					    singlepass_read_back, singlepass_close};
+const struct renderer_ops singlepass_ops = {singlepass_open,	    singlepass_piece,
+					    singlepass_passes,	    singlepass_read_back,
+					    singlepass_read_rows, singlepass_close};

@@ -312,6 +312,14 @@ static int wavefront_piece(struct renderer *r, const struct rt_piece *piece,
 	return 0;
 }
 
+static int wavefront_read_rows(struct renderer *r, const struct rt_piece *piece, float *to,
+			       int packed, char *err, size_t err_size)
+{
+	struct wavefront *w = r->state;
+
+	return buffers_read_rows(r->dev, r->settings, &w->b, piece, to, packed, err, err_size);
+}
+
 static int wavefront_read_back(struct renderer *r, char *err, size_t err_size)
 {
 	struct wavefront *w = r->state;
@@ -361,5 +369,6 @@ static void wavefront_close(struct renderer *r)
 	r->state = NULL;
 }
 
-const struct renderer_ops wavefront_ops = {wavefront_open, wavefront_piece, NULL, wavefront_read_back,
-					   wavefront_close};
+const struct renderer_ops wavefront_ops = {wavefront_open,	   wavefront_piece,
+					   NULL,		   wavefront_read_back,
+					   wavefront_read_rows, wavefront_close};
