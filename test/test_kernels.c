@@ -1039,8 +1039,9 @@ Test(kernels, queues_give_the_same_image)
 	device_close(&dev);
 }
 
-/* By default (no --queues) a GPU takes two queues for a render of several
- * passes and one for a single pass, whose launch then keeps the kernel's
+/* By default (no --queues) a GPU takes two queues for a whole image of
+ * several passes, four for a share of the image (a piece of several
+ * devices), and one for a single pass, whose launch then keeps the kernel's
  * schedule over the whole image; --queues applies to either. (A PoCL
  * device that says it is a GPU.) */
 Test(kernels, a_gpu_takes_two_queues_for_several_passes_only)
@@ -1061,7 +1062,16 @@ Test(kernels, a_gpu_takes_two_queues_for_several_passes_only)
 	s.samples_per_pass = 2;
 	cr_assert_eq(render(&dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
 	cr_assert_eq(res.passes, 2);
-	cr_assert_eq(res.queues, RENDER_GPU_QUEUES);
+	cr_assert_eq(res.queues, RENDER_GPU_QUEUES_WHOLE, "the whole image");
+	render_result_free(&res);
+	struct renderer r;
+	struct piece_result out;
+	struct rt_piece share = renderer_rows(&s, 0, 16, 0, 4); /* 16 of the 24 rows */
+	cr_assert_eq(renderer_open(&r, &dev, &scene, &s, &res, err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(renderer_all_samples(&r, &share, &out, err, sizeof(err)), 0, "%s", err);
+	renderer_close(&r);
+	cr_assert_eq(res.queues, RENDER_GPU_QUEUES_SHARE, "a share of the image");
+	cr_assert_eq(out.launches, 2 * RENDER_GPU_QUEUES_SHARE);
 	render_result_free(&res);
 	s.samples_per_pass = 0;
 	s.queues = 3;
@@ -1090,7 +1100,7 @@ Test(kernels, queues_where_they_apply)
 	struct device cpu = {.is_gpu = 0}, gpu = {.is_gpu = 1};
 	struct render_settings s = settings_for("dynamic", 8, 8, 8, 8, 5);
 
-	cr_assert_eq(renderer_queues(&s, &gpu), RENDER_GPU_QUEUES);
+	cr_assert_eq(renderer_queues(&s, &gpu), RENDER_GPU_QUEUES_SHARE);
 	cr_assert_eq(renderer_queues(&s, &cpu), 1);
 	s.queues = 3;
 	cr_assert_eq(renderer_queues(&s, &cpu), 3);

@@ -124,17 +124,33 @@ int renderer_queues(const struct render_settings *s, const struct device *dev)
 
 	if (!k || !k->ops->passes || k->single_item || s->count_flops || s->record_schedule)
 		return 1;
-	return s->queues > 0 ? s->queues : dev->is_gpu ? RENDER_GPU_QUEUES : 1;
+	return s->queues > 0 ? s->queues : dev->is_gpu ? RENDER_GPU_QUEUES_SHARE : 1;
 }
 
-/* Cuts piece's columns into at most r->queues parts of whole work-groups
+/* How many queues piece takes: --queues, else (RENDER_GPU_QUEUES_*) none
+ * for a single pass, whose one launch keeps the kernel's schedule over the
+ * whole piece (the paper's measurements are of single passes), 2 for the
+ * whole image and 4 for a share of it; at most the queues open. */
+static int piece_queues(const struct renderer *r, const struct rt_piece *piece, int passes)
+{
+	const struct render_settings *s = r->settings;
+	int whole = piece->width == s->width && piece->height == s->height;
+	int want = s->queues > 0  ? s->queues
+		   : passes < 2	  ? 1
+		   : whole	  ? RENDER_GPU_QUEUES_WHOLE
+				  : RENDER_GPU_QUEUES_SHARE;
+
+	return want < r->queues ? want : r->queues;
+}
+
+/* Cuts piece's columns into at most `queues` parts of whole work-groups
  * (the last takes the rest); returns how many. */
-static int split_columns(const struct renderer *r, const struct rt_piece *piece,
+static int split_columns(const struct renderer *r, const struct rt_piece *piece, int queues,
 			 struct rt_piece parts[RENDER_MAX_QUEUES])
 {
 	int group = (int)r->result->local_size[0];
 	int groups = (piece->width + group - 1) / group;
-	int count = r->queues < groups ? r->queues : groups;
+	int count = queues < groups ? queues : groups;
 	int x = piece->x0;
 
 	for (int i = 0; i < count; i++) {
@@ -153,14 +169,10 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 	int per_pass =
 		renderer_pass_samples(r->settings, (long long)whole->width * whole->height);
 
-	/* By default only a piece of several passes takes several queues: a
-	 * launch then fills the end of the one before it. One pass stays one
-	 * launch with the kernel's schedule over the whole piece (the paper's
-	 * measurements are of single passes). */
-	int passes = (whole->samples + per_pass - 1) / per_pass;
-	if (r->queues > 1 && (r->settings->queues > 0 || passes > 1)) {
+	int queues = piece_queues(r, whole, (whole->samples + per_pass - 1) / per_pass);
+	if (queues > 1) {
 		struct rt_piece parts[RENDER_MAX_QUEUES];
-		int count = split_columns(r, whole, parts);
+		int count = split_columns(r, whole, queues, parts);
 		if (count > r->result->queues)
 			r->result->queues = count;
 		if (count > 1)

@@ -104,22 +104,29 @@ struct rt_piece renderer_whole_image(const struct render_settings *s, int begin,
 /* Returns how many passes renderer_all_samples() makes over piece. */
 int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece);
 
-/* Returns how many in-order queues a renderer of settings on dev uses:
- * settings->queues if given, else RENDER_GPU_QUEUES on a GPU and 1 on other
- * devices; 1 for a kernel of one work-item (serial), a renderer without
- * `passes` (wavefront), and the counting and recording builds, whose counts
- * are read after every launch. */
+/* Returns how many in-order queues a renderer of settings on dev opens:
+ * settings->queues if given, else RENDER_GPU_QUEUES_SHARE on a GPU and 1 on
+ * other devices; 1 for a kernel of one work-item (serial), a renderer
+ * without `passes` (wavefront), and the counting and recording builds,
+ * whose counts are read after every launch. */
 int renderer_queues(const struct render_settings *settings, const struct device *dev);
 
-/* The queues a GPU renders with by default (docs/GUIDE.md, --queues). */
-#define RENDER_GPU_QUEUES 2
+/* The queues a GPU renders a piece of several passes with by default
+ * (docs/GUIDE.md, --queues): 2 for the whole image, 4 for a share of it
+ * (several devices). Measured on H200s (docs/results/multidevice, batches
+ * 64-66): a whole image took 1556 ms on 2, 1583 on 4 (default scene, 2048
+ * spp), a GPU's half 842 on 2 and 813 on 4. A share has fewer pixels, so a
+ * launch gives each resident work-group fewer chunks and its end is a
+ * larger part of it: more queues overlap more of the ends. */
+#define RENDER_GPU_QUEUES_WHOLE 2
+#define RENDER_GPU_QUEUES_SHARE 4
 
 /* Renders every sample of piece's pixels (its sample range is ignored) in
  * passes of renderer_pass_samples() samples, in sample order on this one
  * renderer, so that the running sums stay in its buffer; sets *out to the
- * passes' kernel time and launches. With several queues (r->queues, and
- * by default only for a piece of two passes or more) the
- * piece's columns are cut into that many parts of whole work-groups, each
+ * passes' kernel time and launches. With several queues (--queues, or by
+ * default on a GPU for a piece of two passes or more, RENDER_GPU_QUEUES_*)
+ * the piece's columns are cut into that many parts of whole work-groups, each
  * rendered on its own queue, launches alternating: a queue's next launch
  * fills the device while another's ends, and the host enqueues ahead
  * instead of waiting between passes. A pixel's samples still come in order,
