@@ -363,14 +363,26 @@ Test(multidev, band_passes_keep_a_launch_near_the_pass_budget)
 	struct rt_piece band = tiles_band(&s, 64, 0, 0, 65536);
 
 	/* 64 Ki pixels: 2^22 / 2^16 = 64 samples per launch. */
-	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height), 64);
-	cr_assert_eq(tiles_piece_launches(&s, &band), 1024);
+	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height, 0), 64);
+	cr_assert_eq(tiles_piece_launches(&s, &band, 0), 1024);
+	/* On a GPU at least RENDER_GPU_PASS_SAMPLES: 64 stays, the 2^22 / 2^20
+	 * = 4 of a 1024x1024 image too, 2000x2000's 1 becomes 4. */
+	cr_assert_eq(RENDER_GPU_PASS_SAMPLES, 4);
+	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height, 1), 64);
+	cr_assert_eq(renderer_pass_samples(&s, 1024 * 1024, 1), 4);
+	cr_assert_eq(renderer_pass_samples(&s, 2000 * 2000, 0), 1);
+	cr_assert_eq(renderer_pass_samples(&s, 2000 * 2000, 1), 4);
+	struct rt_piece whole = tiles_band(&s, 1024, 0, 0, 65536);
+	cr_assert_eq(tiles_piece_launches(&s, &whole, 0), 16384);
+	cr_assert_eq(tiles_piece_launches(&s, &whole, 1), 16384);
 	s.samples_per_pass = 5;
-	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height), 5);
+	cr_assert_eq(renderer_pass_samples(&s, 2000 * 2000, 1), 5, "as given, on a GPU too");
+	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height, 0), 5);
 	s = band_settings(8, 8, 3);
 	band = tiles_band(&s, 8, 0, 0, 3);
 	/* never more than there are */
-	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height), 3);
+	cr_assert_eq(renderer_pass_samples(&s, (long long)band.width * band.height, 0), 3);
+	cr_assert_eq(renderer_pass_samples(&s, 2000 * 2000, 1), 3);
 }
 
 Test(multidev, write_count_check_names_the_first_pixel_off)

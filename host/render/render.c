@@ -48,7 +48,7 @@ const struct kernel_info *render_find_kernel(const char *name)
 
 int render_pass_samples(const struct render_settings *s)
 {
-	return renderer_pass_samples(s, (long long)s->width * s->height);
+	return renderer_pass_samples(s, (long long)s->width * s->height, 0);
 }
 
 int render(struct device *dev, const struct scene *scene, const struct render_settings *s,
@@ -63,7 +63,7 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	int frames = repeats_begin(s, res, err, err_size);
 	if (frames < 0)
 		goto out_close;
-	res->passes = renderer_pass_count(s, &whole);
+	res->passes = renderer_pass_count(s, &whole, dev->is_gpu);
 	if (s->progress)
 		repeats_progress_begin(s, frames, NULL);
 	for (int frame = 0; frame < frames; frame++) {

@@ -12,7 +12,8 @@ extern const int render_kernel_count;
 /* Returns the kernel named `name`, or NULL. */
 const struct kernel_info *render_find_kernel(const char *name);
 
-/* renderer_pass_samples() for the whole image: one pass of render(). */
+/* renderer_pass_samples() for the whole image on a device that is not a
+ * GPU: one pass of render() there. */
 int render_pass_samples(const struct render_settings *settings);
 
 /* Renders `scene` with `settings` (settings->kernel not NULL) on `dev`: each

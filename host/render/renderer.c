@@ -101,19 +101,22 @@ struct rt_piece renderer_whole_image(const struct render_settings *s, int begin,
 	return renderer_rows(s, 0, s->height, begin, end);
 }
 
-int renderer_pass_samples(const struct render_settings *s, long long pixels)
+int renderer_pass_samples(const struct render_settings *s, long long pixels, int gpu)
 {
 	int samples = settings_samples(s);
 	double per_pass = s->samples_per_pass > 0
 				  ? s->samples_per_pass
 				  : floor(RENDER_PASS_PIXEL_SAMPLES / (double)pixels);
 
+	if (gpu && s->samples_per_pass <= 0 && per_pass < RENDER_GPU_PASS_SAMPLES)
+		per_pass = RENDER_GPU_PASS_SAMPLES;
+
 	return per_pass < 1 ? 1 : per_pass > samples ? samples : (int)per_pass;
 }
 
-int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece)
+int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece, int gpu)
 {
-	int per_pass = renderer_pass_samples(s, (long long)piece->width * piece->height);
+	int per_pass = renderer_pass_samples(s, (long long)piece->width * piece->height, gpu);
 
 	return (piece->samples + per_pass - 1) / per_pass;
 }
@@ -167,7 +170,8 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 			 char *err, size_t err_size)
 {
 	int per_pass =
-		renderer_pass_samples(r->settings, (long long)whole->width * whole->height);
+		renderer_pass_samples(r->settings, (long long)whole->width * whole->height,
+				      r->dev->is_gpu);
 
 	int queues = piece_queues(r, whole, (whole->samples + per_pass - 1) / per_pass);
 	if (queues > 1) {

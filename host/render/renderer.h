@@ -101,8 +101,9 @@ void renderer_interleave_rows(struct rt_piece *p, int height, int band, int clas
 /* Returns the piece of the whole image with samples [begin, end). */
 struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end);
 
-/* Returns how many passes renderer_all_samples() makes over piece. */
-int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece);
+/* Returns how many passes renderer_all_samples() makes over piece on a GPU
+ * (gpu != 0) or another device. */
+int renderer_pass_count(const struct render_settings *s, const struct rt_piece *piece, int gpu);
 
 /* Returns how many in-order queues a renderer of settings on dev opens:
  * settings->queues if given, else RENDER_GPU_QUEUES_SHARE on a GPU and 1 on
@@ -140,10 +141,21 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *piece, struc
  * milliseconds, on a CPU a few seconds, so that progress moves. */
 #define RENDER_PASS_PIXEL_SAMPLES (1 << 22)
 
+/* On a GPU a pass takes at least this many samples (when there are as many):
+ * fewer, longer launches, whose ends the queues overlap. Measured on H200s
+ * (docs/results/multidevice, batches 65-66, 2000x2000): the default scene
+ * at 2048 spp took 1557 ms per frame in passes of 1 sample (about 2^22
+ * pixel-samples), 1507 in passes of 2 and 1484 in passes of 4; a GPU's half
+ * of it on 4 queues 813 in passes of 2 and 800 in passes of 4; passes of 8
+ * were slower (863-867 ms for a half on 2 queues). */
+#define RENDER_GPU_PASS_SAMPLES 4
+
 /* Returns how many samples of every pixel one pass over a piece of `pixels`
- * pixels traces: settings->samples_per_pass, else about
- * RENDER_PASS_PIXEL_SAMPLES in all; at least 1, at most settings_samples().
- * The last pass takes what is left. The image does not depend on it. */
-int renderer_pass_samples(const struct render_settings *settings, long long pixels);
+ * pixels traces on a GPU (gpu != 0) or another device:
+ * settings->samples_per_pass, else about RENDER_PASS_PIXEL_SAMPLES in all and
+ * on a GPU at least RENDER_GPU_PASS_SAMPLES; at least 1, at most
+ * settings_samples(). The last pass takes what is left. The image does not
+ * depend on it. */
+int renderer_pass_samples(const struct render_settings *settings, long long pixels, int gpu);
 
 #endif

@@ -92,9 +92,9 @@ void tiles_pack_piece(const struct rt_piece *p, int image_width, const float *fr
 	}
 }
 
-int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece)
+int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece, int gpu)
 {
-	return renderer_pass_count(s, piece);
+	return renderer_pass_count(s, piece, gpu);
 }
 
 /* The work-items a device keeps in flight: a GPU about 2048 per compute
@@ -240,9 +240,9 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 }
 
 /* Adds piece's launches to the expected write counts (check_writes). */
-static void expect_writes(struct tiles_job *t, const struct rt_piece *p, int sign)
+static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, int sign)
 {
-	int launches = tiles_piece_launches(t->settings, p) * sign;
+	int launches = tiles_piece_launches(t->settings, p, t->devs[k].is_gpu) * sign;
 
 	for (int v = p->y0; t->expected && v < p->y0 + p->height; v++)
 		for (int x = p->x0; x < p->x0 + p->width; x++)
@@ -275,7 +275,7 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	done->kernel_ms += out.kernel_ms;
 	done->launches += out.launches;
 	t->owner[band] = k; /* pieces are distinct: no two threads write one */
-	expect_writes(t, &whole, 1);
+	expect_writes(t, k, &whole, 1);
 	done->pixels += (long long)whole.width * whole.height;
 	return 0;
 }
@@ -344,9 +344,10 @@ static int double_band(struct tiles_job *t, char *err, size_t err_size)
 
 	if (!hook_double_band())
 		return 0;
-	if (tiles_render_band(t, (owner + 1) % t->count, 0, &pixels, err, err_size))
+	int other = (owner + 1) % t->count;
+	if (tiles_render_band(t, other, 0, &pixels, err, err_size))
 		return -1;
-	expect_writes(t, &t->pieces[0], -1);
+	expect_writes(t, other, &t->pieces[0], -1);
 	t->owner[0] = owner;
 	return 0;
 }
@@ -358,7 +359,8 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 
 	for (int b = 0; counts && b < t->piece_count; b++) {
 		const struct rt_piece *p = &t->pieces[b];
-		uint32_t expected = t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p) : 0;
+		uint32_t expected =
+			t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p, t->devs[k].is_gpu) : 0;
 		for (int v = p->y0; v < p->y0 + p->height; v++)
 			if (tiles_check_counts(counts + (size_t)rt_piece_row(p, v) * s->width + p->x0,
 					       p->width, 1,
@@ -582,7 +584,7 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	if (frames < 0 || repeats_end(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
-	out->passes = tiles_piece_launches(s, &t.pieces[0]);
+	out->passes = tiles_piece_launches(s, &t.pieces[0], t.devs[t.owner[0]].is_gpu);
 	if (assemble(&t, out, err, err_size))
 		goto out_free;
 	out->times.read_back = timing_lap_ms(&lap);

@@ -146,7 +146,7 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 		      size_t err_size);
 
 /* Launches that cover each pixel of piece once (its samples in passes). */
-int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece);
+int tiles_piece_launches(const struct render_settings *s, const struct rt_piece *piece, int gpu);
 
 /* Reads back device k's image (and counts), once. */
 int tiles_collect(struct tiles_job *t, int k, char *err, size_t err_size);
