@@ -197,6 +197,10 @@ struct rt_scene {
 	rt_uint uv_offset;
 	rt_uint material_map_offset, texture_offset, texture_table_offset;
 	rt_int texture_count;
+	/* The BVH's nodes: 2, struct rt_bvh_node; 4, struct rt_bvh4_node (a CPU
+	   device outside the counting build, RTCL_BVH4); 0 without a BVH. */
+	rt_int bvh_width;
+	rt_int bvh_pad[3];
 };
 
 /* A triangle of a leaf, its three vertex positions inline: v0.w holds its
@@ -222,6 +226,22 @@ struct rt_bvh_box {
 struct rt_bvh_node {
 	struct rt_bvh_box child[2];
 };
+
+/* A four-wide node (RTCL_BVH4, docs/bvh.md "A four-wide tree on CPUs"): the
+ * binary tree collapsed, each node's children replaced by their own children,
+ * the one of largest surface area first, until there are four or only leaves
+ * left (host/layout/bvh.c, bvh_widen). The four boxes in SoA form, so that one
+ * visit tests them in the four lanes of float4s: child k's box is (lo_x[k],
+ * lo_y[k], lo_z[k])..(hi_x[k], hi_y[k], hi_z[k]); index[k] and count[k] are a
+ * binary child's lo.w and hi.w (an inner child's index names a four-wide
+ * node); a slot left empty has count RT_BVH4_EMPTY and a box no ray meets
+ * (lo +FLT_MAX, hi -FLT_MAX). */
+struct rt_bvh4_node {
+	rt_vec4 lo_x, lo_y, lo_z, hi_x, hi_y, hi_z;
+	rt_int index[4], count[4];
+};
+
+#define RT_BVH4_EMPTY (-1)
 
 /* A device leaf of spheres only: the count's flag (see struct rt_bvh_box). */
 #define RT_LEAF_SPHERES 0x40000000
@@ -348,7 +368,8 @@ _Static_assert(sizeof(struct rt_light) == 32, "rt_light layout");
 _Static_assert(sizeof(struct rt_triangle) == 16, "rt_triangle layout");
 _Static_assert(sizeof(struct rt_vertex) == 16, "rt_vertex layout");
 _Static_assert(sizeof(struct rt_vertex_normal) == 16, "rt_vertex_normal layout");
-_Static_assert(sizeof(struct rt_scene) == 208, "rt_scene layout");
+_Static_assert(sizeof(struct rt_scene) == 224, "rt_scene layout");
+_Static_assert(sizeof(struct rt_bvh4_node) == 128, "rt_bvh4_node layout");
 _Static_assert(offsetof(struct rt_scene, uv_offset) == 188, "rt_scene layout");
 _Static_assert(sizeof(struct rt_vertex_uv) == 8, "rt_vertex_uv layout");
 _Static_assert(sizeof(struct rt_material_map) == 16, "rt_material_map layout");

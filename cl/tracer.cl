@@ -164,7 +164,11 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_triangle *triangles;
 	RTCL_SCENE_SPACE const struct rt_vertex *vertices;
 	RTCL_SCENE_SPACE const struct rt_vertex_normal *normals;
+#ifdef RTCL_BVH4
+	RTCL_SCENE_SPACE const struct rt_bvh4_node *nodes; /* four-wide: a CPU's */
+#else
 	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
+#endif
 	RTCL_SCENE_SPACE const uint *refs; /* the BVH leaves' primitives (RT_PRIM_*) */
 	RTCL_SCENE_SPACE const struct rt_leaf_triangle *leaf_triangles; /* RT_LEAF_TRIANGLES */
 #ifdef RTCL_TEXTURES
@@ -275,7 +279,11 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 	tr->vertices = (RTCL_SCENE_SPACE const struct rt_vertex *)(base + scene->vertex_offset);
 	tr->normals =
 		(RTCL_SCENE_SPACE const struct rt_vertex_normal *)(base + scene->normal_offset);
+#ifdef RTCL_BVH4
+	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh4_node *)(base + scene->bvh_node_offset);
+#else
 	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh_node *)(base + scene->bvh_node_offset);
+#endif
 	tr->refs = (RTCL_SCENE_SPACE const uint *)(base + scene->bvh_ref_offset);
 	tr->leaf_triangles =
 		(RTCL_SCENE_SPACE const struct rt_leaf_triangle *)(base + scene->bvh_triangle_offset);

@@ -166,6 +166,82 @@ struct bvh_entry {
 	int index, count;
 };
 
+#ifdef RTCL_BVH4
+#ifndef RTCL_CPU
+#error "four-wide nodes are a CPU device's (host/render/block.c)"
+#endif
+/* The traversal stack of the four-wide tree: a visit leaves at most three
+ * children waiting, and the tree is no deeper than the binary one. */
+#define BVH4_STACK (3 * RT_BVH_MAX_DEPTH + 1)
+
+/* bvh_intersect over four-wide nodes (RTCL_BVH4: a CPU device outside the
+ * counting build; struct rt_bvh4_node, docs/bvh.md "A four-wide tree on
+ * CPUs"): a visit tests the four children's boxes in the lanes of float4s,
+ * box_hit's slabs with a comparison and a select for the minima and maxima
+ * (the operands are never NaN, box_ray), and the children it meets wait on
+ * the stack farthest first, so that the nearest is taken next; a lone one is
+ * taken at once. The same primitives meet the same tests, and the closest
+ * hit does not depend on the order (bvh_intersect), so the image is the
+ * binary tree's. */
+static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
+			  bool any_hit, float *nearest, struct hit *best)
+{
+	struct bvh_entry stack[BVH4_STACK];
+	struct bvh_entry at = {0, 0}; /* the root */
+	struct box_ray ray = box_ray(tr, o, d);
+	int waiting = 0;
+
+	for (;;) {
+		if (at.count > 0) {
+			leaf_intersect(tr, frame, o, d, at.index, at.count, any_hit, nearest, best);
+			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+				return;
+		} else {
+			RTCL_SCENE_SPACE const struct rt_bvh4_node *node = &tr->nodes[at.index];
+			float4 ax = fma(node->lo_x, ray.inv_d.x, -ray.o_inv_d.x);
+			float4 bx = fma(node->hi_x, ray.inv_d.x, -ray.o_inv_d.x);
+			float4 ay = fma(node->lo_y, ray.inv_d.y, -ray.o_inv_d.y);
+			float4 by = fma(node->hi_y, ray.inv_d.y, -ray.o_inv_d.y);
+			float4 az = fma(node->lo_z, ray.inv_d.z, -ray.o_inv_d.z);
+			float4 bz = fma(node->hi_z, ray.inv_d.z, -ray.o_inv_d.z);
+			float4 enter = BOX_MAX(BOX_MAX(BOX_MIN(ax, bx), BOX_MIN(ay, by)),
+					       BOX_MAX(BOX_MIN(az, bz), (float4)(0.0f)));
+			float4 leave = BOX_MIN(BOX_MIN(BOX_MAX(ax, bx), BOX_MAX(ay, by)),
+					       BOX_MIN(BOX_MAX(az, bz), (float4)(*nearest)));
+			int4 count = vload4(0, node->count);
+			int4 index = vload4(0, node->index);
+			int4 hit = enter <= leave & count != RT_BVH4_EMPTY;
+			float t[4] = {enter.x, enter.y, enter.z, enter.w};
+			int ci[4] = {index.x, index.y, index.z, index.w};
+			int cc[4] = {count.x, count.y, count.z, count.w};
+			int met[4] = {hit.x, hit.y, hit.z, hit.w};
+			int order[4], n = 0;
+
+			/* The children met, nearest first (insertion by entry). */
+			for (int k = 0; k < 4; k++) {
+				if (!met[k])
+					continue;
+				int j = n++;
+				while (j > 0 && t[order[j - 1]] > t[k]) {
+					order[j] = order[j - 1];
+					j--;
+				}
+				order[j] = k;
+			}
+			if (n > 0) {
+				for (int j = n - 1; j > 0; j--)
+					stack[waiting++] = (struct bvh_entry){ci[order[j]], cc[order[j]]};
+				at = (struct bvh_entry){ci[order[0]], cc[order[0]]};
+				continue;
+			}
+		}
+		if (waiting == 0)
+			return;
+		at = stack[--waiting];
+	}
+}
+#else
+
 /* Depth first from the root, nearer child first (by where the ray enters the
  * two boxes), the farther one waiting on a stack in private memory; boxes
  * beyond the nearest hit found so far are skipped. With any_hit, stops at
@@ -223,5 +299,6 @@ static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, floa
 		at = stack[--waiting];
 	}
 }
+#endif /* RTCL_BVH4 */
 
 #endif

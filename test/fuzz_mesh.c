@@ -94,10 +94,15 @@ static void pack_and_check(const struct scene *scene)
 
 	if (bvh_build_scene(scene, BVH_TRIANGLE_COST, &bvh) || mesh_block_build(scene, &mesh))
 		abort();
-	void *packed = scene_block_pack(scene, &mesh, &bvh, 4, 4, 2, &bytes);
-	if (!packed || scene_block_problem(packed))
-		abort();
-	free(packed);
+	/* As a GPU packs it (binary nodes), then as a CPU (four-wide). */
+	for (int wide = 0; wide < 2; wide++) {
+		if (wide && bvh_widen(&bvh))
+			abort();
+		void *packed = scene_block_pack(scene, &mesh, &bvh, 4, 4, 2, &bytes);
+		if (!packed || scene_block_problem(packed))
+			abort();
+		free(packed);
+	}
 	mesh_block_free(&mesh);
 	bvh_free(&bvh);
 }

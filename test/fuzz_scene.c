@@ -41,14 +41,18 @@ int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size)
 		if (bvh_build_scene(&scene, BVH_TRIANGLE_COST, &bvh) ||
 		    mesh_block_build(&scene, &mesh))
 			abort();
-		void *packed = scene_block_pack(&scene, &mesh, &bvh, scene.width, scene.height,
-					     scene.max_depth, &bytes);
-
-		if (!packed || scene_block_problem(packed))
-			abort();
+		/* As a GPU packs it (binary nodes), then as a CPU (four-wide). */
+		for (int wide = 0; wide < 2; wide++) {
+			if (wide && bvh_widen(&bvh))
+				abort();
+			void *packed = scene_block_pack(&scene, &mesh, &bvh, scene.width,
+							scene.height, scene.max_depth, &bytes);
+			if (!packed || scene_block_problem(packed))
+				abort();
+			free(packed);
+		}
 		bvh_free(&bvh);
 		mesh_block_free(&mesh);
-		free(packed);
 		scene_free(&scene);
 	} else if (strlen(err) == 0 || strchr(err, '\n') || scene.source || scene.materials ||
 		   scene.spheres || scene.planes || scene.lights) {

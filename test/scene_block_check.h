@@ -82,21 +82,53 @@ static const char *leaf_triangles_problem(const struct rt_scene *h, int index, i
 	return NULL;
 }
 
-/* The BVH: every child a later node, a range of spheres (RT_LEAF_SPHERES), of
- * leaf triangles (RT_LEAF_TRIANGLES) or of references within their arrays,
- * naming primitives the scene has; the spheres' scene indices (leaf order,
- * host/layout/scene_block.c) each scene index once. */
+/* One child of BVH node n (width 2 or 4): a later node, a range of spheres
+ * (RT_LEAF_SPHERES), of leaf triangles (RT_LEAF_TRIANGLES) or of references
+ * within their arrays, naming primitives the scene has. */
+static const char *bvh_child_problem(const struct rt_scene *h, const rt_uint *refs, int ref_slots,
+				     int n, int index, int count)
+{
+	int leaf_count = count & RT_LEAF_COUNT_MASK;
+
+	if (count == 0 && index == 0 && n == 0)
+		return NULL; /* an empty leaf beside a single primitive */
+	if (count == 0 && (index <= n || index >= h->bvh_node_count))
+		return "BVH child node out of range";
+	if (count < 0 || index < 0)
+		return "BVH child negative";
+	if ((count & RT_LEAF_SPHERES) && index + leaf_count > h->sphere_count)
+		return "BVH sphere leaf out of range";
+	if (count & RT_LEAF_TRIANGLES)
+		return leaf_triangles_problem(h, index, leaf_count);
+	if (count > 0 && !(count & RT_LEAF_SPHERES)) {
+		if (index + count > ref_slots)
+			return "BVH leaf references out of range";
+		return refs_problem(h, refs, index, count);
+	}
+	return NULL;
+}
+
+/* The BVH: its nodes binary (struct rt_bvh_node) or, on a CPU,
+ * four-wide (struct rt_bvh4_node, empty slots RT_BVH4_EMPTY), filling their
+ * array; every child as bvh_child_problem wants; the spheres' scene indices
+ * (leaf order, host/layout/scene_block.c) each scene index once. */
 static const char *bvh_problem(const void *packed)
 {
 	const unsigned char *block = packed;
 	const struct rt_scene *h = packed;
 	const struct rt_bvh_node *nodes = (const void *)(block + h->bvh_node_offset);
+	const struct rt_bvh4_node *wide = (const void *)(block + h->bvh_node_offset);
 	const struct rt_sphere *s = (const void *)(block + h->sphere_offset);
 	const rt_uint *refs = (const void *)(block + h->bvh_ref_offset);
 	int ref_slots = (int)((h->bvh_triangle_offset - h->bvh_ref_offset) / sizeof(rt_uint));
 	int seen_all = 1;
 	char *seen = calloc((size_t)h->sphere_count + 1, 1);
+	size_t node_bytes = h->bvh_width == 4 ? sizeof(*wide) : sizeof(*nodes);
 
+	if (h->bvh_node_count > 0 ? h->bvh_width != 2 && h->bvh_width != 4 : h->bvh_width != 0)
+		return "BVH width neither 2 nor 4";
+	if (h->bvh_ref_offset - h->bvh_node_offset != (size_t)h->bvh_node_count * node_bytes)
+		return "BVH nodes do not fill their array";
 	for (int i = 0; seen && i < h->sphere_count; i++) {
 		int k = s[i].scene_index;
 		if (k < 0 || k >= h->sphere_count || seen[k])
@@ -108,32 +140,20 @@ static const char *bvh_problem(const void *packed)
 	if (!seen_all)
 		return "sphere scene indices not a permutation";
 	for (int n = 0; n < h->bvh_node_count; n++)
-		for (int c = 0; c < 2; c++) {
+		for (int c = 0; c < h->bvh_width; c++) {
 			int index, count;
-			memcpy(&index, &nodes[n].child[c].lo.s[3], sizeof(index));
-			memcpy(&count, &nodes[n].child[c].hi.s[3], sizeof(count));
-			int leaf_count = count & RT_LEAF_COUNT_MASK;
-			if (count == 0 && index == 0 && n == 0)
-				continue; /* an empty leaf beside a single primitive */
-			if (count == 0 && (index <= n || index >= h->bvh_node_count))
-				return "BVH child node out of range";
-			if (count < 0 || index < 0)
-				return "BVH child negative";
-			if ((count & RT_LEAF_SPHERES) && index + leaf_count > h->sphere_count)
-				return "BVH sphere leaf out of range";
-			if (count & RT_LEAF_TRIANGLES) {
-				const char *problem = leaf_triangles_problem(h, index, leaf_count);
-				if (problem)
-					return problem;
-				continue;
+			if (h->bvh_width == 4) {
+				index = wide[n].index[c];
+				count = wide[n].count[c];
+				if (count == RT_BVH4_EMPTY)
+					continue;
+			} else {
+				memcpy(&index, &nodes[n].child[c].lo.s[3], sizeof(index));
+				memcpy(&count, &nodes[n].child[c].hi.s[3], sizeof(count));
 			}
-			if (count > 0 && !(count & RT_LEAF_SPHERES)) {
-				if (index + count > ref_slots)
-					return "BVH leaf references out of range";
-				const char *problem = refs_problem(h, refs, index, count);
-				if (problem)
-					return problem;
-			}
+			const char *problem = bvh_child_problem(h, refs, ref_slots, n, index, count);
+			if (problem)
+				return problem;
 		}
 	return NULL;
 }

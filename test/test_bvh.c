@@ -314,3 +314,129 @@ Test(bvh, triangle_box_is_padded)
 		}
 	}
 }
+
+/* A leaf as a walk finds it: its reference range and its box. */
+struct leaf_seen {
+	int index, count;
+	float lo[3], hi[3];
+};
+
+static int by_leaf(const void *a, const void *b)
+{
+	return memcmp(a, b, sizeof(struct leaf_seen));
+}
+
+static void binary_leaves(const struct bvh *bvh, const struct rt_bvh_box *b,
+			  struct leaf_seen *out, int *n)
+{
+	if (child_count(b) == 0 && child_index(b) != 0) {
+		for (int k = 0; k < 2; k++)
+			binary_leaves(bvh, &bvh->nodes[child_index(b)].child[k], out, n);
+		return;
+	}
+	struct leaf_seen l = {child_index(b), child_count(b), {0}, {0}};
+	for (int a = 0; a < 3; a++) {
+		l.lo[a] = b->lo.s[a];
+		l.hi[a] = b->hi.s[a];
+	}
+	out[(*n)++] = l;
+}
+
+/* Walks four-wide node w, whose box (from its parent) is lo..hi: every
+ * child's box inside it, a node with fewer than four children holding only
+ * leaves, empty slots last and empty; collects the leaves. */
+static void wide_leaves(const struct bvh *bvh, int w, const float lo[3], const float hi[3],
+			int *reached, struct leaf_seen *out, int *n)
+{
+	const struct rt_bvh4_node *node = &bvh->wide[w];
+	const float *los[3] = {node->lo_x.s, node->lo_y.s, node->lo_z.s};
+	const float *his[3] = {node->hi_x.s, node->hi_y.s, node->hi_z.s};
+	int children = 0, leaves = 0;
+
+	cr_assert(w >= 0 && w < bvh->wide_count, "four-wide node %d of %d", w, bvh->wide_count);
+	cr_assert_eq(reached[w]++, 0, "four-wide node %d reached twice", w);
+	for (int k = 0; k < 4; k++) {
+		if (node->count[k] == RT_BVH4_EMPTY) {
+			for (int a = 0; a < 3; a++)
+				cr_assert(los[a][k] > his[a][k], "an empty slot's box is not empty");
+			continue;
+		}
+		cr_assert_eq(children++, k, "an empty slot before a child");
+		float clo[3] = {los[0][k], los[1][k], los[2][k]};
+		float chi[3] = {his[0][k], his[1][k], his[2][k]};
+		for (int a = 0; a < 3; a++)
+			cr_assert(clo[a] >= lo[a] && chi[a] <= hi[a], "node %d's child %d sticks out",
+				  w, k);
+		if (node->count[k] == 0 && node->index[k] != 0) {
+			cr_assert_gt(node->index[k], w, "a child node before its parent");
+			wide_leaves(bvh, node->index[k], clo, chi, reached, out, n);
+			continue;
+		}
+		leaves++;
+		struct leaf_seen l = {node->index[k], node->count[k], {0}, {0}};
+		memcpy(l.lo, clo, sizeof(clo));
+		memcpy(l.hi, chi, sizeof(chi));
+		out[(*n)++] = l;
+	}
+	cr_assert_geq(children, 2, "four-wide node %d has %d children", w, children);
+	cr_assert(children == 4 || leaves == children,
+		  "node %d left an inner child closed with room", w);
+}
+
+/* bvh_widen (docs/bvh.md, "A four-wide tree on CPUs"): the binary tree's
+ * leaves, each once with its box, under four-wide nodes whose boxes hold
+ * what is below them; fewer nodes than the binary tree. */
+static void check_widened(struct bvh *bvh)
+{
+	int cap = 2 * bvh->node_count + 2, nb = 0, nw = 0;
+	struct leaf_seen *binary = calloc((size_t)cap, sizeof(*binary));
+	struct leaf_seen *wide = calloc((size_t)cap, sizeof(*wide));
+	int *reached = calloc((size_t)bvh->node_count + 1, sizeof(int));
+	const float big[3] = {INFINITY, INFINITY, INFINITY}, small[3] = {-INFINITY, -INFINITY,
+								       -INFINITY};
+
+	cr_assert(binary && wide && reached);
+	cr_assert_eq(bvh_widen(bvh), 0);
+	if (bvh->node_count == 0) {
+		cr_assert_null(bvh->wide);
+		cr_assert_eq(bvh->wide_count, 0);
+	} else {
+		cr_assert(bvh->wide_count >= 1 && bvh->wide_count <= bvh->node_count);
+		for (int k = 0; k < 2; k++)
+			binary_leaves(bvh, &bvh->nodes[0].child[k], binary, &nb);
+		wide_leaves(bvh, 0, small, big, reached, wide, &nw);
+		for (int w = 0; w < bvh->wide_count; w++)
+			cr_assert_eq(reached[w], 1, "four-wide node %d unreached", w);
+		cr_assert_eq(nw, nb, "%d leaves in the four-wide tree, %d in the binary", nw, nb);
+		qsort(binary, (size_t)nb, sizeof(*binary), by_leaf);
+		qsort(wide, (size_t)nw, sizeof(*wide), by_leaf);
+		cr_assert(memcmp(binary, wide, (size_t)nb * sizeof(*binary)) == 0,
+			  "the four-wide tree's leaves are not the binary tree's");
+	}
+	free(binary);
+	free(wide);
+	free(reached);
+}
+
+Test(bvh, widened_trees_hold_the_binary_trees_leaves)
+{
+	static const int sizes[] = {0, 1, 2, 3, 5, 17, 60, 400, 2000};
+	static struct bvh_prim prims[5000];
+
+	for (size_t z = 0; z < sizeof(sizes) / sizeof(sizes[0]); z++) {
+		int n = sizes[z];
+		random_spheres(prims, n, 26 + (unsigned)n, 0.5);
+		struct bvh bvh = check_tree(prims, n);
+		check_widened(&bvh);
+		if (n == 2000) /* 2000 spheres in leaves of up to 8: about a third */
+			cr_expect_lt(bvh.wide_count, bvh.node_count / 2, "%d four-wide nodes of %d",
+				     bvh.wide_count, bvh.node_count);
+		bvh_free(&bvh);
+	}
+	struct scene_sphere s = {{1, 2, 3}, 0.5, 0};
+	for (int i = 0; i < 5000; i++) /* a deep tree of identical spheres */
+		bvh_sphere_prim(&s, i, &prims[i]);
+	struct bvh bvh = check_tree(prims, 5000);
+	check_widened(&bvh);
+	bvh_free(&bvh);
+}

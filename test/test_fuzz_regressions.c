@@ -62,16 +62,20 @@ static void check_load(const char *path, const char *json)
 		cr_assert_eq(bvh_build_scene(&s, BVH_TRIANGLE_COST, &bvh), 0, "%s: out of memory",
 			     path);
 		cr_assert_eq(mesh_block_build(&s, &mesh), 0, "%s: out of memory", path);
-		void *packed =
-			scene_block_pack(&s, &mesh, &bvh, s.width, s.height, s.max_depth, &bytes);
+		/* As a GPU packs it (binary nodes), then as a CPU (four-wide). */
+		for (int wide = 0; wide < 2; wide++) {
+			cr_assert(!wide || bvh_widen(&bvh) == 0, "%s: out of memory", path);
+			void *packed = scene_block_pack(&s, &mesh, &bvh, s.width, s.height,
+							s.max_depth, &bytes);
+			cr_assert_not_null(packed, "%s: scene_block_pack failed", path);
+			cr_expect_gt(bytes, 0);
+			cr_expect_null(scene_block_problem(packed),
+				       "%s: accepted, but packs (%s nodes) with %s", path,
+				       wide ? "four-wide" : "binary", scene_block_problem(packed));
+			free(packed);
+		}
 		bvh_free(&bvh);
 		mesh_block_free(&mesh);
-
-		cr_assert_not_null(packed, "%s: scene_block_pack failed", path);
-		cr_expect_gt(bytes, 0);
-		cr_expect_null(scene_block_problem(packed), "%s: accepted, but packs with %s", path,
-			       scene_block_problem(packed));
-		free(packed);
 		scene_free(&s);
 	} else {
 		cr_expect_neq(err[0], '\0', "%s: refused without a message", path);

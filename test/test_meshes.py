@@ -119,6 +119,59 @@ def test_a_scene_without_spheres_builds_leaves_of_triangles_only(tmp_path):
     assert "-DRTCL_LEAF_TRIANGLES_ONLY" not in stats["build_options"]
 
 
+def many_balls_scene(tmp_path):
+    """900 small balls in a grid on a plane, lit: a binary tree of over 128 nodes."""
+    scene = tmp_path / "balls.json"
+    spheres = [{"center": [x * 0.5 - 6, 0.3 + (x * 7 + z) % 3 * 0.2, z * 0.5],
+                "radius": 0.2, "material": ["red", "glass"][(x + z) % 2]}
+               for x in range(30) for z in range(30)]
+    scene.write_text(json.dumps({
+        "format": "rtcl-scene", "version": 1,
+        "camera": {"eye": [0, 4, -8], "look_at": [0, 0, 4], "fov": 60},
+        "materials": {"red": {"color": [0.8, 0.3, 0.2], "reflect": 0.3},
+                      "glass": {"color": [0.2, 0.4, 0.9], "transmit": 0.5, "ior": 1.5}},
+        "spheres": spheres,
+        "planes": [{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "red"}],
+        "lights": [{"position": [2, 8, -4], "color": [1, 1, 1]}]}))
+    return scene
+
+
+@pytest.mark.parametrize("scene", ["scenes/glass_mesh.json", "balls", str(MESH_SCENE)])
+def test_a_cpus_four_wide_tree_gives_the_binary_trees_image(tmp_path, scene):
+    """On a CPU device the BVH's nodes are four-wide (docs/bvh.md, "A four-wide
+    tree on CPUs"; -DRTCL_BVH4) when the binary tree has 128 nodes or more,
+    outside the counting build: the image of the binary tree (RTCL_TEST_BVH2=1),
+    for meshes, spheres and both at 4 spp."""
+    if scene == "balls":
+        scene = str(many_balls_scene(tmp_path))
+    runs = {}
+    for width, env in (("4", {}), ("2", {"RTCL_TEST_BVH2": "1"})):
+        result = subprocess.run(
+            [RTCL, "-s", scene, "-o", str(tmp_path / f"{width}.ppm"), "--size", "40x30",
+             "--spp", "4", "--stats", str(tmp_path / f"{width}.json")],
+            capture_output=True, text=True, cwd=ROOT, timeout=300, env={**os.environ, **env})
+        assert result.returncode == 0, result.stderr
+        runs[width] = json.loads((tmp_path / f"{width}.json").read_text())
+    assert runs["4"]["bvh"]["nodes"] >= 128
+    assert "-DRTCL_BVH4" in runs["4"]["build_options"]
+    assert "-DRTCL_BVH4" not in runs["2"]["build_options"]
+    assert (runs["4"]["bvh"]["width"], runs["2"]["bvh"]["width"]) == (4, 2)
+    assert runs["4"]["bvh"]["nodes"] == runs["2"]["bvh"]["nodes"]
+    assert (tmp_path / "4.ppm").read_bytes() == (tmp_path / "2.ppm").read_bytes()
+
+
+def test_a_small_tree_stays_binary_on_a_cpu(tmp_path):
+    """The default scene's 16 nodes: a four-wide visit would cost more than it
+    saves (host/layout/bvh.h, BVH_WIDE_MIN_NODES)."""
+    result = rtcl("-o", str(tmp_path / "o.ppm"), "--size", "8x8", "--stats",
+                  str(tmp_path / "s.json"))
+    assert result.returncode == 0, result.stderr
+    stats = json.loads((tmp_path / "s.json").read_text())
+    assert stats["bvh"]["nodes"] < 128 and stats["bvh"]["width"] == 2
+    assert stats["bvh"]["device_nodes"] == stats["bvh"]["nodes"]
+    assert "-DRTCL_BVH4" not in stats["build_options"]
+
+
 @pytest.mark.parametrize("scene, kernel", [
     (ROOT / "scenes" / "two_balls.json", "dynamic"),
     # The same rule: make test-long.
@@ -196,7 +249,9 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
     bvh.bytes its 64-byte nodes and 4-byte references; -v prints the same; --accel
     none's block is the same less the BVH. bvh-compact within issue 11's 64 bytes
     per triangle; bvh (its leaves of triangles smaller and the triangles again in
-    leaf order with their vertices inline, 48 bytes each, issue 26) within 128."""
+    leaf order with their vertices inline, 48 bytes each, issue 26) within 128.
+    On a CPU (PoCL) a tree of 128 nodes or more is four-wide, 128 bytes a node
+    (docs/bvh.md)."""
     scene, n = grid_mesh_scene(tmp_path)
     runs = {}
     for accel in ("bvh", "none", "bvh-compact"):
@@ -208,7 +263,8 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
     total, bvh, vertices = stats["scene_bytes"], stats["bvh"], stats["vertices"]
     assert stats["bytes_per_triangle"] == total / n
     assert vertices == 9 * 9  # the 8x8 grid's corners
-    assert bvh["bytes"] == 64 * bvh["nodes"] + (4 + 48) * n
+    node_bytes = {2: 64, 4: 128}  # binary nodes; a CPU's four-wide ones
+    assert bvh["bytes"] == node_bytes[bvh["width"]] * bvh["device_nodes"] + (4 + 48) * n
     # 16 bytes a triangle (its vertex indices and material), 32 a vertex (its
     # position and normal), the BVH, and a header, one material and one light
     # of less than 1 KiB
@@ -216,7 +272,8 @@ def test_device_bytes_per_triangle_add_up(tmp_path):
     assert stats["bytes_per_triangle"] <= 128
     compact = runs["bvh-compact"][1]
     assert compact["accel"] == "bvh-compact" and compact["bytes_per_triangle"] <= 64
-    assert compact["bvh"]["bytes"] == 64 * compact["bvh"]["nodes"] + 4 * n
+    assert (compact["bvh"]["bytes"] ==
+            node_bytes[compact["bvh"]["width"]] * compact["bvh"]["device_nodes"] + 4 * n)
     assert compact["bvh"]["nodes"] < bvh["nodes"]
     assert (tmp_path / "bvh-compact.ppm").read_bytes() == (tmp_path / "bvh.ppm").read_bytes()
     assert runs["none"][1]["scene_bytes"] == total - bvh["bytes"]  # 4 n a multiple of 16

@@ -4,6 +4,13 @@
 #include <string.h>
 #include <time.h>
 
+int hook_binary_bvh(void)
+{
+	const char *value = getenv("RTCL_TEST_BVH2");
+
+	return value && strcmp(value, "1") == 0;
+}
+
 int hook_device_fault(void)
 {
 	const char *fault = getenv("RTCL_TEST_DEVICE_FAULT");

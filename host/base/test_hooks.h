@@ -11,6 +11,10 @@
  * failed mid-render does (there is no way to make a real one fail on demand). */
 int hook_device_fault(void);
 
+/* RTCL_TEST_BVH2=1: CPU devices keep the binary BVH (host/render/block.c),
+ * so that the tests can set its images beside the four-wide tree's. */
+int hook_binary_bvh(void);
+
 /* RTCL_TEST_SLOW_CACHE_WRITE=MS: the program cache sleeps MS milliseconds
  * with its temporary file written and not yet renamed, so that a test can
  * interrupt it there (host/device/progcache.c). */

@@ -507,8 +507,106 @@ double bvh_sah_cost(const struct bvh *bvh, double triangle_cost)
 	return BVH_NODE_COST + (area > 0.0 ? sum / area : 0.0);
 }
 
+/* Child c of binary node n. */
+static const struct rt_bvh_box *binary_child(const struct bvh *bvh, int n, int c)
+{
+	return &bvh->nodes[n].child[c];
+}
+
+static int box_index(const struct rt_bvh_box *b)
+{
+	int32_t i;
+
+	memcpy(&i, &b->lo.s[3], sizeof(i));
+	return i;
+}
+
+static int box_count(const struct rt_bvh_box *b)
+{
+	int32_t c;
+
+	memcpy(&c, &b->hi.s[3], sizeof(c));
+	return c;
+}
+
+/* An inner child: count 0 and a node index (an empty leaf, only beside a
+ * root's single primitive, has index 0, the root, which no node has as a
+ * child). */
+static int is_inner(const struct rt_bvh_box *b)
+{
+	return box_count(b) == 0 && box_index(b) != 0;
+}
+
+static double half_area(const struct rt_bvh_box *b)
+{
+	double dx = b->hi.s[0] - b->lo.s[0], dy = b->hi.s[1] - b->lo.s[1],
+	       dz = b->hi.s[2] - b->lo.s[2];
+
+	return dx * dy + dy * dz + dz * dx;
+}
+
+/* Four-wide node w from binary node n: its children, inner ones opened,
+ * largest first, while there is room; an inner child left gets the next
+ * four-wide node (*next), filled the same way, depth first. */
+static void widen_node(struct bvh *bvh, int n, int w, int *next)
+{
+	struct rt_bvh_box kids[4] = {*binary_child(bvh, n, 0), *binary_child(bvh, n, 1)};
+	int count = 2;
+	struct rt_bvh4_node *node = &bvh->wide[w];
+
+	while (count < 4) {
+		int open = -1;
+		for (int k = 0; k < count; k++)
+			if (is_inner(&kids[k]) &&
+			    (open < 0 || half_area(&kids[k]) > half_area(&kids[open])))
+				open = k;
+		if (open < 0)
+			break;
+		int inner = box_index(&kids[open]);
+		kids[open] = *binary_child(bvh, inner, 0);
+		kids[count++] = *binary_child(bvh, inner, 1);
+	}
+	for (int k = 0; k < 4; k++) {
+		const struct rt_bvh_box *b = &kids[k];
+		float *lo[3] = {&node->lo_x.s[k], &node->lo_y.s[k], &node->lo_z.s[k]};
+		float *hi[3] = {&node->hi_x.s[k], &node->hi_y.s[k], &node->hi_z.s[k]};
+		for (int a = 0; a < 3; a++) {
+			*lo[a] = k < count ? b->lo.s[a] : FLT_MAX;
+			*hi[a] = k < count ? b->hi.s[a] : -FLT_MAX;
+		}
+		node->index[k] = k < count ? box_index(b) : 0;
+		node->count[k] = k < count ? box_count(b) : RT_BVH4_EMPTY;
+	}
+	for (int k = 0; k < count; k++) {
+		if (!is_inner(&kids[k]))
+			continue;
+		int child = (*next)++;
+		node->index[k] = child;
+		widen_node(bvh, box_index(&kids[k]), child, next);
+	}
+}
+
+int bvh_widen(struct bvh *bvh)
+{
+	int next = 1;
+
+	free(bvh->wide);
+	bvh->wide = NULL;
+	bvh->wide_count = 0;
+	if (bvh->node_count == 0)
+		return 0;
+	/* Each four-wide node opens at least one binary node: never more. */
+	bvh->wide = malloc((size_t)bvh->node_count * sizeof(*bvh->wide));
+	if (!bvh->wide)
+		return -1;
+	widen_node(bvh, 0, 0, &next);
+	bvh->wide_count = next;
+	return 0;
+}
+
 void bvh_free(struct bvh *bvh)
 {
+	free(bvh->wide);
 	free(bvh->nodes);
 	free(bvh->refs);
 	memset(bvh, 0, sizeof(*bvh));

@@ -31,6 +31,9 @@ struct bvh {
 	int depth;	 /* of the deepest leaf, the root's children at 1 */
 	int max_leaf;	 /* most references in one leaf */
 	double sah_cost; /* bvh_sah_cost of the tree */
+	/* bvh_widen: the tree as four-wide nodes, node 0 the root; NULL until. */
+	struct rt_bvh4_node *wide;
+	int wide_count;
 };
 
 /* Leaves hold at most this many primitives. With BVH_NODE_COST 3 (a node
@@ -85,6 +88,23 @@ double bvh_sah_cost(const struct bvh *bvh, double triangle_cost);
 #ifndef BVH_TRIANGLE_COST
 #define BVH_TRIANGLE_COST 3.0
 #endif
+
+/* A CPU device takes the four-wide tree (bvh_widen) when the binary tree
+ * has at least this many nodes; a smaller tree has few visits to save, and a
+ * four-wide visit's sorting costs more than it saves (PoCL on the 2-core VM,
+ * docs/results/pocl-cpu-bvh4: the default scene's 16 nodes 7 % slower, 400
+ * balls' 106 1-2 % slower, scenes/glass_mesh.json's 173 9 % faster, SPD
+ * tetra 8's 1.31x). */
+#define BVH_WIDE_MIN_NODES 128
+
+/* Collapses the binary tree into four-wide nodes (struct rt_bvh4_node, for
+ * CPU devices: docs/bvh.md, "A four-wide tree on CPUs") in bvh->wide: each
+ * node takes its binary node's two children and replaces an inner one by
+ * its two, the one of largest surface area first, until it has four or only
+ * leaves; the leaves and their references are the binary tree's. Returns 0
+ * (also for a tree without nodes, which stays without), or -1 when out of
+ * memory. */
+int bvh_widen(struct bvh *bvh);
 
 void bvh_free(struct bvh *bvh);
 

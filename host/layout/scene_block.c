@@ -157,13 +157,12 @@ static int *sphere_order(const struct scene *scene, const struct bvh *bvh)
  * RT_LEAF_SPHERES; one whose references are all triangles a range of the
  * leaf triangles (RT_LEAF_TRIANGLES). before[r]: references of r's kind
  * before r. */
-static void leaf_to_range(struct rt_bvh_box *child, const struct bvh *bvh, const int *before)
+static void leaf_to_range(int32_t *first_out, int32_t *count_out, const struct bvh *bvh,
+			  const int *before)
 {
-	int32_t first, count;
+	int32_t first = *first_out, count = *count_out;
 	int spheres = 0;
 
-	memcpy(&first, &child->lo.s[3], sizeof(first));
-	memcpy(&count, &child->hi.s[3], sizeof(count));
 	if (count <= 0)
 		return;
 	for (int r = first; r < first + count; r++)
@@ -172,8 +171,18 @@ static void leaf_to_range(struct rt_bvh_box *child, const struct bvh *bvh, const
 		return;
 	if (spheres == 0 && !bvh->leaf_triangles)
 		return;
-	first = before[first];
-	count |= spheres ? RT_LEAF_SPHERES : RT_LEAF_TRIANGLES;
+	*first_out = before[first];
+	*count_out = count | (spheres ? RT_LEAF_SPHERES : RT_LEAF_TRIANGLES);
+}
+
+/* leaf_to_range for a binary node's child, whose w lanes hold the pair. */
+static void box_leaf_to_range(struct rt_bvh_box *child, const struct bvh *bvh, const int *before)
+{
+	int32_t first, count;
+
+	memcpy(&first, &child->lo.s[3], sizeof(first));
+	memcpy(&count, &child->hi.s[3], sizeof(count));
+	leaf_to_range(&first, &count, bvh, before);
 	memcpy(&child->lo.s[3], &first, sizeof(first));
 	memcpy(&child->hi.s[3], &count, sizeof(count));
 }
@@ -198,7 +207,7 @@ static void pack_leaf_triangle(struct rt_leaf_triangle *out, const struct mesh_b
 static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct bvh *bvh,
 		    const struct mesh_block *mesh)
 {
-	struct rt_bvh_node *nodes = (struct rt_bvh_node *)(block + header->bvh_node_offset);
+	unsigned char *nodes = block + header->bvh_node_offset;
 	uint32_t *refs = (uint32_t *)(block + header->bvh_ref_offset);
 	struct rt_leaf_triangle *leaf_triangles =
 		(struct rt_leaf_triangle *)(block + header->bvh_triangle_offset);
@@ -209,7 +218,8 @@ static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct 
 	before = malloc((size_t)bvh->ref_count * sizeof(int));
 	if (!before)
 		return -1;
-	header->bvh_node_count = bvh->node_count;
+	header->bvh_node_count = bvh->wide ? bvh->wide_count : bvh->node_count;
+	header->bvh_width = bvh->wide ? 4 : 2;
 	for (int r = 0; r < bvh->ref_count; r++) {
 		if (is_sphere_ref(bvh->refs[r])) {
 			before[r] = spheres;
@@ -223,10 +233,21 @@ static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct 
 			triangles++;
 		}
 	}
-	memcpy(nodes, bvh->nodes, (size_t)bvh->node_count * sizeof(*bvh->nodes));
-	for (int n = 0; n < bvh->node_count; n++)
-		for (int c = 0; c < 2; c++)
-			leaf_to_range(&nodes[n].child[c], bvh, before);
+	if (bvh->wide) {
+		struct rt_bvh4_node *wide = (struct rt_bvh4_node *)nodes;
+		memcpy(wide, bvh->wide, (size_t)bvh->wide_count * sizeof(*wide));
+		for (int n = 0; n < bvh->wide_count; n++)
+			for (int c = 0; c < 4; c++)
+				if (wide[n].count[c] != RT_BVH4_EMPTY)
+					leaf_to_range(&wide[n].index[c], &wide[n].count[c], bvh,
+						      before);
+	} else {
+		struct rt_bvh_node *binary = (struct rt_bvh_node *)nodes;
+		memcpy(binary, bvh->nodes, (size_t)bvh->node_count * sizeof(*binary));
+		for (int n = 0; n < bvh->node_count; n++)
+			for (int c = 0; c < 2; c++)
+				box_leaf_to_range(&binary[n].child[c], bvh, before);
+	}
 	free(before);
 	return 0;
 }
@@ -266,7 +287,9 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	l.vertex = l.triangle + (size_t)scene->triangle_count * sizeof(struct rt_triangle);
 	l.normal = l.vertex + (size_t)mesh->vertex_count * sizeof(struct rt_vertex);
 	l.node = l.normal + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal);
-	l.ref = l.node + (bvh ? (size_t)bvh->node_count * sizeof(*bvh->nodes) : 0);
+	l.ref = l.node + (!bvh	      ? 0
+			  : bvh->wide ? (size_t)bvh->wide_count * sizeof(*bvh->wide)
+				      : (size_t)bvh->node_count * sizeof(*bvh->nodes));
 	l.leaf_triangle = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
 	l.uv = l.leaf_triangle + leaf_triangle_count(bvh) * sizeof(struct rt_leaf_triangle);
 	l.material_map = l.texture = l.texture_table = l.texel = l.total = l.uv;

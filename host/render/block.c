@@ -5,6 +5,7 @@
 
 #include "layout/scene_block.h"
 #include "base/quote.h"
+#include "base/test_hooks.h"
 #include "base/timing.h"
 
 int block_check_scene_fits(const struct device *dev, const struct scene *scene,
@@ -98,6 +99,21 @@ static int pack_scene(struct device *dev, const struct scene *scene,
 	res->vertex_count = mesh.vertex_count;
 	if (use_bvh && build_bvh(scene, s, res, &bvh, err, err_size))
 		goto free_mesh;
+	/* A CPU device traverses a four-wide tree (docs/bvh.md, "A four-wide
+	 * tree on CPUs") of a tree large enough; GPUs and the counting build,
+	 * whose node visits and box tests are the binary tree's on every
+	 * device, the binary one. */
+	if (use_bvh && !dev->is_gpu && !s->count_flops && bvh.node_count >= BVH_WIDE_MIN_NODES &&
+	    !hook_binary_bvh()) {
+		if (bvh_widen(&bvh)) {
+			snprintf(err, err_size, "out of host memory for the four-wide BVH");
+			goto free_bvh;
+		}
+		res->bvh_bytes += (size_t)bvh.wide_count * sizeof(*bvh.wide) -
+				  (size_t)bvh.node_count * sizeof(*bvh.nodes);
+	}
+	res->bvh_width = !use_bvh || bvh.node_count == 0 ? 0 : bvh.wide ? 4 : 2;
+	res->bvh_device_nodes = bvh.wide ? bvh.wide_count : bvh.node_count;
 	if (block_check_scene_fits(dev, scene, &mesh, use_bvh ? &bvh : NULL, err, err_size))
 		goto free_bvh;
 	*block = scene_block_pack(scene, &mesh, use_bvh ? &bvh : NULL, s->width, s->height,

@@ -23,6 +23,7 @@ struct program_features {
 	int fresnel;	    /* a Fresnel material: ray weights are colours */
 	int textures;	    /* a texture or an alpha cut-out (scene_has_textures) */
 	int no_lights;	    /* no light: the shadow rays' code is left out */
+	int bvh4;	    /* the BVH's nodes are four-wide (a CPU's, rt_bvh4_node) */
 };
 
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads

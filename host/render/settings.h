@@ -130,6 +130,8 @@ struct render_result {
 
 	/* The BVH, with ACCEL_BVH and a sphere or triangle (else bvh_nodes 0). */
 	int bvh_nodes, bvh_depth;
+	int bvh_width; /* the device's nodes: 2 (binary) or 4 (a CPU's), 0: none */
+	int bvh_device_nodes; /* bvh_nodes, or the four-wide nodes they became */
 	double bvh_sah_cost, bvh_build_ms;
 	size_t bvh_bytes; /* its nodes and references in the scene block */
 

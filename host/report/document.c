@@ -83,9 +83,10 @@ static void add_accel_figures(json_t *doc, const struct job *job, const struct r
 	if (r->bvh_nodes == 0)
 		return;
 	json_object_set_new(doc, "bvh",
-			    json_pack("{s:i, s:i, s:f, s:f, s:I}", "nodes", r->bvh_nodes, "depth",
-				      r->bvh_depth, "sah_cost", r->bvh_sah_cost, "build_ms",
-				      r->bvh_build_ms, "bytes", (json_int_t)r->bvh_bytes));
+			    json_pack("{s:i, s:i, s:f, s:f, s:I, s:i, s:i}", "nodes", r->bvh_nodes,
+				      "depth", r->bvh_depth, "sah_cost", r->bvh_sah_cost, "build_ms",
+				      r->bvh_build_ms, "bytes", (json_int_t)r->bvh_bytes, "width",
+				      r->bvh_width, "device_nodes", r->bvh_device_nodes));
 }
 
 /* The --stats document, without the figures added below. */
