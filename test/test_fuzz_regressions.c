@@ -180,6 +180,10 @@ Test(fuzz, issue_24_mesh_files_are_refused)
 		/* Assimp's own crash (SIGSEGV in the plain helper, an
 		 * AddressSanitizer report in libassimp in the sanitized one). */
 		{"ply-postprocess-segv.ply", "the importer (Assimp) crashed on it"},
+		/* An allocation of 32 GiB: over the memory limit in the plain
+		 * helper, an AddressSanitizer out-of-memory report in the
+		 * sanitized one. */
+		{"ply-header-twice-huge-list.ply", "the import needed more memory than"},
 	};
 
 	for (size_t i = 0; i < sizeof(refused) / sizeof(refused[0]); i++) {

@@ -325,6 +325,25 @@ static int sanitizer_blames_assimp(FILE *f)
 	return 0;
 }
 
+/* Whether a sanitizer report (captured in f) says an allocation failed: more
+ * memory than there is, or than the sanitizer allocates at once. The file
+ * asked for it (a count of 2^32 - 1, say), as when the plain helper's
+ * allocation fails under the memory limit; the report's stack may stop at
+ * operator new in libstdc++, so it cannot say whose code asked. */
+static int sanitizer_out_of_memory(FILE *f)
+{
+	char line[1024];
+
+	if (!f || fseek(f, 0, SEEK_SET))
+		return 0;
+	while (fgets(line, (int)sizeof(line), f))
+		if (strstr(line, "Sanitizer") &&
+		    (strstr(line, "allocator is out of memory") ||
+		     strstr(line, "allocation-size-too-big") || strstr(line, "out-of-memory")))
+			return 1;
+	return 0;
+}
+
 /* Waits for the helper, then turns what happened into the outcome: the
  * answer received, or why there is none. */
 static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t reason_size)
@@ -367,6 +386,15 @@ static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t r
 	/* A sanitized helper (test builds) ends with exit status 1, or a
 	 * signal, after its report. */
 	if ((WIFSIGNALED(status) || code != 0) && sanitizer_report(said)) {
+		if (sanitizer_out_of_memory(said_file)) {
+			if (mesh_get_limits().memory_mib)
+				snprintf(reason, reason_size, MESH_MEMORY_MESSAGE,
+					 mesh_get_limits().memory_mib);
+			else
+				snprintf(reason, reason_size,
+					 "the import needed more memory than there is");
+			return MESH_REFUSED;
+		}
 		if (sanitizer_blames_assimp(said_file)) {
 			snprintf(reason, reason_size,
 				 "the importer (Assimp) crashed on it%s; the file is malformed",
