@@ -160,7 +160,6 @@ cl_int launch_run(struct device *dev, cl_kernel kernel, cl_uint dims, const size
 		  const char **call)
 {
 	cl_event event;
-	cl_ulong start = 0, end = 0;
 	cl_int status;
 
 	*call = "clEnqueueNDRangeKernel";
@@ -174,16 +173,24 @@ cl_int launch_run(struct device *dev, cl_kernel kernel, cl_uint dims, const size
 		*call = "waiting for the kernel";
 		status = watch_wait(event, watch);
 	}
+	struct launch_span span = {0, 0};
 	if (status == CL_SUCCESS) {
 		*call = "clGetEventProfilingInfo";
-		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START, sizeof(start),
-						 &start, NULL);
+		status = launch_event_span(event, &span);
 	}
-	if (status == CL_SUCCESS)
-		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(end), &end,
-						 NULL);
-	*ms += (double)(end - start) * 1e-6;
+	*ms += (double)(span.end - span.start) * 1e-6;
 	clReleaseEvent(event);
+	return status;
+}
+
+cl_int launch_event_span(cl_event event, struct launch_span *span)
+{
+	cl_int status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_START,
+						sizeof(span->start), &span->start, NULL);
+
+	if (status == CL_SUCCESS)
+		status = clGetEventProfilingInfo(event, CL_PROFILING_COMMAND_END, sizeof(span->end),
+						 &span->end, NULL);
 	return status;
 }
 

@@ -44,6 +44,14 @@ int launch_setup(struct device *dev, const struct scene *scene,
 		 const struct render_settings *settings, struct render_result *result,
 		 void **scene_block, cl_program *program, char *err, size_t err_size);
 
+/* One launch's profiled interval on the device's clock, in nanoseconds. */
+struct launch_span {
+	cl_ulong start, end;
+};
+
+/* Reads a finished launch's profiled interval (its queue profiles). */
+cl_int launch_event_span(cl_event event, struct launch_span *span);
+
 /* Enqueues one launch, waits for it (drawing the progress line, with the
  * share that watch reads when not NULL) and adds its profiled time to *ms.
  * On failure *call names what failed. */
@@ -51,10 +59,6 @@ cl_int launch_run(struct device *dev, cl_kernel kernel, cl_uint dims, const size
 		  const size_t *local, const struct launch_watch *watch, double *ms,
 		  const char **call);
 
-/* One launch's profiled interval on the device's clock, in nanoseconds. */
-struct launch_span {
-	cl_ulong start, end;
-};
 
 /* The time in ms during which at least one of the launches ran: the union of
  * their intervals, which may overlap (launches on several queues of one

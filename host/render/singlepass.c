@@ -245,18 +245,14 @@ struct in_flight {
 static cl_int finish_launch(struct renderer *r, struct in_flight *f, struct launch_span *spans,
 			    int *span_count)
 {
-	cl_ulong start = 0, end = 0;
+	struct launch_span span = {0, 0};
 	cl_int status = clWaitForEvents(1, &f->event);
 
 	if (status == CL_SUCCESS)
-		status = clGetEventProfilingInfo(f->event, CL_PROFILING_COMMAND_START,
-						 sizeof(start), &start, NULL);
-	if (status == CL_SUCCESS)
-		status = clGetEventProfilingInfo(f->event, CL_PROFILING_COMMAND_END, sizeof(end),
-						 &end, NULL);
+		status = launch_event_span(f->event, &span);
 	clReleaseEvent(f->event);
 	f->event = NULL;
-	spans[(*span_count)++] = (struct launch_span){start, end};
+	spans[(*span_count)++] = span;
 	progress_add(r->dev, f->work);
 	progress_draw();
 	return status;

@@ -275,14 +275,20 @@ static int open_rank_device(void *context, int device, char *err, size_t err_siz
 	return tiles_open(&j->tiles, device, err, err_size);
 }
 
+/* Rank 0: band b is in the image (its own device's or another rank's). */
+static void mark_arrived(struct mpi_job *j, int band)
+{
+	pthread_mutex_lock(&j->lock);
+	j->arrived[band]++;
+	pthread_mutex_unlock(&j->lock);
+}
+
 /* Rank 0: band b's rows, rgb (packed, in split-row order), into the image. */
 static void place_band(struct mpi_job *j, int band, const float *rgb)
 {
 	struct rt_piece p = tiles_job_band(&j->tiles, band, 0, 1);
 
-	pthread_mutex_lock(&j->lock);
-	j->arrived[band]++;
-	pthread_mutex_unlock(&j->lock);
+	mark_arrived(j, band);
 	tiles_pack_piece(&p, j->settings.width, rgb, j->record->result.rgb, 1);
 }
 
@@ -305,9 +311,7 @@ static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
 		if (j->rank == ROOT) {
 			if (renderer_read_rows(r, &p, j->record->result.rgb, 0, err, err_size))
 				return -1;
-			pthread_mutex_lock(&j->lock);
-			j->arrived[b]++;
-			pthread_mutex_unlock(&j->lock);
+			mark_arrived(j, b);
 			continue;
 		}
 		size_t bytes = image_float_bytes(p.width, p.height);
