@@ -5,7 +5,8 @@
  * paper's geometry. The assignment is fixed: work_counter only counts the
  * pixels done for the progress line. */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *work_counter, __global ulong *counts,
+		     __global float *image, __global long *sums,
+		     __global uint *work_counter, __global ulong *counts,
 		     __global uint *probe, struct rt_piece piece)
 {
 	struct tracer tr;
@@ -22,8 +23,7 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 
 	for (uint cy = get_group_id(1); cy < grid.down; cy += get_num_groups(1)) {
 		for (uint cx = get_group_id(0); cx < grid.across; cx += get_num_groups(0))
-			render_pixel_if_inside(
-				&tr, &piece, image, probe,
+			render_pixel_if_inside(&tr, &piece, image, sums, probe,
 				chunk_pixel(&grid, cx, cy, get_local_id(0), get_local_id(1)));
 		progress_chunk_done(work_counter, row_chunks * grid.chunk_w * grid.chunk_h);
 	}

@@ -11,7 +11,8 @@
  * work counter's word RT_COUNTER_NEXT, which the host also reads for the
  * progress line (the chunks handed out). */
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *next_chunk_counter,
+		     __global float *image, __global long *sums,
+		     __global uint *next_chunk_counter,
 		     __global ulong *counts, __global uint *probe, struct rt_piece piece)
 {
 	__local uint group_chunk; /* the chunk item (0,0) took for the group */
@@ -27,8 +28,7 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	barrier(CLK_LOCAL_MEM_FENCE);
 	uint chunk = group_chunk;
 	while (chunk < chunks) {
-		render_pixel_if_inside(
-			&tr, &piece, image, probe,
+		render_pixel_if_inside(&tr, &piece, image, sums, probe,
 			numbered_chunk_pixel(&grid, chunk, get_local_id(0), get_local_id(1)));
 		/* Everyone has read group_chunk before it is replaced. */
 		barrier(CLK_LOCAL_MEM_FENCE);

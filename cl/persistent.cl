@@ -18,7 +18,8 @@
 #endif
 
 __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_local,
-		     __global float *image, __global uint *next_pixel_counter,
+		     __global float *image, __global long *sums,
+		     __global uint *next_pixel_counter,
 		     __global ulong *counts, __global uint *probe, struct rt_piece piece)
 {
 	struct tracer tr;
@@ -33,7 +34,7 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 		uint end = min(first + RTCL_BATCH, pixels);
 		for (uint i = first; i < end; i++) {
 			uint within = i % chunk_pixels;
-			render_pixel_if_inside(&tr, &piece, image, probe,
+			render_pixel_if_inside(&tr, &piece, image, sums, probe,
 					       numbered_chunk_pixel(&grid, i / chunk_pixels,
 								    within % grid.chunk_w,
 								    within / grid.chunk_w));

@@ -324,8 +324,30 @@ struct rt_piece {
 					    height of the bands rt_piece_row deals */
 	rt_int row_bands;		 /* the image's whole bands of row_band rows */
 	rt_int row_classes;		 /* the classes they are dealt to (>= 2) */
-	rt_int pad;
+	rt_int sum_begin;		 /* the first sample whose colour the sums
+					    buffer holds (0 unless the samples
+					    are split between devices): a pass
+					    adds to the sums it holds when
+					    sample_begin > sum_begin, and stores
+					    the mean when sample_end == samples
+					    and sum_begin == 0 */
+	rt_float mean_scale;		 /* 1 / (samples * RT_SUM_ONE), rounded to
+					    float: what the sum is multiplied by
+					    for the mean (set by the host at each
+					    launch, rt_mean_scale) */
 };
+
+/* A pixel's samples are summed in fixed point (docs/RENDERING.md, "Samples per pixel"):
+ * each channel of a sample's colour c becomes the integer round(c * RT_SUM_ONE)
+ * in a 64-bit sum, so that the sum does not depend on the order the samples
+ * are added in and samples can be split between devices. A channel of
+ * RT_SUM_LIMIT or more, or NaN, saturates: the sum is RT_SUM_SATURATED for
+ * good and the mean +inf (written as the format's largest value); one of
+ * -RT_SUM_LIMIT or less counts as -RT_SUM_LIMIT. RT_SUM_LIMIT * RT_SUM_ONE *
+ * 65536 samples (SCENE_MAX_SAMPLES) is 2^62: a sum never overflows. */
+#define RT_SUM_ONE 0x1p24f
+#define RT_SUM_LIMIT 0x1p22f
+#define RT_SUM_SATURATED 0x7fffffffffffffffL
 
 /* The image row of split row v of a piece (docs/GUIDE.md, "How the rows are
  * ordered"): with row_band 0, v itself. Else the image's whole bands of
@@ -354,7 +376,7 @@ static inline rt_int rt_piece_row(const struct rt_piece *p, rt_int v)
 
 #ifndef __OPENCL_VERSION__
 #include <stddef.h>
-_Static_assert(sizeof(struct rt_piece) == 44, "rt_piece layout");
+_Static_assert(sizeof(struct rt_piece) == 48, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, sample_begin) == 16, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, samples) == 24, "rt_piece layout");
 _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");

@@ -87,26 +87,61 @@ static inline float2 sample_offset(struct tracer *tr, int x, int y, uint k, uint
 	return convert_float2(bits) * 0x1p-24f;
 }
 
-/* Returns the running sum of a pixel's sample colours once sample k's colour
- * is added: sum + color in sample order, with sample 0 taken as it is (no
- * addition, so that one sample costs nothing here). Counted 3 for k > 0. */
-static inline float3 sample_add(struct tracer *tr, float3 sum, float3 color, int k)
+/* Returns channel c of a sample's colour in fixed point, round(c *
+ * RT_SUM_ONE), saturated (rtcl_shared.h, RT_SUM_LIMIT). */
+static inline long sample_fixed(float c)
 {
-	if (k == 0)
-		return color;
-	COUNT_FLOPS(tr, FLOPS_ADD3);
-	return sum + color;
+	if (!(c < RT_SUM_LIMIT)) /* also NaN */
+		return RT_SUM_SATURATED;
+	return convert_long_rte(fmax(c, -RT_SUM_LIMIT) * RT_SUM_ONE);
 }
 
-/* Returns what the image holds after the piece's pass: the running sum, or
- * once the last sample is in, the mean sum / N (a division, not a product by
- * 1/N, counted 3; N = 1 is the sum itself and counts 0). */
-static inline float3 sample_finish(struct tracer *tr, float3 sum, const struct rt_piece *piece)
+/* Returns a + b, two sums of fixed-point channels: saturated if either is. */
+static inline long sample_sum(long a, long b)
 {
-	if (piece->sample_end < piece->samples || piece->samples == 1)
-		return sum;
-	COUNT_FLOPS(tr, 3); /* one division per channel */
-	return sum / (float)piece->samples;
+	return a == RT_SUM_SATURATED || b == RT_SUM_SATURATED ? RT_SUM_SATURATED : a + b;
+}
+
+/* Returns the pixel's sum once a sample's colour is added (docs/RENDERING.md,
+ * "Samples per pixel"): the colour in fixed point, its three scalings counted 3; the
+ * integer additions are exact and count 0. */
+static inline long3 sample_add(struct tracer *tr, long3 sum, float3 color)
+{
+	COUNT_FLOPS(tr, 3);
+	return (long3)(sample_sum(sum.x, sample_fixed(color.x)),
+		       sample_sum(sum.y, sample_fixed(color.y)),
+		       sample_sum(sum.z, sample_fixed(color.z)));
+}
+
+/* Returns a channel's mean from its sum: the sum rounded to float, times
+ * the piece's mean_scale (1 / (N * RT_SUM_ONE)); +inf when saturated. */
+static inline float sample_mean_channel(long sum, float scale)
+{
+	return sum == RT_SUM_SATURATED ? INFINITY : convert_float_rte(sum) * scale;
+}
+
+/* Returns the pixel's mean colour from the sum of all its N samples: one
+ * product per channel, counted 3 (the exact rounding of the integer to float
+ * counts 0, as the sample position's conversions do). */
+static inline float3 sample_mean(struct tracer *tr, long3 sum, const struct rt_piece *piece)
+{
+	COUNT_FLOPS(tr, 3);
+	return (float3)(sample_mean_channel(sum.x, piece->mean_scale),
+			sample_mean_channel(sum.y, piece->mean_scale),
+			sample_mean_channel(sum.z, piece->mean_scale));
+}
+
+/* Whether a pass over piece holds the pixel's sum so far in the sums buffer
+ * (it does not start the buffer's samples), and whether it ends the pixel:
+ * its last sample is the render's last and the buffer holds them all. */
+static inline bool sample_sum_held(const struct rt_piece *piece, int sample_begin)
+{
+	return sample_begin > piece->sum_begin;
+}
+
+static inline bool sample_ends_pixel(const struct rt_piece *piece, int sample_end)
+{
+	return sample_end == piece->samples && piece->sum_begin == 0;
 }
 
 /* Kensler's hashed permutation of 0 ... n-1 ("Correlated Multi-Jittered

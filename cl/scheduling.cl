@@ -125,9 +125,9 @@ static inline int2 numbered_chunk_pixel(const struct chunk_grid *g, uint chunk, 
 /* Traces and stores pixel p (x and the split row, rt_piece_row) if it lies
  * inside the piece's rectangle. */
 static inline void render_pixel_if_inside(struct tracer *tr, const struct rt_piece *piece,
-					  __global float *image, __global uint *probe,
-					  int2 p)
+					  __global float *image, __global long *sums,
+					  __global uint *probe, int2 p)
 {
 	if (p.x < piece->x0 + piece->width && p.y < piece->y0 + piece->height)
-		render_pixel(tr, piece, image, probe, p.x, rt_piece_row(piece, p.y));
+		render_pixel(tr, piece, image, sums, probe, p.x, rt_piece_row(piece, p.y));
 }

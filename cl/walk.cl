@@ -251,10 +251,11 @@ static inline void count_pixel_flops(__global ulong *pixel_flops, int pixel, ulo
 }
 
 /* Traces samples [sample_begin, sample_end) of pixel (x, y), which must lie
- * inside the image, and stores the running sum of its sample colours, or
- * after the last sample their mean (sample.cl). */
+ * inside the image, and stores the sum of its sample colours in sums, or
+ * after the last sample their mean in image (sample.cl); one sample's colour
+ * goes to image as it is. */
 static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __global float *image,
-			 __global uint *probe, int x, int y)
+			 __global long *sums, __global uint *probe, int x, int y)
 {
 	struct walk w;
 	struct ray_job waiting[RAY_STACK_SIZE];
@@ -271,17 +272,25 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 		;
 	vstore3(w.color, pixel, image);
 #else
-	/* The sum so far is in the image, unless this pass starts the pixel. */
-	float3 sum = piece->sample_begin > 0 ? vload3(pixel, image) : (float3)(0.0f);
+	/* The sum so far is in the sums buffer, unless this pass starts it;
+	 * the pass that ends the pixel stores its mean instead, and one sample
+	 * its colour as it is (sample.cl). */
+	long3 sum = sample_sum_held(piece, piece->sample_begin) ? vload3(pixel, sums) : (long3)(0);
 
 	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
 		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples), k,
 			   piece->samples);
 		while (!walk_step(tr, &w, waiting))
 			;
-		sum = sample_add(tr, sum, w.color, k);
+		if (piece->samples > 1)
+			sum = sample_add(tr, sum, w.color);
 	}
-	vstore3(sample_finish(tr, sum, piece), pixel, image);
+	if (piece->samples == 1)
+		vstore3(w.color, pixel, image);
+	else if (sample_ends_pixel(piece, piece->sample_end))
+		vstore3(sample_mean(tr, sum, piece), pixel, image);
+	else
+		vstore3(sum, pixel, sums);
 #endif
 	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
 	count_write(probe, pixel);

@@ -125,14 +125,15 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 }
 
 /* One work-item per pixel of the piece, like wavefront_start: adds sample
- * `sample`'s colour to the pixel's running sum, or stores the mean after the
- * render's last sample (sample.cl), and the sample's cost to the pixel's. The
- * pass's last sample counts as the pixel's write. */
+ * `sample`'s colour to the pixel's sum in sums, or stores the mean in image
+ * after the render's last sample (one sample: its colour as it is;
+ * sample.cl), and the sample's cost to the pixel's. The pass's last sample
+ * counts as the pixel's write. */
 __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local uint4 *scene_local,
-				   __global float *image, __global const float *sample_rgb,
-				   __global ulong *item_counts, __global ulong *pixel_flops,
-				   __global const ulong *sample_flops, __global uint *write_counts,
-				   struct rt_piece piece, uint sample)
+				   __global float *image, __global long *sums,
+				   __global const float *sample_rgb, __global ulong *item_counts,
+				   __global ulong *pixel_flops, __global const ulong *sample_flops,
+				   __global uint *write_counts, struct rt_piece piece, uint sample)
 {
 	struct tracer tr;
 	int dx = get_global_id(0), dy = get_global_id(1);
@@ -140,14 +141,22 @@ __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local u
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
 	if (dx < piece.width && dy < piece.height) {
 		int pixel = rt_piece_row(&piece, piece.y0 + dy) * tr.scene->width + piece.x0 + dx;
-		float3 sum = sample > 0 ? vload3(pixel, image) : (float3)(0.0f);
+		float3 color = vload3(pixel, sample_rgb);
+		bool last = (int)sample == piece.sample_end - 1;
 
-		sum = sample_add(&tr, sum, vload3(pixel, sample_rgb), (int)sample);
-		if ((int)sample == piece.sample_end - 1) {
-			sum = sample_finish(&tr, sum, &piece);
-			count_write(write_counts, pixel);
+		if (piece.samples == 1) {
+			vstore3(color, pixel, image);
+		} else {
+			long3 sum = sample_sum_held(&piece, (int)sample) ? vload3(pixel, sums)
+									 : (long3)(0);
+			sum = sample_add(&tr, sum, color);
+			if (last && sample_ends_pixel(&piece, piece.sample_end))
+				vstore3(sample_mean(&tr, sum, &piece), pixel, image);
+			else
+				vstore3(sum, pixel, sums);
 		}
-		vstore3(sum, pixel, image);
+		if (last)
+			count_write(write_counts, pixel);
 		count_pixel_flops(pixel_flops, pixel,
 				  sample_pixel_flops(sample_flops, pixel) + tracer_flops(&tr));
 	}

@@ -20,6 +20,12 @@ int buffers_create(struct device *dev, const struct render_settings *s,
 					res->scene_bytes, b->scene_block, "scene", err, err_size);
 	if (!b->scene || checks_create_image(dev, s, &b->image, err, err_size))
 		return -1;
+	b->sums = device_create_buffer(dev, CL_MEM_READ_WRITE,
+				       settings_samples(s) > 1 ? image_sum_bytes(s->width, s->height)
+							       : UNUSED_BUFFER_BYTES,
+				       NULL, "sample sums", err, err_size);
+	if (!b->sums)
+		return -1;
 	b->flops = device_create_buffer(dev, CL_MEM_READ_WRITE,
 					s->count_flops ? flops_bytes : UNUSED_BUFFER_BYTES, NULL,
 					flops_what, err, err_size);
@@ -159,9 +165,23 @@ int buffers_read_rows(struct device *dev, const struct render_settings *s,
 	return 0;
 }
 
+int buffers_read_sums(struct device *dev, const struct render_settings *s,
+		      const struct render_buffers *b, cl_long *to, char *err, size_t err_size)
+{
+	cl_int status = clEnqueueReadBuffer(dev->queue, b->sums, CL_TRUE, 0,
+					    image_sum_bytes(s->width, s->height), to, 0, NULL, NULL);
+
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "reading the sample sums back failed (%s): %s", dev->name,
+			 cl_error_name(status));
+		return -1;
+	}
+	return 0;
+}
+
 void buffers_release(struct render_buffers *b)
 {
-	cl_mem buffers[] = {b->probe, b->flops, b->scene};
+	cl_mem buffers[] = {b->probe, b->flops, b->sums, b->scene};
 
 	free(b->item_flops);
 	free(b->scene_block);

@@ -21,6 +21,8 @@ struct render_buffers {
 	void *scene_block; /* the packed scene (launch_setup) */
 	cl_mem scene;
 	struct guarded_image image;
+	cl_mem sums;	      /* each pixel's fixed-point sum of its samples' colours
+				 between passes, 3 cl_long (samples > 1) */
 	cl_mem flops;	      /* the per-pixel flop counts at its head (count_flops) */
 	cl_mem probe;	      /* write counts or the schedule map (probe.h) */
 	uint64_t *item_flops; /* per work-item, as the renderer lays them out */
@@ -61,6 +63,13 @@ int buffers_read_back(struct device *dev, const struct render_settings *s, struc
 int buffers_read_rows(struct device *dev, const struct render_settings *s,
 		      const struct render_buffers *b, const struct rt_piece *piece, float *to,
 		      int packed, char *err, size_t err_size);
+
+/* Reads the fixed-point sums of every pixel (3 cl_long each, RT_SUM_ONE)
+ * into to: what the passes of a piece whose samples are split between
+ * devices leave (rt_piece.sum_begin). Returns 0, or -1 with one message in
+ * err. */
+int buffers_read_sums(struct device *dev, const struct render_settings *s,
+		      const struct render_buffers *b, cl_long *to, char *err, size_t err_size);
 
 /* Releases what b holds, the program last. */
 void buffers_release(struct render_buffers *b);

@@ -96,6 +96,14 @@ void renderer_interleave_rows(struct rt_piece *p, int height, int band, int clas
 	p->row_classes = classes;
 }
 
+struct rt_piece renderer_launch_piece(const struct rt_piece *piece)
+{
+	struct rt_piece p = *piece;
+
+	p.mean_scale = settings_mean_scale(p.samples);
+	return p;
+}
+
 struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end)
 {
 	return renderer_rows(s, 0, s->height, begin, end);
@@ -173,7 +181,8 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 		renderer_pass_samples(r->settings, (long long)whole->width * whole->height,
 				      r->dev->is_gpu);
 
-	int queues = piece_queues(r, whole, (whole->samples + per_pass - 1) / per_pass);
+	int queues = piece_queues(
+		r, whole, (whole->sample_end - whole->sample_begin + per_pass - 1) / per_pass);
 	if (queues > 1) {
 		struct rt_piece parts[RENDER_MAX_QUEUES];
 		int count = split_columns(r, whole, queues, parts);
@@ -184,12 +193,12 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 	}
 	out->kernel_ms = 0;
 	out->launches = 0;
-	for (int begin = 0; begin < whole->samples; begin += per_pass) {
+	for (int begin = whole->sample_begin; begin < whole->sample_end; begin += per_pass) {
 		struct rt_piece piece = *whole;
 		struct piece_result pass;
 		piece.sample_begin = begin;
 		piece.sample_end =
-			whole->samples - begin > per_pass ? begin + per_pass : whole->samples;
+			whole->sample_end - begin > per_pass ? begin + per_pass : whole->sample_end;
 		if (renderer_piece(r, &piece, &pass, err, err_size))
 			return -1;
 		out->kernel_ms += pass.kernel_ms;

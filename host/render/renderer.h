@@ -98,6 +98,10 @@ struct rt_piece renderer_rows(const struct render_settings *s, int y0, int heigh
  * or more classes than bands: scan order, split row v is image row v. */
 void renderer_interleave_rows(struct rt_piece *p, int height, int band, int classes);
 
+/* Returns piece as a kernel takes it: with its mean_scale set
+ * (settings_mean_scale of its samples). */
+struct rt_piece renderer_launch_piece(const struct rt_piece *piece);
+
 /* Returns the piece of the whole image with samples [begin, end). */
 struct rt_piece renderer_whole_image(const struct render_settings *s, int begin, int end);
 

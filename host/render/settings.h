@@ -167,4 +167,18 @@ static inline size_t image_float_bytes(int width, int height)
 	return (size_t)width * (size_t)height * 3 * sizeof(float);
 }
 
+/* Bytes of the fixed-point sums of width × height pixels (3 cl_long each;
+ * docs/RENDERING.md, "Samples per pixel"). */
+static inline size_t image_sum_bytes(int width, int height)
+{
+	return (size_t)width * (size_t)height * 3 * sizeof(cl_long);
+}
+
+/* What a pixel's sum of `samples` samples is multiplied by for its mean:
+ * 1 / (samples * RT_SUM_ONE) rounded to float (rt_piece.mean_scale). */
+static inline float settings_mean_scale(int samples)
+{
+	return (float)(1.0 / ((double)samples * (double)RT_SUM_ONE));
+}
+
 #endif

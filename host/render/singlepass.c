@@ -21,6 +21,7 @@ enum render_arg {
 	ARG_SCENE,
 	ARG_SCENE_LOCAL,
 	ARG_IMAGE,
+	ARG_SUMS,
 	ARG_WORK_COUNTER,
 	ARG_COUNTS,
 	ARG_PROBE,
@@ -87,6 +88,7 @@ static int set_args(const struct launch_state *st, cl_kernel kernel, const struc
 	const cl_mem *buffers[RENDER_ARGS] = {
 		[ARG_SCENE] = &st->b.scene,
 		[ARG_IMAGE] = &st->b.image.image,
+		[ARG_SUMS] = &st->b.sums,
 		[ARG_WORK_COUNTER] = &counter->buffer,
 		[ARG_COUNTS] = &st->b.flops,
 		[ARG_PROBE] = &st->b.probe,
@@ -205,6 +207,7 @@ static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 	const char *call = "clEnqueueFillBuffer";
 	size_t global[2];
 	struct launch_watch watch = piece_watch(r, piece);
+	struct rt_piece launched = renderer_launch_piece(piece);
 	cl_int status = watch_reset_counter(&st->work_counter);
 
 	piece_global_size(s, r->result, piece, global);
@@ -212,7 +215,7 @@ static int singlepass_piece(struct renderer *r, const struct rt_piece *piece,
 	out->launches = 1;
 	if (status == CL_SUCCESS) {
 		call = "clSetKernelArg";
-		status = clSetKernelArg(st->kernel, ARG_PIECE, sizeof(*piece), piece);
+		status = clSetKernelArg(st->kernel, ARG_PIECE, sizeof(launched), &launched);
 	}
 	if (status == CL_SUCCESS)
 		status = launch_run(dev, st->kernel, 2, global, r->result->local_size, &watch,
@@ -258,8 +261,8 @@ static cl_int finish_launch(struct renderer *r, struct in_flight *f, struct laun
 	return status;
 }
 
-/* Renders every sample of the disjoint parts, part i on lane i, in passes of
- * per_pass samples: each lane's launches are enqueued LANE_DEPTH ahead of
+/* Renders the samples of the disjoint parts (the same range for each), part
+ * i on lane i, in passes of per_pass samples: each lane's launches are enqueued LANE_DEPTH ahead of
  * the host, so that a lane's next launch is waiting when its last one ends
  * and another lane's launch can fill the device while one ends. */
 #define LANE_DEPTH 2
@@ -269,7 +272,8 @@ static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, i
 	const struct render_settings *s = r->settings;
 	struct launch_state *st = r->state;
 	struct in_flight flight[RENDER_MAX_QUEUES][LANE_DEPTH] = {{{0}}};
-	int samples = parts[0].samples, passes = (samples + per_pass - 1) / per_pass;
+	int begin = parts[0].sample_begin, end = parts[0].sample_end;
+	int passes = (end - begin + per_pass - 1) / per_pass;
 	struct launch_span *spans = malloc((size_t)passes * count * sizeof(*spans));
 	int span_count = 0;
 	const char *call = "malloc";
@@ -290,12 +294,12 @@ static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, i
 			struct work_counter *counter = i ? &st->lanes[i].work_counter
 							 : &st->work_counter;
 			struct in_flight *f = &flight[i][pass % LANE_DEPTH];
-			struct rt_piece piece = parts[i];
+			struct rt_piece piece = renderer_launch_piece(&parts[i]);
 			size_t global[2];
-			piece.sample_begin = pass * per_pass;
-			piece.sample_end = samples - piece.sample_begin > per_pass
+			piece.sample_begin = begin + pass * per_pass;
+			piece.sample_end = end - piece.sample_begin > per_pass
 						   ? piece.sample_begin + per_pass
-						   : samples;
+						   : end;
 			piece_global_size(s, r->result, &piece, global);
 			call = "waiting for the kernel";
 			if (f->event)

@@ -185,19 +185,20 @@ static cl_int launch_primary(struct renderer *r, struct wavefront *w, size_t loc
 	return status;
 }
 
-/* Adds sample `sample` to the running sums of piece's pixels. */
+/* Adds sample `sample` to the sums of piece's pixels (or stores their mean). */
 static cl_int launch_accumulate(struct renderer *r, struct wavefront *w, size_t local_bytes,
 				const struct rt_piece *piece, cl_uint sample, double *ms)
 {
 	size_t global[2];
 	const char *call;
-	const void *args[] = {&w->b.scene,     NULL,	    &w->b.image.image, &w->sample_rgb,
-			      &w->item_counts, &w->b.flops, &w->sample_flops,  &w->b.probe,
-			      piece,	       &sample};
-	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem), sizeof(cl_mem),
-				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),
-				sizeof(*piece), sizeof(cl_uint)};
-	cl_int status = set_kernel_args(w->accumulate, args, sizes, 10);
+	struct rt_piece launched = renderer_launch_piece(piece);
+	const void *args[] = {&w->b.scene,	NULL,		&w->b.image.image, &w->b.sums,
+			      &w->sample_rgb,	&w->item_counts, &w->b.flops,	    &w->sample_flops,
+			      &w->b.probe,	&launched,	&sample};
+	const size_t sizes[] = {sizeof(cl_mem), local_bytes,	sizeof(cl_mem),	  sizeof(cl_mem),
+				sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),	  sizeof(cl_mem),
+				sizeof(cl_mem), sizeof(launched), sizeof(cl_uint)};
+	cl_int status = set_kernel_args(w->accumulate, args, sizes, 11);
 
 	wavefront_global_size(r->result, piece, global);
 	if (status == CL_SUCCESS)
