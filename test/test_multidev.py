@@ -112,7 +112,7 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--devices", "0:0,0:0"], "--devices: device 0:0 is listed twice"),
     (["--devices", "0:0", "-d", "0"], "--devices and -p/-d both choose devices"),
     (["--devices", "0:0", "-k", "reference"], "the reference renderer runs on the host"),
-    (["--split", "half"], "--split: expected dynamic or static, got \"half\""),
+    (["--split", "half"], "--split: expected dynamic, static or samples, got \"half\""),
     (["--frames", "5"], "--frames: expected A:B"),
     (["--frames", "5:x"], "--frames: expected A:B"),
     (["--frames", "5:4"], "the last frame must not come before the first"),
@@ -140,6 +140,12 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--mpi", "--flops", "x.npy"], "use --work-map FILE.npy (per pixel)"),
     (["--mpi", "-r", "2"], "--mpi renders the image once"),
     (["--mpi", "--work-map", "w.png"], "--mpi renders the image once"),
+    (["--devices", "0:0,0:1", "--split", "samples", "--piece-rows", "4"],
+     "--split samples renders the whole image on every device of --devices, each a share of "
+     "every pixel's samples; it does not go with --piece-rows (use --split dynamic or static)"),
+    (["--devices", "0:0,0:1", "--split", "samples", "--work-map", "w.npy"],
+     "it does not go with --work-map"),
+    (["--mpi", "--split", "samples"], "it does not go with --mpi"),
 ])
 def test_option_errors(tmp_path, args, message):
     result = run(*args, "-o", str(tmp_path / "x.png"))
@@ -504,6 +510,52 @@ def test_interleaved_split_gives_a_slowed_device_less_of_the_image(tmp_path):
     assert md["row_order"] == "interleave" and md["row_classes"] == 2
     pixels = [d["pixels"] for d in md["devices"]]
     assert sum(pixels) == 24 * 48 and pixels[1] < pixels[0], pixels
+
+
+@pytest.mark.parametrize("kernel", ["persistent", "wavefront"])
+def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel):
+    # --split samples: both devices render the whole image, each a range of
+    # every pixel's samples into its fixed-point sums, which the host adds:
+    # the image is one device's (RENDERING.md, "Samples per pixel"). The
+    # mirror corridor has colours of every size; every pixel written once a
+    # pass on each device (CHECK).
+    common = ["-k", kernel, "--spp", "6", "-s", "test/scenes/mirror_corridor.json"]
+    image_run(tmp_path, "one", *common, "-d", "0")
+    _, stats = image_run(tmp_path, "two", *common, "--devices", "0:0,0:1", "--split", "samples",
+                         env=CHECK)
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    md = stats["multidevice"]
+    assert md["split"] == "samples" and md["piece"] == "sample range"
+    assert [d["pieces"] for d in md["devices"]] == [1, 1]
+    # Each takes a share of the samples: pixels count that share.
+    assert all(0 < d["pixels"] < 32 * 24 for d in md["devices"])
+    assert abs(sum(d["pixels"] for d in md["devices"]) - 32 * 24) <= 1
+
+
+def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
+    # After the warm-up frame the ranges follow the devices' rates: the
+    # device slowed 4 times takes fewer samples. GPUs alone take the sample
+    # split by default (RTCL_TEST_AS_GPUS: the PoCL devices count as GPUs).
+    common = [*TALL, "--spp", "64"]  # 32 a device or more: the default split
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = run(*common, "--devices", "0:0,0:1", "-r", "2", "-o", str(tmp_path / "two.ppm"),
+                 "--stats", str(tmp_path / "s.json"),
+                 env={**CHECK, "RTCL_TEST_SLOW_DEVICE": "1:x4", "RTCL_TEST_AS_GPUS": "1"})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert md["split"] == "samples"
+    pixels = [d["pixels"] for d in md["devices"]]
+    assert pixels[1] < pixels[0], pixels
+
+
+def test_sample_split_needs_a_sample_per_device(tmp_path):
+    result = run(*SMALL, "--devices", "0:0,0:1", "--split", "samples", "-o",
+                 str(tmp_path / "x.png"))
+    expect_failure(result, 1, "--split samples shares each pixel's samples between the 2 "
+                   "devices: it needs at least 2 samples per pixel (--spp or image.samples), "
+                   "and this render has 1", tmp_path)
 
 
 def test_write_count_check_catches_a_band_written_twice(tmp_path):

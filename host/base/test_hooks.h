@@ -44,7 +44,8 @@ int hook_count_writes(void);
 
 /* RTCL_TEST_AS_GPUS=1: under --mpi every rank reports its devices as GPUs
  * when the ranks choose their bands (host/run/mpi_render.c), so that PoCL's
- * CPU devices take the bands two GPU ranks would. */
+ * CPU devices take the bands two GPU ranks would; in one process the
+ * devices count as GPUs when the default split is chosen (tiles_choose_split). */
 int hook_devices_as_gpus(void);
 
 /* RTCL_TEST_DOUBLE_BAND=1: several devices in one process render band 0 a

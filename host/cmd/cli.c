@@ -165,8 +165,13 @@ static void print_help_after_kernels(FILE *out)
 		"      --devices LIST|all render on several devices at once: PLATFORM:DEVICE\n"
 		"                         indices (e.g. 1:0,0:0), or all (every GPU and CPU);\n"
 		"                         not with -p/-d\n"
-		"      --split dynamic|static  how pieces go to the devices: each takes the\n"
-		"                         next when it is free (default), or equal shares\n"
+		"      --split dynamic|static|samples  how the image goes to the devices:\n"
+		"                         pieces of pixels, each device taking the next when\n"
+		"                         it is free (dynamic), or equal shares (static); or\n"
+		"                         samples: every device renders the whole image, a\n"
+		"                         share of each pixel's samples by its speed, the same\n"
+		"                         image (default: samples if every device is a GPU\n"
+		"                         and each gets a whole pass, else dynamic)\n"
 		"      --frames A:B       render frames A to B (0..99999, at most %d), the\n"
 		"                         camera's eye turned about look_at along up by\n"
 		"                         360 (f-A)/(B-A+1) degrees; -o out.png writes\n"
@@ -465,6 +470,21 @@ static int parse_choice(const char *option, const char *text, const char *first,
 	return 0;
 }
 
+/* --split dynamic|static|samples into *split (enum split). */
+static int parse_split(const char *text, int *split, char *err, size_t err_size)
+{
+	static const enum split choices[] = {SPLIT_DYNAMIC, SPLIT_STATIC, SPLIT_SAMPLES};
+
+	for (size_t i = 0; i < sizeof(choices) / sizeof(choices[0]); i++)
+		if (strcmp(text, split_name(choices[i])) == 0) {
+			*split = choices[i];
+			return 0;
+		}
+	snprintf(err, err_size, "--split: expected dynamic, static or samples, got \"%s\"",
+		 quote_text(text));
+	return -1;
+}
+
 /* --row-order interleave[:S]|scan into o (enum row_order, S). */
 static int parse_row_order(const char *text, struct options *o, char *err, size_t err_size)
 {
@@ -628,8 +648,7 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return devices_parse(arg, &o->devices.list, err, err_size);
 	case OPT_SPLIT:
 		o->split_given = 1;
-		return parse_choice("--split", arg, "dynamic", "static", &o->split_static, err,
-				    err_size);
+		return parse_split(arg, &o->split, err, err_size);
 	case OPT_FRAMES:
 		o->frames_given = 1;
 		return parse_frames(arg, o->frames, err, err_size);
@@ -771,6 +790,22 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 			 "--split chooses how pieces go to the devices of --devices or --mpi; it "
 			 "does not apply to a render without them");
 		return -1;
+	}
+	if (o->split == SPLIT_SAMPLES && o->split_given) {
+		const char *other = o->mpi				? "--mpi"
+				    : o->frames_given			? "--frames"
+				    : o->piece_rows > 0			? "--piece-rows"
+				    : o->outputs.work_map		? "--work-map"
+				    : o->outputs.schedule_map		? "--schedule-map"
+								: NULL;
+		if (other) {
+			snprintf(err, err_size,
+				 "--split samples renders the whole image on every device of "
+				 "--devices, each a share of every pixel's samples; it does not "
+				 "go with %s (use --split dynamic or static)",
+				 other);
+			return -1;
+		}
 	}
 	if (several && o->outputs.flops) {
 		snprintf(err, err_size,

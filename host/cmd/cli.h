@@ -28,7 +28,7 @@ struct options {
 	struct camera_override camera; /* --eye, --look-at, --fov, --aperture, --focus-distance */
 	struct device_choice devices; /* -p, -d (-1 when not given), -t, --devices */
 	int list_devices;
-	int split_static; /* --split static */
+	int split;	  /* --split: enum split (dynamic, static, samples) */
 	int split_given;  /* --split given */
 	int row_order;	     /* --row-order: enum row_order (schedule/tiles.h) */
 	int row_classes;     /* --row-order interleave:S; 0: the devices */

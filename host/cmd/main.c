@@ -104,7 +104,8 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	job->counting = opt->outputs.flops || opt->outputs.work_map;
 	job->mapping = opt->outputs.schedule_map != NULL;
 	job->devices = opt->devices;
-	job->split = opt->split_static ? SPLIT_STATIC : SPLIT_DYNAMIC;
+	job->split = (enum split)opt->split;
+	job->split_given = opt->split_given;
 	job->piece_rows = opt->piece_rows;
 	job->row_order = (enum row_order)opt->row_order;
 	job->row_classes = opt->row_classes;

@@ -26,6 +26,7 @@ struct job {
 	int mapping;			 /* the same run records the schedule: --schedule-map */
 	struct device_choice devices;
 	enum split split;	    /* --split */
+	int split_given;	    /* --split given: no default chosen (tiles.h) */
 	int piece_rows;		    /* --piece-rows; 0: chosen (tiles.h) */
 	enum row_order row_order;   /* --row-order */
 	int row_classes;	    /* --row-order interleave:S; 0: the devices */

@@ -58,6 +58,11 @@ int renderer_read_back(struct renderer *r, char *err, size_t err_size)
 	return r->ops->read_back(r, err, err_size);
 }
 
+int renderer_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size)
+{
+	return r->ops->read_sums(r, to, err, err_size);
+}
+
 int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *to, int packed,
 		       char *err, size_t err_size)
 {
@@ -126,7 +131,7 @@ int renderer_pass_count(const struct render_settings *s, const struct rt_piece *
 {
 	int per_pass = renderer_pass_samples(s, (long long)piece->width * piece->height, gpu);
 
-	return (piece->samples + per_pass - 1) / per_pass;
+	return (piece->sample_end - piece->sample_begin + per_pass - 1) / per_pass;
 }
 
 int renderer_queues(const struct render_settings *s, const struct device *dev)

@@ -59,6 +59,7 @@ struct renderer_ops {
 	int (*read_back)(struct renderer *r, char *err, size_t err_size);
 	int (*read_rows)(struct renderer *r, const struct rt_piece *piece, float *to, int packed,
 			 char *err, size_t err_size);
+	int (*read_sums)(struct renderer *r, cl_long *to, char *err, size_t err_size);
 	void (*close)(struct renderer *r);
 };
 
@@ -84,6 +85,11 @@ int renderer_read_back(struct renderer *r, char *err, size_t err_size);
  * for a piece that goes elsewhere without the whole image read first. */
 int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *to, int packed,
 		       char *err, size_t err_size);
+
+/* Reads the fixed-point sums of every pixel (buffers_read_sums) into to:
+ * what pieces whose samples are split between devices leave
+ * (rt_piece.sum_begin). */
+int renderer_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size);
 
 void renderer_close(struct renderer *r);
 
@@ -126,9 +132,10 @@ int renderer_queues(const struct render_settings *settings, const struct device 
 #define RENDER_GPU_QUEUES_WHOLE 2
 #define RENDER_GPU_QUEUES_SHARE 4
 
-/* Renders every sample of piece's pixels (its sample range is ignored) in
- * passes of renderer_pass_samples() samples, in sample order on this one
- * renderer, so that the running sums stay in its buffer; sets *out to the
+/* Renders piece's samples [sample_begin, sample_end) of every pixel (all of
+ * them but where the samples are split between devices, rt_piece.sum_begin)
+ * in passes of renderer_pass_samples() samples, in sample order on this one
+ * renderer, so that the sums stay in its buffer; sets *out to the
  * passes' kernel time and launches. With several queues (--queues, or by
  * default on a GPU for a piece of two passes or more, RENDER_GPU_QUEUES_*)
  * the piece's columns are cut into that many parts of whole work-groups, each

@@ -370,6 +370,13 @@ static int singlepass_read_rows(struct renderer *r, const struct rt_piece *piece
 	return buffers_read_rows(r->dev, r->settings, &st->b, piece, to, packed, err, err_size);
 }
 
+static int singlepass_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size)
+{
+	struct launch_state *st = r->state;
+
+	return buffers_read_sums(r->dev, r->settings, &st->b, to, err, err_size);
+}
+
 static int singlepass_open(struct renderer *r, const struct scene *scene, char *err,
 			   size_t err_size)
 {
@@ -418,4 +425,5 @@ static void singlepass_close(struct renderer *r)
 
 const struct renderer_ops singlepass_ops = {singlepass_open,	    singlepass_piece,
 					    singlepass_passes,	    singlepass_read_back,
-					    singlepass_read_rows, singlepass_close};
+					    singlepass_read_rows, singlepass_read_sums,
+					    singlepass_close};

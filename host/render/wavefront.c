@@ -370,6 +370,14 @@ static void wavefront_close(struct renderer *r)
 	r->state = NULL;
 }
 
+static int wavefront_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size)
+{
+	struct wavefront *w = r->state;
+
+	return buffers_read_sums(r->dev, r->settings, &w->b, to, err, err_size);
+}
+
 const struct renderer_ops wavefront_ops = {wavefront_open,	   wavefront_piece,
 					   NULL,		   wavefront_read_back,
-					   wavefront_read_rows, wavefront_close};
+					   wavefront_read_rows, wavefront_read_sums,
+					   wavefront_close};

@@ -44,6 +44,6 @@ json_t *devstats_json(const struct device *devs, const int *ranks, const struct 
 		json_array_append_new(list, entry);
 	}
 	return json_pack("{s:s, s:s, s:o, s:f}", "split",
-			 split == SPLIT_STATIC ? "static" : "dynamic", "piece", noun, "devices",
+			 split_name(split), "piece", noun, "devices",
 			 list, "device_efficiency", multidev_efficiency(work, count));
 }

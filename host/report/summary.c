@@ -94,7 +94,7 @@ void report_print_frames(FILE *out, const struct job *job, const struct record *
 		quote_text(job->scene->source), s->kernel->name);
 	devstats_print(out, d->devs, d->ranks, d->work, d->count, d->piece);
 	fprintf(out, "time:    %.1f ms for %d frame%s (%.1f ms each), %s split\n", d->wall_ms, n,
-		n == 1 ? "" : "s", d->wall_ms / n, d->split == SPLIT_STATIC ? "static" : "dynamic");
+		n == 1 ? "" : "s", d->wall_ms / n, split_name(d->split));
 }
 
 void report_print_shares(FILE *out, const struct record *record)

@@ -109,15 +109,25 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	d->tiles = (struct tiles_request){job->scene,	  d->devs,	    d->count,
 					  job->split,	  job->piece_rows, job->row_order,
 					  job->row_classes};
+	/* The split the renders share: a counting run counts each pixel on
+	 * one device, so it and the timed run split the pixels. */
+	struct render_settings instrumented = s;
+	instrumented.count_flops = job->counting;
+	instrumented.record_schedule = job->mapping;
+	if (tiles_choose_split(&d->tiles, &instrumented, job->split_given, &d->tiles.split, err,
+			       err_size))
+		return -1;
 	record_devices(record, d->devs, d->count);
-	int adaptive = tiles_adaptive(job->split, job->piece_rows);
-	int rows = tiles_band_rows(&s, job->piece_rows, d->count, job->split);
+	int adaptive = tiles_adaptive(d->tiles.split, job->piece_rows);
+	int rows = tiles_band_rows(&s, job->piece_rows, d->count, d->tiles.split);
 	record->shares = (struct device_shares){
 		.devs = d->devs,
 		.work = d->work,
 		.count = d->count,
-		.split = job->split,
-		.piece = adaptive ? "rectangle" : "band",
+		.split = d->tiles.split,
+		.piece = d->tiles.split == SPLIT_SAMPLES ? "sample range"
+			 : adaptive			  ? "rectangle"
+							  : "band",
 		.band_rows = adaptive ? 0 : rows,
 		.bands = adaptive ? 0 : tiles_band_count(s.height, rows),
 		.row_order_given = 1,

@@ -3,6 +3,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+const char *split_name(enum split split)
+{
+	return split == SPLIT_STATIC ? "static" : split == SPLIT_SAMPLES ? "samples" : "dynamic";
+}
+
 int dispenser_static_first(int k, int n, int count)
 {
 	return (int)((long long)k * count / n);
@@ -30,7 +35,7 @@ void dispenser_free(struct dispenser *d)
 
 int dispenser_take(struct dispenser *d, int k)
 {
-	if (d->split == SPLIT_STATIC) {
+	if (d->split != SPLIT_DYNAMIC) {
 		int end = dispenser_static_first(k + 1, d->devices, d->pieces);
 		return d->next_static[k] < end ? d->next_static[k]++ : -1;
 	}

@@ -11,7 +11,13 @@
 #ifndef RTCL_DISPENSER_H
 #define RTCL_DISPENSER_H
 
-enum split { SPLIT_DYNAMIC, SPLIT_STATIC };
+/* SPLIT_SAMPLES (one image over devices of this process only, tiles.h): every
+ * device renders the whole image, each a range of every pixel's samples; the
+ * dispenser then hands device k piece k, as SPLIT_STATIC does. */
+enum split { SPLIT_DYNAMIC, SPLIT_STATIC, SPLIT_SAMPLES };
+
+/* "dynamic", "static" or "samples". */
+const char *split_name(enum split split);
 
 struct dispenser {
 	enum split split;

@@ -1,5 +1,6 @@
 #include "schedule/tiles.h"
 
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -15,7 +16,7 @@ int tiles_band_rows(const struct render_settings *s, int piece_rows, int devices
 		    enum split split)
 {
 	int unit = s->workgroup[1] > 0 ? s->workgroup[1] : 1;
-	int wanted = (split == SPLIT_STATIC ? 1 : TILES_PER_DEVICE) * (devices > 0 ? devices : 1);
+	int wanted = (split == SPLIT_DYNAMIC ? TILES_PER_DEVICE : 1) * (devices > 0 ? devices : 1);
 	int rows;
 
 	if (piece_rows > 0)
@@ -152,6 +153,8 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 	t->adaptive = adaptive;
 	t->row_map = *map;
 	t->piece_cap = t->piece_count = t->bands;
+	if (t->piece_cap < count) /* SPLIT_SAMPLES: one piece per device */
+		t->piece_cap = count;
 	if (adaptive)
 		init_adaptive(t, s);
 	pthread_mutex_init(&t->lock, NULL);
@@ -212,6 +215,8 @@ void tiles_job_free(struct tiles_job *t)
 		if (t->dev[k].open)
 			renderer_close(&t->dev[k].renderer);
 		render_result_free(&t->dev[k].result);
+		free(t->dev[k].sums);
+		t->dev[k].sums = NULL;
 		t->dev[k].open = 0;
 	}
 	free(t->owner);
@@ -249,6 +254,22 @@ static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, 
 			t->expected[(size_t)rt_piece_row(p, v) * t->settings->width + x] += launches;
 }
 
+/* SPLIT_SAMPLES: reads device k's sums into its host copy, as part of the
+ * frame (the image is not done before). */
+static int read_sums(struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	struct tiles_device *d = &t->dev[k];
+
+	if (!d->sums)
+		d->sums = malloc(image_sum_bytes(t->settings->width, t->settings->height));
+	if (!d->sums) {
+		snprintf(err, err_size, "out of host memory for the sample sums of a %dx%d image",
+			 t->settings->width, t->settings->height);
+		return -1;
+	}
+	return renderer_read_sums(&d->renderer, d->sums, err, err_size);
+}
+
 int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
 		      size_t err_size)
 {
@@ -269,6 +290,8 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	 * sums stay in its buffer. */
 	if (renderer_all_samples(&t->dev[k].renderer, &whole, &out, err, err_size))
 		return -1;
+	if (t->by_samples && read_sums(t, k, err, err_size))
+		return -1;
 	t->piece_ms[3 * band] = (start - t->frame_start) * 1e3;
 	t->piece_ms[3 * band + 1] = (timing_now() - t->frame_start) * 1e3;
 	t->piece_ms[3 * band + 2] = out.kernel_ms;
@@ -276,7 +299,10 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	done->launches += out.launches;
 	t->owner[band] = k; /* pieces are distinct: no two threads write one */
 	expect_writes(t, k, &whole, 1);
-	done->pixels += (long long)whole.width * whole.height;
+	/* A range of every pixel's samples counts as that share of the pixels. */
+	done->pixels += (long long)((double)whole.width * whole.height *
+					    (whole.sample_end - whole.sample_begin) / whole.samples +
+				    0.5);
 	return 0;
 }
 
@@ -357,6 +383,11 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	const struct render_settings *s = t->settings;
 	const uint32_t *counts = t->dev[k].result.write_counts;
 
+	if (counts && t->by_samples) /* every pixel, once a pass of its piece */
+		return tiles_check_counts(counts, s->width, s->height,
+					  (uint32_t)tiles_piece_launches(s, &t->pieces[k],
+									 t->devs[k].is_gpu),
+					  err, err_size);
 	for (int b = 0; counts && b < t->piece_count; b++) {
 		const struct rt_piece *p = &t->pieces[b];
 		uint32_t expected =
@@ -480,6 +511,26 @@ static int record_pieces(const struct tiles_job *t, struct render_result *out)
 	return 0;
 }
 
+/* SPLIT_SAMPLES: the image from the devices' sums of the last frame, by
+ * RENDERING.md's rule ("Samples per pixel"): their sum, saturated if any is,
+ * then float(S) times the mean's scale, as a kernel's last pass takes it. */
+static void add_sums(const struct tiles_job *t, float *rgb)
+{
+	const struct render_settings *s = t->settings;
+	size_t values = 3 * (size_t)s->width * s->height;
+	float scale = settings_mean_scale(settings_samples(s));
+
+	for (size_t i = 0; i < values; i++) {
+		cl_long sum = 0;
+		for (int k = 0; k < t->count; k++) {
+			cl_long part = t->dev[k].sums[i];
+			sum = sum == RT_SUM_SATURATED || part == RT_SUM_SATURATED ? RT_SUM_SATURATED
+										  : sum + part;
+		}
+		rgb[i] = sum == RT_SUM_SATURATED ? INFINITY : (float)sum * scale;
+	}
+}
+
 /* Reads every device back and assembles the image (and counts) in out. */
 static int assemble(struct tiles_job *t, struct render_result *out, char *err, size_t err_size)
 {
@@ -498,8 +549,11 @@ static int assemble(struct tiles_job *t, struct render_result *out, char *err, s
 	for (int k = 0; k < t->count; k++)
 		if (tiles_collect(t, k, err, err_size))
 			return -1;
-	for (int b = 0; b < t->piece_count; b++)
-		tiles_copy_piece(t, b, &t->dev[t->owner[b]].result, out);
+	if (t->by_samples)
+		add_sums(t, out->rgb);
+	else
+		for (int b = 0; b < t->piece_count; b++)
+			tiles_copy_piece(t, b, &t->dev[t->owner[b]].result, out);
 	if (s->count_flops && join_item_counts(t, out)) {
 		snprintf(err, err_size, "out of host memory for the flop counts");
 		return -1;
@@ -526,13 +580,50 @@ static int open_all(struct tiles_job *t, struct device_work *setup, char *err, s
 	return multidev_run(&job, t->devs, t->count, setup, err, err_size);
 }
 
+/* SPLIT_SAMPLES: piece k is the whole image with device k's range of the
+ * samples, in whole passes (the largest of the devices' pass sizes) shared
+ * by the rates of the last frame (equal in the first), each device at least
+ * one; the ranges follow one another from sample 0. */
+static void split_samples(struct tiles_job *t)
+{
+	const struct render_settings *s = t->settings;
+	int n = settings_samples(s), count = t->count, unit = 1, known = 1;
+	double weight[DEVICES_MAX], total = 0, sum = 0;
+
+	for (int k = 0; k < count; k++) {
+		int pass = renderer_pass_samples(s, (long long)s->width * s->height,
+						 t->devs[k].is_gpu);
+		unit = pass > unit ? pass : unit;
+		known &= t->sample_rate[k] > 0;
+	}
+	if ((n + unit - 1) / unit < count)
+		unit = 1; /* tiles_samples_fit: n >= count */
+	int units = (n + unit - 1) / unit, first = 0;
+	for (int k = 0; k < count; k++)
+		total += weight[k] = known ? t->sample_rate[k] : 1;
+	for (int k = 0; k < count; k++) {
+		sum += weight[k];
+		int end = k == count - 1 ? units : (int)(units * sum / total + 0.5);
+		if (end < first + 1)
+			end = first + 1;
+		if (end > units - (count - 1 - k))
+			end = units - (count - 1 - k);
+		int begin = first * unit, stop = end * unit < n ? end * unit : n;
+		t->pieces[k] = renderer_whole_image(s, begin, stop);
+		t->pieces[k].sum_begin = begin;
+		t->owner[k] = k;
+		first = end;
+	}
+	t->piece_count = count;
+}
+
 /* The frames (a warm-up and -r N timed ones, or one), each every band over
  * every device; each frame's wall time recorded in out. Returns the frames
  * rendered, or -1. */
 static int render_tile_frames(struct tiles_job *t, int split_static, struct device_work *work,
 			      struct render_result *out, char *err, size_t err_size)
 {
-	struct multidev_job job = {.piece_count = t->bands,
+	struct multidev_job job = {.piece_count = t->by_samples ? t->count : t->bands,
 				   .split = split_static ? SPLIT_STATIC : SPLIT_DYNAMIC,
 				   .render_piece = render_band,
 				   .take_piece = t->adaptive ? take_tile_piece : NULL,
@@ -551,8 +642,15 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 			adapt_new_frame(&t->adapt);
 			t->piece_count = 0;
 		}
+		if (t->by_samples)
+			split_samples(t);
 		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
 			return -1;
+		for (int k = 0; t->by_samples && k < t->count; k++) /* the next frame's split */
+			t->sample_rate[k] = work[k].last_piece_ms > 0
+						    ? (t->pieces[k].sample_end - t->pieces[k].sample_begin) /
+							      work[k].last_piece_ms
+						    : 0;
 		double wall_ms = (timing_now() - start) * 1e3;
 		repeats_record(out, f, frames, wall_ms, wall_ms);
 	}
@@ -561,7 +659,38 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 
 int tiles_adaptive(enum split split, int piece_rows)
 {
-	return split != SPLIT_STATIC && piece_rows <= 0;
+	return split == SPLIT_DYNAMIC && piece_rows <= 0;
+}
+
+int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows)
+{
+	return settings_samples(s) >= 2 && settings_samples(s) >= count &&
+	       !settings_instrumented(s) && piece_rows <= 0;
+}
+
+int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
+		       enum split *split, char *err, size_t err_size)
+{
+	int n = settings_samples(s), gpus = 0;
+
+	*split = r->split;
+	if (r->split == SPLIT_SAMPLES) {
+		if (n < 2 || n < r->count) {
+			snprintf(err, err_size,
+				 "--split samples shares each pixel's samples between the %d "
+				 "devices: it needs at least %d samples per pixel (--spp or "
+				 "image.samples), and this render has %d",
+				 r->count, r->count > 2 ? r->count : 2, n);
+			return -1;
+		}
+		return 0;
+	}
+	for (int k = 0; k < r->count; k++)
+		gpus += r->devs[k].is_gpu != 0 || hook_devices_as_gpus();
+	if (!given && r->count >= 2 && gpus == r->count &&
+	    tiles_samples_fit(s, r->count, r->piece_rows) && n >= r->count * TILES_SAMPLES_MIN)
+		*split = SPLIT_SAMPLES;
+	return 0;
 }
 
 int tiles_render(const struct tiles_request *r, const struct render_settings *s,
@@ -578,10 +707,11 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows), &map,
 			   r->devs, r->count, err, err_size))
 		return -1;
+	t.by_samples = r->split == SPLIT_SAMPLES;
 	if (open_all(&t, setup, err, err_size))
 		goto out_free;
 	double lap = timing_now();
-	frames = render_tile_frames(&t, r->split == SPLIT_STATIC, work, out, err, err_size);
+	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);
 	progress_end();
 	if (frames < 0 || repeats_end(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;

@@ -42,6 +42,12 @@
  * only a bound. */
 #define TILES_FRONT_WAIT_MS 200
 
+/* By default GPUs split the samples (SPLIT_SAMPLES) when each takes at least
+ * this many of every pixel: each device then reads back 24 bytes of sums a
+ * pixel, twice the image, and the host adds them, which a short render
+ * would not pay back (docs/results/multidevice, batch 70). */
+#define TILES_SAMPLES_MIN 32
+
 /* The order in which pieces take the image's rows (--row-order;
  * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
  * rows, and split row v is image row rt_piece_row(v) (cl/rtcl_shared.h).
@@ -89,6 +95,7 @@ struct tiles_device {
 	struct render_result result;
 	int open;
 	int collected; /* read back */
+	cl_long *sums; /* SPLIT_SAMPLES: its pixels' sums, read after each frame */
 };
 
 /* The pieces of one image on devs[count] of this process: the bands of
@@ -101,6 +108,10 @@ struct tiles_job {
 	int count;
 	int rows, bands;
 	int adaptive;		 /* pieces from `adapt`, not bands */
+	int by_samples;		 /* SPLIT_SAMPLES: piece k, device k's, is the whole
+				    image with a range of the samples */
+	double sample_rate[DEVICES_MAX]; /* by_samples: each device's samples per
+					    ms of its last piece, 0 before */
 	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
@@ -184,6 +195,19 @@ struct tiles_request {
 	enum row_order row_order; /* --row-order */
 	int row_classes;	  /* --row-order interleave:S; 0: the devices */
 };
+
+/* The split of one image over r's devices for --split r->split, given or
+ * not (docs/GUIDE.md, "Several devices"): SPLIT_SAMPLES when asked, and by
+ * default when every device is a GPU and each takes TILES_SAMPLES_MIN
+ * samples of every pixel or more (tiles_samples_fit); else r->split. Returns -1 with one message in
+ * err when --split samples was asked of a render it cannot split. */
+int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
+		       enum split *split, char *err, size_t err_size);
+
+/* Whether a render of settings s can split its samples over `count` devices
+ * (SPLIT_SAMPLES): 2 samples or more, at least one pass of them for each
+ * device, nothing counted or recorded per pixel, no --piece-rows. */
+int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows);
 
 /* Whether the pieces come from the adaptive dispenser (multidev.h): unless
  * --split static or --piece-rows (a fixed band height) asks for bands. */
