@@ -102,15 +102,20 @@ static inline long sample_sum(long a, long b)
 	return a == RT_SUM_SATURATED || b == RT_SUM_SATURATED ? RT_SUM_SATURATED : a + b;
 }
 
+/* Returns a + b, two pixels' sums of three fixed-point channels. */
+static inline long3 sample_sums(long3 a, long3 b)
+{
+	return (long3)(sample_sum(a.x, b.x), sample_sum(a.y, b.y), sample_sum(a.z, b.z));
+}
+
 /* Returns the pixel's sum once a sample's colour is added (docs/RENDERING.md,
  * "Samples per pixel"): the colour in fixed point, its three scalings counted 3; the
  * integer additions are exact and count 0. */
 static inline long3 sample_add(struct tracer *tr, long3 sum, float3 color)
 {
 	COUNT_FLOPS(tr, 3);
-	return (long3)(sample_sum(sum.x, sample_fixed(color.x)),
-		       sample_sum(sum.y, sample_fixed(color.y)),
-		       sample_sum(sum.z, sample_fixed(color.z)));
+	return sample_sums(sum, (long3)(sample_fixed(color.x), sample_fixed(color.y),
+					sample_fixed(color.z)));
 }
 
 /* Returns a channel's mean from its sum: the sum rounded to float, times

@@ -272,10 +272,12 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 		;
 	vstore3(w.color, pixel, image);
 #else
-	/* The sum so far is in the sums buffer, unless this pass starts it;
-	 * the pass that ends the pixel stores its mean instead, and one sample
-	 * its colour as it is (sample.cl). */
-	long3 sum = sample_sum_held(piece, piece->sample_begin) ? vload3(pixel, sums) : (long3)(0);
+	/* The pass's samples are summed from 0 and the sum so far (in the sums
+	 * buffer unless this pass starts it) added after them: integer sums do
+	 * not depend on the order, and the loaded sum is not live across the
+	 * trace. The pass that ends the pixel stores its mean instead, and one
+	 * sample its colour as it is (sample.cl). */
+	long3 sum = (long3)(0);
 
 	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
 		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples), k,
@@ -285,6 +287,8 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 		if (piece->samples > 1)
 			sum = sample_add(tr, sum, w.color);
 	}
+	if (piece->samples > 1 && sample_sum_held(piece, piece->sample_begin))
+		sum = sample_sums(sum, vload3(pixel, sums));
 	if (piece->samples == 1)
 		vstore3(w.color, pixel, image);
 	else if (sample_ends_pixel(piece, piece->sample_end))

@@ -132,6 +132,7 @@ static void in_bands(struct job *j)
 static void static_split(struct job *j)
 {
 	j->split = SPLIT_STATIC;
+	j->split_given = 1;
 }
 static void scan_rows(struct job *j)
 {
@@ -174,7 +175,7 @@ Test(job_digest, each_setting_is_named_as_the_option)
 		{shallower, "--depth 3 against rank 0's --depth 5"},
 		{animated, "--frames 0:2 against rank 0's one image (no --frames)"},
 		{in_bands, "--piece-rows 3 against rank 0's no --piece-rows"},
-		{static_split, "--split static against rank 0's --split dynamic"},
+		{static_split, "--split static against rank 0's --split dynamic (the default)"},
 		{scan_rows, "--row-order scan against rank 0's --row-order interleave"},
 		{three_classes, "--row-order interleave:3 against rank 0's --row-order interleave"},
 		{cyclic, "-k cyclic against rank 0's -k dynamic"},

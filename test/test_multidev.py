@@ -141,11 +141,11 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--mpi", "-r", "2"], "--mpi renders the image once"),
     (["--mpi", "--work-map", "w.png"], "--mpi renders the image once"),
     (["--devices", "0:0,0:1", "--split", "samples", "--piece-rows", "4"],
-     "--split samples renders the whole image on every device of --devices, each a share of "
-     "every pixel's samples; it does not go with --piece-rows (use --split dynamic or static)"),
+     "--split samples renders the whole image on every device, each a share of every pixel's "
+     "samples; it does not go with --piece-rows (use --split dynamic or static)"),
     (["--devices", "0:0,0:1", "--split", "samples", "--work-map", "w.npy"],
      "it does not go with --work-map"),
-    (["--mpi", "--split", "samples"], "it does not go with --mpi"),
+    (["--mpi", "--split", "samples", "--frames", "0:1"], "it does not go with --frames"),
 ])
 def test_option_errors(tmp_path, args, message):
     result = run(*args, "-o", str(tmp_path / "x.png"))
@@ -536,7 +536,7 @@ def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
     # After the warm-up frame the ranges follow the devices' rates: the
     # device slowed 4 times takes fewer samples. GPUs alone take the sample
     # split by default (RTCL_TEST_AS_GPUS: the PoCL devices count as GPUs).
-    common = [*TALL, "--spp", "64"]  # 32 a device or more: the default split
+    common = [*TALL, "--spp", "256"]  # 128 a device or more: the default split
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
     assert one.returncode == 0, one.stderr
     result = run(*common, "--devices", "0:0,0:1", "-r", "2", "-o", str(tmp_path / "two.ppm"),
@@ -646,6 +646,26 @@ def test_mpi_gpus_alone_take_a_class_each_under_the_dynamic_split(tmp_path):
         assert md["split"] == "dynamic" and md["bands"] == bands, md
         assert sum(d["pieces"] for d in md["devices"]) == bands
         assert md["row_classes"] == 3
+
+
+@needs_mpi
+def test_mpi_gpus_alone_split_the_samples_and_match_one_device(tmp_path):
+    # Three ranks of one GPU each (RTCL_TEST_AS_GPUS) at 128 samples a device
+    # or more: every rank renders the whole image, a third of the samples in
+    # whole passes, and sends its sums to rank 0, which adds them: one
+    # device's image, every pixel written once a pass on each (CHECK).
+    common = [*TALL, "--spp", "384", "-k", "dynamic"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = mpi_run(*common, "-o", str(tmp_path / "ranks.ppm"), "--stats",
+                     str(tmp_path / "s.json"), env={**CHECK, "RTCL_TEST_AS_GPUS": "1"})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert md["split"] == "samples" and md["piece"] == "sample range", md
+    assert [d["pieces"] for d in md["devices"]] == [1, 1, 1]
+    assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
+    assert abs(sum(d["pixels"] for d in md["devices"]) - 24 * 48) <= 2
 
 
 @needs_mpi

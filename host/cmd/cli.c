@@ -171,7 +171,7 @@ static void print_help_after_kernels(FILE *out)
 		"                         samples: every device renders the whole image, a\n"
 		"                         share of each pixel's samples by its speed, the same\n"
 		"                         image (default: samples if every device is a GPU\n"
-		"                         and each gets a whole pass, else dynamic)\n"
+		"                         and each takes 128 samples or more, else dynamic)\n"
 		"      --frames A:B       render frames A to B (0..99999, at most %d), the\n"
 		"                         camera's eye turned about look_at along up by\n"
 		"                         360 (f-A)/(B-A+1) degrees; -o out.png writes\n"
@@ -792,17 +792,16 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 		return -1;
 	}
 	if (o->split == SPLIT_SAMPLES && o->split_given) {
-		const char *other = o->mpi				? "--mpi"
-				    : o->frames_given			? "--frames"
+		const char *other = o->frames_given			? "--frames"
 				    : o->piece_rows > 0			? "--piece-rows"
 				    : o->outputs.work_map		? "--work-map"
 				    : o->outputs.schedule_map		? "--schedule-map"
 								: NULL;
 		if (other) {
 			snprintf(err, err_size,
-				 "--split samples renders the whole image on every device of "
-				 "--devices, each a share of every pixel's samples; it does not "
-				 "go with %s (use --split dynamic or static)",
+				 "--split samples renders the whole image on every device, each a "
+				 "share of every pixel's samples; it does not go with %s (use "
+				 "--split dynamic or static)",
 				 other);
 			return -1;
 		}

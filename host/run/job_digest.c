@@ -23,7 +23,8 @@ void job_digest_fill(const struct job *job, struct job_digest *d)
 	v[JOB_FRAME_FIRST] = job->animation ? job->first_frame : 0;
 	v[JOB_FRAME_LAST] = job->animation ? job->last_frame : 0;
 	v[JOB_PIECE_ROWS] = job->piece_rows;
-	v[JOB_SPLIT_STATIC] = job->split == SPLIT_STATIC;
+	/* The split and whether it was given: the default chooses. */
+	v[JOB_SPLIT_STATIC] = (int)job->split + 3 * (job->split_given != 0);
 	v[JOB_ROW_ORDER] = job->row_order;
 	v[JOB_ROW_CLASSES] = job->row_classes;
 	v[JOB_KERNEL] = s->kernel ? s->kernel - render_kernels : -1;
@@ -73,7 +74,8 @@ static void show_setting(const long long *v, enum job_setting first, char *out, 
 			snprintf(out, size, "no --piece-rows");
 		break;
 	case JOB_SPLIT_STATIC:
-		snprintf(out, size, "--split %s", v[JOB_SPLIT_STATIC] ? "static" : "dynamic");
+		snprintf(out, size, "--split %s%s", split_name((enum split)(v[JOB_SPLIT_STATIC] % 3)),
+			 v[JOB_SPLIT_STATIC] >= 3 ? "" : " (the default)");
 		break;
 	case JOB_ROW_ORDER:
 		if (v[JOB_ROW_ORDER] == ROWS_INTERLEAVE && v[JOB_ROW_CLASSES])

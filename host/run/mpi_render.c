@@ -46,6 +46,8 @@ struct mpi_job {
 	struct device_work work[DEVICES_MAX];
 	int taken;			/* pieces this rank took (the test-only rank death) */
 	int image;			/* one image in bands (tiles.h), not --frames */
+	int by_samples;			/* image: each device a range of the samples
+					   (SPLIT_SAMPLES), not bands */
 	int pieces;			/* frames, or bands */
 	struct tiles_job tiles;		/* image: this rank's devices and bands */
 	int device_failed[DEVICES_MAX]; /* image: a piece of this device failed */
@@ -62,6 +64,8 @@ struct mpi_job {
 	struct device *all_devs;
 	struct device_work *all_work;
 	int *arrived; /* image: how often each band arrived */
+	cl_long *sums;	 /* by_samples: the devices' sums added so far */
+	char *received; /* by_samples: where another rank's sums arrive */
 	double wall_ms;
 	int initialized; /* MPI_Init_thread succeeded */
 	int threads;	 /* with MPI_THREAD_MULTIPLE */
@@ -172,12 +176,16 @@ static int take_rank_piece(void *context, int device)
 	return piece;
 }
 
+/* A result message starts with the piece's number in a header of 8 bytes, so
+ * that the floats or cl_long after it are aligned. */
+#define RESULT_HEADER 8
+
 /* A message to rank 0 of a piece's number and bytes of pixels, the pixels
  * left for the caller to write at result_pixels(message); NULL (with err
  * set) when it cannot be made. */
 static char *result_message(int piece, size_t bytes, char *err, size_t err_size)
 {
-	char *message = bytes + sizeof(int) <= INT_MAX ? malloc(sizeof(int) + bytes) : NULL;
+	char *message = bytes + RESULT_HEADER <= INT_MAX ? calloc(1, RESULT_HEADER + bytes) : NULL;
 
 	if (!message) {
 		snprintf(err, err_size,
@@ -192,13 +200,13 @@ static char *result_message(int piece, size_t bytes, char *err, size_t err_size)
 
 static float *result_pixels(char *message)
 {
-	return (float *)(message + sizeof(int));
+	return (float *)(message + RESULT_HEADER);
 }
 
 /* Sends and frees a result_message of `bytes` bytes of pixels. */
 static int send_message(char *message, size_t bytes, char *err, size_t err_size)
 {
-	int status = MPI_Send(message, (int)(sizeof(int) + bytes), MPI_BYTE, ROOT, TAG_RESULT,
+	int status = MPI_Send(message, (int)(RESULT_HEADER + bytes), MPI_BYTE, ROOT, TAG_RESULT,
 			      MPI_COMM_WORLD);
 
 	free(message);
@@ -219,6 +227,39 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 		return -1;
 	memcpy(result_pixels(message), rgb, bytes);
 	return send_message(message, bytes, err, err_size);
+}
+
+/* Sends a piece's bytes to rank 0 as send_result does, from where they lie:
+ * one message of the header and the bytes (a datatype of the two), no copy
+ * (a device's sums are 24 bytes a pixel). */
+static int send_in_place(int piece, const void *data, size_t bytes, char *err, size_t err_size)
+{
+	char header[RESULT_HEADER] = {0};
+	int lengths[2] = {RESULT_HEADER, (int)bytes};
+	MPI_Aint places[2];
+	MPI_Datatype type;
+	int status;
+
+	if (bytes + RESULT_HEADER > INT_MAX) {
+		snprintf(err, err_size, "cannot send a piece of %zu bytes to rank 0 (at most 2 GiB)",
+			 bytes);
+		return -1;
+	}
+	memcpy(header, &piece, sizeof(int));
+	MPI_Get_address(header, &places[0]);
+	MPI_Get_address(data, &places[1]);
+	status = MPI_Type_create_hindexed(2, lengths, places, MPI_BYTE, &type);
+	if (status == MPI_SUCCESS) {
+		status = MPI_Type_commit(&type);
+		if (status == MPI_SUCCESS)
+			status = MPI_Send(MPI_BOTTOM, 1, type, ROOT, TAG_RESULT, MPI_COMM_WORLD);
+		MPI_Type_free(&type);
+	}
+	if (status != MPI_SUCCESS) {
+		snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)", status);
+		return -1;
+	}
+	return 0;
 }
 
 /* Rank 0: keeps a frame's pixels (malloc'd, taken) until every frame has
@@ -292,6 +333,42 @@ static void place_band(struct mpi_job *j, int band, const float *rgb)
 	tiles_pack_piece(&p, j->settings.width, rgb, j->record->result.rgb, 1);
 }
 
+/* Rank 0, by_samples: piece g's sums (device g's range of the samples) added
+ * to the image's. */
+static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
+{
+	const struct render_settings *s = &j->settings;
+
+	pthread_mutex_lock(&j->lock);
+	tiles_add_sums(j->sums, sums, 3 * (size_t)s->width * s->height);
+	j->arrived[piece]++;
+	pthread_mutex_unlock(&j->lock);
+}
+
+/* By_samples: the device is done: its sums to rank 0 (one message), or on
+ * rank 0 into the image's. */
+static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
+{
+	struct tiles_job *t = &j->tiles;
+	const struct render_settings *s = &j->settings;
+	size_t bytes = image_sum_bytes(s->width, s->height);
+
+	if (t->settings->check_writes && (tiles_collect(t, device, err, err_size) ||
+					  tiles_check_device(t, device, err, err_size)))
+		return -1;
+	for (int g = 0; g < t->piece_count; g++) {
+		if (t->owner[g] != device)
+			continue;
+		if (j->rank == ROOT) {
+			add_piece_sums(j, g, t->dev[device].sums);
+			continue;
+		}
+		if (send_in_place(g, t->dev[device].sums, bytes, err, err_size))
+			return -1;
+	}
+	return 0;
+}
+
 /* Image: the device is done: reads back the bands it rendered, and only
  * those, straight into the image (rank 0) or into each band's message to
  * rank 0: one copy of its pixels. Under check_writes the whole image and its
@@ -334,7 +411,9 @@ static void finish_bands(struct mpi_job *j, int device)
 	char err[MESSAGE_SIZE], message[MESSAGE_SIZE + 600];
 	const struct device *d = &j->devs[device];
 
-	if (j->device_failed[device] || send_bands(j, device, err, sizeof(err)) == 0)
+	if (j->device_failed[device] ||
+	    (j->by_samples ? send_sums(j, device, err, sizeof(err))
+			   : send_bands(j, device, err, sizeof(err))) == 0)
 		return;
 	snprintf(message, sizeof(message), "device %d:%d (%s): %s", d->platform_index,
 		 d->device_index, d->name, err);
@@ -371,6 +450,10 @@ static double piece_work(const struct mpi_job *j, int piece)
 
 	if (!j->image)
 		return repeats_image_work(s);
+	if (j->by_samples) {
+		const struct rt_piece *p = &j->tiles.pieces[piece];
+		return (double)p->width * p->height * (p->sample_end - p->sample_begin);
+	}
 	struct rt_piece p = tiles_job_band(&j->tiles, piece, 0, 1);
 	return (double)p.width * p.height * p.samples;
 }
@@ -402,6 +485,8 @@ static size_t piece_bytes(const struct mpi_job *j, int piece)
 
 	if (!j->image)
 		return image_float_bytes(s->width, s->height);
+	if (j->by_samples)
+		return image_sum_bytes(s->width, s->height);
 	p = tiles_job_band(&j->tiles, piece, 0, 1);
 	return image_float_bytes(p.width, p.height);
 }
@@ -412,26 +497,32 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	int bytes = 0, piece = -1;
 
 	MPI_Get_count(status, MPI_BYTE, &bytes);
-	message = malloc(bytes > 0 ? (size_t)bytes : 1);
+	/* A device's sums go to the buffer kept for them (its pages touched
+	 * before the render), others to one of their own. */
+	int kept = j->by_samples && (size_t)bytes == RESULT_HEADER + piece_bytes(j, 0);
+	message = kept ? j->received : malloc(bytes > 0 ? (size_t)bytes : 1);
 	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
 		 MPI_STATUS_IGNORE);
-	if (message && (size_t)bytes >= sizeof(int))
+	if (message && (size_t)bytes >= RESULT_HEADER)
 		memcpy(&piece, message, sizeof(int));
-	const float *rgb = (const float *)(message + sizeof(int));
+	const float *rgb = (const float *)(message + RESULT_HEADER);
 	if (piece < 0 || piece >= piece_count(j)) {
 		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
-	} else if ((size_t)bytes != sizeof(int) + piece_bytes(j, piece)) {
+	} else if ((size_t)bytes != RESULT_HEADER + piece_bytes(j, piece)) {
 		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
+	} else if (j->by_samples) {
+		add_piece_sums(j, piece, (const cl_long *)(message + RESULT_HEADER));
 	} else if (j->image) {
 		place_band(j, piece, rgb);
 	} else {
 		/* The frame's floats to the front: the buffer becomes the frame. */
-		memmove(message, rgb, (size_t)bytes - sizeof(int));
+		memmove(message, rgb, (size_t)bytes - RESULT_HEADER);
 		if (hold_frame(j, piece, (float *)message, err, sizeof(err)))
 			record_failure(j, status->MPI_SOURCE, err);
 		return;
 	}
-	free(message);
+	if (!kept)
+		free(message);
 }
 
 static void serve_fail(struct mpi_job *j, const MPI_Status *status)
@@ -554,7 +645,7 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 	j->current = malloc((size_t)j->total * sizeof(int));
 	if (!j->rank_of || !j->all_devs || !j->all_work || !j->current ||
 	    dispenser_init(&j->dispenser, piece_count(j), j->total,
-			   j->job->split))
+			   j->by_samples ? SPLIT_STATIC : j->job->split))
 		return -1;
 	for (int g = 0; g < j->total; g++)
 		j->current[g] = -1;
@@ -589,8 +680,32 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 			   0, &map, j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
+	/* GPUs alone split the samples by default, as in one process
+	 * (tiles_choose_split): every device the whole image, an equal range
+	 * of the samples in whole passes, its sums to rank 0. */
+	j->by_samples = job->split == SPLIT_SAMPLES ||
+			(!job->split_given && gpus == total && total >= 2 &&
+			 tiles_samples_fit(s, total, job->piece_rows) &&
+			 settings_samples(s) >= total * TILES_SAMPLES_MIN);
+	if (j->by_samples) {
+		if (tiles_split_samples(&j->tiles, total,
+					renderer_pass_samples(s, (long long)s->width * s->height, 1),
+					NULL))
+			return -1;
+		j->pieces = total;
+	}
 	if (j->rank != ROOT)
 		return 0;
+	if (j->by_samples) {
+		size_t bytes = image_sum_bytes(s->width, s->height);
+		j->sums = malloc(bytes);
+		j->received = malloc(RESULT_HEADER + bytes);
+		if (!j->sums || !j->received)
+			return -1;
+		/* Zero and touched, as the image below. */
+		memset(j->sums, 0, bytes);
+		memset(j->received, 0, RESULT_HEADER + bytes);
+	}
 	j->arrived = calloc((size_t)j->pieces, sizeof(int));
 	j->record->result.rgb = malloc(image_float_bytes(s->width, s->height));
 	if (!j->arrived || !j->record->result.rgb)
@@ -681,6 +796,8 @@ static int assemble_image(struct mpi_job *j, double wall_ms)
 	res->frame_ms[0] = res->frame_ms_median = wall_ms;
 	res->repeat = res->launches = 1;
 	res->passes = 1;
+	if (j->by_samples)
+		tiles_mean_of_sums(&j->settings, j->sums, res->rgb);
 	tiles_copy_facts(&j->tiles.dev[0].result, res);
 	record_device(record, &j->devs[0]);
 	snprintf(record->device.name, sizeof(record->device.name),
@@ -706,8 +823,8 @@ static int finish_root(struct mpi_job *j)
 		.work = j->all_work,
 		.count = j->total,
 		.ranks_count = j->image ? j->size : 0,
-		.split = j->job->split,
-		.piece = j->image ? "band" : "frame",
+		.split = j->by_samples ? SPLIT_SAMPLES : j->job->split,
+		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
 		.wall_ms = j->wall_ms,
 		.row_order_given = j->image,
 	};
@@ -729,7 +846,9 @@ static int render_all(struct mpi_job *j)
 {
 	struct multidev_job job = {.piece_count = piece_count(j),
 				   .split =
-					   j->job->split == SPLIT_STATIC ? SPLIT_STATIC : SPLIT_DYNAMIC,
+					   j->job->split == SPLIT_DYNAMIC && !j->by_samples
+						   ? SPLIT_DYNAMIC
+						   : SPLIT_STATIC,
 				   .begin = j->image ? open_rank_device : NULL,
 				   .render_piece = render_rank_piece,
 				   .end = device_done,
@@ -770,6 +889,8 @@ static void free_job(struct mpi_job *j)
 	tiles_job_free(&j->tiles); /* the renderers, before their devices */
 	devices_close(j->devs, j->count);
 	free(j->arrived);
+	free(j->sums);
+	free(j->received);
 	free(j->first);
 	free(j->rank_of);
 	dispenser_free(&j->dispenser);

@@ -5,6 +5,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
 #include "base/test_hooks.h"
 #include "render/repeats.h"
@@ -231,6 +232,22 @@ void tiles_job_free(struct tiles_job *t)
 	pthread_cond_destroy(&t->asked);
 }
 
+/* SPLIT_SAMPLES: device k's host copy of its sums, its pages touched. */
+static int alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	size_t bytes = image_sum_bytes(t->settings->width, t->settings->height);
+
+	if (!t->dev[k].sums)
+		t->dev[k].sums = malloc(bytes);
+	if (!t->dev[k].sums) {
+		snprintf(err, err_size, "out of host memory for the sample sums of a %dx%d image",
+			 t->settings->width, t->settings->height);
+		return -1;
+	}
+	memset(t->dev[k].sums, 0, bytes);
+	return 0;
+}
+
 int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 {
 	struct tiles_device *d = &t->dev[k];
@@ -241,7 +258,9 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 			  err_size))
 		return -1;
 	d->open = 1;
-	return 0;
+	/* SPLIT_SAMPLES: the host copy of its sums, touched now, before the
+	 * frames' clock, not in the frame that first reads into it. */
+	return t->by_samples ? alloc_sums(t, k, err, err_size) : 0;
 }
 
 /* Adds piece's launches to the expected write counts (check_writes). */
@@ -258,16 +277,7 @@ static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, 
  * frame (the image is not done before). */
 static int read_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 {
-	struct tiles_device *d = &t->dev[k];
-
-	if (!d->sums)
-		d->sums = malloc(image_sum_bytes(t->settings->width, t->settings->height));
-	if (!d->sums) {
-		snprintf(err, err_size, "out of host memory for the sample sums of a %dx%d image",
-			 t->settings->width, t->settings->height);
-		return -1;
-	}
-	return renderer_read_sums(&d->renderer, d->sums, err, err_size);
+	return renderer_read_sums(&t->dev[k].renderer, t->dev[k].sums, err, err_size);
 }
 
 int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
@@ -383,11 +393,14 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	const struct render_settings *s = t->settings;
 	const uint32_t *counts = t->dev[k].result.write_counts;
 
-	if (counts && t->by_samples) /* every pixel, once a pass of its piece */
-		return tiles_check_counts(counts, s->width, s->height,
-					  (uint32_t)tiles_piece_launches(s, &t->pieces[k],
-									 t->devs[k].is_gpu),
-					  err, err_size);
+	if (counts && t->by_samples) { /* every pixel, once a pass of its pieces */
+		uint32_t expected = 0;
+		for (int b = 0; b < t->piece_count; b++)
+			if (t->owner[b] == k)
+				expected += (uint32_t)tiles_piece_launches(s, &t->pieces[b],
+									    t->devs[k].is_gpu);
+		return tiles_check_counts(counts, s->width, s->height, expected, err, err_size);
+	}
 	for (int b = 0; counts && b < t->piece_count; b++) {
 		const struct rt_piece *p = &t->pieces[b];
 		uint32_t expected =
@@ -511,24 +524,84 @@ static int record_pieces(const struct tiles_job *t, struct render_result *out)
 	return 0;
 }
 
-/* SPLIT_SAMPLES: the image from the devices' sums of the last frame, by
- * RENDERING.md's rule ("Samples per pixel"): their sum, saturated if any is,
- * then float(S) times the mean's scale, as a kernel's last pass takes it. */
-static void add_sums(const struct tiles_job *t, float *rgb)
-{
-	const struct render_settings *s = t->settings;
-	size_t values = 3 * (size_t)s->width * s->height;
-	float scale = settings_mean_scale(settings_samples(s));
+/* Part of combine_sums: values [begin, end) of the parts' sums. */
+struct sums_range {
+	const cl_long *const *parts;
+	int count;
+	cl_long *to;
+	float *rgb;
+	float scale;
+	size_t begin, end;
+};
 
-	for (size_t i = 0; i < values; i++) {
+static void *combine_range(void *arg)
+{
+	const struct sums_range *r = arg;
+
+	for (size_t i = r->begin; i < r->end; i++) {
 		cl_long sum = 0;
-		for (int k = 0; k < t->count; k++) {
-			cl_long part = t->dev[k].sums[i];
+		for (int k = 0; k < r->count; k++) {
+			cl_long part = r->parts[k][i];
 			sum = sum == RT_SUM_SATURATED || part == RT_SUM_SATURATED ? RT_SUM_SATURATED
 										  : sum + part;
 		}
-		rgb[i] = sum == RT_SUM_SATURATED ? INFINITY : (float)sum * scale;
+		if (r->to)
+			r->to[i] = sum;
+		if (r->rgb)
+			r->rgb[i] = sum == RT_SUM_SATURATED ? INFINITY : (float)sum * r->scale;
 	}
+	return NULL;
+}
+
+/* The sum of `count` parts' fixed-point sums, `values` of them, into to
+ * and/or their means into rgb, over up to TILES_SUM_THREADS threads (a 2000 x
+ * 2000 image is 12 million sums: memory-bound, about 40 ms on one core). */
+static void combine_sums(const cl_long *const *parts, int count, cl_long *to, float *rgb,
+			 float scale, size_t values)
+{
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	int threads = cores < 1 ? 1 : cores > TILES_SUM_THREADS ? TILES_SUM_THREADS : (int)cores;
+	struct sums_range ranges[TILES_SUM_THREADS];
+	pthread_t ids[TILES_SUM_THREADS];
+	int started[TILES_SUM_THREADS] = {0};
+
+	if (values < ((size_t)1 << 16))
+		threads = 1;
+	for (int i = 0; i < threads; i++) {
+		ranges[i] = (struct sums_range){parts, count, to, rgb, scale, values * i / threads,
+						values * (i + 1) / threads};
+		started[i] = i > 0 && pthread_create(&ids[i], NULL, combine_range, &ranges[i]) == 0;
+	}
+	for (int i = 0; i < threads; i++)
+		if (!started[i]) /* the first, and any the system would not start */
+			combine_range(&ranges[i]);
+	for (int i = 1; i < threads; i++)
+		if (started[i])
+			pthread_join(ids[i], NULL);
+}
+
+void tiles_add_sums(cl_long *to, const cl_long *from, size_t values)
+{
+	const cl_long *parts[2] = {to, from};
+
+	combine_sums(parts, 2, to, NULL, 0, values);
+}
+
+void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb)
+{
+	combine_sums(&sums, 1, NULL, rgb, settings_mean_scale(settings_samples(s)),
+		     3 * (size_t)s->width * s->height);
+}
+
+/* SPLIT_SAMPLES: the image from the devices' sums of the last frame. */
+static void add_sums(const struct tiles_job *t, float *rgb)
+{
+	const cl_long *parts[DEVICES_MAX];
+
+	for (int k = 0; k < t->count; k++)
+		parts[k] = t->dev[k].sums;
+	combine_sums(parts, t->count, NULL, rgb, settings_mean_scale(settings_samples(t->settings)),
+		     3 * (size_t)t->settings->width * t->settings->height);
 }
 
 /* Reads every device back and assembles the image (and counts) in out. */
@@ -546,7 +619,9 @@ static int assemble(struct tiles_job *t, struct render_result *out, char *err, s
 			 s->height);
 		return -1;
 	}
-	for (int k = 0; k < t->count; k++)
+	/* Split samples leave no image on the devices: only the write counts
+	 * and guards, when checked, are read. */
+	for (int k = 0; k < t->count && (!t->by_samples || s->check_writes); k++)
 		if (tiles_collect(t, k, err, err_size))
 			return -1;
 	if (t->by_samples)
@@ -580,41 +655,75 @@ static int open_all(struct tiles_job *t, struct device_work *setup, char *err, s
 	return multidev_run(&job, t->devs, t->count, setup, err, err_size);
 }
 
-/* SPLIT_SAMPLES: piece k is the whole image with device k's range of the
- * samples, in whole passes (the largest of the devices' pass sizes) shared
- * by the rates of the last frame (equal in the first), each device at least
- * one; the ranges follow one another from sample 0. */
-static void split_samples(struct tiles_job *t)
+int tiles_split_samples(struct tiles_job *t, int total, int unit, const double *rate)
 {
 	const struct render_settings *s = t->settings;
-	int n = settings_samples(s), count = t->count, unit = 1, known = 1;
-	double weight[DEVICES_MAX], total = 0, sum = 0;
+	int n = settings_samples(s);
+	double weight_sum = 0, sum = 0;
 
-	for (int k = 0; k < count; k++) {
-		int pass = renderer_pass_samples(s, (long long)s->width * s->height,
-						 t->devs[k].is_gpu);
-		unit = pass > unit ? pass : unit;
-		known &= t->sample_rate[k] > 0;
+	if (total > t->piece_cap) {
+		struct rt_piece *pieces = realloc(t->pieces, (size_t)total * sizeof(*pieces));
+		if (pieces)
+			t->pieces = pieces;
+		int *owner = realloc(t->owner, (size_t)total * sizeof(int));
+		if (owner)
+			t->owner = owner;
+		double *ms = realloc(t->piece_ms, (size_t)total * 3 * sizeof(double));
+		if (ms)
+			t->piece_ms = ms;
+		if (!pieces || !owner || !ms)
+			return -1;
+		memset(t->piece_ms, 0, (size_t)total * 3 * sizeof(double));
+		t->piece_cap = total;
 	}
-	if ((n + unit - 1) / unit < count)
-		unit = 1; /* tiles_samples_fit: n >= count */
+	if ((n + unit - 1) / unit < total)
+		unit = 1; /* tiles_samples_fit: n >= total */
 	int units = (n + unit - 1) / unit, first = 0;
-	for (int k = 0; k < count; k++)
-		total += weight[k] = known ? t->sample_rate[k] : 1;
-	for (int k = 0; k < count; k++) {
-		sum += weight[k];
-		int end = k == count - 1 ? units : (int)(units * sum / total + 0.5);
+	for (int k = 0; k < total; k++)
+		weight_sum += rate ? rate[k] : 1;
+	for (int k = 0; k < total; k++) {
+		sum += rate ? rate[k] : 1;
+		int end = k == total - 1 ? units : (int)(units * sum / weight_sum + 0.5);
 		if (end < first + 1)
 			end = first + 1;
-		if (end > units - (count - 1 - k))
-			end = units - (count - 1 - k);
+		if (end > units - (total - 1 - k))
+			end = units - (total - 1 - k);
 		int begin = first * unit, stop = end * unit < n ? end * unit : n;
 		t->pieces[k] = renderer_whole_image(s, begin, stop);
 		t->pieces[k].sum_begin = begin;
-		t->owner[k] = k;
+		t->owner[k] = -1;
 		first = end;
 	}
-	t->piece_count = count;
+	t->piece_count = total;
+	t->by_samples = 1;
+	return 0;
+}
+
+int tiles_sample_unit(const struct render_settings *s, const struct device *devs, int count)
+{
+	int unit = 1;
+
+	for (int k = 0; k < count; k++) {
+		int pass = renderer_pass_samples(s, (long long)s->width * s->height,
+						 devs[k].is_gpu);
+		unit = pass > unit ? pass : unit;
+	}
+	return unit;
+}
+
+/* SPLIT_SAMPLES in this process: device k's range is piece k, shared by the
+ * rates of the last frame (equal in the first). */
+static void split_samples(struct tiles_job *t)
+{
+	int known = 1;
+
+	for (int k = 0; k < t->count; k++)
+		known &= t->sample_rate[k] > 0;
+	/* The pieces hold one per device already (tiles_job_init). */
+	tiles_split_samples(t, t->count, tiles_sample_unit(t->settings, t->devs, t->count),
+			    known ? t->sample_rate : NULL);
+	for (int k = 0; k < t->count; k++)
+		t->owner[k] = k;
 }
 
 /* The frames (a warm-up and -r N timed ones, or one), each every band over

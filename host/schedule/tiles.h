@@ -44,9 +44,14 @@
 
 /* By default GPUs split the samples (SPLIT_SAMPLES) when each takes at least
  * this many of every pixel: each device then reads back 24 bytes of sums a
- * pixel, twice the image, and the host adds them, which a short render
- * would not pay back (docs/results/multidevice, batch 70). */
-#define TILES_SAMPLES_MIN 32
+ * pixel, twice the image, and the host adds them, which a short render does
+ * not pay back. Two H200s, default scene 2000x2000 (batch 70): 64 spp took
+ * 34.4 ms split by samples, 26.2 by pixels; 256 spp 104.6 and 100.8; 2048
+ * spp 755 and 808. */
+#define TILES_SAMPLES_MIN 128
+
+/* The most threads that add devices' sums (tiles_add_sums). */
+#define TILES_SUM_THREADS 8
 
 /* The order in which pieces take the image's rows (--row-order;
  * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
@@ -208,6 +213,26 @@ int tiles_choose_split(const struct tiles_request *r, const struct render_settin
  * (SPLIT_SAMPLES): 2 samples or more, at least one pass of them for each
  * device, nothing counted or recorded per pixel, no --piece-rows. */
 int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows);
+
+/* SPLIT_SAMPLES: makes the job's pieces 0..total-1 the whole image, each
+ * with a range of every pixel's samples (sum_begin its first), in whole
+ * passes of `unit` samples (1 when there are fewer passes than pieces),
+ * shared by rate[] (NULL: equally), each piece at least one; the ranges
+ * follow one another from sample 0. Piece k is global device k's: under
+ * --mpi, of every rank's devices. Returns 0, or -1 when out of memory. */
+int tiles_split_samples(struct tiles_job *t, int total, int unit, const double *rate);
+
+/* The samples a pass takes on the slowest of devs (the largest
+ * renderer_pass_samples of the whole image): the unit of the sample split. */
+int tiles_sample_unit(const struct render_settings *s, const struct device *devs, int count);
+
+/* to[i] += from[i] for `values` fixed-point sums, saturated if either is. */
+void tiles_add_sums(cl_long *to, const cl_long *from, size_t values);
+
+/* The image's mean colours from every pixel's sum of all its samples
+ * (docs/RENDERING.md, "Samples per pixel"): float(S) times the mean's
+ * scale, as a kernel's last pass takes it; +inf where saturated. */
+void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb);
 
 /* Whether the pieces come from the adaptive dispenser (multidev.h): unless
  * --split static or --piece-rows (a fixed band height) asks for bands. */
