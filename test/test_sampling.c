@@ -180,3 +180,90 @@ Test(sampling, kernels_place_samples_as_the_reference, .timeout = 120)
 	clReleaseProgram(program);
 	device_close(&dev);
 }
+
+/* A sample's colour channel in fixed point (RENDERING.md, "Samples per
+ * pixel"): cl/sample.cl's integer conversion against round(c * 2^24) in
+ * double (exact for |c| < 2^22), ties to even, saturation at 2^22, inf and
+ * NaN, and -2^22 for anything below it; built both ways, the kernels'
+ * integer shifts and OpenCL's convert_long_rte (RTCL_FIX_CONVERT). */
+static const char fixed_test[] = "__kernel void fixed(__global const float *in, __global long *out)\n"
+				 "{\n"
+				 "	out[get_global_id(0)] = sample_fixed(in[get_global_id(0)]);\n"
+				 "}\n";
+
+static long long fixed_reference(float c)
+{
+	if (!(c < 0x1p22f))
+		return RT_SUM_SATURATED;
+	if (c < -0x1p22f)
+		c = -0x1p22f;
+	return llrint((double)c * 0x1p24); /* the default mode: to nearest, ties to even */
+}
+
+#define FIXED_CASES 8192
+
+Test(sampling, colours_go_to_fixed_point_as_the_rule_says, .timeout = 120)
+{
+	const char *sources[4] = {embedded_file("rtcl_shared.h"), embedded_file("tracer.cl"),
+				  embedded_file("sample.cl"), fixed_test};
+	static const char *const options[] = {"-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1",
+					      "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_FIX_CONVERT"};
+	static cl_float in[FIXED_CASES];
+	static cl_long out[FIXED_CASES];
+	static const float special[] = {0.0f, -0.0f, 1.0f, -1.0f, 0x1p-25f, 0x1.8p-25f,
+					0x1p-24f, 0x1.8p-24f, 0x1.4p-23f, 0x1.8p-23f, 0x1p-126f,
+					0x1p-149f, 0x1p22f, -0x1p22f, 0x1.fffffep21f,
+					-0x1.fffffep21f, 1e30f, -1e30f, INFINITY, -INFINITY, NAN};
+	struct device dev;
+	cl_int status;
+	unsigned seed = 12345;
+
+	for (int i = 0; i < FIXED_CASES; i++) {
+		if (i < (int)(sizeof(special) / sizeof(special[0]))) {
+			in[i] = special[i];
+			continue;
+		}
+		seed = seed * 1103515245u + 12345u;
+		if (i % 3 == 0) { /* a tie: k + 1/2 steps of 2^-24, k of either parity */
+			in[i] = ((float)(seed >> 12 & 0xfffff) + 0.5f) * 0x1p-24f * (i % 2 ? 1 : -1);
+			continue;
+		}
+		/* Any bit pattern with an exponent from 2^-40 to 2^23 (past the limit). */
+		unsigned bits = (seed & 0x807fffffu) | ((unsigned)(87 + (seed >> 8) % 64) << 23);
+		memcpy(&in[i], &bits, sizeof(float));
+	}
+	cr_assert_eq(device_open(&dev, -1, -1, err, sizeof(err)), 0, "%s", err);
+	for (int o = 0; o < 2; o++) {
+		cl_program program = clCreateProgramWithSource(dev.context, 4, sources, NULL, &status);
+		cr_assert_eq(status, CL_SUCCESS);
+		status = clBuildProgram(program, 1, &dev.id, options[o], NULL, NULL);
+		if (status != CL_SUCCESS) {
+			clGetProgramBuildInfo(program, dev.id, CL_PROGRAM_BUILD_LOG, sizeof(err),
+					      err, NULL);
+			cr_assert_fail("build failed: %s", err);
+		}
+		cl_kernel kernel = clCreateKernel(program, "fixed", &status);
+		cr_assert_eq(status, CL_SUCCESS);
+		cl_mem bufs[2] = {clCreateBuffer(dev.context, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
+						 sizeof(in), in, &status),
+				  clCreateBuffer(dev.context, CL_MEM_WRITE_ONLY, sizeof(out), NULL,
+						 &status)};
+		for (cl_uint a = 0; a < 2; a++)
+			clSetKernelArg(kernel, a, sizeof(cl_mem), &bufs[a]);
+		size_t global = FIXED_CASES;
+		cr_assert_eq(clEnqueueNDRangeKernel(dev.queue, kernel, 1, NULL, &global, NULL, 0,
+						    NULL, NULL),
+			     CL_SUCCESS);
+		clEnqueueReadBuffer(dev.queue, bufs[1], CL_TRUE, 0, sizeof(out), out, 0, NULL,
+				    NULL);
+		for (int i = 0; i < FIXED_CASES; i++)
+			cr_assert_eq(out[i], fixed_reference(in[i]),
+				     "%s: %a (%.9g) became %lld, want %lld", options[o], in[i],
+				     in[i], (long long)out[i], fixed_reference(in[i]));
+		for (int a = 0; a < 2; a++)
+			clReleaseMemObject(bufs[a]);
+		clReleaseKernel(kernel);
+		clReleaseProgram(program);
+	}
+	device_close(&dev);
+}
