@@ -669,6 +669,16 @@ def test_mpi_gpus_alone_split_the_samples_and_match_one_device(tmp_path):
 
 
 @needs_mpi
+def test_mpi_sample_split_needs_a_sample_per_device(tmp_path):
+    result = mpi_run(*SMALL, "--split", "samples", "--spp", "2", "-o", str(tmp_path / "x.ppm"))
+    assert result.returncode == 2, result.stderr
+    assert own_messages(result.stderr) == [
+        "rtcl: --split samples shares each pixel's samples between the 3 devices: it needs "
+        "at least 3 samples per pixel (--spp or image.samples), and this render has 2"]
+    assert os.listdir(tmp_path) == []
+
+
+@needs_mpi
 @pytest.mark.parametrize("order", ["interleave", pytest.param("scan", marks=pytest.mark.slow)])
 def test_mpi_interleaved_bands_match_one_process(tmp_path, order):
     # Bands of split rows go to rank 0 packed, in split-row order, and are

@@ -180,6 +180,13 @@ static int take_rank_piece(void *context, int device)
  * that the floats or cl_long after it are aligned. */
 #define RESULT_HEADER 8
 
+/* Whether a message of `bytes` after the header is too large for one
+ * MPI_Send (a count of int). */
+static int message_too_large(size_t bytes)
+{
+	return bytes + RESULT_HEADER > INT_MAX;
+}
+
 /* A message to rank 0 of a piece's number and bytes of pixels, the pixels
  * left for the caller to write at result_pixels(message); NULL (with err
  * set) when it cannot be made. */
@@ -227,39 +234,6 @@ static int send_result(int piece, const float *rgb, size_t bytes, char *err, siz
 		return -1;
 	memcpy(result_pixels(message), rgb, bytes);
 	return send_message(message, bytes, err, err_size);
-}
-
-/* Sends a piece's bytes to rank 0 as send_result does, from where they lie:
- * one message of the header and the bytes (a datatype of the two), no copy
- * (a device's sums are 24 bytes a pixel). */
-static int send_in_place(int piece, const void *data, size_t bytes, char *err, size_t err_size)
-{
-	char header[RESULT_HEADER] = {0};
-	int lengths[2] = {RESULT_HEADER, (int)bytes};
-	MPI_Aint places[2];
-	MPI_Datatype type;
-	int status;
-
-	if (bytes + RESULT_HEADER > INT_MAX) {
-		snprintf(err, err_size, "cannot send a piece of %zu bytes to rank 0 (at most 2 GiB)",
-			 bytes);
-		return -1;
-	}
-	memcpy(header, &piece, sizeof(int));
-	MPI_Get_address(header, &places[0]);
-	MPI_Get_address(data, &places[1]);
-	status = MPI_Type_create_hindexed(2, lengths, places, MPI_BYTE, &type);
-	if (status == MPI_SUCCESS) {
-		status = MPI_Type_commit(&type);
-		if (status == MPI_SUCCESS)
-			status = MPI_Send(MPI_BOTTOM, 1, type, ROOT, TAG_RESULT, MPI_COMM_WORLD);
-		MPI_Type_free(&type);
-	}
-	if (status != MPI_SUCCESS) {
-		snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)", status);
-		return -1;
-	}
-	return 0;
 }
 
 /* Rank 0: keeps a frame's pixels (malloc'd, taken) until every frame has
@@ -363,8 +337,17 @@ static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
 			add_piece_sums(j, g, t->dev[device].sums);
 			continue;
 		}
-		if (send_in_place(g, t->dev[device].sums, bytes, err, err_size))
+		/* The sums lie RESULT_HEADER bytes into their block: one message,
+		 * no copy. */
+		char *message = t->dev[device].block;
+		memcpy(message, &g, sizeof(int));
+		int status = MPI_Send(message, (int)(RESULT_HEADER + bytes), MPI_BYTE, ROOT,
+				      TAG_RESULT, MPI_COMM_WORLD);
+		if (status != MPI_SUCCESS) {
+			snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)",
+				 status);
 			return -1;
+		}
 	}
 	return 0;
 }
@@ -655,6 +638,9 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 	return 0;
 }
 
+/* choose_pieces: --split samples cannot split this job (said on rank 0). */
+#define CHOSEN_BADLY 2
+
 /* The pieces, once every rank's device count is known: the frames, or the
  * image's bands over all devices (total, of which gpus are GPUs). With the
  * dynamic split and no --piece-rows, GPUs alone take one band per device,
@@ -683,16 +669,40 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 	/* GPUs alone split the samples by default, as in one process
 	 * (tiles_choose_split): every device the whole image, an equal range
 	 * of the samples in whole passes, its sums to rank 0. */
+	size_t sum_bytes = image_sum_bytes(s->width, s->height);
+	/* Every rank decides the same from the same job and counts: rank 0
+	 * says why, and all stop. */
+	if (job->split == SPLIT_SAMPLES && tiles_check_sample_split(s, total, err, sizeof(err))) {
+		if (j->rank == ROOT)
+			fprintf(stderr, "rtcl: %s\n", err);
+		return CHOSEN_BADLY;
+	}
+	if (job->split == SPLIT_SAMPLES && message_too_large(sum_bytes)) {
+		if (j->rank == ROOT)
+			fprintf(stderr,
+				"rtcl: --split samples under --mpi sends each device's sums of the "
+				"image in one message of at most 2 GiB, and a %dx%d image's are "
+				"%zu bytes: use --split dynamic or a smaller image\n",
+				s->width, s->height, sum_bytes);
+		return CHOSEN_BADLY;
+	}
 	j->by_samples = job->split == SPLIT_SAMPLES ||
 			(!job->split_given && gpus == total && total >= 2 &&
 			 tiles_samples_fit(s, total, job->piece_rows) &&
-			 settings_samples(s) >= total * TILES_SAMPLES_MIN);
+			 settings_samples(s) >= total * TILES_SAMPLES_MIN &&
+			 !message_too_large(sum_bytes));
 	if (j->by_samples) {
 		if (tiles_split_samples(&j->tiles, total,
 					renderer_pass_samples(s, (long long)s->width * s->height, 1),
 					NULL))
 			return -1;
 		j->pieces = total;
+		/* Each device's sums, sent as they lie (send_sums), allocated now,
+		 * before the render's clock. */
+		j->tiles.sums_header = RESULT_HEADER;
+		for (int k = 0; k < j->count; k++)
+			if (tiles_alloc_sums(&j->tiles, k, err, sizeof(err)))
+				return -1;
 	}
 	if (j->rank != ROOT)
 		return 0;
@@ -759,12 +769,16 @@ static int agree_on_start(struct mpi_job *j, int failed, const char *err)
 			lowest = r;
 	if (lowest == j->rank)
 		fprintf(stderr, "rtcl: rank %d: %s\n", j->rank, err);
-	if (lowest < 0 &&
-	    (choose_pieces(j, total, gpus) || (j->rank == ROOT && plan_devices(j, counts)))) {
+	int chosen = lowest < 0 ? choose_pieces(j, total, gpus) : 0;
+	if (lowest < 0 && chosen != CHOSEN_BADLY &&
+	    (chosen || (j->rank == ROOT && plan_devices(j, counts)))) {
 		fprintf(stderr, "rtcl: out of host memory for the device plan\n");
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
-	int status = lowest < 0 ? 0 : counts[lowest] == -2 ? EXIT_USAGE : EXIT_FAILED;
+	int status = chosen == CHOSEN_BADLY	 ? EXIT_USAGE
+		     : lowest < 0		 ? 0
+		     : counts[lowest] == -2 ? EXIT_USAGE
+					    : EXIT_FAILED;
 	free(counts);
 	return status;
 }

@@ -216,7 +216,8 @@ void tiles_job_free(struct tiles_job *t)
 		if (t->dev[k].open)
 			renderer_close(&t->dev[k].renderer);
 		render_result_free(&t->dev[k].result);
-		free(t->dev[k].sums);
+		free(t->dev[k].block);
+		t->dev[k].block = NULL;
 		t->dev[k].sums = NULL;
 		t->dev[k].open = 0;
 	}
@@ -232,19 +233,21 @@ void tiles_job_free(struct tiles_job *t)
 	pthread_cond_destroy(&t->asked);
 }
 
-/* SPLIT_SAMPLES: device k's host copy of its sums, its pages touched. */
-static int alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
+int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 {
-	size_t bytes = image_sum_bytes(t->settings->width, t->settings->height);
+	size_t bytes = t->sums_header + image_sum_bytes(t->settings->width, t->settings->height);
+	struct tiles_device *d = &t->dev[k];
 
-	if (!t->dev[k].sums)
-		t->dev[k].sums = malloc(bytes);
-	if (!t->dev[k].sums) {
+	if (d->block)
+		return 0;
+	d->block = malloc(bytes);
+	if (!d->block) {
 		snprintf(err, err_size, "out of host memory for the sample sums of a %dx%d image",
 			 t->settings->width, t->settings->height);
 		return -1;
 	}
-	memset(t->dev[k].sums, 0, bytes);
+	memset(d->block, 0, bytes);
+	d->sums = (cl_long *)(d->block + t->sums_header);
 	return 0;
 }
 
@@ -260,7 +263,7 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 	d->open = 1;
 	/* SPLIT_SAMPLES: the host copy of its sums, touched now, before the
 	 * frames' clock, not in the frame that first reads into it. */
-	return t->by_samples ? alloc_sums(t, k, err, err_size) : 0;
+	return t->by_samples ? tiles_alloc_sums(t, k, err, err_size) : 0;
 }
 
 /* Adds piece's launches to the expected write counts (check_writes). */
@@ -777,23 +780,28 @@ int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows
 	       !settings_instrumented(s) && piece_rows <= 0;
 }
 
+int tiles_check_sample_split(const struct render_settings *s, int count, char *err,
+			     size_t err_size)
+{
+	int n = settings_samples(s);
+
+	if (n >= 2 && n >= count)
+		return 0;
+	snprintf(err, err_size,
+		 "--split samples shares each pixel's samples between the %d devices: it needs "
+		 "at least %d samples per pixel (--spp or image.samples), and this render has %d",
+		 count, count > 2 ? count : 2, n);
+	return -1;
+}
+
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
 		       enum split *split, char *err, size_t err_size)
 {
 	int n = settings_samples(s), gpus = 0;
 
 	*split = r->split;
-	if (r->split == SPLIT_SAMPLES) {
-		if (n < 2 || n < r->count) {
-			snprintf(err, err_size,
-				 "--split samples shares each pixel's samples between the %d "
-				 "devices: it needs at least %d samples per pixel (--spp or "
-				 "image.samples), and this render has %d",
-				 r->count, r->count > 2 ? r->count : 2, n);
-			return -1;
-		}
-		return 0;
-	}
+	if (r->split == SPLIT_SAMPLES)
+		return tiles_check_sample_split(s, r->count, err, err_size);
 	for (int k = 0; k < r->count; k++)
 		gpus += r->devs[k].is_gpu != 0 || hook_devices_as_gpus();
 	if (!given && r->count >= 2 && gpus == r->count &&

@@ -100,7 +100,9 @@ struct tiles_device {
 	struct render_result result;
 	int open;
 	int collected; /* read back */
-	cl_long *sums; /* SPLIT_SAMPLES: its pixels' sums, read after each frame */
+	cl_long *sums; /* SPLIT_SAMPLES: its pixels' sums, read after each frame,
+			  sums_header bytes into `block` */
+	char *block;
 };
 
 /* The pieces of one image on devs[count] of this process: the bands of
@@ -117,6 +119,9 @@ struct tiles_job {
 				    image with a range of the samples */
 	double sample_rate[DEVICES_MAX]; /* by_samples: each device's samples per
 					    ms of its last piece, 0 before */
+	size_t sums_header;		 /* by_samples: bytes kept before each
+					    device's sums (a message's header,
+					    under --mpi), a multiple of 8 */
 	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
@@ -209,6 +214,11 @@ struct tiles_request {
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
 		       enum split *split, char *err, size_t err_size);
 
+/* --split samples asked of `count` devices: 0 when the render has a sample
+ * for each (and 2 or more), else -1 with one message in err. */
+int tiles_check_sample_split(const struct render_settings *s, int count, char *err,
+			     size_t err_size);
+
 /* Whether a render of settings s can split its samples over `count` devices
  * (SPLIT_SAMPLES): 2 samples or more, at least one pass of them for each
  * device, nothing counted or recorded per pixel, no --piece-rows. */
@@ -225,6 +235,12 @@ int tiles_split_samples(struct tiles_job *t, int total, int unit, const double *
 /* The samples a pass takes on the slowest of devs (the largest
  * renderer_pass_samples of the whole image): the unit of the sample split. */
 int tiles_sample_unit(const struct render_settings *s, const struct device *devs, int count);
+
+/* SPLIT_SAMPLES: device k's host copy of its sums (t->sums_header bytes into
+ * its block), allocated and touched once: tiles_open does it, or the caller
+ * before, to keep it out of a timed render. Returns 0, or -1 with one
+ * message in err. */
+int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size);
 
 /* to[i] += from[i] for `values` fixed-point sums, saturated if either is. */
 void tiles_add_sums(cl_long *to, const cl_long *from, size_t values);
