@@ -87,41 +87,13 @@ static inline float2 sample_offset(struct tracer *tr, int x, int y, uint k, uint
 	return convert_float2(bits) * 0x1p-24f;
 }
 
-/* Returns round(c * 2^24) (to nearest, ties to even) for |c| < 2^22, as
- * convert_long_rte(c * RT_SUM_ONE) does, in integer operations: c is m *
- * 2^e with a 24-bit m, so c * 2^24 is m shifted by e + 24. (A conversion to
- * a 64-bit integer is a slow instruction on some GPUs.) */
-static inline long sample_fixed_bits(float c)
-{
-	uint bits = as_uint(c);
-	int biased = (int)((bits >> 23) & 0xffu);
-	uint m = (bits & 0x7fffffu) | 0x800000u;
-	int shift = biased - 127 - 23 + 24; /* c * 2^24 = m * 2^shift */
-	long q;
-
-	if (biased == 0 || shift < -24) /* 0, a denormal, or below 1/2 */
-		q = 0;
-	else if (shift >= 0)
-		q = (long)m << shift;
-	else {
-		uint r = (uint)-shift, mid = 1u << (r - 1);
-		uint keep = m >> r, rest = m & ((mid << 1) - 1u);
-		q = (long)(keep + (rest > mid || (rest == mid && (keep & 1u))));
-	}
-	return bits >> 31 ? -q : q;
-}
-
 /* Returns channel c of a sample's colour in fixed point, round(c *
  * RT_SUM_ONE), saturated (rtcl_shared.h, RT_SUM_LIMIT). */
 static inline long sample_fixed(float c)
 {
 	if (!(c < RT_SUM_LIMIT)) /* also NaN */
 		return RT_SUM_SATURATED;
-#ifdef RTCL_FIX_CONVERT
 	return convert_long_rte(fmax(c, -RT_SUM_LIMIT) * RT_SUM_ONE);
-#else
-	return sample_fixed_bits(fmax(c, -RT_SUM_LIMIT));
-#endif
 }
 
 /* Returns a + b, two sums of fixed-point channels: saturated if either is. */
