@@ -649,23 +649,23 @@ def test_mpi_gpus_alone_take_a_class_each_under_the_dynamic_split(tmp_path):
 
 
 @needs_mpi
-def test_mpi_gpus_alone_split_the_samples_and_match_one_device(tmp_path):
-    # Three ranks of one GPU each (RTCL_TEST_AS_GPUS) at 128 samples a device
-    # or more: every rank renders the whole image, a third of the samples in
-    # whole passes, and sends its sums to rank 0, which adds them: one
-    # device's image, every pixel written once a pass on each (CHECK).
-    common = [*TALL, "--spp", "384", "-k", "dynamic"]
+def test_mpi_sample_split_matches_one_device(tmp_path):
+    # --split samples over three ranks: every rank renders the whole image, a
+    # third of the samples in whole passes, and sends its sums to rank 0,
+    # which adds them: one device's image, every pixel written once a pass
+    # on each (CHECK).
+    common = ["--size", "16x8", "--spp", "12", "-k", "dynamic"]
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
     assert one.returncode == 0, one.stderr
-    result = mpi_run(*common, "-o", str(tmp_path / "ranks.ppm"), "--stats",
-                     str(tmp_path / "s.json"), env={**CHECK, "RTCL_TEST_AS_GPUS": "1"})
+    result = mpi_run(*common, "--split", "samples", "-o", str(tmp_path / "ranks.ppm"),
+                     "--stats", str(tmp_path / "s.json"), env=CHECK)
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
     md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
     assert md["split"] == "samples" and md["piece"] == "sample range", md
     assert [d["pieces"] for d in md["devices"]] == [1, 1, 1]
     assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
-    assert abs(sum(d["pixels"] for d in md["devices"]) - 24 * 48) <= 2
+    assert abs(sum(d["pixels"] for d in md["devices"]) - 16 * 8) <= 2
 
 
 @needs_mpi

@@ -666,9 +666,12 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 			   0, &map, j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
-	/* GPUs alone split the samples by default, as in one process
-	 * (tiles_choose_split): every device the whole image, an equal range
-	 * of the samples in whole passes, its sums to rank 0. */
+	/* --split samples: every device the whole image, an equal range of the
+	 * samples in whole passes, its sums to rank 0 (24 bytes a pixel). Not
+	 * the default, unlike in one process: over Open MPI's shared memory on
+	 * two H200s (batch 73) 96 MB of sums took rank 0 170-200 ms to receive,
+	 * so two ranks took 1003-1030 ms split by samples and 835-842 ms in
+	 * bands. */
 	size_t sum_bytes = image_sum_bytes(s->width, s->height);
 	/* Every rank decides the same from the same job and counts: rank 0
 	 * says why, and all stop. */
@@ -686,11 +689,7 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 				s->width, s->height, sum_bytes);
 		return CHOSEN_BADLY;
 	}
-	j->by_samples = job->split == SPLIT_SAMPLES ||
-			(!job->split_given && gpus == total && total >= 2 &&
-			 tiles_samples_fit(s, total, job->piece_rows) &&
-			 settings_samples(s) >= total * TILES_SAMPLES_MIN &&
-			 !message_too_large(sum_bytes));
+	j->by_samples = job->split == SPLIT_SAMPLES;
 	if (j->by_samples) {
 		if (tiles_split_samples(&j->tiles, total,
 					renderer_pass_samples(s, (long long)s->width * s->height, 1),
