@@ -512,7 +512,7 @@ def test_interleaved_split_gives_a_slowed_device_less_of_the_image(tmp_path):
     assert sum(pixels) == 24 * 48 and pixels[1] < pixels[0], pixels
 
 
-@pytest.mark.parametrize("kernel", ["persistent", "wavefront"])
+@pytest.mark.parametrize("kernel", ["persistent", pytest.param("wavefront", marks=pytest.mark.slow)])
 def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel):
     # --split samples: both devices render the whole image, each a range of
     # every pixel's samples into its fixed-point sums, which the host adds:
@@ -649,7 +649,7 @@ def test_mpi_gpus_alone_take_a_class_each_under_the_dynamic_split(tmp_path):
 
 
 @needs_mpi
-@pytest.mark.parametrize("way", ["window", "messages"])
+@pytest.mark.parametrize("way", ["window", pytest.param("messages", marks=pytest.mark.slow)])
 def test_mpi_sample_split_matches_one_device(tmp_path, way):
     # --split samples over three ranks: every rank renders the whole image, a
     # third of the samples in whole passes, and rank 0 adds their sums, read
@@ -673,7 +673,9 @@ def test_mpi_sample_split_matches_one_device(tmp_path, way):
 
 
 @needs_mpi
-@pytest.mark.parametrize("way, split", [("window", "samples"), ("messages", "dynamic")])
+@pytest.mark.parametrize("way, split", [("window", "samples"),
+                                        pytest.param("messages", "dynamic",
+                                                     marks=pytest.mark.slow)])
 def test_mpi_gpus_alone_on_one_node_split_the_samples_by_default(tmp_path, way, split):
     # GPUs alone (RTCL_TEST_AS_GPUS) at 128 samples a device or more split
     # the samples when the sums can lie in shared memory (every rank on one
