@@ -649,44 +649,23 @@ def test_mpi_gpus_alone_take_a_class_each_under_the_dynamic_split(tmp_path):
 
 
 @needs_mpi
-@pytest.mark.parametrize("way", ["window", pytest.param("messages", marks=pytest.mark.slow)])
-def test_mpi_sample_split_matches_one_device(tmp_path, way):
+def test_mpi_sample_split_matches_one_device(tmp_path):
     # --split samples over three ranks: every rank renders the whole image, a
-    # third of the samples in whole passes, and rank 0 adds their sums, read
-    # in place from shared memory (every rank on this node) or sent in
-    # messages (RTCL_TEST_MPI_MESSAGES, as across nodes): one device's image,
-    # every pixel written once a pass on each (CHECK).
+    # third of the samples in whole passes, and sends its sums to rank 0,
+    # which adds them: one device's image, every pixel written once a pass
+    # on each (CHECK).
     common = ["--size", "16x8", "--spp", "12", "-k", "dynamic"]
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
     assert one.returncode == 0, one.stderr
-    env = {**CHECK, "RTCL_TEST_MPI_MESSAGES": "1" if way == "messages" else "0"}
     result = mpi_run(*common, "--split", "samples", "-o", str(tmp_path / "ranks.ppm"),
-                     "--stats", str(tmp_path / "s.json"), env=env)
+                     "--stats", str(tmp_path / "s.json"), env=CHECK)
     assert result.returncode == 0, result.stderr
     assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
     md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
     assert md["split"] == "samples" and md["piece"] == "sample range", md
-    assert md["sums"] == {"window": "shared memory", "messages": "messages"}[way]
     assert [d["pieces"] for d in md["devices"]] == [1, 1, 1]
     assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
     assert abs(sum(d["pixels"] for d in md["devices"]) - 16 * 8) <= 2
-
-
-@needs_mpi
-@pytest.mark.parametrize("way, split", [("window", "samples"),
-                                        pytest.param("messages", "dynamic",
-                                                     marks=pytest.mark.slow)])
-def test_mpi_gpus_alone_on_one_node_split_the_samples_by_default(tmp_path, way, split):
-    # GPUs alone (RTCL_TEST_AS_GPUS) at 128 samples a device or more split
-    # the samples when the sums can lie in shared memory (every rank on one
-    # node); sent in messages they would cost more than bands (batch 73).
-    result = mpi_run("--size", "8x8", "--spp", "384", "-o", str(tmp_path / "x.ppm"),
-                     "--stats", str(tmp_path / "s.json"),
-                     env={"RTCL_TEST_AS_GPUS": "1",
-                          "RTCL_TEST_MPI_MESSAGES": "1" if way == "messages" else "0"})
-    assert result.returncode == 0, result.stderr
-    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
-    assert md["split"] == split, md
 
 
 @needs_mpi

@@ -106,11 +106,6 @@ int hook_devices_as_gpus(void)
 	return env_is_one("RTCL_TEST_AS_GPUS");
 }
 
-int hook_mpi_messages(void)
-{
-	return env_is_one("RTCL_TEST_MPI_MESSAGES");
-}
-
 int hook_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");

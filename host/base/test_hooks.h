@@ -2,8 +2,7 @@
  * variables, as a real device, rank, cache or file system would produce them
  * and as no test can provoke on demand. Each is off unless its variable is
  * set: RTCL_TEST_DEVICE_FAULT, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE,
- * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_AS_GPUS, RTCL_TEST_MPI_MESSAGES,
- * RTCL_TEST_DOUBLE_BAND,
+ * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_AS_GPUS, RTCL_TEST_DOUBLE_BAND,
  * RTCL_TEST_FAIL_RENAME, RTCL_TEST_SLOW_CACHE_WRITE, RTCL_TEST_COMMIT_DELAY. */
 #ifndef RTCL_TEST_HOOKS_H
 #define RTCL_TEST_HOOKS_H
@@ -48,11 +47,6 @@ int hook_count_writes(void);
  * CPU devices take the bands two GPU ranks would; in one process the
  * devices count as GPUs when the default split is chosen (tiles_choose_split). */
 int hook_devices_as_gpus(void);
-
-/* RTCL_TEST_MPI_MESSAGES=1: under --mpi with the samples split, the devices'
- * sums travel to rank 0 in messages even when every rank is on one node,
- * where they would lie in shared memory (host/run/mpi_render.c). */
-int hook_mpi_messages(void);
 
 /* RTCL_TEST_DOUBLE_BAND=1: several devices in one process render band 0 a
  * second time on another device, which the write-count check must catch. */

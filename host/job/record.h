@@ -46,8 +46,6 @@ struct device_shares {
 				 row_band, row_bands, row_classes); frames: 0 */
 	int row_order_given;  /* one image: rows holds the job's row order */
 	double wall_ms;	      /* an animation: all its frames */
-	const char *sums;     /* --mpi split by samples: how the sums reached
-				 rank 0, "shared memory" or "messages" */
 };
 
 /* SIMD efficiency modelled from the instrumented run's flops and schedule

@@ -174,8 +174,6 @@ static json_t *shares_document(const struct device_shares *d)
 	}
 	if (doc && d->ranks_count)
 		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
-	if (doc && d->sums)
-		json_object_set_new(doc, "sums", json_string(d->sums));
 	if (doc && d->row_order_given) {
 		json_object_set_new(doc, "row_order",
 				    json_string(d->rows.row_band ? "interleave" : "scan"));

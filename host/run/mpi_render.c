@@ -66,12 +66,6 @@ struct mpi_job {
 	int *arrived; /* image: how often each band arrived */
 	cl_long *sums;	 /* by_samples: the devices' sums added so far */
 	char *received; /* by_samples: where another rank's sums arrive */
-	/* by_samples with every rank on one node: each rank's devices' sums in
-	   its segment of one window of shared memory, read in place by rank 0
-	   (share_sums); else they travel in messages. */
-	int windowed;
-	MPI_Comm node;
-	MPI_Win window;
 	double wall_ms;
 	int initialized; /* MPI_Init_thread succeeded */
 	int threads;	 /* with MPI_THREAD_MULTIPLE */
@@ -313,59 +307,6 @@ static void place_band(struct mpi_job *j, int band, const float *rgb)
 	tiles_pack_piece(&p, j->settings.width, rgb, j->record->result.rgb, 1);
 }
 
-/* By_samples, collective: when every rank is on this node, places each of
- * this rank's devices' sums in its segment of one window of shared memory
- * (MPI-3), which rank 0 reads in place (windowed); else leaves them to
- * messages. Returns 0, or -1 when the window cannot be made. */
-static int share_sums(struct mpi_job *j, size_t bytes)
-{
-	int node_size = 0;
-	char *base = NULL;
-
-	j->node = MPI_COMM_NULL;
-	if (hook_mpi_messages() ||
-	    MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, j->rank, MPI_INFO_NULL,
-				&j->node) != MPI_SUCCESS)
-		return 0;
-	MPI_Comm_size(j->node, &node_size);
-	if (node_size != j->size) /* alike on every rank: some rank is elsewhere */
-		return 0;
-	if (MPI_Win_allocate_shared((MPI_Aint)(bytes * (size_t)j->count), 1, MPI_INFO_NULL,
-				    j->node, &base, &j->window) != MPI_SUCCESS)
-		return -1;
-	MPI_Win_lock_all(MPI_MODE_NOCHECK, j->window);
-	j->windowed = 1;
-	memset(base, 0, bytes * (size_t)j->count); /* touched before the clock */
-	/* Rank 0 reads every other rank's segment later: its page tables map
-	 * them now, not during the render (96 MB, some 24,000 page faults, for
-	 * a 2000x2000 image). */
-	for (int r = 1; j->rank == ROOT && r < j->size; r++) {
-		MPI_Aint size = 0;
-		int unit;
-		volatile const char *segment = NULL;
-		MPI_Win_shared_query(j->window, r, &size, &unit, (void *)&segment);
-		for (MPI_Aint at = 0; segment && at < size; at += 4096)
-			(void)segment[at];
-	}
-	for (int k = 0; k < j->count; k++)
-		j->tiles.dev[k].sums = (cl_long *)(base + bytes * (size_t)k);
-	return 0;
-}
-
-/* Rank 0, windowed: where global device g's sums lie in the window. */
-static const cl_long *shared_sums(struct mpi_job *j, int g)
-{
-	const struct render_settings *s = &j->settings;
-	int rank = j->rank_of[g];
-	MPI_Aint size;
-	int unit;
-	char *base;
-
-	MPI_Win_shared_query(j->window, rank, &size, &unit, &base);
-	return (const cl_long *)(base + image_sum_bytes(s->width, s->height) *
-						 (size_t)(g - j->first[rank]));
-}
-
 /* Rank 0, by_samples: piece g's sums (device g's range of the samples) added
  * to the image's. */
 static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
@@ -396,16 +337,12 @@ static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
 			add_piece_sums(j, g, t->dev[device].sums);
 			continue;
 		}
-		/* In the window, rank 0 reads the sums in place once told;
-		 * else they lie RESULT_HEADER bytes into their block: one
-		 * message, no copy. */
-		char header[RESULT_HEADER] = {0};
-		char *message = j->windowed ? header : t->dev[device].block;
+		/* The sums lie RESULT_HEADER bytes into their block: one message,
+		 * no copy. */
+		char *message = t->dev[device].block;
 		memcpy(message, &g, sizeof(int));
-		if (j->windowed)
-			MPI_Win_sync(j->window);
-		int status = MPI_Send(message, (int)(RESULT_HEADER + (j->windowed ? 0 : bytes)),
-				      MPI_BYTE, ROOT, TAG_RESULT, MPI_COMM_WORLD);
+		int status = MPI_Send(message, (int)(RESULT_HEADER + bytes), MPI_BYTE, ROOT,
+				      TAG_RESULT, MPI_COMM_WORLD);
 		if (status != MPI_SUCCESS) {
 			snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)",
 				 status);
@@ -546,7 +483,6 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	/* A device's sums go to the buffer kept for them (its pages touched
 	 * before the render), others to one of their own. */
 	int kept = j->by_samples && (size_t)bytes == RESULT_HEADER + piece_bytes(j, 0);
-	int told = j->windowed && bytes == RESULT_HEADER; /* the sums are in the window */
 	message = kept ? j->received : malloc(bytes > 0 ? (size_t)bytes : 1);
 	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
 		 MPI_STATUS_IGNORE);
@@ -555,9 +491,6 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	const float *rgb = (const float *)(message + RESULT_HEADER);
 	if (piece < 0 || piece >= piece_count(j)) {
 		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
-	} else if (told) {
-		MPI_Win_sync(j->window);
-		add_piece_sums(j, piece, shared_sums(j, piece));
 	} else if ((size_t)bytes != RESULT_HEADER + piece_bytes(j, piece)) {
 		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
 	} else if (j->by_samples) {
@@ -756,24 +689,15 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 				s->width, s->height, sum_bytes);
 		return CHOSEN_BADLY;
 	}
-	/* By default GPUs alone split the samples only when every rank is on
-	 * one node, the sums then read in place (share_sums). Every rank
-	 * decides alike: share_sums is collective. */
-	int wanted = !job->split_given && gpus == total && total >= 2 &&
-		     tiles_samples_fit(s, total, job->piece_rows) &&
-		     settings_samples(s) >= total * TILES_SAMPLES_MIN;
-	if ((job->split == SPLIT_SAMPLES || wanted) &&
-	    share_sums(j, image_sum_bytes(s->width, s->height)))
-		return -1;
-	j->by_samples = job->split == SPLIT_SAMPLES || (wanted && j->windowed);
+	j->by_samples = job->split == SPLIT_SAMPLES;
 	if (j->by_samples) {
 		if (tiles_split_samples(&j->tiles, total,
 					renderer_pass_samples(s, (long long)s->width * s->height, 1),
 					NULL))
 			return -1;
 		j->pieces = total;
-		/* Each device's sums, in the window, or sent as they lie
-		 * (send_sums), allocated now, before the render's clock. */
+		/* Each device's sums, sent as they lie (send_sums), allocated now,
+		 * before the render's clock. */
 		j->tiles.sums_header = RESULT_HEADER;
 		for (int k = 0; k < j->count; k++)
 			if (tiles_alloc_sums(&j->tiles, k, err, sizeof(err)))
@@ -783,14 +707,13 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 		return 0;
 	if (j->by_samples) {
 		size_t bytes = image_sum_bytes(s->width, s->height);
-		size_t message = j->windowed ? RESULT_HEADER : RESULT_HEADER + bytes;
 		j->sums = malloc(bytes);
-		j->received = malloc(message);
+		j->received = malloc(RESULT_HEADER + bytes);
 		if (!j->sums || !j->received)
 			return -1;
 		/* Zero and touched, as the image below. */
 		memset(j->sums, 0, bytes);
-		memset(j->received, 0, message);
+		memset(j->received, 0, RESULT_HEADER + bytes);
 	}
 	j->arrived = calloc((size_t)j->pieces, sizeof(int));
 	j->record->result.rgb = malloc(image_float_bytes(s->width, s->height));
@@ -917,7 +840,6 @@ static int finish_root(struct mpi_job *j)
 		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
 		.wall_ms = j->wall_ms,
 		.row_order_given = j->image,
-		.sums = !j->by_samples ? NULL : j->windowed ? "shared memory" : "messages",
 	};
 	if (j->image)
 		j->record->shares.rows = j->tiles.row_map;
@@ -1073,14 +995,6 @@ static void mpi_end(struct mode_run *run, int status)
 
 	if (!j || !j->initialized)
 		return;
-	if (j->windowed) { /* collective, as every rank made it */
-		MPI_Win_unlock_all(j->window);
-		MPI_Win_free(&j->window);
-		for (int k = 0; k < j->count; k++)
-			j->tiles.dev[k].sums = NULL;
-	}
-	if (j->node != MPI_COMM_NULL)
-		MPI_Comm_free(&j->node);
 	MPI_Finalize();
 	if (j->rank != ROOT && status == 0)
 		interrupt_set_outcome(

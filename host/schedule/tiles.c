@@ -238,7 +238,7 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 	size_t bytes = t->sums_header + image_sum_bytes(t->settings->width, t->settings->height);
 	struct tiles_device *d = &t->dev[k];
 
-	if (d->block || d->sums) /* allocated, or placed by the caller */
+	if (d->block)
 		return 0;
 	d->block = malloc(bytes);
 	if (!d->block) {
