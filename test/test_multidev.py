@@ -389,7 +389,7 @@ def test_mpi_as_a_single_rank_renders_or_says_how_to_get_mpi(tmp_path):
 def test_help_and_man_page_teach_the_options():
     help_text = run("--help").stdout
     man = (ROOT / "docs" / "rtcl.1").read_text()
-    for option in ["--devices LIST|all", "--split dynamic|static", "--frames A:B", "--mpi",
+    for option in ["--devices LIST|all", "--split dynamic|static|samples", "--frames A:B", "--mpi",
                    "out_0000.png", "--piece-rows N", "--row-order interleave[:S]|scan"]:
         assert option in help_text, option
     for option in [r"\-\-devices", r"\-\-split", r"\-\-frames", r"\-\-mpi",
