@@ -284,23 +284,11 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 			   piece->samples);
 		while (!walk_step(tr, &w, waiting))
 			;
-#ifdef RTCL_SUM_PER_SAMPLE /* experiment (batch 73): nothing live across a trace */
-		if (piece->samples > 1) {
-			sum = sample_add(tr, (long3)(0), w.color);
-			if (k > piece->sample_begin || sample_sum_held(piece, k))
-				sum = sample_sums(sum, vload3(pixel, sums));
-			if (k + 1 < piece->sample_end)
-				vstore3(sum, pixel, sums);
-		}
-#else
 		if (piece->samples > 1)
 			sum = sample_add(tr, sum, w.color);
-#endif
 	}
-#ifndef RTCL_SUM_PER_SAMPLE
 	if (piece->samples > 1 && sample_sum_held(piece, piece->sample_begin))
 		sum = sample_sums(sum, vload3(pixel, sums));
-#endif
 	if (piece->samples == 1)
 		vstore3(w.color, pixel, image);
 	else if (sample_ends_pixel(piece, piece->sample_end))
