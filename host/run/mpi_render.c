@@ -210,18 +210,27 @@ static float *result_pixels(char *message)
 	return (float *)(message + RESULT_HEADER);
 }
 
-/* Sends and frees a result_message of `bytes` bytes of pixels. */
-static int send_message(char *message, size_t bytes, char *err, size_t err_size)
+/* Sends a message of a piece (its number in the header, then `bytes`) to
+ * rank 0 and keeps it. */
+static int send_kept(const char *message, size_t bytes, char *err, size_t err_size)
 {
 	int status = MPI_Send(message, (int)(RESULT_HEADER + bytes), MPI_BYTE, ROOT, TAG_RESULT,
 			      MPI_COMM_WORLD);
 
-	free(message);
 	if (status != MPI_SUCCESS) {
 		snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)", status);
 		return -1;
 	}
 	return 0;
+}
+
+/* Sends and frees a result_message of `bytes` bytes of pixels. */
+static int send_message(char *message, size_t bytes, char *err, size_t err_size)
+{
+	int failed = send_kept(message, bytes, err, err_size);
+
+	free(message);
+	return failed;
 }
 
 /* Sends a piece's pixels (a frame, or a band) to rank 0: the piece number,
@@ -319,6 +328,15 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 	pthread_mutex_unlock(&j->lock);
 }
 
+/* Under check_writes: reads device's image and write counts and returns -1
+ * with one message in err when a pixel was not written as its pieces say;
+ * else 0. */
+static int writes_wrong(struct tiles_job *t, int device, char *err, size_t err_size)
+{
+	return t->settings->check_writes && (tiles_collect(t, device, err, err_size) ||
+					     tiles_check_device(t, device, err, err_size));
+}
+
 /* By_samples: the device is done: its sums to rank 0 (one message), or on
  * rank 0 into the image's. */
 static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
@@ -327,8 +345,7 @@ static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
 	const struct render_settings *s = &j->settings;
 	size_t bytes = image_sum_bytes(s->width, s->height);
 
-	if (t->settings->check_writes && (tiles_collect(t, device, err, err_size) ||
-					  tiles_check_device(t, device, err, err_size)))
+	if (writes_wrong(t, device, err, err_size))
 		return -1;
 	for (int g = 0; g < t->piece_count; g++) {
 		if (t->owner[g] != device)
@@ -339,15 +356,9 @@ static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
 		}
 		/* The sums lie RESULT_HEADER bytes into their block: one message,
 		 * no copy. */
-		char *message = t->dev[device].block;
-		memcpy(message, &g, sizeof(int));
-		int status = MPI_Send(message, (int)(RESULT_HEADER + bytes), MPI_BYTE, ROOT,
-				      TAG_RESULT, MPI_COMM_WORLD);
-		if (status != MPI_SUCCESS) {
-			snprintf(err, err_size, "sending a piece to rank 0 failed (MPI error %d)",
-				 status);
+		memcpy(t->dev[device].block, &g, sizeof(int));
+		if (send_kept(t->dev[device].block, bytes, err, err_size))
 			return -1;
-		}
 	}
 	return 0;
 }
@@ -361,8 +372,7 @@ static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
 	struct tiles_job *t = &j->tiles;
 	struct renderer *r = &t->dev[device].renderer;
 
-	if (t->settings->check_writes && (tiles_collect(t, device, err, err_size) ||
-					  tiles_check_device(t, device, err, err_size)))
+	if (writes_wrong(t, device, err, err_size))
 		return -1;
 	for (int b = 0; b < t->bands; b++) {
 		if (t->owner[b] != device)
