@@ -328,9 +328,8 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 	pthread_mutex_unlock(&j->lock);
 }
 
-/* Under check_writes: reads device's image and write counts and returns -1
- * with one message in err when a pixel was not written as its pieces say;
- * else 0. */
+/* Under check_writes: reads device's image and write counts; nonzero, with
+ * one message in err, when a pixel was not written as its pieces say. */
 static int writes_wrong(struct tiles_job *t, int device, char *err, size_t err_size)
 {
 	return t->settings->check_writes && (tiles_collect(t, device, err, err_size) ||
