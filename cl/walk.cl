@@ -278,26 +278,14 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 	 * trace. The pass that ends the pixel stores its mean instead, and one
 	 * sample its colour as it is (sample.cl). */
 	long3 sum = (long3)(0);
-#ifdef RTCL_SUM_IN_MEMORY /* experiment (batch 76): the pass's sum on the stack */
-	volatile long kept[3] = {0, 0, 0};
-#endif
 
 	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
 		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples), k,
 			   piece->samples);
 		while (!walk_step(tr, &w, waiting))
 			;
-#ifdef RTCL_SUM_IN_MEMORY
-		if (piece->samples > 1) {
-			sum = sample_add(tr, (long3)(kept[0], kept[1], kept[2]), w.color);
-			kept[0] = sum.x;
-			kept[1] = sum.y;
-			kept[2] = sum.z;
-		}
-#else
 		if (piece->samples > 1)
 			sum = sample_add(tr, sum, w.color);
-#endif
 	}
 	if (piece->samples > 1 && sample_sum_held(piece, piece->sample_begin))
 		sum = sample_sums(sum, vload3(pixel, sums));
