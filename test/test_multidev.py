@@ -8,6 +8,7 @@ import os
 import pathlib
 import re
 import signal
+import struct
 import subprocess
 import sys
 import time
@@ -530,6 +531,28 @@ def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel):
     # Each takes a share of the samples: pixels count that share.
     assert all(0 < d["pixels"] < 32 * 24 for d in md["devices"])
     assert abs(sum(d["pixels"] for d in md["devices"]) - 32 * 24) <= 1
+
+
+def test_sample_split_saturates_as_one_device(tmp_path):
+    # Radiance that overflows float (lights, colours and kd of 1e18) saturates
+    # the fixed-point sums: the host's sum of the devices' is saturated too
+    # and written as the largest float, as one device writes it.
+    scene = json.loads((ROOT / "scenes" / "two_balls.json").read_text())
+    for light in scene["lights"]:
+        light["color"] = [1e18, 1e18, 1e18]
+    for material in scene["materials"].values():
+        material["color"] = [1e18, 1e18, 1e18]
+        material["diffuse"] = 1e18
+    (tmp_path / "hot.json").write_text(json.dumps(scene))
+    common = ["-s", str(tmp_path / "hot.json"), "--size", "24x16", "--spp", "4"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.pfm"))
+    assert one.returncode == 0, one.stderr
+    two = run(*common, "--devices", "0:0,0:1", "--split", "samples", "-o",
+              str(tmp_path / "two.pfm"))
+    assert two.returncode == 0, two.stderr
+    data = (tmp_path / "one.pfm").read_bytes()
+    assert data == (tmp_path / "two.pfm").read_bytes()
+    assert struct.pack("<f", 3.4028234663852886e38) in data  # FLT_MAX, little-endian
 
 
 def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
