@@ -45,9 +45,9 @@
 /* By default GPUs split the samples (SPLIT_SAMPLES) when each takes at least
  * this many of every pixel: each device then reads back 24 bytes of sums a
  * pixel, twice the image, and the host adds them, which a short render does
- * not pay back. Two H200s, default scene 2000x2000 (batch 70): 64 spp took
- * 34.4 ms split by samples, 26.2 by pixels; 256 spp 104.6 and 100.8; 2048
- * spp 755 and 808. */
+ * not pay back. Two H200s, default scene 2000x2000 (docs/results/multidevice,
+ * batches 70-71): 64 spp took 34.4 ms split by samples, 26.2 by pixels; 256
+ * spp 102.9-104.6 and 100.8; 512 spp 195.0 and 200.8; 2048 spp 755 and 808. */
 #define TILES_SAMPLES_MIN 128
 
 /* The most threads that add devices' sums (tiles_add_sums). */
@@ -209,8 +209,9 @@ struct tiles_request {
 /* The split of one image over r's devices for --split r->split, given or
  * not (docs/GUIDE.md, "Several devices"): SPLIT_SAMPLES when asked, and by
  * default when every device is a GPU and each takes TILES_SAMPLES_MIN
- * samples of every pixel or more (tiles_samples_fit); else r->split. Returns -1 with one message in
- * err when --split samples was asked of a render it cannot split. */
+ * samples of every pixel or more (tiles_samples_fit); else r->split.
+ * Returns -1 with one message in err when --split samples was asked of a
+ * render it cannot split. */
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
 		       enum split *split, char *err, size_t err_size);
 
@@ -220,8 +221,8 @@ int tiles_check_sample_split(const struct render_settings *s, int count, char *e
 			     size_t err_size);
 
 /* Whether a render of settings s can split its samples over `count` devices
- * (SPLIT_SAMPLES): 2 samples or more, at least one pass of them for each
- * device, nothing counted or recorded per pixel, no --piece-rows. */
+ * (SPLIT_SAMPLES): 2 samples or more and one for each device, nothing
+ * counted or recorded per pixel, no --piece-rows. */
 int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows);
 
 /* SPLIT_SAMPLES: makes the job's pieces 0..total-1 the whole image, each
@@ -232,8 +233,9 @@ int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows
  * --mpi, of every rank's devices. Returns 0, or -1 when out of memory. */
 int tiles_split_samples(struct tiles_job *t, int total, int unit, const double *rate);
 
-/* The samples a pass takes on the slowest of devs (the largest
- * renderer_pass_samples of the whole image): the unit of the sample split. */
+/* The largest renderer_pass_samples of the whole image among devs (a GPU's
+ * passes take at least RENDER_GPU_PASS_SAMPLES): the unit of the sample
+ * split, so that each device's passes are whole. */
 int tiles_sample_unit(const struct render_settings *s, const struct device *devs, int count);
 
 /* SPLIT_SAMPLES: device k's host copy of its sums (t->sums_header bytes into
