@@ -558,7 +558,8 @@ static void *combine_range(void *arg)
 
 /* The sum of `count` parts' fixed-point sums, `values` of them, into to
  * and/or their means into rgb, over up to TILES_SUM_THREADS threads (a 2000 x
- * 2000 image is 12 million sums: memory-bound, about 40 ms on one core). */
+ * 2000 image is 12 million sums; on two H200s' host the image was assembled
+ * in 10-13 ms, 139 ms on one thread with both images read back first). */
 static void combine_sums(const cl_long *const *parts, int count, cl_long *to, float *rgb,
 			 float scale, size_t values)
 {
