@@ -528,6 +528,12 @@ def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel):
     md = stats["multidevice"]
     assert md["split"] == "samples" and md["piece"] == "sample range"
     assert [d["pieces"] for d in md["devices"]] == [1, 1]
+    # Each piece the whole image and a range of the samples, one after the
+    # other from 0 (--stats pieces: [begin, end)).
+    ranges = sorted(p["samples"] for p in md["pieces"])
+    assert ranges[0][0] == 0 and ranges[0][1] == ranges[1][0] and ranges[1][1] == 6, ranges
+    assert all((p["width"], p["height"]) == (32, 24) for p in md["pieces"])
+    assert "bands" not in md and "row_order" not in md
     # Each takes a share of the samples: pixels count that share.
     assert all(0 < d["pixels"] < 32 * 24 for d in md["devices"])
     assert abs(sum(d["pixels"] for d in md["devices"]) - 32 * 24) <= 1

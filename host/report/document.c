@@ -193,10 +193,12 @@ static json_t *pieces_document(const struct render_result *r)
 	for (int b = 0; b < r->piece_count && list; b++) {
 		const struct piece_record *p = &r->pieces[b];
 		json_array_append_new(
-			list, json_pack("{s:i, s:i, s:i, s:i, s:i, s:f, s:f, s:f}", "device",
-					p->device, "x0", p->piece.x0, "y0", p->piece.y0, "width",
-					p->piece.width, "height", p->piece.height, "start_ms",
-					p->start_ms, "end_ms", p->end_ms, "kernel_ms", p->kernel_ms));
+			list, json_pack("{s:i, s:i, s:i, s:i, s:i, s:[i,i], s:f, s:f, s:f}",
+					"device", p->device, "x0", p->piece.x0, "y0",
+					p->piece.y0, "width", p->piece.width, "height",
+					p->piece.height, "samples", p->piece.sample_begin,
+					p->piece.sample_end, "start_ms", p->start_ms, "end_ms",
+					p->end_ms, "kernel_ms", p->kernel_ms));
 	}
 	return list;
 }

@@ -119,6 +119,7 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 		return -1;
 	record_devices(record, d->devs, d->count);
 	int adaptive = tiles_adaptive(d->tiles.split, job->piece_rows);
+	int banded = !adaptive && d->tiles.split != SPLIT_SAMPLES;
 	int rows = tiles_band_rows(&s, job->piece_rows, d->count, d->tiles.split);
 	record->shares = (struct device_shares){
 		.devs = d->devs,
@@ -128,9 +129,10 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 		.piece = d->tiles.split == SPLIT_SAMPLES ? "sample range"
 			 : adaptive			  ? "rectangle"
 							  : "band",
-		.band_rows = adaptive ? 0 : rows,
-		.bands = adaptive ? 0 : tiles_band_count(s.height, rows),
-		.row_order_given = 1,
+		.band_rows = banded ? rows : 0,
+		.bands = banded ? tiles_band_count(s.height, rows) : 0,
+		/* Split samples take whole images: no rows to order. */
+		.row_order_given = d->tiles.split != SPLIT_SAMPLES,
 	};
 	tiles_row_map(&record->shares.rows, &s, job->row_order,
 		      job->row_classes ? job->row_classes : tiles_row_classes(d->devs, d->count));
