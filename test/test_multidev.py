@@ -521,7 +521,7 @@ def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel):
     # mirror corridor has colours of every size; every pixel written once a
     # pass on each device (CHECK).
     common = ["-k", kernel, "--spp", "6", "-s", "test/scenes/mirror_corridor.json"]
-    image_run(tmp_path, "one", *common, "-d", "0")
+    image_run(tmp_path, "one", *common, "-d", "0", env=CHECK)  # the same program
     _, stats = image_run(tmp_path, "two", *common, "--devices", "0:0,0:1", "--split", "samples",
                          env=CHECK)
     assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "two.ppm").read_bytes()
@@ -539,6 +539,7 @@ def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel):
     assert abs(sum(d["pixels"] for d in md["devices"]) - 32 * 24) <= 1
 
 
+@pytest.mark.slow
 def test_sample_split_saturates_as_one_device(tmp_path):
     # Radiance that overflows float (lights, colours and kd of 1e18) saturates
     # the fixed-point sums: the host's sum of the devices' is saturated too
@@ -698,6 +699,7 @@ def test_mpi_sample_split_matches_one_device(tmp_path):
 
 
 @needs_mpi
+@pytest.mark.slow  # the message itself: test_sample_split_needs_a_sample_per_device
 def test_mpi_sample_split_needs_a_sample_per_device(tmp_path):
     result = mpi_run(*SMALL, "--split", "samples", "--spp", "2", "-o", str(tmp_path / "x.ppm"))
     assert result.returncode == 2, result.stderr
