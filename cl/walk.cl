@@ -1,3 +1,6 @@
+#ifdef RTCL_SUM_ATOMIC
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+#endif
 /* Walking a pixel's ray tree: ray_step advances one ray by one
  * intersection; render_pixel walks the tree depth first with a stack, and
  * trace_one gives the wavefront kernel one ray's colour and children. Part
@@ -284,9 +287,30 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 			   piece->samples);
 		while (!walk_step(tr, &w, waiting))
 			;
+#ifdef RTCL_SUM_ATOMIC /* experiment (batch 77): each sample added in place, no load */
+		if (piece->samples > 1) {
+			long3 q = sample_add(tr, (long3)(0), w.color);
+			if (k == piece->sample_begin && !sample_sum_held(piece, k)) {
+				vstore3(q, pixel, sums);
+			} else {
+				atom_add((volatile __global long *)sums + 3 * pixel, q.x);
+				atom_add((volatile __global long *)sums + 3 * pixel + 1, q.y);
+				atom_add((volatile __global long *)sums + 3 * pixel + 2, q.z);
+			}
+		}
+#else
 		if (piece->samples > 1)
 			sum = sample_add(tr, sum, w.color);
+#endif
 	}
+#ifdef RTCL_SUM_ATOMIC
+	if (piece->samples > 1)
+		sum = vload3(pixel, sums);
+	if (piece->samples == 1)
+		vstore3(w.color, pixel, image);
+	else if (sample_ends_pixel(piece, piece->sample_end))
+		vstore3(sample_mean(tr, sum, piece), pixel, image);
+#else
 	if (piece->samples > 1 && sample_sum_held(piece, piece->sample_begin))
 		sum = sample_sums(sum, vload3(pixel, sums));
 	if (piece->samples == 1)
@@ -295,6 +319,7 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 		vstore3(sample_mean(tr, sum, piece), pixel, image);
 	else
 		vstore3(sum, pixel, sums);
+#endif
 #endif
 	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
 	count_write(probe, pixel);
