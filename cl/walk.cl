@@ -1,6 +1,3 @@
-#ifdef RTCL_SUM_ATOMIC
-#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
-#endif
 /* Walking a pixel's ray tree: ray_step advances one ray by one
  * intersection; render_pixel walks the tree depth first with a stack, and
  * trace_one gives the wavefront kernel one ray's colour and children. Part
@@ -275,51 +272,43 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 		;
 	vstore3(w.color, pixel, image);
 #else
-	/* The pass's samples are summed from 0 and the sum so far (in the sums
-	 * buffer unless this pass starts it) added after them: integer sums do
-	 * not depend on the order, and the loaded sum is not live across the
-	 * trace. The pass that ends the pixel stores its mean instead, and one
-	 * sample its colour as it is (sample.cl). */
-	long3 sum = (long3)(0);
+	/* Each sample's colour goes to the pixel's sum in the sums buffer (in
+	 * place, or summed over the pass in registers and added after it:
+	 * sample.cl); the pass that ends the pixel stores its mean, and one
+	 * sample its colour as it is. */
+	bool held = sample_sum_held(piece, piece->sample_begin);
+	long4 sum = (long4)(0);
 
 	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
 		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples), k,
 			   piece->samples);
 		while (!walk_step(tr, &w, waiting))
 			;
-#ifdef RTCL_SUM_ATOMIC /* experiment (batch 77): each sample added in place, no load */
-		if (piece->samples > 1) {
-			long3 q = sample_add(tr, (long3)(0), w.color);
-			if (k == piece->sample_begin && !sample_sum_held(piece, k)) {
-				vstore3(q, pixel, sums);
-			} else {
-				atom_add((volatile __global long *)sums + 3 * pixel, q.x);
-				atom_add((volatile __global long *)sums + 3 * pixel + 1, q.y);
-				atom_add((volatile __global long *)sums + 3 * pixel + 2, q.z);
-			}
-		}
+		if (piece->samples == 1)
+			continue;
+#ifdef RTCL_SUM_IN_PLACE
+		sample_add_in_place(sums, pixel, sample_term(tr, w.color),
+				    held || k > piece->sample_begin);
 #else
-		if (piece->samples > 1)
-			sum = sample_add(tr, sum, w.color);
+		sum = sample_sums(sum, sample_term(tr, w.color));
 #endif
 	}
-#ifdef RTCL_SUM_ATOMIC
-	if (piece->samples > 1)
-		sum = vload3(pixel, sums);
-	if (piece->samples == 1)
+	if (piece->samples == 1) {
 		vstore3(w.color, pixel, image);
-	else if (sample_ends_pixel(piece, piece->sample_end))
-		vstore3(sample_mean(tr, sum, piece), pixel, image);
+	} else {
+#ifdef RTCL_SUM_IN_PLACE
+		if (sample_ends_pixel(piece, piece->sample_end))
+			vstore3(sample_mean(tr, sample_read_in_place(sums, pixel), piece), pixel,
+				image);
 #else
-	if (piece->samples > 1 && sample_sum_held(piece, piece->sample_begin))
-		sum = sample_sums(sum, vload3(pixel, sums));
-	if (piece->samples == 1)
-		vstore3(w.color, pixel, image);
-	else if (sample_ends_pixel(piece, piece->sample_end))
-		vstore3(sample_mean(tr, sum, piece), pixel, image);
-	else
-		vstore3(sum, pixel, sums);
+		if (held)
+			sum = sample_sums(sum, vload4(pixel, sums));
+		if (sample_ends_pixel(piece, piece->sample_end))
+			vstore3(sample_mean(tr, sum, piece), pixel, image);
+		else
+			vstore4(sum, pixel, sums);
 #endif
+	}
 #endif
 	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
 	count_write(probe, pixel);

@@ -147,13 +147,13 @@ __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local u
 		if (piece.samples == 1) {
 			vstore3(color, pixel, image);
 		} else {
-			long3 sum = sample_sum_held(&piece, (int)sample) ? vload3(pixel, sums)
-									 : (long3)(0);
-			sum = sample_add(&tr, sum, color);
+			long4 sum = sample_term(&tr, color);
+			if (sample_sum_held(&piece, (int)sample))
+				sum = sample_sums(sum, vload4(pixel, sums));
 			if (last && sample_ends_pixel(&piece, piece.sample_end))
 				vstore3(sample_mean(&tr, sum, &piece), pixel, image);
 			else
-				vstore3(sum, pixel, sums);
+				vstore4(sum, pixel, sums);
 		}
 		if (last)
 			count_write(write_counts, pixel);

@@ -167,11 +167,12 @@ static inline size_t image_float_bytes(int width, int height)
 	return (size_t)width * (size_t)height * 3 * sizeof(float);
 }
 
-/* Bytes of the fixed-point sums of width × height pixels (3 cl_long each;
- * docs/RENDERING.md, "Samples per pixel"). */
+/* Bytes of the fixed-point sums of width × height pixels (4 cl_long each:
+ * the three channels' sums and their saturation bits; docs/RENDERING.md,
+ * "Samples per pixel"). */
 static inline size_t image_sum_bytes(int width, int height)
 {
-	return (size_t)width * (size_t)height * 3 * sizeof(cl_long);
+	return (size_t)width * (size_t)height * 4 * sizeof(cl_long);
 }
 
 /* What a pixel's sum of `samples` samples is multiplied by for its mean:

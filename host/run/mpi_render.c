@@ -323,7 +323,7 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 	const struct render_settings *s = &j->settings;
 
 	pthread_mutex_lock(&j->lock);
-	tiles_add_sums(j->sums, sums, 3 * (size_t)s->width * s->height);
+	tiles_add_sums(j->sums, sums, (size_t)s->width * s->height);
 	j->arrived[piece]++;
 	pthread_mutex_unlock(&j->lock);
 }

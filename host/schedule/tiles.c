@@ -527,7 +527,7 @@ static int record_pieces(const struct tiles_job *t, struct render_result *out)
 	return 0;
 }
 
-/* Part of combine_sums: values [begin, end) of the parts' sums. */
+/* Part of combine_sums: pixels [begin, end) of the parts' sums. */
 struct sums_range {
 	const cl_long *const *parts;
 	int count;
@@ -542,26 +542,29 @@ static void *combine_range(void *arg)
 	const struct sums_range *r = arg;
 
 	for (size_t i = r->begin; i < r->end; i++) {
-		cl_long sum = 0;
+		cl_long sum[4] = {0, 0, 0, 0};
 		for (int k = 0; k < r->count; k++) {
-			cl_long part = r->parts[k][i];
-			sum = sum == RT_SUM_SATURATED || part == RT_SUM_SATURATED ? RT_SUM_SATURATED
-										  : sum + part;
+			const cl_long *part = r->parts[k] + 4 * i;
+			sum[0] += part[0];
+			sum[1] += part[1];
+			sum[2] += part[2];
+			sum[3] |= part[3];
 		}
 		if (r->to)
-			r->to[i] = sum;
-		if (r->rgb)
-			r->rgb[i] = sum == RT_SUM_SATURATED ? INFINITY : (float)sum * r->scale;
+			memcpy(r->to + 4 * i, sum, sizeof(sum));
+		for (int c = 0; r->rgb && c < 3; c++)
+			r->rgb[3 * i + c] = sum[3] & (1 << c) ? INFINITY : (float)sum[c] * r->scale;
 	}
 	return NULL;
 }
 
-/* The sum of `count` parts' fixed-point sums, `values` of them, into to
- * and/or their means into rgb, over up to TILES_SUM_THREADS threads (a 2000 x
- * 2000 image is 12 million sums; on two H200s' host the image was assembled
- * in 10-13 ms, 139 ms on one thread with both images read back first). */
+/* The sum of `count` parts' sums of `pixels` pixels (4 cl_long each, as the
+ * kernels leave them: cl/sample.cl) into to and/or their means into rgb,
+ * over up to TILES_SUM_THREADS threads (a 2000 x 2000 image is 4 million
+ * pixels' sums; on two H200s' host the image was assembled in 10-13 ms, 139
+ * ms on one thread with both images read back first). */
 static void combine_sums(const cl_long *const *parts, int count, cl_long *to, float *rgb,
-			 float scale, size_t values)
+			 float scale, size_t pixels)
 {
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);
 	int threads = cores < 1 ? 1 : cores > TILES_SUM_THREADS ? TILES_SUM_THREADS : (int)cores;
@@ -569,11 +572,11 @@ static void combine_sums(const cl_long *const *parts, int count, cl_long *to, fl
 	pthread_t ids[TILES_SUM_THREADS];
 	int started[TILES_SUM_THREADS] = {0};
 
-	if (values < ((size_t)1 << 16))
+	if (pixels < ((size_t)1 << 14))
 		threads = 1;
 	for (int i = 0; i < threads; i++) {
-		ranges[i] = (struct sums_range){parts, count, to, rgb, scale, values * i / threads,
-						values * (i + 1) / threads};
+		ranges[i] = (struct sums_range){parts, count, to, rgb, scale, pixels * i / threads,
+						pixels * (i + 1) / threads};
 		started[i] = i > 0 && pthread_create(&ids[i], NULL, combine_range, &ranges[i]) == 0;
 	}
 	for (int i = 0; i < threads; i++)
@@ -584,17 +587,17 @@ static void combine_sums(const cl_long *const *parts, int count, cl_long *to, fl
 			pthread_join(ids[i], NULL);
 }
 
-void tiles_add_sums(cl_long *to, const cl_long *from, size_t values)
+void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels)
 {
 	const cl_long *parts[2] = {to, from};
 
-	combine_sums(parts, 2, to, NULL, 0, values);
+	combine_sums(parts, 2, to, NULL, 0, pixels);
 }
 
 void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb)
 {
 	combine_sums(&sums, 1, NULL, rgb, settings_mean_scale(settings_samples(s)),
-		     3 * (size_t)s->width * s->height);
+		     (size_t)s->width * s->height);
 }
 
 /* SPLIT_SAMPLES: the image from the devices' sums of the last frame. */
@@ -605,7 +608,7 @@ static void add_sums(const struct tiles_job *t, float *rgb)
 	for (int k = 0; k < t->count; k++)
 		parts[k] = t->dev[k].sums;
 	combine_sums(parts, t->count, NULL, rgb, settings_mean_scale(settings_samples(t->settings)),
-		     3 * (size_t)t->settings->width * t->settings->height);
+		     (size_t)t->settings->width * t->settings->height);
 }
 
 /* Reads every device back and assembles the image (and counts) in out. */

@@ -244,12 +244,13 @@ int tiles_sample_unit(const struct render_settings *s, const struct device *devs
  * message in err. */
 int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size);
 
-/* to[i] += from[i] for `values` fixed-point sums, saturated if either is. */
-void tiles_add_sums(cl_long *to, const cl_long *from, size_t values);
+/* Adds from's sums of `pixels` pixels to to's (cl/sample.cl: 4 cl_long a
+ * pixel, the channels' sums added, their saturation bits joined). */
+void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels);
 
 /* The image's mean colours from every pixel's sum of all its samples
  * (docs/RENDERING.md, "Samples per pixel"): float(S) times the mean's
- * scale, as a kernel's last pass takes it; +inf where saturated. */
+ * scale, as a kernel's last pass takes it; +inf where a channel saturated. */
 void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb);
 
 /* Whether the pieces come from the adaptive dispenser (multidev.h): unless
