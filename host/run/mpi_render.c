@@ -676,9 +676,10 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 		return -1;
 	j->pieces = j->tiles.bands;
 	/* --split samples: every device the whole image, an equal range of the
-	 * samples in whole passes, its sums to rank 0 (24 bytes a pixel). Not
+	 * samples in whole passes, its sums to rank 0 (32 bytes a pixel). Not
 	 * the default, unlike in one process: over Open MPI's shared memory on
-	 * two H200s (batch 73) 96 MB of sums took rank 0 170-200 ms to receive,
+	 * two H200s (batch 73) 96 MB of sums (24 bytes a pixel then) took rank 0
+	 * 170-200 ms to receive,
 	 * so two ranks took 1003-1030 ms split by samples and 835-842 ms in
 	 * bands. */
 	size_t sum_bytes = image_sum_bytes(s->width, s->height);

@@ -43,8 +43,8 @@
 #define TILES_FRONT_WAIT_MS 200
 
 /* By default GPUs split the samples (SPLIT_SAMPLES) when each takes at least
- * this many of every pixel: each device then reads back 24 bytes of sums a
- * pixel, twice the image, and the host adds them, which a short render does
+ * this many of every pixel: each device then reads back 32 bytes of sums a
+ * pixel, more than twice the image, and the host adds them, which a short render does
  * not pay back. Two H200s, default scene 2000x2000 (docs/results/multidevice,
  * batches 70-71): 64 spp took 34.4 ms split by samples, 26.2 by pixels; 256
  * spp 102.9-104.6 and 100.8; 512 spp 195.0 and 200.8; 2048 spp 755 and 808. */
