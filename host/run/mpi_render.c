@@ -679,9 +679,8 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 	 * samples in whole passes, its sums to rank 0 (32 bytes a pixel). Not
 	 * the default, unlike in one process: over Open MPI's shared memory on
 	 * two H200s (batch 73) 96 MB of sums (24 bytes a pixel then) took rank 0
-	 * 170-200 ms to receive,
-	 * so two ranks took 1003-1030 ms split by samples and 835-842 ms in
-	 * bands. */
+	 * 170-200 ms to receive, so two ranks took 1003-1030 ms split by samples
+	 * and 835-842 ms in bands. */
 	size_t sum_bytes = image_sum_bytes(s->width, s->height);
 	/* Every rank decides the same from the same job and counts: rank 0
 	 * says why, and all stop. */
