@@ -337,14 +337,17 @@ struct rt_piece {
 					    launch, rt_mean_scale) */
 };
 
-/* A pixel's samples are summed in fixed point (docs/RENDERING.md, "Samples per pixel"):
- * each channel of a sample's colour c becomes the integer round(c * RT_SUM_ONE)
- * in a 64-bit sum, so that the sum does not depend on the order the samples
- * are added in and samples can be split between devices. A channel of
- * RT_SUM_LIMIT or more, or NaN, saturates: the sum is RT_SUM_SATURATED for
- * good and the mean +inf (written as the format's largest value); one of
- * -RT_SUM_LIMIT or less counts as -RT_SUM_LIMIT. RT_SUM_LIMIT * RT_SUM_ONE *
- * 65536 samples (SCENE_MAX_SAMPLES) is 2^62: a sum never overflows. */
+/* A pixel's samples are summed in fixed point (docs/RENDERING.md, "Samples
+ * per pixel"): each channel of a sample's colour c becomes the integer
+ * round(c * RT_SUM_ONE) in a 64-bit sum, so that the sum does not depend on
+ * the order the samples are added in and samples can be split between
+ * devices. A pixel's sum is 4 such integers: the channels' sums and a word
+ * of saturation marks (cl/sample.cl). A channel of RT_SUM_LIMIT or more, or
+ * NaN, saturates (sample_fixed returns RT_SUM_SATURATED): it adds nothing,
+ * its mark stays, and its mean is +inf (written as the format's largest
+ * value); one of -RT_SUM_LIMIT or less counts as -RT_SUM_LIMIT. RT_SUM_LIMIT
+ * * RT_SUM_ONE * 65536 samples (SCENE_MAX_SAMPLES) is 2^62: a sum never
+ * overflows. */
 #define RT_SUM_ONE 0x1p24f
 #define RT_SUM_LIMIT 0x1p22f
 #define RT_SUM_SATURATED 0x7fffffffffffffffL
