@@ -544,14 +544,8 @@ def test_sample_split_saturates_as_one_device(tmp_path):
     # Radiance that overflows float (lights, colours and kd of 1e18) saturates
     # the fixed-point sums: the host's sum of the devices' is saturated too
     # and written as the largest float, as one device writes it.
-    scene = json.loads((ROOT / "scenes" / "two_balls.json").read_text())
-    for light in scene["lights"]:
-        light["color"] = [1e18, 1e18, 1e18]
-    for material in scene["materials"].values():
-        material["color"] = [1e18, 1e18, 1e18]
-        material["diffuse"] = 1e18
-    (tmp_path / "hot.json").write_text(json.dumps(scene))
-    common = ["-s", str(tmp_path / "hot.json"), "--size", "24x16", "--spp", "4"]
+    from test_encoding import hot_scene  # noqa: E402 (test/ is on the path)
+    common = ["-s", str(hot_scene(tmp_path)), "--size", "24x16", "--spp", "4"]
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.pfm"))
     assert one.returncode == 0, one.stderr
     two = run(*common, "--devices", "0:0,0:1", "--split", "samples", "-o",
