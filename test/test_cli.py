@@ -335,6 +335,18 @@ def test_flop_count_buffer_too_large(tmp_path):
     expect_failure(result, 1, "the flop count buffer needs ", tmp_path)
 
 
+def test_sample_sums_buffer_too_large(tmp_path):
+    """An image that fits the device's largest buffer whose samples' sums (32
+    bytes a pixel against the image's 12) do not: refused before rendering."""
+    probe = rtcl("-o", str(tmp_path / "out.png"), "--size", "32768x32768")
+    limit = int(re.search(r"allows at most (\d+) bytes", probe.stderr).group(1))
+    height = limit // 12 // 32768
+    if not 1 <= height <= 32768 or 32 * 32768 * height <= limit:
+        pytest.skip(f"the device allows {limit} bytes in one buffer")
+    result = rtcl("-o", str(tmp_path / "out.png"), "--size", f"32768x{height}", "--spp", "2")
+    expect_failure(result, 1, "the sample sums buffer (32 bytes a pixel) needs ", tmp_path)
+
+
 def test_unwritable_output_directory(tmp_path):
     result = rtcl(*SMALL, "-o", str(tmp_path / "missing" / "out.png"))
     expect_failure(result, 1, "does not exist", tmp_path)

@@ -225,6 +225,9 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	if (launch_plan(dev, s, res, err, err_size) ||
 	    device_check_fits(dev, "the image", (double)image_float_bytes(s->width, s->height), err,
 			      err_size) ||
+	    (settings_samples(s) > 1 &&
+	     device_check_fits(dev, "the sample sums buffer (32 bytes a pixel)",
+			       (double)image_sum_bytes(s->width, s->height), err, err_size)) ||
 	    block_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);
