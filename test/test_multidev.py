@@ -147,6 +147,8 @@ def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     (["--devices", "0:0,0:1", "--split", "samples", "--work-map", "w.npy"],
      "it does not go with --work-map"),
     (["--mpi", "--split", "samples", "--frames", "0:1"], "it does not go with --frames"),
+    (["--devices", "0:0,0:1", "--split", "samples", "--row-order", "scan"],
+     "it does not go with --row-order"),
 ])
 def test_option_errors(tmp_path, args, message):
     result = run(*args, "-o", str(tmp_path / "x.png"))
@@ -572,6 +574,13 @@ def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
     assert md["split"] == "samples"
     pixels = [d["pixels"] for d in md["devices"]]
     assert pixels[1] < pixels[0], pixels
+    # A row order asked for asks for pieces of pixels.
+    result = run(*common, "--devices", "0:0,0:1", "--row-order", "scan", "-o",
+                 str(tmp_path / "rows.ppm"), "--stats", str(tmp_path / "rows.json"),
+                 env={"RTCL_TEST_AS_GPUS": "1"})
+    assert result.returncode == 0, result.stderr
+    md = json.loads((tmp_path / "rows.json").read_text())["multidevice"]
+    assert md["split"] == "dynamic" and md["row_order"] == "scan", md
 
 
 def test_sample_split_needs_a_sample_per_device(tmp_path):

@@ -171,8 +171,8 @@ static void print_help_after_kernels(FILE *out)
 		"                         samples: every device renders the whole image, a\n"
 		"                         share of each pixel's samples by its speed, the same\n"
 		"                         image (default: samples if every device is a GPU\n"
-		"                         and each takes 128 samples or more, not under\n"
-		"                         --mpi; else dynamic)\n"
+		"                         and each takes 128 samples or more, without\n"
+		"                         --row-order, not under --mpi; else dynamic)\n"
 		"      --frames A:B       render frames A to B (0..99999, at most %d), the\n"
 		"                         camera's eye turned about look_at along up by\n"
 		"                         360 (f-A)/(B-A+1) degrees; -o out.png writes\n"
@@ -794,6 +794,7 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 	}
 	if (o->split == SPLIT_SAMPLES && o->split_given) {
 		const char *other = o->frames_given			? "--frames"
+				    : o->row_order_given		? "--row-order"
 				    : o->piece_rows > 0			? "--piece-rows"
 				    : o->outputs.work_map		? "--work-map"
 				    : o->outputs.schedule_map		? "--schedule-map"

@@ -106,6 +106,7 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	job->devices = opt->devices;
 	job->split = (enum split)opt->split;
 	job->split_given = opt->split_given;
+	job->row_order_given = opt->row_order_given;
 	job->piece_rows = opt->piece_rows;
 	job->row_order = (enum row_order)opt->row_order;
 	job->row_classes = opt->row_classes;

@@ -27,6 +27,7 @@ struct job {
 	struct device_choice devices;
 	enum split split;	    /* --split */
 	int split_given;	    /* --split given: no default chosen (tiles.h) */
+	int row_order_given;	    /* --row-order given: pieces of pixels */
 	int piece_rows;		    /* --piece-rows; 0: chosen (tiles.h) */
 	enum row_order row_order;   /* --row-order */
 	int row_classes;	    /* --row-order interleave:S; 0: the devices */

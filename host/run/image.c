@@ -114,8 +114,9 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	struct render_settings instrumented = s;
 	instrumented.count_flops = job->counting;
 	instrumented.record_schedule = job->mapping;
-	if (tiles_choose_split(&d->tiles, &instrumented, job->split_given, &d->tiles.split, err,
-			       err_size))
+	/* A row order asked for asks for pieces of pixels, as a split does. */
+	if (tiles_choose_split(&d->tiles, &instrumented, job->split_given || job->row_order_given,
+			       &d->tiles.split, err, err_size))
 		return -1;
 	record_devices(record, d->devs, d->count);
 	int adaptive = tiles_adaptive(d->tiles.split, job->piece_rows);
