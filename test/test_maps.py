@@ -273,6 +273,11 @@ def test_pieces_that_overlap_or_leave_the_image_are_refused(tmp_path):
     (tmp_path / "plain.json").write_text(json.dumps({"width": 8, "height": 6}))
     assert_refused(run_maps("--pieces", "plain.json", "-o", "m.png", cwd=tmp_path), tmp_path,
                    "m.png", "plain.json: no pieces of an image; write them with rtcl --devices")
+    split = pieces_stats()
+    split["multidevice"]["split"] = "samples"  # but no piece says its samples
+    (tmp_path / "split.json").write_text(json.dumps(split))
+    assert_refused(run_maps("--pieces", "split.json", "-o", "m.png", cwd=tmp_path), tmp_path,
+                   "m.png", "split.json: samples split without each piece's samples")
     (tmp_path / "bad.json").write_text("{")
     assert_refused(run_maps("--pieces", "bad.json", "-o", "m.png", cwd=tmp_path), tmp_path,
                    "m.png", "bad.json: not rtcl --stats JSON")
@@ -314,3 +319,24 @@ def test_the_pieces_of_one_rtcl_run(tmp_path):
     assert (tmp_path / "maps.png").read_bytes().startswith(PNG_SIGNATURE)
     owner = pieces_module.device_map(pieces_module.load_pieces(tmp_path / "s.json"))
     assert owner.shape == (48, 24) and (owner >= 0).all()
+
+
+def test_split_samples_show_each_devices_samples():
+    # rtcl --split samples: two pieces of the whole image, samples [0, 12)
+    # and [12, 16): no device per pixel, but each device's samples.
+    stats = pieces_stats(band=0, bands=0, classes=0)
+    stats["multidevice"]["split"] = "samples"
+    stats["multidevice"]["pieces"] = [
+        {"device": 0, "x0": 0, "y0": 0, "width": WIDTH, "height": HEIGHT, "samples": [0, 12],
+         "start_ms": 0.0, "end_ms": 3.0, "kernel_ms": 2.9},
+        {"device": 1, "x0": 0, "y0": 0, "width": WIDTH, "height": HEIGHT, "samples": [12, 16],
+         "start_ms": 0.0, "end_ms": 2.9, "kernel_ms": 2.8}]
+    figure, images = drawn(pieces=stats)
+    assert images == []  # no device per pixel
+    [samples] = [axes for axes in figure.axes
+                 if axes.get_title() == "samples per device (every pixel)"]
+    assert samples.get_xlabel() == "sample"
+    bars = [(box.x0, box.width) for collection in samples.collections
+            for box in (path.get_extents() for path in collection.get_paths())]
+    assert sorted(bars) == [(0, 12), (12, 4)]
+    assert [axes.get_title() for axes in figure.axes].count("pieces over time") == 1

@@ -94,6 +94,23 @@ def device_map(stats, source="the stats"):
     return owner
 
 
+def splits_samples(stats):
+    """Whether the devices split the samples (rtcl --split samples): every
+    piece is the whole image with a range of every pixel's samples."""
+    return stats["multidevice"].get("split") == "samples"
+
+
+def sample_ranges(stats, source="the stats"):
+    """Under --split samples: (device, first sample, end) of each piece;
+    raises PiecesError when a piece has no range of samples."""
+    try:
+        return [(int(piece["device"]), int(piece["samples"][0]), int(piece["samples"][1]))
+                for piece in stats["multidevice"]["pieces"]]
+    except (KeyError, IndexError, TypeError, ValueError):
+        raise PiecesError(f"{source}: samples split without each piece's samples: "
+                          "not rtcl --stats of --split samples") from None
+
+
 def device_names(stats):
     """Each device's name as --stats gives it, by index."""
     return [str(device.get("device", f"device {k}"))

@@ -29,7 +29,9 @@ panels show the schedule over the devices:
 
 4. the device that rendered each pixel (colour bar "device", the index of
    multidevice.devices), its pieces placed through the row map, so that
-   interleaved rows show as the bands each device took;
+   interleaved rows show as the bands each device took; under --split samples,
+   where every device renders every pixel, each device's range of every
+   pixel's samples instead (x: the sample);
 5. each device's pieces over the frame's time (x: ms from the frame's start,
    y: the device, named on the axis), one bar per piece, from when the device
    took it to when it was done.
@@ -53,7 +55,8 @@ import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
 from ..flops import FLOPS_DTYPE, flop_unit, output_format, read_npy  # noqa: E402
-from ..pieces import NO_DEVICE, PiecesError, device_map, device_names, load_pieces  # noqa: E402
+from ..pieces import (NO_DEVICE, PiecesError, device_map, device_names, load_pieces,  # noqa: E402
+                      sample_ranges, splits_samples)
 from ..plots import pyplot  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..schedule import ScheduleMapError, load_map, order_started, started  # noqa: E402
@@ -136,7 +139,10 @@ def draw_maps(figure, work=None, schedule=None, *, pieces=None, log=False, title
         _draw_groups(figure, axes.pop(0), schedule)
         _draw_order(figure, axes.pop(0), schedule)
     if pieces is not None:
-        _draw_devices(figure, axes.pop(0), pieces)
+        if splits_samples(pieces):
+            _draw_samples(axes.pop(0), pieces)
+        else:
+            _draw_devices(figure, axes.pop(0), pieces)
         _draw_timeline(axes.pop(0), pieces)
     if title:
         figure.suptitle(title)
@@ -211,6 +217,24 @@ def _draw_devices(figure, axes, stats):
            interpolation="nearest")
 
 
+def _draw_samples(axes, stats):
+    """--split samples: every device rendered every pixel, so instead of a
+    device per pixel, each device's range of every pixel's samples."""
+    names = device_names(stats)
+    ranges = sample_ranges(stats)
+    count = max(len(names), max(k for k, _, _ in ranges) + 1)
+    colours = _device_colours(count)
+    for k, first, end in ranges:
+        axes.broken_barh([(first, end - first)], (k - 0.4, 0.8), facecolors=colours(k),
+                         edgecolors="black", linewidth=0.5)
+    axes.set_yticks(range(count))
+    axes.set_yticklabels([f"{k}: {names[k][:28]}" if k < len(names) else str(k)
+                          for k in range(count)])
+    axes.set_ylim(count - 0.5, -0.5)
+    axes.set_xlabel("sample")
+    axes.set_title("samples per device (every pixel)")
+
+
 def _draw_timeline(axes, stats):
     pieces = stats["multidevice"]["pieces"]
     names = device_names(stats)
@@ -257,7 +281,9 @@ def draw(arguments):
     shapes = [shape for shape in shapes if shape]
     for other in shapes[1:]:
         check_same_render(*shapes[0], *other)
-    if pieces is not None:
+    if pieces is not None and splits_samples(pieces):
+        sample_ranges(pieces, arguments.pieces)  # pieces without their samples: refused
+    elif pieces is not None:
         device_map(pieces, arguments.pieces)  # pieces that do not tile the image: refused
     plot_maps(arguments.output, work, schedule, pieces=pieces, log=arguments.log,
               title=arguments.title)
