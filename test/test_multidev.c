@@ -723,3 +723,59 @@ Test(multidev, adaptive_equal_devices_share_the_image)
 
 	cr_assert(two < 0.55 * one, "%.1f ms on two, %.1f on one", two, one);
 }
+
+/* --split samples (tiles_split_samples): the ranges follow one another from
+ * sample 0 to N, each at least one sample, in whole passes of the unit but
+ * the last, shared by the rates; pieces are the whole image with sum_begin
+ * their first sample; more pieces than passes take single samples. */
+Test(multidev, sample_ranges_cover_the_samples_once_by_rate)
+{
+	static const struct {
+		int samples, total, unit;
+		double rate[3];
+	} cases[] = {
+		{2048, 2, 4, {1, 1, 0}},     {2048, 2, 4, {3, 1, 0}}, {1000, 3, 4, {1, 2, 1}},
+		{7, 3, 4, {1, 1, 1}},	      {3, 3, 4, {1, 1, 1}},    {130, 2, 4, {1, 1000, 0}},
+	};
+	struct render_settings base = band_settings(40, 30, 1);
+
+	for (size_t c = 0; c < sizeof(cases) / sizeof(cases[0]); c++) {
+		struct render_settings s = base;
+		struct tiles_job t;
+		struct rt_piece map = {0};
+		struct device devs[3] = {{0}};
+		char err[256];
+		s.samples = cases[c].samples;
+		cr_assert_eq(tiles_job_init(&t, NULL, &s, 30, 0, &map, devs, 2, err, sizeof(err)),
+			     0, "%s", err);
+		cr_assert_eq(tiles_split_samples(&t, cases[c].total, cases[c].unit, cases[c].rate),
+			     0);
+		cr_assert_eq(t.piece_count, cases[c].total);
+		int next = 0, unit = (s.samples + cases[c].unit - 1) / cases[c].unit < cases[c].total
+					     ? 1
+					     : cases[c].unit;
+		double rate_sum = 0;
+		for (int k = 0; k < cases[c].total; k++)
+			rate_sum += cases[c].rate[k];
+		for (int k = 0; k < cases[c].total; k++) {
+			const struct rt_piece *p = &t.pieces[k];
+			int size = p->sample_end - p->sample_begin;
+			cr_assert_eq(p->sample_begin, next, "case %zu piece %d", c, k);
+			cr_assert_eq(p->sum_begin, p->sample_begin);
+			cr_assert_gt(size, 0, "case %zu piece %d is empty", c, k);
+			cr_assert(p->x0 == 0 && p->y0 == 0 && p->width == 40 && p->height == 30);
+			cr_assert(k == cases[c].total - 1 || size % unit == 0,
+				  "case %zu piece %d: %d samples, not whole passes of %d", c, k, size,
+				  unit);
+			/* Its share within a pass of the rate's, at least one pass. */
+			double share = s.samples * cases[c].rate[k] / rate_sum;
+			cr_assert(size <= (share > unit ? share : unit) + unit + 0.5 &&
+					  size >= share - unit - 0.5,
+				  "case %zu piece %d: %d samples for a share of %.1f", c, k, size,
+				  share);
+			next = p->sample_end;
+		}
+		cr_assert_eq(next, s.samples, "case %zu ends at %d", c, next);
+		tiles_job_free(&t);
+	}
+}
