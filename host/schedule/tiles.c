@@ -778,11 +778,6 @@ int tiles_adaptive(enum split split, int piece_rows)
 	return split == SPLIT_DYNAMIC && piece_rows <= 0;
 }
 
-int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows)
-{
-	return settings_samples(s) >= 2 && settings_samples(s) >= count &&
-	       !settings_instrumented(s) && piece_rows <= 0;
-}
 
 int tiles_check_sample_split(const struct render_settings *s, int count, char *err,
 			     size_t err_size)
@@ -796,6 +791,12 @@ int tiles_check_sample_split(const struct render_settings *s, int count, char *e
 		 "at least %d samples per pixel (--spp or image.samples), and this render has %d",
 		 count, count > 2 ? count : 2, n);
 	return -1;
+}
+
+int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows)
+{
+	return tiles_check_sample_split(s, count, NULL, 0) == 0 && !settings_instrumented(s) &&
+	       piece_rows <= 0;
 }
 
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,

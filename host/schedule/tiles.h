@@ -216,7 +216,8 @@ int tiles_choose_split(const struct tiles_request *r, const struct render_settin
 		       enum split *split, char *err, size_t err_size);
 
 /* --split samples asked of `count` devices: 0 when the render has a sample
- * for each (and 2 or more), else -1 with one message in err. */
+ * for each (and 2 or more), else -1 with one message in err (which may be
+ * NULL with err_size 0). */
 int tiles_check_sample_split(const struct render_settings *s, int count, char *err,
 			     size_t err_size);
 

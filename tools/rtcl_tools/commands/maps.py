@@ -217,6 +217,14 @@ def _draw_devices(figure, axes, stats):
            interpolation="nearest")
 
 
+def _device_rows(axes, names, count):
+    """One row per device, top to bottom, named on the y axis."""
+    axes.set_yticks(range(count))
+    axes.set_yticklabels([f"{k}: {names[k][:28]}" if k < len(names) else str(k)
+                          for k in range(count)])
+    axes.set_ylim(count - 0.5, -0.5)
+
+
 def _draw_samples(axes, stats):
     """--split samples: every device rendered every pixel, so instead of a
     device per pixel, each device's range of every pixel's samples."""
@@ -227,10 +235,7 @@ def _draw_samples(axes, stats):
     for k, first, end in ranges:
         axes.broken_barh([(first, end - first)], (k - 0.4, 0.8), facecolors=colours(k),
                          edgecolors="black", linewidth=0.5)
-    axes.set_yticks(range(count))
-    axes.set_yticklabels([f"{k}: {names[k][:28]}" if k < len(names) else str(k)
-                          for k in range(count)])
-    axes.set_ylim(count - 0.5, -0.5)
+    _device_rows(axes, names, count)
     axes.set_xlabel("sample")
     axes.set_title("samples per device (every pixel)")
 
@@ -245,10 +250,7 @@ def _draw_timeline(axes, stats):
         start, end = float(piece["start_ms"]), float(piece["end_ms"])
         axes.broken_barh([(start, max(end - start, 0.0))], (k - 0.4, 0.8),
                          facecolors=colours(k), edgecolors="black", linewidth=0.5)
-    axes.set_yticks(range(count))
-    axes.set_yticklabels([f"{k}: {names[k][:28]}" if k < len(names) else str(k)
-                          for k in range(count)])
-    axes.set_ylim(count - 0.5, -0.5)
+    _device_rows(axes, names, count)
     axes.set_xlabel(TIME_LABEL)
     axes.set_title("pieces over time")
 
