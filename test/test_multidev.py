@@ -515,14 +515,18 @@ def test_interleaved_split_gives_a_slowed_device_less_of_the_image(tmp_path):
     assert sum(pixels) == 24 * 48 and pixels[1] < pixels[0], pixels
 
 
-@pytest.mark.parametrize("kernel", ["persistent", pytest.param("wavefront", marks=pytest.mark.slow)])
-def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel):
+@pytest.mark.parametrize("kernel, scene", [
+    ("dynamic", "scenes/paper60.json"),
+    pytest.param("persistent", "test/scenes/mirror_corridor.json", marks=pytest.mark.slow),
+    pytest.param("wavefront", "test/scenes/mirror_corridor.json", marks=pytest.mark.slow)])
+def test_sample_split_matches_one_device_byte_for_byte(tmp_path, kernel, scene):
     # --split samples: both devices render the whole image, each a range of
     # every pixel's samples into its fixed-point sums, which the host adds:
     # the image is one device's (RENDERING.md, "Samples per pixel"). The
     # mirror corridor has colours of every size; every pixel written once a
-    # pass on each device (CHECK).
-    common = ["-k", kernel, "--spp", "6", "-s", "test/scenes/mirror_corridor.json"]
+    # pass on each device (CHECK). make test's case builds the program the
+    # next test uses.
+    common = ["-k", kernel, "--spp", "6", "-s", scene]
     image_run(tmp_path, "one", *common, "-d", "0", env=CHECK)  # the same program
     _, stats = image_run(tmp_path, "two", *common, "--devices", "0:0,0:1", "--split", "samples",
                          env=CHECK)
@@ -563,7 +567,7 @@ def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
     # device slowed 4 times takes fewer samples. GPUs alone take the sample
     # split by default (RTCL_TEST_AS_GPUS: the PoCL devices count as GPUs).
     common = ["--size", "16x8", "--spp", "256"]  # 128 a device or more: the default split
-    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"), env=CHECK)  # one program
     assert one.returncode == 0, one.stderr
     result = run(*common, "--devices", "0:0,0:1", "-r", "2", "-o", str(tmp_path / "two.ppm"),
                  "--stats", str(tmp_path / "s.json"),
@@ -577,7 +581,7 @@ def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
     # A row order asked for asks for pieces of pixels.
     result = run(*common, "--devices", "0:0,0:1", "--row-order", "scan", "-o",
                  str(tmp_path / "rows.ppm"), "--stats", str(tmp_path / "rows.json"),
-                 env={"RTCL_TEST_AS_GPUS": "1"})
+                 env={**CHECK, "RTCL_TEST_AS_GPUS": "1"})
     assert result.returncode == 0, result.stderr
     md = json.loads((tmp_path / "rows.json").read_text())["multidevice"]
     assert md["split"] == "dynamic" and md["row_order"] == "scan", md
@@ -682,6 +686,7 @@ def test_mpi_gpus_alone_take_a_class_each_under_the_dynamic_split(tmp_path):
 
 
 @needs_mpi
+@pytest.mark.slow  # --split samples itself: test_sample_split_matches_one_device_byte_for_byte
 def test_mpi_sample_split_matches_one_device(tmp_path):
     # --split samples over three ranks: every rank renders the whole image, a
     # third of the samples in whole passes, and sends its sums to rank 0,
