@@ -6,7 +6,10 @@
 # -DRTCL_SUM_IN_REGISTERS (the pass's sum in registers); two GPUs split by
 # samples; MPI one rank against two in bands; GPU + CPU. Default scene
 # 2000x2000 at 2048 spp, the lake at 256 spp, kernel dynamic, -r 3, three
-# interleaved rounds.
+# interleaved rounds. MPI also with `mpirun --bind-to none`: Open MPI binds
+# each of two ranks to one core by default, and rank 0 adds the sums or
+# places the bands (8 threads) on that core. GPU + CPU, the lake under MPI
+# and the transport alone (mpibw.c) are in run79.sh.
 #   COMMIT=<commit> bash docs/results/multidevice/h200x2/run78.sh
 set -u
 echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
@@ -35,13 +38,13 @@ for s in D L; do
   RTCL_BUILD_OPTIONS=-DRTCL_SUM_IN_REGISTERS $R -p $P -d 0 ${!s} --size 64x64 -q -o $T/prime.ppm
   $R -p $P -d 0 ${!s} -q -o $T/$s.ppm
 done
-mpi_run() { # tag, ranks, scene variable, extra options
+mpi_run() { # tag, ranks, scene variable, extra options, mpirun options
   local args="${!3} $4" second=""
   [ $2 = 2 ] && second=": -np 1 $RM --mpi -p $P -d 1 $args -q -o $T/x.ppm --stats $O/$1.json"
   ( . $G/ompi/env.sh
-    /usr/bin/time -f "process %e s" mpirun -np 1 $RM --mpi -p $P -d 0 $args -q -o $T/x.ppm --stats $O/$1.json $second ) \
-    2>&1 | grep -E '^process|rtcl' | tail -3
-  echo "$3 MPI $2 rank(s) $4: $(show $O/$1.json)"; same $T/$3.ppm $T/x.ppm; }
+    /usr/bin/time -f "process %e s" mpirun ${5:-} -np 1 $RM --mpi -p $P -d 0 $args -q -o $T/x.ppm --stats $O/$1.json $second ) \
+    2>&1 | grep -E '^process|rtcl|bound' | tail -4
+  echo "$3 MPI $2 rank(s) $4 ${5:-(default binding)}: $(show $O/$1.json)"; same $T/$3.ppm $T/x.ppm; }
 for round in 1 2 3; do
   for s in D L; do
     $B -p $P -d 0 ${!s} -r 3 -q -o $T/x.ppm --stats $O/$s-base-$round.json
@@ -54,15 +57,10 @@ for round in 1 2 3; do
     echo "$s two GPUs, round $round: $(show $O/$s-two-$round.json)"; same $T/$s.ppm $T/x.ppm
   done
   mpi_run mpi-D1-$round 1 D ""; mpi_run mpi-D2-$round 2 D ""
+  mpi_run mpi-D1n-$round 1 D "" "--bind-to none"; mpi_run mpi-D2n-$round 2 D "" "--bind-to none"
+  mpi_run mpi-D2s-$round 2 D "--split samples"
+  mpi_run mpi-D2sn-$round 2 D "--split samples" "--bind-to none"
 done
-mpi_run mpi-L1 1 L ""; mpi_run mpi-L2 2 L ""
-G1="-k dynamic --size 2000x2000 --spp 1024"
-$R --devices $P:0,$C:0 $G1 --size 64x64 -q -o $T/prime.ppm  # PoCL's build
-$B --devices $P:0,$C:0 $G1 --size 64x64 -q -o $T/prime.ppm
-for X in $B $R; do
-  $X -p $P -d 0 $G1 -r 3 -q -o $T/g.ppm --stats $O/gpu-$(basename $X).json
-  echo "1024 spp GPU alone ($(basename $X)): $(show $O/gpu-$(basename $X).json)"
-  $X --devices $P:0,$C:0 $G1 -r 3 -q -o $T/x.ppm --stats $O/gpucpu-$(basename $X).json
-  echo "1024 spp GPU + CPU ($(basename $X)): $(show $O/gpucpu-$(basename $X).json)"; same $T/g.ppm $T/x.ppm
-done
+( . $G/ompi/env.sh; mpirun --report-bindings -np 2 $G/mpibw 1 2>&1 | grep bound
+  mpirun --bind-to none --report-bindings -np 2 $G/mpibw 1 2>&1 | grep -i bound )
 tar czf $OUT/batch78-json.tgz -C $T json78
