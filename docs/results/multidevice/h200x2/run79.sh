@@ -47,6 +47,6 @@ mpi_run() { # tag, ranks, extra options, mpirun options
     2>&1 | grep -E '^process|rtcl' | tail -3
   echo "L MPI $2 rank(s) $3 ${4:-(default binding)}: $(show $O/$1.json)"; same $T/L.ppm $T/x.ppm; }
 for b in "" "--bind-to none"; do
-  mpi_run mpi-L1 1 "" "$b"; mpi_run mpi-L2 2 "" "$b"; mpi_run mpi-L2s 2 "--split samples" "$b"
+  n=${b:+n}; mpi_run mpi-L1$n 1 "" "$b"; mpi_run mpi-L2$n 2 "" "$b"; mpi_run mpi-L2s$n 2 "--split samples" "$b"
 done
 tar czf $OUT/batch79-json.tgz -C $T json79
