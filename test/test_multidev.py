@@ -234,6 +234,25 @@ def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
     assert result.stdout.count("rank ") == 3
 
 
+@needs_mpi
+@pytest.mark.slow
+@pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="binding to one core of one is no note")
+def test_mpi_notes_a_rank_bound_to_one_core(tmp_path):
+    """Open MPI binds one or two ranks to a core each by default, where a rank's
+    BVH build and sums then run alone: rank 0 says so once, and not when the
+    ranks are unbound (docs/results/multidevice/README.md, "MPI")."""
+    def run(*binding):
+        return subprocess.run(["mpirun", *binding, "-np", "1", RTCL, "--mpi", "--size", "8x8",
+                               "-o", str(tmp_path / "x.ppm")], capture_output=True, text=True,
+                              cwd=ROOT, timeout=300, env={**os.environ, **MPI_ENV})
+    bound, unbound = run("--bind-to", "core"), run("--bind-to", "none")
+    assert bound.returncode == 0 and unbound.returncode == 0, bound.stderr + unbound.stderr
+    notes = [line for line in own_messages(bound.stderr) if line.startswith("rtcl: note:")]
+    assert len(notes) == 1 and "bound 1 of 1 rank(s) to one core each" in notes[0], bound.stderr
+    assert "--bind-to none" in notes[0]
+    assert "rtcl: note:" not in unbound.stderr, unbound.stderr
+
+
 # The pieces of the MPI tests below: 9 frames, or one image in 12 bands of 2
 # rows, with the pieces each of the 3 ranks' devices gets under --split static.
 MPI_PIECES = {"frames": (["--frames", "0:8"], "f.ppm", 3),

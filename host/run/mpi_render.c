@@ -1,6 +1,9 @@
+/* sched_getaffinity, CPU_COUNT (note_binding) */
+#define _GNU_SOURCE
 #include "run/mpi_render.h"
 
 #include <limits.h>
+#include <sched.h>
 #include <mpi.h>
 #include <pthread.h>
 #include <signal.h>
@@ -8,7 +11,9 @@
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
+#include <unistd.h>
 
+#include "base/pages.h"
 #include "base/test_hooks.h"
 #include "base/version.h"
 #include "run/frames.h"
@@ -188,11 +193,12 @@ static int message_too_large(size_t bytes)
 }
 
 /* A message to rank 0 of a piece's number and bytes of pixels, the pixels
- * left for the caller to write at result_pixels(message); NULL (with err
- * set) when it cannot be made. */
+ * left for the caller to write at result_pixels(message), on a page
+ * (base/pages.h); NULL (with err set) when it cannot be made. Free it with
+ * free_message. */
 static char *result_message(int piece, size_t bytes, char *err, size_t err_size)
 {
-	char *message = bytes + RESULT_HEADER <= INT_MAX ? calloc(1, RESULT_HEADER + bytes) : NULL;
+	char *message = bytes + RESULT_HEADER <= INT_MAX ? pages_alloc(RESULT_HEADER, bytes) : NULL;
 
 	if (!message) {
 		snprintf(err, err_size,
@@ -201,8 +207,14 @@ static char *result_message(int piece, size_t bytes, char *err, size_t err_size)
 			 bytes);
 		return NULL;
 	}
+	memset(message, 0, RESULT_HEADER);
 	memcpy(message, &piece, sizeof(int));
 	return message;
+}
+
+static void free_message(char *message)
+{
+	pages_free(message, RESULT_HEADER);
 }
 
 static float *result_pixels(char *message)
@@ -229,7 +241,7 @@ static int send_message(char *message, size_t bytes, char *err, size_t err_size)
 {
 	int failed = send_kept(message, bytes, err, err_size);
 
-	free(message);
+	free_message(message);
 	return failed;
 }
 
@@ -388,7 +400,7 @@ static int send_bands(struct mpi_job *j, int device, char *err, size_t err_size)
 		if (!message)
 			return -1;
 		if (renderer_read_rows(r, &p, result_pixels(message), 1, err, err_size)) {
-			free(message);
+			free_message(message);
 			return -1;
 		}
 		if (send_message(message, bytes, err, err_size))
@@ -960,6 +972,30 @@ static int mpi_begin(struct mode_run *run, char *err, size_t err_size)
 	return 0;
 }
 
+/* Rank 0 notes (unless -q) when mpirun bound a rank to one core of
+ * several: that rank's host threads (the scene's BVH build, the sums of the
+ * sample split, a CPU device's work) then share it. On two H200s, Open MPI's
+ * default binding made the lake's BVH build take 4.6-5.4 s instead of
+ * 2.2-2.6 (docs/results/multidevice/README.md, "MPI"). */
+static void note_binding(const struct mpi_job *j)
+{
+	cpu_set_t set;
+	long online = sysconf(_SC_NPROCESSORS_ONLN);
+	int mine = sched_getaffinity(0, sizeof(set), &set) == 0 ? CPU_COUNT(&set) : 0;
+	int one = mine == 1 && online > 1, count = 0, first = one ? j->rank : INT_MAX, lowest;
+
+	if (MPI_Allreduce(&one, &count, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD) != MPI_SUCCESS ||
+	    MPI_Allreduce(&first, &lowest, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS ||
+	    !count || j->rank != ROOT || j->job->quiet)
+		return;
+	fprintf(stderr,
+		"rtcl: note: mpirun bound %d of %d rank(s) to one core each (rank %d to one of "
+		"%ld): a rank's BVH build, sample sums and CPU devices then run on that core "
+		"alone; start rtcl with `mpirun --bind-to none`, or give each rank cores "
+		"(--map-by slot:PE=N)\n",
+		count, j->size, lowest, online);
+}
+
 /* Every rank agrees on the job and on starting (rank 0's check of the
  * outputs included), then renders. Each rank prints its own failure. */
 static int mpi_render(struct mode_run *run, int checked, char *err, size_t err_size)
@@ -977,6 +1013,7 @@ static int mpi_render(struct mode_run *run, int checked, char *err, size_t err_s
 		err[0] = '\0'; /* rank 0 printed it */
 		return EXIT_FAILED;
 	}
+	note_binding(j);
 	int status = agree_on_start(j, start_rank(j, checked, err, err_size), err);
 	err[0] = '\0'; /* printed by the rank that failed */
 	if (status)

@@ -7,6 +7,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "base/pages.h"
 #include "base/test_hooks.h"
 #include "render/repeats.h"
 #include "base/progress.h"
@@ -216,7 +217,7 @@ void tiles_job_free(struct tiles_job *t)
 		if (t->dev[k].open)
 			renderer_close(&t->dev[k].renderer);
 		render_result_free(&t->dev[k].result);
-		free(t->dev[k].block);
+		pages_free(t->dev[k].block, t->sums_header);
 		t->dev[k].block = NULL;
 		t->dev[k].sums = NULL;
 		t->dev[k].open = 0;
@@ -240,7 +241,7 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 
 	if (d->block)
 		return 0;
-	d->block = malloc(bytes);
+	d->block = pages_alloc(t->sums_header, bytes - t->sums_header);
 	if (!d->block) {
 		snprintf(err, err_size, "out of host memory for the sample sums of a %dx%d image",
 			 t->settings->width, t->settings->height);

@@ -101,7 +101,8 @@ struct tiles_device {
 	int open;
 	int collected; /* read back */
 	cl_long *sums; /* SPLIT_SAMPLES: its pixels' sums, read after each frame,
-			  sums_header bytes into `block` */
+			  sums_header bytes into `block`, on a page
+			  (base/pages.h) */
 	char *block;
 };
 
