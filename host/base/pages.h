@@ -27,4 +27,19 @@ static inline void pages_free(char *p, size_t header)
 		free(p - (PAGE_BYTES - header));
 }
 
+/* Maps every page of [p, p + bytes) now by writing a zero into each, so that
+ * a timed write into it later pays no first faults. A memset(p, 0, n) right
+ * after malloc does not do this: the compiler may merge the two into calloc,
+ * which maps nothing (on the 2-core VM, 128 MB of sums then took 166 ms to
+ * add into instead of 31). For memory that is zero already, as calloc's. */
+static inline void pages_touch(void *p, size_t bytes)
+{
+	volatile char *v = p;
+
+	for (size_t i = 0; i < bytes; i += PAGE_BYTES)
+		v[i] = 0;
+	if (bytes)
+		v[bytes - 1] = 0;
+}
+
 #endif

@@ -70,6 +70,9 @@ struct mpi_job {
 	struct device_work *all_work;
 	int *arrived; /* image: how often each band arrived */
 	cl_long *sums;	 /* by_samples: the devices' sums added so far */
+	pthread_mutex_t sums_lock; /* sums and arrived, by_samples: not `lock`,
+				      which the other ranks' requests for
+				      pieces wait on meanwhile */
 	char *received; /* by_samples: where another rank's sums arrive */
 	double wall_ms;
 	int initialized; /* MPI_Init_thread succeeded */
@@ -345,11 +348,11 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 	const struct render_settings *s = &j->settings;
 
 	trace(j->rank, "add: wait for lock");
-	pthread_mutex_lock(&j->lock);
+	pthread_mutex_lock(&j->sums_lock);
 	trace(j->rank, "add: begin");
 	tiles_add_sums(j->sums, sums, (size_t)s->width * s->height);
 	j->arrived[piece]++;
-	pthread_mutex_unlock(&j->lock);
+	pthread_mutex_unlock(&j->sums_lock);
 	trace(j->rank, "add: end");
 }
 
@@ -748,22 +751,22 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 		return 0;
 	if (j->by_samples) {
 		size_t bytes = image_sum_bytes(s->width, s->height);
-		j->sums = malloc(bytes);
-		j->received = malloc(RESULT_HEADER + bytes);
+		j->sums = calloc(1, bytes);
+		j->received = calloc(1, RESULT_HEADER + bytes);
 		if (!j->sums || !j->received)
 			return -1;
-		/* Zero and touched, as the image below. */
-		memset(j->sums, 0, bytes);
-		memset(j->received, 0, RESULT_HEADER + bytes);
+		/* Mapped now, as the image below. */
+		pages_touch(j->sums, bytes);
+		pages_touch(j->received, RESULT_HEADER + bytes);
 	}
 	j->arrived = calloc((size_t)j->pieces, sizeof(int));
-	j->record->result.rgb = malloc(image_float_bytes(s->width, s->height));
+	j->record->result.rgb = calloc(1, image_float_bytes(s->width, s->height));
 	if (!j->arrived || !j->record->result.rgb)
 		return -1;
-	/* Touched now, before the render's clock starts, so that the bands
+	/* Mapped now, before the render's clock starts, so that the bands
 	 * written into it later do not pay its pages' first faults (about
 	 * 25 ms for 2000x2000 here). */
-	memset(j->record->result.rgb, 0, image_float_bytes(s->width, s->height));
+	pages_touch(j->record->result.rgb, image_float_bytes(s->width, s->height));
 	return 0;
 }
 
@@ -955,6 +958,7 @@ static void free_job(struct mpi_job *j)
 	free(j->all_devs);
 	free(j->all_work);
 	pthread_mutex_destroy(&j->lock);
+	pthread_mutex_destroy(&j->sums_lock);
 }
 
 /* Starts MPI; only rank 0 writes the outputs. */
@@ -969,6 +973,7 @@ static int mpi_begin(struct mode_run *run, char *err, size_t err_size)
 	}
 	run->state = j;
 	pthread_mutex_init(&j->lock, NULL);
+	pthread_mutex_init(&j->sums_lock, NULL);
 	j->job = run->job;
 	j->record = run->record;
 	j->plan = run->plan;

@@ -248,6 +248,7 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 		return -1;
 	}
 	memset(d->block, 0, bytes);
+	pages_touch(d->block, bytes);
 	d->sums = (cl_long *)(d->block + t->sums_header);
 	return 0;
 }
