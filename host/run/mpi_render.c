@@ -106,16 +106,6 @@ static int central_take(struct mpi_job *j, int g)
 	return piece;
 }
 
-/* EXPERIMENT (batch 81): the timeline of the sums' way to rank 0. */
-static void trace(int rank, const char *what)
-{
-	static int on = -1;
-	if (on < 0)
-		on = getenv("RTCL_MPI_TRACE") != NULL;
-	if (on)
-		fprintf(stderr, "trace %d %.3f %s\n", rank, timing_now() * 1e3, what);
-}
-
 /* ---- waiting without spinning --------------------------------------------
  *
  * Open MPI's blocking calls poll at full speed while they wait, each taking
@@ -347,13 +337,10 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 {
 	const struct render_settings *s = &j->settings;
 
-	trace(j->rank, "add: wait for lock");
 	pthread_mutex_lock(&j->sums_lock);
-	trace(j->rank, "add: begin");
 	tiles_add_sums(j->sums, sums, (size_t)s->width * s->height);
 	j->arrived[piece]++;
 	pthread_mutex_unlock(&j->sums_lock);
-	trace(j->rank, "add: end");
 }
 
 /* Under check_writes: reads device's image and write counts; nonzero, with
@@ -384,10 +371,8 @@ static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
 		/* The sums lie RESULT_HEADER bytes into their block: one message,
 		 * no copy. */
 		memcpy(t->dev[device].block, &g, sizeof(int));
-		trace(j->rank, "send: begin");
 		if (send_kept(t->dev[device].block, bytes, err, err_size))
 			return -1;
-		trace(j->rank, "send: end");
 	}
 	return 0;
 }
@@ -449,10 +434,8 @@ static void device_done(void *context, int device)
 	struct mpi_job *j = context;
 	struct device_report r;
 
-	trace(j->rank, "device_done: begin");
 	if (j->image)
 		finish_bands(j, device);
-	trace(j->rank, "device_done: bands or sums sent");
 	if (j->rank == ROOT)
 		return;
 	memset(&r, 0, sizeof(r));
@@ -525,10 +508,8 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	 * before the render), others to one of their own. */
 	int kept = j->by_samples && (size_t)bytes == RESULT_HEADER + piece_bytes(j, 0);
 	message = kept ? j->received : malloc(bytes > 0 ? (size_t)bytes : 1);
-	trace(j->rank, "recv: begin");
 	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
 		 MPI_STATUS_IGNORE);
-	trace(j->rank, "recv: end");
 	if (message && (size_t)bytes >= RESULT_HEADER)
 		memcpy(&piece, message, sizeof(int));
 	const float *rgb = (const float *)(message + RESULT_HEADER);
@@ -606,7 +587,6 @@ static void *serve(void *context)
 			serve_fail(j, &status);
 			break;
 		case TAG_DONE:
-			trace(j->rank, "done arrived");
 			remaining -= serve_done(j, status.MPI_SOURCE);
 			break;
 		}
@@ -926,12 +906,9 @@ static int render_all(struct mpi_job *j)
 		fprintf(stderr, "rtcl: cannot start rank 0's server thread\n");
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
-	trace(j->rank, "render_all: start");
 	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
-	trace(j->rank, "multidev_run: returned");
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
-		trace(j->rank, "server joined");
 		progress_end();
 		j->wall_ms = (timing_now() - start) * 1e3;
 		status = finish_root(j);
