@@ -237,20 +237,30 @@ def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
 @needs_mpi
 @pytest.mark.slow
 @pytest.mark.skipif((os.cpu_count() or 1) < 2, reason="binding to one core of one is no note")
-def test_mpi_notes_a_rank_bound_to_one_core(tmp_path):
+def test_mpi_ranks_bound_to_one_core_get_a_note_and_bands(tmp_path):
     """Open MPI binds one or two ranks to a core each by default, where a rank's
-    BVH build and sums then run alone: rank 0 says so once, and not when the
-    ranks are unbound (docs/results/multidevice/README.md, "MPI")."""
-    def run(*binding):
-        return subprocess.run(["mpirun", *binding, "-np", "1", RTCL, "--mpi", "--size", "8x8",
-                               "-o", str(tmp_path / "x.ppm")], capture_output=True, text=True,
-                              cwd=ROOT, timeout=300, env={**os.environ, **MPI_ENV})
-    bound, unbound = run("--bind-to", "core"), run("--bind-to", "none")
-    assert bound.returncode == 0 and unbound.returncode == 0, bound.stderr + unbound.stderr
+    BVH build and sums then run alone: rank 0 says so once, and GPUs alone
+    (RTCL_TEST_AS_GPUS) split the image in bands; unbound, they split its
+    samples, as in one process (docs/results/multidevice/README.md, "MPI").
+    Both give the same image."""
+    def run(binding):
+        out = tmp_path / binding
+        out.mkdir()
+        rank = [RTCL, "--mpi", "--size", "16x8", "--spp", "256", "-k", "dynamic", "-o",
+                str(out / "x.ppm"), "--stats", str(out / "s.json")]
+        result = subprocess.run(["mpirun", "--bind-to", binding, "-np", "2", *rank],
+                                capture_output=True, text=True, cwd=ROOT, timeout=300,
+                                env={**os.environ, **MPI_ENV, "RTCL_TEST_AS_GPUS": "1"})
+        assert result.returncode == 0, result.stderr
+        split = json.loads((out / "s.json").read_text())["multidevice"]["split"]
+        return result, split, (out / "x.ppm").read_bytes()
+    (bound, bound_split, bound_image), (free, free_split, free_image) = run("core"), run("none")
     notes = [line for line in own_messages(bound.stderr) if line.startswith("rtcl: note:")]
-    assert len(notes) == 1 and "bound 1 of 1 rank(s) to one core each" in notes[0], bound.stderr
+    assert len(notes) == 1 and "bound 2 of 2 rank(s) to one core each" in notes[0], bound.stderr
     assert "--bind-to none" in notes[0]
-    assert "rtcl: note:" not in unbound.stderr, unbound.stderr
+    assert "rtcl: note:" not in free.stderr, free.stderr
+    assert (bound_split, free_split) == ("dynamic", "samples")
+    assert bound_image == free_image
 
 
 # The pieces of the MPI tests below: 9 frames, or one image in 12 bands of 2

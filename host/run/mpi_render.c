@@ -75,6 +75,7 @@ struct mpi_job {
 				      pieces wait on meanwhile */
 	char *received; /* by_samples: where another rank's sums arrive */
 	double wall_ms;
+	int bound_ranks; /* ranks bound to one core of several (note_binding) */
 	int initialized; /* MPI_Init_thread succeeded */
 	int threads;	 /* with MPI_THREAD_MULTIPLE */
 };
@@ -672,6 +673,24 @@ static int plan_devices(struct mpi_job *j, const int *counts)
  * launches too few pixels (two H200s, batch 58: 6.57 s in 63 bands against
  * 1.16 s in 2); with a CPU among the devices, about TILES_PER_DEVICE bands
  * per device, so that the slow one cannot hold up the end. */
+/* Whether the image is split by samples without --split samples: as in one
+ * process (tiles_choose_split), when every device of every rank is a GPU and
+ * takes TILES_SAMPLES_MIN samples of each pixel or more, and also only when
+ * no rank is bound to one core (note_binding), where rank 0 adds the sums.
+ * On two H200s (batch 82, docs/results/multidevice/README.md, "MPI") two
+ * ranks took 780-789 ms split by samples against 816-833 in bands, and 855-869
+ * against 832-835 with each rank bound to one core. */
+static int samples_by_default(const struct mpi_job *j, int total, int gpus)
+{
+	const struct job *job = j->job;
+	const struct render_settings *s = &j->settings;
+
+	return !job->split_given && !job->row_order_given && total >= 2 && gpus == total &&
+	       j->bound_ranks == 0 && tiles_samples_fit(s, total, job->piece_rows) &&
+	       settings_samples(s) >= total * TILES_SAMPLES_MIN &&
+	       !message_too_large(image_sum_bytes(s->width, s->height));
+}
+
 static int choose_pieces(struct mpi_job *j, int total, int gpus)
 {
 	const struct job *job = j->job;
@@ -691,11 +710,7 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 		return -1;
 	j->pieces = j->tiles.bands;
 	/* --split samples: every device the whole image, an equal range of the
-	 * samples in whole passes, its sums to rank 0 (32 bytes a pixel). Not
-	 * the default, unlike in one process: over Open MPI's shared memory on
-	 * two H200s (batch 73) 96 MB of sums (24 bytes a pixel then) took rank 0
-	 * 170-200 ms to receive, so two ranks took 1003-1030 ms split by samples
-	 * and 835-842 ms in bands. */
+	 * samples in whole passes, its sums to rank 0 (32 bytes a pixel). */
 	size_t sum_bytes = image_sum_bytes(s->width, s->height);
 	/* Every rank decides the same from the same job and counts: rank 0
 	 * says why, and all stop. */
@@ -713,7 +728,7 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 				s->width, s->height, sum_bytes);
 		return CHOSEN_BADLY;
 	}
-	j->by_samples = job->split == SPLIT_SAMPLES;
+	j->by_samples = job->split == SPLIT_SAMPLES || samples_by_default(j, total, gpus);
 	if (j->by_samples) {
 		if (tiles_split_samples(&j->tiles, total,
 					renderer_pass_samples(s, (long long)s->width * s->height, 1),
@@ -982,7 +997,7 @@ static int mpi_begin(struct mode_run *run, char *err, size_t err_size)
  * sample split, a CPU device's work) then share it. On two H200s, Open MPI's
  * default binding made the lake's BVH build take 4.6-5.4 s instead of
  * 2.2-2.6 (docs/results/multidevice/README.md, "MPI"). */
-static void note_binding(const struct mpi_job *j)
+static void note_binding(struct mpi_job *j)
 {
 	cpu_set_t set;
 	long online = sysconf(_SC_NPROCESSORS_ONLN);
@@ -991,7 +1006,10 @@ static void note_binding(const struct mpi_job *j)
 
 	if (MPI_Allreduce(&one, &count, 1, MPI_INT, MPI_SUM, MPI_COMM_WORLD) != MPI_SUCCESS ||
 	    MPI_Allreduce(&first, &lowest, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS ||
-	    !count || j->rank != ROOT || j->job->quiet)
+	    !count)
+		return;
+	j->bound_ranks = count;
+	if (j->rank != ROOT || j->job->quiet)
 		return;
 	fprintf(stderr,
 		"rtcl: note: mpirun bound %d of %d rank(s) to one core each (rank %d to one of "
