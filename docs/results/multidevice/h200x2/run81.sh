@@ -1,3 +1,8 @@
+#!/bin/bash
+# Issue 28, batch 81 (two H200s): the timeline of the sums' and bands' way to
+# rank 0 under MPI, printed by the experiment e01c2a3 (RTCL_MPI_TRACE, since
+# taken out): CLOCK_MONOTONIC in ms, shared by the ranks of one machine.
+#   COMMIT=e01c2a3 bash docs/results/multidevice/h200x2/run81.sh
 set -u
 echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
 export LD_LIBRARY_PATH=/usr/local/nvidia/lib64:$PWD/.gpu/lib:${LD_LIBRARY_PATH:-}

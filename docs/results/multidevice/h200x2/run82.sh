@@ -1,6 +1,6 @@
 #!/bin/bash
 # Issue 28, batch 82 (two H200s): MPI after the page touches and the sums'
-# own lock (d5e0c0e-ish, with batch 81's RTCL_MPI_TRACE still in), Open
+# own lock (6c72d03, with batch 81's RTCL_MPI_TRACE still in), Open
 # MPI's single-copy mechanism (CMA, its default) against none (copies through
 # shared memory), bands and --split samples, both bindings; one rank as the
 # base. Default scene 2000x2000, 2048 spp, dynamic; two rounds.
