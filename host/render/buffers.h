@@ -22,7 +22,7 @@ struct render_buffers {
 	cl_mem scene;
 	struct guarded_image image;
 	cl_mem sums;	      /* each pixel's fixed-point sum of its samples' colours
-				 between passes, 3 cl_long (samples > 1) */
+				 between passes, 4 cl_long (samples > 1; cl/sample.cl) */
 	cl_mem flops;	      /* the per-pixel flop counts at its head (count_flops) */
 	cl_mem probe;	      /* write counts or the schedule map (probe.h) */
 	uint64_t *item_flops; /* per work-item, as the renderer lays them out */
@@ -32,7 +32,8 @@ struct render_buffers {
 
 /* Creates the scene buffer from b->scene_block, the image, the flop-count
  * buffer `flops_what` of flops_bytes (a placeholder without count_flops) and
- * the write counts. Returns 0, or -1 with one message in err. */
+ * the write counts, and places them all on the device before it returns.
+ * Returns 0, or -1 with one message in err. */
 int buffers_create(struct device *dev, const struct render_settings *s,
 		   const struct render_result *res, struct render_buffers *b, size_t flops_bytes,
 		   const char *flops_what, char *err, size_t err_size);

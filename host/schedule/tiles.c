@@ -651,9 +651,7 @@ static int assemble(struct tiles_job *t, struct render_result *out, char *err, s
 	return s->check_writes ? check_summed_counts(t, out->write_counts, err, err_size) : 0;
 }
 
-/* Opens every device's renderer, each in its own thread (build and upload
- * overlap), before the timed frames. */
-static int open_all(struct tiles_job *t, struct device_work *setup, char *err, size_t err_size)
+int tiles_open_all(struct tiles_job *t, struct device_work *setup, char *err, size_t err_size)
 {
 	struct multidev_job job = {.piece_count = 0,
 				   .split = SPLIT_STATIC,
@@ -832,7 +830,7 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 			   r->devs, r->count, err, err_size))
 		return -1;
 	t.by_samples = r->split == SPLIT_SAMPLES;
-	if (open_all(&t, setup, err, err_size))
+	if (tiles_open_all(&t, setup, err, err_size))
 		goto out_free;
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);

@@ -240,6 +240,12 @@ int tiles_split_samples(struct tiles_job *t, int total, int unit, const double *
  * split, so that each device's passes are whole. */
 int tiles_sample_unit(const struct render_settings *s, const struct device *devs, int count);
 
+/* Opens every device's renderer (tiles_open), each in its own thread (build
+ * and upload overlap), before the timed frames; each one's time in
+ * setup[k].setup_ms. Returns 0, or -1 with the first failed device's message
+ * in err (a device that failed stays closed: tiles_open tries again). */
+int tiles_open_all(struct tiles_job *t, struct device_work *setup, char *err, size_t err_size);
+
 /* SPLIT_SAMPLES: device k's host copy of its sums (t->sums_header bytes into
  * its block), allocated and touched once: tiles_open does it, or the caller
  * before, to keep it out of a timed render. Returns 0, or -1 with one
