@@ -13,14 +13,14 @@ export RTCL_MESHREAD=$PWD/.gpu/rtcl-meshread
 echo "commit: $COMMIT"; nvidia-smi -L
 G=$PWD/.gpu; X=$G/rtcl-x; T=$(mktemp -d)
 P=$($X --list-devices | awk '/^Platform/ && /NVIDIA/ {sub("#","",$2); sub(":","",$2); print $2}')
-python3 tools/genbench.py tetra --size 8 -o $T/tetra > /dev/null
-python3 tools/genbench.py mount --size 8 -o $T/mount > /dev/null
+python3 tools/genbench.py tetra --size 8 --triangles ply -o $T/tetra > /dev/null
+python3 tools/genbench.py mount --size 8 --triangles ply -o $T/mount > /dev/null
 python3 tools/genbench.py lake -o $T/lake > /dev/null
 python3 - $T <<'PY'
 import json, pathlib, sys
 T = pathlib.Path(sys.argv[1])
 for name, folder in (("tetra-8", "tetra"), ("mount-8", "mount"), ("lake-10", "lake")):
-    src = T / folder / f"{name}.json"
+    (src,) = (T / folder).glob("*.json")
     scene = json.loads(src.read_text())
     mesh = dict(scene["meshes"][0]); mesh["file"] = str((src.parent / mesh["file"]).resolve())
     kept = {k: scene[k] for k in ("format", "camera", "materials") if k in scene}
