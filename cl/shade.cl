@@ -20,6 +20,17 @@ static float3 plane_color(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_pl
 	return (square & 1) ? checker.xyz : material_color;
 }
 
+/* Whether a hit's normals are used: by the lights' terms and shadow rays, or
+ * by the rays a hit spawns. A scene without lights at max_depth 0 (the
+ * primary rays of the comparison with TinyBVH, docs/bvh.md) uses neither, so
+ * its hits skip them (RENDERING.md step 2): a triangle's normal read its
+ * vertices again, 5-8 % of such a frame on an H100 (batch 86). */
+#if defined(RTCL_NO_LIGHTS) && RTCL_MAX_DEPTH == 0
+#define SHADING_NORMALS 0
+#else
+#define SHADING_NORMALS 1
+#endif
+
 /* A hit being shaded (RENDERING.md steps 2-4), carried across the shadow rays
  * it casts: the lights are taken one at a time, so that a shadow ray can go
  * through the same intersect_scene call as every other ray. */
@@ -82,21 +93,25 @@ static float3 triangle_normal(struct tracer *tr, uint4 index, float3 d)
 	return n * rsqrt(dot3(n, n));
 }
 
-/* The geometric normal at the hit (step 2), the material and base colour
- * (step 3). A triangle's shading normal is left to shading_begin. */
+/* The geometric normal at the hit (step 2; -d where nothing uses it,
+ * SHADING_NORMALS), the material and base colour (step 3). A triangle's
+ * shading normal is left to shading_begin. */
 static float3 hit_surface(struct tracer *tr, struct hit hit, float3 p, float3 d, struct shading *sh)
 {
 	float3 normal;
 
 	if (hit.sphere >= 0) {
 		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[hit.sphere];
-		normal = (p - s->center.xyz) * s->inv_radius;
+		normal = -d;
+		if (SHADING_NORMALS) {
+			normal = (p - s->center.xyz) * s->inv_radius;
+			COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_MUL3);
+		}
 		sh->m = &tr->materials[s->material];
 		sh->base = sh->m->color.xyz;
-		COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_MUL3);
 	} else if (SCENE_HAS_TRIANGLES && hit.triangle >= 0) {
 		uint4 index = tr->triangles[hit.triangle].index;
-		normal = triangle_normal(tr, index, d);
+		normal = SHADING_NORMALS ? triangle_normal(tr, index, d) : -d;
 		sh->m = &tr->materials[triangle_material(index)];
 		sh->base = sh->m->color.xyz;
 #ifdef RTCL_TEXTURES
@@ -121,11 +136,12 @@ static void shading_begin(struct tracer *tr, const struct ray_job *ray, struct h
 	sh->p = ray->origin + hit.t * ray->dir;
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3);
 	float3 normal = hit_surface(tr, hit, sh->p, ray->dir, sh);
-	sh->inside = dot3(normal, ray->dir) > 0.0f;
+	sh->inside = SHADING_NORMALS && dot3(normal, ray->dir) > 0.0f;
 	sh->n_face = sh->inside ? -normal : normal;
 	sh->n = sh->n_face;
-	COUNT_FLOPS(tr, FLOPS_DOT3);
-	if (SCENE_HAS_TRIANGLES && hit.triangle >= 0) {
+	if (SHADING_NORMALS)
+		COUNT_FLOPS(tr, FLOPS_DOT3);
+	if (SHADING_NORMALS && SCENE_HAS_TRIANGLES && hit.triangle >= 0) {
 		uint4 index = tr->triangles[hit.triangle].index;
 		if (triangle_smooth(index))
 			sh->n = triangle_shading_normal(tr, index, hit, sh->n_face);

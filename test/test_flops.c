@@ -127,8 +127,9 @@ struct fixture {
 };
 
 /* Builds the test kernels over the scene json, with its BVH and RTCL_BVH
- * when bvh. */
-static void setup_scene(struct fixture *f, const char *json, int bvh)
+ * when bvh, and the tracer's other options `options` (max depth 1 when
+ * NULL). */
+static void setup_scene_with(struct fixture *f, const char *json, int bvh, const char *options)
 {
 	const char *sources[16];
 	int count = 0;
@@ -151,11 +152,10 @@ static void setup_scene(struct fixture *f, const char *json, int bvh)
 	f->program =
 		clCreateProgramWithSource(f->dev.context, (cl_uint)count, sources, NULL, &status);
 	cr_assert_eq(status, CL_SUCCESS);
-	status = clBuildProgram(
-		f->program, 1, &f->dev.id,
-		bvh ? "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS -DRTCL_BVH"
-		    : "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=1 -DRTCL_COUNT_FLOPS",
-		NULL, NULL);
+	char build[256];
+	snprintf(build, sizeof(build), "-cl-std=CL1.2 -DRTCL_COUNT_FLOPS %s %s",
+		 options ? options : "-DRTCL_MAX_DEPTH=1", bvh ? "-DRTCL_BVH" : "");
+	status = clBuildProgram(f->program, 1, &f->dev.id, build, NULL, NULL);
 	if (status != CL_SUCCESS) {
 		clGetProgramBuildInfo(f->program, f->dev.id, CL_PROGRAM_BUILD_LOG, sizeof(err), err,
 				      NULL);
@@ -167,6 +167,11 @@ static void setup_scene(struct fixture *f, const char *json, int bvh)
 	f->out = clCreateBuffer(f->dev.context, CL_MEM_READ_WRITE, 64, NULL, &status);
 	cr_assert_eq(status, CL_SUCCESS);
 	free(block);
+}
+
+static void setup_scene(struct fixture *f, const char *json, int bvh)
+{
+	setup_scene_with(f, json, bvh, NULL);
 }
 
 static void setup(struct fixture *f)
@@ -326,6 +331,23 @@ Test(flops, shading_evaluation)
 	 * Red: 0.1 + 0.7 * 0.8 + 0.3 * ((1.8 / sqrt(3.6))^2)^16 = 0.1 + 0.56 + 0.3 * 0.9^16. */
 	cr_expect_eq(run_kernel(&f, "count_shading", o, d, &red), 199);
 	cr_expect_float_eq(red, 0.1 + 0.56 + 0.3 * 0.18530202, 1e-5);
+	teardown(&f);
+}
+
+/* A scene without lights at max_depth 0 uses no normal (RENDERING.md step
+ * 2), so the hit above computes and counts none: the hit 61, p 6, ka C (x)
+ * ambient 6, the shadow origin 6 (along n_face = -d), the weight 3: 82,
+ * where 199 - 82 is the normal, the side test and the light's terms. The
+ * same colour: the ambient term, 0.1. (A build of its own: flops_slow.) */
+Test(flops_slow, shading_without_lights_at_depth_0_counts_no_normal)
+{
+	struct fixture f;
+	const float o[4] = {0, 0, 5, 0}, d[4] = {0, 0, -1, 0};
+	float red;
+
+	setup_scene_with(&f, analytic_json, 0, "-DRTCL_MAX_DEPTH=0 -DRTCL_NO_LIGHTS");
+	cr_expect_eq(run_kernel(&f, "count_shading", o, d, &red), 82);
+	cr_expect_float_eq(red, 0.1, 1e-6);
 	teardown(&f);
 }
 
