@@ -38,10 +38,12 @@ int buffers_create(struct device *dev, const struct render_settings *s,
 	return b->probe ? buffers_place(dev, b, err, err_size) : -1;
 }
 
-/* Every buffer on the device now, in the renderer's set-up: NVIDIA's OpenCL
- * allocates and fills a buffer at its first use, which fell in the first
- * frame of a render without -r (the lake's 250 MB scene block: 39-67 ms
- * beyond the kernels' time on two H200s, docs/results/multidevice). */
+/* Every buffer on the device now, in the renderer's set-up: an OpenCL
+ * implementation may allocate and fill a buffer at its first use, which
+ * would fall in the first frame of a render without -r (on two H200s under
+ * --mpi a device's busy time held 39-64 ms beyond its kernels, gone with
+ * this and the set-up before the clock together, batch 85:
+ * docs/results/multidevice/README.md). */
 static int buffers_place(struct device *dev, struct render_buffers *b, char *err,
 			 size_t err_size)
 {
