@@ -230,6 +230,7 @@ def fake_rtcl(tmp_path):
     return fake
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 def test_accel_and_scene_reach_every_rtcl_call_and_name_the_folder(tmp_path, fake_rtcl):
     result = run_tool("--rtcl", fake_rtcl, "--quick", "--no-sweep", "--accel", "bvh",
                       "--scene", "somewhere/lake-10.json", cwd=tmp_path)
@@ -248,6 +249,7 @@ def test_accel_and_scene_reach_every_rtcl_call_and_name_the_folder(tmp_path, fak
     assert not list(tmp_path.rglob("*.npy"))
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 def test_default_accel_is_none_in_the_device_folder(tmp_path, fake_rtcl):
     result = run_tool("--rtcl", fake_rtcl, "--quick", "--no-sweep", "--no-serial",
                       "--no-reference", "--peak-gflops", "500", cwd=tmp_path)
@@ -266,6 +268,7 @@ def test_default_accel_is_none_in_the_device_folder(tmp_path, fake_rtcl):
         ["histograms.png", "results.json", "speedup.png", "table1.md"]
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 @pytest.mark.parametrize("how", ["matplotlib missing", "--no-plots"])
 def test_without_figures_results_and_table_are_written(tmp_path, fake_rtcl, how):
     out = tmp_path / "out"

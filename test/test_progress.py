@@ -30,6 +30,7 @@ def shares(lines):
     return [int(m.group(1)) for line in lines if (m := re.search(r": (\d+)% done", line))]
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 def test_progress_moves_during_a_single_pass(tmp_path):
     result, lines = on_terminal(*ONE_PASS, "-o", str(tmp_path / "x.ppm"))
     assert result.returncode == 0

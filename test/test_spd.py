@@ -207,6 +207,7 @@ def test_lake_has_a_million_triangles_glass_and_mirror(lake):
     assert any(m["reflect"] >= 0.5 and m["transmit"] == 0 for m in materials), "mirror"
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 @needs_models
 def test_every_scene_of_the_set_passes_the_validator(tmp_path):
     names = []
@@ -242,6 +243,7 @@ def test_random_balls_are_genscene_s_scenes(tmp_path):
         assert len(scene.load_scene(tmp_path / ("random-balls-%d.json" % n))["spheres"]) == n
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 def test_random_ball_series_reaches_20000_without_overlap():
     balls = genscene.build_scene(20000)["spheres"]
     assert len(balls) == 20000

@@ -63,6 +63,7 @@ def run_tool(env, *args, cwd):
                           text=True, env=env, cwd=cwd, timeout=300)
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 def test_runs_both_interleaved_and_reports(tmp_path, fakes):
     bin_dir, env = fakes
     done = run_tool(env, "--rtcl", bin_dir / "rtcl", "--runs", "3", "--size", "40x30",

@@ -594,6 +594,7 @@ def markdown_section_rows(markdown, heading):
     return rows
 
 
+@pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 def test_experiments_best_rows_keep_their_sweep_time_when_a_rerun_would_differ(tmp_path):
     fake = tmp_path / "bin" / "rtcl"
     fake.parent.mkdir()
