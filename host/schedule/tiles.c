@@ -247,8 +247,7 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 			 t->settings->width, t->settings->height);
 		return -1;
 	}
-	memset(d->block, 0, bytes);
-	pages_touch(d->block, bytes);
+	memset(d->block, 0, bytes); /* zeroes and maps it (not merged into calloc) */
 	d->sums = (cl_long *)(d->block + t->sums_header);
 	return 0;
 }
