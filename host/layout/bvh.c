@@ -604,8 +604,200 @@ int bvh_widen(struct bvh *bvh)
 	return 0;
 }
 
+/* A compressed node's children as the collapse finds them. */
+struct kids8 {
+	struct rt_bvh_box box[8];
+	int count;
+};
+
+/* Binary node n's children, an inner one replaced by its two, the one of
+ * largest area first, while there is room; an empty leaf (beside a root's
+ * single primitive) left out. */
+static void collapse8(const struct bvh *bvh, int n, struct kids8 *k)
+{
+	k->count = 0;
+	for (int c = 0; c < 2; c++) {
+		const struct rt_bvh_box *b = binary_child(bvh, n, c);
+		if (is_inner(b) || box_count(b) > 0)
+			k->box[k->count++] = *b;
+	}
+	while (k->count < 8) {
+		int open = -1;
+		for (int i = 0; i < k->count; i++)
+			if (is_inner(&k->box[i]) &&
+			    (open < 0 || half_area(&k->box[i]) > half_area(&k->box[open])))
+				open = i;
+		if (open < 0)
+			break;
+		int inner = box_index(&k->box[open]);
+		k->box[open] = *binary_child(bvh, inner, 0);
+		k->box[k->count++] = *binary_child(bvh, inner, 1);
+	}
+}
+
+/* slot_of[i]: child i's slot, each child in the octant of the node it lies
+ * most towards, greedily: the (child, slot) pair of largest
+ * dot(centre - node centre, the slot's direction) first. */
+static void assign_slots(const struct kids8 *k, const double center[3], int slot_of[8])
+{
+	double score[8][8];
+	int taken = 0, placed = 0;
+
+	for (int i = 0; i < k->count; i++) {
+		slot_of[i] = -1;
+		for (int s = 0; s < 8; s++) {
+			score[i][s] = 0.0;
+			for (int a = 0; a < 3; a++) {
+				double c = 0.5 * ((double)k->box[i].lo.s[a] + k->box[i].hi.s[a]);
+				score[i][s] += (s >> a & 1 ? 1.0 : -1.0) * (c - center[a]);
+			}
+		}
+	}
+	while (placed < k->count) {
+		int bi = -1, bs = -1;
+		for (int i = 0; i < k->count; i++)
+			for (int s = 0; i < k->count && slot_of[i] < 0 && s < 8; s++)
+				if (!(taken >> s & 1) && (bi < 0 || score[i][s] > score[bi][bs]))
+					bi = i, bs = s;
+		slot_of[bi] = bs;
+		taken |= 1 << bs;
+		placed++;
+	}
+}
+
+/* The largest float at most x. */
+static float float_down(double x)
+{
+	float f = (float)x;
+
+	return (double)f > x ? nextafterf(f, -FLT_MAX) : f;
+}
+
+struct compress {
+	struct bvh *bvh;
+	double margin;
+	int next_node, next_leaf;
+};
+
+/* Compressed node w from binary node n, its inner children the next nodes
+ * (filled the same way, depth first) and its leaves the next leaf entries. */
+static void compress_node(struct compress *z, int n, int w)
+{
+	struct rt_bvh8_node *node = &z->bvh->wide8[w];
+	struct kids8 k;
+	double lo[3], hi[3], center[3], scale[3];
+	uint32_t qlo[3][2] = {{0}}, qhi[3][2] = {{0}}, exps = 0, imask = 0, lmask = 0;
+	int slot_of[8], child_of[8], first_node, first_leaf;
+
+	collapse8(z->bvh, n, &k);
+	for (int a = 0; a < 3; a++) {
+		lo[a] = DBL_MAX;
+		hi[a] = -DBL_MAX;
+		for (int i = 0; i < k.count; i++) {
+			lo[a] = fmin(lo[a], k.box[i].lo.s[a]);
+			hi[a] = fmax(hi[a], k.box[i].hi.s[a]);
+		}
+		center[a] = 0.5 * (lo[a] + hi[a]);
+		/* The grid: its origin at or below the margin-grown box, its step
+		 * the least power of two whose 255 steps reach past it. */
+		node->frame.s[a] = float_down(lo[a] - z->margin);
+		double extent = hi[a] + z->margin - node->frame.s[a];
+		int e = -126;
+		while (e < 127 && ldexp(255.0, e) < extent)
+			e++;
+		scale[a] = ldexp(1.0, e);
+		exps |= (uint32_t)(e + 127) << (8 * a);
+	}
+	assign_slots(&k, center, slot_of);
+	for (int s = 0; s < 8; s++)
+		child_of[s] = -1;
+	for (int i = 0; i < k.count; i++)
+		child_of[slot_of[i]] = i;
+	first_node = z->next_node;
+	first_leaf = z->next_leaf;
+	for (int s = 0; s < 8; s++) {
+		int i = child_of[s];
+		for (int a = 0; a < 3; a++) {
+			double l = 255.0, h = 0.0;
+			if (i >= 0) {
+				l = floor((k.box[i].lo.s[a] - z->margin - node->frame.s[a]) / scale[a]);
+				h = ceil((k.box[i].hi.s[a] + z->margin - node->frame.s[a]) / scale[a]);
+				l = fmax(l, 0.0);
+				h = fmin(h, 255.0);
+			}
+			qlo[a][s / 4] |= (uint32_t)l << (8 * (s % 4));
+			qhi[a][s / 4] |= (uint32_t)h << (8 * (s % 4));
+		}
+		if (i < 0)
+			continue;
+		if (is_inner(&k.box[i])) {
+			imask |= 1u << s;
+			z->next_node++;
+		} else {
+			struct rt_bvh8_leaf *leaf = &z->bvh->wide8_leaves[z->next_leaf++];
+			leaf->index = box_index(&k.box[i]);
+			leaf->count = box_count(&k.box[i]);
+			lmask |= 1u << s;
+		}
+	}
+	exps |= imask << 24;
+	memcpy(&node->frame.s[3], &exps, sizeof(exps));
+	node->links.s[0] = (uint32_t)first_node;
+	node->links.s[1] = (uint32_t)first_leaf;
+	node->links.s[2] = lmask;
+	node->links.s[3] = 0;
+	node->q[0] = (rt_uvec4){{qlo[0][0], qlo[0][1], qlo[1][0], qlo[1][1]}};
+	node->q[1] = (rt_uvec4){{qlo[2][0], qlo[2][1], qhi[0][0], qhi[0][1]}};
+	node->q[2] = (rt_uvec4){{qhi[1][0], qhi[1][1], qhi[2][0], qhi[2][1]}};
+	for (int s = 0, next = first_node; s < 8; s++)
+		if (imask >> s & 1)
+			compress_node(z, box_index(&k.box[child_of[s]]), next++);
+}
+
+int bvh_compress(struct bvh *bvh)
+{
+	struct compress z = {bvh, 0.0, 1, 0};
+	double reach = 0.0;
+
+	free(bvh->wide8);
+	free(bvh->wide8_leaves);
+	bvh->wide8 = NULL;
+	bvh->wide8_leaves = NULL;
+	bvh->wide8_count = bvh->wide8_leaf_count = 0;
+	if (bvh->node_count == 0)
+		return 0;
+	/* Each compressed node opens at least one binary node, and a binary
+	 * tree of N nodes has N + 1 leaves: never more. */
+	bvh->wide8 = calloc((size_t)bvh->node_count, sizeof(*bvh->wide8));
+	bvh->wide8_leaves = calloc((size_t)bvh->node_count + 1, sizeof(*bvh->wide8_leaves));
+	if (!bvh->wide8 || !bvh->wide8_leaves) {
+		free(bvh->wide8);
+		free(bvh->wide8_leaves);
+		bvh->wide8 = NULL;
+		bvh->wide8_leaves = NULL;
+		return -1;
+	}
+	for (int c = 0; c < 2; c++)
+		for (int a = 0; a < 3; a++)
+			reach = fmax(reach, fmax(fabs(binary_child(bvh, 0, c)->lo.s[a]),
+						 fabs(binary_child(bvh, 0, c)->hi.s[a])));
+	z.margin = fmax(reach * BVH8_MARGIN, FLT_MIN);
+	compress_node(&z, 0, 0);
+	bvh->wide8_count = z.next_node;
+	bvh->wide8_leaf_count = z.next_leaf;
+	/* The leaf entries follow the nodes on the device: their first index
+	 * counted from the node array's start, in entries. */
+	for (int w = 0; w < bvh->wide8_count; w++)
+		bvh->wide8[w].links.s[1] +=
+			(uint32_t)((size_t)bvh->wide8_count * sizeof(*bvh->wide8) /
+				   sizeof(*bvh->wide8_leaves));
+	return 0;
+}
+
 void bvh_free(struct bvh *bvh)
 {
+	free(bvh->wide8);
+	free(bvh->wide8_leaves);
 	free(bvh->wide);
 	free(bvh->nodes);
 	free(bvh->refs);
