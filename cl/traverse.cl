@@ -245,7 +245,11 @@ static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, floa
 /* A byte of q as the float it counts: 2^23 + q, less 2^23, both exact. */
 static inline float q_float(uint word, int byte)
 {
+#ifdef RTCL_BVH8_I2F
+	return convert_float(word >> (8 * byte) & 0xffu);
+#else
 	return as_float(0x4b000000u | (word >> (8 * byte) & 0xffu)) - 0x1p23f;
+#endif
 }
 
 /* The hits of a compressed node's eight children (struct rt_bvh8_node): bit
@@ -272,10 +276,17 @@ static inline uint bvh8_hits(RTCL_SCENE_SPACE const struct rt_bvh8_node *node,
 	uint2 ny = fy ? hiy : loy, fyw = fy ? loy : hiy;
 	uint2 nz = fz ? hiz : loz, fzw = fz ? loz : hiz;
 	uint hits = 0;
+#ifdef RTCL_BVH8_SKIP_EMPTY
+	uint used = node->links.z | e >> 24;
+#endif
 
 #pragma unroll
 	for (int s = 0; s < 8; s++) {
 		int w = s >> 2, b = s & 3;
+#ifdef RTCL_BVH8_SKIP_EMPTY
+		if (!(used >> s & 1u))
+			continue;
+#endif
 		float ex = fma(q_float(w ? nx.y : nx.x, b), step.x, start.x);
 		float ey = fma(q_float(w ? ny.y : ny.x, b), step.y, start.y);
 		float ez = fma(q_float(w ? nz.y : nz.x, b), step.z, start.z);
