@@ -198,12 +198,9 @@ struct rt_scene {
 	rt_uint material_map_offset, texture_offset, texture_table_offset;
 	rt_int texture_count;
 	/* The BVH's nodes: 2, struct rt_bvh_node; 4, struct rt_bvh4_node (a CPU
-	   device outside the counting build, RTCL_BVH4); 8, struct
-	   rt_bvh8_node followed by bvh_leaf_count struct rt_bvh8_leaf
-	   (RTCL_BVH8); 0 without a BVH. */
+	   device outside the counting build, RTCL_BVH4); 0 without a BVH. */
 	rt_int bvh_width;
-	rt_int bvh_leaf_count; /* the eight-wide tree's leaf entries, else 0 */
-	rt_int bvh_pad[2];
+	rt_int bvh_pad[3];
 };
 
 /* A triangle of a leaf, its three vertex positions inline: v0.w holds its
@@ -245,38 +242,6 @@ struct rt_bvh4_node {
 };
 
 #define RT_BVH4_EMPTY (-1)
-
-/* A compressed eight-wide node (RTCL_BVH8, docs/bvh.md "A compressed
- * eight-wide tree"): the binary tree collapsed into nodes of up to eight
- * children (bvh_compress), each child's box stored as bytes on a grid of the
- * node's own: child k's box along axis a is origin[a] + q·2^e[a] for its lo
- * byte q and its hi byte, bounds that contain the child's padded box by a
- * margin (host/layout/bvh.c says how much and why), so that a ray meets
- * every primitive the binary tree would let it meet.
- *   frame: xyz the origin; w (uint bits) the three biased exponents e + 127
- *          in bytes 0-2 and the mask of inner children in byte 3;
- *   links: x the first child node (inner children are consecutive nodes, in
- *          slot order), y the first leaf entry (struct rt_bvh8_leaf, counted
- *          from the start of the node array; leaf children are consecutive
- *          entries, in slot order), z the mask of leaf children, w 0;
- *   q:     the bytes, slot k in byte k % 4 of word k / 4 of each pair: q[0]
- *          lo x (xy) and lo y (zw), q[1] lo z and hi x, q[2] hi y and hi z.
- * A slot neither inner nor leaf is empty: lo bytes 255, hi bytes 0, a box no
- * ray meets. A child's slot is the octant of the node it lies towards (bit 0
- * +x, bit 1 +y, bit 2 +z) as far as the children allow, so that a ray taking
- * the slots in the order k ^ (its direction's sign bits) meets the near ones
- * first. */
-struct rt_bvh8_node {
-	rt_vec4 frame;
-	rt_uvec4 links;
-	rt_uvec4 q[3];
-};
-
-/* A leaf child of an eight-wide node: a binary child's lo.w and hi.w (its
- * first primitive and its count, as struct rt_bvh_box). */
-struct rt_bvh8_leaf {
-	rt_int index, count;
-};
 
 /* A device leaf of spheres only: the count's flag (see struct rt_bvh_box). */
 #define RT_LEAF_SPHERES 0x40000000
@@ -430,7 +395,6 @@ _Static_assert(sizeof(struct rt_vertex) == 16, "rt_vertex layout");
 _Static_assert(sizeof(struct rt_vertex_normal) == 16, "rt_vertex_normal layout");
 _Static_assert(sizeof(struct rt_scene) == 224, "rt_scene layout");
 _Static_assert(sizeof(struct rt_bvh4_node) == 128, "rt_bvh4_node layout");
-_Static_assert(sizeof(struct rt_bvh8_node) == 80, "rt_bvh8_node layout");
 _Static_assert(offsetof(struct rt_scene, uv_offset) == 188, "rt_scene layout");
 _Static_assert(sizeof(struct rt_vertex_uv) == 8, "rt_vertex_uv layout");
 _Static_assert(sizeof(struct rt_material_map) == 16, "rt_material_map layout");

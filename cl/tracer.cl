@@ -166,8 +166,6 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_vertex_normal *normals;
 #ifdef RTCL_BVH4
 	RTCL_SCENE_SPACE const struct rt_bvh4_node *nodes; /* four-wide: a CPU's */
-#elif defined(RTCL_BVH8)
-	RTCL_SCENE_SPACE const struct rt_bvh8_node *nodes; /* compressed eight-wide */
 #else
 	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
 #endif
@@ -283,8 +281,6 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 		(RTCL_SCENE_SPACE const struct rt_vertex_normal *)(base + scene->normal_offset);
 #ifdef RTCL_BVH4
 	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh4_node *)(base + scene->bvh_node_offset);
-#elif defined(RTCL_BVH8)
-	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh8_node *)(base + scene->bvh_node_offset);
 #else
 	tr->nodes = (RTCL_SCENE_SPACE const struct rt_bvh_node *)(base + scene->bvh_node_offset);
 #endif

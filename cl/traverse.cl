@@ -37,7 +37,6 @@ static struct box_ray box_ray(struct tracer *tr, float3 o, float3 d)
 	return r;
 }
 
-#ifndef RTCL_CPU
 /* Returns whether the ray meets the box lo..hi somewhere in [0, nearest], and
  * where it enters it in *entry. The caller counts FLOPS_BOX_TEST. */
 static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float nearest,
@@ -52,7 +51,7 @@ static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float 
 	*entry = enter;
 	return enter <= leave;
 }
-#else
+#ifdef RTCL_CPU
 /* The box test's minimum and maximum on a CPU: a comparison and a select,
  * one instruction (x86's minps/maxps), where fmin and fmax add a NaN test and
  * a blend each. The operands are never NaN (box_ray's clamp keeps the slab
@@ -240,118 +239,89 @@ static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, floa
 		at = stack[--waiting];
 	}
 }
-#elif defined(RTCL_BVH8)
+#elif defined(RTCL_SPECULATIVE)
 
-/* A byte of q as the float it counts: 2^23 + q, less 2^23, both exact. */
-static inline float q_float(uint word, int byte)
+/* Whether p holds on any lane of the warp that runs this code: NVIDIA's
+ * vote through inline PTX (RTCL_NV_PTX), else this work-item's p. The
+ * traversal's result does not depend on it. */
+static inline bool warp_any(bool p)
 {
-#ifdef RTCL_BVH8_I2F
-	return convert_float(word >> (8 * byte) & 0xffu);
+#ifdef RTCL_NV_PTX
+	uint mask, r;
+	asm volatile("activemask.b32 %0;" : "=r"(mask));
+	asm volatile("{ .reg .pred q, a; setp.ne.u32 q, %1, 0; vote.sync.any.pred a, q, %2; "
+		     "selp.u32 %0, 1, 0, a; }"
+		     : "=r"(r)
+		     : "r"((uint)p), "r"(mask));
+	return r != 0;
 #else
-	return as_float(0x4b000000u | (word >> (8 * byte) & 0xffu)) - 0x1p23f;
+	return p;
 #endif
 }
 
-/* The hits of a compressed node's eight children (struct rt_bvh8_node): bit
- * k set when the child in slot k ^ oct meets the ray in [0, nearest]. A
- * child's slab along axis a is q·2^e + origin in the node's frame, so its
- * distance along the ray is fma(q, 2^e/d, origin/d − o/d): one fma a plane
- * from the byte, with 2^e/d exact and the rest rounded once
- * (host/layout/bvh.c, BVH8_MARGIN, says why the boxes' margin covers it).
- * The near plane is the lo byte where d is positive, the hi byte where it is
- * negative: no minimum and maximum to order them. */
-static inline uint bvh8_hits(RTCL_SCENE_SPACE const struct rt_bvh8_node *node,
-			     const struct box_ray *ray, uint oct, float nearest)
-{
-	float4 frame = node->frame;
-	uint4 q0 = node->q[0], q1 = node->q[1], q2 = node->q[2];
-	uint e = as_uint(frame.w);
-	float3 step = (float3)(as_float((e & 0xffu) << 23), as_float((e >> 8 & 0xffu) << 23),
-			       as_float((e >> 16 & 0xffu) << 23)) *
-		      ray->inv_d;
-	float3 start = fma(frame.xyz, ray->inv_d, -ray->o_inv_d);
-	bool fx = ray->inv_d.x < 0.0f, fy = ray->inv_d.y < 0.0f, fz = ray->inv_d.z < 0.0f;
-	uint2 lox = q0.xy, loy = q0.zw, loz = q1.xy, hix = q1.zw, hiy = q2.xy, hiz = q2.zw;
-	uint2 nx = fx ? hix : lox, fxw = fx ? lox : hix;
-	uint2 ny = fy ? hiy : loy, fyw = fy ? loy : hiy;
-	uint2 nz = fz ? hiz : loz, fzw = fz ? loz : hiz;
-	uint hits = 0;
-#ifdef RTCL_BVH8_SKIP_EMPTY
-	uint used = node->links.z | e >> 24;
-#endif
-
-#pragma unroll
-	for (int s = 0; s < 8; s++) {
-		int w = s >> 2, b = s & 3;
-#ifdef RTCL_BVH8_SKIP_EMPTY
-		if (!(used >> s & 1u))
-			continue;
-#endif
-		float ex = fma(q_float(w ? nx.y : nx.x, b), step.x, start.x);
-		float ey = fma(q_float(w ? ny.y : ny.x, b), step.y, start.y);
-		float ez = fma(q_float(w ? nz.y : nz.x, b), step.z, start.z);
-		float lx = fma(q_float(w ? fxw.y : fxw.x, b), step.x, start.x);
-		float ly = fma(q_float(w ? fyw.y : fyw.x, b), step.y, start.y);
-		float lz = fma(q_float(w ? fzw.y : fzw.x, b), step.z, start.z);
-		float enter = fmax(fmax(ex, ey), fmax(ez, 0.0f));
-		float leave = fmin(fmin(lx, ly), fmin(lz, nearest));
-		hits |= (uint)(enter <= leave) << (s ^ oct);
-	}
-	return hits;
-}
-
-/* bvh_intersect over compressed eight-wide nodes (RTCL_BVH8; struct
- * rt_bvh8_node, docs/bvh.md "A compressed eight-wide tree"). A visit tests
- * the node's eight boxes and leaves a mask of those met, in the order of the
- * ray's octant (bvh8_hits); the children are then taken one at a time, the
- * lowest bit first: a leaf is tested at once, an inner child is visited,
- * the rest of its node's mask waiting on the stack as one entry. The same
- * primitives a binary tree lets the ray meet are met, and the closest hit
- * does not depend on the order (see the binary bvh_intersect), so the image
- * is the binary tree's. */
+/* The binary bvh_intersect with leaves postponed (Aila and Laine 2009,
+ * "speculative while-while"): a work-item that meets a leaf keeps it and goes
+ * on through nodes until every work-item of its warp holds a leaf (or has
+ * none left), then the warp tests leaves together. */
 static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
 			  bool any_hit, float *nearest, struct hit *best)
 {
-	int2 stack[RT_BVH_MAX_DEPTH];
+	struct bvh_entry stack[RT_BVH_MAX_DEPTH];
+	struct bvh_entry at = {0, 0}; /* the root */
+	struct bvh_entry leaf = {0, 0}; /* a leaf kept for later when its count > 0 */
 	struct box_ray ray = box_ray(tr, o, d);
-	uint oct = (ray.inv_d.x < 0.0f ? 1u : 0u) | (ray.inv_d.y < 0.0f ? 2u : 0u) |
-		   (ray.inv_d.z < 0.0f ? 4u : 0u);
-	RTCL_SCENE_SPACE const struct rt_bvh8_leaf *leaves =
-		(RTCL_SCENE_SPACE const struct rt_bvh8_leaf *)tr->nodes;
-	int waiting = 0, at = 0;
-	uint hits = bvh8_hits(&tr->nodes[0], &ray, oct, *nearest);
-	uint4 links = tr->nodes[0].links;
-	uint inner = as_uint(tr->nodes[0].frame.w) >> 24;
+	int waiting = 0;
+	bool more = true; /* at holds a child still to take */
 
-	COUNT_NODE_VISIT(tr);
-	for (;;) {
-		SIMD_STEP(tr, RT_SIMD_TRAVERSAL);
-		if (hits == 0) {
-			if (waiting == 0)
-				return;
-			waiting--;
-			at = stack[waiting].x;
-			hits = (uint)stack[waiting].y;
-			links = tr->nodes[at].links;
-			inner = as_uint(tr->nodes[at].frame.w) >> 24;
-		}
-		uint k = 31 - clz(hits & (0u - hits));
-		uint slot = k ^ oct, below = (1u << slot) - 1u;
-		hits &= hits - 1u;
-		if (inner >> slot & 1u) {
-			if (hits != 0)
-				stack[waiting++] = (int2)(at, (int)hits);
-			at = (int)(links.x + popcount(inner & below));
-			hits = bvh8_hits(&tr->nodes[at], &ray, oct, *nearest);
-			links = tr->nodes[at].links;
-			inner = as_uint(tr->nodes[at].frame.w) >> 24;
+	while (more) {
+		while (more && at.count == 0) {
+			RTCL_SCENE_SPACE const struct rt_bvh_node *node = &tr->nodes[at.index];
+			float4 lo0 = node->child[0].lo, hi0 = node->child[0].hi;
+			float4 lo1 = node->child[1].lo, hi1 = node->child[1].hi;
+			float t0, t1;
+			bool hit0 = box_hit(lo0, hi0, &ray, *nearest, &t0);
+			bool hit1 = box_hit(lo1, hi1, &ray, *nearest, &t1);
+
+			SIMD_STEP(tr, RT_SIMD_TRAVERSAL);
 			COUNT_NODE_VISIT(tr);
-			continue;
+			COUNT_FLOPS(tr, 2 * FLOPS_BOX_TEST);
+			struct bvh_entry c0 = {bvh_child_index(lo0), bvh_child_count(hi0)};
+			struct bvh_entry c1 = {bvh_child_index(lo1), bvh_child_count(hi1)};
+			if (hit0 && hit1) {
+				bool first0 = t0 <= t1;
+				stack[waiting++] = first0 ? c1 : c0;
+				at = first0 ? c0 : c1;
+			} else if (hit0 || hit1) {
+				at = hit0 ? c0 : c1;
+			} else if (waiting > 0) {
+				at = stack[--waiting];
+			} else {
+				more = false;
+			}
+			if (more && at.count > 0 && leaf.count == 0) {
+				leaf = at;
+				if (waiting > 0)
+					at = stack[--waiting];
+				else
+					more = false;
+			}
+			if (!warp_any(leaf.count == 0))
+				break;
 		}
-		struct rt_bvh8_leaf leaf = leaves[links.y + popcount(links.z & below)];
-		leaf_intersect(tr, frame, o, d, leaf.index, leaf.count, any_hit, nearest, best);
-		if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
-			return;
+		while (leaf.count > 0) {
+			SIMD_STEP(tr, RT_SIMD_TRAVERSAL);
+			leaf_intersect(tr, frame, o, d, leaf.index, leaf.count, any_hit, nearest, best);
+			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
+				return;
+			leaf.count = 0;
+			if (more && at.count > 0) {
+				leaf = at;
+				if (waiting > 0)
+					at = stack[--waiting];
+				else
+					more = false;
+			}
+		}
 	}
 }
 #else
@@ -413,6 +383,6 @@ static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, floa
 		at = stack[--waiting];
 	}
 }
-#endif /* RTCL_BVH4, RTCL_BVH8 */
+#endif /* RTCL_BVH4 */
 
 #endif

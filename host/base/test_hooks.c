@@ -11,13 +11,6 @@ int hook_binary_bvh(void)
 	return value && strcmp(value, "1") == 0;
 }
 
-int hook_bvh8(void)
-{
-	const char *value = getenv("RTCL_TEST_BVH8");
-
-	return value && strcmp(value, "1") == 0;
-}
-
 int hook_device_fault(void)
 {
 	const char *fault = getenv("RTCL_TEST_DEVICE_FAULT");

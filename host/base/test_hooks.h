@@ -15,10 +15,6 @@ int hook_device_fault(void);
  * so that the tests can set its images beside the four-wide tree's. */
 int hook_binary_bvh(void);
 
-/* RTCL_TEST_BVH8=1: every device outside the counting build takes the
- * compressed eight-wide tree (bvh_compress). */
-int hook_bvh8(void);
-
 /* RTCL_TEST_SLOW_CACHE_WRITE=MS: the program cache sleeps MS milliseconds
  * with its temporary file written and not yet renamed, so that a test can
  * interrupt it there (host/device/progcache.c). */

@@ -34,11 +34,6 @@ struct bvh {
 	/* bvh_widen: the tree as four-wide nodes, node 0 the root; NULL until. */
 	struct rt_bvh4_node *wide;
 	int wide_count;
-	/* bvh_compress: the tree as compressed eight-wide nodes, node 0 the
-	 * root, and their leaf entries; NULL until. */
-	struct rt_bvh8_node *wide8;
-	struct rt_bvh8_leaf *wide8_leaves;
-	int wide8_count, wide8_leaf_count;
 };
 
 /* Leaves hold at most this many primitives. With BVH_NODE_COST 3 (a node
@@ -110,24 +105,6 @@ double bvh_sah_cost(const struct bvh *bvh, double triangle_cost);
  * (also for a tree without nodes, which stays without), or -1 when out of
  * memory. */
 int bvh_widen(struct bvh *bvh);
-
-/* Collapses the binary tree into compressed eight-wide nodes (struct
- * rt_bvh8_node: docs/bvh.md, "A compressed eight-wide tree") in bvh->wide8,
- * their leaf children in bvh->wide8_leaves: each node takes its binary
- * node's children and replaces an inner one by its two, the one of largest
- * surface area first, until it has eight or only leaves; the children go to
- * the slots of the octants they lie towards, their boxes rounded outward to
- * bytes by BVH8_MARGIN more than their padded boxes. The leaves and their
- * references are the binary tree's. Returns 0 (also for a tree without
- * nodes, which stays without), or -1 when out of memory. */
-int bvh_compress(struct bvh *bvh);
-
-/* The margin of bvh_compress's boxes, as a fraction of the largest
- * coordinate of the root's box (relative to the eye): 2^-16, about 1.5e-5,
- * like the primitives' pad (bvh.c, BVH_SPHERE_PAD). It covers the rounding
- * of the traversal's test from bytes (cl/traverse.cl), a few float ulps of
- * the distances between the node's origin, the box and the ray's origin. */
-#define BVH8_MARGIN 0x1p-16
 
 void bvh_free(struct bvh *bvh);
 

@@ -218,11 +218,8 @@ static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct 
 	before = malloc((size_t)bvh->ref_count * sizeof(int));
 	if (!before)
 		return -1;
-	header->bvh_node_count = bvh->wide8 ? bvh->wide8_count
-				 : bvh->wide ? bvh->wide_count
-					     : bvh->node_count;
-	header->bvh_width = bvh->wide8 ? 8 : bvh->wide ? 4 : 2;
-	header->bvh_leaf_count = bvh->wide8 ? bvh->wide8_leaf_count : 0;
+	header->bvh_node_count = bvh->wide ? bvh->wide_count : bvh->node_count;
+	header->bvh_width = bvh->wide ? 4 : 2;
 	for (int r = 0; r < bvh->ref_count; r++) {
 		if (is_sphere_ref(bvh->refs[r])) {
 			before[r] = spheres;
@@ -236,15 +233,7 @@ static int pack_bvh(unsigned char *block, struct rt_scene *header, const struct 
 			triangles++;
 		}
 	}
-	if (bvh->wide8) {
-		struct rt_bvh8_leaf *leaves =
-			(struct rt_bvh8_leaf *)(nodes + (size_t)bvh->wide8_count * sizeof(*bvh->wide8));
-		memcpy(nodes, bvh->wide8, (size_t)bvh->wide8_count * sizeof(*bvh->wide8));
-		memcpy(leaves, bvh->wide8_leaves,
-		       (size_t)bvh->wide8_leaf_count * sizeof(*bvh->wide8_leaves));
-		for (int i = 0; i < bvh->wide8_leaf_count; i++)
-			leaf_to_range(&leaves[i].index, &leaves[i].count, bvh, before);
-	} else if (bvh->wide) {
+	if (bvh->wide) {
 		struct rt_bvh4_node *wide = (struct rt_bvh4_node *)nodes;
 		memcpy(wide, bvh->wide, (size_t)bvh->wide_count * sizeof(*wide));
 		for (int n = 0; n < bvh->wide_count; n++)
@@ -274,20 +263,6 @@ static size_t leaf_triangle_count(const struct bvh *bvh)
 	return n;
 }
 
-/* The BVH's node array on the device: binary, four-wide or compressed
- * eight-wide nodes (with their leaf entries); 0 without a BVH. */
-static size_t bvh_node_bytes(const struct bvh *bvh)
-{
-	if (!bvh)
-		return 0;
-	if (bvh->wide8)
-		return (size_t)bvh->wide8_count * sizeof(*bvh->wide8) +
-		       (size_t)bvh->wide8_leaf_count * sizeof(*bvh->wide8_leaves);
-	if (bvh->wide)
-		return (size_t)bvh->wide_count * sizeof(*bvh->wide);
-	return (size_t)bvh->node_count * sizeof(*bvh->nodes);
-}
-
 /* Where the arrays go in the block (byte offsets) and its size. The
  * textures' arrays (uv ... texel) only in a scene with textures
  * (scene_has_textures), else they are empty at the end. */
@@ -312,7 +287,9 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	l.vertex = l.triangle + (size_t)scene->triangle_count * sizeof(struct rt_triangle);
 	l.normal = l.vertex + (size_t)mesh->vertex_count * sizeof(struct rt_vertex);
 	l.node = l.normal + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal);
-	l.ref = l.node + bvh_node_bytes(bvh);
+	l.ref = l.node + (!bvh	      ? 0
+			  : bvh->wide ? (size_t)bvh->wide_count * sizeof(*bvh->wide)
+				      : (size_t)bvh->node_count * sizeof(*bvh->nodes));
 	l.leaf_triangle = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
 	l.uv = l.leaf_triangle + leaf_triangle_count(bvh) * sizeof(struct rt_leaf_triangle);
 	l.material_map = l.texture = l.texture_table = l.texel = l.total = l.uv;

@@ -103,16 +103,8 @@ static int pack_scene(struct device *dev, const struct scene *scene,
 	 * tree on CPUs") of a tree large enough; GPUs and the counting build,
 	 * whose node visits and box tests are the binary tree's on every
 	 * device, the binary one. */
-	if (use_bvh && !s->count_flops && bvh.node_count > 0 && hook_bvh8()) {
-		if (bvh_compress(&bvh)) {
-			snprintf(err, err_size, "out of host memory for the eight-wide BVH");
-			goto free_bvh;
-		}
-		res->bvh_bytes += (size_t)bvh.wide8_count * sizeof(*bvh.wide8) +
-				  (size_t)bvh.wide8_leaf_count * sizeof(*bvh.wide8_leaves) -
-				  (size_t)bvh.node_count * sizeof(*bvh.nodes);
-	} else if (use_bvh && !dev->is_gpu && !s->count_flops &&
-		   bvh.node_count >= BVH_WIDE_MIN_NODES && !hook_binary_bvh()) {
+	if (use_bvh && !dev->is_gpu && !s->count_flops && bvh.node_count >= BVH_WIDE_MIN_NODES &&
+	    !hook_binary_bvh()) {
 		if (bvh_widen(&bvh)) {
 			snprintf(err, err_size, "out of host memory for the four-wide BVH");
 			goto free_bvh;
@@ -120,8 +112,8 @@ static int pack_scene(struct device *dev, const struct scene *scene,
 		res->bvh_bytes += (size_t)bvh.wide_count * sizeof(*bvh.wide) -
 				  (size_t)bvh.node_count * sizeof(*bvh.nodes);
 	}
-	res->bvh_width = !use_bvh || bvh.node_count == 0 ? 0 : bvh.wide8 ? 8 : bvh.wide ? 4 : 2;
-	res->bvh_device_nodes = bvh.wide8 ? bvh.wide8_count : bvh.wide ? bvh.wide_count : bvh.node_count;
+	res->bvh_width = !use_bvh || bvh.node_count == 0 ? 0 : bvh.wide ? 4 : 2;
+	res->bvh_device_nodes = bvh.wide ? bvh.wide_count : bvh.node_count;
 	if (block_check_scene_fits(dev, scene, &mesh, use_bvh ? &bvh : NULL, err, err_size))
 		goto free_bvh;
 	*block = scene_block_pack(scene, &mesh, use_bvh ? &bvh : NULL, s->width, s->height,

@@ -191,7 +191,7 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 /* A CPU device: the box test in its vector unit's way
 		  * (cl/traverse.cl, box_pair_hit); the same numbers. */
@@ -199,8 +199,6 @@ static int format_options(const struct device *dev, const struct render_settings
 		 f->scene_in_local ? " -DRTCL_SCENE_IN_LOCAL" : "", f->use_bvh ? " -DRTCL_BVH" : "",
 		 /* Four-wide nodes (a CPU outside the counting build, traverse.cl). */
 		 f->bvh4 ? " -DRTCL_BVH4" : "",
-		 /* Compressed eight-wide nodes (traverse.cl). */
-		 f->bvh8 ? " -DRTCL_BVH8" : "",
 		 f->has_triangles ? "" : " -DRTCL_NO_TRIANGLES",
 		 /* Meshes without spheres: leaves of leaf triangles only (traverse.cl). */
 		 f->leaf_triangles_only ? " -DRTCL_LEAF_TRIANGLES_ONLY" : "",
