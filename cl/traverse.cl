@@ -37,6 +37,7 @@ static struct box_ray box_ray(struct tracer *tr, float3 o, float3 d)
 	return r;
 }
 
+#ifndef RTCL_CPU
 /* Returns whether the ray meets the box lo..hi somewhere in [0, nearest], and
  * where it enters it in *entry. The caller counts FLOPS_BOX_TEST. */
 static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float nearest,
@@ -51,7 +52,7 @@ static inline bool box_hit(float4 lo, float4 hi, const struct box_ray *r, float 
 	*entry = enter;
 	return enter <= leave;
 }
-#ifdef RTCL_CPU
+#else
 /* The box test's minimum and maximum on a CPU: a comparison and a select,
  * one instruction (x86's minps/maxps), where fmin and fmax add a NaN test and
  * a blend each. The operands are never NaN (box_ray's clamp keeps the slab
@@ -237,91 +238,6 @@ static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, floa
 		if (waiting == 0)
 			return;
 		at = stack[--waiting];
-	}
-}
-#elif defined(RTCL_SPECULATIVE)
-
-/* Whether p holds on any lane of the warp that runs this code: NVIDIA's
- * vote through inline PTX (RTCL_NV_PTX), else this work-item's p. The
- * traversal's result does not depend on it. */
-static inline bool warp_any(bool p)
-{
-#ifdef RTCL_NV_PTX
-	uint mask, r;
-	asm volatile("activemask.b32 %0;" : "=r"(mask));
-	asm volatile("{ .reg .pred q, a; setp.ne.u32 q, %1, 0; vote.sync.any.pred a, q, %2; "
-		     "selp.u32 %0, 1, 0, a; }"
-		     : "=r"(r)
-		     : "r"((uint)p), "r"(mask));
-	return r != 0;
-#else
-	return p;
-#endif
-}
-
-/* The binary bvh_intersect with leaves postponed (Aila and Laine 2009,
- * "speculative while-while"): a work-item that meets a leaf keeps it and goes
- * on through nodes until every work-item of its warp holds a leaf (or has
- * none left), then the warp tests leaves together. */
-static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, float3 o, float3 d,
-			  bool any_hit, float *nearest, struct hit *best)
-{
-	struct bvh_entry stack[RT_BVH_MAX_DEPTH];
-	struct bvh_entry at = {0, 0}; /* the root */
-	struct bvh_entry leaf = {0, 0}; /* a leaf kept for later when its count > 0 */
-	struct box_ray ray = box_ray(tr, o, d);
-	int waiting = 0;
-	bool more = true; /* at holds a child still to take */
-
-	while (more) {
-		while (more && at.count == 0) {
-			RTCL_SCENE_SPACE const struct rt_bvh_node *node = &tr->nodes[at.index];
-			float4 lo0 = node->child[0].lo, hi0 = node->child[0].hi;
-			float4 lo1 = node->child[1].lo, hi1 = node->child[1].hi;
-			float t0, t1;
-			bool hit0 = box_hit(lo0, hi0, &ray, *nearest, &t0);
-			bool hit1 = box_hit(lo1, hi1, &ray, *nearest, &t1);
-
-			SIMD_STEP(tr, RT_SIMD_TRAVERSAL);
-			COUNT_NODE_VISIT(tr);
-			COUNT_FLOPS(tr, 2 * FLOPS_BOX_TEST);
-			struct bvh_entry c0 = {bvh_child_index(lo0), bvh_child_count(hi0)};
-			struct bvh_entry c1 = {bvh_child_index(lo1), bvh_child_count(hi1)};
-			if (hit0 && hit1) {
-				bool first0 = t0 <= t1;
-				stack[waiting++] = first0 ? c1 : c0;
-				at = first0 ? c0 : c1;
-			} else if (hit0 || hit1) {
-				at = hit0 ? c0 : c1;
-			} else if (waiting > 0) {
-				at = stack[--waiting];
-			} else {
-				more = false;
-			}
-			if (more && at.count > 0 && leaf.count == 0) {
-				leaf = at;
-				if (waiting > 0)
-					at = stack[--waiting];
-				else
-					more = false;
-			}
-			if (!warp_any(leaf.count == 0))
-				break;
-		}
-		while (leaf.count > 0) {
-			SIMD_STEP(tr, RT_SIMD_TRAVERSAL);
-			leaf_intersect(tr, frame, o, d, leaf.index, leaf.count, any_hit, nearest, best);
-			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
-				return;
-			leaf.count = 0;
-			if (more && at.count > 0) {
-				leaf = at;
-				if (waiting > 0)
-					at = stack[--waiting];
-				else
-					more = false;
-			}
-		}
 	}
 }
 #else
