@@ -12,7 +12,6 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	struct tracer tr;
 
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
-	tracer_set_top(&tr, scene_local);
 	struct chunk_grid grid = chunk_grid(&piece);
 
 	/* The group's chunks in each of its rows of chunks: counted once a row,

@@ -20,7 +20,6 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	bool first_item = get_local_id(0) == 0 && get_local_id(1) == 0;
 
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
-	tracer_set_top(&tr, scene_local);
 	struct chunk_grid grid = chunk_grid(&piece);
 	uint chunks = chunk_count(&grid);
 

@@ -10,7 +10,6 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	struct tracer tr;
 
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
-	tracer_set_top(&tr, scene_local);
 	render_pixel_if_inside(&tr, &piece, image, sums, probe,
 		(int2)(piece.x0 + (int)get_global_id(0), piece.y0 + (int)get_global_id(1)));
 	progress_chunk_done(work_counter, get_local_size(0) * get_local_size(1));

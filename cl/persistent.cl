@@ -25,7 +25,6 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	struct tracer tr;
 
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
-	tracer_set_top(&tr, scene_local);
 	struct chunk_grid grid = chunk_grid(&piece);
 	uint chunk_pixels = grid.chunk_w * grid.chunk_h;
 	uint pixels = chunk_count(&grid) * chunk_pixels; /* the edge chunks' overhang included */

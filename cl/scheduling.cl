@@ -18,30 +18,9 @@ static scene_ptr load_scene(__global const uint4 *scene_global, __local uint4 *s
 		scene_local[i] = scene_global[i];
 	barrier(CLK_LOCAL_MEM_FENCE);
 	return (scene_ptr)scene_local;
-#elif defined(RTCL_TOP_NODES)
-	__global const struct rt_scene *scene = (__global const struct rt_scene *)scene_global;
-	__global const uint4 *nodes = scene_global + scene->bvh_node_offset / 16;
-	uint item = get_local_id(1) * get_local_size(0) + get_local_id(0);
-	uint items = get_local_size(0) * get_local_size(1);
-
-	for (uint i = item; i < RTCL_TOP_NODES * 4; i += items)
-		scene_local[i] = nodes[i];
-	barrier(CLK_LOCAL_MEM_FENCE);
-	return (scene_ptr)scene_global;
 #else
 	(void)scene_local;
 	return (scene_ptr)scene_global;
-#endif
-}
-
-/* The BVH's first RTCL_TOP_NODES nodes, copied by load_scene. */
-static inline void tracer_set_top(struct tracer *tr, __local uint4 *scene_local)
-{
-#if defined(RTCL_TOP_NODES) && !defined(RTCL_SCENE_IN_LOCAL)
-	tr->top = (__local const struct rt_bvh_node *)scene_local;
-#else
-	(void)tr;
-	(void)scene_local;
 #endif
 }
 

@@ -9,7 +9,6 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	struct tracer tr;
 
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
-	tracer_set_top(&tr, scene_local);
 	for (int y = piece.y0; y < piece.y0 + piece.height; y++) {
 		for (int x = piece.x0; x < piece.x0 + piece.width; x++)
 			render_pixel(&tr, &piece, image, sums, probe, x, rt_piece_row(&piece, y));

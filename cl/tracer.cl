@@ -169,9 +169,6 @@ struct tracer {
 #else
 	RTCL_SCENE_SPACE const struct rt_bvh_node *nodes;
 #endif
-#if defined(RTCL_TOP_NODES) && !defined(RTCL_SCENE_IN_LOCAL)
-	__local const struct rt_bvh_node *top; /* nodes [0, RTCL_TOP_NODES) */
-#endif
 	RTCL_SCENE_SPACE const uint *refs; /* the BVH leaves' primitives (RT_PRIM_*) */
 	RTCL_SCENE_SPACE const struct rt_leaf_triangle *leaf_triangles; /* RT_LEAF_TRIANGLES */
 #ifdef RTCL_TEXTURES

@@ -267,26 +267,9 @@ static void bvh_intersect(struct tracer *tr, const struct ray_frame *frame, floa
 			if (any_hit && (best->sphere >= 0 || best->triangle >= 0))
 				return;
 		} else {
-#if defined(RTCL_TOP_NODES) && !defined(RTCL_SCENE_IN_LOCAL)
-			float4 lo0, hi0, lo1, hi1;
-			if (at.index < RTCL_TOP_NODES) {
-				__local const struct rt_bvh_node *node = &tr->top[at.index];
-				lo0 = node->child[0].lo;
-				hi0 = node->child[0].hi;
-				lo1 = node->child[1].lo;
-				hi1 = node->child[1].hi;
-			} else {
-				RTCL_SCENE_SPACE const struct rt_bvh_node *node = &tr->nodes[at.index];
-				lo0 = node->child[0].lo;
-				hi0 = node->child[0].hi;
-				lo1 = node->child[1].lo;
-				hi1 = node->child[1].hi;
-			}
-#else
 			RTCL_SCENE_SPACE const struct rt_bvh_node *node = &tr->nodes[at.index];
 			float4 lo0 = node->child[0].lo, hi0 = node->child[0].hi;
 			float4 lo1 = node->child[1].lo, hi1 = node->child[1].hi;
-#endif
 			float t0, t1;
 #ifdef RTCL_CPU
 			int2 hits = box_pair_hit(lo0, hi0, lo1, hi1, &ray, *nearest, &t0, &t1);

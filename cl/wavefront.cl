@@ -110,7 +110,6 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 	int dx = get_global_id(0), dy = get_global_id(1);
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, sample_flops);
-	tracer_set_top(&tr, scene_local);
 	if (dx < piece.width && dy < piece.height) {
 		int x = piece.x0 + dx, y = rt_piece_row(&piece, piece.y0 + dy);
 		int pixel = y * tr.scene->width + x;
@@ -140,7 +139,6 @@ __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local u
 	int dx = get_global_id(0), dy = get_global_id(1);
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
-	tracer_set_top(&tr, scene_local);
 	if (dx < piece.width && dy < piece.height) {
 		int pixel = rt_piece_row(&piece, piece.y0 + dy) * tr.scene->width + piece.x0 + dx;
 		float3 color = vload3(pixel, sample_rgb);
@@ -182,7 +180,6 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 	uint i = get_global_id(0);
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
-	tracer_set_top(&tr, scene_local);
 	if (i < queued) {
 		float4 origin = queue[i].origin;
 #ifdef RTCL_FRESNEL

@@ -604,62 +604,6 @@ int bvh_widen(struct bvh *bvh)
 	return 0;
 }
 
-/* The nodes not in the top, depth first from node k, into order[*at]. */
-static void order_rest(const struct bvh *bvh, int k, const int *new_index, int *order, int *at)
-{
-	if (new_index[k] < 0)
-		order[(*at)++] = k;
-	for (int c = 0; c < 2; c++)
-		if (is_inner(binary_child(bvh, k, c)))
-			order_rest(bvh, box_index(binary_child(bvh, k, c)), new_index, order, at);
-}
-
-int bvh_top_first(struct bvh *bvh, int n)
-{
-	int count = bvh->node_count, head = 0, tail = 1, at;
-	int *order = malloc((size_t)count * sizeof(int));
-	int *new_index = malloc((size_t)count * sizeof(int));
-	struct rt_bvh_node *nodes = malloc((size_t)count * sizeof(*nodes));
-
-	if (!order || !new_index || !nodes) {
-		free(order);
-		free(new_index);
-		free(nodes);
-		return -1;
-	}
-	for (int k = 0; k < count; k++)
-		new_index[k] = -1;
-	order[0] = 0;
-	new_index[0] = 0;
-	while (head < tail && tail < n) {
-		int k = order[head++];
-		for (int c = 0; c < 2 && tail < n; c++) {
-			const struct rt_bvh_box *b = binary_child(bvh, k, c);
-			if (is_inner(b)) {
-				new_index[box_index(b)] = tail;
-				order[tail++] = box_index(b);
-			}
-		}
-	}
-	at = tail;
-	order_rest(bvh, 0, new_index, order, &at);
-	for (int i = tail; i < count; i++)
-		new_index[order[i]] = i;
-	for (int i = 0; i < count; i++) {
-		nodes[i] = bvh->nodes[order[i]];
-		for (int c = 0; c < 2; c++)
-			if (is_inner(&nodes[i].child[c])) {
-				int32_t j = new_index[box_index(&nodes[i].child[c])];
-				memcpy(&nodes[i].child[c].lo.s[3], &j, sizeof(j));
-			}
-	}
-	free(bvh->nodes);
-	bvh->nodes = nodes;
-	free(order);
-	free(new_index);
-	return 0;
-}
-
 void bvh_free(struct bvh *bvh)
 {
 	free(bvh->wide);

@@ -106,11 +106,6 @@ double bvh_sah_cost(const struct bvh *bvh, double triangle_cost);
  * memory. */
 int bvh_widen(struct bvh *bvh);
 
-/* Renumbers the binary tree's nodes: the first n breadth first from the
- * root, the others depth first after them, first child first (as built).
- * Returns 0, or -1 when out of memory. */
-int bvh_top_first(struct bvh *bvh, int n);
-
 void bvh_free(struct bvh *bvh);
 
 #endif

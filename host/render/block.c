@@ -112,22 +112,6 @@ static int pack_scene(struct device *dev, const struct scene *scene,
 		res->bvh_bytes += (size_t)bvh.wide_count * sizeof(*bvh.wide) -
 				  (size_t)bvh.node_count * sizeof(*bvh.nodes);
 	}
-	res->bvh_top_nodes = 0;
-	if (use_bvh && !bvh.wide && getenv("RTCL_X_TOP")) {
-		size_t bytes = scene_block_bytes(scene, &mesh, &bvh);
-		int fits = !s->force_global_scene &&
-			   (bytes + LOCAL_MEM_RESERVE) * LOCAL_MEM_SHARE <= dev->local_mem_size;
-		int n = atoi(getenv("RTCL_X_TOP"));
-		if (!fits && n > 0 && bvh.node_count > 0) {
-			if (n > bvh.node_count)
-				n = bvh.node_count;
-			if (bvh_top_first(&bvh, n)) {
-				snprintf(err, err_size, "out of host memory for the BVH's order");
-				goto free_bvh;
-			}
-			res->bvh_top_nodes = n;
-		}
-	}
 	res->bvh_width = !use_bvh || bvh.node_count == 0 ? 0 : bvh.wide ? 4 : 2;
 	res->bvh_device_nodes = bvh.wide ? bvh.wide_count : bvh.node_count;
 	if (block_check_scene_fits(dev, scene, &mesh, use_bvh ? &bvh : NULL, err, err_size))

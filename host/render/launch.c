@@ -240,8 +240,7 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 					    scene_has_fresnel(scene->materials, scene->material_count),
 					    scene_has_textures(scene),
 					    scene->light_count == 0,
-					    res->bvh_width == 4,
-					    res->bvh_top_nodes};
+					    res->bvh_width == 4};
 	if (program_build(dev, s, &features, program, res->build_options, &res->build_cached, err,
 			  err_size))
 		return -1;

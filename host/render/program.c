@@ -190,12 +190,9 @@ static int format_options(const struct device *dev, const struct render_settings
 			 BUILD_OPTIONS_EXTRA_MAX);
 		return -1;
 	}
-	char top[40] = "";
-	if (f->top_nodes > 0)
-		snprintf(top, sizeof(top), " -DRTCL_TOP_NODES=%d", f->top_nodes);
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
-		 s->max_depth, s->batch > 0 ? s->batch : 1, top,
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 /* A CPU device: the box test in its vector unit's way
 		  * (cl/traverse.cl, box_pair_hit); the same numbers. */
 		 dev->is_gpu ? "" : " -DRTCL_CPU",

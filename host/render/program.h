@@ -24,7 +24,6 @@ struct program_features {
 	int textures;	    /* a texture or an alpha cut-out (scene_has_textures) */
 	int no_lights;	    /* no light: the shadow rays' code is left out */
 	int bvh4;	    /* the BVH's nodes are four-wide (a CPU's, rt_bvh4_node) */
-	int top_nodes;	    /* the BVH's first nodes read from __local memory */
 };
 
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads

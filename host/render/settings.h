@@ -132,7 +132,6 @@ struct render_result {
 	int bvh_nodes, bvh_depth;
 	int bvh_width; /* the device's nodes: 2 (binary) or 4 (a CPU's), 0: none */
 	int bvh_device_nodes; /* bvh_nodes, or the four-wide nodes they became */
-	int bvh_top_nodes; /* the first nodes, breadth first, copied to __local memory */
 	double bvh_sah_cost, bvh_build_ms;
 	size_t bvh_bytes; /* its nodes and references in the scene block */
 

@@ -100,9 +100,7 @@ static int set_args(const struct launch_state *st, cl_kernel kernel, const struc
 			continue; /* set per piece */
 		if (i == ARG_SCENE_LOCAL)
 			status = clSetKernelArg(
-				kernel, i, res->scene_in_local ? res->scene_bytes
-						: res->bvh_top_nodes ? (size_t)res->bvh_top_nodes * sizeof(struct rt_bvh_node)
-						: UNUSED_BUFFER_BYTES,
+				kernel, i, res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES,
 				NULL);
 		else
 			status = clSetKernelArg(kernel, i, sizeof(cl_mem), buffers[i]);

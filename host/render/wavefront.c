@@ -254,9 +254,7 @@ static int trace_sample(struct renderer *r, struct wavefront *w, const struct rt
 			cl_uint sample, double *ms, int *launches, char *err, size_t err_size)
 {
 	size_t local_bytes =
-		r->result->scene_in_local ? r->result->scene_bytes
-		: r->result->bvh_top_nodes ? (size_t)r->result->bvh_top_nodes * sizeof(struct rt_bvh_node)
-		: UNUSED_BUFFER_BYTES;
+		r->result->scene_in_local ? r->result->scene_bytes : UNUSED_BUFFER_BYTES;
 	size_t items_before = w->b.item_count;
 	struct trace_counts counts_before = w->b.counts;
 

@@ -506,7 +506,6 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
 	to->bvh_nodes = from->bvh_nodes;
 	to->bvh_width = from->bvh_width;
 	to->bvh_device_nodes = from->bvh_device_nodes;
-	to->bvh_top_nodes = from->bvh_top_nodes;
 	to->bvh_depth = from->bvh_depth;
 	to->bvh_sah_cost = from->bvh_sah_cost;
 	to->bvh_build_ms = from->bvh_build_ms;
