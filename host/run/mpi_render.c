@@ -671,13 +671,6 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 /* choose_pieces: --split samples cannot split this job (said on rank 0). */
 #define CHOSEN_BADLY 2
 
-/* The pieces, once every rank's device count is known: the frames, or the
- * image's bands over all devices (total, of which gpus are GPUs). With the
- * dynamic split and no --piece-rows, GPUs alone take one band per device,
- * a class each, as --split static gives them: smaller bands leave a GPU's
- * launches too few pixels (two H200s, batch 58: 6.57 s in 63 bands against
- * 1.16 s in 2); with a CPU among the devices, about TILES_PER_DEVICE bands
- * per device, so that the slow one cannot hold up the end. */
 /* Whether the image is split by samples without --split samples: as in one
  * process (tiles_choose_split), when every device of every rank is a GPU and
  * takes TILES_SAMPLES_MIN samples of each pixel or more, and also only when
@@ -696,6 +689,13 @@ static int samples_by_default(const struct mpi_job *j, int total, int gpus)
 	       !message_too_large(image_sum_bytes(s->width, s->height));
 }
 
+/* The pieces, once every rank's device count is known: the frames, or the
+ * image's bands over all devices (total, of which gpus are GPUs). With the
+ * dynamic split and no --piece-rows, GPUs alone take one band per device,
+ * a class each, as --split static gives them: smaller bands leave a GPU's
+ * launches too few pixels (two H200s, batch 58: 6.57 s in 63 bands against
+ * 1.16 s in 2); with a CPU among the devices, about TILES_PER_DEVICE bands
+ * per device, so that the slow one cannot hold up the end. */
 static int choose_pieces(struct mpi_job *j, int total, int gpus)
 {
 	const struct job *job = j->job;
