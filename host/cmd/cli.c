@@ -586,6 +586,7 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_GROUPS:
 		return parse_shape("--groups", arg, 65536, o->groups, err, err_size);
 	case OPT_BATCH:
+		o->batch_given = 1;
 		return parse_bounded("--batch", arg, 1, 4096, &o->batch, err, err_size);
 	case OPT_QUEUES:
 		return parse_bounded("--queues", arg, 1, RENDER_MAX_QUEUES, &o->queues, err,
@@ -640,6 +641,7 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return take_file_name("--schedule-map", arg, &o->outputs.schedule_map, err,
 				      err_size);
 	case OPT_WORK_MAP_SCALE:
+		o->work_map_scale_given = 1;
 		return parse_choice("--work-map-scale", arg, "linear", "log", &o->outputs.work_map_log, err,
 				    err_size);
 	case OPT_ENCODING:
@@ -849,6 +851,37 @@ static int check_schedule_map(const struct options *o, char *err, size_t err_siz
 	return 0;
 }
 
+/* The rule for an option that sets something the run does not have
+ * (docs/GUIDE.md, "Options that do not apply"): refused, with what it
+ * needs. The kernel's options: */
+static int check_kernel_options(const struct options *o, char *err, size_t err_size)
+{
+	const struct kernel_info *k = render_find_kernel(o->kernel); /* NULL: the reference */
+
+	if (o->groups[0] > 0 && !(k && k->uses_groups)) {
+		snprintf(err, err_size,
+			 "--groups sets the persistent work-groups of -k cyclic, dynamic and "
+			 "persistent; it does not apply to -k %s",
+			 o->kernel);
+		return -1;
+	}
+	if (o->batch_given && !(k && k->pixel_counter)) {
+		snprintf(err, err_size,
+			 "--batch sets the pixels a work-item of -k persistent fetches at a "
+			 "time; it does not apply to -k %s",
+			 o->kernel);
+		return -1;
+	}
+	if (o->queues > 0 && !(k && !k->single_item && !k->multi_pass)) {
+		snprintf(err, err_size,
+			 "--queues sets the command queues of -k naive, cyclic, dynamic and "
+			 "persistent; it does not apply to -k %s, which renders on one",
+			 o->kernel);
+		return -1;
+	}
+	return 0;
+}
+
 /* Rules between options, checked once all are read. */
 static int check_combination(const struct options *o, char *err, size_t err_size)
 {
@@ -883,7 +916,15 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 			 "--work-map an image file (not .npy, .exr, .pfm or .hdr)");
 		return -1;
 	}
-	if (check_several_devices(o, err, err_size) || check_schedule_map(o, err, err_size))
+	if (o->work_map_scale_given &&
+	    (!o->outputs.work_map || workmap_kind(o->outputs.work_map) != WORKMAP_PICTURE)) {
+		snprintf(err, err_size,
+			 "--work-map-scale sets the colours of a --work-map picture; give "
+			 "--work-map an image file (not .npy, .exr, .pfm or .hdr)");
+		return -1;
+	}
+	if (check_kernel_options(o, err, err_size) || check_several_devices(o, err, err_size) ||
+	    check_schedule_map(o, err, err_size))
 		return -1;
 	if (o->quiet && o->verbose) {
 		snprintf(err, err_size, "-q/--quiet and -v/--verbose contradict each other");

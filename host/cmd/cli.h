@@ -20,6 +20,7 @@ struct options {
 	int workgroup[2];	/* -w WxH */
 	int groups[2];		/* --groups GXxGY; 0x0 when not given */
 	int batch;		/* --batch N for the persistent kernel */
+	int batch_given;
 	int queues;		/* --queues N (0: the default) */
 	const char *scene_path; /* -s or the argument; NULL: the built-in paper60 scene */
 	int size[2];		/* --size WxH; 0x0 when not given */
@@ -39,6 +40,7 @@ struct options {
 	int piece_rows; /* --piece-rows N; 0: chosen (schedule/tiles.h) */
 	int repeat;	/* -r N; 0 when not given */
 	struct output_request outputs; /* -o, --stats, --flops, --work-map, ... */
+	int work_map_scale_given;      /* --work-map-scale given */
 	int accel;		       /* --accel: enum accel (render/settings.h) */
 	int quiet, verbose;
 	int help, version;

@@ -5,6 +5,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -30,13 +31,53 @@
 #define IMPORT_FLAGS                                                                               \
 	(aiProcess_Triangulate | aiProcess_SortByPType | aiProcess_PreTransformVertices)
 
-/* ---- Assimp's file access: only regular files, opened without blocking ----
+/* ---- Assimp's file access: only regular files inside the model's folder,
+ * opened without blocking ----
  * Assimp opens the files a mesh file names (an OBJ's mtllib, a glTF's
  * buffers[].uri) itself; one that is a FIFO hung the import for good (issue
- * 24 finding 4). Every file it opens goes through these procedures, which
- * refuse anything but a regular file and remember the first refused. */
+ * 24 finding 4), and one outside the model's folder let a model read any
+ * file into an image (issue 39 finding 3). Every file it opens goes through
+ * these procedures, which refuse anything but a regular file inside the
+ * folder (texture_read.h's rule), remember the first refused, and remember
+ * every file opened: rtcl counts them among the run's inputs (finding 1). */
 
 static char refused_file[512];
+static int refused_outside; /* refused_file lies outside the folder */
+static const char *mesh_file; /* the mesh file, as rtcl names it */
+
+/* The files read besides the mesh file, each once. */
+static struct mesh_file *opened;
+static size_t opened_count;
+static int opened_failed; /* out of memory for the list */
+
+static void remember_opened(const char *path, uint32_t kind)
+{
+	struct mesh_file *grown;
+
+	if (strcmp(path, mesh_file) == 0)
+		return;
+	for (size_t i = 0; i < opened_count; i++)
+		if (strcmp(opened[i].path, path) == 0)
+			return;
+	grown = realloc(opened, (opened_count + 1) * sizeof(*grown));
+	if (grown)
+		opened = grown;
+	if (!grown || !(opened[opened_count].path = strdup(path))) {
+		opened_failed = 1;
+		return;
+	}
+	opened[opened_count++].kind = kind;
+}
+
+static void forget_opened(void)
+{
+	for (size_t i = 0; i < opened_count; i++)
+		free(opened[i].path);
+	free(opened);
+	opened = NULL;
+	opened_count = 0;
+	opened_failed = 0;
+}
 
 static size_t file_read(struct aiFile *file, char *buffer, size_t size, size_t count)
 {
@@ -88,7 +129,25 @@ static struct aiFile *file_open(struct aiFileIO *io, const char *path, const cha
 	(void)io;
 	if (mode[0] != 'r')
 		return NULL;
-	fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	/* The mesh file itself as the scene names it, maybe a link to
+	 * elsewhere; any other file by where it leads. */
+	if (strcmp(path, mesh_file) == 0) {
+		fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	} else {
+		char resolved[PATH_MAX];
+		int where = model_folder_resolve(path, resolved);
+
+		if (where == MODEL_MISSING)
+			return NULL; /* Assimp tries other spellings of the name */
+		if (where == MODEL_OUTSIDE) {
+			if (!refused_file[0]) {
+				snprintf(refused_file, sizeof(refused_file), "%s", path);
+				refused_outside = 1;
+			}
+			return NULL;
+		}
+		fd = open(resolved, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW);
+	}
 	if (fd < 0)
 		return NULL;
 	if (fstat(fd, &st) != 0) {
@@ -101,6 +160,7 @@ static struct aiFile *file_open(struct aiFileIO *io, const char *path, const cha
 		close(fd);
 		return NULL;
 	}
+	remember_opened(path, MESH_FILE_OTHER);
 	file = calloc(1, sizeof(*file));
 	stream = file ? fdopen(fd, "rb") : NULL;
 	if (!stream) {
@@ -537,12 +597,15 @@ static unsigned char *raw_texels(const struct aiTexture *tex, struct mesh_textur
 	return texels;
 }
 
+static int from_gltf2(const struct aiScene *sc);
+
 /* Reads texture t (its name and role set): embedded ("*N") or a file beside
  * the mesh. Its reason says why when it could not be read. */
 static void read_texture(const struct aiScene *sc, const char *path, struct mesh_data *out,
 			 struct mesh_texture *t)
 {
 	unsigned char *bytes = NULL, *texels = NULL;
+	char *file = NULL;
 	size_t size = 0;
 
 	if (t->name[0] == '*') {
@@ -562,9 +625,16 @@ static void read_texture(const struct aiScene *sc, const char *path, struct mesh
 					   &texels)) {
 			/* decoded */
 		}
-	} else if (!texture_file_bytes(path, t->name, &bytes, &size, t->reason,
-				       sizeof(t->reason))) {
-		texture_decode(bytes, size, t, &texels);
+	} else {
+		/* glTF names its images by URI (glTF 2.0, "URIs"); other formats
+		 * by file name */
+		int ok = !texture_file_bytes(path, t->name, from_gltf2(sc), &bytes, &size, &file,
+					     t->reason, sizeof(t->reason));
+		if (file)
+			remember_opened(file, MESH_FILE_TEXTURE);
+		free(file);
+		if (ok)
+			texture_decode(bytes, size, t, &texels);
 	}
 	free(bytes);
 	if (texels && !t->reason[0])
@@ -572,8 +642,11 @@ static void read_texture(const struct aiScene *sc, const char *path, struct mesh
 	free(texels);
 }
 
+/* texture_of's answer when out of memory. */
+#define TEXTURE_NO_MEMORY (-2)
+
 /* The index in out->textures of texture `type` of mat, read in `role`
- * (each name and role once), or -1 where mat has none. */
+ * (each name and role once), -1 where mat has none, or TEXTURE_NO_MEMORY. */
 static int32_t texture_of(const struct aiScene *sc, const char *path,
 			  const struct aiMaterial *mat, enum aiTextureType type, uint32_t role,
 			  struct mesh_data *out)
@@ -587,21 +660,21 @@ static int32_t texture_of(const struct aiScene *sc, const char *path,
 	    aiGetMaterialTexture(mat, type, 0, &name, NULL, NULL, NULL, NULL, modes, NULL) !=
 		    aiReturn_SUCCESS)
 		return -1;
+	/* The whole name: messages quote its control bytes (base/quote.h). */
 	for (size_t i = 0; i < out->texture_count; i++)
 		if (out->textures[i].role == role && out->textures[i].wrap_s == wrap_of(modes[0]) &&
 		    out->textures[i].wrap_t == wrap_of(modes[1]) &&
-		    strncmp(out->textures[i].name, name.data, MESH_TEXTURE_NAME_MAX - 1) == 0)
+		    strcmp(out->textures[i].name, name.data) == 0)
 			return (int32_t)i;
 	grown = realloc(out->textures, (out->texture_count + 1) * sizeof(*grown));
 	if (!grown)
-		return -1;
+		return TEXTURE_NO_MEMORY;
 	out->textures = grown;
 	t = &out->textures[out->texture_count];
 	memset(t, 0, sizeof(*t));
-	snprintf(t->name, sizeof(t->name), "%.*s", (int)sizeof(t->name) - 1, name.data);
-	for (char *c = t->name; *c; c++) /* names go into messages on one line */
-		if ((unsigned char)*c < 0x20 || *c == 0x7f)
-			*c = '?';
+	t->name = strdup(name.data);
+	if (!t->name)
+		return TEXTURE_NO_MEMORY;
 	t->role = role;
 	t->wrap_s = wrap_of(modes[0]);
 	t->wrap_t = wrap_of(modes[1]);
@@ -638,6 +711,10 @@ static int read_textures(const struct aiScene *sc, const char *path, struct mesh
 			m->opacity_texture = texture_of(sc, path, mat, aiTextureType_OPACITY,
 							MESH_TEXTURE_OPACITY, out);
 		textured |= m->base_texture >= 0 || m->opacity_texture >= 0;
+		if (m->base_texture == TEXTURE_NO_MEMORY || m->opacity_texture == TEXTURE_NO_MEMORY) {
+			free(used);
+			return -1;
+		}
 	}
 	free(used);
 	if (!textured)
@@ -800,18 +877,36 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 
 	memset(out, 0, sizeof(*out));
 	refused_file[0] = '\0';
+	refused_outside = 0;
+	mesh_file = path;
+	forget_opened();
 	if (ply_check(path, reason, reason_size) ||
-	    obj_polygon_too_large(path, reason, reason_size))
+	    obj_polygon_too_large(path, reason, reason_size) ||
+	    model_folder_set(path, reason, reason_size))
 		return -1;
 	sc = aiImportFileEx(path, IMPORT_FLAGS, &io);
 	if (refused_file[0]) {
-		snprintf(reason, reason_size, "it names \"%s\", which is not a regular file",
-			 refused_file);
+		const char *slash = strrchr(path, '/');
+		if (refused_outside)
+			snprintf(reason, reason_size,
+				 "it names \"%s\", which lies outside the folder of \"%s\"",
+				 refused_file, slash ? slash + 1 : path);
+		else
+			snprintf(reason, reason_size,
+				 "it names \"%s\", which is not a regular file", refused_file);
 		goto out_release_scene;
 	}
 	if (!sc) {
 		snprintf(reason, reason_size, "%s", aiGetErrorString());
 		return -1;
+	}
+	/* What the files Assimp opened are, for rtcl's messages. */
+	for (size_t i = 0; i < opened_count; i++) {
+		size_t n = strlen(opened[i].path);
+		if (from_gltf2(sc))
+			opened[i].kind = MESH_FILE_BUFFER;
+		else if (n > 4 && strcasecmp(opened[i].path + n - 4, ".mtl") == 0)
+			opened[i].kind = MESH_FILE_LIBRARY;
 	}
 	count(sc, &vertices, &triangles, &has_normals);
 	out->positions = malloc((vertices ? vertices : 1) * 3 * sizeof(double));
@@ -845,8 +940,17 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 			goto out_release_scene;
 		}
 	}
+	if (opened_failed) {
+		snprintf(reason, reason_size, "out of memory for the names of the files it read");
+		goto out_release_scene;
+	}
+	out->files = opened;
+	out->file_count = opened_count;
+	opened = NULL;
+	opened_count = 0;
 	ret = 0;
 out_release_scene:
+	forget_opened();
 	if (ret)
 		mesh_data_free(out);
 	if (sc)

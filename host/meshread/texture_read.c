@@ -10,6 +10,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <limits.h>
 #include <math.h>
 #include <stdint.h>
 #include <stdio.h>
@@ -31,45 +32,101 @@
 #pragma GCC diagnostic pop
 #endif
 
-/* Whether name, relative to the mesh file's folder, stays inside it: not
- * absolute, and no ".." that climbs above the folder. */
-static int inside_folder(const char *name)
-{
-	int depth = 0;
+/* The model's folder and the mesh file, resolved (model_folder_set). */
+static char model_folder[PATH_MAX], model_file[PATH_MAX];
 
-	if (name[0] == '/' || name[0] == '\\' || (name[0] && name[1] == ':'))
-		return 0;
-	for (const char *part = name; *part;) {
-		size_t n = strcspn(part, "/\\");
-		if (n == 2 && part[0] == '.' && part[1] == '.') {
-			if (--depth < 0)
-				return 0;
-		} else if (n > 0 && !(n == 1 && part[0] == '.')) {
-			depth++;
-		}
-		part += n;
-		part += *part != '\0';
-	}
-	return 1;
+int model_folder_set(const char *mesh_path, char *reason, size_t reason_size)
+{
+	const char *slash = strrchr(mesh_path, '/');
+	char *folder = slash ? strndup(mesh_path, (size_t)(slash - mesh_path) + 1) : strdup(".");
+	int ok = folder && realpath(folder, model_folder) && realpath(mesh_path, model_file);
+
+	if (!ok)
+		snprintf(reason, reason_size, "%s", folder ? strerror(errno) : "out of memory");
+	free(folder);
+	return ok ? 0 : -1;
 }
 
-int texture_file_bytes(const char *mesh_path, const char *name, unsigned char **bytes,
-		       size_t *size, char *reason, size_t reason_size)
+int model_folder_resolve(const char *path, char *resolved)
+{
+	size_t n = strlen(model_folder);
+
+	if (!realpath(path, resolved))
+		return MODEL_MISSING;
+	if (strcmp(resolved, model_file) == 0)
+		return MODEL_INSIDE;
+	if (strcmp(model_folder, "/") == 0)
+		return resolved[1] ? MODEL_INSIDE : MODEL_OUTSIDE;
+	return strncmp(resolved, model_folder, n) == 0 && resolved[n] == '/' ? MODEL_INSIDE
+									     : MODEL_OUTSIDE;
+}
+
+static int hex_digit(char c)
+{
+	return c >= '0' && c <= '9'   ? c - '0'
+	       : c >= 'a' && c <= 'f' ? c - 'a' + 10
+	       : c >= 'A' && c <= 'F' ? c - 'A' + 10
+				      : -1;
+}
+
+/* A glTF URI's path with its %XX escapes decoded (RFC 3986, as glTF 2.0
+ * asks), malloc'd; NULL with why in reason (out of memory, an escaped NUL).
+ * A '%' without two hex digits after it stays itself. */
+static char *decode_uri(const char *uri, char *reason, size_t reason_size)
+{
+	char *out = malloc(strlen(uri) + 1), *o = out;
+
+	if (!out) {
+		snprintf(reason, reason_size, "out of memory");
+		return NULL;
+	}
+	for (const char *c = uri; *c; c++) {
+		int high = c[0] == '%' ? hex_digit(c[1]) : -1, low = high >= 0 ? hex_digit(c[2]) : -1;
+
+		if (low < 0) {
+			*o++ = *c;
+			continue;
+		}
+		if (high == 0 && low == 0) {
+			snprintf(reason, reason_size, "its URI holds an escaped NUL byte (%%00)");
+			free(out);
+			return NULL;
+		}
+		*o++ = (char)(high * 16 + low);
+		c += 2;
+	}
+	*o = '\0';
+	return out;
+}
+
+int texture_file_bytes(const char *mesh_path, const char *name, int uri, unsigned char **bytes,
+		       size_t *size, char **opened, char *reason, size_t reason_size)
 {
 	const char *slash = strrchr(mesh_path, '/');
 	size_t dir = slash ? (size_t)(slash - mesh_path) + 1 : 0;
 	const char *mesh_name = slash ? slash + 1 : mesh_path;
-	char *path = malloc(dir + strlen(name) + 1);
+	char *decoded = uri ? decode_uri(name, reason, reason_size) : NULL, *path = NULL;
+	char resolved[PATH_MAX];
 	struct stat st;
 	int fd = -1, ret = -1;
 
 	*bytes = NULL;
+	*opened = NULL;
+	if (uri && !decoded)
+		return -1;
+	name = decoded ? decoded : name;
+	if (!name[0]) {
+		snprintf(reason, reason_size, "the file gives it no name");
+		goto out_free;
+	}
+	/* An absolute name: a drive letter, or a slash either way. */
+	if (name[0] == '/' || name[0] == '\\' || name[1] == ':') {
+		snprintf(reason, reason_size, MODEL_OUTSIDE_REASON, mesh_name);
+		goto out_free;
+	}
+	path = malloc(dir + strlen(name) + 1);
 	if (!path) {
 		snprintf(reason, reason_size, "out of memory");
-		return -1;
-	}
-	if (!inside_folder(name)) {
-		snprintf(reason, reason_size, "it lies outside the folder of \"%s\"", mesh_name);
 		goto out_free;
 	}
 	memcpy(path, mesh_path, dir);
@@ -77,8 +134,17 @@ int texture_file_bytes(const char *mesh_path, const char *name, unsigned char **
 	for (char *c = path + dir; *c; c++) /* Windows exports write a\b.png */
 		if (*c == '\\')
 			*c = '/';
-	/* Without blocking: a FIFO there must not hang the import. */
-	fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+	switch (model_folder_resolve(path, resolved)) {
+	case MODEL_MISSING:
+		snprintf(reason, reason_size, "%s", strerror(errno));
+		goto out_free;
+	case MODEL_OUTSIDE:
+		snprintf(reason, reason_size, MODEL_OUTSIDE_REASON, mesh_name);
+		goto out_free;
+	}
+	/* The resolved path, so that what was checked is what is read; without
+	 * blocking: a FIFO there must not hang the import. */
+	fd = open(resolved, O_RDONLY | O_NONBLOCK | O_CLOEXEC | O_NOFOLLOW);
 	if (fd < 0 || fstat(fd, &st) != 0) {
 		snprintf(reason, reason_size, "%s", strerror(errno));
 		goto out_free;
@@ -87,6 +153,8 @@ int texture_file_bytes(const char *mesh_path, const char *name, unsigned char **
 		snprintf(reason, reason_size, "it is not a regular file");
 		goto out_free;
 	}
+	*opened = path;
+	path = NULL;
 	*size = (size_t)st.st_size;
 	*bytes = malloc(*size ? *size : 1);
 	if (!*bytes) {
@@ -111,6 +179,7 @@ out_free:
 	if (fd >= 0)
 		close(fd);
 	free(path);
+	free(decoded);
 	return ret;
 }
 

@@ -55,8 +55,7 @@ struct mesh_material {
 
 /* A texture a used material names, decoded by the helper (stb_image) into
  * RGBA texels (docs/RENDERING.md, "Textures"), or why it could not be read.
- * Fixed-size so that it crosses the pipe as it is. */
-#define MESH_TEXTURE_NAME_MAX 256
+ * Fixed-size but for its name, which follows the array on the pipe. */
 #define MESH_TEXTURE_REASON_MAX 256
 #define MESH_TEXTURE_MAX_SIDE 16384 /* texels a side */
 
@@ -73,7 +72,7 @@ enum mesh_texture_role { MESH_TEXTURE_COLOR, MESH_TEXTURE_OPACITY };
 enum mesh_wrap { MESH_WRAP_REPEAT, MESH_WRAP_CLAMP, MESH_WRAP_MIRROR };
 
 struct mesh_texture {
-	char name[MESH_TEXTURE_NAME_MAX];     /* as the file names it ("*0": embedded) */
+	char *name; /* as the file names it, whole ("*0": embedded); malloc'd */
 	char reason[MESH_TEXTURE_REASON_MAX]; /* "" when read, else why not */
 	uint32_t role;			      /* enum mesh_texture_role */
 	uint32_t format;		      /* enum mesh_texels */
@@ -100,6 +99,21 @@ struct mesh_camera {
 	double aspect;				 /* the file's aspect ratio; 0: not given */
 };
 
+/* A file the helper read besides the mesh file itself: rtcl counts each
+ * among the run's inputs, which no output may replace (output/plan.h). */
+enum mesh_file_kind {
+	MESH_FILE_TEXTURE, /* an image a material names */
+	MESH_FILE_LIBRARY, /* an OBJ file's MTL library */
+	MESH_FILE_BUFFER,  /* a glTF buffer */
+	MESH_FILE_OTHER	   /* another file the mesh file names */
+};
+
+struct mesh_file {
+	char *path;    /* as the helper opened it (relative to rtcl's folder
+			  unless absolute); malloc'd */
+	uint32_t kind; /* enum mesh_file_kind */
+};
+
 struct mesh_data {
 	double *positions;	      /* 3 per vertex */
 	double *normals;	      /* 3 per vertex, or NULL where the file has none */
@@ -114,6 +128,8 @@ struct mesh_data {
 	size_t texture_count, texel_bytes;
 	struct mesh_camera *cameras; /* the cameras that a node of the file places */
 	size_t camera_count;
+	struct mesh_file *files; /* every other file the import read */
+	size_t file_count;
 };
 
 /* What mesh_import returns besides 0. */

@@ -43,9 +43,13 @@ struct reply {
 	uint32_t has_uvs, pad;
 	uint64_t texture_count, texel_bytes; /* then the uvs, textures and texels */
 	uint64_t camera_count;		     /* then the cameras */
+	uint64_t file_count; /* then the textures' names, then the files read */
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
 #define REASON_MAX 1024
+/* The longest name or path that crosses the pipe: a path of PATH_MAX, or a
+ * name Assimp keeps (1023 bytes), with room to spare. */
+#define TEXT_MAX 65536
 
 static int write_all(int fd, const void *data, size_t size)
 {
@@ -111,6 +115,28 @@ static int read_all(int fd, void *data, size_t size)
 	return 0;
 }
 
+/* A string on the pipe: its length (32 bits), then its bytes. */
+static int write_text(int fd, const char *text)
+{
+	size_t n = strlen(text);
+	uint32_t length = n < TEXT_MAX ? (uint32_t)n : TEXT_MAX;
+
+	return write_all(fd, &length, sizeof(length)) || write_all(fd, text, length) ? -1 : 0;
+}
+
+/* The names of the textures, then the files read (each its kind, then its path). */
+static int write_names(int fd, const struct mesh_data *mesh)
+{
+	for (size_t i = 0; i < mesh->texture_count; i++)
+		if (write_text(fd, mesh->textures[i].name ? mesh->textures[i].name : ""))
+			return -1;
+	for (size_t i = 0; i < mesh->file_count; i++)
+		if (write_all(fd, &mesh->files[i].kind, sizeof(mesh->files[i].kind)) ||
+		    write_text(fd, mesh->files[i].path))
+			return -1;
+	return 0;
+}
+
 int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 {
 	struct reply r = {.magic = REPLY_MAGIC};
@@ -130,6 +156,7 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	r.texture_count = mesh->texture_count;
 	r.texel_bytes = mesh->texel_bytes;
 	r.camera_count = mesh->camera_count;
+	r.file_count = mesh->file_count;
 	if (write_all(fd, &r, sizeof(r)) ||
 	    write_all(fd, mesh->positions, 3 * mesh->vertex_count * sizeof(double)) ||
 	    (mesh->normals &&
@@ -140,7 +167,8 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	    (mesh->uvs && write_all(fd, mesh->uvs, 2 * mesh->vertex_count * sizeof(double))) ||
 	    write_all(fd, mesh->textures, mesh->texture_count * sizeof(struct mesh_texture)) ||
 	    write_all(fd, mesh->texels, mesh->texel_bytes) ||
-	    write_all(fd, mesh->cameras, mesh->camera_count * sizeof(struct mesh_camera)))
+	    write_all(fd, mesh->cameras, mesh->camera_count * sizeof(struct mesh_camera)) ||
+	    write_names(fd, mesh))
 		return -1;
 	return 0;
 }
@@ -153,7 +181,12 @@ void mesh_data_free(struct mesh_data *mesh)
 	free(mesh->triangle_materials);
 	free(mesh->materials);
 	free(mesh->uvs);
+	for (size_t i = 0; mesh->textures && i < mesh->texture_count; i++)
+		free(mesh->textures[i].name);
 	free(mesh->textures);
+	for (size_t i = 0; mesh->files && i < mesh->file_count; i++)
+		free(mesh->files[i].path);
+	free(mesh->files);
 	free(mesh->texels);
 	free(mesh->cameras);
 	memset(mesh, 0, sizeof(*mesh));
@@ -172,6 +205,42 @@ static void *alloc_array(uint64_t count, size_t item_size)
 	if (count > SIZE_MAX / item_size)
 		return NULL;
 	return malloc(count ? (size_t)count * item_size : 1);
+}
+
+/* A string written by write_text into *text (malloc'd, NUL-terminated). */
+static int read_text(int fd, char **text)
+{
+	uint32_t length;
+	int got = read_all(fd, &length, sizeof(length));
+
+	if (got)
+		return got;
+	if (length > TEXT_MAX)
+		return NONSENSE;
+	*text = malloc((size_t)length + 1);
+	if (!*text)
+		return OUT_OF_MEMORY;
+	(*text)[length] = '\0';
+	got = read_all(fd, *text, length);
+	/* A NUL inside would cut the name short, as names were cut before. */
+	return got ? got : strlen(*text) != length ? NONSENSE : 0;
+}
+
+/* The textures' names and the files read, after the arrays. */
+static int read_names(int fd, struct mesh_data *out)
+{
+	int got = 0;
+
+	for (size_t i = 0; !got && i < out->texture_count; i++)
+		got = read_text(fd, &out->textures[i].name);
+	for (size_t i = 0; !got && i < out->file_count; i++) {
+		got = read_all(fd, &out->files[i].kind, sizeof(out->files[i].kind));
+		if (!got)
+			got = read_text(fd, &out->files[i].path);
+		if (!got && out->files[i].kind > MESH_FILE_OTHER)
+			got = NONSENSE;
+	}
+	return got;
 }
 
 /* The answer on fd, into *out (ok) or reason (refused). */
@@ -205,7 +274,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->textures = alloc_array(r.texture_count, sizeof(struct mesh_texture));
 	out->texels = alloc_array(r.texel_bytes, 1);
 	out->cameras = alloc_array(r.camera_count, sizeof(struct mesh_camera));
-	if (!out->cameras || !out->positions || (r.has_normals && !out->normals) || !out->indices ||
+	out->files = alloc_array(r.file_count, sizeof(struct mesh_file));
+	if (!out->cameras || !out->files || !out->positions || (r.has_normals && !out->normals) || !out->indices ||
 	    !out->triangle_materials || !out->materials || (r.has_uvs && !out->uvs) ||
 	    !out->textures || !out->texels) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
@@ -218,6 +288,10 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->texture_count = (size_t)r.texture_count;
 	out->texel_bytes = (size_t)r.texel_bytes;
 	out->camera_count = (size_t)r.camera_count;
+	out->file_count = (size_t)r.file_count;
+	/* Nothing for mesh_data_free to free before it is read. */
+	memset(out->textures, 0, out->texture_count * sizeof(struct mesh_texture));
+	memset(out->files, 0, out->file_count * sizeof(struct mesh_file));
 	got = read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double));
 	if (!got && r.has_normals)
 		got = read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double));
@@ -230,12 +304,22 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 			       out->material_count * sizeof(struct mesh_material));
 	if (!got && r.has_uvs)
 		got = read_all(fd, out->uvs, 2 * out->vertex_count * sizeof(double));
-	if (!got)
+	if (!got) {
 		got = read_all(fd, out->textures, out->texture_count * sizeof(struct mesh_texture));
+		for (size_t i = 0; i < out->texture_count; i++)
+			out->textures[i].name = NULL; /* the helper's pointers: read below */
+	}
 	if (!got)
 		got = read_all(fd, out->texels, out->texel_bytes);
 	if (!got)
 		got = read_all(fd, out->cameras, out->camera_count * sizeof(struct mesh_camera));
+	if (!got)
+		got = read_names(fd, out);
+	if (got == NONSENSE || got == OUT_OF_MEMORY) {
+		if (got == OUT_OF_MEMORY)
+			snprintf(reason, reason_size, "out of memory for its names");
+		return got;
+	}
 	if (got)
 		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	for (size_t i = 0; i < 3 * out->triangle_count; i++)
@@ -256,7 +340,7 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	for (size_t i = 0; i < out->texture_count; i++) {
 		struct mesh_texture *t = &out->textures[i];
 		uint64_t texel_size = t->format == MESH_TEXELS_FLOAT ? 16 : 4;
-		t->name[MESH_TEXTURE_NAME_MAX - 1] = t->reason[MESH_TEXTURE_REASON_MAX - 1] = '\0';
+		t->reason[MESH_TEXTURE_REASON_MAX - 1] = '\0';
 		if (t->reason[0])
 			continue;
 		if (t->format > MESH_TEXELS_FLOAT || t->role > MESH_TEXTURE_OPACITY ||

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/quote.h"
 #include "scene/mesh.h"
 #include "scene/mesh_place.h"
 #include "scene/scene_loader.h"
@@ -20,19 +21,33 @@
 #define SCENE_MAX_TRIANGLES (INT_MAX / 4)
 
 /* Where a file's name or the importer's reason goes into a message: control
- * bytes become '?', so that the message stays one line. */
-#define MESSAGE_TEXT_MAX 300
+ * bytes escaped as base/quote.h escapes them (\x1b, \n), so that the message
+ * stays one line and drives no terminal; a text longer than the buffer ends
+ * in "...". */
+#define MESSAGE_TEXT_MAX 1200
 
 static const char *one_line(const char *text, char buf[MESSAGE_TEXT_MAX])
 {
-	size_t i = 0;
+	size_t n = strlen(text), len = 0;
 
-	for (; text[i] && i + 1 < MESSAGE_TEXT_MAX; i++)
-		buf[i] = (unsigned char)text[i] < 0x20 || text[i] == 0x7f ? '?' : text[i];
 	/* The importer ends some reasons with a newline or a space. */
-	while (i > 0 && (buf[i - 1] == '?' || buf[i - 1] == ' '))
-		i--;
-	buf[i] = '\0';
+	while (n > 0 && ((unsigned char)text[n - 1] <= ' ' || text[n - 1] == 0x7f))
+		n--;
+	for (size_t i = 0; i < n; i++) {
+		char escaped[QUOTE_BYTE_SIZE];
+		size_t e = strlen(quote_byte((unsigned char)text[i], 0, escaped));
+
+		if (len + e + 4 > MESSAGE_TEXT_MAX) {
+			while (len > 0 && ((unsigned char)buf[len - 1] & 0x80))
+				len--; /* no part of a UTF-8 character left */
+			memcpy(buf + len, "...", 3);
+			len += 3;
+			break;
+		}
+		memcpy(buf + len, escaped, e);
+		len += e;
+	}
+	buf[len] = '\0';
 	return buf;
 }
 
@@ -319,7 +334,8 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 		       const struct mesh_data *mesh, int forced)
 {
 	struct scene *s = ld->scene;
-	char line[1200], notes[700] = "", where[200], text[MESSAGE_TEXT_MAX];
+	char line[2 * MESSAGE_TEXT_MAX + 300], notes[700] = "", where[200], text[MESSAGE_TEXT_MAX],
+		said[MESSAGE_TEXT_MAX];
 	size_t materials = 0, used = 0, textures = 0;
 	char *has = calloc(mesh->material_count ? mesh->material_count : 1, 1);
 
@@ -364,7 +380,7 @@ static int report_mesh(struct loader *ld, const struct path *item, const char *n
 		 textures == 1 ? "" : "s",
 		 forced ? "; replaced by its \"material\"" : "",
 		 notes[0] && !forced ? "; not understood: " : "",
-		 forced ? "" : one_line(notes, notes));
+		 forced ? "" : one_line(notes, said));
 	return add_line(ld, &s->mesh_reports, &s->mesh_report_count, line);
 }
 
@@ -428,7 +444,8 @@ static int add_texture(struct loader *ld, struct mesh_textures *mt, int i)
 	const struct mesh_texture *in = &mt->mesh->textures[i];
 	struct scene *s = ld->scene;
 	struct scene_texture *grown, *t;
-	char line[1200], where[200], text[MESSAGE_TEXT_MAX], tex[MESSAGE_TEXT_MAX];
+	char line[2 * MESSAGE_TEXT_MAX + 300], where[200], text[MESSAGE_TEXT_MAX],
+		tex[MESSAGE_TEXT_MAX];
 
 	grown = realloc(s->textures, (size_t)(s->texture_count + 1) * sizeof(*grown));
 	if (!grown) {
@@ -473,8 +490,9 @@ static int add_texture(struct loader *ld, struct mesh_textures *mt, int i)
 static int use_texture(struct loader *ld, struct mesh_textures *mt, const char *material, int i)
 {
 	const struct mesh_texture *t = &mt->mesh->textures[i];
-	char text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX], tex[MESSAGE_TEXT_MAX];
-	char warning[1400];
+	char text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX], tex[MESSAGE_TEXT_MAX],
+		why[MESSAGE_TEXT_MAX];
+	char warning[4 * MESSAGE_TEXT_MAX];
 
 	if (mt->scene_index[i])
 		return mt->scene_index[i] < 0 ? 0 : mt->scene_index[i];
@@ -482,7 +500,7 @@ static int use_texture(struct loader *ld, struct mesh_textures *mt, const char *
 		return mt->scene_index[i] = add_texture(ld, mt, i);
 	loader_fail(ld, mt->file, "\"%s\": material \"%s\": cannot read texture \"%s\": %s",
 		    one_line(mt->name, text), short_name(material, quoted), one_line(t->name, tex),
-		    t->reason);
+		    one_line(t->reason, why));
 	if (!mt->warn)
 		return -1;
 	snprintf(warning, sizeof(warning), "%s; its material renders without it", ld->err);
@@ -680,7 +698,7 @@ static int take_camera(struct loader *ld, const struct path *item, const char *n
 	struct scene_camera *cam = &ld->scene->camera;
 	const struct mesh_camera *c = NULL;
 	char text[MESSAGE_TEXT_MAX], cname[MESSAGE_TEXT_MAX], buf[200], a[100], b[100], u[100],
-		f[32], where[200], line[900];
+		f[32], where[200], line[2 * MESSAGE_TEXT_MAX + 300];
 	double dir[3], up[3];
 	const char *problem, *which;
 
@@ -749,13 +767,33 @@ static int take_camera(struct loader *ld, const struct path *item, const char *n
 	return add_line(ld, &ld->scene->mesh_reports, &ld->scene->mesh_report_count, line);
 }
 
+/* Every file the import read besides the mesh file is an input of the run
+ * too, which no output may replace (issue 39 finding 1). */
+static int add_mesh_inputs(struct loader *ld, const struct mesh_data *mesh)
+{
+	static const char *const kinds[] = {"texture", "material library", "glTF buffer",
+					    "mesh file's companion"};
+
+	for (size_t i = 0; i < mesh->file_count; i++) {
+		char *copy = strdup(mesh->files[i].path);
+
+		if (!copy) {
+			loader_write_err(ld, "%s: out of memory", ld->source);
+			return -1;
+		}
+		if (loader_add_input(ld, copy, kinds[mesh->files[i].kind]))
+			return -1;
+	}
+	return 0;
+}
+
 static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 {
 	static const char *const keys[] = {"file",	 "material", "materials",
 					   "scale",	 "rotate",   "translate",
 					   "smooth",	 "missing_textures", "camera", NULL};
 	struct path file = child_key(item, "file");
-	char reason[MESSAGE_TEXT_MAX], text[MESSAGE_TEXT_MAX];
+	char reason[MESSAGE_TEXT_MAX], text[MESSAGE_TEXT_MAX], why[MESSAGE_TEXT_MAX];
 	struct mesh_data mesh;
 	struct placement pl;
 	const char *name;
@@ -801,7 +839,11 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	}
 	if (ret)
 		return loader_fail(ld, &file, "cannot read \"%s\": %s", one_line(name, text),
-				   one_line(reason, reason));
+				   one_line(reason, why));
+	if (add_mesh_inputs(ld, &mesh)) {
+		ret = -1;
+		goto out_free;
+	}
 	if (mesh.triangle_count == 0) {
 		ret = loader_fail(ld, &file, "\"%s\" holds no triangles", one_line(name, text));
 		goto out_free;
