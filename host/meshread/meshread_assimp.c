@@ -41,9 +41,15 @@
  * folder (texture_read.h's rule), remember the first refused, and remember
  * every file opened: rtcl counts them among the run's inputs (finding 1). */
 
-static char refused_file[512];
+static char refused_file[PATH_MAX];
 static int refused_outside; /* refused_file lies outside the folder */
 static const char *mesh_file; /* the mesh file, as rtcl names it */
+/* Where the mesh file is glTF (named .gltf or .glb), the length of its
+ * folder's part of its path (the slash included): Assimp opens a buffer
+ * there by the URI as the file writes it, which is decoded here (glTF 2.0,
+ * "URIs"); 0 for other formats. */
+static size_t gltf_uri_at;
+static int gltf_names_uris;
 
 /* The files read besides the mesh file, each once. */
 static struct mesh_file *opened;
@@ -67,6 +73,13 @@ static void remember_opened(const char *path, uint32_t kind)
 		return;
 	}
 	opened[opened_count++].kind = kind;
+}
+
+static int has_extension(const char *path, const char *extension)
+{
+	size_t n = strlen(path), e = strlen(extension);
+
+	return n > e && strcasecmp(path + n - e, extension) == 0;
 }
 
 static void forget_opened(void)
@@ -121,6 +134,7 @@ static void file_flush(struct aiFile *file)
 
 static struct aiFile *file_open(struct aiFileIO *io, const char *path, const char *mode)
 {
+	static char name[PATH_MAX]; /* a glTF URI decoded */
 	struct aiFile *file;
 	struct stat st;
 	FILE *stream;
@@ -134,9 +148,19 @@ static struct aiFile *file_open(struct aiFileIO *io, const char *path, const cha
 	if (strcmp(path, mesh_file) == 0) {
 		fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
 	} else {
-		char resolved[PATH_MAX];
-		int where = model_folder_resolve(path, resolved);
+		char resolved[PATH_MAX], why[80];
+		int uri = gltf_names_uris && strncmp(path, mesh_file, gltf_uri_at) == 0;
+		char *decoded = uri ? model_decode_uri(path, gltf_uri_at, why, sizeof(why)) : NULL;
+		int where;
 
+		if (uri && !decoded)
+			return NULL; /* an escaped NUL: no such file */
+		if (decoded) {
+			snprintf(name, sizeof(name), "%s", decoded);
+			free(decoded);
+			path = name;
+		}
+		where = model_folder_resolve(path, resolved);
 		if (where == MODEL_MISSING)
 			return NULL; /* Assimp tries other spellings of the name */
 		if (where == MODEL_OUTSIDE) {
@@ -879,6 +903,8 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	refused_file[0] = '\0';
 	refused_outside = 0;
 	mesh_file = path;
+	gltf_uri_at = strrchr(path, '/') ? (size_t)(strrchr(path, '/') - path) + 1 : 0;
+	gltf_names_uris = has_extension(path, ".gltf") || has_extension(path, ".glb");
 	forget_opened();
 	if (ply_check(path, reason, reason_size) ||
 	    obj_polygon_too_large(path, reason, reason_size) ||
@@ -902,10 +928,9 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	}
 	/* What the files Assimp opened are, for rtcl's messages. */
 	for (size_t i = 0; i < opened_count; i++) {
-		size_t n = strlen(opened[i].path);
 		if (from_gltf2(sc))
 			opened[i].kind = MESH_FILE_BUFFER;
-		else if (n > 4 && strcasecmp(opened[i].path + n - 4, ".mtl") == 0)
+		else if (has_extension(opened[i].path, ".mtl"))
 			opened[i].kind = MESH_FILE_LIBRARY;
 	}
 	count(sc, &vertices, &triangles, &has_normals);

@@ -69,10 +69,7 @@ static int hex_digit(char c)
 				      : -1;
 }
 
-/* A glTF URI's path with its %XX escapes decoded (RFC 3986, as glTF 2.0
- * asks), malloc'd; NULL with why in reason (out of memory, an escaped NUL).
- * A '%' without two hex digits after it stays itself. */
-static char *decode_uri(const char *uri, char *reason, size_t reason_size)
+char *model_decode_uri(const char *uri, size_t keep, char *reason, size_t reason_size)
 {
 	char *out = malloc(strlen(uri) + 1), *o = out;
 
@@ -80,7 +77,9 @@ static char *decode_uri(const char *uri, char *reason, size_t reason_size)
 		snprintf(reason, reason_size, "out of memory");
 		return NULL;
 	}
-	for (const char *c = uri; *c; c++) {
+	memcpy(o, uri, keep);
+	o += keep;
+	for (const char *c = uri + keep; *c; c++) {
 		int high = c[0] == '%' ? hex_digit(c[1]) : -1, low = high >= 0 ? hex_digit(c[2]) : -1;
 
 		if (low < 0) {
@@ -105,7 +104,7 @@ int texture_file_bytes(const char *mesh_path, const char *name, int uri, unsigne
 	const char *slash = strrchr(mesh_path, '/');
 	size_t dir = slash ? (size_t)(slash - mesh_path) + 1 : 0;
 	const char *mesh_name = slash ? slash + 1 : mesh_path;
-	char *decoded = uri ? decode_uri(name, reason, reason_size) : NULL, *path = NULL;
+	char *decoded = uri ? model_decode_uri(name, 0, reason, reason_size) : NULL, *path = NULL;
 	char resolved[PATH_MAX];
 	struct stat st;
 	int fd = -1, ret = -1;

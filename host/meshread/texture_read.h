@@ -21,6 +21,12 @@ int model_folder_set(const char *mesh_path, char *reason, size_t reason_size);
 enum { MODEL_INSIDE, MODEL_OUTSIDE, MODEL_MISSING };
 int model_folder_resolve(const char *path, char *resolved);
 
+/* A glTF URI with its %XX escapes decoded (RFC 3986, as glTF 2.0 asks)
+ * after its first `keep` bytes, which stay as they are; malloc'd. NULL with
+ * why in reason: out of memory, or an escaped NUL byte. A '%' without two
+ * hex digits after it stays itself. */
+char *model_decode_uri(const char *uri, size_t keep, char *reason, size_t reason_size);
+
 /* The reason a file outside the model's folder is refused with (%s: the
  * mesh file's name). */
 #define MODEL_OUTSIDE_REASON "it lies outside the folder of \"%s\""
