@@ -109,8 +109,9 @@ static void print_help_after_kernels(FILE *out)
 		"                         so that one fills the device while another ends\n"
 		"                         (default on a GPU for a render of several passes:\n"
 		"                         2 for the whole image, 4 for a device's share of\n"
-		"                         it; else 1. The image is the same; wavefront,\n"
-		"                         serial and the counting run of --flops use 1)\n"
+		"                         it; else 1. The image is the same; the counting\n"
+		"                         run of --flops uses 1). Not for serial, wavefront\n"
+		"                         or reference, which render on one queue\n"
 		"      --accel bvh|bvh-compact|none  how a ray finds the spheres and\n"
 		"                         triangles it hits: through a BVH built on the host\n"
 		"                         (default); bvh-compact, one with larger leaves of\n"
@@ -241,6 +242,10 @@ static void print_help_after_kernels(FILE *out)
 		"                           $XDG_CACHE_HOME/rtcl (default: ~/.cache/rtcl)\n"
 		"  POCL_CACHE_DIR=DIR       PoCL's kernel cache; PoCL finds no device unless it\n"
 		"                           can write there (default: ~/.cache/pocl)\n"
+		"An option that sets something the run does not have is refused, naming what\n"
+		"it needs: --groups with -k naive, --batch without -k persistent, --queues\n"
+		"with serial, wavefront or reference, --work-map-scale without a --work-map\n"
+		"picture, --split without --devices or --mpi.\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
 		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX);
