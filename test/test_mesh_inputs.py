@@ -248,7 +248,7 @@ def test_links_and_dots_that_stay_inside_the_folder_are_followed(tmp_path):
 
 
 @pytest.mark.parametrize("uri", ["../outside/secret.bin", "lnk.bin",
-                                 "%2e%2e%2foutside%2fsecret.bin"])
+                                 "%2e%2e%2foutside%2fsecret.bin", "../outside/none.bin"])
 def test_a_gltf_buffer_outside_the_model_folder_is_refused(tmp_path, outside, uri):
     doc = gltf_quad()
     (outside / "secret.bin").write_bytes(geometry_in(doc, uri))

@@ -42,13 +42,13 @@
  * every file opened: rtcl counts them among the run's inputs (finding 1). */
 
 static char refused_file[PATH_MAX];
-static int refused_outside; /* refused_file lies outside the folder */
+static int refused_outside;   /* refused_file lies outside the folder */
 static const char *mesh_file; /* the mesh file, as rtcl names it */
-/* Where the mesh file is glTF (named .gltf or .glb), the length of its
- * folder's part of its path (the slash included): Assimp opens a buffer
- * there by the URI as the file writes it, which is decoded here (glTF 2.0,
- * "URIs"); 0 for other formats. */
-static size_t gltf_uri_at;
+/* The length of the mesh file's folder's part of its path (the slash
+ * included): Assimp opens the files it names there. Where the mesh file is
+ * glTF (named .gltf or .glb), it names them by URI as the file writes it,
+ * which is decoded here (glTF 2.0, "URIs"). */
+static size_t named_at;
 static int gltf_names_uris;
 
 /* The files read besides the mesh file, each once. */
@@ -149,8 +149,8 @@ static struct aiFile *file_open(struct aiFileIO *io, const char *path, const cha
 		fd = open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
 	} else {
 		char resolved[PATH_MAX], why[80];
-		int uri = gltf_names_uris && strncmp(path, mesh_file, gltf_uri_at) == 0;
-		char *decoded = uri ? model_decode_uri(path, gltf_uri_at, why, sizeof(why)) : NULL;
+		int uri = gltf_names_uris && strncmp(path, mesh_file, named_at) == 0;
+		char *decoded = uri ? model_decode_uri(path, named_at, why, sizeof(why)) : NULL;
 		int where;
 
 		if (uri && !decoded)
@@ -161,6 +161,13 @@ static struct aiFile *file_open(struct aiFileIO *io, const char *path, const cha
 			path = name;
 		}
 		where = model_folder_resolve(path, resolved);
+		/* A name whose ".." climb out of the folder is outside, there
+		 * or not. (Assimp also tries the folder joined to a whole path,
+		 * "m//abs/m/x.mtl", which no file answers to: not a name that
+		 * leaves.) */
+		if (where == MODEL_MISSING && strncmp(path, mesh_file, named_at) == 0 &&
+		    model_name_leaves(path + named_at + strspn(path + named_at, "/")))
+			where = MODEL_OUTSIDE;
 		if (where == MODEL_MISSING)
 			return NULL; /* Assimp tries other spellings of the name */
 		if (where == MODEL_OUTSIDE) {
@@ -735,7 +742,8 @@ static int read_textures(const struct aiScene *sc, const char *path, struct mesh
 			m->opacity_texture = texture_of(sc, path, mat, aiTextureType_OPACITY,
 							MESH_TEXTURE_OPACITY, out);
 		textured |= m->base_texture >= 0 || m->opacity_texture >= 0;
-		if (m->base_texture == TEXTURE_NO_MEMORY || m->opacity_texture == TEXTURE_NO_MEMORY) {
+		if (m->base_texture == TEXTURE_NO_MEMORY ||
+		    m->opacity_texture == TEXTURE_NO_MEMORY) {
 			free(used);
 			return -1;
 		}
@@ -903,7 +911,7 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	refused_file[0] = '\0';
 	refused_outside = 0;
 	mesh_file = path;
-	gltf_uri_at = strrchr(path, '/') ? (size_t)(strrchr(path, '/') - path) + 1 : 0;
+	named_at = strrchr(path, '/') ? (size_t)(strrchr(path, '/') - path) + 1 : 0;
 	gltf_names_uris = has_extension(path, ".gltf") || has_extension(path, ".glb");
 	forget_opened();
 	if (ply_check(path, reason, reason_size) ||

@@ -61,6 +61,26 @@ int model_folder_resolve(const char *path, char *resolved)
 									     : MODEL_OUTSIDE;
 }
 
+int model_name_leaves(const char *name)
+{
+	int depth = 0;
+
+	if (name[0] == '/' || name[0] == '\\' || (name[0] && name[1] == ':'))
+		return 1;
+	for (const char *part = name; *part;) {
+		size_t n = strcspn(part, "/\\");
+		if (n == 2 && part[0] == '.' && part[1] == '.') {
+			if (--depth < 0)
+				return 1;
+		} else if (n > 0 && !(n == 1 && part[0] == '.')) {
+			depth++;
+		}
+		part += n;
+		part += *part != '\0';
+	}
+	return 0;
+}
+
 static int hex_digit(char c)
 {
 	return c >= '0' && c <= '9'   ? c - '0'
@@ -80,7 +100,8 @@ char *model_decode_uri(const char *uri, size_t keep, char *reason, size_t reason
 	memcpy(o, uri, keep);
 	o += keep;
 	for (const char *c = uri + keep; *c; c++) {
-		int high = c[0] == '%' ? hex_digit(c[1]) : -1, low = high >= 0 ? hex_digit(c[2]) : -1;
+		int high = c[0] == '%' ? hex_digit(c[1]) : -1,
+		    low = high >= 0 ? hex_digit(c[2]) : -1;
 
 		if (low < 0) {
 			*o++ = *c;
@@ -118,8 +139,7 @@ int texture_file_bytes(const char *mesh_path, const char *name, int uri, unsigne
 		snprintf(reason, reason_size, "the file gives it no name");
 		goto out_free;
 	}
-	/* An absolute name: a drive letter, or a slash either way. */
-	if (name[0] == '/' || name[0] == '\\' || name[1] == ':') {
+	if (model_name_leaves(name)) {
 		snprintf(reason, reason_size, MODEL_OUTSIDE_REASON, mesh_name);
 		goto out_free;
 	}

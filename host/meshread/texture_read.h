@@ -21,6 +21,12 @@ int model_folder_set(const char *mesh_path, char *reason, size_t reason_size);
 enum { MODEL_INSIDE, MODEL_OUTSIDE, MODEL_MISSING };
 int model_folder_resolve(const char *path, char *resolved);
 
+/* Whether name, relative to the model's folder, leaves it as text, before
+ * any link is followed: an absolute name (a slash either way, a drive
+ * letter), or one whose ".." climb above the folder. Such a name is outside
+ * even where no file answers to it. */
+int model_name_leaves(const char *name);
+
 /* A glTF URI with its %XX escapes decoded (RFC 3986, as glTF 2.0 asks)
  * after its first `keep` bytes, which stay as they are; malloc'd. NULL with
  * why in reason: out of memory, or an escaped NUL byte. A '%' without two

@@ -52,9 +52,9 @@ int output_plan_open(struct output_plan *plan, const struct output_request *requ
 		     const struct job *job, char *err, size_t err_size);
 
 /* Checks, before any work, that the outputs name distinct files, that none
- * is a file the scene was read from (scene->inputs, compared by identity),
- * and that each can be written. Returns 0, OUTPUT_CLASH, or -1 with one
- * message in err. */
+ * is a file the run reads (scene->inputs: the scene file, its mesh files and
+ * every file those read; compared by identity), and that each can be
+ * written. Returns 0, OUTPUT_CLASH, or -1 with one message in err. */
 int output_plan_check(const struct output_plan *plan, char *err, size_t err_size);
 
 /* Whether two paths name one file (through links and "./"). */

@@ -43,7 +43,7 @@ struct reply {
 	uint32_t has_uvs, pad;
 	uint64_t texture_count, texel_bytes; /* then the uvs, textures and texels */
 	uint64_t camera_count;		     /* then the cameras */
-	uint64_t file_count; /* then the textures' names, then the files read */
+	uint64_t file_count;		     /* then the textures' names, then the files read */
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
 #define REASON_MAX 1024
@@ -275,9 +275,9 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->texels = alloc_array(r.texel_bytes, 1);
 	out->cameras = alloc_array(r.camera_count, sizeof(struct mesh_camera));
 	out->files = alloc_array(r.file_count, sizeof(struct mesh_file));
-	if (!out->cameras || !out->files || !out->positions || (r.has_normals && !out->normals) || !out->indices ||
-	    !out->triangle_materials || !out->materials || (r.has_uvs && !out->uvs) ||
-	    !out->textures || !out->texels) {
+	if (!out->cameras || !out->files || !out->positions || (r.has_normals && !out->normals) ||
+	    !out->indices || !out->triangle_materials || !out->materials ||
+	    (r.has_uvs && !out->uvs) || !out->textures || !out->texels) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
 			 (unsigned long long)r.triangle_count);
 		return OUT_OF_MEMORY;

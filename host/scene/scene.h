@@ -125,15 +125,18 @@ struct camera_override {
 	double fov, aperture, focus_distance;
 };
 
-/* A file the scene was read from. No output may replace one (output/plan.h). */
+/* A file the run reads: the scene file, its mesh files, and every file those
+ * read (MTL libraries, glTF buffers and images, textures), as the mesh
+ * helper reports them (scene/mesh.h). No output may replace one
+ * (output/plan.h). */
 struct scene_input {
 	char *path;	  /* as opened: a mesh file's path joined to the scene's folder */
-	const char *kind; /* "scene file", "mesh file" */
+	const char *kind; /* "scene file", "mesh file", "texture", "glTF buffer", ... */
 };
 
 struct scene {
 	char *source;		    /* file name (or "name (built-in)") used in messages */
-	struct scene_input *inputs; /* the scene file (none for a string) and its mesh files */
+	struct scene_input *inputs; /* the scene file (none for a string), its mesh files, theirs */
 	int input_count;
 	int width, height;
 	int samples; /* per pixel, image.samples (1 when not given) */
