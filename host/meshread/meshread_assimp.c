@@ -932,7 +932,7 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	}
 	if (!sc) {
 		snprintf(reason, reason_size, "%s", aiGetErrorString());
-		return -1;
+		goto out_release_scene;
 	}
 	/* What the files Assimp opened are, for rtcl's messages. */
 	for (size_t i = 0; i < opened_count; i++) {
