@@ -487,20 +487,31 @@ static uint32_t wrap_of(enum aiTextureMapMode mode)
 										   : MESH_WRAP_REPEAT;
 }
 
-/* Appends t's texels to out->texels at a 16-byte boundary. Returns 0, or
- * -1 when out of memory (reason in t). */
+/* Appends t's texels (malloc'd; taken, freed here) to out->texels at a
+ * 16-byte boundary; the first texture's buffer becomes out->texels as it is,
+ * not copied (a 16384² texture is 1 GiB). Returns 0, or -1 when out of
+ * memory (reason in t). */
 static int append_texels(struct mesh_data *out, struct mesh_texture *t, unsigned char *texels)
 {
 	size_t at = (out->texel_bytes + 15) / 16 * 16;
-	unsigned char *grown = realloc(out->texels, at + (size_t)t->bytes);
+	unsigned char *grown;
 
+	if (!out->texels) {
+		out->texels = texels;
+		t->offset = 0;
+		out->texel_bytes = (size_t)t->bytes;
+		return 0;
+	}
+	grown = realloc(out->texels, at + (size_t)t->bytes);
 	if (!grown) {
 		snprintf(t->reason, sizeof(t->reason), "out of memory for its %llu bytes",
 			 (unsigned long long)t->bytes);
+		free(texels);
 		return -1;
 	}
 	memset(grown + out->texel_bytes, 0, at - out->texel_bytes);
 	memcpy(grown + at, texels, (size_t)t->bytes);
+	free(texels);
 	out->texels = grown;
 	t->offset = at;
 	out->texel_bytes = at + (size_t)t->bytes;
@@ -569,7 +580,8 @@ static void read_texture(const struct aiScene *sc, const char *path, struct mesh
 	free(bytes);
 	if (texels && !t->reason[0])
 		append_texels(out, t, texels);
-	free(texels);
+	else
+		free(texels);
 }
 
 /* The index in out->textures of texture `type` of mat, read in `role`

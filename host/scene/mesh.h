@@ -59,6 +59,13 @@ struct mesh_material {
 #define MESH_TEXTURE_NAME_MAX 256
 #define MESH_TEXTURE_REASON_MAX 256
 #define MESH_TEXTURE_MAX_SIDE 16384 /* texels a side */
+/* The most bytes of texels one texture may take on the device (4 a texel, 16
+ * for 16-bit and float images): the scene block's limit (its offsets are 32
+ * bits, host/layout/scene_block.h), checked from the image's header so that
+ * no image is decoded that could never render. */
+#define MESH_TEXTURE_MAX_BYTES ((uint64_t)UINT32_MAX - 15)
+/* The most bytes of an image file or embedded image (stb_image takes an int). */
+#define MESH_TEXTURE_MAX_FILE_BYTES ((uint64_t)INT32_MAX)
 
 enum mesh_texels {
 	MESH_TEXELS_8,	  /* 4 bytes: RGB sRGB-encoded, alpha linear */

@@ -141,15 +141,16 @@ void loader_default_focus(struct scene_camera *cam)
 	cam->focus_distance = 2 * loader_length3(half);
 }
 
-/* The first mesh entry that takes its file's camera ("camera" there, and
- * not false), or -1. */
+/* The first mesh entry that takes its file's camera ("camera" true or a
+ * name), or -1. Other values (null, a number) are the entry's error
+ * (scene_mesh.c), never a request that makes the scene's camera wrong. */
 static long camera_mesh_entry(json_t *doc)
 {
 	json_t *meshes = json_object_get(doc, "meshes");
 
 	for (size_t i = 0; i < json_array_size(meshes); i++) {
 		json_t *v = json_object_get(json_array_get(meshes, i), "camera");
-		if (v && !json_is_false(v))
+		if (json_is_true(v) || json_is_string(v))
 			return (long)i;
 	}
 	return -1;
