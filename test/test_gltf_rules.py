@@ -190,3 +190,18 @@ def test_khr_texture_transform_offset_rotation_and_scale(tmp_path):
 def test_tex_coord_picks_the_set_of_coordinates(tmp_path, binding):
     image = textured_quad(tmp_path, binding, texcoords=True)
     check_lookups(image, lambda u, v: (u, v))
+
+
+def test_a_data_uri_that_is_not_base64_says_so(tmp_path):
+    """Before: cannot read texture "": it is not a regular file (the model's folder)."""
+    path = quad_scene(tmp_path)
+    doc = json.loads(path.read_text())
+    name = gltf_quad(tmp_path, {"wrapS": 10497, "wrapT": 10497})
+    gltf = json.loads((tmp_path / name).read_text())
+    gltf["images"][0]["uri"] = "data:image/png,not-base64"
+    (tmp_path / name).write_text(json.dumps(gltf))
+    doc["meshes"][0]["file"] = name
+    path.write_text(json.dumps(doc))
+    assert refused(path) == (
+        's.json: meshes[0].file: "q.gltf": material "#0": cannot read texture "": images[0] is'
+        " a data: URI that is not base64; rtcl reads only base64 data: URIs")

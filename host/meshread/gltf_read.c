@@ -305,3 +305,17 @@ int gltf_transform_texcoord(const json_t *doc, const char *name)
 		       ? (int)json_integer_value(texcoord)
 		       : -1;
 }
+
+long gltf_plain_data_image(const json_t *doc)
+{
+	const json_t *images = json_object_get(doc, "images");
+
+	for (size_t i = 0; i < json_array_size(images); i++) {
+		const char *uri = json_string_value(json_object_get(json_array_get(images, i), "uri"));
+		const char *comma = uri && strncmp(uri, "data:", 5) == 0 ? strchr(uri, ',') : NULL;
+
+		if (comma && !(comma - uri >= 7 && strncmp(comma - 7, ";base64", 7) == 0))
+			return (long)i;
+	}
+	return -1;
+}

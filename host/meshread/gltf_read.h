@@ -37,4 +37,8 @@ int gltf_read_cameras(const json_t *doc, struct mesh_data *out);
  * rotation and scale, not this. */
 int gltf_transform_texcoord(const json_t *doc, const char *name);
 
+/* The index of the file's first image whose uri is a data: URI that is not
+ * base64 (Assimp 5.2 keeps no bytes and no name for one), or -1. */
+long gltf_plain_data_image(const json_t *doc);
+
 #endif

@@ -550,14 +550,25 @@ static unsigned char *raw_texels(const struct aiTexture *tex, struct mesh_textur
 }
 
 /* Reads texture t (its name and role set): embedded ("*N") or a file beside
- * the mesh. Its reason says why when it could not be read. */
-static void read_texture(const struct aiScene *sc, const char *path, struct mesh_data *out,
-			 struct mesh_texture *t)
+ * the mesh (doc: a glTF file's JSON, or NULL). Its reason says why when it
+ * could not be read. */
+static void read_texture(const struct aiScene *sc, const char *path, const json_t *doc,
+			 struct mesh_data *out, struct mesh_texture *t)
 {
 	unsigned char *bytes = NULL, *texels = NULL;
 	size_t size = 0;
+	long plain;
 
-	if (t->name[0] == '*') {
+	if (!t->name[0] && doc && (plain = gltf_plain_data_image(doc)) >= 0) {
+		/* Assimp keeps neither bytes nor a name for it (issue 39: "it is
+		 * not a regular file" was said of the model's folder). */
+		snprintf(t->reason, sizeof(t->reason),
+			 "images[%ld] is a data: URI that is not base64; rtcl reads only base64 "
+			 "data: URIs",
+			 plain);
+	} else if (!t->name[0]) {
+		snprintf(t->reason, sizeof(t->reason), "the file gives no image for it");
+	} else if (t->name[0] == '*') {
 		char *end;
 		unsigned long i = strtoul(t->name + 1, &end, 10);
 		const struct aiTexture *tex;
@@ -587,7 +598,7 @@ static void read_texture(const struct aiScene *sc, const char *path, struct mesh
 
 /* The index in out->textures of texture `type` of mat, read in `role`
  * (each name and role once), or -1 where mat has none. */
-static int32_t texture_of(const struct aiScene *sc, const char *path,
+static int32_t texture_of(const struct aiScene *sc, const char *path, const json_t *doc,
 			  const struct aiMaterial *mat, enum aiTextureType type, uint32_t role,
 			  struct mesh_data *out)
 {
@@ -618,7 +629,7 @@ static int32_t texture_of(const struct aiScene *sc, const char *path,
 	t->role = role;
 	t->wrap_s = wrap_of(modes[0]);
 	t->wrap_t = wrap_of(modes[1]);
-	read_texture(sc, path, out, t);
+	read_texture(sc, path, doc, out, t);
 	return (int32_t)out->texture_count++;
 }
 
@@ -719,9 +730,9 @@ static int read_textures(const struct aiScene *sc, const char *path, const json_
 
 		if (!used[i] || m->kind == MESH_MATERIAL_MISSING)
 			continue;
-		m->base_texture = texture_of(sc, path, mat, base_type(mat), MESH_TEXTURE_COLOR, out);
+		m->base_texture = texture_of(sc, path, doc, mat, base_type(mat), MESH_TEXTURE_COLOR, out);
 		if (m->kind == MESH_MATERIAL_PHONG)
-			m->opacity_texture = texture_of(sc, path, mat, aiTextureType_OPACITY,
+			m->opacity_texture = texture_of(sc, path, doc, mat, aiTextureType_OPACITY,
 							MESH_TEXTURE_OPACITY, out);
 		textured |= m->base_texture >= 0 || m->opacity_texture >= 0;
 	}
