@@ -17,7 +17,9 @@
 /* A material of the file as the importer reads it, before rtcl's rule turns
  * it into a scene material (docs/RENDERING.md, "Materials from mesh files";
  * host/scene/mesh_material.c). Fixed-size so that it crosses the pipe as it is. */
-#define MESH_NAME_MAX 128 /* a longer name is cut */
+/* Names as the importer keeps them: Assimp's aiString holds 1023 bytes
+ * (issue 39: 127 cut long names, and two sharing 127 bytes became one). */
+#define MESH_NAME_MAX 1024
 #define MESH_NOTES_MAX 256
 
 enum mesh_material_kind {
