@@ -133,7 +133,8 @@ $(BIN): $(BUILD)/cmd/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 # The mesh import helper: Assimp in a process of its own.
 $(MESHREAD): $(BUILD)/meshread/meshread.o $(BUILD)/meshread/meshread_assimp.o \
 		$(BUILD)/meshread/ply_check.o $(BUILD)/meshread/texture_read.o \
-		$(BUILD)/meshread/gltf_read.o $(BUILD)/scene/mesh_spawn.o $(BUILD)/base/libdir.o
+		$(BUILD)/meshread/gltf_read.o $(BUILD)/meshread/mtl_read.o $(BUILD)/scene/mesh_spawn.o \
+		$(BUILD)/base/libdir.o
 	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -ljansson -lstdc++ -lm
 
 # Where the companion files (rtcl-oiio.so, rtcl-meshread) are in a build tree.
@@ -265,7 +266,7 @@ FUZZ_HEADERS := test/scene_block_check.h host/scene/scene.h host/scene/scene_loa
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
-$(FUZZ_DIR)/rtcl-meshread: host/meshread/meshread.c host/meshread/meshread_assimp.c host/meshread/ply_check.c host/meshread/ply_check.h host/meshread/texture_read.c host/meshread/texture_read.h host/meshread/gltf_read.c host/meshread/gltf_read.h host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh.h
+$(FUZZ_DIR)/rtcl-meshread: host/meshread/meshread.c host/meshread/meshread_assimp.c host/meshread/ply_check.c host/meshread/ply_check.h host/meshread/texture_read.c host/meshread/texture_read.h host/meshread/gltf_read.c host/meshread/gltf_read.h host/meshread/mtl_read.c host/meshread/mtl_read.h host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh.h
 	mkdir -p $(FUZZ_DIR)
 	$(FUZZ_CC) $(filter-out -fsanitize=fuzzer%,$(FUZZ_FLAGS)) -fsanitize=address,undefined \
 		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -ljansson -lstdc++ -lm

@@ -4,7 +4,8 @@ primitive lacks and an extension in extensionsRequired that rtcl does not read a
 errors; JSON that does not parse says where; a perspective camera of yfov 0 is
 not called orthographic; a mesh entry's "camera": null is refused; a camera is
 placed by the node that holds it, whatever the other nodes are called; a base
-colour texture's KHR_texture_transform and texCoord are applied."""
+colour texture's KHR_texture_transform and texCoord are applied, and so are an
+MTL's map_Kd -s and -o; a data: image that is not base64 says so."""
 import base64
 import json
 import math
@@ -205,3 +206,28 @@ def test_a_data_uri_that_is_not_base64_says_so(tmp_path):
     assert refused(path) == (
         's.json: meshes[0].file: "q.gltf": material "#0": cannot read texture "": images[0] is'
         " a data: URI that is not base64; rtcl reads only base64 data: URIs")
+
+
+def obj_quad(tmp_path, map_kd, extra_mtl=""):
+    path = quad_scene(tmp_path)
+    mtl = (tmp_path / "q.mtl").read_text().replace("map_Kd t.png", f"map_Kd {map_kd}")
+    (tmp_path / "q.mtl").write_text(mtl + extra_mtl)
+    return path
+
+
+def test_mtl_map_kd_scale_and_offset(tmp_path):
+    """u' = s u + o in the OBJ's coordinates (v up), as three.js and Blender read
+    -s and -o; before, Assimp passed over them and the texture lay untransformed."""
+    path = obj_quad(tmp_path, "-s 2 1.5 1 -o 0.25 -0.5 0 -clamp off t.png")
+    image = read_pfm(render(path)[0])
+    for x, y in ((2, 2), (5, 30), (17, 17), (30, 6), (33, 33), (11, 26), (24, 9)):
+        u, v = pixel_uv(x, y)
+        want = expected(TEXELS, 2 * u + 0.25, 1.5 * v - 0.5)[:3]
+        assert all(abs(g - w) < 3e-4 for g, w in zip(image[y][x], want)), \
+            (x, y, image[y][x], want)
+
+
+def test_a_map_d_transformed_unlike_map_kd_is_named_not_understood(tmp_path):
+    path = obj_quad(tmp_path, "-o 0.5 0 0 t.png", "map_d -s 2 2 1 t.png\n")
+    _, err = render(path, "-v")
+    assert "not understood: map_d -s/-o unlike map_Kd's" in err, err

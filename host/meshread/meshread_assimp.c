@@ -21,6 +21,7 @@
 #include <assimp/version.h>
 
 #include "meshread/gltf_read.h"
+#include "meshread/mtl_read.h"
 #include "meshread/ply_check.h"
 #include "meshread/texture_read.h"
 
@@ -38,6 +39,35 @@
  * refuse anything but a regular file and remember the first refused. */
 
 static char refused_file[512];
+
+/* The files the importer opened, the mesh file first: an OBJ's material
+ * libraries are read again for what Assimp does not keep (mtl_read.h). */
+static char **opened;
+static size_t opened_count;
+
+static void note_opened(const char *path)
+{
+	char **grown = realloc(opened, (opened_count + 1) * sizeof(*grown));
+	char *copy = strdup(path);
+
+	if (!grown || !copy) {
+		free(copy);
+		if (grown)
+			opened = grown;
+		return; /* the file's texture options are then not read */
+	}
+	opened = grown;
+	opened[opened_count++] = copy;
+}
+
+static void forget_opened(void)
+{
+	for (size_t i = 0; i < opened_count; i++)
+		free(opened[i]);
+	free(opened);
+	opened = NULL;
+	opened_count = 0;
+}
 
 static size_t file_read(struct aiFile *file, char *buffer, size_t size, size_t count)
 {
@@ -116,6 +146,7 @@ static struct aiFile *file_open(struct aiFileIO *io, const char *path, const cha
 	file->SeekProc = file_seek;
 	file->FlushProc = file_flush;
 	file->UserData = (aiUserData)stream;
+	note_opened(path);
 	return file;
 }
 
@@ -642,32 +673,32 @@ static enum aiTextureType base_type(const struct aiMaterial *mat)
 }
 
 /* A texture's binding: the set of texture coordinates it reads and the
- * transform from the file's coordinates to the texture's, in glTF's
- * convention (v down): [u' v'] = m [u v 1]. */
+ * transform from the file's coordinates to the texture's: [u' v'] = m [u v
+ * 1], v down (glTF's convention, v_down) or up (the MTL's). */
 struct uv_binding {
 	unsigned set;
+	int v_down;
 	double m[2][3];
 };
 
-/* The binding of mat's texture of type (AI_MATKEY_UVWSRC: glTF's texCoord;
+/* A glTF material's base colour binding (AI_MATKEY_UVWSRC: glTF's texCoord;
  * KHR_texture_transform's texCoord from the JSON, doc; its offset, rotation
  * and scale from Assimp's aiUVTransform). Returns 1 where it is not set 0
  * untransformed. */
-static int binding_of(const struct aiMaterial *mat, enum aiTextureType type, const json_t *doc,
-		      const char *name, struct uv_binding *b)
+static int gltf_binding(const struct aiMaterial *mat, enum aiTextureType type, const json_t *doc,
+			const char *name, struct uv_binding *b)
 {
 	struct aiUVTransform uv;
 	unsigned int max = sizeof(uv) / sizeof(float);
-	int set = 0, texcoord = doc ? gltf_transform_texcoord(doc, name) : -1;
+	int set = 0, texcoord = gltf_transform_texcoord(doc, name);
 
-	memset(b, 0, sizeof(*b));
-	b->m[0][0] = b->m[1][1] = 1;
 	aiGetMaterialIntegerArray(mat, _AI_MATKEY_UVWSRC_BASE, type, 0, &set, NULL);
 	if (texcoord >= 0)
 		set = texcoord;
 	b->set = set > 0 && set < AI_MAX_NUMBER_OF_TEXTURECOORDS ? (unsigned)set : 0;
-	if (!doc || aiGetMaterialFloatArray(mat, _AI_MATKEY_UVTRANSFORM_BASE, type, 0,
-					    (ai_real *)&uv, &max) != aiReturn_SUCCESS ||
+	b->v_down = 1;
+	if (aiGetMaterialFloatArray(mat, _AI_MATKEY_UVTRANSFORM_BASE, type, 0, (ai_real *)&uv,
+				    &max) != aiReturn_SUCCESS ||
 	    max != sizeof(uv) / sizeof(float))
 		return b->set != 0;
 	/* Assimp 5.2's glTF reader keeps KHR_texture_transform as scaling
@@ -688,10 +719,52 @@ static int binding_of(const struct aiMaterial *mat, enum aiTextureType type, con
 	return 1;
 }
 
+/* The -s and -o of material m's map_Kd or map_d (role) among the file's
+ * MTL transforms, or NULL. */
+static const struct mtl_transform *mtl_transform_of(const struct mesh_material *m, unsigned role,
+						     const struct mtl_transform *list, size_t count)
+{
+	for (size_t i = 0; i < count; i++)
+		if (list[i].role == role && strcmp(list[i].material, m->name) == 0)
+			return &list[i];
+	return NULL;
+}
+
+/* Material i's binding into b: glTF's (doc), or an MTL's map_Kd -s/-o (its
+ * map_d's where it has no map_Kd). One set of coordinates serves both of a
+ * material's textures: a map_d transformed unlike its map_Kd is noted as not
+ * understood. Returns 1 where it is not set 0 untransformed. */
+static int material_binding(const struct aiScene *sc, unsigned i, const json_t *doc,
+			    const struct mtl_transform *list, size_t count,
+			    struct mesh_material *m, struct uv_binding *b)
+{
+	const struct mtl_transform *kd, *d, *t;
+
+	memset(b, 0, sizeof(*b));
+	b->m[0][0] = b->m[1][1] = 1;
+	if (doc)
+		return m->base_texture >= 0 &&
+		       gltf_binding(sc->mMaterials[i], base_type(sc->mMaterials[i]), doc, m->name, b);
+	kd = m->base_texture >= 0 ? mtl_transform_of(m, MESH_TEXTURE_COLOR, list, count) : NULL;
+	d = m->opacity_texture >= 0 ? mtl_transform_of(m, MESH_TEXTURE_OPACITY, list, count) : NULL;
+	if (m->base_texture >= 0 && m->opacity_texture >= 0 &&
+	    (kd || d) && (!kd || !d || memcmp(kd->scale, d->scale, sizeof(kd->scale)) ||
+			  memcmp(kd->offset, d->offset, sizeof(kd->offset))))
+		note(m, "map_d -s/-o unlike map_Kd's");
+	t = m->base_texture >= 0 ? kd : d;
+	if (!t)
+		return 0;
+	b->m[0][0] = t->scale[0];
+	b->m[0][2] = t->offset[0];
+	b->m[1][1] = t->scale[1];
+	b->m[1][2] = t->offset[1];
+	return 1;
+}
+
 /* Mesh's texture coordinates into uvs (2 per vertex), for its material's
- * base colour texture: the set that binding b reads, through its transform
- * (in glTF's v-down convention; Assimp's glTF reader turns v up, v' = 1 -
- * v). Without a binding, the first set. */
+ * textures: the set that binding b reads, through its transform (glTF's in
+ * its v-down convention: Assimp's glTF reader turns v up, v' = 1 - v).
+ * Without a binding, the first set. */
 static void mesh_uvs(const struct aiMesh *mesh, const struct uv_binding *b, double *uvs)
 {
 	const struct aiVector3D *set = mesh->mTextureCoords[b ? b->set : 0];
@@ -700,9 +773,10 @@ static void mesh_uvs(const struct aiMesh *mesh, const struct uv_binding *b, doub
 		double u = set[v].x, w = set[v].y;
 
 		if (b) {
-			double down = 1 - w;
-			u = b->m[0][0] * set[v].x + b->m[0][1] * down + b->m[0][2];
-			w = 1 - (b->m[1][0] * set[v].x + b->m[1][1] * down + b->m[1][2]);
+			double y = b->v_down ? 1 - w : w;
+			u = b->m[0][0] * set[v].x + b->m[0][1] * y + b->m[0][2];
+			y = b->m[1][0] * set[v].x + b->m[1][1] * y + b->m[1][2];
+			w = b->v_down ? 1 - y : y;
 		}
 		uvs[2 * v] = u;
 		uvs[2 * v + 1] = w;
@@ -742,20 +816,30 @@ static int read_textures(const struct aiScene *sc, const char *path, const json_
 	out->uvs = calloc(out->vertex_count ? out->vertex_count : 1, 2 * sizeof(double));
 	if (!out->uvs)
 		return -1;
+	/* An OBJ's material libraries: the other files the importer opened. */
+	struct mtl_transform *transforms = NULL;
+	size_t transform_count = 0;
+	for (size_t f = 0; !doc && f < opened_count; f++)
+		if (strcmp(opened[f], path) != 0 &&
+		    mtl_read_transforms(opened[f], &transforms, &transform_count)) {
+			free(transforms);
+			return -1;
+		}
 	size_t base = 0;
 	for (unsigned m = 0; m < sc->mNumMeshes; m++) {
 		const struct aiMesh *mesh = sc->mMeshes[m];
 		unsigned i = mesh->mMaterialIndex;
 		struct uv_binding binding;
-		int bound = i < out->material_count && out->materials[i].base_texture >= 0 &&
-			    binding_of(sc->mMaterials[i], base_type(sc->mMaterials[i]), doc,
-				       out->materials[i].name, &binding);
+		int bound = i < out->material_count &&
+			    material_binding(sc, i, doc, transforms, transform_count,
+					     &out->materials[i], &binding);
 
 		if (!(mesh->mPrimitiveTypes & aiPrimitiveType_TRIANGLE))
 			continue;
 		mesh_uvs(mesh, bound ? &binding : NULL, out->uvs + 2 * base);
 		base += mesh->mNumVertices;
 	}
+	free(transforms);
 	return 0;
 }
 
@@ -830,6 +914,7 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	memset(out, 0, sizeof(*out));
 	refused_file[0] = '\0';
 	dropped_faces = 0;
+	forget_opened();
 	if (ply_check(path, reason, reason_size) ||
 	    obj_polygon_too_large(path, reason, reason_size) ||
 	    gltf_read(path, &doc, reason, reason_size))
@@ -891,5 +976,6 @@ out_release_scene:
 	if (sc)
 		aiReleaseImport(sc);
 	json_decref(doc);
+	forget_opened();
 	return ret;
 }
