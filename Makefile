@@ -56,7 +56,8 @@ CXXFLAGS += -std=c++17 $(WARNINGS)
 # Expanded when used, like OIIO_LIBS below.
 # Textures are decoded in the helper by stb_image (Debian's libstb-dev, `make deps`):
 # its header is compiled into rtcl-meshread (host/meshread/texture_read.c), so the
-# OIIO=0 build needs no image library at run time.
+# OIIO=0 build needs no image library at run time. The helper links jansson too, for
+# a glTF file's JSON (host/meshread/gltf_read.c).
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
 LDLIBS = -lOpenCL -ljansson -lz -lm -pthread
