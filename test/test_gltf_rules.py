@@ -9,6 +9,7 @@ MTL's map_Kd -s and -o; a data: image that is not base64 says so."""
 import base64
 import json
 import math
+import pathlib
 import struct
 
 import pytest
@@ -231,3 +232,40 @@ def test_a_map_d_transformed_unlike_map_kd_is_named_not_understood(tmp_path):
     path = obj_quad(tmp_path, "-o 0.5 0 0 t.png", "map_d -s 2 2 1 t.png\n")
     _, err = render(path, "-v")
     assert "not understood: map_d -s/-o unlike map_Kd's" in err, err
+
+
+SAMPLE = pathlib.Path("/usr/share/assimp/models/glTF2/textureTransform/TextureTransformTest.gltf")
+
+
+@pytest.mark.skipif(not SAMPLE.exists(), reason="assimp-testmodels is not installed")
+def test_khronos_texture_transform_sample_arrows_point_at_the_green_markers(tmp_path):
+    """Khronos' TextureTransformTest (in assimp-testmodels): on the bottom row the
+    arrow texture, rotated, scaled, and both with an offset, must point at the green
+    marker of each quad; a rotation the wrong way round points at the red one. An
+    arrow's tip is the dark texels beside its marker."""
+    doc = {"format": "rtcl-scene", "version": 2, "image": {"width": 480, "height": 320},
+           "camera": {"eye": [0, 0, 4.2], "look_at": [0, 0, 0], "fov": 50},
+           "ambient": [1, 1, 1], "background": [0.2, 0.2, 0.2], "lights": [],
+           "meshes": [{"file": str(SAMPLE), "smooth": False}]}
+    path = tmp_path / "s.json"
+    path.write_text(json.dumps(doc))
+    out = tmp_path / "o.ppm"
+    result = rtcl(path, "-o", out)
+    assert result.returncode == 0, result.stderr
+    data = out.read_bytes()[-480 * 320 * 3:]
+    pixel = lambda x, y: data[3 * (480 * y + x):3 * (480 * y + x) + 3]  # noqa: E731
+
+    def centre(x0, x1, test):
+        """The centre of the pixels passing test in columns x0 ... x1 of the bottom row."""
+        found = [(x, y) for y in range(160, 270) for x in range(x0, x1) if test(pixel(x, y))]
+        assert found
+        return (sum(p[0] for p in found) // len(found), sum(p[1] for p in found) // len(found))
+
+    def dark_near(point, r=14):
+        return sum(max(pixel(x, y)) < 60 for y in range(point[1] - r, point[1] + r)
+                   for x in range(point[0] - r, point[0] + r))
+    green = lambda c: c[1] > 150 and c[0] < 100 and c[2] < 100  # noqa: E731
+    red = lambda c: c[0] > 150 and c[1] < 80 and c[2] < 80  # noqa: E731
+    for x0, x1 in ((100, 200), (200, 285), (285, 380)):  # rotation, scale, all
+        assert dark_near(centre(x0, x1, green)) > 0, (x0, x1)
+    assert dark_near(centre(100, 200, red)) == 0
