@@ -818,8 +818,9 @@ static int read_textures(const struct aiScene *sc, const char *path, const json_
 		return -1;
 	/* An OBJ's material libraries: the other files the importer opened. */
 	struct mtl_transform *transforms = NULL;
-	size_t transform_count = 0;
-	for (size_t f = 0; !doc && f < opened_count; f++)
+	size_t transform_count = 0, n = strlen(path);
+	int obj = n >= 4 && strcasecmp(path + n - 4, ".obj") == 0;
+	for (size_t f = 0; obj && f < opened_count; f++)
 		if (strcmp(opened[f], path) != 0 &&
 		    mtl_read_transforms(opened[f], &transforms, &transform_count)) {
 			free(transforms);
