@@ -181,11 +181,18 @@ static void compose(const double a[3][4], const double b[3][4], double c[3][4])
 }
 
 /* What the walk over the scene's nodes gathers. */
+struct placed_camera {
+	size_t index; /* in the file's cameras */
+	struct mesh_camera camera;
+};
+
 struct camera_walk {
 	const json_t *nodes, *cameras;
-	char *visited;		    /* per node: a node is placed once */
-	struct mesh_camera *placed; /* per camera: filled when a node holds it */
-	char *held;		    /* per camera: whether one does */
+	char *visited;		      /* per node: a node is placed once */
+	char *held;		      /* per camera: whether a node holds it */
+	struct placed_camera *placed; /* the cameras held, as the walk meets them */
+	size_t placed_count;
+	int out_of_memory;
 };
 
 /* Node n under the transform of its parents, then its children. */
@@ -196,7 +203,7 @@ static void walk(struct camera_walk *w, size_t n, const double parent[3][4], int
 	const json_t *children = json_object_get(node, "children");
 	double local[3][4], m[3][4];
 
-	if (!json_is_object(node) || w->visited[n] || depth > 1000)
+	if (!json_is_object(node) || w->visited[n] || depth > 1000 || w->out_of_memory)
 		return;
 	w->visited[n] = 1;
 	local_transform(node, local);
@@ -209,8 +216,18 @@ static void walk(struct camera_walk *w, size_t n, const double parent[3][4], int
 		const json_t *perspective = json_object_get(cam, "perspective");
 		const char *type = json_string_value(json_object_get(cam, "type"));
 		const char *name = json_string_value(json_object_get(node, "name"));
-		struct mesh_camera *c = &w->placed[i];
+		struct placed_camera *grown =
+			realloc(w->placed, (w->placed_count + 1) * sizeof(*grown));
+		struct mesh_camera *c;
 
+		if (!grown) {
+			w->out_of_memory = 1;
+			return;
+		}
+		w->placed = grown;
+		memset(&grown[w->placed_count], 0, sizeof(*grown));
+		grown[w->placed_count].index = i;
+		c = &grown[w->placed_count++].camera;
 		w->held[i] = 1;
 		/* Assimp's name: the node's, or its id where it has none. */
 		if (name && name[0])
@@ -240,6 +257,15 @@ static void walk(struct camera_walk *w, size_t n, const double parent[3][4], int
 	}
 }
 
+/* Orders placed cameras as the file's cameras are. */
+static int by_index(const void *a, const void *b)
+{
+	size_t i = ((const struct placed_camera *)a)->index;
+	size_t j = ((const struct placed_camera *)b)->index;
+
+	return (i > j) - (i < j);
+}
+
 int gltf_read_cameras(const json_t *doc, struct mesh_data *out)
 {
 	static const double identity[3][4] = {{1, 0, 0, 0}, {0, 1, 0, 0}, {0, 0, 1, 0}};
@@ -252,11 +278,9 @@ int gltf_read_cameras(const json_t *doc, struct mesh_data *out)
 	int ret = -1;
 
 	w.visited = calloc(json_array_size(w.nodes) + 1, 1);
-	w.placed = calloc(camera_count + 1, sizeof(*w.placed));
 	w.held = calloc(camera_count + 1, 1);
-	out->cameras = calloc(camera_count + 1, sizeof(*out->cameras));
 	out->camera_count = 0;
-	if (!w.visited || !w.placed || !w.held || !out->cameras)
+	if (!w.visited || !w.held)
 		goto out_free;
 	/* The default scene, as Assimp 5.2 takes it: "scene", else the first. */
 	scene = json_array_get(scenes, json_is_integer(which) && json_integer_value(which) >= 0
@@ -268,9 +292,12 @@ int gltf_read_cameras(const json_t *doc, struct mesh_data *out)
 		if (json_is_integer(root) && json_integer_value(root) >= 0)
 			walk(&w, (size_t)json_integer_value(root), identity, 0);
 	}
-	for (size_t i = 0; i < camera_count; i++)
-		if (w.held[i])
-			out->cameras[out->camera_count++] = w.placed[i];
+	out->cameras = calloc(w.placed_count + 1, sizeof(*out->cameras));
+	if (w.out_of_memory || !out->cameras)
+		goto out_free;
+	qsort(w.placed, w.placed_count, sizeof(*w.placed), by_index);
+	for (size_t i = 0; i < w.placed_count; i++)
+		out->cameras[out->camera_count++] = w.placed[i].camera;
 	ret = 0;
 out_free:
 	free(w.visited);
@@ -311,7 +338,8 @@ long gltf_plain_data_image(const json_t *doc)
 	const json_t *images = json_object_get(doc, "images");
 
 	for (size_t i = 0; i < json_array_size(images); i++) {
-		const char *uri = json_string_value(json_object_get(json_array_get(images, i), "uri"));
+		const char *uri =
+			json_string_value(json_object_get(json_array_get(images, i), "uri"));
 		const char *comma = uri && strncmp(uri, "data:", 5) == 0 ? strchr(uri, ',') : NULL;
 
 		if (comma && !(comma - uri >= 7 && strncmp(comma - 7, ";base64", 7) == 0))
