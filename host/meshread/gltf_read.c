@@ -295,7 +295,8 @@ int gltf_read_cameras(const json_t *doc, struct mesh_data *out)
 	out->cameras = calloc(w.placed_count + 1, sizeof(*out->cameras));
 	if (w.out_of_memory || !out->cameras)
 		goto out_free;
-	qsort(w.placed, w.placed_count, sizeof(*w.placed), by_index);
+	if (w.placed_count > 1) /* qsort must not be given NULL, even for 0 */
+		qsort(w.placed, w.placed_count, sizeof(*w.placed), by_index);
 	for (size_t i = 0; i < w.placed_count; i++)
 		out->cameras[out->camera_count++] = w.placed[i].camera;
 	ret = 0;
