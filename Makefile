@@ -56,7 +56,8 @@ CXXFLAGS += -std=c++17 $(WARNINGS)
 # Expanded when used, like OIIO_LIBS below.
 # Textures are decoded in the helper by stb_image (Debian's libstb-dev, `make deps`):
 # its header is compiled into rtcl-meshread (host/meshread/texture_read.c), so the
-# OIIO=0 build needs no image library at run time.
+# OIIO=0 build needs no image library at run time. The helper links jansson too, for
+# a glTF file's JSON (host/meshread/gltf_read.c).
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
 LDLIBS = -lOpenCL -ljansson -lz -lm -pthread
@@ -133,8 +134,9 @@ $(BIN): $(BUILD)/cmd/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 # The mesh import helper: Assimp in a process of its own.
 $(MESHREAD): $(BUILD)/meshread/meshread.o $(BUILD)/meshread/meshread_assimp.o \
 		$(BUILD)/meshread/ply_check.o $(BUILD)/meshread/texture_read.o \
-		$(BUILD)/scene/mesh_spawn.o $(BUILD)/base/libdir.o
-	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -lstdc++ -lm
+		$(BUILD)/meshread/gltf_read.o $(BUILD)/meshread/mtl_read.o $(BUILD)/scene/mesh_spawn.o \
+		$(BUILD)/base/libdir.o
+	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -ljansson -lstdc++ -lm
 
 # Where the companion files (rtcl-oiio.so, rtcl-meshread) are in a build tree.
 $(BUILD)/base/libdir.o: CPPFLAGS += -DRTCL_MODULE_DIR='"$(abspath $(BUILD))"'
@@ -265,10 +267,10 @@ FUZZ_HEADERS := test/scene_block_check.h host/scene/scene.h host/scene/scene_loa
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
-$(FUZZ_DIR)/rtcl-meshread: host/meshread/meshread.c host/meshread/meshread_assimp.c host/meshread/ply_check.c host/meshread/ply_check.h host/meshread/texture_read.c host/meshread/texture_read.h host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh.h
+$(FUZZ_DIR)/rtcl-meshread: host/meshread/meshread.c host/meshread/meshread_assimp.c host/meshread/ply_check.c host/meshread/ply_check.h host/meshread/texture_read.c host/meshread/texture_read.h host/meshread/gltf_read.c host/meshread/gltf_read.h host/meshread/mtl_read.c host/meshread/mtl_read.h host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh.h
 	mkdir -p $(FUZZ_DIR)
 	$(FUZZ_CC) $(filter-out -fsanitize=fuzzer%,$(FUZZ_FLAGS)) -fsanitize=address,undefined \
-		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -lstdc++ -lm
+		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -ljansson -lstdc++ -lm
 
 $(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c $(FUZZ_SOURCES) $(FUZZ_HEADERS) $(FUZZ_DIR)/rtcl-meshread
 	$(FUZZ_CC) $(FUZZ_FLAGS) $(FUZZ_MODULE_DIR) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) \

@@ -78,3 +78,14 @@ def test_an_object_below_float_resolution_at_its_distance_is_refused(tmp_path):
                     "below what float resolves there (4 steps of 1): rtcl renders in float "
                     "relative to the eye; move the camera closer or enlarge the object"), line
     assert sorted(p.name for p in tmp_path.iterdir()) == ["tiny.json"]
+
+
+@pytest.mark.parametrize("x", [1e13, 1e15])
+def test_the_reference_image_does_not_depend_on_where_the_scene_lies(tmp_path, x):
+    """The reference renders relative to the eye too, in double (issue 39 finding 8):
+    in world coordinates the shadow rays' offset of 1e-4 vanished at 1e13 and the
+    sphere shadowed itself. Its numbers relative to the eye are those of the scene
+    at 0 exactly, and so are the images."""
+    near = render(far_scene(tmp_path, 0.0, "near"), tmp_path / "near.pfm", "-k", "reference")
+    far = render(far_scene(tmp_path, x, "far"), tmp_path / "far.pfm", "-k", "reference")
+    assert near.read_bytes() == far.read_bytes()

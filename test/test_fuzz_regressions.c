@@ -204,3 +204,45 @@ Test(fuzz, issue_24_mesh_files_are_refused)
 		cr_expect(strstr(err, refused[i].why) != NULL, "%s: %s", path, err);
 	}
 }
+
+/* Issue 39's glTF files (the README says what each is): refused with these
+ * words, or (why NULL) loaded. */
+Test(fuzz, issue_39_gltf_files)
+{
+	static const struct {
+		const char *file, *why;
+	} cases[] = {
+		{"gltf-index-out-of-range.gltf", "names a vertex its primitive does not have"},
+		{"gltf-extension-required-unknown.gltf",
+		 "requires the glTF extension \"EXT_not_a_real_one\""},
+		{"gltf-json-number-overflow.gltf",
+		 "its glTF JSON does not parse: line 1, column 82: real number overflow"},
+		{"gltf-camera-duplicate-node-names.gltf", NULL},
+		{"gltf-texture-transform.gltf", NULL},
+	};
+
+	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {
+		char path[256], *full, json[2048], err[512] = "";
+		struct scene s;
+		int ret;
+
+		snprintf(path, sizeof(path), "test/fuzz_mesh_regressions/%s", cases[i].file);
+		full = realpath(path, NULL);
+		cr_assert_not_null(full, "%s: no such file", path);
+		snprintf(json, sizeof(json),
+			 "{\"format\": \"rtcl-scene\", \"version\": 2,"
+			 " \"camera\": {\"eye\": [0, 0, 5], \"look_at\": [0, 0, 0]},"
+			 " \"meshes\": [{\"file\": \"%s\"}]}",
+			 full);
+		free(full);
+		ret = scene_load_string(&s, json, path, err, sizeof(err));
+		if (!cases[i].why) {
+			cr_expect_eq(ret, 0, "%s: %s", path, err);
+			if (ret == 0)
+				scene_free(&s);
+			continue;
+		}
+		cr_expect_neq(ret, 0, "%s: accepted", path);
+		cr_expect(strstr(err, cases[i].why) != NULL, "%s: %s", path, err);
+	}
+}

@@ -168,7 +168,7 @@ def test_an_unknown_file_material_name_lists_the_files(tmp_path):
     path = scene(tmp_path, {"materials": {"gren": {}}})
     assert refused(tmp_path, path) == (
         f'{path}: meshes[0].materials: "quads.obj" has no material "gren"; its materials '
-        'are "DefaultMaterial", "red", "green", "undefined"')
+        'are "red", "green", "undefined"; did you mean "green"?')
 
 
 def test_material_and_materials_exclude_each_other(tmp_path):

@@ -16,6 +16,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <sys/stat.h>
 #include <unistd.h>
 
@@ -174,6 +175,12 @@ int texture_file_bytes(const char *mesh_path, const char *name, int uri, unsigne
 	}
 	*opened = path;
 	path = NULL;
+	/* Refused by its size before any of it is read. */
+	if ((uint64_t)st.st_size > MESH_TEXTURE_MAX_FILE_BYTES) {
+		snprintf(reason, reason_size, "it has %lld bytes, more than 2 GiB",
+			 (long long)st.st_size);
+		goto out_free;
+	}
 	*size = (size_t)st.st_size;
 	*bytes = malloc(*size ? *size : 1);
 	if (!*bytes) {
@@ -214,75 +221,177 @@ static float finite_channel(float x)
 	return !(x > 0.0f) ? 0.0f : x > 1e18f ? 1e18f : x;
 }
 
+/* What the image's header says, before anything is decoded. */
+struct image_header {
+	int width, height, channels; /* channels in the file */
+	int wide, hdr;		     /* 16 bits a channel; float (Radiance HDR) */
+	int png;
+};
+
+/* The bytes of address space the helper may still take: its limit
+ * (RLIMIT_AS, --mesh-memory-limit) less what it holds; 0: no limit. */
+static uint64_t memory_left(uint64_t *limit)
+{
+	struct rlimit rl;
+	unsigned long long pages = 0;
+	FILE *f;
+
+	*limit = 0;
+	if (getrlimit(RLIMIT_AS, &rl) != 0 || rl.rlim_cur == RLIM_INFINITY)
+		return 0;
+	*limit = (uint64_t)rl.rlim_cur;
+	f = fopen("/proc/self/statm", "r");
+	if (f) {
+		if (fscanf(f, "%llu", &pages) != 1)
+			pages = 0;
+		fclose(f);
+	}
+	uint64_t used = (uint64_t)pages * (uint64_t)sysconf(_SC_PAGESIZE);
+	return used < *limit ? *limit - used : 1;
+}
+
+/* Refuses, from its header alone, an image that rtcl could never render or
+ * that the decoder could not hold (issue 39 finding 14: a 16384² 16-bit PNG
+ * decoded for 49 s into 8.4 GB before a limit refused it). Returns 0, or -1
+ * with why in t->reason. */
+static int check_header(const struct image_header *im, size_t file_bytes, struct mesh_texture *t)
+{
+	uint64_t texels = (uint64_t)im->width * (uint64_t)im->height;
+	int bytes_per_channel = im->hdr ? 4 : im->wide ? 2 : 1;
+	uint64_t device_bytes = texels * (im->wide || im->hdr ? 16 : 4);
+	/* stb_image's PNG decoder inflates the rows, each with its filter byte,
+	 * into one buffer whose size is an int. */
+	uint64_t raw = (uint64_t)im->height *
+		       ((uint64_t)im->width * (uint64_t)im->channels * bytes_per_channel + 1);
+	uint64_t decoded = texels * (uint64_t)im->channels * bytes_per_channel;
+	uint64_t four = texels * 4 * bytes_per_channel;
+	uint64_t limit, left = memory_left(&limit);
+	/* The decoder's peak: the inflated rows and the image, or the image
+	 * and its RGBA copy; then the texels (16-bit ones grow in place to
+	 * floats). */
+	uint64_t peak = file_bytes + (raw + decoded > decoded + four ? raw + decoded : decoded + four);
+
+	if (im->width > MESH_TEXTURE_MAX_SIDE || im->height > MESH_TEXTURE_MAX_SIDE) {
+		snprintf(t->reason, sizeof(t->reason),
+			 "it is %dx%d texels, more than the %d a side rtcl reads", im->width,
+			 im->height, MESH_TEXTURE_MAX_SIDE);
+		return -1;
+	}
+	if (device_bytes > MESH_TEXTURE_MAX_BYTES) {
+		snprintf(t->reason, sizeof(t->reason),
+			 "it is %dx%d texels of %s, %llu bytes on the device, more than the %llu a "
+			 "scene may hold",
+			 im->width, im->height, im->wide ? "16 bits (16 bytes a texel as floats)"
+						 : "float (16 bytes a texel)",
+			 (unsigned long long)device_bytes, (unsigned long long)MESH_TEXTURE_MAX_BYTES);
+		return -1;
+	}
+	if (im->png && raw > (uint64_t)INT32_MAX) {
+		snprintf(t->reason, sizeof(t->reason),
+			 "it is %dx%d texels of %d channels at %d bits, more than the image decoder "
+			 "(stb_image) holds (2 GiB of rows)",
+			 im->width, im->height, im->channels, 8 * bytes_per_channel);
+		return -1;
+	}
+	if (device_bytes > peak)
+		peak = device_bytes;
+	if (limit && peak > left) {
+		snprintf(t->reason, sizeof(t->reason),
+			 "it is %dx%d texels; decoding it takes about %llu MiB, more than the "
+			 "import's memory limit of %llu MiB leaves (--mesh-memory-limit or "
+			 "RTCL_MESH_MEMORY_LIMIT)",
+			 im->width, im->height, (unsigned long long)(peak >> 20) + 1,
+			 (unsigned long long)(limit >> 20));
+		return -1;
+	}
+	return 0;
+}
+
+/* Why stb_image returned no image: its words, or (none: a failed malloc,
+ * which it does not always name) out of memory. */
+static void decoder_failed(const struct image_header *im, struct mesh_texture *t)
+{
+	const char *why = stbi_failure_reason();
+
+	if (why && why[0])
+		snprintf(t->reason, sizeof(t->reason), "the image decoder (stb_image) says \"%s\"",
+			 why);
+	else
+		snprintf(t->reason, sizeof(t->reason),
+			 "the image decoder (stb_image) ran out of memory for its %dx%d texels",
+			 im->width, im->height);
+}
+
 int texture_decode(const unsigned char *bytes, size_t size, struct mesh_texture *t,
 		   unsigned char **texels)
 {
+	static const unsigned char png_signature[8] = {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n'};
+	struct image_header im;
 	int w, h, channels;
 	size_t count;
 
 	*texels = NULL;
-	if (size > INT32_MAX) {
+	if ((uint64_t)size > MESH_TEXTURE_MAX_FILE_BYTES) {
 		snprintf(t->reason, sizeof(t->reason), "it has %zu bytes, more than 2 GiB", size);
 		return -1;
 	}
-	if (!stbi_info_from_memory(bytes, (int)size, &w, &h, &channels)) {
+	if (!stbi_info_from_memory(bytes, (int)size, &im.width, &im.height, &im.channels)) {
 		snprintf(t->reason, sizeof(t->reason), "the image decoder (stb_image) says \"%s\"",
 			 stbi_failure_reason());
 		return -1;
 	}
-	if (w > MESH_TEXTURE_MAX_SIDE || h > MESH_TEXTURE_MAX_SIDE) {
-		snprintf(t->reason, sizeof(t->reason),
-			 "it is %dx%d texels, more than the %d a side rtcl reads", w, h,
-			 MESH_TEXTURE_MAX_SIDE);
+	im.wide = stbi_is_16_bit_from_memory(bytes, (int)size);
+	im.hdr = stbi_is_hdr_from_memory(bytes, (int)size);
+	im.png = size >= 8 && memcmp(bytes, png_signature, 8) == 0;
+	if (check_header(&im, size, t))
 		return -1;
-	}
+	/* stbi_info tried every format before the right one and left the
+	 * last one's complaint ("no SOI", a JPEG's); a load that fails
+	 * without words of its own must not show it. */
+	stbi__g_failure_reason = NULL;
 	/* The alpha an opacity texture without an alpha channel takes from
 	 * its first channel. */
-	int alpha_from_first = t->role == MESH_TEXTURE_OPACITY && (channels == 1 || channels == 3);
-	int wide = stbi_is_16_bit_from_memory(bytes, (int)size);
-	int hdr = stbi_is_hdr_from_memory(bytes, (int)size);
+	int alpha_from_first =
+		t->role == MESH_TEXTURE_OPACITY && (im.channels == 1 || im.channels == 3);
 
-	if (wide || hdr) {
-		void *in = wide ? (void *)stbi_load_16_from_memory(bytes, (int)size, &w, &h,
-								   &channels, 4)
-				: (void *)stbi_loadf_from_memory(bytes, (int)size, &w, &h,
-								 &channels, 4);
+	if (im.wide || im.hdr) {
+		/* Decoded as RGBA, 16-bit or float, then made floats in place
+		 * (the buffer grown to 16 bytes a texel, filled from its end):
+		 * no second copy of the image. */
+		void *in = im.wide ? (void *)stbi_load_16_from_memory(bytes, (int)size, &w, &h,
+								      &channels, 4)
+				   : (void *)stbi_loadf_from_memory(bytes, (int)size, &w, &h,
+								    &channels, 4);
 		float *out;
+
 		if (!in) {
-			snprintf(t->reason, sizeof(t->reason),
-				 "the image decoder (stb_image) says \"%s\"", stbi_failure_reason());
+			decoder_failed(&im, t);
 			return -1;
 		}
 		count = (size_t)w * (size_t)h;
-		out = malloc(count * 4 * sizeof(float));
+		out = im.wide ? realloc(in, count * 4 * sizeof(float)) : in;
 		if (!out) {
 			stbi_image_free(in);
 			snprintf(t->reason, sizeof(t->reason), "out of memory for %dx%d texels", w,
 				 h);
 			return -1;
 		}
-		for (size_t i = 0; i < 4 * count; i++) {
+		for (size_t i = 4 * count; i-- > 0;) {
 			int c = (int)(i % 4);
-			if (wide) {
-				double x = ((const uint16_t *)in)[i] / 65535.0;
-				if (c == 3 && alpha_from_first)
-					x = ((const uint16_t *)in)[i - 3] / 65535.0;
+			if (im.wide) {
+				const uint16_t *in16 = (const uint16_t *)out;
+				double x = in16[c == 3 && alpha_from_first ? i - 3 : i] / 65535.0;
 				out[i] = (float)(c == 3 ? x : texture_srgb_to_linear(x));
 			} else {
-				float x = ((const float *)in)[i];
-				if (c == 3 && alpha_from_first)
-					x = ((const float *)in)[i - 3];
-				out[i] = finite_channel(x);
+				out[i] = finite_channel(out[c == 3 && alpha_from_first ? i - 3 : i]);
 			}
 		}
-		stbi_image_free(in);
 		t->format = MESH_TEXELS_FLOAT;
 		*texels = (unsigned char *)out;
 	} else {
 		unsigned char *in = stbi_load_from_memory(bytes, (int)size, &w, &h, &channels, 4);
 		if (!in) {
-			snprintf(t->reason, sizeof(t->reason),
-				 "the image decoder (stb_image) says \"%s\"", stbi_failure_reason());
+			decoder_failed(&im, t);
 			return -1;
 		}
 		count = (size_t)w * (size_t)h;

@@ -211,8 +211,9 @@ double intersect_triangle(const triangle &tri, const dvec3 &o, const dvec3 &d, d
 class tracer
 {
       public:
-	/* May throw std::bad_alloc. */
-	tracer(const struct scene &sc, int max_depth);
+	/* The scene relative to origin (the eye): see the constructor. May
+	 * throw std::bad_alloc. */
+	tracer(const struct scene &sc, int max_depth, const dvec3 &origin);
 
 	dvec3 trace(const dvec3 &o, const dvec3 &d, int depth, const sample_id &sample) const;
 
@@ -240,11 +241,17 @@ class tracer
 	dvec3 ambient;
 	double epsilon;
 	int max_depth;
+	dvec3 origin; /* the world point at this tracer's 0 */
 };
 
-tracer::tracer(const struct scene &sc, int max_depth_)
+/* Every position is taken relative to origin (the camera's eye), in
+ * double, as the host does for the device (RENDERING.md, "Coordinates on the
+ * device"): in world coordinates a unit sphere at x = 1e13 has points 2^-9
+ * apart, and p + epsilon·n (1e-4) is p itself, so its shadow rays started on
+ * the sphere and it shadowed itself (issue 39 finding 8). */
+tracer::tracer(const struct scene &sc, int max_depth_, const dvec3 &origin_)
     : background(to_dvec3(sc.background)), ambient(to_dvec3(sc.ambient)), epsilon(sc.epsilon),
-      max_depth(max_depth_)
+      max_depth(max_depth_), origin(origin_)
 {
 	for (int i = 0; i < sc.material_count; i++) {
 		const scene_material &m = sc.materials[i];
@@ -259,17 +266,19 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 	}
 	for (int i = 0; i < sc.sphere_count; i++) {
 		const scene_sphere &s = sc.spheres[i];
-		spheres.push_back({to_dvec3(s.center), s.radius, s.radius * s.radius, s.material});
+		spheres.push_back(
+			{to_dvec3(s.center) - origin, s.radius, s.radius * s.radius, s.material});
 	}
 	for (int i = 0; i < sc.plane_count; i++) {
 		const scene_plane &p = sc.planes[i];
 		dvec3 normal = to_dvec3(p.normal);
-		planes.push_back({to_dvec3(p.point), normal, p.material, p.has_checker != 0,
+		planes.push_back({to_dvec3(p.point) - origin, normal, p.material, p.has_checker != 0,
 				  p.checker_size, to_dvec3(p.checker_color), largest_axis(normal)});
 	}
 	for (int i = 0; i < sc.triangle_count; i++) {
 		const scene_triangle &t = sc.triangles[i];
-		dvec3 v0 = to_dvec3(t.v[0]), v1 = to_dvec3(t.v[1]), v2 = to_dvec3(t.v[2]);
+		dvec3 v0 = to_dvec3(t.v[0]) - origin, v1 = to_dvec3(t.v[1]) - origin,
+		      v2 = to_dvec3(t.v[2]) - origin;
 		triangles.push_back(
 			{v0,
 			 v1,
@@ -286,7 +295,7 @@ tracer::tracer(const struct scene &sc, int max_depth_)
 	}
 	for (int i = 0; i < sc.light_count; i++) {
 		const scene_light &l = sc.lights[i];
-		lights.push_back({to_dvec3(l.position), to_dvec3(l.color), l.radius,
+		lights.push_back({to_dvec3(l.position) - origin, to_dvec3(l.color), l.radius,
 				  l.directional != 0, -to_dvec3(l.direction),
 				  std::tan(glm::radians(l.angle))});
 	}
@@ -375,16 +384,18 @@ dvec3 tracer::base_color(const hit &h, const dvec3 &p) const
 	if (!pl.has_checker)
 		return materials[pl.material].color;
 
+	/* The squares lie where the world has them. */
+	dvec3 w = p + origin;
 	double s, t;
 	switch (pl.dropped_axis) {
 	case 0:
-		s = p.y, t = p.z;
+		s = w.y, t = w.z;
 		break;
 	case 1:
-		s = p.x, t = p.z;
+		s = w.x, t = w.z;
 		break;
 	default:
-		s = p.x, t = p.y;
+		s = w.x, t = w.y;
 		break;
 	}
 	/* Both floors are whole numbers, so their sum is exact (below 2^53) and
@@ -706,11 +717,10 @@ int reference_render_samples(const struct scene *scene, int width, int height, i
 		return -1;
 
 	try {
-		const tracer tr(*scene, max_depth);
-
 		const scene_camera &cam = scene->camera;
-		dvec3 eye = to_dvec3(cam.eye);
-		dvec3 f = glm::normalize(to_dvec3(cam.look_at) - eye);
+		const tracer tr(*scene, max_depth, to_dvec3(cam.eye));
+		const dvec3 eye(0.0); /* the tracer's origin */
+		dvec3 f = glm::normalize(to_dvec3(cam.look_at) - to_dvec3(cam.eye));
 		dvec3 r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
 		dvec3 u = glm::cross(r, f);
 		double h = std::tan(glm::radians(cam.fov) / 2.0);

@@ -17,7 +17,9 @@
 /* A material of the file as the importer reads it, before rtcl's rule turns
  * it into a scene material (docs/RENDERING.md, "Materials from mesh files";
  * host/scene/mesh_material.c). Fixed-size so that it crosses the pipe as it is. */
-#define MESH_NAME_MAX 128 /* a longer name is cut */
+/* Names as the importer keeps them: Assimp's aiString holds 1023 bytes
+ * (issue 39: 127 cut long names, and two sharing 127 bytes became one). */
+#define MESH_NAME_MAX 1024
 #define MESH_NOTES_MAX 256
 
 enum mesh_material_kind {
@@ -58,6 +60,13 @@ struct mesh_material {
  * Fixed-size but for its name, which follows the array on the pipe. */
 #define MESH_TEXTURE_REASON_MAX 256
 #define MESH_TEXTURE_MAX_SIDE 16384 /* texels a side */
+/* The most bytes of texels one texture may take on the device (4 a texel, 16
+ * for 16-bit and float images): the scene block's limit (its offsets are 32
+ * bits, host/layout/scene_block.h), checked from the image's header so that
+ * no image is decoded that could never render. */
+#define MESH_TEXTURE_MAX_BYTES ((uint64_t)UINT32_MAX - 15)
+/* The most bytes of an image file or embedded image (stb_image takes an int). */
+#define MESH_TEXTURE_MAX_FILE_BYTES ((uint64_t)INT32_MAX)
 
 enum mesh_texels {
 	MESH_TEXELS_8,	  /* 4 bytes: RGB sRGB-encoded, alpha linear */

@@ -141,16 +141,20 @@ void loader_default_focus(struct scene_camera *cam)
 	cam->focus_distance = 2 * loader_length3(half);
 }
 
-/* The first mesh entry that takes its file's camera ("camera" there, and
- * not false), or -1. */
-static long camera_mesh_entry(json_t *doc)
+/* The first mesh entry whose "camera" is there and not false, or -1;
+ * *valid: whether it is true or a name. Another value (null, a number) is
+ * that entry's error (scene_mesh.c), never a request for the file's camera
+ * (issue 39: null was taken for true). */
+static long camera_mesh_entry(json_t *doc, int *valid)
 {
 	json_t *meshes = json_object_get(doc, "meshes");
 
 	for (size_t i = 0; i < json_array_size(meshes); i++) {
 		json_t *v = json_object_get(json_array_get(meshes, i), "camera");
-		if (v && !json_is_false(v))
+		if (v && !json_is_false(v)) {
+			*valid = json_is_true(v) || json_is_string(v);
 			return (long)i;
+		}
 	}
 	return -1;
 }
@@ -188,7 +192,8 @@ static int read_camera(struct loader *ld, json_t *doc)
 					   "focus_distance", NULL};
 	struct path p = child_key(&root_path, "camera");
 	struct scene_camera *cam = &ld->scene->camera;
-	long from_mesh = camera_mesh_entry(doc);
+	int valid = 0;
+	long from_mesh = camera_mesh_entry(doc, &valid);
 	const char *field, *problem;
 	char buf[200];
 	json_t *obj;
@@ -197,6 +202,8 @@ static int read_camera(struct loader *ld, json_t *doc)
 	cam->fov = 45;
 	cam->aperture = 0;
 	cam->focus_distance = 0;
+	if (from_mesh >= 0 && !valid)
+		return 0; /* meshes[from_mesh].camera is refused with its own words */
 	if (loader_get_field(ld, &root_path, doc, "camera", from_mesh >= 0 ? OPTIONAL : REQUIRED,
 			     &obj) ||
 	    (obj && loader_expect_object(ld, &p, obj, keys)))

@@ -12,6 +12,7 @@
 #include <string.h>
 
 #include "base/quote.h"
+#include "base/suggest.h"
 #include "scene/mesh.h"
 #include "scene/mesh_place.h"
 #include "scene/scene_loader.h"
@@ -394,23 +395,40 @@ static const char *short_name(const char *name, char buf[MESSAGE_TEXT_MAX])
 	return buf;
 }
 
-/* "FILE has no material "NAME"; its materials are ...", at field. */
+/* Whether the file's material i is one of its own: not the importer's
+ * stand-in for none (DefaultMaterial, glTF's unnamed default "#N") unless a
+ * triangle has it (an OBJ's usemtl of an undefined name). */
+static int file_has(const struct mesh_data *mesh, size_t i, const char *used)
+{
+	return mesh->materials[i].kind != MESH_MATERIAL_MISSING || used[i];
+}
+
+/* "FILE has no material "KEY"; its materials are ...", at field, with the
+ * nearest of them suggested (issue 39: "#1" and "DefaultMaterial", the
+ * importer's stand-ins, were accepted with no effect). */
 static int fail_unknown_file_material(struct loader *ld, const struct path *field, const char *name,
-				      const struct mesh_data *mesh, const char *key)
+				      const struct mesh_data *mesh, const char *used,
+				      const char *key)
 {
 	char known[600] = "", text[MESSAGE_TEXT_MAX], quoted[MESSAGE_TEXT_MAX];
-	size_t have = 0;
+	const char **names = malloc((mesh->material_count + 1) * sizeof(*names));
+	size_t have = 0, count = 0;
 
 	for (size_t i = 0; i < mesh->material_count; i++) {
 		const char *n = mesh->materials[i].name;
 		int seen = 0;
+		if (!file_has(mesh, i, used))
+			continue;
 		for (size_t j = 0; j < i; j++)
-			seen |= strcmp(mesh->materials[j].name, n) == 0;
+			seen |= file_has(mesh, j, used) && strcmp(mesh->materials[j].name, n) == 0;
 		if (seen)
 			continue;
+		if (names)
+			names[count++] = n;
 		if (have + 64 + 12 >= sizeof(known)) {
-			snprintf(known + have, sizeof(known) - have, ", ...");
-			break;
+			if (!strstr(known, ", ..."))
+				snprintf(known + have, sizeof(known) - have, ", ...");
+			continue;
 		}
 		char cut[MESSAGE_TEXT_MAX];
 		snprintf(known + have, sizeof(known) - have, "%s\"%s\"", have ? ", " : "",
@@ -418,10 +436,15 @@ static int fail_unknown_file_material(struct loader *ld, const struct path *fiel
 		have = strlen(known);
 	}
 	if (!have)
-		return loader_fail(ld, field, "\"%s\" has no material \"%s\"; it has no materials",
-				   one_line(name, text), short_name(key, quoted));
-	return loader_fail(ld, field, "\"%s\" has no material \"%s\"; its materials are %s",
-			   one_line(name, text), short_name(key, quoted), known);
+		loader_fail(ld, field, "\"%s\" has no material \"%s\"; it has no materials",
+			    one_line(name, text), short_name(key, quoted));
+	else
+		loader_fail(ld, field, "\"%s\" has no material \"%s\"; its materials are %s",
+			    one_line(name, text), short_name(key, quoted), known);
+	if (names)
+		suggest_append(ld->err, ld->err_size, key, names, count, "");
+	free(names);
+	return -1;
 }
 
 /* The textures of one mesh file as its materials are mapped: which of them
@@ -584,12 +607,12 @@ static int map_materials(struct loader *ld, const struct path *item, const char 
 		if (loader_read_material_value(ld, &entry, value, &index))
 			return -1;
 		for (size_t i = 0; i < mesh->material_count; i++)
-			if (strcmp(mesh->materials[i].name, key) == 0) {
+			if (file_has(mesh, i, used) && strcmp(mesh->materials[i].name, key) == 0) {
 				map[i] = index;
 				found = 1;
 			}
 		if (!found)
-			return fail_unknown_file_material(ld, &field, name, mesh, key);
+			return fail_unknown_file_material(ld, &field, name, mesh, used, key);
 	}
 	for (size_t i = 0; i < mesh->material_count; i++) {
 		const struct mesh_material *in = &mesh->materials[i];
