@@ -8,6 +8,7 @@
 #include <unistd.h>
 
 #include "base/pages.h"
+#include "device/clerror.h"
 #include "base/test_hooks.h"
 #include "render/repeats.h"
 #include "base/progress.h"
@@ -161,6 +162,8 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 		init_adaptive(t, s);
 	pthread_mutex_init(&t->lock, NULL);
 	pthread_cond_init(&t->asked, NULL);
+	pthread_mutex_init(&t->sums_lock, NULL);
+	pthread_cond_init(&t->sums_ready, NULL);
 	t->pieces = malloc((size_t)t->piece_cap * sizeof(*t->pieces));
 	t->owner = malloc((size_t)t->piece_cap * sizeof(int));
 	t->piece_ms = calloc((size_t)t->piece_cap * 3, sizeof(double));
@@ -218,10 +221,14 @@ void tiles_job_free(struct tiles_job *t)
 			renderer_close(&t->dev[k].renderer);
 		render_result_free(&t->dev[k].result);
 		pages_free(t->dev[k].block, t->sums_header);
+		device_pinned_free(&t->devs[k], t->dev[k].pinned, t->dev[k].sums);
+		t->dev[k].pinned = NULL;
 		t->dev[k].block = NULL;
 		t->dev[k].sums = NULL;
 		t->dev[k].open = 0;
 	}
+	free(t->rgb);
+	t->rgb = NULL;
 	free(t->owner);
 	free(t->pieces);
 	free(t->piece_ms);
@@ -232,6 +239,8 @@ void tiles_job_free(struct tiles_job *t)
 	t->expected = NULL;
 	pthread_mutex_destroy(&t->lock);
 	pthread_cond_destroy(&t->asked);
+	pthread_mutex_destroy(&t->sums_lock);
+	pthread_cond_destroy(&t->sums_ready);
 }
 
 int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
@@ -239,8 +248,17 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 	size_t bytes = t->sums_header + image_sum_bytes(t->settings->width, t->settings->height);
 	struct tiles_device *d = &t->dev[k];
 
-	if (d->block)
+	if (d->block || d->pinned)
 		return 0;
+	/* One process: pinned memory, where the device reads back at the
+	 * speed of its link (under --mpi the sums travel behind a header). */
+	if (t->sums_header == 0 && t->dev[k].open) {
+		d->sums = device_pinned_alloc(&t->devs[k], bytes, &d->pinned);
+		if (d->sums) {
+			memset(d->sums, 0, bytes); /* mapped now, not in the first frame */
+			return 0;
+		}
+	}
 	d->block = pages_alloc(t->sums_header, bytes - t->sums_header);
 	if (!d->block) {
 		snprintf(err, err_size, "out of host memory for the sample sums of a %dx%d image",
@@ -249,6 +267,36 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 	}
 	memset(d->block, 0, bytes); /* zeroes and maps it (not merged into calloc) */
 	d->sums = (cl_long *)(d->block + t->sums_header);
+	return 0;
+}
+
+static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, int sign);
+
+/* For the default split (tiles_prefer_samples), before the clock: one pass
+ * of the whole image, its first tiles_sample_unit samples, and a read-back
+ * of all the sums, each timed. The pass leaves sums that the render's first
+ * pass over each pixel replaces (it starts the buffer's samples) and no
+ * image; with check_writes its launches are expected in the counts. */
+static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	struct tiles_device *d = &t->dev[k];
+	int unit = tiles_sample_unit(s, t->devs, t->count);
+	struct rt_piece pass = renderer_whole_image(s, 0, unit < settings_samples(s) ? unit : 1);
+	struct piece_result out;
+	double lap = timing_now();
+
+	if (renderer_all_samples(&d->renderer, &pass, &out, err, err_size))
+		return -1;
+	d->probe_ms = timing_lap_ms(&lap);
+	d->probe_launches = out.launches;
+	pthread_mutex_lock(&t->lock); /* the devices' threads probe at once */
+	expect_writes(t, k, &pass, 1);
+	pthread_mutex_unlock(&t->lock);
+	if (renderer_read_sums(&d->renderer, d->sums, err, err_size))
+		return -1;
+	hook_sums_delay();
+	d->sums_ms = timing_lap_ms(&lap);
 	return 0;
 }
 
@@ -264,7 +312,9 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 	d->open = 1;
 	/* SPLIT_SAMPLES: the host copy of its sums, touched now, before the
 	 * frames' clock, not in the frame that first reads into it. */
-	return t->by_samples ? tiles_alloc_sums(t, k, err, err_size) : 0;
+	if (t->by_samples && tiles_alloc_sums(t, k, err, err_size))
+		return -1;
+	return t->probe ? probe_device(t, k, err, err_size) : 0;
 }
 
 /* Adds piece's launches to the expected write counts (check_writes). */
@@ -282,6 +332,51 @@ static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, 
 static int read_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 {
 	return renderer_read_sums(&t->dev[k].renderer, t->dev[k].sums, err, err_size);
+}
+
+/* Part i of t->sum_parts: its first pixel and its pixels. */
+static void sum_part(const struct tiles_job *t, int i, size_t *first, size_t *count)
+{
+	size_t pixels = (size_t)t->settings->width * t->settings->height;
+
+	*first = pixels * i / t->sum_parts;
+	*count = pixels * (i + 1) / t->sum_parts - *first;
+}
+
+/* One process's SPLIT_SAMPLES: enqueues every part of device k's sums at
+ * once, then waits for each in turn and tells the threads that add them
+ * (add_sum_parts) that it is in. */
+static int read_sum_parts(struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	cl_event done[TILES_SUM_PARTS_MAX];
+	int enqueued = 0, failed = 0;
+
+	for (; enqueued < t->sum_parts; enqueued++) {
+		size_t first, count;
+		sum_part(t, enqueued, &first, &count);
+		if (renderer_read_sums_part(&t->dev[k].renderer, t->dev[k].sums, first, count,
+					    &done[enqueued], err, err_size)) {
+			failed = 1;
+			break;
+		}
+	}
+	for (int i = 0; i < enqueued; i++) {
+		cl_int status = clWaitForEvents(1, &done[i]);
+		clReleaseEvent(done[i]);
+		if (failed)
+			continue;
+		if (status != CL_SUCCESS) {
+			snprintf(err, err_size, "reading the sample sums back failed (%s): %s",
+				 t->devs[k].name, cl_error_name(status));
+			failed = 1;
+			continue;
+		}
+		pthread_mutex_lock(&t->sums_lock);
+		t->arrived[i]++;
+		pthread_cond_broadcast(&t->sums_ready);
+		pthread_mutex_unlock(&t->sums_lock);
+	}
+	return failed ? -1 : 0;
 }
 
 int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
@@ -304,7 +399,8 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	 * sums stay in its buffer. */
 	if (renderer_all_samples(&t->dev[k].renderer, &whole, &out, err, err_size))
 		return -1;
-	if (t->by_samples && read_sums(t, k, err, err_size))
+	if (t->by_samples && (t->sum_parts ? read_sum_parts(t, k, err, err_size)
+					    : read_sums(t, k, err, err_size)))
 		return -1;
 	t->piece_ms[3 * band] = (start - t->frame_start) * 1e3;
 	t->piece_ms[3 * band + 1] = (timing_now() - t->frame_start) * 1e3;
@@ -612,6 +708,65 @@ static void add_sums(const struct tiles_job *t, float *rgb)
 		     (size_t)t->settings->width * t->settings->height);
 }
 
+/* One process's SPLIT_SAMPLES: a thread that adds the devices' sums into the
+ * image part by part, each part as soon as every device's is on the host
+ * (read_sum_parts), until none is left or a device failed. */
+static void *add_sum_parts(void *arg)
+{
+	struct tiles_job *t = arg;
+	const cl_long *parts[DEVICES_MAX];
+	float scale = settings_mean_scale(settings_samples(t->settings));
+
+	for (int k = 0; k < t->count; k++)
+		parts[k] = t->dev[k].sums;
+	for (;;) {
+		pthread_mutex_lock(&t->sums_lock);
+		int i = t->next_part < t->sum_parts ? t->next_part++ : -1;
+		while (i >= 0 && t->arrived[i] < t->count && !t->sums_failed)
+			pthread_cond_wait(&t->sums_ready, &t->sums_lock);
+		int stop = i < 0 || t->sums_failed;
+		pthread_mutex_unlock(&t->sums_lock);
+		if (stop)
+			return NULL;
+		struct sums_range range = {parts, t->count, NULL, t->rgb, scale, 0, 0};
+		sum_part(t, i, &range.begin, &range.end);
+		range.end += range.begin;
+		combine_range(&range);
+	}
+}
+
+/* Starts up to TILES_SUM_THREADS threads of add_sum_parts for a frame;
+ * returns how many started (ids in ids). */
+static int start_sum_adders(struct tiles_job *t, pthread_t *ids)
+{
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	int threads = cores < 1 ? 1 : cores > TILES_SUM_THREADS ? TILES_SUM_THREADS : (int)cores;
+	int started = 0;
+
+	if (threads > t->sum_parts)
+		threads = t->sum_parts;
+	memset(t->arrived, 0, sizeof(t->arrived));
+	t->next_part = 0;
+	t->sums_failed = 0;
+	while (started < threads && pthread_create(&ids[started], NULL, add_sum_parts, t) == 0)
+		started++;
+	return started;
+}
+
+/* Ends a frame's adders: after a failure they stop waiting; else the ones
+ * that could not start are made up for here. */
+static void join_sum_adders(struct tiles_job *t, pthread_t *ids, int started, int failed)
+{
+	pthread_mutex_lock(&t->sums_lock);
+	t->sums_failed |= failed;
+	pthread_cond_broadcast(&t->sums_ready);
+	pthread_mutex_unlock(&t->sums_lock);
+	if (!failed)
+		add_sum_parts(t); /* whatever is left, e.g. when no thread started */
+	for (int i = 0; i < started; i++)
+		pthread_join(ids[i], NULL);
+}
+
 /* Reads every device back and assembles the image (and counts) in out. */
 static int assemble(struct tiles_job *t, struct render_result *out, char *err, size_t err_size)
 {
@@ -632,7 +787,9 @@ static int assemble(struct tiles_job *t, struct render_result *out, char *err, s
 	for (int k = 0; k < t->count && (!t->by_samples || s->check_writes); k++)
 		if (tiles_collect(t, k, err, err_size))
 			return -1;
-	if (t->by_samples)
+	if (t->by_samples && t->sum_parts)
+		memcpy(out->rgb, t->rgb, image_float_bytes(s->width, s->height));
+	else if (t->by_samples)
 		add_sums(t, out->rgb);
 	else
 		for (int b = 0; b < t->piece_count; b++)
@@ -759,7 +916,12 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 		}
 		if (t->by_samples)
 			split_samples(t);
-		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
+		pthread_t adders[TILES_SUM_THREADS];
+		int adding = t->by_samples && t->sum_parts ? start_sum_adders(t, adders) : -1;
+		int failed = multidev_run(&job, t->devs, t->count, work, err, err_size);
+		if (adding >= 0)
+			join_sum_adders(t, adders, adding, failed);
+		if (failed)
 			return -1;
 		for (int k = 0; t->by_samples && k < t->count; k++) /* the next frame's split */
 			t->sample_rate[k] = work[k].last_piece_ms > 0
@@ -799,22 +961,92 @@ int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows
 }
 
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
-		       enum split *split, char *err, size_t err_size)
+		       enum split *split, int *measure, char *err, size_t err_size)
 {
-	int n = settings_samples(s), gpus = 0;
+	int gpus = 0;
 
 	*split = r->split;
+	*measure = 0;
 	if (r->split == SPLIT_SAMPLES)
 		return tiles_check_sample_split(s, r->count, err, err_size);
 	for (int k = 0; k < r->count; k++)
 		gpus += r->devs[k].is_gpu != 0 || hook_devices_as_gpus();
 	if (!given && r->count >= 2 && gpus == r->count &&
-	    tiles_samples_fit(s, r->count, r->piece_rows) && n >= r->count * TILES_SAMPLES_MIN)
+	    tiles_samples_fit(s, r->count, r->piece_rows)) {
 		*split = SPLIT_SAMPLES;
+		*measure = 1;
+	}
 	return 0;
 }
 
-int tiles_render(const struct tiles_request *r, const struct render_settings *s,
+int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
+			 int samples, struct split_choice *c)
+{
+	double rate = 0; /* samples of the whole image per ms, all devices */
+
+	memset(c, 0, sizeof(*c));
+	c->measured = 1;
+	c->pass_samples = pass_samples;
+	for (int k = 0; k < count; k++) {
+		c->pass_ms = pass_ms[k] > c->pass_ms ? pass_ms[k] : c->pass_ms;
+		c->sums_ms = sums_ms[k] > c->sums_ms ? sums_ms[k] : c->sums_ms;
+		rate += pass_ms[k] > 0 ? pass_samples / pass_ms[k] : 0;
+	}
+	c->render_ms = rate > 0 ? samples / rate : 0;
+	c->penalty_ms = TILES_SHARE_PENALTY * c->render_ms;
+	return c->sums_ms <= c->penalty_ms;
+}
+
+/* r->measure: keeps the sample split if the probes favour it
+ * (tiles_prefer_samples), else turns t into the dynamic split's adaptive
+ * job, as tiles_job_init would have made it. */
+static void choose_by_probes(struct tiles_request *r, struct tiles_job *t)
+{
+	double pass_ms[DEVICES_MAX], sums_ms[DEVICES_MAX];
+	const struct render_settings *s = t->settings;
+	int unit = tiles_sample_unit(s, t->devs, t->count);
+
+	for (int k = 0; k < t->count; k++) {
+		pass_ms[k] = t->dev[k].probe_ms;
+		sums_ms[k] = t->dev[k].sums_ms;
+	}
+	if (tiles_prefer_samples(pass_ms, sums_ms, t->count, unit < settings_samples(s) ? unit : 1,
+				 settings_samples(s), &r->choice)) {
+		t->adaptive = 0;
+		return;
+	}
+	r->split = SPLIT_DYNAMIC;
+	t->by_samples = 0;
+	t->adaptive = 1; /* tiles_render made the job adaptive for this */
+	for (int k = 0; k < t->count; k++) { /* no sums to read */
+		device_pinned_free(&t->devs[k], t->dev[k].pinned, t->dev[k].sums);
+		pages_free(t->dev[k].block, t->sums_header);
+		t->dev[k].pinned = NULL;
+		t->dev[k].block = NULL;
+		t->dev[k].sums = NULL;
+	}
+}
+
+/* One process's SPLIT_SAMPLES: the image the sums' parts are added into,
+ * touched before the clock. Returns 0, or -1 with one message in err. */
+static int alloc_sum_image(struct tiles_job *t, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	size_t pixels = (size_t)s->width * s->height, bytes = image_float_bytes(s->width, s->height);
+	size_t parts = pixels / TILES_SUM_PART_PIXELS;
+
+	t->sum_parts = parts < 1 ? 1 : parts > TILES_SUM_PARTS_MAX ? TILES_SUM_PARTS_MAX : (int)parts;
+	t->rgb = malloc(bytes);
+	if (!t->rgb) {
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width, s->height);
+		return -1;
+	}
+	memset(t->rgb, 0, bytes);
+	pages_touch(t->rgb, bytes);
+	return 0;
+}
+
+int tiles_render(struct tiles_request *r, const struct render_settings *s,
 		 struct device_work *work, struct render_result *out, char *err, size_t err_size)
 {
 	struct device_work setup[DEVICES_MAX];
@@ -825,11 +1057,21 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	memset(out, 0, sizeof(*out));
 	tiles_row_map(&map, s, r->row_order,
 		      r->row_classes ? r->row_classes : tiles_row_classes(r->devs, r->count));
-	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows), &map,
+	/* A split still to be measured may turn out the dynamic one: adaptive
+	 * until then (the pieces' room is the cells', enough for either). */
+	if (tiles_job_init(&t, r->scene, s, rows,
+			   r->measure || tiles_adaptive(r->split, r->piece_rows), &map,
 			   r->devs, r->count, err, err_size))
 		return -1;
 	t.by_samples = r->split == SPLIT_SAMPLES;
+	t.probe = r->measure && t.by_samples; /* in tiles_open, before the clock */
 	if (tiles_open_all(&t, setup, err, err_size))
+		goto out_free;
+	if (t.probe) {
+		choose_by_probes(r, &t);
+		r->measure = 0; /* a second render (-r's are one) keeps the choice */
+	}
+	if (t.by_samples && alloc_sum_image(&t, err, err_size))
 		goto out_free;
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);

@@ -42,16 +42,29 @@
  * only a bound. */
 #define TILES_FRONT_WAIT_MS 200
 
-/* By default GPUs split the samples (SPLIT_SAMPLES) when each takes at least
- * this many of every pixel: each device then reads back 32 bytes of sums a
- * pixel, more than twice the image, and the host adds them, which a short render does
- * not pay back. Two H200s, default scene 2000x2000 (docs/results/multidevice,
- * batches 70-71): 64 spp took 34.4 ms split by samples, 26.2 by pixels; 256
- * spp 102.9-104.6 and 100.8; 512 spp 195.0 and 200.8; 2048 spp 755 and 808. */
-#define TILES_SAMPLES_MIN 128
+/* What a GPU's share of the pixels costs beyond that share of the whole
+ * image's time, at the least: a share's launches have fewer pixels, and each
+ * ends with its slowest work-items (the idle end). Measured on H200s
+ * (docs/results/multidevice, batch 66): one GPU rendering the two
+ * interleaved halves of the default scene one after the other took 4.8 %
+ * more than the whole image, the lake's halves 6.5 %; smaller shares (more
+ * devices) cost more. The default split weighs it against the sample
+ * split's fixed cost (tiles_prefer_samples). */
+#define TILES_SHARE_PENALTY 0.048
 
-/* The most threads that add devices' sums (tiles_add_sums). */
-#define TILES_SUM_THREADS 8
+/* The most threads that add devices' sums (tiles_add_sums, and the parts
+ * of a frame's sums as they arrive): on four H100s' 64-core host the adds
+ * of four 2000x2000 images' sums (512 MB read) are memory-bound, and 8
+ * threads leave most of the bandwidth unused. */
+#define TILES_SUM_THREADS 32
+
+/* One process's sample split reads each device's sums back in parts of
+ * pixels, each added into the image as soon as every device's part is in,
+ * so that the adds overlap the read-backs: the parts are at least
+ * TILES_SUM_PART_PIXELS pixels (8 KB of sums) and at most
+ * TILES_SUM_PARTS_MAX of them (a 2000x2000 image: 128 parts of 1 MB). */
+#define TILES_SUM_PART_PIXELS 256
+#define TILES_SUM_PARTS_MAX 128
 
 /* The order in which pieces take the image's rows (--row-order;
  * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
@@ -102,8 +115,12 @@ struct tiles_device {
 	int collected; /* read back */
 	cl_long *sums; /* SPLIT_SAMPLES: its pixels' sums, read after each frame,
 			  sums_header bytes into `block`, on a page
-			  (base/pages.h) */
+			  (base/pages.h), or in `pinned` (one process) */
 	char *block;
+	cl_mem pinned; /* the sums' pinned host memory (device_pinned_alloc) */
+	double probe_ms; /* tiles_open's probe: one pass of the whole image */
+	double sums_ms;	 /* tiles_open's probe: reading all the sums back */
+	int probe_launches; /* the probe's launches (check_writes) */
 };
 
 /* The pieces of one image on devs[count] of this process: the bands of
@@ -124,6 +141,19 @@ struct tiles_job {
 					    device's sums (a message's header,
 					    under --mpi), a multiple of 8 */
 	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
+	int probe;		 /* tiles_open measures each device for the
+				    default split (tiles_prefer_samples) */
+	int sum_parts;		 /* one process's SPLIT_SAMPLES: the sums read
+				    back and added in this many parts, as they
+				    arrive (TILES_SUM_PART_PIXELS); 0: each
+				    device's read whole (under --mpi) */
+	float *rgb;		 /* sum_parts: the image the parts are added into */
+	int arrived[TILES_SUM_PARTS_MAX]; /* each part: the devices whose sums
+					     of it are on the host */
+	int next_part;			  /* the next part a thread adds */
+	int sums_failed;		  /* a device failed: add no more */
+	pthread_mutex_t sums_lock;	  /* arrived, next_part, sums_failed */
+	pthread_cond_t sums_ready;
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
 	double *piece_ms;	 /* each piece's start, end (from frame_start) and
@@ -196,6 +226,21 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
  * with the first pixel that was not in err. */
 int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
 
+/* How the default split was chosen by measurement (tiles_prefer_samples):
+ * set-up's probes and the prediction, all in ms. */
+struct split_choice {
+	int measured;	   /* the choice was made by these figures */
+	double pass_ms;	   /* the slowest device's probe: one pass of the whole
+			      image, pass_samples of every pixel */
+	int pass_samples;
+	double render_ms;  /* every sample over all devices, by their probes'
+			      rates: the image's time without fixed costs */
+	double sums_ms;	   /* the slowest device's read-back of all its sums:
+			      the sample split's cost beyond render_ms */
+	double penalty_ms; /* TILES_SHARE_PENALTY of render_ms: the pixel
+			      split's cost beyond it, at the least */
+};
+
 /* One image over devices of this process: which, and how it is cut. */
 struct tiles_request {
 	const struct scene *scene;
@@ -205,16 +250,33 @@ struct tiles_request {
 	int piece_rows;	  /* --piece-rows: bands of this height; 0: chosen */
 	enum row_order row_order; /* --row-order */
 	int row_classes;	  /* --row-order interleave:S; 0: the devices */
+	int measure;		  /* SPLIT_SAMPLES by default: kept only if the
+				     devices' measured costs favour it
+				     (tiles_prefer_samples); tiles_render then
+				     sets split to what it chose and fills
+				     choice */
+	struct split_choice choice;
 };
 
 /* The split of one image over r's devices for --split r->split, given or
- * not (docs/GUIDE.md, "Several devices"): SPLIT_SAMPLES when asked, and by
- * default when every device is a GPU and each takes TILES_SAMPLES_MIN
- * samples of every pixel or more (tiles_samples_fit); else r->split.
- * Returns -1 with one message in err when --split samples was asked of a
- * render it cannot split. */
+ * not (docs/GUIDE.md, "Several devices"): SPLIT_SAMPLES when asked; by
+ * default SPLIT_SAMPLES with *measure set when every device is a GPU and the
+ * render can split its samples (tiles_samples_fit), which tiles_render keeps
+ * only if the devices' measured costs favour it (tiles_prefer_samples), else
+ * the dynamic split; else r->split. Returns -1 with one message in err when
+ * --split samples was asked of a render it cannot split. */
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
-		       enum split *split, char *err, size_t err_size);
+		       enum split *split, int *measure, char *err, size_t err_size);
+
+/* Whether the default split takes the samples, from set-up's probes: every
+ * device's sums read back once (sums_ms[k]) and one pass of pass_samples
+ * samples of the whole image rendered (pass_ms[k]). The sample split costs
+ * the image's time on all devices (render_ms: the samples over the sum of
+ * the devices' rates) plus the slowest read-back; a split of the pixels
+ * costs TILES_SHARE_PENALTY more than render_ms at the least. Fills c;
+ * returns 1 for the samples when sums_ms <= penalty_ms. */
+int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
+			 int samples, struct split_choice *c);
 
 /* --split samples asked of `count` devices: 0 when the render has a sample
  * for each (and 2 or more), else -1 with one message in err (which may be
@@ -270,9 +332,10 @@ int tiles_band_count(int height, int rows);
 
 /* One image with settings s over r's devices into out (-r: one warm-up, N
  * timed frames, each the whole image over every device), and what each
- * device did into work[r->count]. Returns 0, or -1 with one message in err
+ * device did into work[r->count]. With r->measure, the devices are probed at
+ * set-up and r->split becomes the split chosen (r->choice says why). Returns 0, or -1 with one message in err
  * and nothing held in out. */
-int tiles_render(const struct tiles_request *r, const struct render_settings *s,
+int tiles_render(struct tiles_request *r, const struct render_settings *s,
 		 struct device_work *work, struct render_result *out, char *err, size_t err_size);
 
 #endif
