@@ -274,7 +274,7 @@ static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, 
 
 /* For the default split (tiles_prefer_samples), before the clock: one pass
  * of the whole image, its first tiles_sample_unit samples, and a read-back
- * of all the sums, each timed. The pass leaves sums that the render's first
+ * of all the sums, each timed (the read-back twice, the faster kept). The pass leaves sums that the render's first
  * pass over each pixel replaces (it starts the buffer's samples) and no
  * image; with check_writes its launches are expected in the counts. */
 static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
@@ -293,10 +293,15 @@ static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
 	pthread_mutex_lock(&t->lock); /* the devices' threads probe at once */
 	expect_writes(t, k, &pass, 1);
 	pthread_mutex_unlock(&t->lock);
-	if (renderer_read_sums(&d->renderer, d->sums, err, err_size))
-		return -1;
-	hook_sums_delay();
-	d->sums_ms = timing_lap_ms(&lap);
+	/* Twice, the faster counting: a first transfer may pay once for what
+	 * a frame's does not (the pinned memory's first use). */
+	for (int i = 0; i < 2; i++) {
+		if (renderer_read_sums(&d->renderer, d->sums, err, err_size))
+			return -1;
+		hook_sums_delay();
+		double ms = timing_lap_ms(&lap);
+		d->sums_ms = i == 0 || ms < d->sums_ms ? ms : d->sums_ms;
+	}
 	return 0;
 }
 
