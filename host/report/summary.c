@@ -108,10 +108,10 @@ void report_print_shares(FILE *out, const struct record *record)
 	if (c->measured)
 		fprintf(out,
 			"split:   %s, measured: the samples %.1f ms over the devices (one pass of "
-			"%d took %.1f ms), the sums' read-back %.1f ms against %.1f ms for a "
-			"share of the pixels\n",
+			"%d took %.1f ms), the sums' read-back %.1f ms and add %.1f ms against "
+			"%.1f ms for a share of the pixels\n",
 			split_name(d->split), c->render_ms, c->pass_samples, c->pass_ms, c->sums_ms,
-			c->penalty_ms);
+			c->add_ms, c->penalty_ms);
 }
 
 void report_print_times(const struct record *record)

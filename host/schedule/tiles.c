@@ -8,7 +8,6 @@
 #include <unistd.h>
 
 #include "base/pages.h"
-#include "device/clerror.h"
 #include "base/test_hooks.h"
 #include "render/repeats.h"
 #include "base/progress.h"
@@ -162,8 +161,6 @@ int tiles_job_init(struct tiles_job *t, const struct scene *scene, const struct 
 		init_adaptive(t, s);
 	pthread_mutex_init(&t->lock, NULL);
 	pthread_cond_init(&t->asked, NULL);
-	pthread_mutex_init(&t->sums_lock, NULL);
-	pthread_cond_init(&t->sums_ready, NULL);
 	t->pieces = malloc((size_t)t->piece_cap * sizeof(*t->pieces));
 	t->owner = malloc((size_t)t->piece_cap * sizeof(int));
 	t->piece_ms = calloc((size_t)t->piece_cap * 3, sizeof(double));
@@ -227,8 +224,6 @@ void tiles_job_free(struct tiles_job *t)
 		t->dev[k].sums = NULL;
 		t->dev[k].open = 0;
 	}
-	free(t->rgb);
-	t->rgb = NULL;
 	free(t->owner);
 	free(t->pieces);
 	free(t->piece_ms);
@@ -239,8 +234,6 @@ void tiles_job_free(struct tiles_job *t)
 	t->expected = NULL;
 	pthread_mutex_destroy(&t->lock);
 	pthread_cond_destroy(&t->asked);
-	pthread_mutex_destroy(&t->sums_lock);
-	pthread_cond_destroy(&t->sums_ready);
 }
 
 int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
@@ -339,51 +332,6 @@ static int read_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 	return renderer_read_sums(&t->dev[k].renderer, t->dev[k].sums, err, err_size);
 }
 
-/* Part i of t->sum_parts: its first pixel and its pixels. */
-static void sum_part(const struct tiles_job *t, int i, size_t *first, size_t *count)
-{
-	size_t pixels = (size_t)t->settings->width * t->settings->height;
-
-	*first = pixels * i / t->sum_parts;
-	*count = pixels * (i + 1) / t->sum_parts - *first;
-}
-
-/* One process's SPLIT_SAMPLES: enqueues every part of device k's sums at
- * once, then waits for each in turn and tells the threads that add them
- * (add_sum_parts) that it is in. */
-static int read_sum_parts(struct tiles_job *t, int k, char *err, size_t err_size)
-{
-	cl_event done[TILES_SUM_PARTS_MAX];
-	int enqueued = 0, failed = 0;
-
-	for (; enqueued < t->sum_parts; enqueued++) {
-		size_t first, count;
-		sum_part(t, enqueued, &first, &count);
-		if (renderer_read_sums_part(&t->dev[k].renderer, t->dev[k].sums, first, count,
-					    &done[enqueued], err, err_size)) {
-			failed = 1;
-			break;
-		}
-	}
-	for (int i = 0; i < enqueued; i++) {
-		cl_int status = clWaitForEvents(1, &done[i]);
-		clReleaseEvent(done[i]);
-		if (failed)
-			continue;
-		if (status != CL_SUCCESS) {
-			snprintf(err, err_size, "reading the sample sums back failed (%s): %s",
-				 t->devs[k].name, cl_error_name(status));
-			failed = 1;
-			continue;
-		}
-		pthread_mutex_lock(&t->sums_lock);
-		t->arrived[i]++;
-		pthread_cond_broadcast(&t->sums_ready);
-		pthread_mutex_unlock(&t->sums_lock);
-	}
-	return failed ? -1 : 0;
-}
-
 int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *done, char *err,
 		      size_t err_size)
 {
@@ -404,8 +352,7 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	 * sums stay in its buffer. */
 	if (renderer_all_samples(&t->dev[k].renderer, &whole, &out, err, err_size))
 		return -1;
-	if (t->by_samples && (t->sum_parts ? read_sum_parts(t, k, err, err_size)
-					    : read_sums(t, k, err, err_size)))
+	if (t->by_samples && read_sums(t, k, err, err_size))
 		return -1;
 	t->piece_ms[3 * band] = (start - t->frame_start) * 1e3;
 	t->piece_ms[3 * band + 1] = (timing_now() - t->frame_start) * 1e3;
@@ -713,65 +660,6 @@ static void add_sums(const struct tiles_job *t, float *rgb)
 		     (size_t)t->settings->width * t->settings->height);
 }
 
-/* One process's SPLIT_SAMPLES: a thread that adds the devices' sums into the
- * image part by part, each part as soon as every device's is on the host
- * (read_sum_parts), until none is left or a device failed. */
-static void *add_sum_parts(void *arg)
-{
-	struct tiles_job *t = arg;
-	const cl_long *parts[DEVICES_MAX];
-	float scale = settings_mean_scale(settings_samples(t->settings));
-
-	for (int k = 0; k < t->count; k++)
-		parts[k] = t->dev[k].sums;
-	for (;;) {
-		pthread_mutex_lock(&t->sums_lock);
-		int i = t->next_part < t->sum_parts ? t->next_part++ : -1;
-		while (i >= 0 && t->arrived[i] < t->count && !t->sums_failed)
-			pthread_cond_wait(&t->sums_ready, &t->sums_lock);
-		int stop = i < 0 || t->sums_failed;
-		pthread_mutex_unlock(&t->sums_lock);
-		if (stop)
-			return NULL;
-		struct sums_range range = {parts, t->count, NULL, t->rgb, scale, 0, 0};
-		sum_part(t, i, &range.begin, &range.end);
-		range.end += range.begin;
-		combine_range(&range);
-	}
-}
-
-/* Starts up to TILES_SUM_THREADS threads of add_sum_parts for a frame;
- * returns how many started (ids in ids). */
-static int start_sum_adders(struct tiles_job *t, pthread_t *ids)
-{
-	long cores = sysconf(_SC_NPROCESSORS_ONLN);
-	int threads = cores < 1 ? 1 : cores > TILES_SUM_THREADS ? TILES_SUM_THREADS : (int)cores;
-	int started = 0;
-
-	if (threads > t->sum_parts)
-		threads = t->sum_parts;
-	memset(t->arrived, 0, sizeof(t->arrived));
-	t->next_part = 0;
-	t->sums_failed = 0;
-	while (started < threads && pthread_create(&ids[started], NULL, add_sum_parts, t) == 0)
-		started++;
-	return started;
-}
-
-/* Ends a frame's adders: after a failure they stop waiting; else the ones
- * that could not start are made up for here. */
-static void join_sum_adders(struct tiles_job *t, pthread_t *ids, int started, int failed)
-{
-	pthread_mutex_lock(&t->sums_lock);
-	t->sums_failed |= failed;
-	pthread_cond_broadcast(&t->sums_ready);
-	pthread_mutex_unlock(&t->sums_lock);
-	if (!failed)
-		add_sum_parts(t); /* whatever is left, e.g. when no thread started */
-	for (int i = 0; i < started; i++)
-		pthread_join(ids[i], NULL);
-}
-
 /* Reads every device back and assembles the image (and counts) in out. */
 static int assemble(struct tiles_job *t, struct render_result *out, char *err, size_t err_size)
 {
@@ -792,9 +680,7 @@ static int assemble(struct tiles_job *t, struct render_result *out, char *err, s
 	for (int k = 0; k < t->count && (!t->by_samples || s->check_writes); k++)
 		if (tiles_collect(t, k, err, err_size))
 			return -1;
-	if (t->by_samples && t->sum_parts)
-		memcpy(out->rgb, t->rgb, image_float_bytes(s->width, s->height));
-	else if (t->by_samples)
+	if (t->by_samples)
 		add_sums(t, out->rgb);
 	else
 		for (int b = 0; b < t->piece_count; b++)
@@ -921,18 +807,19 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 		}
 		if (t->by_samples)
 			split_samples(t);
-		pthread_t adders[TILES_SUM_THREADS];
-		int adding = t->by_samples && t->sum_parts ? start_sum_adders(t, adders) : -1;
-		int failed = multidev_run(&job, t->devs, t->count, work, err, err_size);
-		if (adding >= 0)
-			join_sum_adders(t, adders, adding, failed);
-		if (failed)
+		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
 			return -1;
-		for (int k = 0; t->by_samples && k < t->count; k++) /* the next frame's split */
-			t->sample_rate[k] = work[k].last_piece_ms > 0
-						    ? (t->pieces[k].sample_end - t->pieces[k].sample_begin) /
-							      work[k].last_piece_ms
-						    : 0;
+		/* The next frame's split: each device's samples over its busy
+		 * time in all frames so far: one frame's rates are noisy (on four
+		 * H100s, batch 95, they moved the shares by up to 5 passes of 4
+		 * samples a frame and left one GPU 25 ms behind the others). */
+		for (int k = 0; t->by_samples && k < t->count; k++) {
+			if (work[k].last_piece_ms <= 0)
+				continue;
+			t->samples_done[k] += t->pieces[k].sample_end - t->pieces[k].sample_begin;
+			t->samples_ms[k] += work[k].last_piece_ms;
+			t->sample_rate[k] = t->samples_done[k] / t->samples_ms[k];
+		}
 		double wall_ms = (timing_now() - start) * 1e3;
 		repeats_record(out, f, frames, wall_ms, wall_ms);
 	}
@@ -985,7 +872,7 @@ int tiles_choose_split(const struct tiles_request *r, const struct render_settin
 }
 
 int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
-			 int samples, struct split_choice *c)
+			 int samples, double add_ms, struct split_choice *c)
 {
 	double rate = 0; /* samples of the whole image per ms, all devices */
 
@@ -997,9 +884,33 @@ int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count
 		c->sums_ms = sums_ms[k] > c->sums_ms ? sums_ms[k] : c->sums_ms;
 		rate += pass_ms[k] > 0 ? pass_samples / pass_ms[k] : 0;
 	}
+	c->add_ms = add_ms;
 	c->render_ms = rate > 0 ? samples / rate : 0;
 	c->penalty_ms = TILES_SHARE_PENALTY * c->render_ms;
-	return c->sums_ms <= c->penalty_ms;
+	return c->sums_ms + c->add_ms <= c->penalty_ms;
+}
+
+/* For the default split, after the probes: times the host's add of the
+ * devices' sums (what the probes left) into an image, which the sample
+ * split does once after its frames. Returns 0, or -1 with one message in
+ * err. */
+static int time_add(struct tiles_job *t, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	size_t bytes = image_float_bytes(s->width, s->height);
+	float *rgb = malloc(bytes);
+
+	if (!rgb) {
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width, s->height);
+		return -1;
+	}
+	memset(rgb, 0, bytes);
+	pages_touch(rgb, bytes); /* the image's own pages are touched before the clock too */
+	double lap = timing_now();
+	add_sums(t, rgb);
+	t->add_ms = timing_lap_ms(&lap);
+	free(rgb);
+	return 0;
 }
 
 /* r->measure: keeps the sample split if the probes favour it
@@ -1016,7 +927,7 @@ static void choose_by_probes(struct tiles_request *r, struct tiles_job *t)
 		sums_ms[k] = t->dev[k].sums_ms;
 	}
 	if (tiles_prefer_samples(pass_ms, sums_ms, t->count, unit < settings_samples(s) ? unit : 1,
-				 settings_samples(s), &r->choice)) {
+				 settings_samples(s), t->add_ms, &r->choice)) {
 		t->adaptive = 0;
 		return;
 	}
@@ -1030,25 +941,6 @@ static void choose_by_probes(struct tiles_request *r, struct tiles_job *t)
 		t->dev[k].block = NULL;
 		t->dev[k].sums = NULL;
 	}
-}
-
-/* One process's SPLIT_SAMPLES: the image the sums' parts are added into,
- * touched before the clock. Returns 0, or -1 with one message in err. */
-static int alloc_sum_image(struct tiles_job *t, char *err, size_t err_size)
-{
-	const struct render_settings *s = t->settings;
-	size_t pixels = (size_t)s->width * s->height, bytes = image_float_bytes(s->width, s->height);
-	size_t parts = pixels / TILES_SUM_PART_PIXELS;
-
-	t->sum_parts = parts < 1 ? 1 : parts > TILES_SUM_PARTS_MAX ? TILES_SUM_PARTS_MAX : (int)parts;
-	t->rgb = malloc(bytes);
-	if (!t->rgb) {
-		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width, s->height);
-		return -1;
-	}
-	memset(t->rgb, 0, bytes);
-	pages_touch(t->rgb, bytes);
-	return 0;
 }
 
 int tiles_render(struct tiles_request *r, const struct render_settings *s,
@@ -1073,11 +965,11 @@ int tiles_render(struct tiles_request *r, const struct render_settings *s,
 	if (tiles_open_all(&t, setup, err, err_size))
 		goto out_free;
 	if (t.probe) {
+		if (time_add(&t, err, err_size))
+			goto out_free;
 		choose_by_probes(r, &t);
 		r->measure = 0; /* a second render (-r's are one) keeps the choice */
 	}
-	if (t.by_samples && alloc_sum_image(&t, err, err_size))
-		goto out_free;
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);
 	progress_end();

@@ -52,19 +52,11 @@
  * split's fixed cost (tiles_prefer_samples). */
 #define TILES_SHARE_PENALTY 0.048
 
-/* The most threads that add devices' sums (tiles_add_sums, and the parts
- * of a frame's sums as they arrive): on four H100s' 64-core host the adds
- * of four 2000x2000 images' sums (512 MB read) are memory-bound, and 8
- * threads leave most of the bandwidth unused. */
+/* The most threads that add devices' sums (tiles_add_sums, and the image
+ * of the sample split after its frames): the adds of four 2000x2000 images'
+ * sums (512 MB read) are bound by the host's memory, of which 8 threads
+ * use a part on a 64-core host (four H100s, batch 95). */
 #define TILES_SUM_THREADS 32
-
-/* One process's sample split reads each device's sums back in parts of
- * pixels, each added into the image as soon as every device's part is in,
- * so that the adds overlap the read-backs: the parts are at least
- * TILES_SUM_PART_PIXELS pixels (8 KB of sums) and at most
- * TILES_SUM_PARTS_MAX of them (a 2000x2000 image: 128 parts of 1 MB). */
-#define TILES_SUM_PART_PIXELS 256
-#define TILES_SUM_PARTS_MAX 128
 
 /* The order in which pieces take the image's rows (--row-order;
  * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
@@ -135,25 +127,20 @@ struct tiles_job {
 	int adaptive;		 /* pieces from `adapt`, not bands */
 	int by_samples;		 /* SPLIT_SAMPLES: piece k, device k's, is the whole
 				    image with a range of the samples */
+	double samples_done[DEVICES_MAX], samples_ms[DEVICES_MAX]; /* by_samples:
+					    each device's samples and its busy
+					    time, all frames so far */
+	double add_ms;			 /* tiles_open_all's probe: the host's add
+					    of every device's sums */
 	double sample_rate[DEVICES_MAX]; /* by_samples: each device's samples per
-					    ms of its last piece, 0 before */
+					    ms of busy time, all frames so far
+					    (0 before the first) */
 	size_t sums_header;		 /* by_samples: bytes kept before each
 					    device's sums (a message's header,
 					    under --mpi), a multiple of 8 */
 	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
 	int probe;		 /* tiles_open measures each device for the
 				    default split (tiles_prefer_samples) */
-	int sum_parts;		 /* one process's SPLIT_SAMPLES: the sums read
-				    back and added in this many parts, as they
-				    arrive (TILES_SUM_PART_PIXELS); 0: each
-				    device's read whole (under --mpi) */
-	float *rgb;		 /* sum_parts: the image the parts are added into */
-	int arrived[TILES_SUM_PARTS_MAX]; /* each part: the devices whose sums
-					     of it are on the host */
-	int next_part;			  /* the next part a thread adds */
-	int sums_failed;		  /* a device failed: add no more */
-	pthread_mutex_t sums_lock;	  /* arrived, next_part, sums_failed */
-	pthread_cond_t sums_ready;
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
 	double *piece_ms;	 /* each piece's start, end (from frame_start) and
@@ -235,8 +222,11 @@ struct split_choice {
 	int pass_samples;
 	double render_ms;  /* every sample over all devices, by their probes'
 			      rates: the image's time without fixed costs */
-	double sums_ms;	   /* the slowest device's read-back of all its sums:
-			      the sample split's cost beyond render_ms */
+	double sums_ms;	   /* the slowest device's read-back of all its sums,
+			      in each frame */
+	double add_ms;	   /* the host's add of the devices' sums, once after
+			      the frames: with sums_ms the sample split's
+			      cost beyond render_ms */
 	double penalty_ms; /* TILES_SHARE_PENALTY of render_ms: the pixel
 			      split's cost beyond it, at the least */
 };
@@ -269,14 +259,15 @@ int tiles_choose_split(const struct tiles_request *r, const struct render_settin
 		       enum split *split, int *measure, char *err, size_t err_size);
 
 /* Whether the default split takes the samples, from set-up's probes: every
- * device's sums read back once (sums_ms[k]) and one pass of pass_samples
- * samples of the whole image rendered (pass_ms[k]). The sample split costs
- * the image's time on all devices (render_ms: the samples over the sum of
- * the devices' rates) plus the slowest read-back; a split of the pixels
- * costs TILES_SHARE_PENALTY more than render_ms at the least. Fills c;
- * returns 1 for the samples when sums_ms <= penalty_ms. */
+ * device's sums read back (sums_ms[k]), one pass of pass_samples samples of
+ * the whole image rendered (pass_ms[k]), and the host's add of all the sums
+ * (add_ms). The sample split costs the image's time on all devices
+ * (render_ms: the samples over the sum of the devices' rates) plus the
+ * slowest read-back and the add; a split of the pixels costs
+ * TILES_SHARE_PENALTY more than render_ms at the least. Fills c; returns 1
+ * for the samples when sums_ms + add_ms <= penalty_ms. */
 int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
-			 int samples, struct split_choice *c);
+			 int samples, double add_ms, struct split_choice *c);
 
 /* --split samples asked of `count` devices: 0 when the render has a sample
  * for each (and 2 or more), else -1 with one message in err (which may be
