@@ -1,6 +1,6 @@
 #!/bin/bash
 # Issue 43, batch 96 (four H100s, nvidia-h100-x4): batch 95's one-image
-# table again after 0c0ffee's fix (see README.md): the sample split's add of
+# table again after c6cf709 (see README.md): the sample split's add of
 # the devices' sums after the frames' clock again (as at a5dea23, and as one
 # GPU reads its image back after it), its choice counting that add, and the
 # shares of the samples from each device's rate over all frames so far.
