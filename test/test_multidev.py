@@ -595,7 +595,7 @@ def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
     # After the warm-up frame the ranges follow the devices' rates: the
     # device slowed 4 times takes fewer samples. GPUs alone take the sample
     # split by default (RTCL_TEST_AS_GPUS: the PoCL devices count as GPUs).
-    common = ["--size", "16x8", "--spp", "256"]  # 128 a device or more: the default split
+    common = ["--size", "16x8", "--spp", "256"]  # long enough: the measured default splits samples
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"), env=CHECK)  # one program
     assert one.returncode == 0, one.stderr
     result = run(*common, "--devices", "0:0,0:1", "-r", "2", "-o", str(tmp_path / "two.ppm"),

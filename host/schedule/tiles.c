@@ -267,9 +267,10 @@ static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, 
 
 /* For the default split (tiles_prefer_samples), before the clock: one pass
  * of the whole image, its first tiles_sample_unit samples, and a read-back
- * of all the sums, each timed (the read-back twice, the faster kept). The pass leaves sums that the render's first
- * pass over each pixel replaces (it starts the buffer's samples) and no
- * image; with check_writes its launches are expected in the counts. */
+ * of all the sums, each timed (the read-back twice, the faster kept). The
+ * pass leaves sums that the render's first pass over each pixel replaces
+ * (it starts the buffer's samples) and no image; with check_writes its
+ * launches are expected in the counts. */
 static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
 {
 	const struct render_settings *s = t->settings;
@@ -968,7 +969,7 @@ int tiles_render(struct tiles_request *r, const struct render_settings *s,
 		if (time_add(&t, err, err_size))
 			goto out_free;
 		choose_by_probes(r, &t);
-		r->measure = 0; /* a second render (-r's are one) keeps the choice */
+		r->measure = 0; /* once per request: another render keeps the choice */
 	}
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);
