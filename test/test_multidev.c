@@ -779,3 +779,35 @@ Test(multidev, sample_ranges_cover_the_samples_once_by_rate)
 		tiles_job_free(&t);
 	}
 }
+
+/* The default split by measurement (issue 43): the samples when the
+ * slowest device's read-back of its sums costs no more than
+ * TILES_SHARE_PENALTY of the image's time over all devices, the pixels
+ * otherwise; the image's time from the probes' rates, a slower device
+ * counting less. */
+Test(multidev, the_default_split_weighs_the_sums_against_a_share_of_the_pixels)
+{
+	double pass_ms[4] = {10, 10, 10, 20}, sums_ms[4] = {1, 4, 2, 3};
+	struct split_choice c;
+
+	/* 4 samples a pass: 0.4 + 0.4 + 0.4 + 0.2 = 1.4 samples a ms. */
+	cr_assert(tiles_prefer_samples(pass_ms, sums_ms, 4, 4, 256, 2, &c));
+	cr_assert(c.measured && c.pass_samples == 4);
+	cr_assert_float_eq(c.render_ms, 256 / 1.4, 1e-9);
+	cr_assert_float_eq(c.pass_ms, 20, 1e-12);
+	cr_assert_float_eq(c.sums_ms, 4, 1e-12);
+	cr_assert_float_eq(c.add_ms, 2, 1e-12);
+	cr_assert_float_eq(c.penalty_ms, TILES_SHARE_PENALTY * 256 / 1.4, 1e-9);
+	/* 16 samples: 11.4 ms of work, 0.55 ms of penalty, less than the
+	 * slowest read-back (4 ms). */
+	cr_assert_not(tiles_prefer_samples(pass_ms, sums_ms, 4, 4, 16, 0, &c));
+	cr_assert_float_eq(c.render_ms, 16 / 1.4, 1e-9);
+	/* The boundary: a read-back and an add that make up the penalty take
+	 * the samples; the add counts as much as the read-back. */
+	double one[2] = {TILES_SHARE_PENALTY * 50, TILES_SHARE_PENALTY * 50}, pass[2] = {2, 2};
+	double add = TILES_SHARE_PENALTY * 50;
+	cr_assert(tiles_prefer_samples(pass, one, 2, 1, 100, add, &c)); /* 100 samples, 100 ms */
+	cr_assert_not(tiles_prefer_samples(pass, one, 2, 1, 100, add * 1.001, &c));
+	one[1] *= 1.001;
+	cr_assert_not(tiles_prefer_samples(pass, one, 2, 1, 100, add, &c));
+}

@@ -595,7 +595,7 @@ def test_sample_split_gives_a_slowed_device_fewer_samples(tmp_path):
     # After the warm-up frame the ranges follow the devices' rates: the
     # device slowed 4 times takes fewer samples. GPUs alone take the sample
     # split by default (RTCL_TEST_AS_GPUS: the PoCL devices count as GPUs).
-    common = ["--size", "16x8", "--spp", "256"]  # 128 a device or more: the default split
+    common = ["--size", "16x8", "--spp", "256"]  # long enough: the measured default splits samples
     one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"), env=CHECK)  # one program
     assert one.returncode == 0, one.stderr
     result = run(*common, "--devices", "0:0,0:1", "-r", "2", "-o", str(tmp_path / "two.ppm"),
@@ -856,3 +856,74 @@ def test_piece_rows_keeps_fixed_bands(tmp_path):
     md = stats["multidevice"]
     assert md["piece"] == "band" and md["bands"] == 8 and md["band_rows"] == 8
     assert sum(d["pieces"] for d in md["devices"]) == 8
+
+
+FOUR = {"POCL_DEVICES": "pthread pthread pthread pthread"}
+
+
+def test_default_split_over_four_devices_is_measured_and_matches_one_device(tmp_path):
+    # Issue 43: four GPUs (RTCL_TEST_AS_GPUS: PoCL's devices count as GPUs)
+    # split the samples by default when the devices' probes at set-up say
+    # that the read-back of their sums costs less than a share of the
+    # pixels would (tiles_prefer_samples), their add on the host included.
+    # Every pixel written once a pass, the probe's pass included (CHECK).
+    common = ["--size", "48x32", "--spp", "256"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = run(*common, "--devices", "0:0,0:1,0:2,0:3", "-o", str(tmp_path / "four.ppm"),
+                 "--stats", str(tmp_path / "s.json"),
+                 env={**FOUR, **CHECK, "RTCL_TEST_AS_GPUS": "1"})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "four.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    choice = md["split_choice"]
+    assert md["split"] == "samples" and md["piece"] == "sample range", md
+    assert choice["sums_ms"] > 0 and choice["add_ms"] > 0
+    assert choice["sums_ms"] + choice["add_ms"] <= choice["penalty_ms"], choice
+    assert choice["pass_samples"] >= 1 and choice["pass_ms"] > 0
+    assert choice["render_ms"] > 0
+    assert abs(choice["penalty_ms"] - 0.048 * choice["render_ms"]) < 1e-6 * choice["render_ms"]
+    assert sorted(p["samples"] for p in md["pieces"]) == [[0, 64], [64, 128], [128, 192],
+                                                           [192, 256]]
+    assert "split:   samples, measured:" in result.stdout
+
+
+def test_a_slow_read_back_of_the_sums_makes_the_default_split_the_pixels(tmp_path):
+    # The same render with every device's read-back of its sums 1 s slower
+    # at set-up (RTCL_TEST_SLOW_SUMS): a share of the pixels costs less, so
+    # the devices take rectangles of all the samples (the dynamic split).
+    common = ["--size", "48x32", "--spp", "16"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = run(*common, "--devices", "0:0,0:1,0:2,0:3", "-o", str(tmp_path / "four.ppm"),
+                 "--stats", str(tmp_path / "s.json"),
+                 env={**FOUR, **CHECK, "RTCL_TEST_AS_GPUS": "1", "RTCL_TEST_SLOW_SUMS": "1000"})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "four.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    choice = md["split_choice"]
+    assert md["split"] == "dynamic" and md["piece"] == "rectangle", md
+    assert choice["sums_ms"] >= 1000 > choice["penalty_ms"], choice
+    assert all(p["samples"] == [0, 16] for p in md["pieces"])
+    assert sum(d["pixels"] for d in md["devices"]) == 48 * 32
+
+
+def test_split_given_or_cpus_are_not_measured(tmp_path):
+    # A split asked for, or devices that are not all GPUs, take no probe.
+    for args, env in [(["--split", "samples"], {"RTCL_TEST_AS_GPUS": "1"}),
+                      (["--split", "dynamic"], {"RTCL_TEST_AS_GPUS": "1"}), ([], {})]:
+        result = run("--size", "16x8", "--spp", "8", "--devices", "0:0,0:1", *args, "-o",
+                     str(tmp_path / "x.ppm"), "--stats", str(tmp_path / "s.json"), env=env)
+        assert result.returncode == 0, result.stderr
+        md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+        assert "split_choice" not in md, (args, md)
+        assert "measured" not in result.stdout
+
+
+def test_sample_split_over_four_devices_that_fail_writes_nothing_and_ends(tmp_path):
+    # Every device fails its launches (RTCL_TEST_DEVICE_FAULT) before its
+    # sums are read: the run fails with one message and no output.
+    result = run("--size", "48x32", "--spp", "8", "--devices", "0:0,0:1,0:2,0:3", "--split",
+                 "samples", "-o", str(tmp_path / "x.ppm"),
+                 env={**FOUR, "RTCL_TEST_DEVICE_FAULT": "1"})
+    expect_failure(result, 1, "device 0:", tmp_path)

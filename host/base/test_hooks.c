@@ -106,6 +106,15 @@ int hook_devices_as_gpus(void)
 	return env_is_one("RTCL_TEST_AS_GPUS");
 }
 
+void hook_sums_delay(void)
+{
+	const char *value = getenv("RTCL_TEST_SLOW_SUMS");
+	long ms = value ? strtol(value, NULL, 10) : 0;
+
+	if (ms > 0)
+		nanosleep(&(struct timespec){ms / 1000, ms % 1000 * 1000000L}, NULL);
+}
+
 int hook_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");

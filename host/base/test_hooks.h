@@ -3,7 +3,8 @@
  * and as no test can provoke on demand. Each is off unless its variable is
  * set: RTCL_TEST_DEVICE_FAULT, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE,
  * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_AS_GPUS, RTCL_TEST_DOUBLE_BAND,
- * RTCL_TEST_FAIL_RENAME, RTCL_TEST_SLOW_CACHE_WRITE, RTCL_TEST_COMMIT_DELAY. */
+ * RTCL_TEST_FAIL_RENAME, RTCL_TEST_SLOW_CACHE_WRITE, RTCL_TEST_COMMIT_DELAY,
+ * RTCL_TEST_SLOW_SUMS. */
 #ifndef RTCL_TEST_HOOKS_H
 #define RTCL_TEST_HOOKS_H
 
@@ -47,6 +48,12 @@ int hook_count_writes(void);
  * CPU devices take the bands two GPU ranks would; in one process the
  * devices count as GPUs when the default split is chosen (tiles_choose_split). */
 int hook_devices_as_gpus(void);
+
+/* RTCL_TEST_SLOW_SUMS=MS: reading a device's sample sums back at set-up,
+ * where the default split is measured (tiles_prefer_samples), takes MS
+ * milliseconds more, as over a slow link, so that the measured choice can
+ * be made to take the pixels. */
+void hook_sums_delay(void);
 
 /* RTCL_TEST_DOUBLE_BAND=1: several devices in one process render band 0 a
  * second time on another device, which the write-count check must catch. */

@@ -358,6 +358,36 @@ cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes
 	return buffer;
 }
 
+void *device_pinned_alloc(struct device *dev, size_t bytes, cl_mem *mem)
+{
+	cl_int status;
+	void *p;
+
+	*mem = clCreateBuffer(dev->context, CL_MEM_READ_WRITE | CL_MEM_ALLOC_HOST_PTR, bytes, NULL,
+			      &status);
+	if (status != CL_SUCCESS) {
+		*mem = NULL;
+		return NULL;
+	}
+	p = clEnqueueMapBuffer(dev->queue, *mem, CL_TRUE, CL_MAP_READ | CL_MAP_WRITE, 0, bytes, 0,
+			       NULL, NULL, &status);
+	if (status != CL_SUCCESS) {
+		clReleaseMemObject(*mem);
+		*mem = NULL;
+		return NULL;
+	}
+	return p;
+}
+
+void device_pinned_free(struct device *dev, cl_mem mem, void *p)
+{
+	if (!mem)
+		return;
+	if (p && clEnqueueUnmapMemObject(dev->queue, mem, p, 0, NULL, NULL) == CL_SUCCESS)
+		clFinish(dev->queue);
+	clReleaseMemObject(mem);
+}
+
 int device_find_all(int *platform_indices, int *device_indices, int max, char *err, size_t err_size)
 {
 	cl_platform_id platforms[MAX_PLATFORMS];

@@ -65,6 +65,17 @@ int device_check_fits(const struct device *dev, const char *what, double bytes, 
 cl_mem device_create_buffer(struct device *dev, cl_mem_flags flags, size_t bytes, void *host,
 			    const char *what, char *err, size_t err_size);
 
+/* Host memory the device reads back into at the speed of its link: a buffer
+ * of `bytes` made with CL_MEM_ALLOC_HOST_PTR and mapped for good, which
+ * NVIDIA's OpenCL pins (page-locked), so that a read into it is one DMA
+ * transfer, not a copy through the driver's own staging memory. Returns the
+ * mapped memory and sets *mem, or returns NULL (the caller then uses
+ * ordinary memory). */
+void *device_pinned_alloc(struct device *dev, size_t bytes, cl_mem *mem);
+
+/* Unmaps and releases what device_pinned_alloc gave (nothing for NULL). */
+void device_pinned_free(struct device *dev, cl_mem mem, void *p);
+
 /* Finds every GPU and CPU device of every platform, platform by platform
  * in index order, and writes up to max of their indices to platforms[] and
  * devices[]. Returns how many, or -1 with a message in err. */

@@ -9,6 +9,7 @@
 #include "device/device.h"
 #include "render/settings.h"
 #include "schedule/multidev.h"
+#include "schedule/tiles.h"
 
 /* Figures of a counting run (RENDERING.md). */
 struct flop_summary {
@@ -46,6 +47,8 @@ struct device_shares {
 				 row_band, row_bands, row_classes); frames: 0 */
 	int row_order_given;  /* one image: rows holds the job's row order */
 	double wall_ms;	      /* an animation: all its frames */
+	struct split_choice choice; /* one image: how the default split was
+				       measured and chosen (tiles.h) */
 };
 
 /* SIMD efficiency modelled from the instrumented run's flops and schedule

@@ -192,12 +192,16 @@ int buffers_read_rows(struct device *dev, const struct render_settings *s,
 	return 0;
 }
 
-int buffers_read_sums(struct device *dev, const struct render_settings *s,
-		      const struct render_buffers *b, cl_long *to, char *err, size_t err_size)
+int buffers_read_sums(struct device *dev, const struct render_buffers *b, cl_long *to,
+		      size_t first, size_t count, cl_event *event, char *err, size_t err_size)
 {
-	cl_int status = clEnqueueReadBuffer(dev->queue, b->sums, CL_TRUE, 0,
-					    image_sum_bytes(s->width, s->height), to, 0, NULL, NULL);
+	size_t pixel = 4 * sizeof(cl_long);
+	cl_int status = clEnqueueReadBuffer(dev->queue, b->sums, event ? CL_FALSE : CL_TRUE,
+					    first * pixel, count * pixel, to + 4 * first, 0, NULL,
+					    event);
 
+	if (status == CL_SUCCESS && event)
+		status = clFlush(dev->queue);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "reading the sample sums back failed (%s): %s", dev->name,
 			 cl_error_name(status));

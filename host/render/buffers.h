@@ -65,12 +65,15 @@ int buffers_read_rows(struct device *dev, const struct render_settings *s,
 		      const struct render_buffers *b, const struct rt_piece *piece, float *to,
 		      int packed, char *err, size_t err_size);
 
-/* Reads the fixed-point sums of every pixel (3 cl_long each, RT_SUM_ONE)
- * into to: what the passes of a piece whose samples are split between
- * devices leave (rt_piece.sum_begin). Returns 0, or -1 with one message in
+/* Reads the fixed-point sums (4 cl_long a pixel, cl/sample.cl) of pixels
+ * [first, first + count) into the same places of to, a host copy of every
+ * pixel's: what the passes of a piece whose samples are split between
+ * devices leave (rt_piece.sum_begin). With event NULL the read is done on
+ * return; else it is only enqueued (and flushed), *event says when it is
+ * done, and the caller releases it. Returns 0, or -1 with one message in
  * err. */
-int buffers_read_sums(struct device *dev, const struct render_settings *s,
-		      const struct render_buffers *b, cl_long *to, char *err, size_t err_size);
+int buffers_read_sums(struct device *dev, const struct render_buffers *b, cl_long *to,
+		      size_t first, size_t count, cl_event *event, char *err, size_t err_size);
 
 /* Releases what b holds, the program last. */
 void buffers_release(struct render_buffers *b);

@@ -60,7 +60,15 @@ int renderer_read_back(struct renderer *r, char *err, size_t err_size)
 
 int renderer_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size)
 {
-	return r->ops->read_sums(r, to, err, err_size);
+	const struct render_settings *s = r->settings;
+
+	return r->ops->read_sums(r, to, 0, (size_t)s->width * s->height, NULL, err, err_size);
+}
+
+int renderer_read_sums_part(struct renderer *r, cl_long *to, size_t first, size_t count,
+			    cl_event *event, char *err, size_t err_size)
+{
+	return r->ops->read_sums(r, to, first, count, event, err, err_size);
 }
 
 int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *to, int packed,

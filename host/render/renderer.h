@@ -59,7 +59,8 @@ struct renderer_ops {
 	int (*read_back)(struct renderer *r, char *err, size_t err_size);
 	int (*read_rows)(struct renderer *r, const struct rt_piece *piece, float *to, int packed,
 			 char *err, size_t err_size);
-	int (*read_sums)(struct renderer *r, cl_long *to, char *err, size_t err_size);
+	int (*read_sums)(struct renderer *r, cl_long *to, size_t first, size_t count,
+			 cl_event *event, char *err, size_t err_size);
 	void (*close)(struct renderer *r);
 };
 
@@ -90,6 +91,13 @@ int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *
  * what pieces whose samples are split between devices leave
  * (rt_piece.sum_begin). */
 int renderer_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size);
+
+/* Reads the sums of pixels [first, first + count) to the same places of to
+ * (a host copy of every pixel's sums), as buffers_read_sums: done on return
+ * with event NULL, else only enqueued, *event saying when it is done (the
+ * caller releases it). */
+int renderer_read_sums_part(struct renderer *r, cl_long *to, size_t first, size_t count,
+			    cl_event *event, char *err, size_t err_size);
 
 void renderer_close(struct renderer *r);
 

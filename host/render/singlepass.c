@@ -370,11 +370,12 @@ static int singlepass_read_rows(struct renderer *r, const struct rt_piece *piece
 	return buffers_read_rows(r->dev, r->settings, &st->b, piece, to, packed, err, err_size);
 }
 
-static int singlepass_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size)
+static int singlepass_read_sums(struct renderer *r, cl_long *to, size_t first, size_t count,
+				cl_event *event, char *err, size_t err_size)
 {
 	struct launch_state *st = r->state;
 
-	return buffers_read_sums(r->dev, r->settings, &st->b, to, err, err_size);
+	return buffers_read_sums(r->dev, &st->b, to, first, count, event, err, err_size);
 }
 
 static int singlepass_open(struct renderer *r, const struct scene *scene, char *err,

@@ -370,11 +370,12 @@ static void wavefront_close(struct renderer *r)
 	r->state = NULL;
 }
 
-static int wavefront_read_sums(struct renderer *r, cl_long *to, char *err, size_t err_size)
+static int wavefront_read_sums(struct renderer *r, cl_long *to, size_t first, size_t count,
+				cl_event *event, char *err, size_t err_size)
 {
 	struct wavefront *w = r->state;
 
-	return buffers_read_sums(r->dev, r->settings, &w->b, to, err, err_size);
+	return buffers_read_sums(r->dev, &w->b, to, first, count, event, err, err_size);
 }
 
 const struct renderer_ops wavefront_ops = {wavefront_open,	   wavefront_piece,

@@ -172,6 +172,13 @@ static json_t *shares_document(const struct device_shares *d)
 		json_object_set_new(doc, "band_rows", json_integer(d->band_rows));
 		json_object_set_new(doc, "bands", json_integer(d->bands));
 	}
+	if (doc && d->choice.measured)
+		json_object_set_new(
+			doc, "split_choice",
+			json_pack("{s:f, s:i, s:f, s:f, s:f, s:f}", "pass_ms", d->choice.pass_ms,
+				  "pass_samples", d->choice.pass_samples, "render_ms",
+				  d->choice.render_ms, "sums_ms", d->choice.sums_ms, "add_ms",
+				  d->choice.add_ms, "penalty_ms", d->choice.penalty_ms));
 	if (doc && d->ranks_count)
 		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
 	if (doc && d->row_order_given) {

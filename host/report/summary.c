@@ -101,8 +101,17 @@ void report_print_shares(FILE *out, const struct record *record)
 {
 	const struct device_shares *d = &record->shares;
 
+	const struct split_choice *c = &d->choice;
+
 	if (d->count)
 		devstats_print(out, d->devs, d->ranks, d->work, d->count, d->piece);
+	if (c->measured)
+		fprintf(out,
+			"split:   %s, measured: the samples %.1f ms over the devices (one pass of "
+			"%d took %.1f ms), the sums' read-back %.1f ms and add %.1f ms against "
+			"%.1f ms for a share of the pixels\n",
+			split_name(d->split), c->render_ms, c->pass_samples, c->pass_ms, c->sums_ms,
+			c->add_ms, c->penalty_ms);
 }
 
 void report_print_times(const struct record *record)

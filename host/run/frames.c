@@ -1,6 +1,8 @@
 #include "run/frames.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -65,6 +67,21 @@ struct piece_work frames_piece_work(const struct render_settings *s,
 				   result->passes * result->repeat};
 }
 
+/* A device's last frame, staged (converted and written to its temporary
+ * file) in a thread of its own while the device renders its next frame: on
+ * four H100s (docs/results/h100x4, batch 95) a 2000x2000 frame took its
+ * device's thread 758 ms, 142 of them kernels, and a single render's
+ * encoding and writing of such an image 460-660 ms. */
+struct stager {
+	struct frames_state *f;
+	pthread_t thread;
+	int running; /* thread started and not yet joined */
+	int piece;
+	float *rgb; /* the frame's image, freed once staged */
+	int failed;
+	char err[1024];
+};
+
 /* The devices of an animation, and what the devices' threads share. */
 struct frames_state {
 	const struct job *job;
@@ -74,6 +91,7 @@ struct frames_state {
 	struct device_work work[DEVICES_MAX];
 	int count;
 	int done; /* frames rendered, for the progress line */
+	struct stager stagers[DEVICES_MAX]; /* each device's frame being staged */
 };
 
 /* Names the frame under way on the progress line: with one device "frame k
@@ -94,11 +112,40 @@ static void show_frame(struct frames_state *f, int piece, int finished)
 	}
 }
 
-/* A multidev render_piece: frame first + piece, rendered whole and staged. */
+static void *stage_frame(void *arg)
+{
+	struct stager *st = arg;
+
+	st->failed = output_plan_stage_image(st->f->plan, st->piece, st->rgb, st->err,
+					     sizeof(st->err)) != 0;
+	free(st->rgb);
+	st->rgb = NULL;
+	return NULL;
+}
+
+/* Waits for the device's frame being staged; returns 0, or -1 with its
+ * message in err when staging it failed (reported once). */
+static int finish_staging(struct stager *st, char *err, size_t err_size)
+{
+	if (st->running) {
+		pthread_join(st->thread, NULL);
+		st->running = 0;
+	}
+	if (!st->failed)
+		return 0;
+	st->failed = 0;
+	snprintf(err, err_size, "%s", st->err);
+	return -1;
+}
+
+/* A multidev render_piece: frame first + piece, rendered whole; staged in
+ * the device's stager thread once its previous frame is staged (at most one
+ * frame a device waits to be staged), or here when no thread starts. */
 static int render_frame_piece(void *context, int device, int piece, struct piece_work *done,
 			      char *err, size_t err_size)
 {
 	struct frames_state *f = context;
+	struct stager *st = &f->stagers[device];
 	struct render_result result;
 
 	show_frame(f, piece, 0);
@@ -106,10 +153,33 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 				err_size))
 		return -1;
 	show_frame(f, piece, 1);
-	int failed = output_plan_stage_image(f->plan, piece, result.rgb, err, err_size);
 	*done = frames_piece_work(&f->settings, &result);
+	if (finish_staging(st, err, err_size)) {
+		render_result_free(&result);
+		return -1;
+	}
+	*st = (struct stager){.f = f, .piece = piece, .rgb = result.rgb};
+	result.rgb = NULL; /* the stager's now */
 	render_result_free(&result);
-	return failed ? -1 : 0;
+	if (pthread_create(&st->thread, NULL, stage_frame, st) == 0) {
+		st->running = 1;
+		return 0;
+	}
+	stage_frame(st);
+	return finish_staging(st, err, err_size);
+}
+
+/* A multidev end: the device's last frame staged (a failure is reported
+ * after the job, frames_render). */
+static void end_frames(void *context, int device)
+{
+	struct frames_state *f = context;
+	struct stager *st = &f->stagers[device];
+
+	if (st->running) {
+		pthread_join(st->thread, NULL);
+		st->running = 0;
+	}
 }
 
 static int frames_render(struct mode_run *run, int checked, char *err, size_t err_size)
@@ -134,6 +204,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	struct multidev_job pieces = {.piece_count = n,
 				      .split = job->split,
 				      .render_piece = render_frame_piece,
+				      .end = end_frames,
 				      .context = f};
 	/* One line for every frame: render() only adds to it. */
 	f->settings.progress = 0;
@@ -142,6 +213,15 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	repeats_progress_begin(&f->settings, n, f->count > 1 ? devices : NULL);
 	double start = timing_now();
 	int failed = multidev_run(&pieces, f->devs, f->count, f->work, err, err_size);
+	/* A device's last frame may fail to stage after its job: that message,
+	 * unless a piece failed first. */
+	for (int k = 0; k < f->count; k++) {
+		char late[sizeof(f->stagers[k].err)];
+		if (finish_staging(&f->stagers[k], late, sizeof(late)) && !failed) {
+			snprintf(err, err_size, "%s", late);
+			failed = 1;
+		}
+	}
 	progress_end();
 	run->record->shares = (struct device_shares){
 		.devs = f->devs,

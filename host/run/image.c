@@ -106,9 +106,13 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	}
 	struct render_settings s = job->settings;
 	s.check_writes |= hook_count_writes();
-	d->tiles = (struct tiles_request){job->scene,	  d->devs,	    d->count,
-					  job->split,	  job->piece_rows, job->row_order,
-					  job->row_classes};
+	d->tiles = (struct tiles_request){.scene = job->scene,
+					  .devs = d->devs,
+					  .count = d->count,
+					  .split = job->split,
+					  .piece_rows = job->piece_rows,
+					  .row_order = job->row_order,
+					  .row_classes = job->row_classes};
 	/* The split the renders share: a counting run counts each pixel on
 	 * one device, so it and the timed run split the pixels. */
 	struct render_settings instrumented = s;
@@ -116,7 +120,7 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	instrumented.record_schedule = job->mapping;
 	/* A row order asked for asks for pieces of pixels, as a split does. */
 	if (tiles_choose_split(&d->tiles, &instrumented, job->split_given || job->row_order_given,
-			       &d->tiles.split, err, err_size))
+			       &d->tiles.split, &d->tiles.measure, err, err_size))
 		return -1;
 	record_devices(record, d->devs, d->count);
 	int adaptive = tiles_adaptive(d->tiles.split, job->piece_rows);
@@ -137,7 +141,16 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	};
 	tiles_row_map(&record->shares.rows, &s, job->row_order,
 		      job->row_classes ? job->row_classes : tiles_row_classes(d->devs, d->count));
-	return render_counted(d, job, &s, render_pieces, record, err, err_size);
+	if (render_counted(d, job, &s, render_pieces, record, err, err_size))
+		return -1;
+	/* The default split is chosen at set-up, by measurement. */
+	if (d->tiles.choice.measured) {
+		record->shares.split = d->tiles.split;
+		record->shares.piece = d->tiles.split == SPLIT_SAMPLES ? "sample range" : "rectangle";
+		record->shares.row_order_given = d->tiles.split != SPLIT_SAMPLES;
+		record->shares.choice = d->tiles.choice;
+	}
+	return 0;
 }
 
 static int image_render(struct mode_run *run, int checked, char *err, size_t err_size)

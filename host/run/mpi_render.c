@@ -671,9 +671,17 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 /* choose_pieces: --split samples cannot split this job (said on rank 0). */
 #define CHOSEN_BADLY 2
 
-/* Whether the image is split by samples without --split samples: as in one
- * process (tiles_choose_split), when every device of every rank is a GPU and
- * takes TILES_SAMPLES_MIN samples of each pixel or more, and also only when
+/* Under --mpi the default splits the samples when each device takes this
+ * many of every pixel or more (one process chooses by measured costs
+ * instead, tiles_prefer_samples: the ranks would have to exchange their
+ * probes first). Two H200s, default scene 2000x2000 (docs/results/
+ * multidevice, batches 70-71): 64 spp took 34.4 ms split by samples, 26.2 by
+ * pixels; 256 spp 102.9-104.6 and 100.8; 512 spp 195.0 and 200.8. */
+#define MPI_SAMPLES_MIN 128
+
+/* Whether the image is split by samples without --split samples: when every
+ * device of every rank is a GPU and
+ * takes MPI_SAMPLES_MIN samples of each pixel or more, and also only when
  * no rank is bound to one core (note_binding), where rank 0 adds the sums.
  * On two H200s (batch 82, docs/results/multidevice/README.md, "MPI") two
  * ranks took 780-789 ms split by samples against 816-833 in bands, and 855-869
@@ -685,7 +693,7 @@ static int samples_by_default(const struct mpi_job *j, int total, int gpus)
 
 	return !job->split_given && !job->row_order_given && total >= 2 && gpus == total &&
 	       j->bound_ranks == 0 && tiles_samples_fit(s, total, job->piece_rows) &&
-	       settings_samples(s) >= total * TILES_SAMPLES_MIN &&
+	       settings_samples(s) >= total * MPI_SAMPLES_MIN &&
 	       !message_too_large(image_sum_bytes(s->width, s->height));
 }
 

@@ -218,6 +218,8 @@ void tiles_job_free(struct tiles_job *t)
 			renderer_close(&t->dev[k].renderer);
 		render_result_free(&t->dev[k].result);
 		pages_free(t->dev[k].block, t->sums_header);
+		device_pinned_free(&t->devs[k], t->dev[k].pinned, t->dev[k].sums);
+		t->dev[k].pinned = NULL;
 		t->dev[k].block = NULL;
 		t->dev[k].sums = NULL;
 		t->dev[k].open = 0;
@@ -239,8 +241,17 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 	size_t bytes = t->sums_header + image_sum_bytes(t->settings->width, t->settings->height);
 	struct tiles_device *d = &t->dev[k];
 
-	if (d->block)
+	if (d->block || d->pinned)
 		return 0;
+	/* One process: pinned memory, where the device reads back at the
+	 * speed of its link (under --mpi the sums travel behind a header). */
+	if (t->sums_header == 0 && t->dev[k].open) {
+		d->sums = device_pinned_alloc(&t->devs[k], bytes, &d->pinned);
+		if (d->sums) {
+			memset(d->sums, 0, bytes); /* mapped now, not in the first frame */
+			return 0;
+		}
+	}
 	d->block = pages_alloc(t->sums_header, bytes - t->sums_header);
 	if (!d->block) {
 		snprintf(err, err_size, "out of host memory for the sample sums of a %dx%d image",
@@ -249,6 +260,42 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 	}
 	memset(d->block, 0, bytes); /* zeroes and maps it (not merged into calloc) */
 	d->sums = (cl_long *)(d->block + t->sums_header);
+	return 0;
+}
+
+static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, int sign);
+
+/* For the default split (tiles_prefer_samples), before the clock: one pass
+ * of the whole image, its first tiles_sample_unit samples, and a read-back
+ * of all the sums, each timed (the read-back twice, the faster kept). The
+ * pass leaves sums that the render's first pass over each pixel replaces
+ * (it starts the buffer's samples) and no image; with check_writes its
+ * launches are expected in the counts. */
+static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	struct tiles_device *d = &t->dev[k];
+	int unit = tiles_sample_unit(s, t->devs, t->count);
+	struct rt_piece pass = renderer_whole_image(s, 0, unit < settings_samples(s) ? unit : 1);
+	struct piece_result out;
+	double lap = timing_now();
+
+	if (renderer_all_samples(&d->renderer, &pass, &out, err, err_size))
+		return -1;
+	d->probe_ms = timing_lap_ms(&lap);
+	d->probe_launches = out.launches;
+	pthread_mutex_lock(&t->lock); /* the devices' threads probe at once */
+	expect_writes(t, k, &pass, 1);
+	pthread_mutex_unlock(&t->lock);
+	/* Twice, the faster counting: a first transfer may pay once for what
+	 * a frame's does not (the pinned memory's first use). */
+	for (int i = 0; i < 2; i++) {
+		if (renderer_read_sums(&d->renderer, d->sums, err, err_size))
+			return -1;
+		hook_sums_delay();
+		double ms = timing_lap_ms(&lap);
+		d->sums_ms = i == 0 || ms < d->sums_ms ? ms : d->sums_ms;
+	}
 	return 0;
 }
 
@@ -264,7 +311,9 @@ int tiles_open(struct tiles_job *t, int k, char *err, size_t err_size)
 	d->open = 1;
 	/* SPLIT_SAMPLES: the host copy of its sums, touched now, before the
 	 * frames' clock, not in the frame that first reads into it. */
-	return t->by_samples ? tiles_alloc_sums(t, k, err, err_size) : 0;
+	if (t->by_samples && tiles_alloc_sums(t, k, err, err_size))
+		return -1;
+	return t->probe ? probe_device(t, k, err, err_size) : 0;
 }
 
 /* Adds piece's launches to the expected write counts (check_writes). */
@@ -761,11 +810,17 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 			split_samples(t);
 		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
 			return -1;
-		for (int k = 0; t->by_samples && k < t->count; k++) /* the next frame's split */
-			t->sample_rate[k] = work[k].last_piece_ms > 0
-						    ? (t->pieces[k].sample_end - t->pieces[k].sample_begin) /
-							      work[k].last_piece_ms
-						    : 0;
+		/* The next frame's split: each device's samples over its busy
+		 * time in all frames so far: one frame's rates are noisy (on four
+		 * H100s, batch 95, they moved the shares by up to 5 passes of 4
+		 * samples a frame and left one GPU 25 ms behind the others). */
+		for (int k = 0; t->by_samples && k < t->count; k++) {
+			if (work[k].last_piece_ms <= 0)
+				continue;
+			t->samples_done[k] += t->pieces[k].sample_end - t->pieces[k].sample_begin;
+			t->samples_ms[k] += work[k].last_piece_ms;
+			t->sample_rate[k] = t->samples_done[k] / t->samples_ms[k];
+		}
 		double wall_ms = (timing_now() - start) * 1e3;
 		repeats_record(out, f, frames, wall_ms, wall_ms);
 	}
@@ -799,22 +854,97 @@ int tiles_samples_fit(const struct render_settings *s, int count, int piece_rows
 }
 
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
-		       enum split *split, char *err, size_t err_size)
+		       enum split *split, int *measure, char *err, size_t err_size)
 {
-	int n = settings_samples(s), gpus = 0;
+	int gpus = 0;
 
 	*split = r->split;
+	*measure = 0;
 	if (r->split == SPLIT_SAMPLES)
 		return tiles_check_sample_split(s, r->count, err, err_size);
 	for (int k = 0; k < r->count; k++)
 		gpus += r->devs[k].is_gpu != 0 || hook_devices_as_gpus();
 	if (!given && r->count >= 2 && gpus == r->count &&
-	    tiles_samples_fit(s, r->count, r->piece_rows) && n >= r->count * TILES_SAMPLES_MIN)
+	    tiles_samples_fit(s, r->count, r->piece_rows)) {
 		*split = SPLIT_SAMPLES;
+		*measure = 1;
+	}
 	return 0;
 }
 
-int tiles_render(const struct tiles_request *r, const struct render_settings *s,
+int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
+			 int samples, double add_ms, struct split_choice *c)
+{
+	double rate = 0; /* samples of the whole image per ms, all devices */
+
+	memset(c, 0, sizeof(*c));
+	c->measured = 1;
+	c->pass_samples = pass_samples;
+	for (int k = 0; k < count; k++) {
+		c->pass_ms = pass_ms[k] > c->pass_ms ? pass_ms[k] : c->pass_ms;
+		c->sums_ms = sums_ms[k] > c->sums_ms ? sums_ms[k] : c->sums_ms;
+		rate += pass_ms[k] > 0 ? pass_samples / pass_ms[k] : 0;
+	}
+	c->add_ms = add_ms;
+	c->render_ms = rate > 0 ? samples / rate : 0;
+	c->penalty_ms = TILES_SHARE_PENALTY * c->render_ms;
+	return c->sums_ms + c->add_ms <= c->penalty_ms;
+}
+
+/* For the default split, after the probes: times the host's add of the
+ * devices' sums (what the probes left) into an image, which the sample
+ * split does once after its frames. Returns 0, or -1 with one message in
+ * err. */
+static int time_add(struct tiles_job *t, char *err, size_t err_size)
+{
+	const struct render_settings *s = t->settings;
+	size_t bytes = image_float_bytes(s->width, s->height);
+	float *rgb = malloc(bytes);
+
+	if (!rgb) {
+		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width, s->height);
+		return -1;
+	}
+	memset(rgb, 0, bytes);
+	pages_touch(rgb, bytes); /* the image's own pages are touched before the clock too */
+	double lap = timing_now();
+	add_sums(t, rgb);
+	t->add_ms = timing_lap_ms(&lap);
+	free(rgb);
+	return 0;
+}
+
+/* r->measure: keeps the sample split if the probes favour it
+ * (tiles_prefer_samples), else turns t into the dynamic split's adaptive
+ * job, as tiles_job_init would have made it. */
+static void choose_by_probes(struct tiles_request *r, struct tiles_job *t)
+{
+	double pass_ms[DEVICES_MAX], sums_ms[DEVICES_MAX];
+	const struct render_settings *s = t->settings;
+	int unit = tiles_sample_unit(s, t->devs, t->count);
+
+	for (int k = 0; k < t->count; k++) {
+		pass_ms[k] = t->dev[k].probe_ms;
+		sums_ms[k] = t->dev[k].sums_ms;
+	}
+	if (tiles_prefer_samples(pass_ms, sums_ms, t->count, unit < settings_samples(s) ? unit : 1,
+				 settings_samples(s), t->add_ms, &r->choice)) {
+		t->adaptive = 0;
+		return;
+	}
+	r->split = SPLIT_DYNAMIC;
+	t->by_samples = 0;
+	t->adaptive = 1; /* tiles_render made the job adaptive for this */
+	for (int k = 0; k < t->count; k++) { /* no sums to read */
+		device_pinned_free(&t->devs[k], t->dev[k].pinned, t->dev[k].sums);
+		pages_free(t->dev[k].block, t->sums_header);
+		t->dev[k].pinned = NULL;
+		t->dev[k].block = NULL;
+		t->dev[k].sums = NULL;
+	}
+}
+
+int tiles_render(struct tiles_request *r, const struct render_settings *s,
 		 struct device_work *work, struct render_result *out, char *err, size_t err_size)
 {
 	struct device_work setup[DEVICES_MAX];
@@ -825,12 +955,22 @@ int tiles_render(const struct tiles_request *r, const struct render_settings *s,
 	memset(out, 0, sizeof(*out));
 	tiles_row_map(&map, s, r->row_order,
 		      r->row_classes ? r->row_classes : tiles_row_classes(r->devs, r->count));
-	if (tiles_job_init(&t, r->scene, s, rows, tiles_adaptive(r->split, r->piece_rows), &map,
+	/* A split still to be measured may turn out the dynamic one: adaptive
+	 * until then (the pieces' room is the cells', enough for either). */
+	if (tiles_job_init(&t, r->scene, s, rows,
+			   r->measure || tiles_adaptive(r->split, r->piece_rows), &map,
 			   r->devs, r->count, err, err_size))
 		return -1;
 	t.by_samples = r->split == SPLIT_SAMPLES;
+	t.probe = r->measure && t.by_samples; /* in tiles_open, before the clock */
 	if (tiles_open_all(&t, setup, err, err_size))
 		goto out_free;
+	if (t.probe) {
+		if (time_add(&t, err, err_size))
+			goto out_free;
+		choose_by_probes(r, &t);
+		r->measure = 0; /* once per request: another render keeps the choice */
+	}
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);
 	progress_end();

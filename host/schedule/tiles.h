@@ -42,16 +42,21 @@
  * only a bound. */
 #define TILES_FRONT_WAIT_MS 200
 
-/* By default GPUs split the samples (SPLIT_SAMPLES) when each takes at least
- * this many of every pixel: each device then reads back 32 bytes of sums a
- * pixel, more than twice the image, and the host adds them, which a short render does
- * not pay back. Two H200s, default scene 2000x2000 (docs/results/multidevice,
- * batches 70-71): 64 spp took 34.4 ms split by samples, 26.2 by pixels; 256
- * spp 102.9-104.6 and 100.8; 512 spp 195.0 and 200.8; 2048 spp 755 and 808. */
-#define TILES_SAMPLES_MIN 128
+/* What a GPU's share of the pixels costs beyond that share of the whole
+ * image's time, at the least: a share's launches have fewer pixels, and each
+ * ends with its slowest work-items (the idle end). Measured on H200s
+ * (docs/results/multidevice, batch 66): one GPU rendering the two
+ * interleaved halves of the default scene one after the other took 4.8 %
+ * more than the whole image, the lake's halves 6.5 %; smaller shares (more
+ * devices) cost more. The default split weighs it against the sample
+ * split's fixed cost (tiles_prefer_samples). */
+#define TILES_SHARE_PENALTY 0.048
 
-/* The most threads that add devices' sums (tiles_add_sums). */
-#define TILES_SUM_THREADS 8
+/* The most threads that add devices' sums (tiles_add_sums, and the image
+ * of the sample split after its frames): the adds of four 2000x2000 images'
+ * sums (512 MB read) are bound by the host's memory, of which 8 threads
+ * use a part on a 64-core host (four H100s, batch 95). */
+#define TILES_SUM_THREADS 32
 
 /* The order in which pieces take the image's rows (--row-order;
  * docs/GUIDE.md, "How the rows are ordered"): a piece is a rectangle of split
@@ -102,8 +107,12 @@ struct tiles_device {
 	int collected; /* read back */
 	cl_long *sums; /* SPLIT_SAMPLES: its pixels' sums, read after each frame,
 			  sums_header bytes into `block`, on a page
-			  (base/pages.h) */
+			  (base/pages.h), or in `pinned` (one process) */
 	char *block;
+	cl_mem pinned; /* the sums' pinned host memory (device_pinned_alloc) */
+	double probe_ms; /* tiles_open's probe: one pass of the whole image */
+	double sums_ms;	 /* tiles_open's probe: reading all the sums back */
+	int probe_launches; /* the probe's launches (check_writes) */
 };
 
 /* The pieces of one image on devs[count] of this process: the bands of
@@ -118,12 +127,20 @@ struct tiles_job {
 	int adaptive;		 /* pieces from `adapt`, not bands */
 	int by_samples;		 /* SPLIT_SAMPLES: piece k, device k's, is the whole
 				    image with a range of the samples */
+	double samples_done[DEVICES_MAX], samples_ms[DEVICES_MAX]; /* by_samples:
+					    each device's samples and its busy
+					    time, all frames so far */
+	double add_ms;			 /* tiles_open_all's probe: the host's add
+					    of every device's sums */
 	double sample_rate[DEVICES_MAX]; /* by_samples: each device's samples per
-					    ms of its last piece, 0 before */
+					    ms of busy time, all frames so far
+					    (0 before the first) */
 	size_t sums_header;		 /* by_samples: bytes kept before each
 					    device's sums (a message's header,
 					    under --mpi), a multiple of 8 */
 	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
+	int probe;		 /* tiles_open measures each device for the
+				    default split (tiles_prefer_samples) */
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
 	double *piece_ms;	 /* each piece's start, end (from frame_start) and
@@ -196,6 +213,24 @@ void tiles_copy_facts(const struct render_result *from, struct render_result *to
  * with the first pixel that was not in err. */
 int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
 
+/* How the default split was chosen by measurement (tiles_prefer_samples):
+ * set-up's probes and the prediction, all in ms. */
+struct split_choice {
+	int measured;	   /* the choice was made by these figures */
+	double pass_ms;	   /* the slowest device's probe: one pass of the whole
+			      image, pass_samples of every pixel */
+	int pass_samples;
+	double render_ms;  /* every sample over all devices, by their probes'
+			      rates: the image's time without fixed costs */
+	double sums_ms;	   /* the slowest device's read-back of all its sums,
+			      in each frame */
+	double add_ms;	   /* the host's add of the devices' sums, once after
+			      the frames: with sums_ms the sample split's
+			      cost beyond render_ms */
+	double penalty_ms; /* TILES_SHARE_PENALTY of render_ms: the pixel
+			      split's cost beyond it, at the least */
+};
+
 /* One image over devices of this process: which, and how it is cut. */
 struct tiles_request {
 	const struct scene *scene;
@@ -205,16 +240,34 @@ struct tiles_request {
 	int piece_rows;	  /* --piece-rows: bands of this height; 0: chosen */
 	enum row_order row_order; /* --row-order */
 	int row_classes;	  /* --row-order interleave:S; 0: the devices */
+	int measure;		  /* SPLIT_SAMPLES by default: kept only if the
+				     devices' measured costs favour it
+				     (tiles_prefer_samples); tiles_render then
+				     sets split to what it chose and fills
+				     choice */
+	struct split_choice choice;
 };
 
 /* The split of one image over r's devices for --split r->split, given or
- * not (docs/GUIDE.md, "Several devices"): SPLIT_SAMPLES when asked, and by
- * default when every device is a GPU and each takes TILES_SAMPLES_MIN
- * samples of every pixel or more (tiles_samples_fit); else r->split.
- * Returns -1 with one message in err when --split samples was asked of a
- * render it cannot split. */
+ * not (docs/GUIDE.md, "Several devices"): SPLIT_SAMPLES when asked; by
+ * default SPLIT_SAMPLES with *measure set when every device is a GPU and the
+ * render can split its samples (tiles_samples_fit), which tiles_render keeps
+ * only if the devices' measured costs favour it (tiles_prefer_samples), else
+ * the dynamic split; else r->split. Returns -1 with one message in err when
+ * --split samples was asked of a render it cannot split. */
 int tiles_choose_split(const struct tiles_request *r, const struct render_settings *s, int given,
-		       enum split *split, char *err, size_t err_size);
+		       enum split *split, int *measure, char *err, size_t err_size);
+
+/* Whether the default split takes the samples, from set-up's probes: every
+ * device's sums read back (sums_ms[k]), one pass of pass_samples samples of
+ * the whole image rendered (pass_ms[k]), and the host's add of all the sums
+ * (add_ms). The sample split costs the image's time on all devices
+ * (render_ms: the samples over the sum of the devices' rates) plus the
+ * slowest read-back and the add; a split of the pixels costs
+ * TILES_SHARE_PENALTY more than render_ms at the least. Fills c; returns 1
+ * for the samples when sums_ms + add_ms <= penalty_ms. */
+int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
+			 int samples, double add_ms, struct split_choice *c);
 
 /* --split samples asked of `count` devices: 0 when the render has a sample
  * for each (and 2 or more), else -1 with one message in err (which may be
@@ -270,9 +323,10 @@ int tiles_band_count(int height, int rows);
 
 /* One image with settings s over r's devices into out (-r: one warm-up, N
  * timed frames, each the whole image over every device), and what each
- * device did into work[r->count]. Returns 0, or -1 with one message in err
+ * device did into work[r->count]. With r->measure, the devices are probed at
+ * set-up and r->split becomes the split chosen (r->choice says why). Returns 0, or -1 with one message in err
  * and nothing held in out. */
-int tiles_render(const struct tiles_request *r, const struct render_settings *s,
+int tiles_render(struct tiles_request *r, const struct render_settings *s,
 		 struct device_work *work, struct render_result *out, char *err, size_t err_size);
 
 #endif
