@@ -262,7 +262,8 @@ KEPT_FIGURES = ("histograms.png", "histograms_best.png")
 def read_results(path):
     """Returns the object stored in results.json at path; ValueError if unreadable."""
     try:
-        text = path.read_text(encoding="utf-8")
+        with files.open_input(path, "r") as stream:
+            text = stream.read()
     except (OSError, UnicodeDecodeError) as error:
         reason = getattr(error, "strerror", None) or "not UTF-8 text"
         raise ValueError(f"{path}: cannot read: {reason}") from None

@@ -79,6 +79,7 @@ import pathlib
 import sys
 import tempfile
 
+from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the flops files; matplotlib is optional (see above)
@@ -180,6 +181,7 @@ def output_folder(arguments, stats):
     return folder
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()

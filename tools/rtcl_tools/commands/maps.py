@@ -47,6 +47,7 @@ matplotlib.
 import argparse
 import pathlib
 
+from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the maps; matplotlib once the options are read (--help needs none)
@@ -271,7 +272,8 @@ def plot_maps(out_path, work=None, schedule=None, *, pieces=None, log=False, tit
 def draw(arguments):
     """Reads the maps and writes the figure."""
     output_format(arguments.output)
-    files.check_not_tracked([arguments.output])
+    files.reading([arguments.work, arguments.schedule, arguments.pieces])
+    files.check_outputs([arguments.output])
     work = load_work_map(arguments.work) if arguments.work else None
     schedule = load_map(arguments.schedule) if arguments.schedule else None
     pieces = load_pieces(arguments.pieces) if arguments.pieces else None
@@ -291,6 +293,7 @@ def draw(arguments):
               title=arguments.title)
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()

@@ -37,6 +37,7 @@ import sys
 import tempfile
 from statistics import median
 
+from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the meshes of a version 2 scene
@@ -161,13 +162,16 @@ def run(args):
                   median_breakdown(breakdowns))
 
 
+@interruptible
 def main(argv=None):
     args = parse_arguments(argv)
     prog = program_name()
     try:
         with files.committed_files_allowed(args.update_committed):
+            files.check_input_files([args.scene])   # before minutes of runs
+            files.reading([args.scene])
             if args.output:
-                files.check_not_tracked([args.output])   # before minutes of runs
+                files.check_outputs([args.output])
             text = run(args)
             if args.output:
                 files.write_text(args.output, text)
