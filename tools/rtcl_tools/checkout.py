@@ -38,22 +38,18 @@ def lacks(names):
     return [name for name in names if importlib.util.find_spec(name) is None]
 
 
-def same_program(first, second):
-    try:
-        return os.path.samefile(first, second)
-    except OSError:
-        return False
-
-
 def candidates():
-    """Returns the other Pythons to try, in order, without the running one."""
+    """Returns the other Pythons to try, in order, without the running one.  They
+    are told apart by path, not by the program they run: a virtual environment's
+    python is a link to its base Python's, with other modules."""
     given = os.environ.get("RTCL_PYTHON")
     names = [given] if given else [SYSTEM_PYTHON, shutil.which("python3")]
+    running = os.path.abspath(sys.executable or "")
     found = []
     for name in names:
-        if name and os.access(name, os.X_OK) and not same_program(name, sys.executable) \
-                and not any(same_program(name, other) for other in found):
-            found.append(name)
+        if name and os.access(name, os.X_OK) and os.path.abspath(name) != running \
+                and os.path.abspath(name) not in found:
+            found.append(os.path.abspath(name))
     return found
 
 
