@@ -171,16 +171,19 @@ class Journal:
         return None if self.folder is None else self.folder / PROGRESS_NAME
 
     def add(self, key, run):
-        """Keeps run (under its key) and rewrites the journal."""
-        device = run.stats["device"]
-        if self.device is not None and device != self.device:
-            raise ValueError(f"{self.path}: the study ran on {self.device}, this run on "
-                             f"{device}: not resumed (-p/-d as the study had them are "
-                             "in its options; or start a new study)")
-        if self.folder is None:
-            self.folder = pathlib.Path(self.folder_for(run.stats))
-        self.device = device
+        """Keeps run (under its key) and rewrites the journal.  The CPU reference
+        names no device: the journal is written from the first run on the device."""
+        if run.kernel != "reference":
+            device = run.stats["device"]
+            if self.device is not None and device != self.device:
+                raise ValueError(f"{self.path}: the study ran on {self.device}, this run "
+                                 f"on {device}: not resumed (start a new study)")
+            if self.folder is None:
+                self.folder = pathlib.Path(self.folder_for(run.stats))
+            self.device = device
         self.runs[key] = run
+        if self.folder is None:
+            return
         document = {"format": PROGRESS_FORMAT, "version": 1, "device": self.device,
                     "options": self.options,
                     "runs": [dict(item.to_json(), key=name) for name, item in self.runs.items()]}
