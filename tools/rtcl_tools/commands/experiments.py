@@ -55,17 +55,30 @@ and `rtcl-experiments --replot DIR` on a machine with matplotlib draws them.
 every figure with the current report code (the best-of-sweep rows taken from the
 stored sweep runs, the table saying when and by which commit it was regenerated).
 A results.json written before it stored histograms leaves histograms*.png as they
-are.  Of the other options only --no-plots, --peak-gflops and --update-committed
-(needed to redraw committed results) are read.
+are.  It takes only --no-plots, --peak-gflops, --fma-units and --update-committed
+(needed to redraw committed results); any other option is refused.
+
+While it runs, the study keeps the runs it finished in its results folder
+(study-progress.json, rewritten after every run).  Interrupted (Ctrl-C, SIGTERM,
+SIGHUP: one line, no traceback, exit status 128 + the signal, the temporary folder
+removed) or stopped by a failed rtcl run, it says so and gives the command that
+goes on: --resume DIR runs the study with the options it started with (only
+--rtcl may be given again), takes the finished runs from the journal without
+running them, and removes the journal once the results are written.
 
 table1.md ends with the bounds of each kernel (docs/RENDERING.md): its time at 100 %
 SIMD efficiency and the time its counted flops take at the device's FP32 peak.  The
 peak comes from --peak-gflops, else a built-in table (NVIDIA H100, H200, A100), else,
-for a CPU, /proc/cpuinfo with --fma-units; results.json keeps it, so --replot on
-another machine uses the measuring machine's.
+for a CPU, /proc/cpuinfo with --fma-units; results.json keeps it (for a CPU with the
+fields of /proc/cpuinfo it came from), so --replot on another machine uses the
+measuring machine's, and --replot --fma-units N computes a CPU's again (refused for
+a GPU's study, or an older CPU study's without those fields on another CPU).  On a
+CPU the SIMD columns say they do not apply: SIMD efficiency is modelled on a GPU's
+warps of 32 in lock-step, which PoCL does not have.
 
     rtcl-experiments -p 0 -d 0                 # the full 2000x2000 experiment
     rtcl-experiments --quick -o quick          # 400x400, a smaller sweep, into quick/
+    rtcl-experiments --resume quick            # go on after an interruption
     rtcl-experiments -p 0 -d 0 --accel bvh     # the study with the BVH
     rtcl-experiments -p 0 -d 0 --accel bvh -s lake/lake-10.json --no-plots
     make experiments DEVICE="-p 0 -d 0"        # the same through make
