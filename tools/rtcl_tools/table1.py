@@ -75,6 +75,11 @@ CPU_SIMD_NOTE = ("On this CPU the SIMD columns do not apply: the modelled SIMD e
                  "divergence included.")
 
 
+def on_cpu(runs):
+    """Whether the study's device (not the CPU reference) is a CPU (PoCL)."""
+    return is_cpu_device(device_run(runs).stats.get("device", ""))
+
+
 def bound_row(run, peak_gflops):
     """Returns the cells of one row of the bounds table (item 4 of issue 25, after
     Aila & Laine 2009): the time, the time at 100 % SIMD efficiency (time × SIMD
@@ -114,7 +119,7 @@ def bounds_lines(runs, peak):
     shown = [run for run in table_runs(runs) if run.kernel != "reference"]
     peak_gflops = peak.get("gflops") if peak else None
     formula = peak.get("formula") if peak else "unknown (--peak-gflops X gives it)"
-    if is_cpu_device(device_run(runs).stats["device"]):
+    if on_cpu(runs):
         return ["", "## Bounds", "", CPU_SIMD_NOTE, "", f"- FP32 peak: {formula}", "",
                 markdown_table(BOUND_COLUMNS, [cpu_bound_row(run, peak_gflops)
                                                for run in shown])]
@@ -317,10 +322,9 @@ def beyond_the_paper_lines(runs):
                  "traced pixels: from the schedule map, of those launched (on a CPU, "
                  "where a work-group's items run one after the other, the first items "
                  "of dynamic and persistent take most of the work: their low parallel "
-                 "efficiency)"
-                 + ("; on this CPU the modelled column is a GPU's warp model, which does "
-                    "not apply (see Bounds)" if is_cpu_device(device_run(runs).stats["device"])
-                    else ""))
+                 "efficiency)" + ("; on this CPU the modelled column is a GPU's warp "
+                                  "model, which does not apply (see Bounds)"
+                                  if on_cpu(runs) else ""))
     if "wavefront" in kernels:
         lines.append("- wavefront: time = sum of every launch of a frame (primary rays, "
                      "then one launch per bounce); the work-group and groups are those of "
