@@ -324,3 +324,14 @@ def test_installed_povray_makes_its_default_scene(tmp_path):
     assert "from paper60 (built in)" in first
     assert rest == from_file.stdout.splitlines()[1:]
     assert result.stdout.count("\nsphere {") >= 60
+
+
+def test_a_missing_output_folder_is_refused_before_the_runs(tmp_path, marking_rtcl):
+    """A single-file output is written beside its target: its folder must exist
+    (folder outputs, -o DIR, are made)."""
+    result = run_tool("multidevice_bench.py", "--single", "0:0", "--multi", "0:0", "-o",
+                      tmp_path / "missing" / "m.md", "--rtcl", marking_rtcl, cwd=tmp_path)
+    assert result.returncode == 1
+    assert one_error_line(result) == \
+        f"multidevice_bench.py: error: {tmp_path / 'missing'}: no such folder"
+    assert not ran(tmp_path)

@@ -107,16 +107,17 @@ def check_not_input(paths):
             raise InputFileError(path, source)
 
 
-def check_outputs(paths):
+def check_outputs(paths, folders_made=False):
     """Refuses, before any work, to write the files at paths: a file tracked by git
     (TrackedFileError), a file the tool reads (InputFileError), a folder where a file
-    goes or a file where a folder would be made (OSError, naming the path)."""
+    goes, a missing folder (unless folders_made: the writer makes it, as write_all
+    does) or a file where a folder would be (OSError, naming the path)."""
     paths = [pathlib.Path(path) for path in paths]
     check_not_input(paths)
     for path in paths:
         if path.is_dir():
             raise IsADirectoryError(errno.EISDIR, "is a folder, not a file", str(path))
-        _check_folder_can_hold(path.parent)
+        _check_folder_can_hold(path.parent, folders_made)
     check_not_tracked(paths)
 
 
@@ -127,16 +128,20 @@ def check_output_folder(folder, names):
     if folder.exists() and not folder.is_dir():
         raise NotADirectoryError(errno.ENOTDIR, "is a file, not a folder: name the folder "
                                  "to write into", str(folder))
-    check_outputs([folder / name for name in names])
+    _check_folder_can_hold(folder, True)
+    check_outputs([folder / name for name in names], True)
 
 
-def _check_folder_can_hold(folder):
-    """Raises OSError when files cannot be written into folder: a file stands at it
-    or above it, or the nearest existing folder is not writable."""
+def _check_folder_can_hold(folder, made=False):
+    """Raises OSError when files cannot be written into folder: it is missing
+    (unless made: then the nearest existing folder above it must take it), a file
+    stands at it or above it, or the folder is not writable."""
     folder = folder if str(folder) else pathlib.Path(".")
     existing = folder
-    while not existing.exists() and existing != existing.parent:
+    while made and not existing.exists() and existing != existing.parent:
         existing = existing.parent
+    if not existing.exists():
+        raise FileNotFoundError(errno.ENOENT, "no such folder", str(existing))
     if not existing.is_dir():
         raise NotADirectoryError(errno.ENOTDIR, "is a file, not a folder", str(existing))
     if not os.access(existing, os.W_OK | os.X_OK):
