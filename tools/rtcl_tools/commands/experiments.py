@@ -92,7 +92,6 @@ import pathlib
 import sys
 import tempfile
 
-from ..interrupts import exit_status, interruptible, signal_name  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the flops files; matplotlib is optional (see above)
@@ -102,6 +101,7 @@ from ..experiment import (FIGURES, PROGRESS_NAME, Journal, load_journal,  # noqa
                           replot, results_folder, run_experiment, study_folder,
                           study_options, write_outputs)
 from ..flops import FlopsFileError  # noqa: E402
+from ..interrupts import exit_status, interruptible, signal_name  # noqa: E402
 from ..paper import DEFAULT_REPEAT, QUICK_SIZE  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..runner import RtclFailed  # noqa: E402

@@ -24,7 +24,6 @@ left half-written.  Needs numpy and matplotlib.
 import argparse
 import sys
 
-from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the flops files; matplotlib once the options are read (--help needs none)
@@ -32,6 +31,7 @@ require("numpy")  # the flops files; matplotlib once the options are read (--hel
 from .. import files  # noqa: E402
 from ..flops import (FlopsFileError, load_flops, output_format,  # noqa: E402
                      sidecar_mismatches, sidecar_path)
+from ..interrupts import interruptible  # noqa: E402
 from ..plots import DEFAULT_BINS, plot_flops_histograms  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..usage import add_update_committed, program_name, report_error  # noqa: E402

@@ -33,12 +33,12 @@ the folder is never replaced.
 import argparse
 import os
 
-from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the meshes
 
 from .. import benchscenes, files, spd  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..usage import parse_size, program_name, report_error  # noqa: E402
 

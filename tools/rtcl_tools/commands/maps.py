@@ -47,7 +47,6 @@ matplotlib.
 import argparse
 import pathlib
 
-from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the maps; matplotlib once the options are read (--help needs none)
@@ -56,6 +55,7 @@ import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
 from ..flops import FLOPS_DTYPE, flop_unit, output_format, read_npy  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..pieces import (NO_DEVICE, PiecesError, device_map, device_names, load_pieces,  # noqa: E402
                       sample_ranges, splits_samples)
 from ..plots import pyplot  # noqa: E402

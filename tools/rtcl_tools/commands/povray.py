@@ -122,12 +122,12 @@ import os
 import shutil
 import sys
 
-from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the meshes
 
 from .. import files, genscene  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..locations import SOURCE_ROOT  # noqa: E402
 from ..povray_mesh import MeshError  # noqa: E402
 from ..povray_run import RunError, povray_version, render, summary  # noqa: E402

@@ -22,7 +22,6 @@ Pillow (which matplotlib brings).
 import argparse
 import pathlib
 
-from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")
@@ -30,6 +29,7 @@ require("numpy")
 import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..schedule import UNSTARTED_GROUP, ScheduleMapError, load_map  # noqa: E402
 from ..usage import add_update_committed, program_name, report_error  # noqa: E402

@@ -37,12 +37,12 @@ import sys
 import tempfile
 from statistics import median
 
-from ..interrupts import interruptible  # noqa: E402
 from ..requirements import require
 
 require("numpy")  # the meshes of a version 2 scene
 
 from .. import files, genscene, locations  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..povray_run import povray_version  # noqa: E402
 from ..povray_sdl import to_sdl  # noqa: E402
 from ..scene import SceneError, load_scene  # noqa: E402
