@@ -54,7 +54,12 @@ done
 [ -n "$fl" ] && cp "$here/counts.npy" "$fl"
 device=$(cat "$here/device")
 [ "$k" = reference ] && device="CPU reference (C++, GLM, double precision, one core)"
-printf '{"device": "%s", "kernel": "%s", "kernel_ms": 10.0, "workgroup": "%s", "groups": "%s", "global_size": [4, 4], "width": 4, "height": 4, "max_depth": 5, "scene": "paper60.json (built-in)", "gflop": 1e-05, "parallel_efficiency": 0.5}\n' "$device" "$k" "$w" "$g" > "$st"
+{
+    printf '{"device": "%s", "kernel": "%s", "kernel_ms": 10.0, ' "$device" "$k"
+    printf '"workgroup": "%s", "groups": "%s", "global_size": [4, 4], ' "$w" "$g"
+    printf '"width": 4, "height": 4, "max_depth": 5, "scene": "paper60.json (built-in)", '
+    printf '"gflop": 1e-05, "parallel_efficiency": 0.5}\n'
+} > "$st"
 """
 
 
