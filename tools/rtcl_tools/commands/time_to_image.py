@@ -169,7 +169,9 @@ def main(argv=None):
     try:
         with files.committed_files_allowed(args.update_committed):
             files.check_input_files([args.scene])   # before minutes of runs
-            files.reading([args.scene])
+            if args.scene:   # the scene and its meshes: no output replaces them
+                files.reading([args.scene, *(mesh["file"] for mesh
+                                             in load_scene(args.scene).get("meshes", []))])
             if args.output:
                 files.check_outputs([args.output])
             text = run(args)
