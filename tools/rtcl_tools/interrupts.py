@@ -16,6 +16,7 @@ import functools
 import signal
 import sys
 
+from . import files
 from .usage import program_name
 
 SIGNALS = (signal.SIGINT, signal.SIGTERM, signal.SIGHUP)
@@ -65,11 +66,14 @@ def signals_raise():
 
 def interruptible(main):
     """Wraps a command's main(argv): signals become Interrupted, and one that the
-    command does not catch ends it with one line and status 128 + the signal."""
+    command does not catch ends it with one line and status 128 + the signal.  The
+    inputs the command registered (files.reading) are its own: forgotten when it
+    returns, so that a test calling several commands in one process sees each
+    one's alone."""
     @functools.wraps(main)
     def wrapper(argv=None):
         try:
-            with signals_raise():
+            with signals_raise(), files.inputs_forgotten():
                 return main(argv)
         except KeyboardInterrupt as error:
             print(f"\n{program_name()}: interrupted ({signal_name(error)})", file=sys.stderr)
