@@ -333,5 +333,6 @@ def test_a_missing_output_folder_is_refused_before_the_runs(tmp_path, marking_rt
                       tmp_path / "missing" / "m.md", "--rtcl", marking_rtcl, cwd=tmp_path)
     assert result.returncode == 1
     assert one_error_line(result) == \
-        f"multidevice_bench.py: error: {tmp_path / 'missing'}: no such folder"
+        f"multidevice_bench.py: error: {tmp_path / 'missing' / 'm.md'}: No such file or " \
+        f"directory (no folder {tmp_path / 'missing'})"
     assert not ran(tmp_path)

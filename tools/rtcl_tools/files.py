@@ -117,6 +117,9 @@ def check_outputs(paths, folders_made=False):
     for path in paths:
         if path.is_dir():
             raise IsADirectoryError(errno.EISDIR, "is a folder, not a file", str(path))
+        if not folders_made and not path.parent.exists():
+            raise FileNotFoundError(errno.ENOENT, f"{os.strerror(errno.ENOENT)} (no folder "
+                                    f"{path.parent})", str(path))
         _check_folder_can_hold(path.parent, folders_made)
     check_not_tracked(paths)
 
