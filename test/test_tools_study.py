@@ -38,7 +38,7 @@ n=$(( $(cat "$here/count" 2>/dev/null || echo 0) + 1 ))
 echo "$n" > "$here/count"
 echo "$*" >> "$here/calls"
 if [ -e "$here/hang-at" ] && [ "$n" -ge "$(cat "$here/hang-at")" ]; then
-    touch "$here/hanging"; exec sleep 600
+    echo $$ > "$here/pid"; touch "$here/hanging"; exec sleep 600
 fi
 if [ -e "$here/fail-at" ] && [ "$n" -ge "$(cat "$here/fail-at")" ]; then
     echo "rtcl: device lost" >&2; exit 3
@@ -77,6 +77,26 @@ def fake_rtcl(tmp_path):
 
 def calls(fake):
     return (fake.parent / "calls").read_text().splitlines()
+
+
+def running(pid):
+    """Whether process pid runs (exists and is not a zombie)."""
+    try:
+        with open(f"/proc/{pid}/stat") as stat:
+            return stat.read().rsplit(")", 1)[1].split()[0] != "Z"
+    except (OSError, IndexError):
+        return False
+
+
+def assert_rtcl_ended(fake):
+    """The hanging rtcl did not outlive the tool that ran it."""
+    pid = int((fake.parent / "pid").read_text())
+    deadline = time.monotonic() + 10
+    while running(pid):
+        if time.monotonic() > deadline:
+            os.kill(pid, signal.SIGKILL)
+            pytest.fail("the rtcl the tool ran was left running")
+        time.sleep(0.05)
 
 
 def tool_env(tmp_path):
@@ -160,6 +180,7 @@ def test_an_interrupted_study_ends_cleanly_and_resumes(tmp_path, fake_rtcl, sign
             os.killpg(process.pid, signal.SIGKILL)
     assert process.returncode == 128 + signum
     assert "Traceback" not in stderr
+    assert_rtcl_ended(fake_rtcl)
     name = signal.Signals(signum).name
     assert stderr.splitlines()[-1] == \
         f"experiments.py: interrupted ({name}); 2 run(s) kept in {out}/study-progress.json: " \
@@ -185,6 +206,7 @@ def test_sigterm_ends_bench_without_a_traceback(tmp_path, fake_rtcl):
     process.terminate()
     _, stderr = process.communicate(timeout=60)
     assert process.returncode == 143 and "Traceback" not in stderr
+    assert_rtcl_ended(fake_rtcl)
     assert stderr.splitlines()[-1] == "bench.py: interrupted (SIGTERM); nothing written"
     assert not list((tmp_path / "tmp").iterdir()) and not (tmp_path / "b").exists()
 
