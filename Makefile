@@ -343,7 +343,7 @@ install: $(BIN)
 	$(INSTALL) -m 644 $(TOOL_COMMAND_MODULES) $(DATADIR)/tools/rtcl_tools/commands
 	for script in $(TOOL_SCRIPTS); do \
 		command=rtcl-$$(basename $$script .py | tr _ -); \
-		module=$$(sed -n 's/^from rtcl_tools\.commands\.\([a-z_]*\) import main$$/\1/p' $$script); \
+		module=$$(sed -n 's/^from rtcl_tools\.commands\.\([a-z_]*\) import main\( *#.*\)\{0,1\}$$/\1/p' $$script); \
 		[ -n "$$module" ] || { echo "$$script: no rtcl_tools.commands module" >&2; exit 1; }; \
 		sed -e "s|@COMMAND@|$$command|g" -e "s|@MODULE@|$$module|g" \
 			-e "s|@PYTHON@|$(PYTHON)|g" tools/build/tool_wrapper.py.in \

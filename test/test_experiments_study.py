@@ -232,6 +232,9 @@ def fake_rtcl(tmp_path):
 
 @pytest.mark.slow  # make test's 3 minutes (cold, 2-core VM)
 def test_accel_and_scene_reach_every_rtcl_call_and_name_the_folder(tmp_path, fake_rtcl):
+    scene = tmp_path / "somewhere" / "lake-10.json"   # read by the fake rtcl: not at all
+    scene.parent.mkdir()
+    scene.write_text("{}")   # but it must be a file: checked before the first run
     result = run_tool("--rtcl", fake_rtcl, "--quick", "--no-sweep", "--accel", "bvh",
                       "--scene", "somewhere/lake-10.json", cwd=tmp_path)
     assert result.returncode == 0, result.stderr

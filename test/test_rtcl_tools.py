@@ -217,8 +217,12 @@ def test_a_missing_module_is_one_line_saying_how_to_install_it(tmp_path, tool, m
                             capture_output=True, text=True, cwd=tmp_path,
                             env=blocking(tmp_path, module), timeout=60)
     assert result.returncode == 1
-    assert result.stderr == (f"{tool}: needs {module} (pip install {module}, or apt-get "
-                             f"install python3-{module})\n")
+    # The Python that lacks it and the commands that install it (the blocked module
+    # is blocked in every Python: none to run the tool under instead, checkout.py).
+    assert result.stderr == (f"{tool}: needs {module}, which {sys.executable} lacks: `make "
+                             f"deps` (Debian's python3-{module} for /usr/bin/python3, which "
+                             f"tools/NAME.py then uses), or `{sys.executable} -m pip install "
+                             f"{module}`\n")
     assert list(tmp_path.iterdir()) == [tmp_path / "blockers"]
 
 

@@ -2,7 +2,10 @@
 """rtcl-bench run from the source tree: rtcl_tools/commands/bench.py says what it does."""
 import sys
 
-from rtcl_tools.commands.bench import main
+from rtcl_tools.checkout import python_with
+
+python_with()  # needs no module beyond Python's own
+from rtcl_tools.commands.bench import main  # noqa: E402
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -2,7 +2,10 @@
 """rtcl-experiments run from the source tree: rtcl_tools/commands/experiments.py says what it does."""
 import sys
 
-from rtcl_tools.commands.experiments import main
+from rtcl_tools.checkout import python_with
+
+python_with(required=("numpy",), wanted=("matplotlib",))
+from rtcl_tools.commands.experiments import main  # noqa: E402
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -5,8 +5,13 @@
                  from a checkout as tools/NAME.py (a thin wrapper)
     files        the one atomic writer (text, figures, copies, all-or-nothing sets),
                  which never replaces a file tracked by git (--update-committed)
+                 or one the tool reads (reading()); inputs opened without blocking
+                 (open_input: no folder, FIFO or device); outputs checked first
     locations    where the tools find rtcl and the results folders
-    requirements a missing numpy or matplotlib as one line
+    requirements a missing numpy or matplotlib as one line, with its install command
+    checkout     tools/NAME.py's Python: the running one, or another that has the
+                 modules the tool needs (/usr/bin/python3 after make deps)
+    interrupts   Ctrl-C, SIGTERM and SIGHUP as one line, temporary folders removed
     scene        the scene validator (docs/SCENE.md, mirroring host/scene/scene.c)
     runner       running rtcl: RtclFailed, Run, Settings, progress lines
     report       number formats, markdown tables, CSV, device folder names
@@ -22,5 +27,6 @@
     images, ppm                             tools/imgdiff.py (and ppmdiff.py)
 
 tools/NAME.py imports this package from its own folder, which Python puts first
-on sys.path when it runs `python3 tools/NAME.py` from any directory.
+on sys.path when it runs `python3 tools/NAME.py` from any directory, and calls
+checkout.python_with(the modules it needs) before it imports its command.
 """

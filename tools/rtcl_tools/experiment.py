@@ -7,18 +7,21 @@ and its docstring the description.
 import argparse
 import dataclasses
 import json
+import os
 import pathlib
 import re
 import sys
 
-from . import files, flops, peak, plots, table1
+from . import files, peak, plots, table1
+from . import flops as flops_module
 from .histogram import histogram_from_json, histogram_of
 from .paper import (GROUP_KERNELS, PAPER, PAPER_BATCH, PAPER_GEOMETRY, PARALLEL_KERNELS,
                     QUICK_GROUP_SCALES, QUICK_WORKGROUPS, SWEEP_GROUP_SCALES,
                     SWEEP_REPEAT, SWEEP_WORKGROUPS)
 from .report import device_slug, git_commit, scene_stem, utc_now
-from .runner import (REQUIRED_STATS, Progress, Run, Settings, common_options, run_rtcl,
-                     scaled_groups, schedule_path)
+from .requirements import install_command
+from .runner import (REQUIRED_STATS, Progress, Run, Settings, common_options, describe,
+                     run_rtcl, scaled_groups, schedule_path)
 from .usage import command_name
 
 
@@ -52,11 +55,11 @@ def best_of_sweep(sweep):
     return dataclasses.replace(select_best(sweep), role="best")
 
 
-def sweep_kernel(settings, progress, kernel, workgroups, group_scales):
+def sweep_kernel(settings, progress, kernel, workgroups, group_scales, journal=None):
     """Returns the sweep runs of one kernel, the best geometry's last."""
     batch = PAPER_BATCH.get(kernel)
     runs = [measure(settings, progress, "sweep", kernel, workgroup, repeat=SWEEP_REPEAT,
-                    batch=batch)
+                    batch=batch, journal=journal)
             for workgroup in workgroups]
     if kernel in GROUP_KERNELS:
         fastest = select_best(runs)
@@ -70,29 +73,47 @@ def sweep_kernel(settings, progress, kernel, workgroups, group_scales):
                 continue
             tried.add(groups)
             runs.append(measure(settings, progress, "sweep", kernel, fastest.workgroup,
-                                groups, repeat=SWEEP_REPEAT, batch=batch))
+                                groups, repeat=SWEEP_REPEAT, batch=batch, journal=journal))
     return runs
 
 
-def measure(settings, progress, role, kernel, *args, **options):
+def measure(settings, progress, role, kernel, workgroup=None, groups=None, *, repeat=None,
+            flops=True, batch=None, journal=None):
     """Runs rtcl once (runner.run_rtcl) and returns the Run with the histogram of its
     flops file (Figure 7's data), the file itself deleted: tens of MB each, they
     would fill the temporary folder over a sweep, and results.json keeps what the
-    figures need."""
-    run = run_rtcl(settings, progress, role, kernel, *args, **options)
+    figures need.  A run the journal holds (--resume) is taken from it, not run
+    again; a new one is added to it."""
+    key = run_key(role, kernel, workgroup, groups, batch)
+    if journal is not None and key in journal.runs:
+        run = journal.runs[key]
+        progress.start(describe(kernel, workgroup, groups, batch)
+                       + (f" ({role})" if role in ("sweep", "best") else ""))
+        progress.finish(run.stats["kernel_ms"], "measured before the interruption")
+        return run
+    run = run_rtcl(settings, progress, role, kernel, workgroup, groups, repeat, flops, batch)
     if run.flops_path:
         try:
             run.histogram = histogram_of(load_checked_flops(run.flops_path))
         finally:
-            for path in (run.flops_path, flops.sidecar_path(run.flops_path),
+            for path in (run.flops_path, flops_module.sidecar_path(run.flops_path),
                          schedule_path(run.flops_path)):
                 path.unlink(missing_ok=True)
             run.flops_path = None
+    if journal is not None:
+        journal.add(key, run)
     return run
 
 
-def run_experiment(arguments, temp_dir):
-    """Runs every configuration and returns the list of Runs."""
+def run_key(role, kernel, workgroup, groups, batch):
+    """Returns the name of one planned run, e.g. 'sweep-cyclic-8x8-50x50-b1'."""
+    return "-".join(str(part) for part in (role, kernel, workgroup, groups,
+                                           batch and f"b{batch}") if part)
+
+
+def run_experiment(arguments, temp_dir, journal=None):
+    """Runs every configuration and returns the list of Runs; with a journal, the
+    runs it holds are taken from it and every new one is added to it."""
     workgroups = QUICK_WORKGROUPS if arguments.quick else SWEEP_WORKGROUPS
     group_scales = QUICK_GROUP_SCALES if arguments.quick else SWEEP_GROUP_SCALES
     # --accel none (the default): the paper's brute force, so that Table 1 stays
@@ -103,20 +124,111 @@ def run_experiment(arguments, temp_dir):
                                           arguments.no_sweep, workgroups, group_scales))
     runs = []
     if not arguments.no_serial:
-        runs.append(measure(settings, progress, "serial", "serial", repeat=1))
+        runs.append(measure(settings, progress, "serial", "serial", repeat=1,
+                            journal=journal))
     if not arguments.no_reference:
         runs.append(measure(settings, progress, "reference", "reference", repeat=1,
-                            flops=False))
+                            flops=False, journal=journal))
     for kernel in PARALLEL_KERNELS:
         workgroup, groups = PAPER_GEOMETRY[kernel]
         runs.append(measure(settings, progress, "paper", kernel, workgroup, groups,
-                            batch=PAPER_BATCH.get(kernel)))
+                            batch=PAPER_BATCH.get(kernel), journal=journal))
     if not arguments.no_sweep:
         for kernel in PARALLEL_KERNELS:
-            sweep = sweep_kernel(settings, progress, kernel, workgroups, group_scales)
+            sweep = sweep_kernel(settings, progress, kernel, workgroups, group_scales,
+                                 journal)
             runs += sweep
             runs.append(best_of_sweep(sweep))   # its histogram: histograms_best.png
     return runs
+
+
+# --resume: the runs of a study so far, kept beside its results while it runs.
+PROGRESS_NAME = "study-progress.json"
+PROGRESS_FORMAT = "rtcl-experiments-progress"
+# The options that make a study what it is: --resume takes them from the journal.
+STUDY_OPTIONS = ("platform", "device", "scene", "accel", "size", "depth", "repeat", "quick",
+                 "no_sweep", "no_reference", "no_serial", "no_plots", "peak_gflops",
+                 "fma_units", "out", "update_committed")
+
+
+class Journal:
+    """The runs of one study so far, written to <folder>/study-progress.json after
+    every run (atomically, as every file here), so that `--resume FOLDER` after an
+    interruption or a failed run goes on where the study stopped: the runs it holds
+    are not run again.  The folder is the study's results folder, made when the
+    first run has named the device (folder_for(stats)); the journal is removed once
+    the results are written."""
+
+    def __init__(self, options, folder_for, folder=None, device=None, runs=None):
+        self.options = options
+        self.folder_for = folder_for
+        self.folder = None if folder is None else pathlib.Path(folder)
+        self.device = device
+        self.runs = dict(runs or {})
+
+    @property
+    def path(self):
+        return None if self.folder is None else self.folder / PROGRESS_NAME
+
+    def add(self, key, run):
+        """Keeps run (under its key) and rewrites the journal.  The CPU reference
+        names no device: the journal is written from the first run on the device."""
+        if run.kernel != "reference":
+            device = run.stats["device"]
+            if self.device is not None and device != self.device:
+                raise ValueError(f"{self.path}: the study ran on {self.device}, this run "
+                                 f"on {device}: not resumed (start a new study)")
+            if self.folder is None:
+                self.folder = pathlib.Path(self.folder_for(run.stats))
+            self.device = device
+        self.runs[key] = run
+        if self.folder is None:
+            return
+        document = {"format": PROGRESS_FORMAT, "version": 1, "device": self.device,
+                    "options": self.options,
+                    "runs": [dict(item.to_json(), key=name) for name, item in self.runs.items()]}
+        files.write_text(self.path, compact_number_lists(json.dumps(document, indent=1)) + "\n")
+
+    def discard(self):
+        """Removes the journal: the study's results are written."""
+        if self.path is not None:
+            files.remove(self.path)
+
+
+def study_options(arguments):
+    """Returns the options of arguments that define the study (STUDY_OPTIONS), the
+    scene as an absolute path (a resumed study may run from another folder)."""
+    options = {name: getattr(arguments, name) for name in STUDY_OPTIONS}
+    if options["scene"] is not None:
+        options["scene"] = os.path.abspath(options["scene"])
+    if options["out"] is not None:
+        options["out"] = os.path.abspath(options["out"])
+    options["rtcl"] = os.path.abspath(arguments.rtcl) if arguments.rtcl else None
+    return options
+
+
+def load_journal(folder):
+    """Returns the Journal in folder (--resume FOLDER); ValueError naming what is
+    wrong when there is none or it is not one."""
+    path = pathlib.Path(folder) / PROGRESS_NAME
+    if not path.exists():
+        raise ValueError(f"{folder}: no interrupted study here ({PROGRESS_NAME} is missing: "
+                         "it is removed once a study's results are written)")
+    data = read_results(path)
+    if not isinstance(data, dict) or data.get("format") != PROGRESS_FORMAT \
+            or not isinstance(data.get("options"), dict) \
+            or not isinstance(data.get("runs"), list) or not isinstance(data.get("device"), str):
+        raise ValueError(f"{path}: not the progress of a study (tools/experiments.py writes it)")
+    options = data["options"]
+    missing = [name for name in STUDY_OPTIONS if name not in options]
+    if missing:
+        raise ValueError(f"{path}: options lack {', '.join(missing)}")
+    runs = {}
+    for index, item in enumerate(data["runs"]):
+        run = stored_run(path, index, item)
+        runs[item.get("key") or run_key(run.role, run.kernel, run.workgroup, run.groups,
+                                         run.batch)] = run
+    return Journal(options, None, folder, data["device"], runs)
 
 
 def study_folder(device_name, accel="none", scene=None):
@@ -139,11 +251,36 @@ def results_folder(out, device_name, accel="none", scene=None):
 
 def study_peak(stats, peak_gflops=None, fma_units=None, cpuinfo=None):
     """Returns {"gflops", "formula"}: the FP32 peak of the device of stats (peak.py),
-    gflops None when unknown. cpuinfo: /proc/cpuinfo's fields when the device is
-    this machine's CPU, {} otherwise (a stored study replotted elsewhere)."""
+    gflops None when unknown; for a CPU also "cpuinfo", the fields of /proc/cpuinfo it
+    is computed from.  cpuinfo: /proc/cpuinfo's fields when the device is this
+    machine's CPU, {} otherwise (a stored study replotted elsewhere)."""
     options = argparse.Namespace(peak_gflops=peak_gflops, fma_units=fma_units)
     found = peak.find_peak(stats, options, cpuinfo or {})
-    return {"gflops": found.gflops, "formula": found.formula}
+    result = {"gflops": found.gflops, "formula": found.formula}
+    if cpuinfo and peak.is_cpu_device(stats["device"]):
+        result["cpuinfo"] = peak.peak_cpuinfo(cpuinfo)
+    return result
+
+
+def replot_cpuinfo(meta, stats, out_dir):
+    """Returns the CPU fields --replot --fma-units computes the peak from: those
+    results.json keeps, else this machine's when it is the study's CPU; ValueError
+    when the study ran on no CPU or its CPU's fields are not at hand."""
+    device = stats["device"]
+    if not peak.is_cpu_device(device):
+        raise ValueError(f"--fma-units: the study in {out_dir} ran on {device}, not a CPU: "
+                         "its peak takes no FMA units (--peak-gflops X gives another)")
+    stored = meta.get("peak", {}).get("cpuinfo") if isinstance(meta.get("peak"), dict) \
+        else None
+    if isinstance(stored, dict) and stored.get("flags") is not None:
+        return stored
+    here = peak.read_cpuinfo()
+    model = here.get("model name", "")
+    if model and model in device:
+        return here
+    raise ValueError(f"--fma-units: {out_dir}/results.json does not keep the flags of its "
+                     f"CPU ({device}), and this machine's is another ({model or 'unknown'}): "
+                     "give its peak with --peak-gflops X")
 
 
 def study_meta(arguments, stats):
@@ -198,10 +335,12 @@ def figure_context(runs, meta):
     return table1.device_run(runs).stats["device"] + table1.study_suffix(runs, meta)
 
 
-def skipped_figures_note(out_dir, why):
-    """Returns the one line saying the figures were not drawn and how to draw them."""
+def skipped_figures_note(out_dir, why, install=None):
+    """Returns the one line saying the figures were not drawn and how to draw them
+    (install: how to install matplotlib, when it is missing)."""
     return (f"figures skipped ({why}); `{command_name()} --replot {out_dir}` on a "
-            "machine with matplotlib draws them from results.json")
+            "machine with matplotlib draws them from results.json"
+            + (f" ({install} installs it here)" if install else ""))
 
 
 def draw_figures(out_dir, runs, meta, no_plots=False):
@@ -212,8 +351,10 @@ def draw_figures(out_dir, runs, meta, no_plots=False):
     """
     missing = "--no-plots" if no_plots else plots.matplotlib_missing()
     if missing:
-        why = missing if no_plots else f"matplotlib cannot be imported: {missing}"
-        return [], [skipped_figures_note(out_dir, why)]
+        if no_plots:
+            return [], [skipped_figures_note(out_dir, missing)]
+        return [], [skipped_figures_note(out_dir, f"matplotlib cannot be imported: {missing}",
+                                         install_command(["matplotlib"]))]
     context = figure_context(runs, meta)
     plots.plot_speedup(table1.speedup_bars(runs), out_dir / "speedup.png", context)
     drawn = ["speedup.png"]
@@ -247,8 +388,8 @@ def figure_histogram(run):
 
 def load_checked_flops(path):
     """Returns flops.FlopsFile for path, warning where its sidecar disagrees."""
-    flops_file = flops.load_flops(path)
-    for problem in flops.sidecar_mismatches(flops_file):
+    flops_file = flops_module.load_flops(path)
+    for problem in flops_module.sidecar_mismatches(flops_file):
         print(f"warning: {path.name}.json: {problem}", file=sys.stderr)
     return flops_file
 
@@ -262,7 +403,8 @@ KEPT_FIGURES = ("histograms.png", "histograms_best.png")
 def read_results(path):
     """Returns the object stored in results.json at path; ValueError if unreadable."""
     try:
-        text = path.read_text(encoding="utf-8")
+        with files.open_input(path, "r") as stream:
+            text = stream.read()
     except (OSError, UnicodeDecodeError) as error:
         reason = getattr(error, "strerror", None) or "not UTF-8 text"
         raise ValueError(f"{path}: cannot read: {reason}") from None
@@ -339,24 +481,30 @@ def changed_best_geometries(old_runs, new_runs):
             for kernel in old if kernel in new and old[kernel] != new[kernel]]
 
 
-def replot(out_dir, no_plots=False, peak_gflops=None):
+def replot(out_dir, no_plots=False, peak_gflops=None, fma_units=None):
     """Rewrites out_dir's table1.md and figures from its results.json.
 
     Runs no rtcl.  Histograms are redrawn from the histograms that results.json
     stores; one written before it stored them leaves histograms*.png as they are.
     Without matplotlib (or with no_plots) only table1.md is rewritten.  The bounds
     use peak_gflops when given, else the peak results.json stores, else the built-in
-    table of GPU peaks.  Returns the
-    lines to print: what was rewritten, kept or skipped.  Nothing is written when
-    results.json is missing or malformed (ValueError).
+    table of GPU peaks; fma_units (a CPU study's) computes the peak again from the
+    CPU's fields that results.json keeps (ValueError for a GPU's study, or one whose
+    CPU's fields are not at hand).  Returns the lines to print: what was rewritten,
+    kept or skipped.  Nothing is written when results.json is missing or malformed
+    (ValueError).
     """
     out_dir = pathlib.Path(out_dir)
     files.check_not_tracked([out_dir / name for name in ("table1.md", *FIGURES)])
     meta, stored = load_results(out_dir / "results.json")
     runs = best_rows_from_sweep(stored)
     meta = dict(meta, regenerated={"date": utc_now(), "commit": git_commit()})
-    if peak_gflops is not None or not isinstance(meta.get("peak"), dict):
-        meta["peak"] = study_peak(table1.device_run(runs).stats, peak_gflops)
+    stats = table1.device_run(runs).stats
+    if fma_units is not None and peak_gflops is None:
+        meta["peak"] = study_peak(stats, None, fma_units,
+                                  replot_cpuinfo(meta, stats, out_dir))
+    elif peak_gflops is not None or not isinstance(meta.get("peak"), dict):
+        meta["peak"] = study_peak(stats, peak_gflops)
     text = table1.render_table1(runs, meta)
     drawn, notes = draw_figures(out_dir, runs, meta, no_plots)
     files.write_text(out_dir / "table1.md", text)

@@ -9,10 +9,12 @@ is mean / max flops per launched work-item (docs/RENDERING.md).
 import dataclasses
 import json
 import math
+import os
 import pathlib
 
 import numpy as np
 
+from .files import open_input
 from .report import one_line
 
 FLOPS_DTYPE = np.dtype("<u8")
@@ -115,14 +117,19 @@ def read_npy(path, error):
     exception class) with one line naming the file when it is missing, has no
     NumPy header or cannot be read. rtcl's .npy outputs all come through here."""
     path = pathlib.Path(path)
-    if not path.is_file():
-        raise error(f"{path}: no such file")
     try:
-        with open(path, "rb") as stream:
+        stream = open_input(path)
+    except FileNotFoundError:
+        raise error(f"{path}: no such file") from None
+    except OSError as failure:
+        raise error(f"{path}: {failure.strerror}") from None
+    try:
+        with stream:
             if stream.read(len(NPY_MAGIC)) != NPY_MAGIC:
                 raise error(f"{path}: not a .npy file (no NumPy header)")
-        return np.load(path, allow_pickle=False)
-    except (OSError, ValueError) as failure:
+            stream.seek(0)
+            return np.load(stream, allow_pickle=False)
+    except (OSError, ValueError, EOFError) as failure:
         if isinstance(failure, error):
             raise
         raise error(f"{path}: not a readable .npy file ({one_line(failure)})") from None
@@ -143,11 +150,14 @@ def load_flops(path):
 def _load_sidecar(npy_path):
     """Returns the sidecar's JSON object, or None when there is no sidecar."""
     path = sidecar_path(npy_path)
-    if not path.exists():
+    if not os.path.lexists(path):
         return None
     try:
-        sidecar = json.loads(path.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError) as error:
+        with open_input(path, "r") as stream:
+            sidecar = json.loads(stream.read())
+    except OSError as error:
+        raise FlopsFileError(f"{path}: unreadable sidecar ({error.strerror})") from None
+    except (UnicodeDecodeError, json.JSONDecodeError) as error:
         raise FlopsFileError(f"{path}: unreadable sidecar ({error})") from None
     if not isinstance(sidecar, dict):
         raise FlopsFileError(f"{path}: sidecar is not a JSON object")

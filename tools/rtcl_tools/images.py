@@ -16,12 +16,24 @@ import subprocess
 import sys
 import zlib
 
+from .files import open_input
+
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"
 PNG_CHANNELS = {0: 1, 2: 3, 4: 2, 6: 4}   # colour type: channels (no palette)
 
 
 class ImageError(Exception):
     """An image that cannot be read or compared (one line, naming the file)."""
+
+
+class SizeDiffers(Exception):
+    """Two images of different sizes or channel counts: a result (they differ), not
+    an error; the message is the report line."""
+
+    def __init__(self, path, reference_path, shape, reference_shape):
+        super().__init__(f"{path}: size {shape[0]}x{shape[1]} ({shape[2]} channels) differs "
+                         f"from {reference_shape[0]}x{reference_shape[1]} "
+                         f"({reference_shape[2]} channels) of {reference_path}")
 
 
 @dataclasses.dataclass
@@ -56,7 +68,7 @@ def native_format(data):
 def read(path):
     """Returns the Image of a PPM, PFM or PNG file; ImageError otherwise."""
     try:
-        with open(path, "rb") as stream:
+        with open_input(path) as stream:
             data = stream.read()
     except OSError as error:
         raise ImageError(f"{path}: cannot read: {error.strerror}") from None
@@ -217,22 +229,57 @@ def idiff_program():
     return shutil.which("idiff")
 
 
-def compare_with_idiff(reference_path, path, threshold):
-    """Returns the Comparison that OpenImageIO's idiff makes of two files of any
-    format it reads; ImageError when it cannot read one or their sizes differ."""
-    program = idiff_program()
+def oiio_program(name):
+    """Returns OpenImageIO's program name (idiff, iinfo) on PATH; ImageError without it."""
+    program = shutil.which(name)
     if program is None:
-        raise ImageError(f"{path}: only PPM, PFM and PNG are read without OpenImageIO's "
-                         "idiff (apt-get install openimageio-tools)")
+        raise ImageError(f"only PPM, PFM and PNG are read without OpenImageIO's {name} "
+                         "(apt-get install openimageio-tools)")
+    return program
+
+
+def last_lines(output, count=2):
+    lines = [line.strip() for line in output.splitlines() if line.strip()]
+    return " ".join(lines[-count:])
+
+
+def oiio_shape(path):
+    """Returns (width, height, channels) of the first image of the file at path as
+    OpenImageIO's iinfo reads it; ImageError when it cannot."""
+    try:
+        result = subprocess.run([oiio_program("iinfo"), str(path)], capture_output=True,
+                                text=True, timeout=300)
+    except subprocess.TimeoutExpired:
+        raise ImageError(f"{path}: iinfo did not finish in 300 s") from None
+    match = re.search(r":\s+(\d+)\s+x\s+(\d+),\s+(\d+)\s+channel", result.stdout)
+    if result.returncode != 0 or match is None:
+        raise ImageError(f"{path}: OpenImageIO cannot read it: "
+                         f"{last_lines(result.stdout + result.stderr) or 'iinfo failed'}")
+    return tuple(int(value) for value in match.groups())
+
+
+def compare_with_idiff(reference_path, path, threshold, reference_shape=None):
+    """Returns the Comparison that OpenImageIO's idiff makes of two files of any
+    format it reads; ImageError when it cannot read one.  Their sizes are compared
+    first (iinfo; reference_shape when known): idiff compares images of different
+    sizes over their common part and answers FAILURE, which is no comparison."""
+    for name in (reference_path, path):
+        try:
+            open_input(name).close()
+        except OSError as error:
+            raise ImageError(f"{name}: cannot read: {error.strerror}") from None
+    program = oiio_program("idiff")
+    shapes = (reference_shape or oiio_shape(reference_path), oiio_shape(path))
+    if shapes[0] != shapes[1]:
+        raise SizeDiffers(path, reference_path, shapes[1], shapes[0])
     limit = f"{threshold:g}" if threshold else "0"
     result = subprocess.run([program, "-fail", limit, "-warn", limit, reference_path, path],
                             capture_output=True, text=True)
     output = result.stdout + result.stderr
     if result.returncode == 3:
         raise ImageError(f"{path}: size or channels differ from {reference_path}")
-    if result.returncode > 3:
-        last = [line.strip() for line in output.splitlines() if line.strip()]
-        raise ImageError(f"{path}: idiff cannot compare it: {' '.join(last[-2:])}")
+    if result.returncode > 3 or (result.returncode == 2 and "Max error" not in output):
+        raise ImageError(f"{path}: idiff cannot compare it: {last_lines(output)}")
     if "Max error" not in output:
         return Comparison(0, "pixels", 0.0, math.inf, None)
     largest = float(re.search(r"Max error\s*=\s*([-+0-9.eE]+|inf|nan)", output).group(1))

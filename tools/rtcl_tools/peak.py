@@ -86,6 +86,27 @@ def cpu_peak(stats, cpuinfo, fma_units):
                         f"CL_DEVICE_MAX_CLOCK_FREQUENCY) = {gflops:,.1f} GFLOP/s")
 
 
+def is_cpu_device(device):
+    """Whether the OpenCL device named device is a CPU: PoCL's ('pthread-...',
+    'cpu-...', '... (Portable Computing Language)')."""
+    return bool("Portable Computing Language" in device
+                or re.match(r"(pthread|cpu|basic)-", device))
+
+
+# The /proc/cpuinfo fields a CPU's peak is computed from (kept in results.json, so
+# that --replot --fma-units elsewhere can compute it again).
+PEAK_FLAGS = ("avx512f", "avx2", "fma")
+
+
+def peak_cpuinfo(cpuinfo):
+    """Returns the fields of cpuinfo that cpu_peak reads, the flags cut to PEAK_FLAGS."""
+    kept = {name: cpuinfo[name] for name in ("model name", "cpu cores", "siblings")
+            if name in cpuinfo}
+    kept["flags"] = " ".join(flag for flag in cpuinfo.get("flags", "").split()
+                             if flag in PEAK_FLAGS)
+    return kept
+
+
 def find_peak(stats, arguments, cpuinfo):
     """Returns the Peak for the device of stats; its gflops None when unknown."""
     if arguments.peak_gflops:
@@ -97,9 +118,7 @@ def find_peak(stats, arguments, cpuinfo):
         peak = gpu_peak(device, units)
         if peak:
             return peak
-    is_cpu = "Portable Computing Language" in device or re.match(r"(pthread|cpu|basic)-",
-                                                                 device)
-    if is_cpu and cpuinfo:
+    if is_cpu_device(device) and cpuinfo:
         peak = cpu_peak(stats, cpuinfo, arguments.fma_units)
         if peak:
             return peak

@@ -14,6 +14,8 @@ import pathlib
 
 import numpy as np
 
+from .files import open_input
+
 NO_DEVICE = -1  # a pixel that no piece covered
 
 
@@ -43,7 +45,8 @@ def load_pieces(path):
     raises PiecesError naming what is wrong."""
     path = pathlib.Path(path)
     try:
-        stats = json.loads(path.read_text())
+        with open_input(path, "r") as stream:
+            stats = json.loads(stream.read())
     except OSError as error:
         raise PiecesError(f"{path}: cannot read it ({error.strerror})") from None
     except (UnicodeDecodeError, json.JSONDecodeError):

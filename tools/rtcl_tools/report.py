@@ -41,7 +41,10 @@ def to_csv(columns, rows):
 
 
 def one_line(error):
-    """Returns the message of error on one line (numpy's may span several)."""
+    """Returns the message of error on one line (numpy's may span several); an
+    OSError that names a file as 'FILE: REASON', without Python's [Errno N]."""
+    if isinstance(error, OSError) and error.filename is not None and error.strerror:
+        return " ".join(f"{error.filename}: {error.strerror}".split())
     return " ".join(str(error).split())
 
 

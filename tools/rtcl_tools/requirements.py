@@ -2,7 +2,10 @@
 
 A command module calls require() before it imports what needs numpy (at its
 top), or in its main() before it draws with matplotlib (so that --help works
-without it), e.g. require("matplotlib") in rtcl-flops-hist.
+without it), e.g. require("matplotlib") in rtcl-flops-hist.  The line names the
+Python that lacks the module and the command that installs it: from a checkout
+`make deps` (Debian's packages for /usr/bin/python3, which tools/NAME.py then finds:
+checkout.py), installed `apt-get install ...`; or pip for the Python that ran.
 """
 
 import importlib
@@ -10,11 +13,14 @@ import sys
 
 from .usage import program_name
 
-HOW_TO_INSTALL = {
-    "numpy": "pip install numpy, or apt-get install python3-numpy",
-    "matplotlib": "pip install matplotlib, or apt-get install python3-matplotlib",
-    "PIL": "pip install pillow, or apt-get install python3-pil",
+# module: (its pip package, its Debian package)
+PACKAGES = {
+    "numpy": ("numpy", "python3-numpy"),
+    "matplotlib": ("matplotlib", "python3-matplotlib"),
+    "PIL": ("pillow", "python3-pil"),
 }
+# The Python that `make deps` gives the packages to (the Makefile's PYTHON).
+SYSTEM_PYTHON = "/usr/bin/python3"
 
 
 def missing_modules(*names):
@@ -28,10 +34,35 @@ def missing_modules(*names):
     return missing
 
 
-def requirement_message(program, missing):
-    """Returns 'PROGRAM: needs numpy (pip install numpy, or ...)' for the missing names."""
-    return f"{program}: needs " + "; ".join(
-        f"{name} ({HOW_TO_INSTALL.get(name, 'pip install ' + name)})" for name in missing)
+def joined(names):
+    """Returns 'a', 'a and b' or 'a, b and c'."""
+    names = list(names)
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def install_command(missing, python=None, checkout=None):
+    """Returns the commands that install the missing modules: `make deps` in a
+    checkout (Debian's packages, for /usr/bin/python3), else apt-get; or pip for
+    python (default: the running one)."""
+    if checkout is None:
+        from .locations import in_source_tree
+        checkout = in_source_tree()
+    python = python or sys.executable or "python3"
+    debian = " ".join(PACKAGES.get(name, (name, "python3-" + name.lower()))[1]
+                      for name in missing)
+    pip = " ".join(PACKAGES.get(name, (name,))[0] for name in missing)
+    system = (f"`make deps` (Debian's {debian} for {SYSTEM_PYTHON}, which tools/NAME.py "
+              "then uses)" if checkout else f"`apt-get install {debian}` (for {SYSTEM_PYTHON})")
+    return f"{system}, or `{python} -m pip install {pip}`"
+
+
+def requirement_message(program, missing, python=None, tried=(), checkout=None):
+    """Returns 'PROGRAM: needs numpy, which PYTHON lacks: INSTALL COMMAND' for the
+    missing names (tried: the other Pythons that lack them too)."""
+    python = python or sys.executable or "python3"
+    others = f", as do {', '.join(tried)}" if tried else ""
+    return (f"{program}: needs {joined(missing)}, which {python} lacks{others}: "
+            f"{install_command(missing, python, checkout)}")
 
 
 def require(*names):

@@ -92,8 +92,9 @@ class Progress:
         print(f"[{self.done}/{self.total}] {description} ...", end="", file=sys.stderr,
               flush=True)
 
-    def finish(self, kernel_ms):
-        print(f" {kernel_ms:.1f} ms", file=sys.stderr, flush=True)
+    def finish(self, kernel_ms, note=None):
+        print(f" {kernel_ms:.1f} ms" + (f" ({note})" if note else ""), file=sys.stderr,
+              flush=True)
 
     def fail(self, note="failed"):
         print(f" {note}", file=sys.stderr, flush=True)

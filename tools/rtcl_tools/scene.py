@@ -23,6 +23,7 @@ import json
 import os
 import stat
 
+from .files import open_input
 from .scene_check import (SceneError, Written, _escaped, check_keys, child, did_you_mean, fail,
                           format_number, format_vector, integer, length, number, optional,
                           required, scale_to_unit_max, type_name, vec3)
@@ -444,8 +445,9 @@ def parse(data):
 
 
 def load_scene(path):
-    """Returns the scene in the file at path; SceneError (or OSError) if it cannot."""
-    with open(path, "rb") as stream:
+    """Returns the scene in the file at path; SceneError (or OSError) if it cannot
+    (a folder or FIFO too: files.open_input)."""
+    with open_input(path) as stream:
         data = stream.read()
     return read_scene(parse(data), os.path.dirname(os.path.abspath(path)))
 

@@ -1,6 +1,7 @@
 """Table 1 of the 2009 paper, ours beside the paper's, and Figure 6's speedups."""
 
 from .paper import PAPER, PARALLEL_KERNELS, SWEEP_REPEAT
+from .peak import is_cpu_device
 from .report import BUILT_IN_SCENE, format_number, format_percent, markdown_table, scene_stem
 
 TABLE_COLUMNS = ("Implementation", "work-group", "groups / threads", "time ms (median)",
@@ -50,6 +51,35 @@ def simd_for_bound(stats):
     return None, None
 
 
+def cpu_bound_row(run, peak_gflops):
+    """Returns the bounds row of a run on a CPU, where SIMD efficiency (a GPU's warps
+    of 32 in lock-step) does not apply: the flop-peak bound, and time / that bound
+    as all that is lost."""
+    stats = run.stats
+    kernel_ms = stats["kernel_ms"]
+    gflop = stats.get("gflop")
+    peak_ms = 1e3 * gflop / peak_gflops if gflop and peak_gflops else None
+    return (implementation_name(run), format_number(kernel_ms, 2), "does not apply (CPU)",
+            "–", format_number(peak_ms, 3), "–",
+            format_number(ratio(kernel_ms, peak_ms), 1, "×"),
+            format_percent(ratio(peak_ms, kernel_ms)))
+
+
+# Why a CPU's bounds leave SIMD efficiency out (bounds_lines).
+CPU_SIMD_NOTE = ("On this CPU the SIMD columns do not apply: the modelled SIMD efficiency "
+                 "assumes a GPU's warps of 32 work-items in lock-step, while PoCL runs a "
+                 "work-group's work-items one after the other, or in a loop its compiler "
+                 "vectorises to the CPU's own vector width (8 FP32 lanes with AVX2, 16 with "
+                 "AVX-512) where it can, which rtcl does not measure. Only the flop-peak "
+                 "bound applies: *lost elsewhere* is then time / flop-peak bound, "
+                 "divergence included.")
+
+
+def on_cpu(runs):
+    """Whether the study's device (not the CPU reference) is a CPU (PoCL)."""
+    return is_cpu_device(device_run(runs).stats.get("device", ""))
+
+
 def bound_row(run, peak_gflops):
     """Returns the cells of one row of the bounds table (item 4 of issue 25, after
     Aila & Laine 2009): the time, the time at 100 % SIMD efficiency (time × SIMD
@@ -89,6 +119,10 @@ def bounds_lines(runs, peak):
     shown = [run for run in table_runs(runs) if run.kernel != "reference"]
     peak_gflops = peak.get("gflops") if peak else None
     formula = peak.get("formula") if peak else "unknown (--peak-gflops X gives it)"
+    if on_cpu(runs):
+        return ["", "## Bounds", "", CPU_SIMD_NOTE, "", f"- FP32 peak: {formula}", "",
+                markdown_table(BOUND_COLUMNS, [cpu_bound_row(run, peak_gflops)
+                                               for run in shown])]
     return ["", "## Bounds", "",
             "Where each kernel stands between two lower bounds on its time (after Aila "
             "& Laine 2009): **at 100 % SIMD** = time × SIMD efficiency, the time "
@@ -288,7 +322,9 @@ def beyond_the_paper_lines(runs):
                  "traced pixels: from the schedule map, of those launched (on a CPU, "
                  "where a work-group's items run one after the other, the first items "
                  "of dynamic and persistent take most of the work: their low parallel "
-                 "efficiency)")
+                 "efficiency)" + ("; on this CPU the modelled column is a GPU's warp "
+                                  "model, which does not apply (see Bounds)"
+                                  if on_cpu(runs) else ""))
     if "wavefront" in kernels:
         lines.append("- wavefront: time = sum of every launch of a frame (primary rays, "
                      "then one launch per bounce); the work-group and groups are those of "

@@ -62,6 +62,7 @@ from .. import bench_report, files, locations, scaling
 from ..bench_options import parse_arguments
 from ..bench_plan import plan
 from ..bench_run import BenchProgress, SilentProgress, probe, run_sweep
+from ..interrupts import exit_status, interruptible, signal_name
 from ..peak import find_peak, read_cpuinfo
 from ..report import device_slug, git_describe, one_line, to_csv, utc_now
 from ..runner import RtclFailed, Settings, common_options, describe
@@ -112,6 +113,7 @@ def run_benchmark(arguments, temp_dir, command_line):
     return outputs, device_slug(device_stats["device"])
 
 
+@interruptible
 def main(argv=None):
     program = program_name()
     argv = sys.argv[1:] if argv is None else argv
@@ -126,9 +128,10 @@ def main(argv=None):
         return report_error(program, error)
     except (OSError, ValueError, KeyError, locations.NotFound) as error:
         return report_error(program, one_line(error))
-    except KeyboardInterrupt:
-        print(f"\n{program}: interrupted; nothing written", file=sys.stderr)
-        return 130
+    except KeyboardInterrupt as error:
+        print(f"\n{program}: interrupted ({signal_name(error)}); nothing written",
+              file=sys.stderr)
+        return exit_status(error)
     for path in outputs:
         print(f"{program}: wrote {path}", file=sys.stderr)
     return 0
@@ -138,10 +141,12 @@ def main(argv=None):
 def benchmark(arguments, command_line):
     """Runs the benchmark and writes its files; returns their paths."""
     # What would be refused at the end is refused before hours of runs.
+    files.check_input_files([arguments.scene])
+    files.reading([arguments.scene])
     if arguments.update_committed:
         locations.committed_results()
     elif arguments.out is not None:
-        files.check_not_tracked([pathlib.Path(arguments.out) / name for name in OUTPUT_NAMES])
+        files.check_output_folder(arguments.out, OUTPUT_NAMES)
     with tempfile.TemporaryDirectory(prefix="rtcl-bench-") as temp_name:
         texts, slug = run_benchmark(arguments, pathlib.Path(temp_name), command_line)
     out_dir = output_folder(arguments, slug)

@@ -12,15 +12,18 @@ asserts nothing. A file tracked by git is replaced only with --update-committed.
 """
 import argparse
 import pathlib
+import re
 import sys
 import tempfile
 
 from .. import files, locations, runner
+from ..interrupts import interruptible
 from ..report import device_slug, one_line, to_csv
 from ..usage import (add_rtcl_option, add_update_committed, command_name, program_name,
                      report_error)
 
 OUTPUT_NAMES = ("spp.md", "spp.csv")
+MAX_SPP = 65536   # rtcl's --spp limit (SCENE_MAX_SAMPLES)
 CSV_COLUMNS = ("spp", "passes", "kernel_ms", "kernel_ms_min", "kernel_ms_max",
                "ms_per_sample", "linearity")
 
@@ -34,13 +37,28 @@ def parse_arguments(argv):
     parser.add_argument("--depth")
     parser.add_argument("-p", "--platform")
     parser.add_argument("-d", "--device")
-    parser.add_argument("-r", "--repeat", type=int, default=5)
-    parser.add_argument("--max-spp", type=int, default=64)
+    parser.add_argument("-r", "--repeat", type=int, default=5,
+                        help="timed frames per sample count (default %(default)s)")
+    parser.add_argument("--max-spp", type=int, default=64,
+                        help=f"the largest sample count, 1 ... {MAX_SPP} (rtcl's --spp; "
+                             "default %(default)s)")
     parser.add_argument("-o", "--out", type=pathlib.Path, metavar="DIR",
                         help="the folder to write into (default: a new folder "
                              "rtcl-results/<device-slug>-spp-<YYYYmmdd-HHMMSS>)")
     add_update_committed(parser)
-    return parser.parse_args(argv)
+    arguments = parser.parse_args(argv)
+    # Refused here, not by rtcl after the smaller counts' runs.
+    if not 1 <= arguments.max_spp <= MAX_SPP:
+        parser.error(f"--max-spp {arguments.max_spp}: expected 1 ... {MAX_SPP} (rtcl's "
+                     "--spp limit)")
+    if arguments.repeat < 1:
+        parser.error(f"--repeat {arguments.repeat}: expected at least 1")
+    if not re.fullmatch(r"[1-9][0-9]{0,4}x[1-9][0-9]{0,4}", arguments.size):
+        parser.error(f"--size: expected WxH with positive integers, got {arguments.size!r}")
+    if arguments.depth is not None and not (re.fullmatch(r"[0-9]{1,2}", arguments.depth)
+                                            and int(arguments.depth) <= 64):
+        parser.error(f"--depth: expected 0 ... 64, got {arguments.depth!r}")
+    return arguments
 
 
 def measure(arguments):
@@ -84,13 +102,16 @@ def render_report(arguments, rows):
     return {"spp.md": "\n".join(lines) + "\n", "spp.csv": to_csv(CSV_COLUMNS, table)}
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()
     try:
         with files.committed_files_allowed(arguments.update_committed):
-            if arguments.out is not None:   # refused before the runs, not after
-                files.check_not_tracked([arguments.out / name for name in OUTPUT_NAMES])
+            files.check_input_files([arguments.scene])   # before the runs, not after
+            files.reading([arguments.scene])
+            if arguments.out is not None:
+                files.check_output_folder(arguments.out, OUTPUT_NAMES)
             rows = measure(arguments)
             out = arguments.out or locations.new_results_folder(
                 device_slug(rows[0][1]["device"]) + "-spp")

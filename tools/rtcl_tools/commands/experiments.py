@@ -55,17 +55,30 @@ and `rtcl-experiments --replot DIR` on a machine with matplotlib draws them.
 every figure with the current report code (the best-of-sweep rows taken from the
 stored sweep runs, the table saying when and by which commit it was regenerated).
 A results.json written before it stored histograms leaves histograms*.png as they
-are.  Of the other options only --no-plots, --peak-gflops and --update-committed
-(needed to redraw committed results) are read.
+are.  It takes only --no-plots, --peak-gflops, --fma-units and --update-committed
+(needed to redraw committed results); any other option is refused.
+
+While it runs, the study keeps the runs it finished in its results folder
+(study-progress.json, rewritten after every run).  Interrupted (Ctrl-C, SIGTERM,
+SIGHUP: one line, no traceback, exit status 128 + the signal, the temporary folder
+removed) or stopped by a failed rtcl run, it says so and gives the command that
+goes on: --resume DIR runs the study with the options it started with (only
+--rtcl may be given again), takes the finished runs from the journal without
+running them, and removes the journal once the results are written.
 
 table1.md ends with the bounds of each kernel (docs/RENDERING.md): its time at 100 %
 SIMD efficiency and the time its counted flops take at the device's FP32 peak.  The
 peak comes from --peak-gflops, else a built-in table (NVIDIA H100, H200, A100), else,
-for a CPU, /proc/cpuinfo with --fma-units; results.json keeps it, so --replot on
-another machine uses the measuring machine's.
+for a CPU, /proc/cpuinfo with --fma-units; results.json keeps it (for a CPU with the
+fields of /proc/cpuinfo it came from), so --replot on another machine uses the
+measuring machine's, and --replot --fma-units N computes a CPU's again (refused for
+a GPU's study, or an older CPU study's without those fields on another CPU).  On a
+CPU the SIMD columns say they do not apply: SIMD efficiency is modelled on a GPU's
+warps of 32 in lock-step, which PoCL does not have.
 
     rtcl-experiments -p 0 -d 0                 # the full 2000x2000 experiment
     rtcl-experiments --quick -o quick          # 400x400, a smaller sweep, into quick/
+    rtcl-experiments --resume quick            # go on after an interruption
     rtcl-experiments -p 0 -d 0 --accel bvh     # the study with the BVH
     rtcl-experiments -p 0 -d 0 --accel bvh -s lake/lake-10.json --no-plots
     make experiments DEVICE="-p 0 -d 0"        # the same through make
@@ -84,13 +97,16 @@ from ..requirements import require
 require("numpy")  # the flops files; matplotlib is optional (see above)
 
 from .. import files, locations  # noqa: E402
-from ..experiment import (FIGURES, replot, results_folder, run_experiment,  # noqa: E402
-                          study_folder, write_outputs)
+from ..experiment import (FIGURES, PROGRESS_NAME, Journal, load_journal,  # noqa: E402
+                          replot, results_folder, run_experiment, study_folder,
+                          study_options, write_outputs)
 from ..flops import FlopsFileError  # noqa: E402
+from ..interrupts import exit_status, interruptible, signal_name  # noqa: E402
 from ..paper import DEFAULT_REPEAT, QUICK_SIZE  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..runner import RtclFailed  # noqa: E402
-from ..usage import add_rtcl_option, add_update_committed, program_name, report_error  # noqa: E402
+from ..usage import (add_rtcl_option, add_update_committed, command_name,  # noqa: E402
+                     program_name, report_error)
 
 
 def parse_arguments(argv):
@@ -149,9 +165,27 @@ def parse_arguments(argv):
     parser.add_argument("--replot", metavar="DIR",
                         help="run no rtcl: rewrite DIR/table1.md and the figures from "
                              "DIR/results.json with the current report code (histograms "
-                             "only where results.json stores them; other options than "
-                             "--no-plots and --peak-gflops are not read)")
+                             "only where results.json stores them); takes only "
+                             "--no-plots, --peak-gflops, --fma-units (a CPU study's) and "
+                             "--update-committed")
+    parser.add_argument("--resume", metavar="DIR",
+                        help="go on with the study interrupted in DIR (its results folder, "
+                             f"holding {PROGRESS_NAME}) with the options it started with: "
+                             "the runs it finished are not run again; takes only --rtcl")
     arguments = parser.parse_args(argv)
+    given = given_options(parser, arguments)
+    if arguments.resume is not None:
+        others = [name for name in given if name not in ("resume", "rtcl")]
+        if others:
+            parser.error(f"--resume DIR goes on with the options the study started with: it "
+                         f"takes no {', '.join(option_name(name) for name in others)}")
+        return arguments
+    if arguments.replot is not None:
+        others = [name for name in given if name not in (*REPLOT_OPTIONS, "rtcl")]
+        if others:
+            parser.error(f"--replot DIR runs no rtcl and reads "
+                         f"{', '.join(option_name(name) for name in REPLOT_OPTIONS[1:])} "
+                         f"only: it takes no {', '.join(option_name(n) for n in others)}")
     if arguments.update_committed and arguments.out is not None:
         parser.error("--update-committed writes into docs/results/<study>: it takes no --out")
     if arguments.quick and arguments.size is None:
@@ -163,6 +197,21 @@ def parse_arguments(argv):
     if arguments.fma_units is not None and arguments.fma_units < 1:
         parser.error(f"--fma-units {arguments.fma_units}: expected a positive integer")
     return arguments
+
+
+# What --replot reads besides DIR.
+REPLOT_OPTIONS = ("replot", "no_plots", "peak_gflops", "fma_units", "update_committed")
+
+
+def given_options(parser, arguments):
+    """Returns the names (dests) of the options given on the command line: those whose
+    value is not the parser's default."""
+    return [name for name, value in vars(arguments).items()
+            if value != parser.get_default(name)]
+
+
+def option_name(dest):
+    return "--" + dest.replace("_", "-")
 
 
 def output_folder(arguments, stats):
@@ -180,43 +229,92 @@ def output_folder(arguments, stats):
     return folder
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()
+    if arguments.resume is not None:
+        try:
+            journal = load_journal(arguments.resume)
+        except ValueError as error:
+            return report_error(program, one_line(error))
+        arguments = resumed_arguments(arguments, journal)
+    else:
+        journal = None
     with files.committed_files_allowed(arguments.update_committed):
         if arguments.replot is not None:
             return replot_main(program, arguments.replot, arguments.no_plots,
-                               arguments.peak_gflops)
-        return experiment_main(program, arguments)
+                               arguments.peak_gflops, arguments.fma_units)
+        return experiment_main(program, arguments, journal)
 
 
-def experiment_main(program, arguments):
-    """Runs the experiment and writes its results; returns the exit status."""
+def resumed_arguments(arguments, journal):
+    """Returns the arguments of the study that journal holds (--resume): its own
+    options, with --rtcl if given now, else its rtcl if it is still there."""
+    options = dict(journal.options)
+    rtcl = arguments.rtcl
+    if rtcl is None and options.get("rtcl") and locations.is_program(options["rtcl"]):
+        rtcl = options["rtcl"]
+    options.pop("rtcl", None)
+    return argparse.Namespace(**{**vars(arguments), **options, "rtcl": rtcl})
+
+
+def experiment_main(program, arguments, journal=None):
+    """Runs the experiment (or goes on with the journal's, --resume) and writes its
+    results; returns the exit status.  An interrupted or failed study keeps what it
+    measured in its folder's journal and says how to resume it."""
     with tempfile.TemporaryDirectory(prefix="rtcl-experiments-") as temp_name:
         temp_dir = pathlib.Path(temp_name)
         try:
-            if arguments.out is not None:   # refused before hours of runs, not after
-                out = pathlib.Path(arguments.out)
-                files.check_not_tracked([out / name for name in
-                                         ("results.json", "table1.md", *FIGURES)])
+            # Refused before hours of runs, not after.
+            files.check_input_files([arguments.scene])
+            files.reading([arguments.scene])
+            if arguments.update_committed:
+                locations.committed_results()
+            elif arguments.out is not None and journal is None:
+                files.check_output_folder(arguments.out, ("results.json", "table1.md",
+                                                          PROGRESS_NAME, *FIGURES))
             arguments.rtcl = locations.find_rtcl(arguments.rtcl)
-            runs = run_experiment(arguments, temp_dir)
+            if journal is None:
+                journal = Journal(study_options(arguments),
+                                  lambda stats: output_folder(arguments, stats))
+            runs = run_experiment(arguments, temp_dir, journal)
             out_dir, notes = write_outputs(runs, arguments,
-                                           lambda stats: output_folder(arguments, stats))
-        except RtclFailed as error:
-            return report_error(program, error)
-        except (OSError, ValueError, FlopsFileError, locations.NotFound) as error:
-            return report_error(program, one_line(error))
+                                           lambda stats: journal.folder
+                                           or output_folder(arguments, stats))
+            journal.discard()
+        except KeyboardInterrupt as error:
+            print(f"\n{program}: interrupted ({signal_name(error)}); "
+                  + resume_note(journal, "nothing written"), file=sys.stderr)
+            return exit_status(error)
+        except (RtclFailed, OSError, ValueError, FlopsFileError, locations.NotFound) as error:
+            status = report_error(program, error if isinstance(error, RtclFailed)
+                                  else one_line(error))
+            if kept_runs(journal):
+                print(f"{program}: {resume_note(journal, '')}", file=sys.stderr)
+            return status
     for note in notes:
         print(f"{program}: {note}", file=sys.stderr)
     print(f"{program}: results in {out_dir}", file=sys.stderr)
     return 0
 
 
-def replot_main(program, out_dir, no_plots, peak_gflops=None):
+def kept_runs(journal):
+    return 0 if journal is None or journal.path is None else len(journal.runs)
+
+
+def resume_note(journal, otherwise):
+    """Returns what an interrupted study kept and the command that goes on with it."""
+    if not kept_runs(journal):
+        return otherwise
+    return (f"{kept_runs(journal)} run(s) kept in {journal.path}: `{command_name()} --resume "
+            f"{journal.folder}` goes on with the study")
+
+
+def replot_main(program, out_dir, no_plots, peak_gflops=None, fma_units=None):
     """--replot: redraws the report of out_dir; returns the exit status."""
     try:
-        notes = replot(out_dir, no_plots, peak_gflops)
+        notes = replot(out_dir, no_plots, peak_gflops, fma_units)
     except (OSError, ValueError, locations.NotFound) as error:
         return report_error(program, one_line(error))
     for note in notes:

@@ -13,10 +13,12 @@ cross-checked against the sidecar.  With several files the y axis is the % of ea
     rtcl-flops-hist naive.npy cyclic.npy dynamic.npy -o fig7.png --log
     rtcl-flops-hist run.npy --overlay --bins 100 -o run.svg
 
-A file that is missing, unreadable or not a 2-D '<u8' array is an error: one line
-on stderr, exit status 1, and no output file; so is an output file tracked by git
-(unless --update-committed).  The output is written to a temporary file and
-renamed, so it is never left half-written.  Needs numpy and matplotlib.
+A file that is missing, unreadable, not a regular file (a folder, a FIFO) or not a
+2-D '<u8' array is an error: one line on stderr, exit status 1, and no output file;
+so is an output file tracked by git (unless --update-committed) or one that names an
+input (a flops file or its sidecar, by path, link or inode); --bins above 1000 is
+refused.  The output is written to a temporary file and renamed, so it is never
+left half-written.  Needs numpy and matplotlib.
 """
 
 import argparse
@@ -29,9 +31,14 @@ require("numpy")  # the flops files; matplotlib once the options are read (--hel
 from .. import files  # noqa: E402
 from ..flops import (FlopsFileError, load_flops, output_format,  # noqa: E402
                      sidecar_mismatches, sidecar_path)
+from ..interrupts import interruptible  # noqa: E402
 from ..plots import DEFAULT_BINS, plot_flops_histograms  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..usage import add_update_committed, program_name, report_error  # noqa: E402
+
+# More bins than a figure has pixel columns show nothing more (1000 draw in about
+# a second here, 10000 in 8 s; 10^8 drew for hours).
+MAX_BINS = 1000
 
 
 def parse_arguments(argv):
@@ -50,15 +57,18 @@ def parse_arguments(argv):
     parser.add_argument("--overlay", action="store_true",
                         help="draw every file on one plot instead of one subplot each")
     parser.add_argument("--bins", type=int, default=DEFAULT_BINS,
-                        help="histogram bins (default %(default)s)")
+                        help=f"histogram bins, 1 ... {MAX_BINS} (default %(default)s)")
     parser.add_argument("--title", help="title over the whole figure")
     add_update_committed(parser)
     arguments = parser.parse_args(argv)
-    if arguments.bins < 1:
-        parser.error("--bins must be at least 1")
+    if not 1 <= arguments.bins <= MAX_BINS:
+        parser.error(f"--bins {arguments.bins}: expected 1 ... {MAX_BINS} (a figure is "
+                     "about a thousand pixels wide: more bins draw nothing more, and "
+                     "millions take hours)")
     return arguments
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()
@@ -74,7 +84,8 @@ def main(argv=None):
 def draw(program, arguments):
     """Reads the flops files and writes the figure."""
     output_format(arguments.output)
-    files.check_not_tracked([arguments.output])
+    files.reading([*arguments.files, *map(sidecar_path, arguments.files)])
+    files.check_outputs([arguments.output])
     flops_files = [load_flops(path) for path in arguments.files]
     for flops_file in flops_files:
         for problem in sidecar_mismatches(flops_file):

@@ -37,7 +37,8 @@ from ..requirements import require
 
 require("numpy")  # the meshes
 
-from .. import benchscenes, spd  # noqa: E402
+from .. import benchscenes, files, spd  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..usage import parse_size, program_name, report_error  # noqa: E402
 
@@ -153,9 +154,11 @@ def summary(bench):
     return ", ".join(parts)
 
 
+@interruptible
 def main(argv=None):
     args = parse_arguments(argv)
     try:
+        files.check_output_folder(args.output_dir, [])
         os.makedirs(args.output_dir, exist_ok=True)
         for bench in benches(args):
             path = benchscenes.write(bench, args.output_dir)

@@ -4,7 +4,9 @@
     rtcl-imgdiff REFERENCE FILE...  [--threshold T]
 
 Reads every format rtcl writes: PPM, PFM and PNG itself, others (EXR, HDR, TIFF,
-...) through OpenImageIO's idiff when it is installed.  Prints, per file, how many
+...) through OpenImageIO's iinfo (their sizes, compared first: idiff compares
+images of different sizes over their common part) and idiff, when installed.  A
+folder, FIFO or device is refused at once, never read.  Prints, per file, how many
 channel values differ from the reference, the largest absolute difference (on a
 0 ... 1 scale: 1/255 is one 8-bit level; also in levels for 8-bit images) and the
 PSNR; with --threshold, pass or FAIL.
@@ -18,7 +20,10 @@ import argparse
 import math
 import sys
 
-from ..images import ImageError, compare, compare_with_idiff, native_format, read
+from ..files import open_input
+from ..images import (ImageError, SizeDiffers, compare, compare_with_idiff, native_format,
+                      read)
+from ..interrupts import interruptible
 from ..usage import program_name
 
 
@@ -53,7 +58,7 @@ def parse_arguments(argv):
 def file_kind(path):
     """Returns 'ppm', 'pfm' or 'png' when the file is one of those, else None."""
     try:
-        with open(path, "rb") as stream:
+        with open_input(path) as stream:
             return native_format(stream.read(8))
     except OSError as error:
         raise ImageError(f"{path}: cannot read: {error.strerror}") from None
@@ -78,8 +83,12 @@ def describe(path, reference_path, result, limit):
 def compare_files(reference_path, reference, path, limit):
     """Returns (report line, passes) for one file against the reference."""
     if reference is None or file_kind(path) is None:
-        return describe(path, reference_path,
-                        compare_with_idiff(reference_path, path, limit), limit)
+        shape = (reference.width, reference.height, reference.channels) if reference else None
+        try:
+            result = compare_with_idiff(reference_path, path, limit, shape)
+        except SizeDiffers as differs:
+            return str(differs), False
+        return describe(path, reference_path, result, limit)
     image = read(path)
     if (image.width, image.height, image.channels) != \
             (reference.width, reference.height, reference.channels):
@@ -89,6 +98,7 @@ def compare_files(reference_path, reference, path, limit):
     return describe(path, reference_path, compare(reference, image), limit)
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()

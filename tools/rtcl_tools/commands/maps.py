@@ -55,6 +55,7 @@ import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
 from ..flops import FLOPS_DTYPE, flop_unit, output_format, read_npy  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..pieces import (NO_DEVICE, PiecesError, device_map, device_names, load_pieces,  # noqa: E402
                       sample_ranges, splits_samples)
 from ..plots import pyplot  # noqa: E402
@@ -271,7 +272,8 @@ def plot_maps(out_path, work=None, schedule=None, *, pieces=None, log=False, tit
 def draw(arguments):
     """Reads the maps and writes the figure."""
     output_format(arguments.output)
-    files.check_not_tracked([arguments.output])
+    files.reading([arguments.work, arguments.schedule, arguments.pieces])
+    files.check_outputs([arguments.output])
     work = load_work_map(arguments.work) if arguments.work else None
     schedule = load_map(arguments.schedule) if arguments.schedule else None
     pieces = load_pieces(arguments.pieces) if arguments.pieces else None
@@ -291,6 +293,7 @@ def draw(arguments):
               title=arguments.title)
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()

@@ -29,6 +29,7 @@ import argparse
 import json
 import os
 import pathlib
+import re
 import shlex
 import statistics
 import subprocess
@@ -37,6 +38,7 @@ import tempfile
 import time
 
 from .. import files, locations
+from ..interrupts import interruptible
 from ..runner import RtclFailed, rtcl_reason
 from ..usage import (add_rtcl_option, add_update_committed, os_error_message, program_name,
                      report_error)
@@ -170,16 +172,32 @@ def parse_arguments(argv):
     parser.add_argument("-o", "--out", metavar="FILE",
                         help="also write the report to FILE")
     add_update_committed(parser)
-    return parser.parse_args(argv)
+    args = parser.parse_args(argv)
+    # Refused here, before any run (-r 0 once ended in statistics.StatisticsError).
+    if args.runs < 1:
+        parser.error(f"-r/--repeat {args.runs}: expected at least 1 run of each configuration")
+    if args.spp < 1:
+        parser.error(f"--spp {args.spp}: expected at least 1")
+    if args.mpi_np < 0:
+        parser.error(f"--mpi-np {args.mpi_np}: expected 0 (no MPI run) or more ranks")
+    if not re.fullmatch(r"([1-9][0-9]*(,[1-9][0-9]*)*)?", args.scan_rows):
+        parser.error(f"--scan-rows: expected band sizes such as 8,32,128, got "
+                     f"{args.scan_rows!r}")
+    if args.frames is not None:
+        match = re.fullmatch(r"([0-9]+):([0-9]+)", args.frames)
+        if not match or int(match.group(1)) > int(match.group(2)):
+            parser.error(f"--frames: expected A:B with A <= B, got {args.frames!r}")
+    return args
 
 
+@interruptible
 def main(argv=None):
     args = parse_arguments(argv)
     program = program_name()
     try:
         with files.committed_files_allowed(args.update_committed):
             if args.out:
-                files.check_not_tracked([args.out])   # before the runs, not after
+                files.check_outputs([args.out])   # before the runs, not after
             args.rtcl = locations.find_rtcl(args.rtcl)
             text = image_main(args, environment()) if not args.frames else \
                 frames_main(args, environment())

@@ -52,6 +52,7 @@ import sys
 
 from .. import files, locations, ppm
 from . import genbench
+from ..interrupts import interruptible
 from ..report import git_commit, markdown_table, one_line, to_csv, utc_now
 from ..usage import (UsageError, add_rtcl_option, add_update_committed, check_positive_int,
                      parse_size, program_name, report_error)
@@ -445,6 +446,7 @@ def compare(args, rtcl, out):
     print(report)
 
 
+@interruptible
 def main(argv=None):
     args = parse_arguments(argv)
     program = program_name()
@@ -453,7 +455,8 @@ def main(argv=None):
             out = args.out or locations.new_results_folder("peer")
             outputs = ([out / "counts.md"] if args.counts else [out / "cpu.md"] if args.cpu
                        else [out / "compare.md", out / "compare.csv"])
-            files.check_not_tracked(outputs)
+            files.reading(args.ply)
+            files.check_output_folder(out, [path.name for path in outputs])
             rtcl = locations.find_rtcl(args.rtcl)
             (out / "raw").mkdir(parents=True, exist_ok=True)
             (counts if args.counts else cpu if args.cpu else compare)(args, rtcl, out)

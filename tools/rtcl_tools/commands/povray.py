@@ -6,13 +6,16 @@ machine must need at most half the time that POV-Ray 3.7 (Debian's `povray`,
 equivalent scene at the same size.  The SDL written here is as close to
 docs/RENDERING.md as POV-Ray allows; what differs is listed below.
 
-    rtcl-povray                                   # scenes/paper60.json as SDL, on stdout
+    rtcl-povray                                   # the paper's 60 balls as SDL, on stdout
     rtcl-povray -s scenes/two_balls.json --size 64x48 -o balls.pov
     rtcl-povray --time 3 --size 2000x2000         # median/min/max of 3 POV-Ray renders
     rtcl-povray -s scenes/tir.json --image tir.png  # render once, keep the image
     rtcl-povray --time 3 --transparent-shadows    # POV-Ray's own filtered shadows
-(tools/povray.py in a checkout is the same command.)  Neither -o nor --image
-replaces a file tracked by git.
+(tools/povray.py in a checkout is the same command.)  Without -s, the scene is
+the paper's 60 balls, rtcl's built-in paper60 (scenes/paper60.json), made here as
+tools/genscene.py makes it, so that an installed copy needs no scene file.
+Neither -o nor --image replaces a file tracked by git, or the scene or a mesh it
+reads (by path, link or inode).
 
 With --time N (and --image FILE, which implies one run), the SDL is written to a
 temporary directory and rendered N times with
@@ -123,25 +126,34 @@ from ..requirements import require
 
 require("numpy")  # the meshes
 
-from .. import files  # noqa: E402
+from .. import files, genscene  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..locations import SOURCE_ROOT  # noqa: E402
 from ..povray_mesh import MeshError  # noqa: E402
 from ..povray_run import RunError, povray_version, render, summary  # noqa: E402
 from ..povray_sdl import opaque_warnings, to_sdl  # noqa: E402
-from ..scene import SceneError, load_scene  # noqa: E402
+from ..scene import SceneError, load_scene, read_scene  # noqa: E402
 from ..usage import os_error_message, parse_size, program_name  # noqa: E402
 
-# The checkout's scenes, or those `make install` put in share/rtcl beside the tools.
 ROOT = str(SOURCE_ROOT)
-DEFAULT_SCENE = os.path.join(ROOT, "scenes", "paper60.json")
+# Without -s: rtcl's built-in paper60, which tools/genscene.py's defaults make
+# byte for byte (scenes/paper60.json; test/test_povray.py checks it).
+DEFAULT_SCENE_NAME = "paper60 (built in)"
+
+
+def default_scene():
+    """Returns the paper's 60-ball scene, made as tools/genscene.py makes it."""
+    return read_scene(genscene.build_scene(genscene.REFERENCE_BALLS, genscene.DEFAULT_SEED,
+                                           (2000, 2000), 5))
 
 
 def parse_arguments(argv):
     parser = argparse.ArgumentParser(
         description="Convert an rtcl scene to POV-Ray 3.7 SDL; optionally time POV-Ray on it.",
         epilog="The module docstring lists how the scene maps and what differs.")
-    parser.add_argument("-s", "--scene", default=DEFAULT_SCENE, metavar="FILE",
-                        help="rtcl scene (default scenes/paper60.json)")
+    parser.add_argument("-s", "--scene", metavar="FILE",
+                        help="rtcl scene (default: the paper's 60 balls, rtcl's built-in "
+                             "paper60)")
     parser.add_argument("--size", type=parse_size, metavar="WxH",
                         help="image size (default the scene's)")
     parser.add_argument("--depth", type=int, metavar="N",
@@ -176,7 +188,8 @@ def print_report(args, scene, size, depth, version, exe, cmd, load, results):
         1 for o in scene["spheres"] + scene["planes"] if o["material"]["transmit"] > 0)
     print("povray: %s (%s)" % (version, exe))
     print("scene: %s, %dx%d, max_depth %d -> max_trace_level %d; %d spheres, %d planes, "
-          "%d lights, %d shadow clones" % (args.scene, size[0], size[1], depth, depth + 1,
+          "%d lights, %d shadow clones" % (args.scene or DEFAULT_SCENE_NAME, size[0], size[1],
+                                          depth, depth + 1,
                                           len(scene["spheres"]), len(scene["planes"]),
                                           len(scene["lights"]), n_clones))
     print("command (in a temporary directory holding scene.pov): %s" % " ".join(cmd))
@@ -195,20 +208,36 @@ def print_report(args, scene, size, depth, version, exe, cmd, load, results):
         print("image: %s" % args.image)
 
 
+def scene_label(path):
+    """Returns how the SDL's header names the scene: relative to the source tree
+    when it lies in it."""
+    if path is None:
+        return DEFAULT_SCENE_NAME
+    if os.path.abspath(path).startswith(ROOT + os.sep):
+        return os.path.relpath(path, ROOT)
+    return path
+
+
+@interruptible
 def main(argv=None):
     args = parse_arguments(argv)
     prog = program_name()
     try:
-        scene = load_scene(args.scene)
+        scene = load_scene(args.scene) if args.scene else default_scene()
     except (SceneError, OSError) as e:
         message = e.strerror if isinstance(e, OSError) else e
         print("%s: %s: %s" % (prog, args.scene, message), file=sys.stderr)
         return 1
+    files.reading([args.scene, *(mesh["file"] for mesh in scene.get("meshes", []))])
+    try:   # refused before the conversion and the renders, not after
+        files.check_outputs([path for path in (args.output, args.image) if path])
+    except OSError as e:
+        print("%s: %s" % (prog, os_error_message(e)), file=sys.stderr)
+        return 1
     size = args.size or scene["size"]
     depth = scene["max_depth"] if args.depth is None else args.depth
     try:
-        text = to_sdl(scene, size, depth, os.path.relpath(args.scene, ROOT)
-                      if os.path.abspath(args.scene).startswith(ROOT + os.sep) else args.scene,
+        text = to_sdl(scene, size, depth, scene_label(args.scene),
                       shadow_clones=not args.transparent_shadows)
     except MeshError as e:
         print("%s: %s: %s" % (prog, args.scene, e), file=sys.stderr)
@@ -219,7 +248,6 @@ def main(argv=None):
               " on them" % (prog, dropped), file=sys.stderr)
 
     try:
-        files.check_not_tracked([path for path in (args.output, args.image) if path])
         if args.output:
             files.write_text(args.output, text)
         elif args.time is None and not args.image:

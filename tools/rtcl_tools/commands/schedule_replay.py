@@ -29,6 +29,7 @@ require("numpy")
 import numpy as np  # noqa: E402
 
 from .. import files  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..report import one_line  # noqa: E402
 from ..schedule import UNSTARTED_GROUP, ScheduleMapError, load_map  # noqa: E402
 from ..usage import add_update_committed, program_name, report_error  # noqa: E402
@@ -124,13 +125,15 @@ def replay(arguments):
                        duration=[duration] * (len(frames) - 1) + [duration + 1000], loop=0)
 
 
+@interruptible
 def main(argv=None):
     arguments = parse_arguments(argv)
     program = program_name()
     require("PIL")
     try:
         with files.committed_files_allowed(arguments.update_committed):
-            files.check_not_tracked([arguments.output])
+            files.reading(arguments.maps)
+            files.check_outputs([arguments.output])
             replay(arguments)
     except (ScheduleMapError, OSError) as error:
         return report_error(program, one_line(error))

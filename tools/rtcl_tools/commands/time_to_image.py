@@ -42,6 +42,7 @@ from ..requirements import require
 require("numpy")  # the meshes of a version 2 scene
 
 from .. import files, genscene, locations  # noqa: E402
+from ..interrupts import interruptible  # noqa: E402
 from ..povray_run import povray_version  # noqa: E402
 from ..povray_sdl import to_sdl  # noqa: E402
 from ..scene import SceneError, load_scene  # noqa: E402
@@ -161,13 +162,18 @@ def run(args):
                   median_breakdown(breakdowns))
 
 
+@interruptible
 def main(argv=None):
     args = parse_arguments(argv)
     prog = program_name()
     try:
         with files.committed_files_allowed(args.update_committed):
+            files.check_input_files([args.scene])   # before minutes of runs
+            if args.scene:   # the scene and its meshes: no output replaces them
+                files.reading([args.scene, *(mesh["file"] for mesh
+                                             in load_scene(args.scene).get("meshes", []))])
             if args.output:
-                files.check_not_tracked([args.output])   # before minutes of runs
+                files.check_outputs([args.output])
             text = run(args)
             if args.output:
                 files.write_text(args.output, text)
