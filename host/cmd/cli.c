@@ -44,6 +44,8 @@ enum long_only_option {
 	OPT_FOV,
 	OPT_APERTURE,
 	OPT_FOCUS_DISTANCE,
+	OPT_CHECKPOINT,
+	OPT_NO_PARTIAL,
 };
 
 static const struct option long_options[] = {
@@ -73,6 +75,8 @@ static const struct option long_options[] = {
 	{"piece-rows", required_argument, NULL, OPT_PIECE_ROWS},
 	{"row-order", required_argument, NULL, OPT_ROW_ORDER},
 	{"repeat", required_argument, NULL, 'r'},
+	{"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
+	{"no-partial", no_argument, NULL, OPT_NO_PARTIAL},
 	{"stats", required_argument, NULL, OPT_STATS},
 	{"flops", required_argument, NULL, OPT_FLOPS},
 	{"work-map", required_argument, NULL, OPT_WORK_MAP},
@@ -193,6 +197,19 @@ static void print_help_after_kernels(FILE *out)
 		"                         every rank's devices), so an equal share of the\n"
 		"                         image is every S-th band; or the rows in order\n"
 		"\n"
+		"Interrupts and long renders:\n"
+		"      Ctrl-C (SIGINT) or SIGTERM during a render of several passes stops it\n"
+		"                         after the pass under way and writes the image of\n"
+		"                         the samples done, saying how many (the summary,\n"
+		"                         the file's metadata); a second one stops at once,\n"
+		"                         writing nothing. --frames keeps the frames\n"
+		"                         finished; -r, --mpi and pieces of pixels over\n"
+		"                         several devices write nothing\n"
+		"      --checkpoint SECONDS  also write the image of the samples done every\n"
+		"                         SECONDS (1..%d) during the passes, each a\n"
+		"                         complete file; one device or -k reference\n"
+		"      --no-partial       all or nothing: an interrupt writes nothing\n"
+		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
 		"                         -r, one launch: the image, timed, no warm-up;\n"
@@ -243,7 +260,8 @@ static void print_help_after_kernels(FILE *out)
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX);
+		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
+		CHECKPOINT_MAX_SECONDS);
 }
 
 void cli_print_help(FILE *out)
@@ -598,6 +616,17 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return parse_shape("--size", arg, SCENE_MAX_IMAGE_SIDE, o->size, err, err_size);
 	case OPT_DEPTH:
 		return parse_bounded("--depth", arg, 0, SCENE_MAX_DEPTH, &o->depth, err, err_size);
+	case OPT_CHECKPOINT: {
+		int seconds;
+		if (parse_bounded("--checkpoint", arg, 1, CHECKPOINT_MAX_SECONDS, &seconds, err,
+				  err_size))
+			return -1;
+		o->checkpoint_seconds = seconds;
+		return 0;
+	}
+	case OPT_NO_PARTIAL:
+		o->no_partial = 1;
+		return 0;
 	case OPT_SPP:
 		return parse_bounded("--spp", arg, 1, SCENE_MAX_SAMPLES, &o->spp, err, err_size);
 	case OPT_EYE:
@@ -824,6 +853,25 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 	return 0;
 }
 
+/* --checkpoint and --no-partial: what a render stopped early keeps. */
+static int check_partial(const struct options *o, char *err, size_t err_size)
+{
+	const char *other = o->frames_given ? "--frames (an interrupt keeps the frames finished)"
+			    : o->mpi	     ? "--mpi"
+			    : o->repeat	     ? "-r/--repeat, whose launches are timed"
+			    : o->no_partial  ? "--no-partial"
+					     : NULL;
+
+	if (o->checkpoint_seconds > 0 && other) {
+		snprintf(err, err_size,
+			 "--checkpoint writes the image of one render as it goes: it does not go "
+			 "with %s",
+			 other);
+		return -1;
+	}
+	return 0;
+}
+
 /* --schedule-map: one launch's work-items over the whole image. */
 static int check_schedule_map(const struct options *o, char *err, size_t err_size)
 {
@@ -883,7 +931,8 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 			 "--work-map an image file (not .npy, .exr, .pfm or .hdr)");
 		return -1;
 	}
-	if (check_several_devices(o, err, err_size) || check_schedule_map(o, err, err_size))
+	if (check_several_devices(o, err, err_size) || check_schedule_map(o, err, err_size) ||
+	    check_partial(o, err, err_size))
 		return -1;
 	if (o->quiet && o->verbose) {
 		snprintf(err, err_size, "-q/--quiet and -v/--verbose contradict each other");

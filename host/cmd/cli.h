@@ -38,6 +38,8 @@ struct options {
 	int mpi;	/* --mpi: rank 0 hands out the pieces (run/mpi_render.h) */
 	int piece_rows; /* --piece-rows N; 0: chosen (schedule/tiles.h) */
 	int repeat;	/* -r N; 0 when not given */
+	int checkpoint_seconds; /* --checkpoint SECONDS; 0: none */
+	int no_partial;		/* --no-partial */
 	struct output_request outputs; /* -o, --stats, --flops, --work-map, ... */
 	int accel;		       /* --accel: enum accel (render/settings.h) */
 	int quiet, verbose;
@@ -46,6 +48,9 @@ struct options {
 	 * environment variables (mesh.h); ULONG_MAX when neither is given. */
 	unsigned long mesh_time_limit, mesh_memory_limit;
 };
+
+/* The longest --checkpoint interval: a week. */
+#define CHECKPOINT_MAX_SECONDS 604800
 
 /* Parses argv into o. Returns 0, or -1 with one message in err (the caller
  * exits with EXIT_USAGE). */

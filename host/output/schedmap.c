@@ -34,7 +34,7 @@ int schedmap_stage(struct staged_file *staged, const char *path, const uint32_t 
 	size_t pixels = (size_t)width * (size_t)height;
 	float *rgb = malloc(pixels * 3 * sizeof(float));
 	char description[128];
-	struct image_meta meta = {"rtcl " RTCL_VERSION, description, IMAGE_DISPLAY};
+	struct image_meta meta = {"rtcl " RTCL_VERSION, description, IMAGE_DISPLAY, 0};
 
 	if (!rgb) {
 		snprintf(err, err_size, "out of host memory for the schedule map");

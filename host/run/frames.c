@@ -4,6 +4,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/interrupt.h"
 #include "base/progress.h"
 #include "base/timing.h"
 #include "base/vec3.h"
@@ -74,6 +75,8 @@ struct frames_state {
 	struct device_work work[DEVICES_MAX];
 	int count;
 	int done; /* frames rendered, for the progress line */
+	int keeps; /* an interrupt keeps the frames finished (not --no-partial) */
+	int kept;  /* frames staged */
 };
 
 /* Names the frame under way on the progress line: with one device "frame k
@@ -101,12 +104,26 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	struct frames_state *f = context;
 	struct render_result result;
 
+	/* Interrupted: no frame starts; one under way stops after its pass and
+	 * is not written (an animation's frames hold all their samples). */
+	*done = (struct piece_work){0, 0, 0};
+	if (f->keeps && interrupt_stop_signal())
+		return 0;
 	show_frame(f, piece, 0);
 	if (frames_render_frame(f->job, &f->settings, &f->devs[device], piece, &result, err,
 				err_size))
 		return -1;
 	show_frame(f, piece, 1);
-	int failed = output_plan_stage_image(f->plan, piece, result.rgb, err, err_size);
+	if (result.samples_done < settings_samples(&f->settings)) {
+		render_result_free(&result);
+		return 0;
+	}
+	__atomic_add_fetch(&f->kept, 1, __ATOMIC_RELAXED);
+	int failed = output_plan_stage_image(f->plan, piece, result.rgb, result.samples_done, err,
+					     err_size);
+	/* A frame is kept: an interrupt from now on keeps the finished ones. */
+	if (!failed && f->keeps)
+		interrupt_allow_stop(1);
 	*done = frames_piece_work(&f->settings, &result);
 	render_result_free(&result);
 	return failed ? -1 : 0;
@@ -126,6 +143,8 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	run->state = f;
 	f->job = job;
 	f->settings = job->settings;
+	f->settings.stoppable = job_stoppable(job);
+	f->keeps = !job->all_or_nothing;
 	f->plan = run->plan;
 	if (job_open_devices(job, f->devs, &f->count, err, err_size)) {
 		f->count = 0;
@@ -142,6 +161,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	repeats_progress_begin(&f->settings, n, f->count > 1 ? devices : NULL);
 	double start = timing_now();
 	int failed = multidev_run(&pieces, f->devs, f->count, f->work, err, err_size);
+	interrupt_allow_stop(0);
 	progress_end();
 	run->record->shares = (struct device_shares){
 		.devs = f->devs,
@@ -151,6 +171,10 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 		.piece = "frame",
 		.wall_ms = (timing_now() - start) * 1e3,
 	};
+	if (!failed && f->kept == 0 && interrupt_stop_signal()) {
+		snprintf(err, err_size, "interrupted before a frame was finished; no output written");
+		return 128 + interrupt_stop_signal();
+	}
 	return failed ? EXIT_FAILED : 0;
 }
 
