@@ -956,6 +956,7 @@ static int take_scene_argument(int count, char **args, struct options *o, char *
 			 quote_text(o->scene_path ? args[0] : args[1]));
 		return -1;
 	}
+	o->scene_is_argument = 1;
 	return take_file_name("the scene argument", args[0], &o->scene_path, err, err_size);
 }
 

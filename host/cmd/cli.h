@@ -22,6 +22,7 @@ struct options {
 	int batch;		/* --batch N for the persistent kernel */
 	int queues;		/* --queues N (0: the default) */
 	const char *scene_path; /* -s or the argument; NULL: the built-in paper60 scene */
+	int scene_is_argument;	/* the argument gave it: a scene or a model file */
 	int size[2];		/* --size WxH; 0x0 when not given */
 	int depth;		/* --depth N; -1 when not given */
 	int spp;		/* --spp N; 0 when not given */

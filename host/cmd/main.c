@@ -36,8 +36,21 @@
 
 static int load_scene(const struct options *opt, struct scene *scene, char *err, size_t err_size)
 {
-	if (opt->scene_path)
-		return scene_load_file(scene, opt->scene_path, err, err_size);
+	/* The argument may be a model file to render alone; -s names a scene. */
+	if (opt->scene_path && opt->scene_is_argument && scene_is_model_file(opt->scene_path)) {
+		struct model_view view = {opt->size[0], opt->size[1],
+					  opt->camera.fov_given ? opt->camera.fov : 0};
+		return scene_load_model(scene, opt->scene_path, &view, err, err_size);
+	}
+	if (opt->scene_path) {
+		char hint[2 * PATH_MAX + 200];
+		int failed = scene_load_file(scene, opt->scene_path, err, err_size);
+		size_t length = strlen(err);
+		if (failed)
+			snprintf(err + length, err_size - length, "%s",
+				 scene_model_hint(opt->scene_path, hint, sizeof(hint)));
+		return failed;
+	}
 	return scene_load_string(scene, embedded_file(DEFAULT_SCENE), DEFAULT_SCENE " (built-in)",
 				 err, err_size);
 }

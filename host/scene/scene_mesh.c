@@ -10,6 +10,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 
 #include "scene/mesh.h"
 #include "scene/mesh_place.h"
@@ -749,6 +750,40 @@ static int take_camera(struct loader *ld, const struct path *item, const char *n
 	return add_line(ld, &ld->scene->mesh_reports, &ld->scene->mesh_report_count, line);
 }
 
+/* Whether the file at path is glTF 1.0: a .glb of container version 1, or
+ * a .gltf whose "asset" says version 1.x (glTF 2.0 requires the asset). Its
+ * materials (techniques and shaders) are not glTF 2.0's, which the importer
+ * reads as none: such a model rendered black (issue 44). */
+static int is_gltf_1(const char *path)
+{
+	const char *ext = strrchr(path, '.');
+	unsigned char head[12];
+	char text[65537], *at;
+	size_t n;
+	FILE *file;
+	int old = 0;
+
+	if (!ext || (strcasecmp(ext, ".gltf") != 0 && strcasecmp(ext, ".glb") != 0))
+		return 0;
+	file = fopen(path, "rb");
+	if (!file)
+		return 0; /* the importer says why */
+	if (strcasecmp(ext, ".glb") == 0) {
+		old = fread(head, 1, sizeof(head), file) == sizeof(head) &&
+		      memcmp(head, "glTF", 4) == 0 && head[4] == 1 && !head[5] && !head[6] &&
+		      !head[7];
+	} else {
+		n = fread(text, 1, sizeof(text) - 1, file);
+		text[n] = '\0';
+		at = strstr(text, "\"asset\"");
+		at = at ? strstr(at, "\"version\"") : NULL;
+		at = at ? strchr(at + 9, '"') : NULL;
+		old = at && at[1] == '1' && (at[2] == '.' || at[2] == '"');
+	}
+	fclose(file);
+	return old;
+}
+
 static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 {
 	static const char *const keys[] = {"file",	 "material", "materials",
@@ -793,6 +828,15 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 		loader_write_err(ld, "%s: out of memory", ld->source);
 		return -1;
 	}
+	if (is_gltf_1(path)) {
+		ret = loader_fail(ld, &file,
+				  "\"%s\" is a glTF 1.0 file, whose materials rtcl cannot read: "
+				  "convert it to glTF 2.0 (e.g. \"npx gltf-pipeline -i %s -o "
+				  "converted.gltf\", which upgrades 1.0 files) and render that",
+				  one_line(name, text), text);
+		free(path);
+		return ret;
+	}
 	ret = mesh_import(path, &mesh, reason, sizeof(reason));
 	if (loader_add_input(ld, path, "mesh file")) {
 		if (ret == 0)
@@ -824,6 +868,11 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	} else if ((ret = report_mesh(ld, item, name, &mesh, 1))) {
 		goto out_free;
 	}
+	/* A model rendered alone takes its file's first camera, where that is
+	 * a perspective glTF camera; else its view is framed (scene_model.c). */
+	if (ld->model && !camera && mesh.camera_count > 0 &&
+	    mesh.cameras[0].kind == MESH_CAMERA_PERSPECTIVE)
+		camera = json_true();
 	ret = place_mesh(ld, &file, name, &mesh, &pl, material, map) ||
 			      (camera && take_camera(ld, item, name, &mesh, &pl, camera))
 		      ? -1
