@@ -149,12 +149,12 @@ static int fail(const char *err, int status)
 static int report_stopped(const struct job *job, const struct record *record,
 			  const struct output_plan *plan)
 {
-	int samples = settings_samples(&job->settings), done = record->result.samples_done;
+	int samples = settings_samples(&job->settings), done = record_samples_done(&job->settings, record);
 
 	if (job->animation)
 		fprintf(stderr, "rtcl: interrupted; wrote the %d frame%s finished of %d\n",
 			plan->frames_written, plan->frames_written == 1 ? "" : "s", plan->frames);
-	else if (done > 0 && done < samples)
+	else if (done < samples)
 		fprintf(stderr, "rtcl: interrupted; wrote %s with %d of %d samples per pixel\n",
 			quote_text(plan->request->image), done, samples);
 	else

@@ -484,7 +484,7 @@ int output_plan_commit(struct output_plan *plan, struct record *record, char *er
 		failed = stage_held(plan, err, err_size);
 	else if (!plan->job->animation)
 		failed = output_plan_stage_image(plan, 0, record->result.rgb,
-						 record->result.samples_done, err, err_size);
+						 record_samples_done(&plan->job->settings, record), err, err_size);
 	if (failed)
 		return -1;
 	plan->frames_written = 0;

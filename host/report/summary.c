@@ -54,7 +54,7 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 		       r->groups[1], r->global_size[0], r->global_size[1]);
 	fprintf(out, "image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
 	       quote_text(job->scene->source));
-	if (s->samples > 1 && r->samples_done > 0 && r->samples_done < s->samples)
+	if (record_samples_done(&job->settings, record) < settings_samples(s))
 		fprintf(out, "samples: %d of %d per pixel (interrupted; the image holds the "
 			"samples done)\n", r->samples_done, s->samples);
 	else if (s->samples > 1)
