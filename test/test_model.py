@@ -171,3 +171,39 @@ def test_gltf_1_files_are_refused_with_how_to_convert_them(tmp_path):
         assert "is a glTF 1.0 file, whose materials rtcl cannot read: convert it to glTF " \
                "2.0 (e.g. \"npx gltf-pipeline -i old.gl" in result.stderr
     assert "m.png" not in os.listdir(tmp_path)
+
+
+def lit_gltf(path):
+    """camera.gltf's quad and triangle with KHR_lights_punctual lights instead
+    of cameras: a red point light, a green sun down -z, a blue spot light."""
+    doc = json.loads((MESHES / "camera.gltf").read_text())
+    doc["scenes"][0]["nodes"] = [0, 1, 2, 3]
+    light = lambda i: {"KHR_lights_punctual": {"light": i}}  # noqa: E731
+    doc["nodes"] = [{"mesh": 0},
+                    {"name": "Lamp", "translation": [0, 0, 3], "extensions": light(0)},
+                    {"name": "Sun", "extensions": light(1)},
+                    {"name": "Spot", "translation": [0, 0, 5], "extensions": light(2)}]
+    del doc["cameras"]
+    doc["extensionsUsed"] = ["KHR_lights_punctual"]
+    doc["extensions"] = {"KHR_lights_punctual": {"lights": [
+        {"type": "point", "color": [1, 0, 0], "intensity": 10},
+        {"type": "directional", "color": [0, 1, 0], "intensity": 1},
+        {"type": "spot", "color": [0, 0, 1], "intensity": 10, "spot": {"outerConeAngle": 0.5}}]}}
+    path.write_text(json.dumps(doc))
+
+
+def test_a_model_with_lights_is_lit_by_them_and_gets_no_stage(tmp_path):
+    lit_gltf(tmp_path / "lit.gltf")
+    result = rtcl("lit.gltf", "-v", "--size", "32x24", "--spp", "1", "-o", "m.ppm",
+                  cwd=tmp_path)
+    assert result.returncode == 0, result.stderr
+    assert "model lit.gltf: 3 lights of its own, scaled together" in result.stderr
+    assert 'light "Spot": a spot light, lit as a point light' in result.stderr
+    assert "default stage" not in result.stderr
+    # The quad (default material, facing +z) at the centre: lit red most
+    # (the lamp: 10 / 2.75^2 = 1.32, scaled to 1), green (the sun: 1 / 1.32)
+    # and blue least (the spot: 10 / 4.75^2 = 0.44, / 1.32).
+    (width, height), pixels = read_ppm(tmp_path / "m.ppm")
+    centre = 3 * (height // 2 * width + width // 2)
+    r, g, b = pixels[centre:centre + 3]
+    assert r > g > b, (r, g, b)

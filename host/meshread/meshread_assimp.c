@@ -774,17 +774,69 @@ static int read_cameras(const struct aiScene *sc, struct mesh_data *out)
 	return 0;
 }
 
-/* The cameras of a file that has some, from a second import without
- * post-processing: PreTransformVertices renames every camera "cam_N" and
- * flattens the node hierarchy, and applying the steps to a scene already
- * imported (aiApplyPostProcessing) frees it twice in Assimp 5.2 when a step
- * fails (found by test/fuzz_mesh.c). Only files with cameras are read twice.
- * Returns -1 when out of memory; a second import that fails leaves the file
- * without cameras. */
-static int import_cameras(const char *path, struct aiFileIO *io, struct mesh_data *out)
+/* The lights that a node places, in the file's world space, with their
+ * colour times their intensity (Assimp's mColorDiffuse). A glTF light sits
+ * at its node's origin shining down its -z (KHR_lights_punctual), whatever
+ * Assimp copies into mPosition (as for cameras, read_cameras); another
+ * format's at mPosition along mDirection, in its node's space. Returns -1
+ * when out of memory. */
+static int read_lights(const struct aiScene *sc, struct mesh_data *out)
+{
+	int gltf = from_gltf2(sc);
+
+	out->lights = calloc(sc->mNumLights ? sc->mNumLights : 1, sizeof(*out->lights));
+	if (!out->lights)
+		return -1;
+	for (unsigned i = 0; i < sc->mNumLights; i++) {
+		const struct aiLight *light = sc->mLights[i];
+		const struct aiNode *node =
+			light && light->mName.length && sc->mRootNode
+				? find_node(sc->mRootNode, &light->mName)
+				: NULL;
+		struct mesh_light *l = &out->lights[out->light_count];
+		double m[3][4], local[3] = {0, 0, -1}, at[3] = {0, 0, 0};
+
+		if (!node)
+			continue; /* no node places it */
+		if (!gltf) {
+			local[0] = light->mDirection.x, local[1] = light->mDirection.y;
+			local[2] = light->mDirection.z;
+			at[0] = light->mPosition.x, at[1] = light->mPosition.y;
+			at[2] = light->mPosition.z;
+		}
+		snprintf(l->name, sizeof(l->name), "%.*s", (int)sizeof(l->name) - 1,
+			 light->mName.data);
+		for (char *ch = l->name; *ch; ch++) /* names go into messages on one line */
+			if ((unsigned char)*ch < 0x20 || *ch == 0x7f)
+				*ch = '?';
+		out->light_count++;
+		l->kind = light->mType == aiLightSource_POINT	    ? MESH_LIGHT_POINT
+			  : light->mType == aiLightSource_DIRECTIONAL ? MESH_LIGHT_DIRECTIONAL
+			  : light->mType == aiLightSource_SPOT	    ? MESH_LIGHT_SPOT
+								    : MESH_LIGHT_OTHER;
+		global_transform(node, m);
+		for (int k = 0; k < 3; k++) {
+			l->position[k] = m[k][0] * at[0] + m[k][1] * at[1] + m[k][2] * at[2] + m[k][3];
+			l->direction[k] = m[k][0] * local[0] + m[k][1] * local[1] + m[k][2] * local[2];
+		}
+		l->color[0] = light->mColorDiffuse.r;
+		l->color[1] = light->mColorDiffuse.g;
+		l->color[2] = light->mColorDiffuse.b;
+	}
+	return 0;
+}
+
+/* The cameras and lights of a file that has some, from a second import
+ * without post-processing: PreTransformVertices renames every camera
+ * "cam_N" and flattens the node hierarchy, and applying the steps to a scene
+ * already imported (aiApplyPostProcessing) frees it twice in Assimp 5.2 when a
+ * step fails (found by test/fuzz_mesh.c). Only files with cameras or lights
+ * are read twice. Returns -1 when out of memory; a second import that fails
+ * leaves the file without cameras and lights. */
+static int import_views(const char *path, struct aiFileIO *io, struct mesh_data *out)
 {
 	const struct aiScene *sc = aiImportFileEx(path, 0, io);
-	int ret = sc ? read_cameras(sc, out) : 0;
+	int ret = sc ? read_cameras(sc, out) || read_lights(sc, out) : 0;
 
 	if (sc)
 		aiReleaseImport(sc);
@@ -837,11 +889,11 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 		mesh_data_free(out);
 		goto out_release_scene;
 	}
-	if (sc->mNumCameras) {
+	if (sc->mNumCameras || sc->mNumLights) {
 		aiReleaseImport(sc);
 		sc = NULL;
-		if (import_cameras(path, &io, out)) {
-			snprintf(reason, reason_size, "out of memory for its cameras");
+		if (import_views(path, &io, out)) {
+			snprintf(reason, reason_size, "out of memory for its cameras and lights");
 			goto out_release_scene;
 		}
 	}

@@ -43,6 +43,7 @@ struct reply {
 	uint32_t has_uvs, pad;
 	uint64_t texture_count, texel_bytes; /* then the uvs, textures and texels */
 	uint64_t camera_count;		     /* then the cameras */
+	uint64_t light_count;		     /* then the lights */
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
 #define REASON_MAX 1024
@@ -130,6 +131,7 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	r.texture_count = mesh->texture_count;
 	r.texel_bytes = mesh->texel_bytes;
 	r.camera_count = mesh->camera_count;
+	r.light_count = mesh->light_count;
 	if (write_all(fd, &r, sizeof(r)) ||
 	    write_all(fd, mesh->positions, 3 * mesh->vertex_count * sizeof(double)) ||
 	    (mesh->normals &&
@@ -140,7 +142,8 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	    (mesh->uvs && write_all(fd, mesh->uvs, 2 * mesh->vertex_count * sizeof(double))) ||
 	    write_all(fd, mesh->textures, mesh->texture_count * sizeof(struct mesh_texture)) ||
 	    write_all(fd, mesh->texels, mesh->texel_bytes) ||
-	    write_all(fd, mesh->cameras, mesh->camera_count * sizeof(struct mesh_camera)))
+	    write_all(fd, mesh->cameras, mesh->camera_count * sizeof(struct mesh_camera)) ||
+	    write_all(fd, mesh->lights, mesh->light_count * sizeof(struct mesh_light)))
 		return -1;
 	return 0;
 }
@@ -156,6 +159,7 @@ void mesh_data_free(struct mesh_data *mesh)
 	free(mesh->textures);
 	free(mesh->texels);
 	free(mesh->cameras);
+	free(mesh->lights);
 	memset(mesh, 0, sizeof(*mesh));
 }
 
@@ -205,7 +209,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->textures = alloc_array(r.texture_count, sizeof(struct mesh_texture));
 	out->texels = alloc_array(r.texel_bytes, 1);
 	out->cameras = alloc_array(r.camera_count, sizeof(struct mesh_camera));
-	if (!out->cameras || !out->positions || (r.has_normals && !out->normals) || !out->indices ||
+	out->lights = alloc_array(r.light_count, sizeof(struct mesh_light));
+	if (!out->cameras || !out->lights || !out->positions || (r.has_normals && !out->normals) || !out->indices ||
 	    !out->triangle_materials || !out->materials || (r.has_uvs && !out->uvs) ||
 	    !out->textures || !out->texels) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
@@ -218,6 +223,7 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->texture_count = (size_t)r.texture_count;
 	out->texel_bytes = (size_t)r.texel_bytes;
 	out->camera_count = (size_t)r.camera_count;
+	out->light_count = (size_t)r.light_count;
 	got = read_all(fd, out->positions, 3 * out->vertex_count * sizeof(double));
 	if (!got && r.has_normals)
 		got = read_all(fd, out->normals, 3 * out->vertex_count * sizeof(double));
@@ -236,6 +242,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 		got = read_all(fd, out->texels, out->texel_bytes);
 	if (!got)
 		got = read_all(fd, out->cameras, out->camera_count * sizeof(struct mesh_camera));
+	if (!got)
+		got = read_all(fd, out->lights, out->light_count * sizeof(struct mesh_light));
 	if (got)
 		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	for (size_t i = 0; i < 3 * out->triangle_count; i++)
@@ -271,6 +279,11 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	for (size_t i = 0; i < out->camera_count; i++) {
 		out->cameras[i].name[MESH_NAME_MAX - 1] = '\0';
 		if (out->cameras[i].kind > MESH_CAMERA_NOT_GLTF)
+			return NONSENSE;
+	}
+	for (size_t i = 0; i < out->light_count; i++) {
+		out->lights[i].name[MESH_NAME_MAX - 1] = '\0';
+		if (out->lights[i].kind > MESH_LIGHT_OTHER)
 			return NONSENSE;
 	}
 	return 0;

@@ -750,6 +750,63 @@ static int take_camera(struct loader *ld, const struct path *item, const char *n
 	return add_line(ld, &ld->scene->mesh_reports, &ld->scene->mesh_report_count, line);
 }
 
+/* A model rendered alone takes its file's lights (docs/SCENE.md, "A model
+ * file alone"), placed as its triangles are, with the file's colours times
+ * intensities: scene_model.c scales them. A spot light is lit as a point
+ * light (rtcl has no cone), an area or ambient light is not read; -v says
+ * so. */
+static int take_lights(struct loader *ld, const struct path *item, const char *name,
+		       const struct mesh_data *mesh, const struct placement *pl)
+{
+	struct scene *s = ld->scene;
+	char where[200], text[MESSAGE_TEXT_MAX], lname[MESSAGE_TEXT_MAX], line[900];
+
+	if (mesh->light_count == 0)
+		return 0;
+	struct scene_light *grown =
+		realloc(s->lights, (size_t)(s->light_count + mesh->light_count) * sizeof(*grown));
+	if (!grown) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	s->lights = grown;
+	loader_format_path(item, where, sizeof(where));
+	one_line(name, text);
+	for (size_t i = 0; i < mesh->light_count; i++) {
+		const struct mesh_light *m = &mesh->lights[i];
+		struct scene_light *l = &s->lights[s->light_count];
+		const char *note = NULL;
+		int usable = m->kind != MESH_LIGHT_OTHER;
+
+		memset(l, 0, sizeof(*l));
+		short_name(m->name, lname);
+		place_point(pl, m->position, l->position);
+		place_vector(pl, m->direction, l->direction);
+		for (int k = 0; k < 3; k++) {
+			l->color[k] = isfinite(m->color[k]) && m->color[k] > 0 ? m->color[k] : 0;
+			usable &= fabs(l->position[k]) <= SCENE_MAX_MAGNITUDE;
+		}
+		l->directional = m->kind == MESH_LIGHT_DIRECTIONAL;
+		if (l->directional)
+			usable &= place_unit(l->direction);
+		if (m->kind == MESH_LIGHT_OTHER)
+			note = "an area or ambient light, not read";
+		else if (!usable)
+			note = "not finite after placement, not read";
+		else if (m->kind == MESH_LIGHT_SPOT)
+			note = "a spot light, lit as a point light (rtcl has no cone)";
+		if (note) {
+			snprintf(line, sizeof(line), "%s \"%s\": light \"%s\": %s", where, text,
+				 lname, note);
+			if (add_line(ld, &s->mesh_reports, &s->mesh_report_count, line))
+				return -1;
+		}
+		if (usable)
+			s->light_count++;
+	}
+	return 0;
+}
+
 /* Whether the file at path is glTF 1.0: a .glb of container version 1, or
  * a .gltf whose "asset" says version 1.x (glTF 2.0 requires the asset). Its
  * materials (techniques and shaders) are not glTF 2.0's, which the importer
@@ -874,7 +931,8 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	    mesh.cameras[0].kind == MESH_CAMERA_PERSPECTIVE)
 		camera = json_true();
 	ret = place_mesh(ld, &file, name, &mesh, &pl, material, map) ||
-			      (camera && take_camera(ld, item, name, &mesh, &pl, camera))
+			      (camera && take_camera(ld, item, name, &mesh, &pl, camera)) ||
+			      (ld->model && take_lights(ld, item, name, &mesh, &pl))
 		      ? -1
 		      : 0;
 out_free:

@@ -229,6 +229,37 @@ static int report(struct scene *s, const char *fmt, ...)
 	return 0;
 }
 
+/* The file's own lights (scene_mesh.c took them, with the file's colours
+ * times intensities): rtcl's lights do not fall off and it has no exposure,
+ * so a point or spot light of intensity I (candela in glTF) at distance d
+ * from the model's centre gets I / d^2, what it gives the centre with
+ * glTF's inverse-square falloff, and then every light is scaled by one
+ * factor so that the strongest channel of the strongest light is 1: the
+ * file's colours and relative strengths are kept. */
+static void scale_file_lights(struct scene *s, const double centre[3])
+{
+	double strongest = 0;
+
+	for (int i = 0; i < s->light_count; i++) {
+		struct scene_light *l = &s->lights[i];
+		double d2 = 0;
+		for (int k = 0; !l->directional && k < 3; k++)
+			d2 += (l->position[k] - centre[k]) * (l->position[k] - centre[k]);
+		for (int k = 0; k < 3; k++) {
+			if (d2 > 0)
+				l->color[k] /= d2;
+			strongest = l->color[k] > strongest ? l->color[k] : strongest;
+		}
+	}
+	for (int i = 0; i < s->light_count; i++)
+		for (int k = 0; k < 3; k++) {
+			double *c = &s->lights[i].color[k];
+			*c = strongest > 0 ? *c / strongest : 0;
+			if (*c < SCENE_MIN_MAGNITUDE) /* what the scene rules allow */
+				*c = 0;
+		}
+}
+
 /* A model's messages name the file, not the mesh entry rtcl made of it:
  * "m.obj: meshes[0].file: cannot read ..." becomes "m.obj: cannot read ...". */
 static void drop_entry_path(char *err)
@@ -279,6 +310,17 @@ int scene_load_model(struct scene *scene, const char *path, const struct model_v
 	if (framed)
 		frame_view(scene, lo, hi, (double)width / height, fov);
 	const struct scene_camera *c = &scene->camera;
+	if (scene->light_count > 0) {
+		double centre[3];
+		for (int i = 0; i < 3; i++)
+			centre[i] = (lo[i] + hi[i]) / 2;
+		scale_file_lights(scene, centre);
+		if (report(scene,
+			   "model %s: %d light%s of its own, scaled together so that the strongest "
+			   "is 1 (a point light's intensity as it reaches the model's centre)",
+			   quote_text(path), scene->light_count, scene->light_count == 1 ? "" : "s"))
+			goto out_of_memory;
+	}
 	if ((framed && report(scene,
 			      "model %s: no camera of its own: the view framed from its bounds, "
 			      "eye [%g, %g, %g], look_at [%g, %g, %g], fov %g",
@@ -289,10 +331,12 @@ int scene_load_model(struct scene *scene, const char *path, const struct model_v
 	      report(scene,
 		     "model %s: no light of its own: the default stage, 3 directional lights "
 		     "about the view and a floor at y = %g",
-		     quote_text(path), lo[1])))) {
-		snprintf(err, err_size, "%s: out of memory", quote_text(path));
-		scene_free(scene);
-		return -1;
-	}
+		     quote_text(path), lo[1]))))
+		goto out_of_memory;
 	return 0;
+
+out_of_memory:
+	snprintf(err, err_size, "%s: out of memory", quote_text(path));
+	scene_free(scene);
+	return -1;
 }
