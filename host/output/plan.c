@@ -310,8 +310,14 @@ int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int
 	memset(&staged, 0, sizeof(staged));
 	if (stage_image(plan, &staged, 0, rgb, samples, "a checkpoint", err, err_size))
 		return -1;
-	if (files_commit(&staged, 1, err, err_size))
+	/* One step for an interrupt: the rename and what the message says. */
+	interrupt_hold();
+	if (files_commit(&staged, 1, err, err_size)) {
+		interrupt_release();
 		return -1;
+	}
+	interrupt_set_outcome("the image's last checkpoint was written, no other output");
+	interrupt_release();
 	plan->checkpoints++;
 	plan->checkpoint_samples = samples;
 	return 0;

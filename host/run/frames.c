@@ -118,12 +118,14 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 		render_result_free(&result);
 		return 0;
 	}
-	__atomic_add_fetch(&f->kept, 1, __ATOMIC_RELAXED);
+	/* A frame is done: an interrupt from now on keeps the finished ones
+	 * (this one staged first). */
+	if (f->keeps)
+		interrupt_allow_stop(1);
 	int failed = output_plan_stage_image(f->plan, piece, result.rgb, result.samples_done, err,
 					     err_size);
-	/* A frame is kept: an interrupt from now on keeps the finished ones. */
-	if (!failed && f->keeps)
-		interrupt_allow_stop(1);
+	if (!failed)
+		__atomic_add_fetch(&f->kept, 1, __ATOMIC_RELAXED);
 	*done = frames_piece_work(&f->settings, &result);
 	render_result_free(&result);
 	return failed ? -1 : 0;

@@ -11,6 +11,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "scene/mesh.h"
 #include "scene/mesh_place.h"
@@ -817,11 +818,14 @@ static int is_gltf_1(const char *path)
 	unsigned char head[12];
 	char text[65537], *at;
 	size_t n;
+	struct stat st;
 	FILE *file;
 	int old = 0;
 
 	if (!ext || (strcasecmp(ext, ".gltf") != 0 && strcasecmp(ext, ".glb") != 0))
 		return 0;
+	if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+		return 0; /* the importer's to refuse, without blocking on a FIFO */
 	file = fopen(path, "rb");
 	if (!file)
 		return 0; /* the importer says why */

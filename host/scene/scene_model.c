@@ -10,6 +10,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <strings.h>
+#include <sys/stat.h>
 
 #include "base/files.h"
 #include "base/quote.h"
@@ -44,12 +45,17 @@ int scene_is_model_file(const char *path)
 {
 	char buf[SNIFF_BYTES + 1];
 	size_t n, i = 0;
+	struct stat st;
 	FILE *file;
 
 	if (has_extension(path, ".json"))
 		return 0;
 	if (has_extension(path, ".gltf") || has_extension(path, ".glb"))
 		return 1;
+	/* Not a regular file (a FIFO would block the open): the scene loader
+	 * says what it is. */
+	if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+		return 0;
 	file = fopen(path, "rb");
 	if (!file)
 		return 0; /* the scene loader says why it cannot be read */
