@@ -283,7 +283,7 @@ def test_an_interrupted_animation_writes_its_finished_frames_with_the_other_outp
                                     "RTCL_DUMP_BINARY": "out.png"})
     wait_for(lambda: staged(tmp_path, "f_0001.png"), process)  # frame 1 done
     process.send_signal(signal.SIGINT)  # in the device's 800 ms after it
-    stdout, stderr = process.communicate(timeout=60)
+    _, stderr = process.communicate(timeout=60)
     assert process.returncode == 128 + signal.SIGINT, stderr
     assert stderr.endswith("rtcl: interrupted; wrote the 1 frame finished of 3\n"), stderr
     assert (tmp_path / "out.png").read_bytes() != PREVIOUS  # the program, dumped
