@@ -234,3 +234,18 @@ def test_checkpoint_on_several_devices_is_refused_before_any_work(tmp_path):
     assert result.returncode == 1, result.stderr
     assert "--checkpoint writes the image of a render on one device" in result.stderr
     assert os.listdir(tmp_path) == []
+
+
+@pytest.mark.slow
+@pytest.mark.parametrize("args", [["-k", "wavefront"], ["-k", "serial"], ["--queues", "3"],
+                                  ["-k", "persistent", "--queues", "2"]])
+def test_every_renderer_keeps_exactly_the_samples_done(tmp_path, args):
+    """The wavefront's passes, one work-item's, and the launches of several
+    queues (singlepass_passes, stopped between passes on every queue) alike."""
+    status, _ = interrupted_early(tmp_path, *args)
+    assert status == 128 + signal.SIGINT
+    done, _ = png_samples(tmp_path / "out.png")
+    assert 16 <= done < 1024
+    subprocess.run([RTCL, "-q", "--size", "64x64", "--spp", str(done), *args, "-o",
+                    "whole.png"], cwd=tmp_path, check=True, timeout=300)
+    assert decode(tmp_path / "out.png") == decode(tmp_path / "whole.png")
