@@ -53,8 +53,11 @@ def framed_view(stderr):
     return vec(m[1]), vec(m[2]), float(m[3])
 
 
-@pytest.mark.parametrize("model", [MODELS / "crate.obj", MODELS / "trellis.gltf",
-                                   MESHES / "quad.ply", MESHES / "tri.stl"])
+# make test renders an OBJ and a PLY here and glTF files below; make test-long
+# the rest (each model's program is a build of its own on a cold cache).
+@pytest.mark.parametrize("model", [MODELS / "crate.obj", MESHES / "quad.ply",
+                                   pytest.param(MODELS / "trellis.gltf", marks=pytest.mark.slow),
+                                   pytest.param(MESHES / "tri.stl", marks=pytest.mark.slow)])
 def test_a_model_file_renders_alone_with_the_default_stage(tmp_path, model):
     result = rtcl(str(model), "-v", "--size", "40x30", "--spp", "1", "-o", "m.ppm",
                   cwd=tmp_path)
@@ -83,7 +86,8 @@ def corners(lo, hi):
     return [[(lo, hi)[(k >> i) & 1][i] for i in range(3)] for k in range(8)]
 
 
-@pytest.mark.parametrize("size", ["64x48", "30x90", "200x20"])
+@pytest.mark.parametrize("size", ["64x48", pytest.param("30x90", marks=pytest.mark.slow),
+                                  pytest.param("200x20", marks=pytest.mark.slow)])
 def test_the_framed_view_holds_the_whole_model_from_a_three_quarter_view(tmp_path, size):
     result = rtcl(str(MODELS / "crate.obj"), "-v", "--size", size, "--spp", "1", "-o", "m.ppm",
                   cwd=tmp_path)
@@ -124,6 +128,7 @@ def test_a_model_with_a_camera_is_seen_through_it(tmp_path):
     assert "framed" not in result.stderr
 
 
+@pytest.mark.slow
 def test_image_options_apply_to_a_model_as_to_a_scene(tmp_path):
     result = rtcl(str(MODELS / "cube.obj"), "--size", "16x12", "--eye", "3,2,4", "--frames",
                   "0:1", "-k", "naive", "-o", "f.ppm", cwd=tmp_path)
