@@ -871,10 +871,10 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 static int check_partial(const struct options *o, char *err, size_t err_size)
 {
 	const char *other = o->frames_given ? "--frames (an interrupt keeps the frames finished)"
-			    : o->mpi	     ? "--mpi"
-			    : o->repeat	     ? "-r/--repeat, whose launches are timed"
-			    : o->no_partial  ? "--no-partial"
-					     : NULL;
+			    : o->mpi	    ? "--mpi"
+			    : o->repeat	    ? "-r/--repeat, whose launches are timed"
+			    : o->no_partial ? "--no-partial"
+					    : NULL;
 
 	if (o->checkpoint_seconds > 0 && other) {
 		snprintf(err, err_size,

@@ -39,8 +39,8 @@ struct options {
 	int mpi;	/* --mpi: rank 0 hands out the pieces (run/mpi_render.h) */
 	int piece_rows; /* --piece-rows N; 0: chosen (schedule/tiles.h) */
 	int repeat;	/* -r N; 0 when not given */
-	int checkpoint_seconds; /* --checkpoint SECONDS; 0: none */
-	int no_partial;		/* --no-partial */
+	int checkpoint_seconds;	       /* --checkpoint SECONDS; 0: none */
+	int no_partial;		       /* --no-partial */
 	struct output_request outputs; /* -o, --stats, --flops, --work-map, ... */
 	int accel;		       /* --accel: enum accel (render/settings.h) */
 	int quiet, verbose;

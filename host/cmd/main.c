@@ -149,7 +149,8 @@ static int fail(const char *err, int status)
 static int report_stopped(const struct job *job, const struct record *record,
 			  const struct output_plan *plan)
 {
-	int samples = settings_samples(&job->settings), done = record_samples_done(&job->settings, record);
+	int samples = settings_samples(&job->settings),
+	    done = record_samples_done(&job->settings, record);
 
 	if (job->animation)
 		fprintf(stderr, "rtcl: interrupted; wrote the %d frame%s finished of %d\n",
@@ -158,7 +159,8 @@ static int report_stopped(const struct job *job, const struct record *record,
 		fprintf(stderr, "rtcl: interrupted; wrote %s with %d of %d samples per pixel\n",
 			quote_text(plan->request->image), done, samples);
 	else
-		fprintf(stderr, "rtcl: interrupted after the last pass; the outputs were written\n");
+		fprintf(stderr,
+			"rtcl: interrupted after the last pass; the outputs were written\n");
 	return 128 + interrupt_stop_signal();
 }
 

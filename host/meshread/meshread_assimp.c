@@ -789,10 +789,9 @@ static int read_lights(const struct aiScene *sc, struct mesh_data *out)
 		return -1;
 	for (unsigned i = 0; i < sc->mNumLights; i++) {
 		const struct aiLight *light = sc->mLights[i];
-		const struct aiNode *node =
-			light && light->mName.length && sc->mRootNode
-				? find_node(sc->mRootNode, &light->mName)
-				: NULL;
+		const struct aiNode *node = light && light->mName.length && sc->mRootNode
+						    ? find_node(sc->mRootNode, &light->mName)
+						    : NULL;
 		struct mesh_light *l = &out->lights[out->light_count];
 		double m[3][4], local[3] = {0, 0, -1}, at[3] = {0, 0, 0};
 
@@ -810,14 +809,16 @@ static int read_lights(const struct aiScene *sc, struct mesh_data *out)
 			if ((unsigned char)*ch < 0x20 || *ch == 0x7f)
 				*ch = '?';
 		out->light_count++;
-		l->kind = light->mType == aiLightSource_POINT	    ? MESH_LIGHT_POINT
+		l->kind = light->mType == aiLightSource_POINT	      ? MESH_LIGHT_POINT
 			  : light->mType == aiLightSource_DIRECTIONAL ? MESH_LIGHT_DIRECTIONAL
-			  : light->mType == aiLightSource_SPOT	    ? MESH_LIGHT_SPOT
-								    : MESH_LIGHT_OTHER;
+			  : light->mType == aiLightSource_SPOT	      ? MESH_LIGHT_SPOT
+								      : MESH_LIGHT_OTHER;
 		global_transform(node, m);
 		for (int k = 0; k < 3; k++) {
-			l->position[k] = m[k][0] * at[0] + m[k][1] * at[1] + m[k][2] * at[2] + m[k][3];
-			l->direction[k] = m[k][0] * local[0] + m[k][1] * local[1] + m[k][2] * local[2];
+			l->position[k] =
+				m[k][0] * at[0] + m[k][1] * at[1] + m[k][2] * at[2] + m[k][3];
+			l->direction[k] =
+				m[k][0] * local[0] + m[k][1] * local[1] + m[k][2] * local[2];
 		}
 		l->color[0] = light->mColorDiffuse.r;
 		l->color[1] = light->mColorDiffuse.g;

@@ -37,10 +37,10 @@ struct image_meta {
 	const char
 		*description; /* e.g. "scene: scenes/paper60.json, kernel dynamic"; NULL for none */
 	enum image_encoding encoding; /* a NULL meta: IMAGE_LINEAR */
-	int samples; /* samples per pixel the image holds (0: not said), recorded
-			as IMAGE_SAMPLES_KEY: a PNG tEXt chunk, a PPM comment, an
-			attribute of the formats OpenImageIO writes (EXR...), not TIFF;
-			PFM has no room */
+	/* Samples per pixel the image holds (0: not said), recorded as
+	 * IMAGE_SAMPLES_KEY: a PNG tEXt chunk, a PPM comment, an attribute of
+	 * the formats OpenImageIO writes (EXR...) but TIFF; PFM has no room. */
+	int samples;
 };
 
 /* The key a rendered image's samples per pixel are recorded under. */

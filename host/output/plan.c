@@ -302,8 +302,8 @@ int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, i
 	return stage_image(plan, &plan->staged[i], i, rgb, samples, "interrupted", err, err_size);
 }
 
-int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples,
-				 char *err, size_t err_size)
+int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples, char *err,
+				 size_t err_size)
 {
 	struct staged_file staged;
 
@@ -490,7 +490,8 @@ int output_plan_commit(struct output_plan *plan, struct record *record, char *er
 		failed = stage_held(plan, err, err_size);
 	else if (!plan->job->animation)
 		failed = output_plan_stage_image(plan, 0, record->result.rgb,
-						 record_samples_done(&plan->job->settings, record), err, err_size);
+						 record_samples_done(&plan->job->settings, record),
+						 err, err_size);
 	if (failed)
 		return -1;
 	plan->frames_written = 0;
@@ -519,9 +520,10 @@ void output_plan_print(const struct output_plan *plan, FILE *out)
 		if (plan->frames > 1)
 			fprintf(out, " .. %s", quote_text(plan->names[plan->frames - 1]));
 		if (plan->frames_written < plan->frames)
-			fprintf(out, ": the %d frame%s finished (interrupted; the frames not "
-				"finished are not written)", plan->frames_written,
-				plan->frames_written == 1 ? "" : "s");
+			fprintf(out,
+				": the %d frame%s finished (interrupted; the frames not "
+				"finished are not written)",
+				plan->frames_written, plan->frames_written == 1 ? "" : "s");
 		fprintf(out, "\n");
 		return;
 	}

@@ -80,8 +80,8 @@ int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, i
 /* --checkpoint: writes the one image now, of `samples` samples per pixel
  * so far, staged and committed alone (the run's other outputs come at its
  * end, with the final image). Returns 0, or -1 with one message in err. */
-int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples,
-				 char *err, size_t err_size);
+int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples, char *err,
+				 size_t err_size);
 
 /* Under --mpi, rank 0 keeps every frame in host memory and creates nothing
  * in the output folder until all have arrived, because a rank that dies makes

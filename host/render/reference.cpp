@@ -725,7 +725,8 @@ void add_sample(const tracer &tr, const scene_camera &cam, int width, int height
 			if (cam.aperture > 0) {
 				/* RENDERING.md, "The thin lens" */
 				glm::dvec2 lens = sample_disk(x, y, k, n, 1);
-				dvec3 on_lens = cam.aperture * lens.x * r + cam.aperture * lens.y * u;
+				dvec3 on_lens =
+					cam.aperture * lens.x * r + cam.aperture * lens.y * u;
 				dvec3 dir = glm::normalize(cam.focus_distance * q - on_lens);
 				c = tr.trace(eye + on_lens, dir, 0, sample);
 			} else {

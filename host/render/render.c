@@ -129,8 +129,8 @@ static int reference_checkpoint(const struct render_settings *s, const double *s
  * samples at a time), with stops and checkpoints between them as
  * renderer_all_samples has between passes. Returns the samples done, or
  * -1 with one message in err. */
-static int reference_frame(const struct scene *scene, const struct render_settings *s,
-			   double *sums, char *err, size_t err_size)
+static int reference_frame(const struct scene *scene, const struct render_settings *s, double *sums,
+			   char *err, size_t err_size)
 {
 	int samples = settings_samples(s);
 	double next_checkpoint = s->checkpoint ? timing_now() + s->checkpoint->seconds : 0;

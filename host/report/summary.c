@@ -70,14 +70,16 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 	fprintf(out, "image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
 	       quote_text(job->scene->source));
 	if (record_samples_done(&job->settings, record) < settings_samples(s))
-		fprintf(out, "samples: %d of %d per pixel (interrupted; the image holds the "
-			"samples done)\n", r->samples_done, s->samples);
+		fprintf(out,
+			"samples: %d of %d per pixel (interrupted; the image holds the "
+			"samples done)\n",
+			r->samples_done, s->samples);
 	else if (s->samples > 1)
 		fprintf(out, "samples: %d per pixel in %d pass%s\n", s->samples, r->passes,
 		       r->passes == 1 ? "" : "es");
 	if (r->repeat > 1)
 		fprintf(out, "time:    %.3f ms median of %d launches (min %.3f, max %.3f)",
-		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
+			r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
 	else
 		fprintf(out, "time:    %.3f ms %s", r->kernel_ms_median,
 			s->kernel ? "in the kernels" : "rendering");

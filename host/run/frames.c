@@ -174,7 +174,8 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 		.wall_ms = (timing_now() - start) * 1e3,
 	};
 	if (!failed && f->kept == 0 && interrupt_stop_signal()) {
-		snprintf(err, err_size, "interrupted before a frame was finished; no output written");
+		snprintf(err, err_size,
+			 "interrupted before a frame was finished; no output written");
 		return 128 + interrupt_stop_signal();
 	}
 	return failed ? EXIT_FAILED : 0;

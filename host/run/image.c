@@ -97,8 +97,8 @@ static int render_counted(struct image_devices *d, const struct job *job,
  * timed: the job's settings for the timed run, with its stop and
  * checkpoints. */
 static int render_on_devices(struct image_devices *d, const struct job *job,
-			     const struct render_settings *timed, struct record *record,
-			     char *err, size_t err_size)
+			     const struct render_settings *timed, struct record *record, char *err,
+			     size_t err_size)
 {
 	double lap = timing_now();
 
@@ -176,7 +176,8 @@ static int image_render(struct mode_run *run, int checked, char *err, size_t err
 	struct record *record = run->record;
 	struct image_devices *d = calloc(1, sizeof(*d));
 	struct render_settings timed = job->settings;
-	struct render_checkpoint checkpoint = {job->checkpoint_seconds, write_checkpoint, run->plan};
+	struct render_checkpoint checkpoint = {job->checkpoint_seconds, write_checkpoint,
+					       run->plan};
 	int failed;
 
 	(void)checked; /* not called with a failed check */

@@ -210,9 +210,9 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->texels = alloc_array(r.texel_bytes, 1);
 	out->cameras = alloc_array(r.camera_count, sizeof(struct mesh_camera));
 	out->lights = alloc_array(r.light_count, sizeof(struct mesh_light));
-	if (!out->cameras || !out->lights || !out->positions || (r.has_normals && !out->normals) || !out->indices ||
-	    !out->triangle_materials || !out->materials || (r.has_uvs && !out->uvs) ||
-	    !out->textures || !out->texels) {
+	if (!out->cameras || !out->lights || !out->positions || (r.has_normals && !out->normals) ||
+	    !out->indices || !out->triangle_materials || !out->materials ||
+	    (r.has_uvs && !out->uvs) || !out->textures || !out->texels) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
 			 (unsigned long long)r.triangle_count);
 		return OUT_OF_MEMORY;

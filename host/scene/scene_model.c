@@ -194,14 +194,15 @@ static int add_default_stage(struct scene *s, const double lo[3], const double h
 	 * a quarter of the box's largest side. */
 	for (int i = 0; i < 3; i++)
 		size = hi[i] - lo[i] > size ? hi[i] - lo[i] : size;
-	struct scene_material floor = {
-		.color = {0.55, 0.55, 0.55}, .ambient = 1, .diffuse = 0.8, .specular = 0.1,
-		.shininess = 16, .ior = 1.5};
-	struct scene_material *m =
-		grow((void **)&s->materials, &s->material_count, 1, sizeof(*m));
-	struct scene_plane *plane = m ? grow((void **)&s->planes, &s->plane_count, 1,
-					     sizeof(*plane))
-				      : NULL;
+	struct scene_material floor = {.color = {0.55, 0.55, 0.55},
+				       .ambient = 1,
+				       .diffuse = 0.8,
+				       .specular = 0.1,
+				       .shininess = 16,
+				       .ior = 1.5};
+	struct scene_material *m = grow((void **)&s->materials, &s->material_count, 1, sizeof(*m));
+	struct scene_plane *plane =
+		m ? grow((void **)&s->planes, &s->plane_count, 1, sizeof(*plane)) : NULL;
 	if (!plane)
 		return -1;
 	*m = floor;
@@ -220,7 +221,8 @@ static int report(struct scene *s, const char *fmt, ...)
 {
 	char line[1024];
 	va_list args;
-	char **grown = realloc(s->mesh_reports, (size_t)(s->mesh_report_count + 1) * sizeof(*grown));
+	char **grown =
+		realloc(s->mesh_reports, (size_t)(s->mesh_report_count + 1) * sizeof(*grown));
 
 	if (!grown)
 		return -1;
@@ -270,8 +272,8 @@ static void scale_file_lights(struct scene *s, const double centre[3])
  * "m.obj: meshes[0].file: cannot read ..." becomes "m.obj: cannot read ...". */
 static void drop_entry_path(char *err)
 {
-	static const char *const entry[] = {"meshes[0].file: ", "meshes[0].camera: ",
-					    "meshes[0]: "};
+	static const char *const entry[] = {
+		"meshes[0].file: ", "meshes[0].camera: ", "meshes[0]: "};
 
 	for (size_t i = 0; i < sizeof(entry) / sizeof(entry[0]); i++) {
 		char *at = strstr(err, entry[i]);
@@ -288,10 +290,9 @@ int scene_load_model(struct scene *scene, const char *path, const struct model_v
 	int width = view && view->width ? view->width : MODEL_WIDTH;
 	int height = view && view->height ? view->height : MODEL_HEIGHT;
 	double fov = view && view->fov > 0 ? view->fov : 45;
-	json_t *doc = json_pack("{s:s, s:i, s:{s:i, s:i, s:i}, s:[{s:s}]}", "format",
-				"rtcl-scene", "version", 2, "image", "width", MODEL_WIDTH,
-				"height", MODEL_HEIGHT, "samples", MODEL_SAMPLES, "meshes", "file",
-				path);
+	json_t *doc = json_pack("{s:s, s:i, s:{s:i, s:i, s:i}, s:[{s:s}]}", "format", "rtcl-scene",
+				"version", 2, "image", "width", MODEL_WIDTH, "height", MODEL_HEIGHT,
+				"samples", MODEL_SAMPLES, "meshes", "file", path);
 	char *text = doc ? json_dumps(doc, JSON_COMPACT) : NULL;
 	double lo[3], hi[3];
 	int ret;
@@ -324,7 +325,8 @@ int scene_load_model(struct scene *scene, const char *path, const struct model_v
 		if (report(scene,
 			   "model %s: %d light%s of its own, scaled together so that the strongest "
 			   "is 1 (a point light's intensity as it reaches the model's centre)",
-			   quote_text(path), scene->light_count, scene->light_count == 1 ? "" : "s"))
+			   quote_text(path), scene->light_count,
+			   scene->light_count == 1 ? "" : "s"))
 			goto out_of_memory;
 	}
 	if ((framed && report(scene,
