@@ -118,8 +118,11 @@ def test_an_interrupted_render_writes_the_samples_done(tmp_path, signal_number):
 
 
 def test_the_stop_is_said_and_a_second_interrupt_writes_nothing(tmp_path):
-    process, controller = start(*LONG, "-o", "out.png", cwd=tmp_path)
-    read_terminal(controller, share_done(5))
+    # Four long passes (256 samples each): the second interrupt comes while
+    # the pass under way runs, not after the image is written.
+    process, controller = start(*LONG, "-o", "out.png", cwd=tmp_path,
+                                env={"RTCL_TEST_PASS_SAMPLES": "256"})
+    read_terminal(controller, share_done(30))  # the first pass done: the stop allowed
     process.send_signal(signal.SIGINT)
     read_terminal(controller, lambda shown: "interrupt again" in shown)
     process.send_signal(signal.SIGINT)
