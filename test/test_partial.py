@@ -117,6 +117,7 @@ def test_an_interrupted_render_writes_the_samples_done(tmp_path, signal_number):
     assert decode(tmp_path / "out.png") == decode(tmp_path / "whole.png")
 
 
+@pytest.mark.slow
 def test_the_stop_is_said_and_a_second_interrupt_writes_nothing(tmp_path):
     # Four long passes (256 samples each): the second interrupt comes while
     # the pass under way runs, not after the image is written.
