@@ -256,3 +256,23 @@ def test_every_renderer_keeps_exactly_the_samples_done(tmp_path, args):
     subprocess.run([RTCL, "-q", "--size", "64x64", "--spp", str(done), *args, "-o",
                     "whole.png"], cwd=tmp_path, check=True, timeout=300)
     assert decode(tmp_path / "out.png") == decode(tmp_path / "whole.png")
+
+
+def test_every_image_says_its_samples_per_pixel_where_the_format_has_room(tmp_path):
+    for name in ("x.ppm", "x.png"):
+        result = subprocess.run([RTCL, "-q", "--size", "8x6", "--spp", "3", "-o", name],
+                                cwd=tmp_path, capture_output=True, text=True, timeout=300)
+        assert result.returncode == 0, result.stderr
+    assert b"\n# rtcl:samples_per_pixel: 3\n" in (tmp_path / "x.ppm").read_bytes()
+    assert png_samples(tmp_path / "x.png")[0] == 3
+    iinfo = subprocess.run(["sh", "-c", "command -v iinfo"], capture_output=True, text=True)
+    if iinfo.returncode != 0 or "OIIO=0" in os.environ.get("MAKEFLAGS", ""):
+        return  # OpenImageIO's tools are not installed: the EXR is not read back
+    result = subprocess.run([RTCL, "-q", "--size", "8x6", "--spp", "3", "-o", "x.exr"],
+                            cwd=tmp_path, capture_output=True, text=True, timeout=300)
+    if "OpenImageIO" in result.stderr:
+        return  # a build without it (OIIO=0)
+    assert result.returncode == 0, result.stderr
+    shown = subprocess.run(["iinfo", "-v", "x.exr"], cwd=tmp_path, capture_output=True,
+                           text=True, timeout=60).stdout
+    assert "rtcl:samples_per_pixel: 3" in shown, shown
