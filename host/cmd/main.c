@@ -18,6 +18,7 @@
 #include "base/files.h"
 #include "base/interrupt.h"
 #include "base/progress.h"
+#include "base/quote.h"
 #include "base/test_hooks.h"
 #include "base/timing.h"
 #include "cmd/cli.h"
@@ -35,8 +36,21 @@
 
 static int load_scene(const struct options *opt, struct scene *scene, char *err, size_t err_size)
 {
-	if (opt->scene_path)
-		return scene_load_file(scene, opt->scene_path, err, err_size);
+	/* The argument may be a model file to render alone; -s names a scene. */
+	if (opt->scene_path && opt->scene_is_argument && scene_is_model_file(opt->scene_path)) {
+		struct model_view view = {opt->size[0], opt->size[1],
+					  opt->camera.fov_given ? opt->camera.fov : 0};
+		return scene_load_model(scene, opt->scene_path, &view, err, err_size);
+	}
+	if (opt->scene_path) {
+		char hint[2 * PATH_MAX + 200];
+		int failed = scene_load_file(scene, opt->scene_path, err, err_size);
+		size_t length = strlen(err);
+		if (failed)
+			snprintf(err + length, err_size - length, "%s",
+				 scene_model_hint(opt->scene_path, hint, sizeof(hint)));
+		return failed;
+	}
 	return scene_load_string(scene, embedded_file(DEFAULT_SCENE), DEFAULT_SCENE " (built-in)",
 				 err, err_size);
 }
@@ -93,6 +107,7 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	s->height = opt->size[1] ? opt->size[1] : scene->height;
 	s->max_depth = opt->depth >= 0 ? opt->depth : scene->max_depth;
 	s->samples = opt->spp ? opt->spp : scene->samples;
+	s->samples_per_pass = hook_pass_samples();
 	s->repeat = opt->repeat ? opt->repeat : 1;
 	s->warm_up = opt->repeat > 0;
 	s->batch = opt->batch;
@@ -114,6 +129,8 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	job->first_frame = opt->frames[0];
 	job->last_frame = opt->frames[1];
 	job->mpi = opt->mpi;
+	job->all_or_nothing = opt->no_partial;
+	job->checkpoint_seconds = opt->checkpoint_seconds;
 	job->verbose = opt->verbose;
 	job->quiet = opt->quiet;
 }
@@ -124,6 +141,27 @@ static int fail(const char *err, int status)
 	if (err[0])
 		fprintf(stderr, "rtcl: %s\n", err);
 	return status;
+}
+
+/* After a render an interrupt stopped (interrupt_allow_stop) and whose
+ * outputs were written: says what they hold, returns the interrupt's exit
+ * status. */
+static int report_stopped(const struct job *job, const struct record *record,
+			  const struct output_plan *plan)
+{
+	int samples = settings_samples(&job->settings),
+	    done = record_samples_done(&job->settings, record);
+
+	if (job->animation)
+		fprintf(stderr, "rtcl: interrupted; wrote the %d frame%s finished of %d\n",
+			plan->frames_written, plan->frames_written == 1 ? "" : "s", plan->frames);
+	else if (done < samples)
+		fprintf(stderr, "rtcl: interrupted; wrote %s with %d of %d samples per pixel\n",
+			quote_text(plan->request->image), done, samples);
+	else
+		fprintf(stderr,
+			"rtcl: interrupted after the last pass; the outputs were written\n");
+	return 128 + interrupt_stop_signal();
 }
 
 /* The pipeline every mode shares: the output plan checked before any work,
@@ -156,6 +194,10 @@ static int render_and_write(const struct job *job, const struct output_request *
 		fail(err, status);
 	else if (run.writes && !job->quiet)
 		mode->summary(&run, stdout);
+	if (status == 0 && run.writes && interrupt_stop_signal()) {
+		fflush(stdout);
+		status = report_stopped(job, record, &plan);
+	}
 	if (mode->release)
 		mode->release(&run);
 	output_plan_close(&plan);

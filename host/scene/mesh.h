@@ -123,6 +123,26 @@ struct mesh_file {
 	uint32_t kind; /* enum mesh_file_kind */
 };
 
+/* A light of the file (glTF 2.0's KHR_lights_punctual, or another
+ * format's), in the file's world space: its node's transform and those of
+ * the node's parents applied (glTF: at the node's origin, shining down its
+ * -z). Only a model rendered alone uses them (docs/SCENE.md, "A model file
+ * alone"). Fixed-size so that it crosses the pipe as it is. */
+enum mesh_light_kind {
+	MESH_LIGHT_POINT,
+	MESH_LIGHT_DIRECTIONAL,
+	MESH_LIGHT_SPOT,
+	MESH_LIGHT_OTHER /* an area or ambient light: not read */
+};
+
+struct mesh_light {
+	char name[MESH_NAME_MAX]; /* its node's name */
+	uint32_t kind;		  /* enum mesh_light_kind */
+	uint32_t pad;
+	double position[3], direction[3]; /* direction not unit */
+	double color[3];		  /* the file's colour times its intensity */
+};
+
 struct mesh_data {
 	double *positions;	      /* 3 per vertex */
 	double *normals;	      /* 3 per vertex, or NULL where the file has none */
@@ -139,6 +159,8 @@ struct mesh_data {
 	size_t camera_count;
 	struct mesh_file *files; /* every other file the import read */
 	size_t file_count;
+	struct mesh_light *lights; /* the lights that a node of the file places */
+	size_t light_count;
 };
 
 /* What mesh_import returns besides 0. */

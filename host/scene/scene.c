@@ -204,6 +204,10 @@ static int read_camera(struct loader *ld, json_t *doc)
 	cam->focus_distance = 0;
 	if (from_mesh >= 0 && !valid)
 		return 0; /* meshes[from_mesh].camera is refused with its own words */
+	/* A model's view is its file's camera or framed from its bounds
+	 * (scene_model.c). */
+	if (ld->model && !json_object_get(doc, "camera"))
+		return 0;
 	if (loader_get_field(ld, &root_path, doc, "camera", from_mesh >= 0 ? OPTIONAL : REQUIRED,
 			     &obj) ||
 	    (obj && loader_expect_object(ld, &p, obj, keys)))
@@ -497,9 +501,8 @@ static int read_scene(struct loader *ld, json_t *doc)
  * file; SCENE.md allows it there. */
 static const char utf8_bom[] = "\xef\xbb\xbf";
 
-/* Parses and validates `len` bytes of JSON; `source` names them in messages. */
-static int load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
-		       const char *base_dir, char *err, size_t err_size)
+int loader_load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
+		       const char *base_dir, int model, char *err, size_t err_size)
 {
 	/* Messages show the name with its control bytes escaped (quote.h). */
 	char *shown = strdup(quote_text(source));
@@ -507,7 +510,8 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 			    .err = err,
 			    .err_size = err_size,
 			    .scene = scene,
-			    .base_dir = base_dir};
+			    .base_dir = base_dir,
+			    .model = model};
 	json_error_t jerr;
 	json_t *doc;
 	int ret;
@@ -564,7 +568,7 @@ int scene_load_file(struct scene *scene, const char *path, char *err, size_t err
 	ret = files_read(path, "scene", SCENE_MAX_BYTES, &buf, &len, err, err_size);
 	if (ret == 0) {
 		/* Mesh files are found relative to the scene file's folder. */
-		ret = load_buffer(scene, buf, len, path, dir, err, err_size);
+		ret = loader_load_buffer(scene, buf, len, path, dir, 0, err, err_size);
 		free(buf);
 	}
 	if (ret == 0) {
@@ -595,7 +599,7 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		loader_write_err(&ld, "%s: no scene text", quote_text(name));
 		return -1;
 	}
-	return load_buffer(scene, json, strlen(json), name, NULL, err, err_size);
+	return loader_load_buffer(scene, json, strlen(json), name, NULL, 0, err, err_size);
 }
 
 void scene_free(struct scene *scene)

@@ -220,6 +220,30 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 
 void scene_free(struct scene *scene);
 
+/* A model file rendered alone (docs/SCENE.md, "A model file alone";
+ * scene_model.c): the image size and vertical field of view the command
+ * line gives, 0 for the defaults, which the framed view is made for. */
+struct model_view {
+	int width, height;
+	double fov;
+};
+
+/* Whether path names a model file (a mesh file the importer reads) rather
+ * than an rtcl scene: not named .json, and .gltf or .glb, or not a JSON
+ * object, or a glTF document (one with an "asset"). */
+int scene_is_model_file(const char *path);
+
+/* Loads the model file at path as a scene: its own materials, textures and
+ * camera; where it has no camera, a view framed from its bounds; where it
+ * has no light, the default stage. Returns 0, or -1 with one message in err
+ * and nothing held. */
+int scene_load_model(struct scene *scene, const char *path, const struct model_view *view,
+		     char *err, size_t err_size);
+
+/* What a scene file's message adds when the file is a model: "; PATH is a
+ * model file ...: render it alone with ...", or "" (into out). */
+const char *scene_model_hint(const char *path, char *out, size_t size);
+
 /* Applies the command line's camera to a loaded scene, and checks the
  * camera again as the loader does (the eye and look_at must differ, up not
  * parallel to them). Returns 0, or -1 with one message naming the options
