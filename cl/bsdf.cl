@@ -1,5 +1,5 @@
 /* The path integrator's BSDFs (docs/RENDERING.md, "The BSDFs"): diffuse,
- * conductor and dielectric (GGX, sampled by visible normals), the mapped
+ * conductor and dielectric (GGX, sampled by visible normals), principled, the mapped
  * BSDF of a Whitted material, each evaluated and sampled in the local frame
  * of the shading normal (z along n). Part of the tracer, only in programs
  * built with RTCL_PATH: built after walk.cl. */
@@ -47,6 +47,7 @@ struct bsdf {
 	float alpha;  /* GGX width */
 	float eta;    /* dielectric: the index beyond the surface over this side's */
 	float mirror; /* mapped: the mirror's probability */
+	float metallic, transmission; /* principled */
 };
 
 static inline float max3(float3 c)
@@ -210,6 +211,60 @@ static float3 dielectric_eval(struct tracer *tr, const struct bsdf *b, float3 wo
 			(fabs(wi.z) * wo.z * den) / (eta * eta));
 }
 
+/* The principled BSDF's plastic lobe (glTF 2.0's fresnel_mix of a GGX
+ * highlight over a diffuse base) for a given wi above; *pdf of its own
+ * sampling, the highlight with probability p_s = Schlick(F0, wo.z). */
+static float3 plastic_eval(struct tracer *tr, const struct bsdf *b, float f0, float3 wo, float3 wi,
+			   float *pdf)
+{
+	float3 h = normalize3(wo + wi);
+	float wo_h = dot3(wo, h);
+	float f = schlick3(tr, (float3)(f0), wo_h).x;
+	float p_s = schlick3(tr, (float3)(f0), wo.z).x;
+	float g = ggx_g1(tr, wo, h, b->alpha) * ggx_g1(tr, wi, h, b->alpha);
+	float specular = f * ggx_d(tr, h, b->alpha) * g / (4.0f * wo.z * wi.z);
+
+	*pdf = p_s * ggx_visible(tr, wo, h, b->alpha) / (4.0f * wo_h) +
+	       (1.0f - p_s) * wi.z * M_1_PI_F;
+	COUNT_FLOPS(tr, FLOPS_ADD3 + FLOPS_NORMALIZE3 + FLOPS_DOT3 + 1 + 6 + 7 + 2 + FLOPS_MUL3 +
+				FLOPS_ADD3);
+	return specular + (1.0f - f) * M_1_PI_F * b->color;
+}
+
+/* The principled BSDF (RENDERING.md): m metal + (1 - m) t glass (its
+ * transmission tinted by the base colour) + (1 - m)(1 - t) plastic, and
+ * the mixture of their pdfs. */
+static float3 principled_eval(struct tracer *tr, const struct bsdf *b, float3 wo, float3 wi,
+			      float *pdf)
+{
+	float m = b->metallic, t = b->transmission;
+	float glass = (1.0f - m) * t, plastic = (1.0f - m) * (1.0f - t);
+	float f0 = (b->eta - 1.0f) / (b->eta + 1.0f);
+	float3 f = (float3)(0.0f);
+	float lobe_pdf;
+
+	f0 = f0 * f0;
+	*pdf = 0.0f;
+	COUNT_FLOPS(tr, 4 + 4);
+	if (m > 0.0f && wi.z > 0.0f) {
+		f += m * conductor_eval(tr, b, wo, wi, &lobe_pdf);
+		*pdf += m * lobe_pdf;
+		COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3 + 2);
+	}
+	if (glass > 0.0f) {
+		float3 g = dielectric_eval(tr, b, wo, wi, &lobe_pdf);
+		f += glass * (wi.z < 0.0f ? g * b->color : g);
+		*pdf += glass * lobe_pdf;
+		COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_ADD3 + 2);
+	}
+	if (plastic > 0.0f && wi.z > 0.0f) {
+		f += plastic * plastic_eval(tr, b, f0, wo, wi, &lobe_pdf);
+		*pdf += plastic * lobe_pdf;
+		COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3 + 2);
+	}
+	return f;
+}
+
 /* f(wo, wi) of the BSDF's non-delta parts, and *pdf, the density with which
  * bsdf_sample returns wi; local directions, wo.z > 0. The side rules are the
  * caller's (path.cl). */
@@ -225,6 +280,8 @@ static float3 bsdf_eval(struct tracer *tr, const struct bsdf *b, float3 wo, floa
 		if (b->alpha < BSDF_SMOOTH_ALPHA)
 			return (float3)(0.0f);
 		return dielectric_eval(tr, b, wo, wi, pdf);
+	case RT_BSDF_PRINCIPLED:
+		return principled_eval(tr, b, wo, wi, pdf);
 	default: /* diffuse, and the mapped BSDF's diffuse lobe */
 		if (wi.z <= 0.0f)
 			return (float3)(0.0f);
@@ -316,6 +373,44 @@ static bool bsdf_sample(struct tracer *tr, const struct bsdf *b, float3 wo, floa
 		out->pdf = (1.0f - f) * visible * fabs(wi_h) / den;
 		out->weight = (float3)(ggx_g1(tr, out->wi, h, b->alpha) / (eta * eta));
 		COUNT_FLOPS(tr, FLOPS_DOT3 + 3 + 4 + 3);
+		return true;
+	}
+	case RT_BSDF_PRINCIPLED: {
+		/* The lobe by u_lobe (metal, glass, plastic), u rescaled to its
+		 * interval; then the mixture's pdf and weight at wi. */
+		float m = b->metallic, glass = (1.0f - m) * b->transmission;
+		COUNT_FLOPS(tr, 2);
+		bool reflected = true; /* the lobe's side: a sample on the other is none */
+		if (u_lobe < m) {
+			float3 h = ggx_sample(tr, wo, b->alpha, u);
+			out->wi = reflect_about(tr, wo, h);
+		} else if (u_lobe < m + glass) {
+			float v = (u_lobe - m) / glass;
+			float3 h = ggx_sample(tr, wo, b->alpha, u);
+			float wo_h = dot3(wo, h);
+			COUNT_FLOPS(tr, 3 + FLOPS_DOT3);
+			if (v < fresnel_dielectric(tr, wo_h, b->eta))
+				out->wi = reflect_about(tr, wo, h);
+			else if (!refract_about(tr, wo, h, b->eta, &out->wi))
+				return false;
+			else
+				reflected = false;
+		} else {
+			float f0 = (b->eta - 1.0f) / (b->eta + 1.0f);
+			float v = (u_lobe - m - glass) / (1.0f - m - glass);
+			COUNT_FLOPS(tr, 3 + 4 + 1);
+			if (v < schlick3(tr, (float3)(f0 * f0), wo.z).x)
+				out->wi = reflect_about(tr, wo, ggx_sample(tr, wo, b->alpha, u));
+			else
+				out->wi = cosine_direction(tr, u);
+		}
+		if (reflected != (out->wi.z > 0.0f))
+			return false;
+		float3 f = principled_eval(tr, b, wo, out->wi, &out->pdf);
+		if (!(out->pdf > 0.0f))
+			return false;
+		out->weight = f * (fabs(out->wi.z) / out->pdf);
+		COUNT_FLOPS(tr, 2 + FLOPS_MUL3);
 		return true;
 	}
 	case RT_BSDF_MAPPED:

@@ -89,6 +89,8 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 	out->alpha = b->color.w;
 	out->eta = h->inside ? 1.0f / b->emission.w : b->emission.w;
 	out->mirror = b->mirror;
+	out->metallic = b->metallic;
+	out->transmission = b->transmission;
 	out->tint = b->mirror_tint ? sh.base : (float3)(1.0f);
 	COUNT_FLOPS(tr, 1);
 	if (b->type == RT_BSDF_MAPPED) {

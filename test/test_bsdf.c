@@ -28,6 +28,8 @@ static const char test_kernels[] =
 	"	b.mirror = params[0].w;\n"
 	"	b.color = params[1].xyz;\n"
 	"	b.tint = (float3)(1.0f);\n"
+	"	b.metallic = params[1].w;\n"
+	"	b.transmission = params[2].w;\n"
 	"	return b;\n"
 	"}\n"
 	"__kernel void sample(__global const float4 *params, __global const float4 *u,\n"
@@ -143,13 +145,14 @@ static double uniform(uint64_t *state)
 #define PHI_BINS 48
 #define SUB 5 /* the pdf's integral over a bin: SUB x SUB midpoints */
 
-enum { TYPE_MAPPED, TYPE_DIFFUSE, TYPE_CONDUCTOR, TYPE_DIELECTRIC };
+enum { TYPE_MAPPED, TYPE_DIFFUSE, TYPE_CONDUCTOR, TYPE_DIELECTRIC, TYPE_PRINCIPLED };
 
 struct bsdf_case {
 	const char *name;
 	float type, alpha, eta, mirror;
 	float color[3];
 	float theta_o; /* degrees */
+	float metallic, transmission;
 };
 
 static int bin_of(const float wi[3])
@@ -178,8 +181,8 @@ static void check_case(const struct bsdf_case *c)
 	static double observed[THETA_BINS * PHI_BINS], expected[THETA_BINS * PHI_BINS];
 	double to = c->theta_o * M_PI / 180;
 	cl_float params[3][4] = {{c->type, c->alpha, c->eta, c->mirror},
-				 {c->color[0], c->color[1], c->color[2], 0},
-				 {(float)sin(to), 0, (float)cos(to), 0}};
+				 {c->color[0], c->color[1], c->color[2], c->metallic},
+				 {(float)sin(to), 0, (float)cos(to), c->transmission}};
 	uint64_t state = 12345;
 	size_t grid_n = THETA_BINS * PHI_BINS * SUB * SUB;
 
@@ -285,29 +288,39 @@ TestSuite(bsdf, .init = setup, .fini = teardown, .timeout = 300);
 
 Test(bsdf, diffuse)
 {
-	check_case(&(struct bsdf_case){"diffuse", TYPE_DIFFUSE, 0, 1.5f, 0, {0.9f, 0.5f, 0.1f}, 30});
+	check_case(&(struct bsdf_case){"diffuse", TYPE_DIFFUSE, 0, 1.5f, 0, {0.9f, 0.5f, 0.1f}, 30, 0, 0});
 }
 
 Test(bsdf, mapped_with_a_mirror)
 {
 	check_case(&(struct bsdf_case){"mapped", TYPE_MAPPED, 0, 1.5f, 0.3f, {0.7f, 0.7f, 0.7f},
-				       50});
+				       50, 0, 0});
 }
 
 Test(bsdf, rough_conductor)
 {
 	check_case(&(struct bsdf_case){"conductor a=0.25", TYPE_CONDUCTOR, 0.25f, 1.5f, 0,
-				       {1, 0.8f, 0.4f}, 40});
+				       {1, 0.8f, 0.4f}, 40, 0, 0});
 	check_case(&(struct bsdf_case){"conductor a=0.6", TYPE_CONDUCTOR, 0.6f, 1.5f, 0,
-				       {1, 1, 1}, 70});
+				       {1, 1, 1}, 70, 0, 0});
 }
 
 Test(bsdf, rough_dielectric)
 {
 	check_case(&(struct bsdf_case){"dielectric entering", TYPE_DIELECTRIC, 0.3f, 1.5f, 0,
-				       {1, 1, 1}, 35});
+				       {1, 1, 1}, 35, 0, 0});
 	check_case(&(struct bsdf_case){"dielectric leaving", TYPE_DIELECTRIC, 0.4f, 1 / 1.5f, 0,
-				       {1, 1, 1}, 20});
+				       {1, 1, 1}, 20, 0, 0});
+}
+
+Test(bsdf, principled)
+{
+	check_case(&(struct bsdf_case){"principled plastic", TYPE_PRINCIPLED, 0.3f, 1.5f, 0,
+				       {0.8f, 0.3f, 0.2f}, 30, 0, 0});
+	check_case(&(struct bsdf_case){"principled half metal", TYPE_PRINCIPLED, 0.2f, 1.5f, 0,
+				       {0.9f, 0.7f, 0.3f}, 60, 0.5f, 0});
+	check_case(&(struct bsdf_case){"principled glass", TYPE_PRINCIPLED, 0.35f, 1.5f, 0,
+				       {0.9f, 0.9f, 0.9f}, 25, 0.2f, 0.8f});
 }
 
 Test(bsdf, mis_weights_sum_to_one)

@@ -355,7 +355,10 @@ static void pack_bsdf(struct rt_bsdf *out, const struct scene_material *m)
 		out->mirror = (float)m->reflect;
 		out->mirror_tint = m->fresnel == SCENE_FRESNEL_CONDUCTOR;
 	}
-	out->color = vec4(b->color, roughness * roughness);
+	double alpha = roughness * roughness;
+	if (b->type == SCENE_BSDF_PRINCIPLED && alpha < 0.001)
+		alpha = 0.001; /* RENDERING.md: no delta lobes */
+	out->color = vec4(b->color, alpha);
 	out->emission = vec4(m->emission, ior);
 	out->metallic = (float)b->metallic;
 	out->transmission = (float)b->transmission;

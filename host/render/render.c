@@ -59,14 +59,6 @@ int render_check_integrator(const struct scene *scene, const struct render_setti
 			 s->kernel ? "the wavefront kernel" : "the CPU reference (-k reference)");
 		return -1;
 	}
-	for (int i = 0; i < scene->material_count; i++)
-		if (scene->materials[i].bsdf.type == SCENE_BSDF_PRINCIPLED) {
-			snprintf(err, err_size,
-				 "%s: the principled BSDF is not rendered yet by the path "
-				 "integrator; use \"diffuse\", \"conductor\" or \"dielectric\"",
-				 quote_text(scene->source));
-			return -1;
-		}
 	if (scene->environment.file) {
 		snprintf(err, err_size,
 			 "%s: environment: maps are not rendered yet (the path integrator lights "
