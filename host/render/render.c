@@ -59,13 +59,6 @@ int render_check_integrator(const struct scene *scene, const struct render_setti
 			 "wavefront, or --integrator whitted");
 		return -1;
 	}
-	if (scene->environment.file) {
-		snprintf(err, err_size,
-			 "%s: environment: maps are not rendered yet (the path integrator lights "
-			 "the scene with \"background\" only); leave \"environment\" out",
-			 quote_text(scene->source));
-		return -1;
-	}
 	return 0;
 }
 
