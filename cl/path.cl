@@ -58,6 +58,7 @@ static void walk_start(struct tracer *tr, struct walk *w, int x, int y, float2 o
 
 /* The hit being scattered: where, its normals and its BSDF. */
 struct path_hit {
+	struct hit hit;
 	float3 p, n, n_face;
 	bool inside;
 	int material;
@@ -71,6 +72,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 {
 	struct shading sh;
 
+	h->hit = hit;
 	h->p = ray->origin + hit.t * ray->dir;
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_DOT3);
 	float3 normal = hit_surface(tr, hit, h->p, ray->dir, &sh);
@@ -124,7 +126,7 @@ static void path_next_event(struct tracer *tr, struct walk *w, const struct path
 	struct light_sample ls;
 
 	COUNT_FLOPS(tr, 1);
-	if (!light_sample(tr, g, t, path_pair(tr, PAIR_LIGHT_POINT(w->vertex)), h->p, &ls))
+	if (!light_sample(tr, g, t, path_pair(tr, PAIR_LIGHT_POINT(w->vertex)), h->p, h->hit, &ls))
 		return;
 	float3 l = to_local(tr, f, ls.dir);
 	bool front = dot3(ls.dir, h->n_face) > 0.0f;

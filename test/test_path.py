@@ -377,3 +377,17 @@ def test_environment_map_errors(tmp_path, content, message):
     scene = box_with(tmp_path, lambda d: d.update(environment={"file": "sky.hdr"}))
     failure(rtcl(scene, "-o", tmp_path / "x.pfm"), message)
     assert not (tmp_path / "x.pfm").exists()
+
+
+def test_an_emitter_is_no_light_at_its_own_points(tmp_path):
+    """Inside an emitting sphere, whose emission leaves its outside only,
+    nothing is lit: a point on the dome must not sample the dome itself
+    (RENDERING.md, next_event), which rounding would otherwise decide."""
+    doc = {"format": "rtcl-scene", "version": 1, "integrator": "path", "max_depth": 3,
+           "camera": {"eye": [0.3, 0.2, -2], "look_at": [0, 0, 0], "fov": 60},
+           "spheres": [{"center": [0, 0, 0], "radius": 5,
+                        "material": {"bsdf": {"type": "diffuse", "reflectance": [0.8] * 3},
+                                     "emission": [1, 1, 1]}}]}
+    image = read_pfm(render(write_scene(tmp_path, doc), tmp_path, "dome", "--size", "16x16",
+                            "--spp", "16"))
+    assert image.max() == 0, image.mean()
