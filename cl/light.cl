@@ -205,6 +205,14 @@ static bool emitter_sample(struct tracer *tr, float p_group, float t, float3 p, 
 		le = emitter_emission(tr, triangle_material(tri));
 		/* P_e pdf_e = lum area / W * dist^2 / (area cos): the area cancels */
 		ls->pdf = p_group * luminance(tr, le) * path->inv_emitter_weight * dist2 / cos_l;
+#ifdef RTCL_TEXTURES
+		int texture = tr->bsdfs[triangle_material(tri)].emissive_texture;
+		if (texture >= 0) { /* at y, of barycentric (r (1 - t), r t) */
+			float2 uv = triangle_uv(tr, tri, (float2)(r * (1.0f - st.y), r * st.y));
+			le *= texture_lookup(tr, texture, uv).xyz;
+			COUNT_FLOPS(tr, 3 + FLOPS_MUL3);
+		}
+#endif
 		ls->t_max = dist2 * inv - 2.0f * scene_epsilon(tr->scene);
 		COUNT_FLOPS(tr, 4 + 3);
 	}
