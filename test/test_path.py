@@ -483,7 +483,7 @@ def test_a_models_normal_texture_turns_its_shading_normal(tmp_path):
     tilted, flat = (191, 128, 238, 255), (128, 128, 255, 255)
     scene = textured_quad(tmp_path, {"pbrMetallicRoughness": white,
                                      "normalTexture": {"index": 0}},
-                          [tilted, tilted, flat, flat], background=[0, 0, 0], max_depth=0,
+                          [tilted, tilted, flat, flat], background=[0, 0, 0],
                           lights=[{"direction": [-1, 0, -1], "color": [1, 1, 1]}])
     image = read_pfm(render(scene, tmp_path, "n", "--size", "16x16", "--spp", "16"))
     left, right = image[6:10, 3:5].mean(), image[6:10, 11:13].mean()
