@@ -489,3 +489,27 @@ def test_a_models_normal_texture_turns_its_shading_normal(tmp_path):
     left, right = image[6:10, 3:5].mean(), image[6:10, 11:13].mean()
     assert right > 0.1, right
     assert 1.2 < left / right < 1.5, (left, right)  # cos 15 / cos 45 = 1.37
+
+
+@pytest.mark.slow
+def test_pieces_devices_and_mpi_ranks_give_the_one_device_image(tmp_path):
+    """A path-traced image in row bands, with its samples split, and over
+    three MPI ranks is the one-device image, byte for byte (the per-pixel
+    sample sequence and the fixed-point sums do not depend on who traces)."""
+    args = ["--size", "16x16", "--spp", "4"]
+    plain = render(BOX, tmp_path, "plain", *args).read_bytes()
+    bands = render(BOX, tmp_path, "bands", *args, "--devices", "0:0", "--piece-rows", "4")
+    samples = render(BOX, tmp_path, "samples", *args, "--devices", "0:0", "--split", "samples")
+    assert bands.read_bytes() == plain and samples.read_bytes() == plain
+    if subprocess.run(["sh", "-c", "command -v mpirun"], capture_output=True).returncode:
+        pytest.skip("no mpirun")
+    env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
+           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp"}
+    out = tmp_path / "mpi.pfm"
+    result = subprocess.run(["mpirun", "--oversubscribe", "-np", "3", RTCL, "--mpi", str(BOX),
+                             "-o", str(out), "-q", *args], capture_output=True, text=True,
+                            cwd=ROOT, timeout=300, env=env)
+    if "built without MPI" in result.stderr:
+        pytest.skip("rtcl built without MPI")
+    assert result.returncode == 0, result.stderr
+    assert out.read_bytes() == plain
