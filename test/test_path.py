@@ -170,6 +170,10 @@ def box_with(tmp_path, change):
     (lambda d: d["materials"]["lamp"].update(emision=[1, 0, 0]),
      'materials.lamp: unknown key "emision"; did you mean "emission"?'),
     (lambda d: d.update(environment={"scale": 2}), 'environment: needs "file"'),
+    (lambda d: d.update(environment={"file": 3}), 'environment.file: must be a file name, got an integer'),
+    (lambda d: d.update(environment={"file": ""}), 'environment.file: must be a file name, got ""'),
+    (lambda d: d.update(environment={"file": "sky.hdr", "scale": -1}),
+     "environment.scale: must be >= 0, got -1"),
     (lambda d: d.update(environment={"file": "nothere.hdr", "rotat": 2}),
      'environment: unknown key "rotat"; did you mean "rotate"?'),
 ])
@@ -369,6 +373,7 @@ def test_environment_map_is_seen_where_rays_leave(tmp_path):
     (b"P6\n1 1\n255\n...", '"sky.hdr" is not a Radiance HDR file (it does not start with "#?")'),
     (b"#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n", 'its FORMAT is "32-bit_rle_xyze"'),
     (b"#?RADIANCE\n\n+X 2 -Y 2\n", 'its size line is "+X 2 -Y 2"'),
+    (b"#?RADIANCE\n\n-Y 10 +X 20000\n", '"sky.hdr" is 20000x10; rtcl reads 1 to 16384 pixels a side'),
     (b"#?RADIANCE\n\n-Y 3 +X 8\n" + bytes(32 * 2) + bytes([2, 2, 0, 8]),
      '"sky.hdr": its pixels end after row 2 of 3'),
     (b"#?RADIANCE\n\n-Y 16384 +X 16384\n" + bytes(100),
