@@ -518,3 +518,10 @@ def test_pieces_devices_and_mpi_ranks_give_the_one_device_image(tmp_path):
         pytest.skip("rtcl built without MPI")
     assert result.returncode == 0, result.stderr
     assert out.read_bytes() == plain
+
+
+def test_verbose_says_what_lights_a_path_traced_scene(tmp_path):
+    result = rtcl(BOX, "-v", "--size", "8x8", "--spp", "2", "-o", tmp_path / "v.pfm")
+    assert result.returncode == 0, result.stderr
+    assert ("rtcl: path integrator: 0 lights, 2 emitting triangles, 0 emitting spheres, "
+            "no environment") in result.stderr.splitlines()
