@@ -46,6 +46,7 @@ enum long_only_option {
 	OPT_FOCUS_DISTANCE,
 	OPT_CHECKPOINT,
 	OPT_NO_PARTIAL,
+	OPT_INTEGRATOR,
 };
 
 static const struct option long_options[] = {
@@ -59,6 +60,7 @@ static const struct option long_options[] = {
 	{"size", required_argument, NULL, OPT_SIZE},
 	{"depth", required_argument, NULL, OPT_DEPTH},
 	{"spp", required_argument, NULL, OPT_SPP},
+	{"integrator", required_argument, NULL, OPT_INTEGRATOR},
 	{"eye", required_argument, NULL, OPT_EYE},
 	{"look-at", required_argument, NULL, OPT_LOOK_AT},
 	{"fov", required_argument, NULL, OPT_FOV},
@@ -137,6 +139,10 @@ static void print_help_after_kernels(FILE *out)
 		"      --spp N            samples per pixel, overriding image.samples (1..%d;\n"
 		"                         default 1, the pixel centre): antialiasing with a\n"
 		"                         box filter, traced in passes with progress\n"
+		"      --integrator whitted|path  the light transport, overriding the scene's\n"
+		"                         integrator: Whitted ray tracing (the default), or a\n"
+		"                         path tracer (bounced light, BSDFs, emitters; converges\n"
+		"                         with --spp; not yet with -k reference)\n"
 		"      --eye X,Y,Z        the camera's eye, overriding camera.eye\n"
 		"      --look-at X,Y,Z    the point the camera looks at, overriding\n"
 		"                         camera.look_at\n"
@@ -289,9 +295,13 @@ void cli_print_help(FILE *out)
 		"lights, sphere lights and directional lights (soft shadows from the last\n"
 		"two), shaded Whitted-style (Blinn-Phong, shadows, reflection, refraction,\n"
 		"an optional Fresnel term), seen through a pinhole, a thin lens (depth of\n"
-		"field) or a glTF camera, with antialiasing (--spp).\n"
+		"field) or a glTF camera, with antialiasing (--spp). Or a physically based\n"
+		"path tracer (--integrator path): global illumination, emission, microfacet\n"
+		"BSDFs (diffuse, GGX conductor, rough or smooth glass, glTF's principled),\n"
+		"multiple importance sampling, a uniform sky or an environment map (.hdr).\n"
 		"\n"
 		"Examples:\n"
+		"  rtcl scenes/cornell.json              a path-traced Cornell box\n"
 		"  rtcl                                  the built-in 60-ball scene, dynamic "
 		"kernel\n"
 		"  rtcl scenes/two_balls.json -o balls.exr --size 800x600\n"
@@ -710,6 +720,9 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return 0;
 	case OPT_ACCEL:
 		return parse_accel(arg, &o->accel, err, err_size);
+	case OPT_INTEGRATOR:
+		return parse_choice("--integrator", arg, "whitted", "path", &o->integrator, err,
+				    err_size);
 	case OPT_MESH_TIME_LIMIT:
 		return parse_limit("--mesh-time-limit", arg, "seconds", MESH_TIME_LIMIT_MAX,
 				   &o->mesh_time_limit, err, err_size);
@@ -1029,6 +1042,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	o->workgroup[0] = o->workgroup[1] = 8;
 	o->outputs.image = "render.png";
 	o->depth = -1;
+	o->integrator = -1;
 	o->devices.platform = o->devices.device = -1;
 	o->repeat = 0; /* not given: one launch, no warm-up */
 	o->batch = 1;

@@ -93,6 +93,52 @@ static int shows_progress(const struct options *opt)
 	return !opt->quiet && (isatty(STDERR_FILENO) || (opt->mpi && isatty(STDOUT_FILENO)));
 }
 
+/* What the integrator makes of fields that only the other one reads
+ * (SCENE.md, "Path tracing"). */
+static void print_integrator_warnings(const struct scene *scene)
+{
+	const char *source = quote_text(scene->source);
+
+	if (scene->integrator == SCENE_INTEGRATOR_PATH && scene->ambient_given)
+		fprintf(stderr,
+			"rtcl: warning: %s: ambient: has no meaning under the path integrator "
+			"(indirect light is traced); it is ignored\n",
+			source);
+	if (scene->integrator == SCENE_INTEGRATOR_WHITTED && scene->environment.file)
+		fprintf(stderr,
+			"rtcl: warning: %s: environment: is used only by the path integrator; it "
+			"is ignored\n",
+			source);
+}
+
+/* Under -v and the path integrator, what lights the scene (RENDERING.md,
+ * "Lights and their selection"): the scene's lights, the emitting triangles
+ * and spheres, the environment. */
+static void print_path_lights(const struct scene *scene)
+{
+	const struct scene_environment *env = &scene->environment;
+	int triangles = 0, spheres = 0;
+
+	if (scene->integrator != SCENE_INTEGRATOR_PATH)
+		return;
+	for (int i = 0; i < scene->triangle_count; i++)
+		triangles += scene_material_emits(&scene->materials[scene->triangles[i].material]);
+	for (int i = 0; i < scene->sphere_count; i++)
+		spheres += scene_material_emits(&scene->materials[scene->spheres[i].material]);
+	fprintf(stderr, "rtcl: path integrator: %d light%s, %d emitting triangle%s, %d emitting "
+			"sphere%s, ",
+		scene->light_count, scene->light_count == 1 ? "" : "s", triangles,
+		triangles == 1 ? "" : "s", spheres, spheres == 1 ? "" : "s");
+	if (env->rgb)
+		fprintf(stderr, "environment map %dx%d (scale %g, rotate %g)\n", env->width,
+			env->height, env->scale, env->rotate);
+	else if (scene->background[0] > 0 || scene->background[1] > 0 || scene->background[2] > 0)
+		fprintf(stderr, "uniform environment [%g, %g, %g]\n", scene->background[0],
+			scene->background[1], scene->background[2]);
+	else
+		fprintf(stderr, "no environment\n");
+}
+
 /* The job: the options, else the scene's own values. */
 static void make_job(struct job *job, const struct options *opt, const struct scene *scene)
 {
@@ -264,13 +310,22 @@ int main(int argc, char **argv)
 		scene_free(&scene);
 		return EXIT_USAGE;
 	}
+	if (opt.integrator >= 0)
+		scene.integrator = opt.integrator;
 	for (int i = 0; i < scene.warning_count; i++)
 		fprintf(stderr, "rtcl: warning: %s\n", scene.warnings[i]);
+	print_integrator_warnings(&scene);
 	if (opt.verbose) {
 		print_mesh_reports(&scene);
 		print_scene_bounds(&scene);
+		print_path_lights(&scene);
 	}
 	make_job(&job, &opt, &scene);
+	if (render_check_integrator(&scene, &job.settings, err, sizeof(err))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		scene_free(&scene);
+		return EXIT_USAGE;
+	}
 	memset(&record, 0, sizeof(record));
 	record.start = start;
 	status = render_and_write(&job, &opt.outputs, &record, err, sizeof(err));

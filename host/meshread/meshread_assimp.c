@@ -344,7 +344,8 @@ static int understood(const char *key, int metallic_roughness)
 {
 	static const char *const always[] = {
 		"?mat.name",	 "$mat.shadingm", "$mat.twosided",	   "$clr.transparent",
-		"$mat.refracti", "$clr.emissive", "$mat.anisotropyFactor", NULL};
+		"$mat.refracti", "$clr.emissive", "$mat.anisotropyFactor", "$mat.emissiveIntensity",
+		NULL};
 	static const char *const phong[] = {"$clr.diffuse",
 					    "$clr.specular",
 					    "$clr.ambient",
@@ -373,11 +374,15 @@ static int understood(const char *key, int metallic_roughness)
 	return 0;
 }
 
-/* The texture kinds rtcl reads: base colour and (cut-out) opacity. */
+/* The texture kinds rtcl reads: base colour, (cut-out) opacity, and for the
+ * path integrator glTF's metallic-roughness (Assimp 5.2's "unknown" type)
+ * and the emissive texture. */
 static int texture_read(unsigned semantic)
 {
 	return semantic == aiTextureType_DIFFUSE || semantic == aiTextureType_BASE_COLOR ||
-	       semantic == aiTextureType_OPACITY;
+	       semantic == aiTextureType_OPACITY || semantic == aiTextureType_UNKNOWN ||
+	       semantic == aiTextureType_METALNESS || semantic == aiTextureType_DIFFUSE_ROUGHNESS ||
+	       semantic == aiTextureType_EMISSIVE || semantic == aiTextureType_NORMALS;
 }
 
 /* Counts the textures rtcl reads and notes the properties it does not
@@ -413,9 +418,16 @@ static void survey(const struct aiMaterial *mat, struct mesh_material *m)
 			note(m, what);
 		}
 	}
+	/* Emission is rendered by the path integrator only (SCENE.md,
+	 * "Emission"): read, and under Whitted not drawn, as -v said before. */
 	if (numbers(mat, "$clr.emissive", emissive, 3) &&
-	    (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0))
+	    (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0)) {
+		double strength = 1;
+		numbers(mat, "$mat.emissiveIntensity", &strength, 1);
+		for (int i = 0; i < 3; i++)
+			m->emissive[i] = emissive[i] * strength;
 		note(m, "emissive");
+	}
 	if (numbers(mat, "$mat.anisotropyFactor", &anisotropy, 1) && anisotropy != 0)
 		note(m, "anisotropy");
 }
@@ -488,6 +500,7 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 
 	memset(m, 0, sizeof(*m));
 	m->base_texture = m->opacity_texture = -1;
+	m->metallic_roughness_texture = m->emissive_texture = m->normal_texture = -1;
 	string_of(mat, "?mat.name", m->name, sizeof(m->name));
 	int named = m->name[0] != '\0';
 	if (!named)
@@ -894,9 +907,26 @@ static int read_textures(const struct aiScene *sc, const char *path, const json_
 		if (m->kind == MESH_MATERIAL_PHONG)
 			m->opacity_texture = texture_of(sc, path, doc, mat, aiTextureType_OPACITY,
 							MESH_TEXTURE_OPACITY, out);
-		textured |= m->base_texture >= 0 || m->opacity_texture >= 0;
-		if (m->base_texture == TEXTURE_NO_MEMORY ||
-		    m->opacity_texture == TEXTURE_NO_MEMORY) {
+		/* glTF's metallicRoughnessTexture: Assimp 5.2 gives it as the
+		 * "unknown" type, later versions also as metalness */
+		if (m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+			m->metallic_roughness_texture = texture_of(
+				sc, path, doc, mat,
+				aiGetMaterialTextureCount(mat, aiTextureType_UNKNOWN)
+					? aiTextureType_UNKNOWN
+					: aiTextureType_METALNESS,
+				MESH_TEXTURE_DATA, out);
+		m->emissive_texture =
+			texture_of(sc, path, doc, mat, aiTextureType_EMISSIVE, MESH_TEXTURE_COLOR, out);
+		if (m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+			m->normal_texture = texture_of(sc, path, doc, mat, aiTextureType_NORMALS,
+						       MESH_TEXTURE_DATA, out);
+		textured |= m->base_texture >= 0 || m->opacity_texture >= 0 ||
+			    m->metallic_roughness_texture >= 0 || m->emissive_texture >= 0 ||
+			    m->normal_texture >= 0;
+		if (m->base_texture == TEXTURE_NO_MEMORY || m->opacity_texture == TEXTURE_NO_MEMORY ||
+		    m->metallic_roughness_texture == TEXTURE_NO_MEMORY ||
+		    m->emissive_texture == TEXTURE_NO_MEMORY || m->normal_texture == TEXTURE_NO_MEMORY) {
 			free(used);
 			return -1;
 		}

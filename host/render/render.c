@@ -11,6 +11,7 @@
 #include "base/interrupt.h"
 #include "render/repeats.h"
 #include "base/progress.h"
+#include "base/quote.h"
 #include "render/reference.h"
 #include "render/renderer.h"
 #include "render/singlepass.h"
@@ -45,6 +46,21 @@ const struct kernel_info *render_find_kernel(const char *name)
 		if (strcmp(render_kernels[i].name, name) == 0)
 			return &render_kernels[i];
 	return NULL;
+}
+
+int render_check_integrator(const struct scene *scene, const struct render_settings *s,
+			    char *err, size_t err_size)
+{
+	if (scene->integrator != SCENE_INTEGRATOR_PATH)
+		return 0;
+	if (!s->kernel) {
+		snprintf(err, err_size,
+			 "the CPU reference (-k reference) does not trace paths yet (the path "
+			 "integrator): use -k dynamic, naive, cyclic, persistent, serial or "
+			 "wavefront, or --integrator whitted");
+		return -1;
+	}
+	return 0;
 }
 
 int render_pass_samples(const struct render_settings *s)
@@ -163,6 +179,8 @@ int render_reference(const struct scene *scene, const struct render_settings *s,
 	double *sums = malloc(values * sizeof(double));
 
 	memset(res, 0, sizeof(*res));
+	if (render_check_integrator(scene, s, err, err_size))
+		return -1;
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
 	res->kernel_ms = calloc((size_t)s->repeat, sizeof(double));
 	if (!res->rgb || !res->kernel_ms || !sums) {
