@@ -1,0 +1,471 @@
+#!/usr/bin/env python3
+"""Renders an rtcl path-tracing scene with Mitsuba 3, the independent oracle of
+issue 40, and writes the reference image as data (docs/oracle.md).
+
+    python3 tools/mitsuba_ref.py SCENE.json -o test/oracle/refs/NAME.npz \\
+        [--spp N] [--batches K] [--size WxH] [--threads T] [--aov albedo]
+
+The scene is read by this script's own reading of docs/SCENE.md, not by rtcl,
+and turned into a Mitsuba scene by the rules of docs/oracle.md ("Mappings"):
+the same triangles (OBJ files parsed here, placed by scale, rotate, translate)
+and spheres, the same pinhole camera (fov_axis "y", a box pixel filter), the
+same BSDFs (GGX alpha = roughness^2; the Schlick conductor as Mitsuba's
+`principled` with metallic 1; glTF's metallic-roughness BSDF as the BSDF
+`gltf` below), emission on the front side, `background` as a uniform
+environment. What it cannot map exactly is refused with a message, never
+approximated silently.
+
+The N samples a pixel are rendered as K batches of N/K, each with its own seed
+of Mitsuba's independent sampler. The output (.npz) holds
+  image            float32 H x W x 3, linear radiance, rows from the top: the mean
+  block_sample_std float32 H/8 x W/8 x 3: the standard deviation of ONE sample's
+                   contribution to the mean of an 8 x 8 block, estimated from the
+                   spread of the K batches' block means (std x sqrt(64 N/K)); a
+                   renderer's block mean at n samples a pixel then has the Monte
+                   Carlo error block_sample_std / sqrt(64 n)
+  meta             a JSON string: the scene, its SHA-256, spp, batches, Mitsuba's
+                   version and variant, the command, seconds taken
+Needs `pip install mitsuba` (tools/requirements-oracle.txt); rtcl's tests do
+not: they read the committed .npz files.
+"""
+import argparse
+import hashlib
+import json
+import math
+import os
+import pathlib
+import struct
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+BLOCK = 8
+
+
+class SceneError(Exception):
+    """A scene this script cannot turn into the same Mitsuba scene."""
+
+
+# ---------------------------------------------------------------- the scene
+
+def vec(value, where):
+    if not (isinstance(value, list) and len(value) == 3
+            and all(isinstance(c, (int, float)) for c in value)):
+        raise SceneError(f"{where}: expected three numbers, got {value!r}")
+    return [float(c) for c in value]
+
+
+def rotation(degrees):
+    """SCENE.md's meshes[i].rotate: degrees about x, then y, then z (world axes)."""
+    ax, ay, az = (math.radians(d) for d in degrees)
+    rx = np.array([[1, 0, 0], [0, math.cos(ax), -math.sin(ax)], [0, math.sin(ax), math.cos(ax)]])
+    ry = np.array([[math.cos(ay), 0, math.sin(ay)], [0, 1, 0], [-math.sin(ay), 0, math.cos(ay)]])
+    rz = np.array([[math.cos(az), -math.sin(az), 0], [math.sin(az), math.cos(az), 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def read_obj(path):
+    """The triangles of an OBJ file by material name: {name: [[v0, v1, v2], ...]}.
+    Polygons are fanned from their first vertex, as Assimp triangulates a convex
+    polygon; faces before the first `usemtl` have the material None."""
+    vertices, groups, material = [], {}, None
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        fields = line.split()
+        if not fields or fields[0].startswith("#"):
+            continue
+        if fields[0] == "v":
+            vertices.append([float(c) for c in fields[1:4]])
+        elif fields[0] == "usemtl":
+            material = fields[1]
+        elif fields[0] == "f":
+            index = []
+            for field in fields[1:]:
+                i = int(field.split("/")[0])
+                index.append(i - 1 if i > 0 else len(vertices) + i)
+            for k in range(1, len(index) - 1):
+                groups.setdefault(material, []).append(
+                    [vertices[index[0]], vertices[index[k]], vertices[index[k + 1]]])
+        elif fields[0] in ("vn", "vt"):
+            raise SceneError(f"{path}:{number}: vertex normals and texture coordinates are "
+                             "not mapped (give flat, untextured meshes)")
+        elif fields[0] not in ("o", "g", "s", "mtllib"):
+            raise SceneError(f"{path}:{number}: unknown OBJ statement {fields[0]!r}")
+    return groups
+
+
+class Scene:
+    """An rtcl scene (docs/SCENE.md) as far as the oracle maps it."""
+
+    KNOWN = {"format", "version", "image", "camera", "background", "max_depth", "materials",
+             "spheres", "meshes", "triangles", "integrator", "environment", "epsilon",
+             "lights", "planes", "ambient"}
+
+    def __init__(self, path):
+        self.path = pathlib.Path(path)
+        self.doc = json.loads(self.path.read_text())
+        unknown = set(self.doc) - self.KNOWN
+        if unknown:
+            raise SceneError(f"{path}: keys the oracle does not map: {sorted(unknown)}")
+        for key in ("lights", "planes"):
+            if self.doc.get(key):
+                raise SceneError(f"{path}: {key}: not mapped (docs/oracle.md: emissive "
+                                 "triangles and spheres are the lights)")
+        if self.doc.get("integrator", "whitted") != "path":
+            raise SceneError(f'{path}: integrator: the oracle renders "path" scenes only')
+        self.materials = self.doc.get("materials", {})
+
+    def material(self, ref, where):
+        if isinstance(ref, str):
+            if ref not in self.materials:
+                raise SceneError(f"{where}: unknown material {ref!r}")
+            return ref, self.materials[ref]
+        if isinstance(ref, dict):
+            return None, ref
+        raise SceneError(f"{where}: a material must be named or given, got {ref!r}")
+
+    def shapes(self):
+        """Yields (kind, geometry, (name, material), where): kind "sphere" with
+        (center, radius) or "triangles" with an N x 3 x 3 float64 array."""
+        for i, sphere in enumerate(self.doc.get("spheres", [])):
+            where = f"spheres[{i}]"
+            if "material" not in sphere:
+                raise SceneError(f"{where}: give a material with a bsdf")
+            yield ("sphere", (vec(sphere["center"], where), float(sphere["radius"])),
+                   self.material(sphere["material"], where), where)
+        for i, tri in enumerate(self.doc.get("triangles", [])):
+            where = f"triangles[{i}]"
+            geometry = np.array([vec(v, where) for v in tri["vertices"]])[None]
+            yield "triangles", geometry, self.material(tri["material"], where), where
+        for i, mesh in enumerate(self.doc.get("meshes", [])):
+            yield from self.mesh_shapes(i, mesh)
+
+    def mesh_shapes(self, i, mesh):
+        where = f"meshes[{i}]"
+        extra = set(mesh) - {"file", "material", "materials", "scale", "rotate", "translate",
+                             "smooth"}
+        if extra:
+            raise SceneError(f"{where}: keys the oracle does not map: {sorted(extra)}")
+        if mesh.get("smooth", True):
+            raise SceneError(f'{where}: give "smooth": false (the oracle maps flat meshes)')
+        file = self.path.parent / mesh["file"]
+        if file.suffix.lower() != ".obj":
+            raise SceneError(f"{where}.file: the oracle reads OBJ files only")
+        scale = mesh.get("scale", 1)
+        scale = np.array([float(scale)] * 3 if isinstance(scale, (int, float))
+                         else vec(scale, where + ".scale"))
+        turn = rotation(vec(mesh.get("rotate", [0, 0, 0]), where + ".rotate"))
+        shift = np.array(vec(mesh.get("translate", [0, 0, 0]), where + ".translate"))
+        mirror = np.prod(np.sign(scale)) < 0
+        for name, triangles in read_obj(file).items():
+            if "material" in mesh:
+                ref = mesh["material"]
+            elif name in mesh.get("materials", {}):
+                ref = mesh["materials"][name]
+            else:
+                raise SceneError(f"{where}: the file's material {name!r} needs a scene "
+                                 "material with a bsdf (meshes[i].materials)")
+            tri = np.array(triangles, dtype=np.float64) * scale
+            tri = tri @ turn.T + shift
+            if mirror:
+                tri = tri[:, ::-1]
+            yield "triangles", tri, self.material(ref, f"{where}.materials.{name}"), where
+
+
+# ---------------------------------------------------------------- the mapping
+
+def rgb(value, where):
+    return {"type": "rgb", "value": vec(value, where)}
+
+
+def number_in(material, key, default, where, low=0.0, high=1.0):
+    value = float(material.get(key, default))
+    if not low <= value <= high:
+        raise SceneError(f"{where}.{key}: must be in [{low}, {high}], got {value}")
+    return value
+
+
+def mitsuba_bsdf(material, where):
+    """The Mitsuba BSDF of an rtcl material's "bsdf" (docs/oracle.md, "Mappings")."""
+    if "bsdf" not in material:
+        raise SceneError(f"{where}: the oracle maps materials with a \"bsdf\" only")
+    bsdf = material["bsdf"]
+    kind = bsdf.get("type")
+    where = where + ".bsdf"
+    if kind == "diffuse":
+        inner = {"type": "diffuse", "reflectance": rgb(bsdf["reflectance"], where)}
+    elif kind == "conductor":
+        # Schlick's Fresnel with F0 = reflectance, GGX alpha = roughness^2: exactly
+        # Mitsuba's principled with metallic 1 (its calc_schlick(base_color, wi.m)),
+        # whose alpha is max(0.001, roughness^2).
+        inner = {"type": "principled", "base_color": rgb(bsdf["reflectance"], where),
+                 "metallic": 1.0,
+                 "roughness": number_in(bsdf, "roughness", 0, where)}
+    elif kind == "dielectric":
+        ior = float(bsdf.get("ior", 1.5))
+        roughness = number_in(bsdf, "roughness", 0, where)
+        if roughness == 0:
+            return {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0}
+        return {"type": "roughdielectric", "distribution": "ggx", "alpha": roughness ** 2,
+                "int_ior": ior, "ext_ior": 1.0, "sample_visible": True}
+    elif kind == "principled":
+        inner = {"type": "gltf",
+                 "base_color": vec(bsdf.get("base_color", [1, 1, 1]), where + ".base_color"),
+                 "metallic": number_in(bsdf, "metallic", 0, where),
+                 "roughness": number_in(bsdf, "roughness", 0.5, where),
+                 "ior": float(bsdf.get("ior", 1.5))}
+        if number_in(bsdf, "transmission", 0, where) != 0:
+            raise SceneError(f"{where}.transmission: not mapped yet (docs/oracle.md)")
+        register_gltf()
+    else:
+        raise SceneError(f"{where}.type: unknown BSDF {kind!r}")
+    # rtcl's opaque BSDFs reflect on both sides of a surface; Mitsuba's on the
+    # front only unless wrapped.
+    return {"type": "twosided", "bsdf": inner}
+
+
+def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
+    import mitsuba as mi
+    doc = scene.doc
+    image = doc.get("image", {})
+    width = width or image.get("width", 640)
+    height = height or image.get("height", 480)
+    camera = doc["camera"]
+    if camera.get("aperture", 0) != 0:
+        raise SceneError("camera.aperture: the oracle maps the pinhole camera only")
+    eye = vec(camera["eye"], "camera.eye")
+    look_at = vec(camera["look_at"], "camera.look_at")
+    up = vec(camera.get("up", [0, 1, 0]), "camera.up")
+    # rtcl's max_depth counts bounces (0: what the camera sees; 1: direct
+    # light); Mitsuba's max_depth counts path segments (1: what the camera sees).
+    max_depth = int(doc.get("max_depth", 5)) + 1
+    out = {
+        "type": "scene",
+        "integrator": ({"type": "aov", "aovs": "albedo:albedo"} if aov else
+                       {"type": "path", "max_depth": max_depth, "hide_emitters": False}),
+        "sensor": {
+            "type": "perspective",
+            "fov_axis": "y",
+            "fov": float(camera.get("fov", 45)),
+            "near_clip": 1e-4,
+            "far_clip": 1e6,
+            "to_world": mi.ScalarTransform4f().look_at(origin=eye, target=look_at, up=up),
+            "sampler": {"type": "independent", "sample_count": spp},
+            "film": {"type": "hdrfilm", "width": width, "height": height,
+                     "rfilter": {"type": "box"}, "pixel_format": "rgb",
+                     "component_format": "float32"},
+        },
+    }
+    background = vec(doc.get("background", [0, 0, 0]), "background")
+    if "environment" in doc:
+        raise SceneError("environment: not mapped yet (docs/oracle.md)")
+    if any(background):
+        out["background"] = {"type": "constant", "radiance": rgb(background, "background")}
+    tmp = tempfile.mkdtemp(prefix="mitsuba_ref.")
+    bsdfs = {}
+    for k, (kind, geometry, (name, material), where) in enumerate(scene.shapes()):
+        key = name or f"{where}.material"
+        if name is None or key not in bsdfs:
+            bsdfs[key] = mitsuba_bsdf(material, where if name is None else f"materials.{name}")
+        shape = {"bsdf": bsdfs[key]}
+        if "emission" in material:
+            shape["emitter"] = {"type": "area", "radiance": rgb(material["emission"], where)}
+        if kind == "sphere":
+            shape.update(type="sphere", center=geometry[0], radius=geometry[1])
+        else:
+            ply = pathlib.Path(tmp) / f"shape{k}.ply"
+            write_ply(ply, geometry)
+            shape.update(type="ply", filename=str(ply), face_normals=True)
+        out[f"shape{k}"] = shape
+    return out
+
+
+def write_ply(path, triangles):
+    """N triangles (N x 3 x 3) as a binary PLY, float32 vertices, unshared."""
+    tri = np.asarray(triangles, dtype="<f4").reshape(-1, 3)
+    count = len(triangles)
+    header = ("ply\nformat binary_little_endian 1.0\n"
+              f"element vertex {3 * count}\nproperty float x\nproperty float y\n"
+              f"property float z\nelement face {count}\n"
+              "property list uchar int vertex_indices\nend_header\n").encode()
+    faces = bytearray()
+    for i in range(count):
+        faces += struct.pack("<Biii", 3, 3 * i, 3 * i + 1, 3 * i + 2)
+    path.write_bytes(header + tri.tobytes() + bytes(faces))
+
+
+# ---------------------------------------------------------------- glTF's BSDF
+
+_GLTF_REGISTERED = False
+
+
+def register_gltf():
+    """Registers the Mitsuba BSDF "gltf": the glTF 2.0 metallic-roughness BRDF of
+    the glTF specification's Appendix B, transcribed term by term:
+
+        f = mix(dielectric_brdf, metal_brdf, metallic)
+        metal_brdf      = specular_brdf * (C + (1 - C) (1 - |V.H|)^5)
+        dielectric_brdf = mix(C / pi, specular_brdf, F0 + (1 - F0) (1 - |V.H|)^5)
+        specular_brdf   = D(H) G1(V) G1(L) / (4 |N.L| |N.V|)    (GGX, separable Smith)
+        F0 = ((ior - 1) / (ior + 1))^2, alpha = roughness^2, C = base colour
+
+    sampled by Mitsuba's GGX visible-normal sampling and by the cosine, chosen
+    with a fixed probability (the pdf is their mix, so any choice is unbiased).
+    Reflection only, on the side the light comes from (wrapped in "twosided")."""
+    global _GLTF_REGISTERED
+    if _GLTF_REGISTERED:
+        return
+    import drjit as dr
+    import mitsuba as mi
+
+    class GltfBSDF(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.base = mi.Color3f(props["base_color"])
+            self.metallic = mi.Float(props["metallic"])
+            alpha = dr.maximum(dr.square(mi.Float(props["roughness"])), 1e-3)
+            self.dist = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, alpha, True)
+            ior = mi.Float(props["ior"])
+            self.f0 = dr.square((ior - 1) / (ior + 1))
+            # How often the specular lobe is sampled: its share of a head-on
+            # reflection, kept within [0.2, 0.8] so that neither is starved.
+            spec = (1 - props["metallic"]) * float(self.f0) + props["metallic"]
+            self.p_spec = mi.Float(min(0.8, max(0.2, 0.5 * (spec + 0.5))))
+            reflection = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.DiffuseReflection
+            self.m_components = [reflection]
+            self.m_flags = reflection
+
+        def f(self, wi, wo):
+            cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
+            h = dr.normalize(wi + wo)
+            vh = dr.abs(dr.dot(wi, h))
+            w = dr.power(1 - vh, 5)
+            d = self.dist.eval(h)
+            g = self.dist.G(wi, wo, h)
+            spec = d * g / (4 * cos_i * cos_o)
+            metal = spec * (self.base + (1 - self.base) * w)
+            f_dielectric = self.f0 + (1 - self.f0) * w
+            dielectric = self.base * dr.inv_pi * (1 - f_dielectric) + spec * f_dielectric
+            value = dielectric * (1 - self.metallic) + metal * self.metallic
+            active = (cos_i > 0) & (cos_o > 0)
+            return dr.select(active, value * cos_o, 0)
+
+        def pdf_of(self, wi, wo):
+            cos_o = mi.Frame3f.cos_theta(wo)
+            h = dr.normalize(wi + wo)
+            spec = self.dist.eval(h) * self.dist.smith_g1(wi, h) / (
+                4 * mi.Frame3f.cos_theta(wi))
+            diffuse = dr.maximum(cos_o, 0) * dr.inv_pi
+            pdf = self.p_spec * spec + (1 - self.p_spec) * diffuse
+            return dr.select((mi.Frame3f.cos_theta(wi) > 0) & (cos_o > 0), pdf, 0)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            wi = si.wi
+            use_spec = sample1 < self.p_spec
+            m, _ = self.dist.sample(wi, sample2)
+            wo_spec = mi.reflect(wi, m)
+            wo_diff = mi.warp.square_to_cosine_hemisphere(sample2)
+            wo = dr.select(use_spec, wo_spec, wo_diff)
+            bs = mi.BSDFSample3f()
+            bs.wo = wo
+            bs.pdf = self.pdf_of(wi, wo)
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
+            bs.sampled_component = 0
+            value = self.f(wi, wo)
+            ok = active & (bs.pdf > 0) & (mi.Frame3f.cos_theta(wi) > 0)
+            return bs, dr.select(ok, value / dr.select(ok, bs.pdf, 1), 0)
+
+        def eval(self, ctx, si, wo, active=True):
+            return self.f(si.wi, wo)
+
+        def pdf(self, ctx, si, wo, active=True):
+            return self.pdf_of(si.wi, wo)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.f(si.wi, wo), self.pdf_of(si.wi, wo)
+
+        def to_string(self):
+            return "GltfBSDF[]"
+
+    mi.register_bsdf("gltf", lambda props: GltfBSDF(props))
+    _GLTF_REGISTERED = True
+
+
+# ---------------------------------------------------------------- rendering
+
+def block_means(image):
+    h, w, c = image.shape
+    return image.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(1, 3))
+
+
+def render(scene_path, spp, batches, size=None, threads=1, aov=None):
+    import drjit as dr
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    dr.set_thread_count(threads)
+    scene = Scene(scene_path)
+    width, height = size or (None, None)
+    if spp % batches:
+        raise SceneError(f"--spp {spp} is not a multiple of --batches {batches}")
+    per_batch = spp // batches
+    loaded = mi.load_dict(mitsuba_scene(scene, per_batch, width, height, aov))
+    total, blocks = None, []
+    start = time.time()
+    for seed in range(batches):
+        image = np.array(mi.render(loaded, spp=per_batch, seed=seed), dtype=np.float64)
+        image = image[..., :3]
+        total = image if total is None else total + image
+        if image.shape[0] % BLOCK == 0 and image.shape[1] % BLOCK == 0:
+            blocks.append(block_means(image))
+    seconds = time.time() - start
+    mean = (total / batches).astype(np.float32)
+    if blocks and batches > 1:
+        spread = np.std(np.array(blocks), axis=0, ddof=1)
+        sample_std = (spread * math.sqrt(BLOCK * BLOCK * per_batch)).astype(np.float32)
+    else:
+        sample_std = np.zeros((0,), np.float32)
+    return mean, sample_std, seconds, mi.__version__
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("scene")
+    parser.add_argument("-o", "--output", required=True, help="the .npz to write")
+    parser.add_argument("--spp", type=int, default=4096)
+    parser.add_argument("--batches", type=int, default=16)
+    parser.add_argument("--size", help="WxH (default: the scene's image)")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="rendering threads (default 1: the machine is shared)")
+    parser.add_argument("--aov", choices=["albedo"],
+                        help="render the surfaces' albedo instead (the camera and geometry check)")
+    args = parser.parse_args(argv)
+    size = None
+    if args.size:
+        width, _, height = args.size.partition("x")
+        size = (int(width), int(height))
+    try:
+        mean, sample_std, seconds, version = render(args.scene, args.spp, args.batches, size,
+                                                    args.threads, args.aov)
+    except SceneError as error:
+        sys.exit(f"mitsuba_ref.py: {error}")
+    scene_bytes = pathlib.Path(args.scene).read_bytes()
+    meta = {
+        "scene": os.path.relpath(args.scene, pathlib.Path(args.output).parent),
+        "scene_sha256": hashlib.sha256(scene_bytes).hexdigest(),
+        "spp": args.spp, "batches": args.batches, "aov": args.aov,
+        "width": int(mean.shape[1]), "height": int(mean.shape[0]),
+        "mitsuba": version, "variant": "scalar_rgb", "threads": args.threads,
+        "seconds": round(seconds, 1),
+        "command": "python3 tools/mitsuba_ref.py " + " ".join(argv or sys.argv[1:]),
+    }
+    tmp = pathlib.Path(args.output).with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, image=mean, block_sample_std=sample_std,
+                        meta=np.array(json.dumps(meta, sort_keys=True)))
+    os.replace(tmp, args.output)
+    print(json.dumps(meta, sort_keys=True))
+
+
+if __name__ == "__main__":
+    main()
