@@ -2,7 +2,7 @@
 """Renders an rtcl path-tracing scene with Mitsuba 3, the independent oracle of
 issue 40, and writes the reference image as data (docs/oracle.md).
 
-    python3 tools/mitsuba_ref.py SCENE.json -o test/oracle/refs/NAME.npz \\
+    python3 tools/build/mitsuba_ref.py SCENE.json -o test/oracle/refs/NAME.npz \\
         [--spp N] [--batches K] [--size WxH] [--threads T] [--aov albedo]
 
 The scene is read by this script's own reading of docs/SCENE.md, not by rtcl,
@@ -10,8 +10,8 @@ and turned into a Mitsuba scene by the rules of docs/oracle.md ("Mappings"):
 the same triangles (OBJ files parsed here, placed by scale, rotate, translate)
 and spheres, the same pinhole camera (fov_axis "y", a box pixel filter), the
 same BSDFs (GGX alpha = roughness^2; the Schlick conductor as Mitsuba's
-`principled` with metallic 1; glTF's metallic-roughness BSDF as the BSDF
-`gltf` below), emission on the front side, `background` as a uniform
+`principled` with metallic 1; rtcl's principled as Mitsuba blendbsdf
+mixtures of that, `roughdielectric` and the BSDF `gltf` below), emission on the front side, `background` as a uniform
 environment. What it cannot map exactly is refused with a message, never
 approximated silently.
 
@@ -210,19 +210,45 @@ def mitsuba_bsdf(material, where):
         return {"type": "roughdielectric", "distribution": "ggx", "alpha": roughness ** 2,
                 "int_ior": ior, "ext_ior": 1.0, "sample_visible": True}
     elif kind == "principled":
-        inner = {"type": "gltf",
-                 "base_color": vec(bsdf.get("base_color", [1, 1, 1]), where + ".base_color"),
-                 "metallic": number_in(bsdf, "metallic", 0, where),
-                 "roughness": number_in(bsdf, "roughness", 0.5, where),
-                 "ior": float(bsdf.get("ior", 1.5))}
-        if number_in(bsdf, "transmission", 0, where) != 0:
-            raise SceneError(f"{where}.transmission: not mapped yet (docs/oracle.md)")
-        register_gltf()
+        return principled(bsdf, where)
     else:
         raise SceneError(f"{where}.type: unknown BSDF {kind!r}")
     # rtcl's opaque BSDFs reflect on both sides of a surface; Mitsuba's on the
     # front only unless wrapped.
     return {"type": "twosided", "bsdf": inner}
+
+
+def principled(bsdf, where):
+    """RENDERING.md's principled BSDF, f = m f_metal + (1 - m) t f_glass +
+    (1 - m)(1 - t) f_plastic, as Mitsuba blendbsdf mixtures (whose sample
+    weight and pdf are the mixture's): f_metal the Schlick conductor above,
+    f_glass Mitsuba's roughdielectric with its transmission tinted by the base
+    colour, f_plastic the BSDF "gltf" (glTF's fresnel_mix, below). alpha =
+    max(roughness^2, 0.001) for all three, as rtcl clamps it."""
+    base = vec(bsdf.get("base_color", [1, 1, 1]), where + ".base_color")
+    metallic = number_in(bsdf, "metallic", 0, where)
+    roughness = number_in(bsdf, "roughness", 0.5, where)
+    transmission = number_in(bsdf, "transmission", 0, where)
+    ior = float(bsdf.get("ior", 1.5))
+    alpha = max(roughness ** 2, 0.001)
+    register_gltf()
+    plastic = {"type": "twosided", "bsdf": {"type": "gltf", "base_color": base,
+                                            "alpha": alpha, "ior": ior}}
+    glass = {"type": "roughdielectric", "distribution": "ggx", "alpha": alpha,
+             "int_ior": ior, "ext_ior": 1.0, "sample_visible": True,
+             "specular_transmittance": rgb(base, where + ".base_color")}
+    metal = {"type": "twosided", "bsdf": {
+        "type": "principled", "base_color": rgb(base, where + ".base_color"),
+        "metallic": 1.0, "roughness": math.sqrt(alpha)}}
+    dielectric = plastic
+    if transmission > 0:
+        dielectric = {"type": "blendbsdf", "weight": transmission,
+                      "bsdf_0": plastic, "bsdf_1": glass}
+    if metallic == 0:
+        return dielectric
+    if metallic == 1:
+        return metal
+    return {"type": "blendbsdf", "weight": metallic, "bsdf_0": dielectric, "bsdf_1": metal}
 
 
 def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
@@ -237,9 +263,9 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
     eye = vec(camera["eye"], "camera.eye")
     look_at = vec(camera["look_at"], "camera.look_at")
     up = vec(camera.get("up", [0, 1, 0]), "camera.up")
-    # rtcl's max_depth counts bounces (0: what the camera sees; 1: direct
-    # light); Mitsuba's max_depth counts path segments (1: what the camera sees).
-    max_depth = int(doc.get("max_depth", 5)) + 1
+    # rtcl's max_depth counts the bounces after the first hit (0: direct light);
+    # Mitsuba's counts path segments (1: emitters seen, 2: direct light).
+    max_depth = int(doc.get("max_depth", 5)) + 2
     out = {
         "type": "scene",
         "integrator": ({"type": "aov", "aovs": "albedo:albedo"} if aov else
@@ -259,8 +285,8 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
     }
     background = vec(doc.get("background", [0, 0, 0]), "background")
     if "environment" in doc:
-        raise SceneError("environment: not mapped yet (docs/oracle.md)")
-    if any(background):
+        out["background"] = environment(doc["environment"], scene.path.parent)
+    elif any(background):
         out["background"] = {"type": "constant", "radiance": rgb(background, "background")}
     tmp = tempfile.mkdtemp(prefix="mitsuba_ref.")
     bsdfs = {}
@@ -279,6 +305,71 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
             shape.update(type="ply", filename=str(ply), face_normals=True)
         out[f"shape{k}"] = shape
     return out
+
+
+ENV_UPSAMPLE = 8
+
+
+def environment(env, folder):
+    """RENDERING.md's environment map as Mitsuba's `envmap`. rtcl's map is
+    constant over each texel, its column u = 0.5 looks along -z; Mitsuba's is
+    bilinear between texel samples placed at u = (c + 0.5)/W' (u = 0 along -z)
+    and v = r/(H' - 1). So Mitsuba gets rtcl's map point-sampled at its own
+    sample positions on a grid ENV_UPSAMPLE times finer: the two agree but
+    within 1/(2 ENV_UPSAMPLE) of a texel of rtcl's texel edges (a blur that
+    keeps the integral). `rotate` is the same right-handed turn about +y."""
+    import mitsuba as mi
+    extra = set(env) - {"file", "scale", "rotate"}
+    if extra:
+        raise SceneError(f"environment: keys the oracle does not map: {sorted(extra)}")
+    texels = read_hdr(folder / env["file"])
+    height, width, _ = texels.shape
+    rows, cols = ENV_UPSAMPLE * height, ENV_UPSAMPLE * width
+    v = np.arange(rows) / (rows - 1)
+    u = ((np.arange(cols) + 0.5) / cols - 0.5) % 1.0    # rtcl's u of Mitsuba's column
+    k = np.minimum(height - 1, np.floor(height * v).astype(int))
+    j = np.minimum(width - 1, np.floor(width * u).astype(int))
+    image = texels[k[:, None], j[None, :]].astype(np.float32)
+    return {"type": "envmap", "bitmap": mi.Bitmap(image),
+            "scale": float(env.get("scale", 1.0)),
+            "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], float(env.get("rotate", 0)))}
+
+
+def read_hdr(path):
+    """A Radiance RGBE file (flat or run-length encoded scanlines, -Y H +X W) as
+    an H x W x 3 float64 array, row 0 at the top; a texel is m * 2^(e - 136)
+    (e > 0), as stb_image and rtcl decode it, without Radiance's own + 0.5."""
+    data = pathlib.Path(path).read_bytes()
+    if not data.startswith(b"#?"):
+        raise SceneError(f"{path}: not a Radiance HDR file")
+    end = data.index(b"\n\n") + 2
+    line_end = data.index(b"\n", end)
+    fields = data[end:line_end].split()
+    if fields[0] != b"-Y" or fields[2] != b"+X":
+        raise SceneError(f"{path}: only -Y H +X W files are read")
+    height, width = int(fields[1]), int(fields[3])
+    pos, rows = line_end + 1, []
+    for _ in range(height):
+        if data[pos] == 2 and data[pos + 1] == 2 and not data[pos + 2] & 0x80:
+            pos += 4
+            row = np.zeros((4, width), np.uint8)
+            for channel in range(4):
+                x = 0
+                while x < width:
+                    count = data[pos]
+                    if count > 128:
+                        row[channel, x:x + count - 128] = data[pos + 1]
+                        x, pos = x + count - 128, pos + 2
+                    else:
+                        row[channel, x:x + count] = list(data[pos + 1:pos + 1 + count])
+                        x, pos = x + count, pos + 1 + count
+            rows.append(row.T)
+        else:
+            rows.append(np.frombuffer(data[pos:pos + 4 * width], np.uint8).reshape(width, 4))
+            pos += 4 * width
+    rgbe = np.array(rows).astype(np.float64)
+    scale = np.where(rgbe[..., 3] > 0, np.ldexp(1.0, rgbe[..., 3].astype(int) - 136), 0.0)
+    return rgbe[..., :3] * scale[..., None]
 
 
 def write_ply(path, triangles):
@@ -301,18 +392,18 @@ _GLTF_REGISTERED = False
 
 
 def register_gltf():
-    """Registers the Mitsuba BSDF "gltf": the glTF 2.0 metallic-roughness BRDF of
-    the glTF specification's Appendix B, transcribed term by term:
+    """Registers the Mitsuba BSDF "gltf": the dielectric part of glTF 2.0's
+    metallic-roughness BRDF (the glTF specification, Appendix B), transcribed
+    term by term, which Mitsuba has no plugin for:
 
-        f = mix(dielectric_brdf, metal_brdf, metallic)
-        metal_brdf      = specular_brdf * (C + (1 - C) (1 - |V.H|)^5)
-        dielectric_brdf = mix(C / pi, specular_brdf, F0 + (1 - F0) (1 - |V.H|)^5)
-        specular_brdf   = D(H) G1(V) G1(L) / (4 |N.L| |N.V|)    (GGX, separable Smith)
-        F0 = ((ior - 1) / (ior + 1))^2, alpha = roughness^2, C = base colour
+        f = mix(C / pi, specular_brdf, F)              (glTF's fresnel_mix)
+          = F specular_brdf + (1 - F) C / pi,  F = F0 + (1 - F0) (1 - |V.H|)^5
+        specular_brdf = D(H) G1(V, H) G1(L, H) / (4 |N.L| |N.V|)   (GGX, separable Smith)
+        F0 = ((ior - 1) / (ior + 1))^2, C the base colour, alpha given
 
-    sampled by Mitsuba's GGX visible-normal sampling and by the cosine, chosen
-    with a fixed probability (the pdf is their mix, so any choice is unbiased).
-    Reflection only, on the side the light comes from (wrapped in "twosided")."""
+    sampled by Mitsuba's GGX visible normals or the cosine, chosen with a fixed
+    probability (the pdf is their mixture, so the choice is free). Reflection
+    only, on the side of the normal (wrapped in "twosided")."""
     global _GLTF_REGISTERED
     if _GLTF_REGISTERED:
         return
@@ -323,15 +414,11 @@ def register_gltf():
         def __init__(self, props):
             mi.BSDF.__init__(self, props)
             self.base = mi.Color3f(props["base_color"])
-            self.metallic = mi.Float(props["metallic"])
-            alpha = dr.maximum(dr.square(mi.Float(props["roughness"])), 1e-3)
-            self.dist = mi.MicrofacetDistribution(mi.MicrofacetType.GGX, alpha, True)
+            self.dist = mi.MicrofacetDistribution(mi.MicrofacetType.GGX,
+                                                  mi.Float(props["alpha"]), True)
             ior = mi.Float(props["ior"])
             self.f0 = dr.square((ior - 1) / (ior + 1))
-            # How often the specular lobe is sampled: its share of a head-on
-            # reflection, kept within [0.2, 0.8] so that neither is starved.
-            spec = (1 - props["metallic"]) * float(self.f0) + props["metallic"]
-            self.p_spec = mi.Float(min(0.8, max(0.2, 0.5 * (spec + 0.5))))
+            self.p_spec = mi.Float(0.25)  # how often the specular lobe is sampled
             reflection = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.DiffuseReflection
             self.m_components = [reflection]
             self.m_flags = reflection
@@ -339,43 +426,31 @@ def register_gltf():
         def f(self, wi, wo):
             cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
             h = dr.normalize(wi + wo)
-            vh = dr.abs(dr.dot(wi, h))
-            w = dr.power(1 - vh, 5)
-            d = self.dist.eval(h)
-            g = self.dist.G(wi, wo, h)
-            spec = d * g / (4 * cos_i * cos_o)
-            metal = spec * (self.base + (1 - self.base) * w)
-            f_dielectric = self.f0 + (1 - self.f0) * w
-            dielectric = self.base * dr.inv_pi * (1 - f_dielectric) + spec * f_dielectric
-            value = dielectric * (1 - self.metallic) + metal * self.metallic
-            active = (cos_i > 0) & (cos_o > 0)
-            return dr.select(active, value * cos_o, 0)
+            fresnel = self.f0 + (1 - self.f0) * dr.power(1 - dr.abs(dr.dot(wi, h)), 5)
+            spec = self.dist.eval(h) * self.dist.G(wi, wo, h) / (4 * cos_i * cos_o)
+            value = spec * fresnel + self.base * dr.inv_pi * (1 - fresnel)
+            return dr.select((cos_i > 0) & (cos_o > 0), value * cos_o, 0)
 
         def pdf_of(self, wi, wo):
-            cos_o = mi.Frame3f.cos_theta(wo)
+            cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
             h = dr.normalize(wi + wo)
-            spec = self.dist.eval(h) * self.dist.smith_g1(wi, h) / (
-                4 * mi.Frame3f.cos_theta(wi))
-            diffuse = dr.maximum(cos_o, 0) * dr.inv_pi
-            pdf = self.p_spec * spec + (1 - self.p_spec) * diffuse
-            return dr.select((mi.Frame3f.cos_theta(wi) > 0) & (cos_o > 0), pdf, 0)
+            spec = self.dist.eval(h) * self.dist.smith_g1(wi, h) / (4 * cos_i)
+            pdf = self.p_spec * spec + (1 - self.p_spec) * cos_o * dr.inv_pi
+            return dr.select((cos_i > 0) & (cos_o > 0), pdf, 0)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
             wi = si.wi
-            use_spec = sample1 < self.p_spec
             m, _ = self.dist.sample(wi, sample2)
-            wo_spec = mi.reflect(wi, m)
-            wo_diff = mi.warp.square_to_cosine_hemisphere(sample2)
-            wo = dr.select(use_spec, wo_spec, wo_diff)
+            wo = dr.select(sample1 < self.p_spec, mi.reflect(wi, m),
+                           mi.warp.square_to_cosine_hemisphere(sample2))
             bs = mi.BSDFSample3f()
             bs.wo = wo
             bs.pdf = self.pdf_of(wi, wo)
             bs.eta = 1.0
             bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
             bs.sampled_component = 0
-            value = self.f(wi, wo)
-            ok = active & (bs.pdf > 0) & (mi.Frame3f.cos_theta(wi) > 0)
-            return bs, dr.select(ok, value / dr.select(ok, bs.pdf, 1), 0)
+            ok = active & (bs.pdf > 0)
+            return bs, dr.select(ok, self.f(wi, wo) / dr.select(ok, bs.pdf, 1), 0)
 
         def eval(self, ctx, si, wo, active=True):
             return self.f(si.wi, wo)
@@ -400,7 +475,7 @@ def block_means(image):
     return image.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(1, 3))
 
 
-def render(scene_path, spp, batches, size=None, threads=1, aov=None):
+def render(scene_path, spp, batches, size=None, threads=1, aov=None, seed=0):
     import drjit as dr
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
@@ -413,8 +488,9 @@ def render(scene_path, spp, batches, size=None, threads=1, aov=None):
     loaded = mi.load_dict(mitsuba_scene(scene, per_batch, width, height, aov))
     total, blocks = None, []
     start = time.time()
-    for seed in range(batches):
-        image = np.array(mi.render(loaded, spp=per_batch, seed=seed), dtype=np.float64)
+    for batch in range(batches):
+        image = np.array(mi.render(loaded, spp=per_batch, seed=seed + batch),
+                         dtype=np.float64)
         image = image[..., :3]
         total = image if total is None else total + image
         if image.shape[0] % BLOCK == 0 and image.shape[1] % BLOCK == 0:
@@ -438,6 +514,8 @@ def main(argv=None):
     parser.add_argument("--size", help="WxH (default: the scene's image)")
     parser.add_argument("--threads", type=int, default=1,
                         help="rendering threads (default 1: the machine is shared)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="the first batch's seed (batch k: seed + k)")
     parser.add_argument("--aov", choices=["albedo"],
                         help="render the surfaces' albedo instead (the camera and geometry check)")
     args = parser.parse_args(argv)
@@ -447,18 +525,18 @@ def main(argv=None):
         size = (int(width), int(height))
     try:
         mean, sample_std, seconds, version = render(args.scene, args.spp, args.batches, size,
-                                                    args.threads, args.aov)
+                                                    args.threads, args.aov, args.seed)
     except SceneError as error:
         sys.exit(f"mitsuba_ref.py: {error}")
     scene_bytes = pathlib.Path(args.scene).read_bytes()
     meta = {
         "scene": os.path.relpath(args.scene, pathlib.Path(args.output).parent),
         "scene_sha256": hashlib.sha256(scene_bytes).hexdigest(),
-        "spp": args.spp, "batches": args.batches, "aov": args.aov,
+        "spp": args.spp, "batches": args.batches, "seed": args.seed, "aov": args.aov,
         "width": int(mean.shape[1]), "height": int(mean.shape[0]),
         "mitsuba": version, "variant": "scalar_rgb", "threads": args.threads,
         "seconds": round(seconds, 1),
-        "command": "python3 tools/mitsuba_ref.py " + " ".join(argv or sys.argv[1:]),
+        "command": "python3 tools/build/mitsuba_ref.py " + " ".join(argv or sys.argv[1:]),
     }
     tmp = pathlib.Path(args.output).with_suffix(".tmp.npz")
     np.savez_compressed(tmp, image=mean, block_sample_std=sample_std,

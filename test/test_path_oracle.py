@@ -1,0 +1,214 @@
+"""rtcl's path tracer against an independent renderer, Mitsuba 3 (issue 40), and
+against the white furnace's analytic answer (docs/oracle.md).
+
+Each scene under test/oracle/ (and scenes/cornell.json) has a reference under
+test/oracle/refs/, rendered by Mitsuba 3 (`tools/build/mitsuba_ref.py`, many samples a
+pixel, the command in each file's meta) and committed as data: these tests need
+no Mitsuba. rtcl renders the scene at a moderate number of samples, small, to a
+PFM, and the means of its 8x8-pixel blocks are compared with the reference's,
+channel by channel, within
+
+    tol = Z * sqrt(s^2 / (64 n) + s^2 / (64 N)) + REL * |ref| + ABS
+
+where s is the standard deviation of one sample's contribution to the block
+(the reference measured it from the spread of its independent batches), n and
+N rtcl's and the reference's samples a pixel: Z standard errors of the Monte
+Carlo noise of both images (an independent sampler's; rtcl's Sobol' points do
+at least as well), plus REL of the value for what the two renderers may
+rightly differ in (float against Mitsuba's float, the sphere and triangle
+intersection epsilons) and ABS for blocks that are almost black.  The image's
+mean is compared the same way, with the noise of all its blocks.
+"""
+import hashlib
+import json
+import math
+import os
+import pathlib
+import subprocess
+
+import numpy as np
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+ORACLE = ROOT / "test" / "oracle"
+REFS = ORACLE / "refs"
+BLOCK = 8
+
+Z = 5.0      # standard errors of the combined noise
+REL = 0.01   # of the reference value: what two correct renderers may differ in
+ABS = 2e-3   # absolute, for blocks near black
+
+
+def read_pfm(path):
+    """A PFM image as an H x W x 3 float32 array, rows from the top."""
+    data = pathlib.Path(path).read_bytes()
+    kind, size, scale, body = data.split(b"\n", 3)
+    assert kind == b"PF", kind
+    width, height = map(int, size.split())
+    order = "<f4" if float(scale) < 0 else ">f4"
+    return np.frombuffer(body, dtype=order, count=width * height * 3).reshape(
+        height, width, 3)[::-1]
+
+
+def load_ref(name):
+    with np.load(REFS / f"{name}.npz", allow_pickle=False) as ref:
+        return ref["image"], ref["block_sample_std"], json.loads(str(ref["meta"]))
+
+
+def render(tmp_path, scene, width, height, spp, *extra):
+    out = tmp_path / (pathlib.Path(scene).stem + ".pfm")
+    result = subprocess.run(
+        [RTCL, str(scene), "--size", f"{width}x{height}", "--spp", str(spp), "-q",
+         "-o", str(out), *extra], capture_output=True, text=True, timeout=600)
+    assert result.returncode == 0, result.stderr
+    return read_pfm(out)
+
+
+def blocks(image):
+    h, w, c = image.shape
+    return image.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).astype(np.float64).mean(
+        axis=(1, 3))
+
+
+def compare(image, name, spp):
+    """Asserts that image (rtcl at spp samples a pixel) matches reference name;
+    returns the agreement in numbers (for the report)."""
+    ref, sample_std, meta = load_ref(name)
+    assert image.shape == ref.shape, (image.shape, ref.shape)
+    ours, theirs = blocks(image), blocks(ref)
+    n, big_n = BLOCK * BLOCK * spp, BLOCK * BLOCK * meta["spp"]
+    sigma = sample_std.astype(np.float64) * math.sqrt(1 / n + 1 / big_n)
+    tol = Z * sigma + REL * np.abs(theirs) + ABS
+    diff = ours - theirs
+    z = diff / np.maximum(sigma, 1e-12)
+    worst = np.unravel_index(np.argmax(np.abs(diff) / tol), diff.shape)
+    summary = (f"{name}: {diff.size} block channels, max |diff|/tol "
+               f"{np.max(np.abs(diff) / tol):.2f} at block {worst[:2]} channel {worst[2]} "
+               f"(rtcl {ours[worst]:.5f}, Mitsuba {theirs[worst]:.5f}, tol {tol[worst]:.5f}); "
+               f"z-scores: rms {np.sqrt(np.mean(z ** 2)):.2f}, max |z| {np.max(np.abs(z)):.1f}; "
+               f"relative difference of the image mean by channel "
+               f"{np.round((ours.mean(axis=(0, 1)) / theirs.mean(axis=(0, 1)) - 1) * 100, 2)} %")
+    bad = np.argwhere(np.abs(diff) > tol)
+    assert len(bad) == 0, summary + "; blocks outside: " + ", ".join(
+        f"{tuple(b[:2])}/{b[2]} rtcl {ours[tuple(b)]:.4f} ref {theirs[tuple(b)]:.4f} "
+        f"tol {tol[tuple(b)]:.4f}" for b in bad[:12])
+    # The whole image: its mean's noise is that of all blocks together.
+    sigma_mean = np.sqrt(np.sum(sigma ** 2, axis=(0, 1))) / (sigma.shape[0] * sigma.shape[1])
+    mean_diff = ours.mean(axis=(0, 1)) - theirs.mean(axis=(0, 1))
+    mean_tol = Z * sigma_mean + REL * np.abs(theirs.mean(axis=(0, 1))) + ABS / 8
+    assert np.all(np.abs(mean_diff) <= mean_tol), summary + f"; image mean off by {mean_diff}"
+    print(summary)
+    return summary
+
+
+# ------------------------------------------------------------ the references
+
+REFERENCES = sorted(p.stem for p in REFS.glob("*.npz"))
+
+
+@pytest.mark.parametrize("name", REFERENCES)
+def test_reference_is_of_the_scene_as_committed(name):
+    """A scene changed after its reference was rendered fails here, with the
+    command that renders it again."""
+    _, _, meta = load_ref(name)
+    scene = (REFS / meta["scene"]).resolve()
+    digest = hashlib.sha256(scene.read_bytes()).hexdigest()
+    assert digest == meta["scene_sha256"], (
+        f"{scene} changed since its reference was made; render it again: {meta['command']}")
+
+
+# --------------------------------------------------- camera, geometry, pixels
+
+def whitted_flat(scene_path, tmp_path):
+    """The scene with every material flat (ambient light 1 times the
+    reflectance, nothing else) under the Whitted integrator: a pixel is then the
+    coverage-weighted reflectance of what it sees, as Mitsuba's albedo AOV."""
+    scene = json.loads(pathlib.Path(scene_path).read_text())
+    scene.pop("integrator", None)
+    for material in scene["materials"].values():
+        colour = material.pop("bsdf")["reflectance"]
+        material.pop("emission", None)
+        material.update(color=colour, ambient=1, diffuse=0, specular=0)
+    scene["ambient"] = [1, 1, 1]
+    for mesh in scene["meshes"]:
+        mesh["file"] = str(pathlib.Path(scene_path).parent.resolve() / mesh["file"])
+    out = tmp_path / "flat.json"
+    out.write_text(json.dumps(scene))
+    return out
+
+
+def test_cornell_camera_geometry_and_pixel_filter_match_mitsuba(tmp_path):
+    """The same box seen from the same camera through the same pixels: rtcl's
+    Whitted image of flat colours against Mitsuba's albedo AOV (needs no path
+    tracer). A mirrored image, another field-of-view axis or a shifted pixel
+    centre moves the walls' edges by pixels and fails by far."""
+    image = render(tmp_path, whitted_flat(ROOT / "scenes" / "cornell.json", tmp_path),
+                   64, 64, 64)
+    ref, _, _ = load_ref("cornell_albedo")
+    # Block means: a block's coverage of each colour, up to the edges' noise.
+    assert np.max(np.abs(blocks(image) - blocks(ref))) < 0.01
+    assert np.mean(np.abs(image - ref)) < 0.005
+    assert np.max(np.abs(image - ref)) < 0.25  # an edge pixel's coverage noise at 64 spp
+
+
+# ------------------------------------------------------------- path tracing
+
+def test_cornell_box_matches_mitsuba(tmp_path):
+    compare(render(tmp_path, ROOT / "scenes" / "cornell.json", 64, 64, 256), "cornell", 256)
+
+
+def test_white_furnace_diffuse_sphere_renders_its_albedo(tmp_path):
+    """Analytic: a diffuse sphere of albedo rho under a uniform environment of
+    radiance 1 reflects exactly rho (a convex object sees only the
+    environment), and the environment seen directly is 1."""
+    scene = ORACLE / "furnace_diffuse.json"
+    doc = json.loads(scene.read_text())
+    rho = np.array(doc["materials"]["grey"]["bsdf"]["reflectance"])
+    spp = 64
+    image = render(tmp_path, scene, 64, 64, spp).astype(np.float64)
+    # The silhouette: a circle of radius tan(asin(r/d)) / tan(fov/2) half-heights.
+    eye, radius = np.linalg.norm(doc["camera"]["eye"]), doc["spheres"][0]["radius"]
+    r_px = 32 * math.tan(math.asin(radius / eye)) / math.tan(math.radians(doc["camera"]["fov"]) / 2)
+    centre = np.arange(64) + 0.5 - 32
+    dist = np.hypot(*np.meshgrid(centre, centre))
+    inside = dist + math.sqrt(0.5) < r_px - 0.01
+    outside = dist - math.sqrt(0.5) > r_px + 0.01
+    assert np.all(image[outside] == 1.0), "the environment seen directly must be exactly 1"
+    mean = image[inside].mean(axis=0)
+    assert np.all(np.abs(mean - rho) < 0.005 * rho), (mean, rho)
+    # Every pixel inside: within its noise (MIS of the environment's and the
+    # BSDF's samples; 6 standard deviations of the per-pixel spread).
+    spread = image[inside].std(axis=0)
+    assert np.all(np.abs(image[inside] - rho) <= 6 * spread + 1e-6)
+    compare(image.astype(np.float32), "furnace_diffuse", spp)
+
+
+def test_white_furnace_matches_mitsuba(tmp_path):
+    """Four spheres under a uniform environment of 1: diffuse (0.9), smooth
+    glass (renders 1 up to paths longer than max_depth), a white rough
+    conductor (below 1: single-scattering GGX loses energy, the more the
+    rougher) and rough glass."""
+    compare(render(tmp_path, ORACLE / "furnace.json", 64, 64, 256), "furnace", 256)
+
+
+@pytest.mark.slow
+def test_glass_and_mirror_spheres_in_the_box_match_mitsuba(tmp_path):
+    compare(render(tmp_path, ORACLE / "cornell_spheres.json", 64, 64, 1024),
+            "cornell_spheres", 1024)
+
+
+def test_rough_conductor_and_dielectric_match_mitsuba(tmp_path):
+    compare(render(tmp_path, ORACLE / "cornell_rough.json", 64, 64, 256),
+            "cornell_rough", 256)
+
+
+def test_principled_materials_match_mitsuba(tmp_path):
+    compare(render(tmp_path, ORACLE / "cornell_principled.json", 64, 64, 256),
+            "cornell_principled", 256)
+
+
+def test_environment_map_matches_mitsuba(tmp_path):
+    """test/oracle/sky.hdr (tools/build/oracle_sky.py) turned by 30 degrees:
+    its orientation, importance sampling by luminance and lookup."""
+    compare(render(tmp_path, ORACLE / "env.json", 64, 64, 256), "env", 256)
