@@ -108,10 +108,8 @@ class Scene:
         unknown = set(self.doc) - self.KNOWN
         if unknown:
             raise SceneError(f"{path}: keys the oracle does not map: {sorted(unknown)}")
-        for key in ("lights", "planes"):
-            if self.doc.get(key):
-                raise SceneError(f"{path}: {key}: not mapped (docs/oracle.md: emissive "
-                                 "triangles and spheres are the lights)")
+        if self.doc.get("planes"):
+            raise SceneError(f"{path}: planes: not mapped (infinite; give triangles)")
         if self.doc.get("integrator", "whitted") != "path":
             raise SceneError(f'{path}: integrator: the oracle renders "path" scenes only')
         self.materials = self.doc.get("materials", {})
@@ -251,6 +249,26 @@ def principled(bsdf, where):
     return {"type": "blendbsdf", "weight": metallic, "bsdf_0": dielectric, "bsdf_1": metal}
 
 
+def mitsuba_light(light, where):
+    """SCENE.md's lights under "path": a point light's color is its intensity
+    (Mitsuba's `point`), a directional light's its irradiance (`directional`,
+    `direction` the way the light travels in both). Sphere lights and
+    directional lights with an angle are refused: rtcl's are not seen by rays
+    and block nothing, which no Mitsuba emitter of a finite size matches."""
+    extra = set(light) - {"position", "direction", "color", "radius", "angle"}
+    if extra:
+        raise SceneError(f"{where}: keys the oracle does not map: {sorted(extra)}")
+    color = rgb(light.get("color", [1, 1, 1]), where + ".color")
+    if light.get("radius", 0) or light.get("angle", 0):
+        raise SceneError(f"{where}: sphere lights and directional lights with an angle "
+                         "are not mapped (docs/oracle.md)")
+    if "position" in light:
+        return {"type": "point", "position": vec(light["position"], where + ".position"),
+                "intensity": color}
+    return {"type": "directional", "direction": vec(light["direction"], where + ".direction"),
+            "irradiance": color}
+
+
 def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
     import mitsuba as mi
     doc = scene.doc
@@ -288,6 +306,8 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
         out["background"] = environment(doc["environment"], scene.path.parent)
     elif any(background):
         out["background"] = {"type": "constant", "radiance": rgb(background, "background")}
+    for i, light in enumerate(doc.get("lights", [])):
+        out[f"light{i}"] = mitsuba_light(light, f"lights[{i}]")
     tmp = tempfile.mkdtemp(prefix="mitsuba_ref.")
     bsdfs = {}
     for k, (kind, geometry, (name, material), where) in enumerate(scene.shapes()):
