@@ -18,6 +18,10 @@ at least as well), plus REL of the value for what the two renderers may
 rightly differ in (float against Mitsuba's float, the sphere and triangle
 intersection epsilons) and ABS for blocks that are almost black.  The image's
 mean is compared the same way, with the noise of all its blocks.
+
+make test runs the camera check, the Cornell box, the analytic furnace and the
+principled materials (about 9 s of CPU together, cold); the other scenes, the
+wavefront kernel and the CPU reference are marked slow (make test-long).
 """
 import hashlib
 import json
@@ -169,6 +173,18 @@ def test_cornell_box_matches_mitsuba(tmp_path):
     compare(render(tmp_path, ROOT / "scenes" / "cornell.json", 64, 64, 256), "cornell", 256)
 
 
+@pytest.mark.slow
+@pytest.mark.parametrize("kernel", ["wavefront", "reference"])
+def test_cornell_box_matches_mitsuba_in_the_wavefront_kernel_and_the_cpu_reference(
+        tmp_path, kernel):
+    """The wavefront kernel (its own schedule of the path's bounces, within a
+    tolerance of the others) and the CPU reference (double precision, its own
+    code from RENDERING.md) against Mitsuba too; the other kernels give the
+    default kernel's image byte for byte (test_kernels.c)."""
+    compare(render(tmp_path, ROOT / "scenes" / "cornell.json", 64, 64, 256, "-k", kernel),
+            "cornell", 256)
+
+
 def test_white_furnace_diffuse_sphere_renders_its_albedo(tmp_path):
     """Analytic: a diffuse sphere of albedo rho under a uniform environment of
     radiance 1 reflects exactly rho (a convex object sees only the
@@ -195,6 +211,7 @@ def test_white_furnace_diffuse_sphere_renders_its_albedo(tmp_path):
     compare(image.astype(np.float32), "furnace_diffuse", spp)
 
 
+@pytest.mark.slow
 def test_white_furnace_matches_mitsuba(tmp_path):
     """Four spheres under a uniform environment of 1: diffuse (0.9), smooth
     glass (renders 1 up to paths longer than max_depth), a white rough
@@ -209,6 +226,7 @@ def test_glass_and_mirror_spheres_in_the_box_match_mitsuba(tmp_path):
             "cornell_spheres", 1024)
 
 
+@pytest.mark.slow
 def test_rough_conductor_and_dielectric_match_mitsuba(tmp_path):
     compare(render(tmp_path, ORACLE / "cornell_rough.json", 64, 64, 256),
             "cornell_rough", 256)
@@ -219,12 +237,14 @@ def test_principled_materials_match_mitsuba(tmp_path):
             "cornell_principled", 256)
 
 
+@pytest.mark.slow
 def test_point_and_directional_lights_match_mitsuba(tmp_path):
     """SCENE.md's lights under "path": a point light's color is its intensity
     (falloff 1/r^2), a directional light's its irradiance; with a uniform sky."""
     compare(render(tmp_path, ORACLE / "lights.json", 64, 64, 256), "lights", 256)
 
 
+@pytest.mark.slow
 def test_environment_map_matches_mitsuba(tmp_path):
     """test/oracle/sky.hdr (tools/build/oracle_sky.py) turned by 30 degrees:
     its orientation, importance sampling by luminance and lookup."""

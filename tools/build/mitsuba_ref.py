@@ -443,20 +443,26 @@ def register_gltf():
             self.m_components = [reflection]
             self.m_flags = reflection
 
+        # In scalar variants a cosine is a Python float, whose division by 0
+        # raises: both cosines are checked first (0 outside the hemisphere).
         def f(self, wi, wo):
             cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
+            active = (cos_i > 0) & (cos_o > 0)
             h = dr.normalize(wi + wo)
             fresnel = self.f0 + (1 - self.f0) * dr.power(1 - dr.abs(dr.dot(wi, h)), 5)
-            spec = self.dist.eval(h) * self.dist.G(wi, wo, h) / (4 * cos_i * cos_o)
+            spec = self.dist.eval(h) * self.dist.G(wi, wo, h) / dr.select(
+                active, 4 * cos_i * cos_o, 1)
             value = spec * fresnel + self.base * dr.inv_pi * (1 - fresnel)
-            return dr.select((cos_i > 0) & (cos_o > 0), value * cos_o, 0)
+            return dr.select(active, value * cos_o, 0)
 
         def pdf_of(self, wi, wo):
             cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
+            active = (cos_i > 0) & (cos_o > 0)
             h = dr.normalize(wi + wo)
-            spec = self.dist.eval(h) * self.dist.smith_g1(wi, h) / (4 * cos_i)
+            spec = self.dist.eval(h) * self.dist.smith_g1(wi, h) / dr.select(
+                active, 4 * cos_i, 1)
             pdf = self.p_spec * spec + (1 - self.p_spec) * cos_o * dr.inv_pi
-            return dr.select((cos_i > 0) & (cos_o > 0), pdf, 0)
+            return dr.select(active, pdf, 0)
 
         def sample(self, ctx, si, sample1, sample2, active=True):
             wi = si.wi
