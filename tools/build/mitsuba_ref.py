@@ -332,24 +332,33 @@ ENV_UPSAMPLE = 8
 
 def environment(env, folder):
     """RENDERING.md's environment map as Mitsuba's `envmap`. rtcl's map is
-    constant over each texel, its column u = 0.5 looks along -z; Mitsuba's is
-    bilinear between texel samples placed at u = (c + 0.5)/W' (u = 0 along -z)
-    and v = r/(H' - 1). So Mitsuba gets rtcl's map point-sampled at its own
-    sample positions on a grid ENV_UPSAMPLE times finer: the two agree but
-    within 1/(2 ENV_UPSAMPLE) of a texel of rtcl's texel edges (a blur that
-    keeps the integral). `rotate` is the same right-handed turn about +y."""
+    constant over each texel (j, k), u in [j/W, (j+1)/W), v in [k/H, (k+1)/H),
+    and its u = 0.5 looks along -z; Mitsuba's interpolates bilinearly between
+    samples at u = (c + 0.5)/W' (its u = 0 along -z: rtcl's u is Mitsuba's u -
+    0.5) and v = r/(H' - 1). Mitsuba gets a grid ENV_UPSAMPLE times finer, W' =
+    U W columns and H' = U H + 1 rows, so that each of rtcl's texel edges lies
+    midway between two columns or exactly on a row; a row on an edge holds the
+    mean of the texels on either side. Mitsuba's map then differs from rtcl's
+    only within 1/(2U) of a texel of its edges, where it ramps linearly from one
+    texel to the next, and has the same integral over each texel's rows and
+    columns (up to the change of sin(theta) across 1/U of a texel). `rotate`
+    is the same right-handed turn about +y in both."""
     import mitsuba as mi
     extra = set(env) - {"file", "scale", "rotate"}
     if extra:
         raise SceneError(f"environment: keys the oracle does not map: {sorted(extra)}")
     texels = read_hdr(folder / env["file"])
     height, width, _ = texels.shape
-    rows, cols = ENV_UPSAMPLE * height, ENV_UPSAMPLE * width
-    v = np.arange(rows) / (rows - 1)
-    u = ((np.arange(cols) + 0.5) / cols - 0.5) % 1.0    # rtcl's u of Mitsuba's column
-    k = np.minimum(height - 1, np.floor(height * v).astype(int))
-    j = np.minimum(width - 1, np.floor(width * u).astype(int))
-    image = texels[k[:, None], j[None, :]].astype(np.float32)
+    u = ((np.arange(ENV_UPSAMPLE * width) + 0.5) / (ENV_UPSAMPLE * width) - 0.5) % 1.0
+    columns = texels[:, np.minimum(width - 1, np.floor(width * u).astype(int))]
+    rows = []
+    for r in range(ENV_UPSAMPLE * height + 1):
+        k, on_edge = divmod(r, ENV_UPSAMPLE)
+        if on_edge:                                    # inside texel row k
+            rows.append(columns[k])
+        else:                                          # on the edge above row k
+            rows.append(0.5 * (columns[max(k - 1, 0)] + columns[min(k, height - 1)]))
+    image = np.array(rows, dtype=np.float32)
     return {"type": "envmap", "bitmap": mi.Bitmap(image),
             "scale": float(env.get("scale", 1.0)),
             "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], float(env.get("rotate", 0)))}
