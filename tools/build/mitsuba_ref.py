@@ -192,12 +192,14 @@ def mitsuba_bsdf(material, where):
     kind = bsdf.get("type")
     where = where + ".bsdf"
     if kind == "diffuse":
-        inner = {"type": "diffuse", "reflectance": rgb(bsdf["reflectance"], where)}
+        inner = {"type": "diffuse",
+                 "reflectance": rgb(bsdf.get("reflectance", [0.5] * 3), where)}
     elif kind == "conductor":
         # Schlick's Fresnel with F0 = reflectance, GGX alpha = roughness^2: exactly
         # Mitsuba's principled with metallic 1 (its calc_schlick(base_color, wi.m)),
         # whose alpha is max(0.001, roughness^2).
-        inner = {"type": "principled", "base_color": rgb(bsdf["reflectance"], where),
+        inner = {"type": "principled",
+                 "base_color": rgb(bsdf.get("reflectance", [1.0] * 3), where),
                  "metallic": 1.0,
                  "roughness": number_in(bsdf, "roughness", 0, where)}
     elif kind == "dielectric":
@@ -311,11 +313,14 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
     tmp = tempfile.mkdtemp(prefix="mitsuba_ref.")
     bsdfs = {}
     for k, (kind, geometry, (name, material), where) in enumerate(scene.shapes()):
-        key = name or f"{where}.material"
-        if name is None or key not in bsdfs:
-            bsdfs[key] = mitsuba_bsdf(material, where if name is None else f"materials.{name}")
-        shape = {"bsdf": bsdfs[key]}
-        if "emission" in material:
+        if name is None:                       # an inline material: its own BSDF
+            bsdf = mitsuba_bsdf(material, where)
+        else:
+            if name not in bsdfs:
+                bsdfs[name] = mitsuba_bsdf(material, f"materials.{name}")
+            bsdf = bsdfs[name]
+        shape = {"bsdf": bsdf}
+        if any(material.get("emission", [0, 0, 0])):
             shape["emitter"] = {"type": "area", "radiance": rgb(material["emission"], where)}
         if kind == "sphere":
             shape.update(type="sphere", center=geometry[0], radius=geometry[1])
