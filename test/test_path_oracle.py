@@ -125,13 +125,14 @@ REFERENCES = sorted(p.stem for p in REFS.glob("*.npz"))
 
 @pytest.mark.parametrize("name", REFERENCES)
 def test_reference_is_of_the_scene_as_committed(name):
-    """A scene changed after its reference was rendered fails here, with the
-    command that renders it again."""
+    """A scene, mesh or map changed after its reference was rendered fails
+    here, with the command that renders the reference again."""
     _, _, meta = load_ref(name)
-    scene = (REFS / meta["scene"]).resolve()
-    digest = hashlib.sha256(scene.read_bytes()).hexdigest()
-    assert digest == meta["scene_sha256"], (
-        f"{scene} changed since its reference was made; render it again: {meta['command']}")
+    for path, digest in meta["inputs"].items():
+        data = (REFS / path).read_bytes()
+        assert hashlib.sha256(data).hexdigest() == digest, (
+            f"{path} changed since its reference was made; render it again: "
+            f"{meta['command']}")
 
 
 # --------------------------------------------------- camera, geometry, pixels

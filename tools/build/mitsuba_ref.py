@@ -545,6 +545,18 @@ def render(scene_path, spp, batches, size=None, threads=1, aov=None, seed=0):
     return mean, sample_std, seconds, mi.__version__
 
 
+def input_digests(scene_path, folder):
+    """The SHA-256 of every file the render read: the scene, its mesh files
+    and its environment map, by their paths relative to folder."""
+    scene_path = pathlib.Path(scene_path)
+    doc = json.loads(scene_path.read_text())
+    files = [scene_path] + [scene_path.parent / m["file"] for m in doc.get("meshes", [])]
+    if "environment" in doc:
+        files.append(scene_path.parent / doc["environment"]["file"])
+    return {os.path.relpath(f, folder): hashlib.sha256(f.read_bytes()).hexdigest()
+            for f in files}
+
+
 def main(argv=None):
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     parser.add_argument("scene")
@@ -572,6 +584,7 @@ def main(argv=None):
     meta = {
         "scene": os.path.relpath(args.scene, pathlib.Path(args.output).parent),
         "scene_sha256": hashlib.sha256(scene_bytes).hexdigest(),
+        "inputs": input_digests(args.scene, pathlib.Path(args.output).parent),
         "spp": args.spp, "batches": args.batches, "seed": args.seed, "aov": args.aov,
         "width": int(mean.shape[1]), "height": int(mean.shape[0]),
         "mitsuba": version, "variant": "scalar_rgb", "threads": args.threads,
