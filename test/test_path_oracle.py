@@ -21,9 +21,9 @@ intersection epsilons) and ABS for blocks that are almost black.  The image's
 mean is compared the same way, with the noise of all its blocks.
 
 make test runs the camera check, the Cornell box (at its depth and at depth
-1), the analytic furnace and the principled materials (about 11 s of CPU
-together, cold); the other scenes, the wavefront kernel and the CPU reference
-are marked slow (make test-long).
+1) and the analytic furnace (about 8 s of CPU together, cold, with PoCL's and
+rtcl's program caches off); the other scenes, the wavefront kernel and the
+CPU reference are marked slow (make test-long).
 """
 import hashlib
 import json
@@ -250,6 +250,7 @@ def test_rough_conductor_and_dielectric_match_mitsuba(tmp_path):
             "cornell_rough", 256)
 
 
+@pytest.mark.slow
 def test_principled_materials_match_mitsuba(tmp_path):
     compare(render(tmp_path, ORACLE / "cornell_principled.json", 64, 64, 256),
             "cornell_principled", 256)
