@@ -1,16 +1,16 @@
 #!/usr/bin/env python3
-"""Writes scenes/models/cornell/room.obj, boxes.obj and cornell.mtl: the geometry and
-colours of Mitsuba 3's Cornell box (`mi.cornell_box()`), exported triangle for
+"""Writes scenes/models/cornell/room.obj, boxes.obj and cornell.mtl: the
+geometry and colours of Mitsuba 3's Cornell box (`mi.cornell_box()`), exported triangle for
 triangle, so that rtcl and Mitsuba render the same box (docs/oracle.md).
 
 Each of Mitsuba's shapes becomes an OBJ object whose `usemtl` names its
 material, the walls and the light in room.obj, the two boxes in boxes.obj (the
-test scenes put spheres in the room instead): `white` (floor, ceiling, back wall, the two boxes), `red` (the wall
-at x = -1), `green` (x = +1) and `light` (the emissive quad under the ceiling,
-white, with Mitsuba's radiance as `Ke`). A rectangle is Mitsuba's
-[-1, 1]^2 square at z = 0 with normal +z, placed by its `to_world`; a cube is the
-mesh Mitsuba builds for it (12 triangles, 24 vertices), read back through
-`mi.traverse`. The vertex order keeps Mitsuba's faces, so each face's
+test scenes put spheres in the room instead): `white` (floor, ceiling, back
+wall, the two boxes), `red` (the wall at x = -1), `green` (x = +1) and `light`
+(the emissive quad under the ceiling, white, with Mitsuba's radiance as `Ke`).
+A rectangle is Mitsuba's [-1, 1]^2 square at z = 0 with normal +z, placed by
+its `to_world`; a cube is the mesh Mitsuba builds for it (12 triangles, 24
+vertices), read back through `mi.traverse`. The vertex order keeps Mitsuba's faces, so each face's
 (v1 - v0) x (v2 - v0) points where Mitsuba's normal does: into the box for the
 walls, down for the light, out of the two boxes.
 

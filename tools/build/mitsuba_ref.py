@@ -11,9 +11,10 @@ the same triangles (OBJ files parsed here, placed by scale, rotate, translate)
 and spheres, the same pinhole camera (fov_axis "y", a box pixel filter), the
 same BSDFs (GGX alpha = roughness^2; the Schlick conductor as Mitsuba's
 `principled` with metallic 1; rtcl's principled as Mitsuba blendbsdf
-mixtures of that, `roughdielectric` and the BSDF `gltf` below), emission on the front side, `background` as a uniform
-environment. What it cannot map exactly is refused with a message, never
-approximated silently.
+mixtures of that, `roughdielectric` and the BSDF `gltf` below), emission on
+the front side, `background` as a uniform environment, the environment map
+sampled finely enough to keep its integral. What it cannot map exactly is
+refused with a message, never approximated silently.
 
 The N samples a pixel are rendered as K batches of N/K, each with its own seed
 of Mitsuba's independent sampler. The output (.npz) holds

@@ -23,7 +23,6 @@ WIDTH, HEIGHT = 64, 32
 
 def sky():
     v = (np.arange(HEIGHT) + 0.5) / HEIGHT            # texel centres
-    u = (np.arange(WIDTH) + 0.5) / WIDTH
     theta = math.pi * v[:, None] * np.ones((1, WIDTH))
     elevation = math.pi / 2 - theta
     up = np.clip(np.sin(elevation), 0, 1)[..., None]
