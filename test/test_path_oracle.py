@@ -14,8 +14,9 @@ where s is the standard deviation of one sample's contribution to the block
 (the reference measured it from the spread of its independent batches), n and
 N rtcl's and the reference's samples a pixel: Z standard errors of the Monte
 Carlo noise of both images (an independent sampler's: rtcl's Sobol' points do
-better on most blocks, up to 10 times worse on a smooth glass ball's, which
-REL covers: docs/oracle.md, "Agreement"), plus REL of the value for what the two renderers may
+better on most blocks, 3-5 times worse on a smooth glass ball in a furnace,
+whose blocks then reach 9 standard errors, which REL covers: docs/oracle.md,
+"Agreement"), plus REL of the value for what the two renderers may
 rightly differ in (float against Mitsuba's float, the sphere and triangle
 intersection epsilons) and ABS for blocks that are almost black.  The image's
 mean is compared the same way, with the noise of all its blocks.
