@@ -258,6 +258,15 @@ def test_principled_materials_match_mitsuba(tmp_path):
 
 
 @pytest.mark.slow
+def test_thin_transmitting_sheets_lit_from_behind_match_mitsuba(tmp_path):
+    """Two single-sided sheets, rough glass and a principled one of
+    transmission 1, between the camera and a lamp: light sampled through a
+    surface (a transmitted light direction, its MIS weight against the
+    BSDF's pdf on that side), which closed objects never need."""
+    compare(render(tmp_path, ORACLE / "sheets.json", 64, 64, 256), "sheets", 256)
+
+
+@pytest.mark.slow
 def test_point_and_directional_lights_match_mitsuba(tmp_path):
     """SCENE.md's lights under "path": a point light's color is its intensity
     (falloff 1/r^2), a directional light's its irradiance; with a uniform sky."""
