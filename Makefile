@@ -134,7 +134,7 @@ $(BIN): $(BUILD)/cmd/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
 $(MESHREAD): $(BUILD)/meshread/meshread.o $(BUILD)/meshread/meshread_assimp.o \
 		$(BUILD)/meshread/ply_check.o $(BUILD)/meshread/texture_read.o \
 		$(BUILD)/scene/mesh_spawn.o $(BUILD)/base/libdir.o
-	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -lstdc++ -lm
+	$(CC) $(LDFLAGS) -o $@ $^ $(ASSIMP_LIBS) -ljansson -lstdc++ -lm
 
 # Where the companion files (rtcl-oiio.so, rtcl-meshread) are in a build tree.
 $(BUILD)/base/libdir.o: CPPFLAGS += -DRTCL_MODULE_DIR='"$(abspath $(BUILD))"'
@@ -257,18 +257,19 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # starts the helper; the helper (build/fuzz/rtcl-meshread) is built with the
 # same sanitizers, and its reports fail the run (host/scene/mesh.h).
 FUZZ_SOURCES := host/scene/scene.c host/scene/scene_check.c host/scene/scene_literal.c host/scene/scene_material.c host/base/suggest.c \
-	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/base/files.c host/base/quote.c \
+	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/scene/hdr_read.c \
+	host/base/files.c host/base/quote.c \
 	host/base/interrupt.c host/layout/scene_block.c \
 	host/layout/mesh_block.c host/layout/bvh.c
 FUZZ_HEADERS := test/scene_block_check.h host/scene/scene.h host/scene/scene_loader.h host/scene/mesh.h \
-	host/scene/mesh_place.h host/base/files.h host/base/quote.h host/layout/scene_block.h host/layout/mesh_block.h host/layout/bvh.h host/base/libdir.h \
+	host/scene/mesh_place.h host/scene/hdr_read.h host/base/files.h host/base/quote.h host/layout/scene_block.h host/layout/mesh_block.h host/layout/bvh.h host/base/libdir.h \
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
 $(FUZZ_DIR)/rtcl-meshread: host/meshread/meshread.c host/meshread/meshread_assimp.c host/meshread/ply_check.c host/meshread/ply_check.h host/meshread/texture_read.c host/meshread/texture_read.h host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh.h
 	mkdir -p $(FUZZ_DIR)
 	$(FUZZ_CC) $(filter-out -fsanitize=fuzzer%,$(FUZZ_FLAGS)) -fsanitize=address,undefined \
-		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -lstdc++ -lm
+		$(FUZZ_MODULE_DIR) -o $@ $(filter %.c,$^) $(ASSIMP_LIBS) -ljansson -lstdc++ -lm
 
 $(FUZZ_DIR)/fuzz_scene: test/fuzz_scene.c $(FUZZ_SOURCES) $(FUZZ_HEADERS) $(FUZZ_DIR)/rtcl-meshread
 	$(FUZZ_CC) $(FUZZ_FLAGS) $(FUZZ_MODULE_DIR) -pthread -o $@ test/fuzz_scene.c $(FUZZ_SOURCES) \

@@ -19,6 +19,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/version.h>
+#include <jansson.h>
 
 #include "meshread/ply_check.h"
 #include "meshread/texture_read.h"
@@ -421,6 +422,63 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 		m->kind = MESH_MATERIAL_MISSING;
 		m->not_understood[0] = '\0';
 	}
+}
+
+/* The JSON of a glTF file, .gltf or .glb (its first chunk), or NULL. */
+static json_t *gltf_json(const char *path)
+{
+	size_t n = strlen(path);
+	int glb = n >= 4 && strcasecmp(path + n - 4, ".glb") == 0;
+	FILE *f;
+	json_t *doc = NULL;
+
+	if (!glb && !(n >= 5 && strcasecmp(path + n - 5, ".gltf") == 0))
+		return NULL;
+	f = fopen(path, "rb");
+	if (!f)
+		return NULL;
+	if (glb) {
+		unsigned char header[20];
+		if (fread(header, 1, 20, f) == 20 && memcmp(header, "glTF", 4) == 0 &&
+		    memcmp(header + 16, "JSON", 4) == 0) {
+			uint32_t length = (uint32_t)header[12] | (uint32_t)header[13] << 8 |
+					  (uint32_t)header[14] << 16 | (uint32_t)header[15] << 24;
+			char *text = length < (1u << 30) ? malloc(length ? length : 1) : NULL;
+			if (text && fread(text, 1, length, f) == length)
+				doc = json_loadb(text, length, 0, NULL);
+			free(text);
+		}
+	} else {
+		doc = json_loadf(f, 0, NULL);
+	}
+	fclose(f);
+	return doc;
+}
+
+/* KHR_materials_emissive_strength, which Assimp 5.2 does not read (later
+ * versions give it as $mat.emissiveIntensity, which survey applies): the
+ * glTF's material i is Assimp's material i (Assimp appends its default
+ * material after them). */
+static void gltf_emissive_strengths(const struct aiScene *sc, const char *path,
+				    struct mesh_data *out)
+{
+	json_t *doc = gltf_json(path), *materials = doc ? json_object_get(doc, "materials") : NULL;
+	double given;
+
+	for (size_t i = 0; json_is_array(materials) && i < json_array_size(materials) &&
+			   i < out->material_count;
+	     i++) {
+		json_t *strength = json_object_get(
+			json_object_get(json_object_get(json_array_get(materials, i), "extensions"),
+					"KHR_materials_emissive_strength"),
+			"emissiveStrength");
+		double x = json_is_number(strength) ? json_number_value(strength) : 1;
+		if (x == 1 || numbers(sc->mMaterials[i], "$mat.emissiveIntensity", &given, 1))
+			continue;
+		for (int c = 0; c < 3; c++)
+			out->materials[i].emissive[c] *= x;
+	}
+	json_decref(doc);
 }
 
 /* The vertices and triangles to expect, counting only triangle meshes. */
@@ -861,6 +919,7 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	for (unsigned m = 0; m < sc->mNumMaterials; m++)
 		read_material(sc->mMaterials[m], m, &out->materials[m]);
 	out->material_count = sc->mNumMaterials;
+	gltf_emissive_strengths(sc, path, out);
 	if (read_textures(sc, path, out)) {
 		snprintf(reason, reason_size, "out of memory for its textures");
 		mesh_data_free(out);
