@@ -259,11 +259,12 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # starts the helper; the helper (build/fuzz/rtcl-meshread) is built with the
 # same sanitizers, and its reports fail the run (host/scene/mesh.h).
 FUZZ_SOURCES := host/scene/scene.c host/scene/scene_check.c host/scene/scene_literal.c host/scene/scene_material.c host/base/suggest.c \
-	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/base/files.c host/base/quote.c \
+	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/scene/hdr_read.c \
+	host/base/files.c host/base/quote.c \
 	host/base/interrupt.c host/layout/scene_block.c \
 	host/layout/mesh_block.c host/layout/bvh.c
 FUZZ_HEADERS := test/scene_block_check.h host/scene/scene.h host/scene/scene_loader.h host/scene/mesh.h \
-	host/scene/mesh_place.h host/base/files.h host/base/quote.h host/layout/scene_block.h host/layout/mesh_block.h host/layout/bvh.h host/base/libdir.h \
+	host/scene/mesh_place.h host/scene/hdr_read.h host/base/files.h host/base/quote.h host/layout/scene_block.h host/layout/mesh_block.h host/layout/bvh.h host/base/libdir.h \
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
@@ -326,7 +327,9 @@ TOOL_COMMAND_MODULES := $(wildcard tools/rtcl_tools/commands/*.py)
 TOOL_COMMANDS := $(addprefix rtcl-,$(subst _,-,$(basename $(notdir $(TOOL_SCRIPTS)))))
 SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
 # The mesh files the version 2 scenes place, relative to them.
-SCENE_MODELS := $(wildcard scenes/models/*)
+# Every file under scenes/models, its folders kept (models/cornell/...).
+SCENE_MODELS := $(sort $(shell find scenes/models -type f))
+SCENE_MODEL_DIRS := $(sort $(shell find scenes/models -mindepth 1 -type d))
 
 install: $(BIN)
 	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(LIBDIR) $(DATADIR)/scenes \
@@ -337,8 +340,10 @@ install: $(BIN)
 	sed -e 's|/usr/local/|$(PREFIX)/|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
-	$(INSTALL) -d $(DATADIR)/scenes/models
-	$(INSTALL) -m 644 $(SCENE_MODELS) $(DATADIR)/scenes/models
+	$(INSTALL) -d $(DATADIR)/scenes/models $(addprefix $(DATADIR)/,$(SCENE_MODEL_DIRS))
+	for file in $(SCENE_MODELS); do \
+		$(INSTALL) -m 644 "$$file" "$(DATADIR)/$$file" || exit 1; \
+	done
 	$(INSTALL) -m 644 $(TOOL_MODULES) $(DATADIR)/tools/rtcl_tools
 	$(INSTALL) -m 644 $(TOOL_COMMAND_MODULES) $(DATADIR)/tools/rtcl_tools/commands
 	for script in $(TOOL_SCRIPTS); do \
@@ -357,12 +362,13 @@ uninstall:
 	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
 	rm -f $(LIBDIR)/rtcl-oiio.so $(LIBDIR)/rtcl-meshread
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
-	rm -f $(addprefix $(DATADIR)/scenes/models/,$(notdir $(SCENE_MODELS)))
+	rm -f $(addprefix $(DATADIR)/,$(SCENE_MODELS))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/commands/,$(notdir $(TOOL_COMMAND_MODULES)))
 	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__ \
 		$(DATADIR)/tools/rtcl_tools/commands/__pycache__
-	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools/commands \
+	for dir in $(addprefix $(DATADIR)/,$(SCENE_MODEL_DIRS)) \
+			$(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools/commands \
 			$(DATADIR)/tools/rtcl_tools \
 			$(DATADIR)/tools $(DATADIR) $(LIBDIR); do \
 		if [ -d $$dir ] && [ -z "$$(ls -A $$dir)" ]; then rmdir $$dir; fi; \

@@ -71,8 +71,8 @@ def expected_files():
              f"{share}/scenes/README.md"}
             | {f"{PREFIX}/bin/rtcl-" + path.stem.replace("_", "-") for path in tools}
             | {f"{share}/scenes/{path.name}" for path in (ROOT / "scenes").glob("*.json")}
-            | {f"{share}/scenes/models/{path.name}"
-               for path in (ROOT / "scenes" / "models").glob("*")}
+            | {f"{share}/scenes/models/{path.relative_to(ROOT / 'scenes' / 'models')}"
+               for path in (ROOT / "scenes" / "models").rglob("*") if path.is_file()}
             | {f"{share}/tools/rtcl_tools/{path.name}"
                for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")}
             | {f"{share}/tools/rtcl_tools/commands/{path.name}"

@@ -234,10 +234,10 @@ def test_environment_is_warned_about_under_whitted(tmp_path):
 
 
 def test_model_emission_is_rendered_under_path(tmp_path):
-    """glTF emissiveFactor and MTL Ke are the materials' emission: with no
-    other light, a black emitting quad facing the camera shows its radiance;
-    one without stays black. (KHR_materials_emissive_strength is not read by
-    Assimp 5.2, the importer here: SCENE.md says so.)"""
+    """glTF emissiveFactor times KHR_materials_emissive_strength (read by
+    rtcl-meshread from the file: Assimp 5.2 does not), and MTL Ke, are the
+    materials' emission: with no other light, a black emitting quad facing
+    the camera shows its radiance; one without stays black."""
     import base64
     import struct
     quads = [[(-1.5 + i, -0.5, 0), (-0.5 + i, -0.5, 0), (-0.5 + i, 0.5, 0), (-1.5 + i, 0.5, 0)]
@@ -274,7 +274,7 @@ def test_model_emission_is_rendered_under_path(tmp_path):
     image = read_pfm(render(scene, tmp_path, "e", "--size", "48x16", "--spp", "2"))
     # The quads' normals face +z, the camera: seen from the front.
     left, middle, right = image[8, 19], image[8, 24], image[8, 29]
-    assert np.allclose(left, [1, 0.5, 0.25], rtol=1e-5), left
+    assert np.allclose(left, [2, 1, 0.5], rtol=1e-5), left
     assert np.allclose(middle, 0), middle
     assert np.allclose(right, [0.25, 0.5, 1], rtol=1e-5), right
 

@@ -360,6 +360,7 @@ static void pack_bsdf(struct rt_bsdf *out, const struct scene_material *m)
 		ior = m->ior;
 		roughness = 0;
 	} else if (b->type == SCENE_BSDF_NONE) {
+		ior = m->ior; /* unused by the mapped BSDF, but a number */
 		out->diffuse = (float)m->diffuse;
 		out->mirror = (float)m->reflect;
 		out->mirror_tint = m->fresnel == SCENE_FRESNEL_CONDUCTOR;

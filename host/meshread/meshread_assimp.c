@@ -20,6 +20,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/version.h>
+#include <jansson.h>
 
 #include "meshread/gltf_read.h"
 #include "meshread/mtl_read.h"
@@ -513,6 +514,31 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 	if (missing(m, named)) {
 		m->kind = MESH_MATERIAL_MISSING;
 		m->not_understood[0] = '\0';
+	}
+}
+
+/* KHR_materials_emissive_strength, which Assimp 5.2 does not read (later
+ * versions give it as $mat.emissiveIntensity, which survey applies): the
+ * glTF's material i is Assimp's material i (Assimp appends its default
+ * material after them). */
+static void gltf_emissive_strengths(const struct aiScene *sc, const json_t *doc,
+				    struct mesh_data *out)
+{
+	json_t *materials = doc ? json_object_get(doc, "materials") : NULL;
+	double given;
+
+	for (size_t i = 0; json_is_array(materials) && i < json_array_size(materials) &&
+			   i < out->material_count;
+	     i++) {
+		json_t *strength = json_object_get(
+			json_object_get(json_object_get(json_array_get(materials, i), "extensions"),
+					"KHR_materials_emissive_strength"),
+			"emissiveStrength");
+		double x = json_is_number(strength) ? json_number_value(strength) : 1;
+		if (x == 1 || numbers(sc->mMaterials[i], "$mat.emissiveIntensity", &given, 1))
+			continue;
+		for (int c = 0; c < 3; c++)
+			out->materials[i].emissive[c] *= x;
 	}
 }
 
@@ -1189,6 +1215,7 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	for (unsigned m = 0; m < sc->mNumMaterials; m++)
 		read_material(sc->mMaterials[m], m, &out->materials[m]);
 	out->material_count = sc->mNumMaterials;
+	gltf_emissive_strengths(sc, doc, out);
 	if (read_textures(sc, path, doc, out)) {
 		snprintf(reason, reason_size, "out of memory for its textures");
 		goto out_release_scene;
