@@ -60,7 +60,11 @@ CXXFLAGS += -std=c++17 $(WARNINGS)
 # a glTF file's JSON (host/meshread/gltf_read.c).
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
-LDLIBS = -lOpenCL -ljansson -lz -lm -pthread
+LDLIBS = -lOpenCL -ljansson -lz -lm -pthread -ldl
+# --denoise loads Intel Open Image Denoise from here at run time (host/output/denoise.c):
+# .ci/install-deps (make deps) installs the pyoidn wheel, which carries it, into this folder.
+OIDN_DIR ?= /usr/local/lib/rtcl-oidn
+CFLAGS += -DRTCL_OIDN_DIR='"$(OIDN_DIR)"'
 MESHREAD := $(BUILD)/rtcl-meshread
 
 ifeq ($(SAN),1)
@@ -109,13 +113,13 @@ HOST_MODULES := \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
 	render/checks render/probe render/buffers render/program render/block render/watch render/repeats \
-	render/launch render/singlepass render/wavefront render/renderer render/render \
+	render/launch render/singlepass render/wavefront render/renderer render/render render/aov \
 	render/reference \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
 	report/summary report/document report/simd report/devstats \
 	output/plan output/npy output/schedmap output/workmap output/image_common output/image_encode \
-	output/image_png \
+	output/image_png output/denoise \
 	run/image run/frames run/job_digest \
 	cmd/cli
 HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \

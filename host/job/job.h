@@ -34,6 +34,7 @@ struct job {
 	int animation;		    /* --frames given */
 	int first_frame, last_frame; /* --frames A:B */
 	int mpi;		    /* --mpi */
+	int denoise;		    /* --denoise: settings.aov is set too */
 	int verbose, quiet;	    /* -v, -q */
 };
 

@@ -17,7 +17,8 @@
  * cl/NAME.cl follows. */
 const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl", "sample.cl",
 					      "texture.cl",    "intersect.cl", "traverse.cl",
-					      "shade.cl",      "walk.cl",   "scheduling.cl"};
+					      "shade.cl",      "walk.cl",   "scheduling.cl",
+					      "aov.cl"};
 const int program_tracer_source_count =
 	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
 
@@ -191,7 +192,7 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 s->max_depth, s->batch > 0 ? s->batch : 1,
 		 /* A CPU device: the box test in its vector unit's way
 		  * (cl/traverse.cl, box_pair_hit); the same numbers. */
@@ -218,6 +219,8 @@ static int format_options(const struct device *dev, const struct render_settings
 		 s->count_flops && dev->simd_measurable ? " -DRTCL_SIMD_MEASURE" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 s->record_schedule ? " -DRTCL_SCHEDULE_MAP" : "",
+		 /* The auxiliary images' kernel (cl/aov.cl), only when asked for. */
+		 s->aov ? " -DRTCL_AOV" : "",
 		 /* The chunks done, for the progress line (cl/scheduling.cl). */
 		 program_counts_progress(s) ? " -DRTCL_PROGRESS" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",

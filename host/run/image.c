@@ -8,6 +8,7 @@
 #include "base/test_hooks.h"
 #include "base/version.h"
 #include "base/timing.h"
+#include "output/denoise.h"
 #include "render/render.h"
 #include "report/simd.h"
 #include "report/summary.h"
@@ -153,6 +154,23 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	return 0;
 }
 
+/* --denoise: the image denoised in place with the albedo and normal images,
+ * timed in the -v times. */
+static int denoise_result(const struct job *job, struct render_result *res, char *err,
+			  size_t err_size)
+{
+	const struct render_settings *s = &job->settings;
+	size_t pixels = (size_t)s->width * s->height;
+	double start = timing_now();
+
+	if (denoise_image(res->rgb, res->aov, res->aov + 3 * pixels, s->width, s->height, err,
+			  err_size))
+		return -1;
+	if (job->verbose)
+		fprintf(stderr, "rtcl: denoised in %.0f ms\n", (timing_now() - start) * 1e3);
+	return 0;
+}
+
 static int image_render(struct mode_run *run, int checked, char *err, size_t err_size)
 {
 	const struct job *job = run->job;
@@ -166,6 +184,9 @@ static int image_render(struct mode_run *run, int checked, char *err, size_t err
 		return EXIT_FAILED;
 	}
 	run->state = d;
+	/* A missing library is said before the render, not after it. */
+	if (job->denoise && denoise_load(err, err_size))
+		return EXIT_FAILED;
 	if (!job->settings.kernel) {
 		snprintf(record->device.name, sizeof(record->device.name),
 			 "CPU reference (C++, GLM, double precision, one core)");
@@ -174,6 +195,8 @@ static int image_render(struct mode_run *run, int checked, char *err, size_t err
 	} else {
 		failed = render_on_devices(d, job, record, err, err_size);
 	}
+	if (!failed && job->denoise)
+		failed = denoise_result(job, &record->result, err, err_size);
 	if (!failed && job->verbose && job->settings.kernel)
 		fprintf(stderr, "rtcl: build options: %s\n", record->result.build_options);
 	return failed ? EXIT_FAILED : 0;
