@@ -215,3 +215,21 @@ def test_denoise_lowers_the_error_of_a_noisy_image(tmp_path):
     assert not np.array_equal(noisy, denoised)
     print("rmse noisy", rmse(noisy), "denoised", rmse(denoised))
     assert rmse(denoised) < 0.75 * rmse(noisy), (rmse(denoised), rmse(noisy))
+
+
+def test_albedo_takes_the_image_sample_positions(tmp_path):
+    """Lit by an ambient light of 1 alone (ka 1, no lights, max depth 0), a
+    pixel's colour is the mean of its samples' base colours: the albedo, at the
+    image's own sample positions, checker squares and edges included."""
+    scene = json.loads((ROOT / "scenes" / "two_balls.json").read_text())
+    scene.update(ambient=[1, 1, 1], lights=[], max_depth=0)
+    for m in scene["materials"].values():
+        m.update(reflect=0, transmit=0)
+    path = tmp_path / "flat.json"
+    path.write_text(json.dumps(scene))
+    out = tmp_path / "flat.pfm"
+    result = rtcl(str(path), "--size", "32x24", "--spp", "8", "--aov", "albedo", "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    image, albedo = read_pfm(out), read_pfm(tmp_path / "flat.albedo.pfm")
+    assert np.allclose(image, albedo, atol=1e-6)
+    assert len(np.unique(albedo[..., 0])) > 6  # edges mixed, not only the materials

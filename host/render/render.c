@@ -82,6 +82,7 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	res->times.kernels = timing_lap_ms(&lap);
 	if (s->aov && renderer_aov(&r, err, err_size))
 		goto out_close;
+	res->times.aov = timing_lap_ms(&lap);
 	if (renderer_read_back(&r, err, err_size))
 		goto out_close;
 	res->times.read_back = timing_lap_ms(&lap);

@@ -74,6 +74,7 @@ struct render_times {
 	double build;	  /* the program build */
 	double scene;	  /* packing the scene, creating and filling the buffers */
 	double kernels;	  /* every launch, warm-up included, with its waits */
+	double aov;	  /* the auxiliary images' pass (settings.aov), read-back included */
 	double read_back; /* the image and counts back to the host */
 };
 
