@@ -248,6 +248,8 @@ static void print_help_after_kernels(FILE *out)
 		"Environment:\n"
 		"  RTCL_MESH_TIME_LIMIT=SECONDS  --mesh-time-limit, when not given\n"
 		"  RTCL_MESH_MEMORY_LIMIT=MIB  --mesh-memory-limit, when not given\n"
+		"  RTCL_OIDN_LIBRARY=FILE  the Open Image Denoise library --denoise loads\n"
+		"                           (default: the one `make deps` installs)\n"
 		"For kernel development:\n"
 		"  RTCL_CL_DIR=DIR          load the OpenCL sources from DIR instead of the\n"
 		"                           copies built into the binary\n"
