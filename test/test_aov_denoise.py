@@ -245,3 +245,21 @@ def test_albedo_takes_the_image_sample_positions(tmp_path):
     image, albedo = read_pfm(out), read_pfm(tmp_path / "flat.albedo.pfm")
     assert np.allclose(image, albedo, atol=1e-6)
     assert len(np.unique(albedo[..., 0])) > 6  # edges mixed, not only the materials
+
+
+def test_albedo_of_textures_and_a_lens(tmp_path):
+    """The studio (textured crate, cut-out trellis, a thin lens) lit by an
+    ambient light of 1 alone: its image is its albedo, texture, cut-outs and
+    the lens's sample positions included."""
+    scene = json.loads((ROOT / "scenes" / "studio.json").read_text())
+    scene.update(ambient=[1, 1, 1], lights=[], max_depth=0)
+    for m in scene["materials"].values():
+        m["ambient"] = 1
+    for mesh in scene["meshes"]:
+        mesh["file"] = str(ROOT / "scenes" / mesh["file"])
+    path = tmp_path / "flat_studio.json"
+    path.write_text(json.dumps(scene))
+    out = tmp_path / "studio.pfm"
+    result = rtcl(str(path), "--size", "64x40", "--spp", "4", "--aov", "albedo", "-o", str(out))
+    assert result.returncode == 0, result.stderr
+    assert np.allclose(read_pfm(out), read_pfm(tmp_path / "studio.albedo.pfm"), atol=1e-6)
