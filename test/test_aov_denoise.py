@@ -200,11 +200,13 @@ def require_oidn(tmp_path):
         # TBB, which OIDN runs on, dlopens its libtbbbind with RTLD_DEEPBIND,
         # which AddressSanitizer's runtime refuses (google/sanitizers#611).
         pytest.skip("Open Image Denoise's TBB cannot load under AddressSanitizer")
-    probe = rtcl("--size", "8x8", "--denoise", "-o", str(tmp_path / "probe.pfm"))
+    probe = subprocess.run([RTCL, "--size", "8x8", "--denoise", "-o", str(tmp_path / "probe.pfm")],
+                           capture_output=True, text=True, timeout=300)
     if probe.returncode and "cannot load Intel Open Image Denoise" in probe.stderr:
         pytest.skip("Open Image Denoise is not installed (`make deps` installs it): "
                     + probe.stderr.strip())
     assert probe.returncode == 0, probe.stderr
+    assert "denoise: Open Image Denoise, RT filter with albedo and normal" in probe.stdout
 
 
 def test_denoise_lowers_the_error_of_a_noisy_image(tmp_path):

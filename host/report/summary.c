@@ -62,6 +62,11 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
 	else
 		fprintf(out, "time:    %.3f ms\n", r->kernel_ms_median);
+	if (job->denoise)
+		fprintf(out,
+			"denoise: Open Image Denoise, RT filter with albedo and normal, on the "
+			"host's CPU: %.0f ms\n",
+			record->denoise_ms);
 	if (job->counting) {
 		const struct flop_summary *f = &record->flops;
 		fprintf(out, "work:    %.3f GFLOP, %.1f GFLOP/s; per work-item mean %.0f, max %.0f, min "

@@ -155,19 +155,19 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 }
 
 /* --denoise: the image denoised in place with the albedo and normal images,
- * timed in the -v times. */
-static int denoise_result(const struct job *job, struct render_result *res, char *err,
+ * timed for the summary. */
+static int denoise_result(const struct job *job, struct record *record, char *err,
 			  size_t err_size)
 {
 	const struct render_settings *s = &job->settings;
+	struct render_result *res = &record->result;
 	size_t pixels = (size_t)s->width * s->height;
 	double start = timing_now();
 
 	if (denoise_image(res->rgb, res->aov, res->aov + 3 * pixels, s->width, s->height, err,
 			  err_size))
 		return -1;
-	if (job->verbose)
-		fprintf(stderr, "rtcl: denoised in %.0f ms\n", (timing_now() - start) * 1e3);
+	record->denoise_ms = (timing_now() - start) * 1e3;
 	return 0;
 }
 
@@ -196,7 +196,7 @@ static int image_render(struct mode_run *run, int checked, char *err, size_t err
 		failed = render_on_devices(d, job, record, err, err_size);
 	}
 	if (!failed && job->denoise)
-		failed = denoise_result(job, &record->result, err, err_size);
+		failed = denoise_result(job, record, err, err_size);
 	if (!failed && job->verbose && job->settings.kernel)
 		fprintf(stderr, "rtcl: build options: %s\n", record->result.build_options);
 	return failed ? EXIT_FAILED : 0;
