@@ -271,3 +271,20 @@ def test_albedo_of_textures_and_a_lens(tmp_path):
     result = rtcl(str(path), "--size", "64x40", "--spp", "4", "--aov", "albedo", "-o", str(out))
     assert result.returncode == 0, result.stderr
     assert np.allclose(read_pfm(out), read_pfm(tmp_path / "studio.albedo.pfm"), atol=1e-6)
+
+
+def test_stats_time_the_auxiliary_pass_and_the_denoiser(tmp_path):
+    stats = tmp_path / "s.json"
+    result = rtcl("--size", "16x12", "--aov", "normal", "-o", str(tmp_path / "x.pfm"),
+                  "--stats", str(stats))
+    assert result.returncode == 0, result.stderr
+    times = json.loads(stats.read_text())["time_breakdown_ms"]
+    assert times["auxiliary_images"] > 0 and "denoise" not in times
+    require_oidn(tmp_path)
+    result = rtcl("--size", "16x12", "--denoise", "-o", str(tmp_path / "x.pfm"),
+                  "--stats", str(stats))
+    assert result.returncode == 0, result.stderr
+    times = json.loads(stats.read_text())["time_breakdown_ms"]
+    assert times["auxiliary_images"] > 0 and times["denoise"] > 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["probe.pfm", "s.json", "x.normal.pfm",
+                                                         "x.pfm"]
