@@ -288,3 +288,16 @@ def test_stats_time_the_auxiliary_pass_and_the_denoiser(tmp_path):
     assert times["auxiliary_images"] > 0 and times["denoise"] > 0
     assert sorted(p.name for p in tmp_path.iterdir()) == ["probe.pfm", "s.json", "x.normal.pfm",
                                                          "x.pfm"]
+
+
+def test_an_oidn_failure_is_one_message_and_no_output(tmp_path):
+    require_oidn(tmp_path)
+    (tmp_path / "x.png").write_bytes(b"old")
+    result = rtcl("--size", "16x12", "--denoise", "--aov", "depth", "-o", str(tmp_path / "x.png"),
+                  env={"RTCL_TEST_OIDN_FILTER": "NoSuchFilter"})
+    assert result.returncode == 1
+    assert result.stderr.count("\n") == 1, result.stderr
+    assert "--denoise: Open Image Denoise failed" in result.stderr
+    assert "NoSuchFilter" in result.stderr
+    assert (tmp_path / "x.png").read_bytes() == b"old"
+    assert not (tmp_path / "x.depth.pfm").exists()

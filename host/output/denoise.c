@@ -11,6 +11,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 
+#include "base/test_hooks.h"
+
 #ifndef RTCL_OIDN_DIR
 #define RTCL_OIDN_DIR "/usr/local/lib/rtcl-oidn"
 #endif
@@ -142,7 +144,7 @@ int denoise_image(float *rgb, const float *albedo, const float *normal, int widt
 	oidn.commit_device(device);
 	if (check_device(device, "start its CPU device", err, err_size))
 		goto out_release_device;
-	filter = oidn.new_filter(device, "RT");
+	filter = oidn.new_filter(device, hook_oidn_filter() ? hook_oidn_filter() : "RT");
 	if (check_device(device, "create its RT filter", err, err_size))
 		goto out_release_device;
 	/* The auxiliary images are const here; OIDN only reads its inputs. */
