@@ -55,7 +55,8 @@ static void *open_library(void)
 	if (given && *given) {
 		handle = dlopen(given, RTLD_NOW | RTLD_LOCAL);
 		if (!handle)
-			snprintf(oidn.error, sizeof(oidn.error), "RTCL_OIDN_LIBRARY: %s", dlerror());
+			snprintf(oidn.error, sizeof(oidn.error), "RTCL_OIDN_LIBRARY: %s",
+				 dlerror());
 		return handle;
 	}
 	handle = dlopen(OIDN_WHEEL_LIB, RTLD_NOW | RTLD_LOCAL);

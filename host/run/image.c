@@ -156,8 +156,7 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 
 /* --denoise: the image denoised in place with the albedo and normal images,
  * timed for the summary. */
-static int denoise_result(const struct job *job, struct record *record, char *err,
-			  size_t err_size)
+static int denoise_result(const struct job *job, struct record *record, char *err, size_t err_size)
 {
 	const struct render_settings *s = &job->settings;
 	struct render_result *res = &record->result;
