@@ -301,3 +301,14 @@ def test_an_oidn_failure_is_one_message_and_no_output(tmp_path):
     assert "NoSuchFilter" in result.stderr
     assert (tmp_path / "x.png").read_bytes() == b"old"
     assert not (tmp_path / "x.depth.pfm").exists()
+
+
+def test_the_image_is_the_same_with_aov(tmp_path):
+    """The auxiliary pass runs after the image, in a program whose tracer is the
+    same: the image's bytes do not change."""
+    scene = str(ROOT / "scenes" / "two_balls.json")
+    plain, with_aov = tmp_path / "plain.pfm", tmp_path / "aov.pfm"
+    for out, extra in ((plain, []), (with_aov, ["--aov", "albedo,normal,depth"])):
+        result = rtcl(scene, "--size", "24x16", "--spp", "3", "-o", str(out), *extra)
+        assert result.returncode == 0, result.stderr
+    assert plain.read_bytes() == with_aov.read_bytes()
