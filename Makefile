@@ -29,7 +29,9 @@
 # has numpy, matplotlib and pytest from `make deps`; the installed tools run with it), SAN=1 (sanitizers),
 # FUZZ_SECONDS (default 60), FUZZ_CC (default clang), PREFIX (default /usr/local),
 # DESTDIR (staging root for packaging, default empty), DEVICE, BENCH and OUT (experiments,
-# bench, results: the device options, more bench options, the results folder).
+# bench, results: the device options, more bench options, the results folder), OIDN_DIR
+# (default /usr/local/lib/rtcl-oidn: where make deps puts Open Image Denoise, and where
+# --denoise loads it from).
 
 OIIO ?= 1
 CC ?= gcc
@@ -181,7 +183,7 @@ $(BUILD) $(BUILD)/tests:
 	mkdir -p $@
 
 deps:
-	bash .ci/install-deps
+	OIDN_DIR='$(OIDN_DIR)' bash .ci/install-deps
 
 render: rtcl
 	./rtcl
