@@ -108,7 +108,7 @@ int denoise_load(char *err, size_t err_size)
 	if (load() == 0)
 		return 0;
 	snprintf(err, err_size,
-		 "--denoise: cannot load Intel Open Image Denoise (%s); make deps installs "
+		 "--denoise: cannot load Intel Open Image Denoise (%s); `make deps` installs "
 		 "it (pip's pyoidn wheel in %s), or set RTCL_OIDN_LIBRARY to a "
 		 "libOpenImageDenoise.so.2",
 		 oidn.error, RTCL_OIDN_DIR);
