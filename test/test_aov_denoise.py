@@ -112,8 +112,7 @@ def test_depth_of_a_plane_at_a_known_distance(tmp_path):
     assert np.allclose(aov["normal"], [0, 0, -1], atol=1e-6)
 
 
-def assert_same_across_kernels(tmp_path, kernels, spp):
-    scene = str(ROOT / "scenes" / "two_balls.json")
+def assert_same_across_kernels(tmp_path, kernels, spp, scene=str(ROOT / "scenes" / "two_balls.json")):
     images = {}
     for kernel in kernels:
         out = tmp_path / f"{kernel}-{spp}.pfm"
@@ -130,6 +129,11 @@ def test_auxiliary_images_identical_across_kernels(tmp_path):
     """One of each family: a persistent single-pass kernel, one work-item a
     pixel, and the wavefront's launches per bounce."""
     assert_same_across_kernels(tmp_path, ["dynamic", "naive", "wavefront"], "4")
+
+
+def test_path_traced_auxiliary_images_identical_across_kernels(tmp_path):
+    assert_same_across_kernels(tmp_path, ["dynamic", "wavefront"], "2",
+                               scene=str(ROOT / "scenes" / "cornell.json"))
 
 
 @pytest.mark.slow
@@ -312,3 +316,34 @@ def test_the_image_is_the_same_with_aov(tmp_path):
         result = rtcl(scene, "--size", "24x16", "--spp", "3", "-o", str(out), *extra)
         assert result.returncode == 0, result.stderr
     assert plain.read_bytes() == with_aov.read_bytes()
+
+
+def test_path_traced_albedo_normal_and_denoise(tmp_path):
+    """Under the path integrator the albedo is the BSDF's reflectance
+    (scenes/cornell.json: the red and green walls) and the normal the
+    shading normal facing the camera; --denoise brings the displayed image
+    (clamped to [0, 1]: the lamp's edges dominate an HDR error) closer to a
+    128-spp render."""
+    scene = str(ROOT / "scenes" / "cornell.json")
+
+    def image(name, *args):
+        out = tmp_path / name
+        result = rtcl(scene, "--size", "32x32", "-o", str(out), *args)
+        assert result.returncode == 0, result.stderr
+        return read_pfm(out)
+
+    noisy = image("noisy.pfm", "--spp", "8", "--aov", "albedo,normal")
+    albedo, normal = read_pfm(tmp_path / "noisy.albedo.pfm"), read_pfm(tmp_path / "noisy.normal.pfm")
+    assert np.allclose(albedo[16, 1], [0.570068, 0.0430135, 0.0443706], atol=1e-6)  # red
+    assert np.allclose(albedo[16, 30], [0.105421, 0.37798, 0.076425], atol=1e-6)  # green
+    assert np.allclose(normal[16, 1], [1, 0, 0], atol=1e-6)
+    assert np.allclose(normal[16, 30], [-1, 0, 0], atol=1e-6)
+    assert np.allclose(normal[30, 16], [0, 1, 0], atol=1e-6)  # the floor
+    require_oidn(tmp_path)
+    truth = np.clip(image("truth.pfm", "--spp", "128"), 0, 1)
+    denoised = np.clip(image("denoised.pfm", "--spp", "8", "--denoise"), 0, 1)
+
+    def rmse(a):
+        return float(np.sqrt(np.mean((np.clip(a, 0, 1) - truth) ** 2)))
+
+    assert rmse(denoised) < 0.8 * rmse(noisy), (rmse(denoised), rmse(noisy))

@@ -139,6 +139,18 @@ int hook_rename_fault(void)
 	return end != value && *end == '\0' && n > 0 && n < 1000000 ? (int)n : 0;
 }
 
+int hook_pass_samples(void)
+{
+	const char *value = getenv("RTCL_TEST_PASS_SAMPLES");
+	char *end;
+	long n;
+
+	if (!value)
+		return 0;
+	n = strtol(value, &end, 10);
+	return end != value && *end == '\0' && n > 0 && n < 1000000 ? (int)n : 0;
+}
+
 void hook_commit_delay(void)
 {
 	const char *value = getenv("RTCL_TEST_COMMIT_DELAY");

@@ -297,23 +297,59 @@ int output_plan_check(const struct output_plan *plan, char *err, size_t err_size
 	return 0;
 }
 
-int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, char *err,
-			    size_t err_size)
+/* Stages image i, which holds `samples` samples per pixel, into staged. */
+static int stage_image(const struct output_plan *plan, struct staged_file *staged, int i,
+		       const float *rgb, int samples, const char *why, char *err, size_t err_size)
 {
 	const struct job *job = plan->job;
 	const struct render_settings *s = &job->settings;
+	int planned = settings_samples(s);
 	char description[1024];
 	struct image_meta meta = {"rtcl " RTCL_VERSION, description,
-				  plan->request->linear_encoding ? IMAGE_LINEAR : IMAGE_SRGB};
-	int n = snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
-			 job->scene->source, s->kernel ? s->kernel->name : "reference", s->width,
-			 s->height, s->max_depth);
+				  plan->request->linear_encoding ? IMAGE_LINEAR : IMAGE_SRGB,
+				  samples};
+	size_t n = (size_t)snprintf(description, sizeof(description),
+				    "scene %s, kernel %s, %dx%d, max depth %d", job->scene->source,
+				    s->kernel ? s->kernel->name : "reference", s->width, s->height,
+				    s->max_depth);
+	if (job->animation && n < sizeof(description))
+		n += (size_t)snprintf(description + n, sizeof(description) - n,
+				      ", frame %d of %d..%d", job->first_frame + i,
+				      job->first_frame, job->last_frame);
+	if (samples < planned && n < sizeof(description))
+		snprintf(description + n, sizeof(description) - n,
+			 ", %d of %d samples per pixel (%s)", samples, planned, why);
+	else if (n < sizeof(description))
+		snprintf(description + n, sizeof(description) - n, ", %d sample%s per pixel",
+			 samples, samples == 1 ? "" : "s");
+	return image_stage(staged, plan->names[i], rgb, s->width, s->height, &meta, err, err_size);
+}
 
-	if (job->animation && n > 0 && (size_t)n < sizeof(description))
-		snprintf(description + n, sizeof(description) - (size_t)n, ", frame %d of %d..%d",
-			 job->first_frame + i, job->first_frame, job->last_frame);
-	return image_stage(&plan->staged[i], plan->names[i], rgb, s->width, s->height, &meta, err,
-			   err_size);
+int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, int samples,
+			    char *err, size_t err_size)
+{
+	return stage_image(plan, &plan->staged[i], i, rgb, samples, "interrupted", err, err_size);
+}
+
+int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples, char *err,
+				 size_t err_size)
+{
+	struct staged_file staged;
+
+	memset(&staged, 0, sizeof(staged));
+	if (stage_image(plan, &staged, 0, rgb, samples, "a checkpoint", err, err_size))
+		return -1;
+	/* One step for an interrupt: the rename and what the message says. */
+	interrupt_hold();
+	if (files_commit(&staged, 1, err, err_size)) {
+		interrupt_release();
+		return -1;
+	}
+	interrupt_set_outcome("the image's last checkpoint was written, no other output");
+	interrupt_release();
+	plan->checkpoints++;
+	plan->checkpoint_samples = samples;
+	return 0;
 }
 
 int output_plan_check_memory(const struct output_plan *plan, char *err, size_t err_size)
@@ -374,7 +410,8 @@ static int stage_held(struct output_plan *plan, char *err, size_t err_size)
 	if (output_plan_check_held(plan, err, err_size))
 		return -1;
 	for (int i = 0; i < plan->frames; i++) {
-		if (output_plan_stage_image(plan, i, plan->held[i], err, err_size))
+		if (output_plan_stage_image(plan, i, plan->held[i],
+					    settings_samples(&plan->job->settings), err, err_size))
 			return -1;
 		free(plan->held[i]);
 		plan->held[i] = NULL;
@@ -514,9 +551,14 @@ int output_plan_commit(struct output_plan *plan, struct record *record, char *er
 	if (any_held(plan))
 		failed = stage_held(plan, err, err_size);
 	else if (!plan->job->animation)
-		failed = output_plan_stage_image(plan, 0, record->result.rgb, err, err_size);
+		failed = output_plan_stage_image(plan, 0, record->result.rgb,
+						 record_samples_done(&plan->job->settings, record),
+						 err, err_size);
 	if (failed)
 		return -1;
+	plan->frames_written = 0;
+	for (int i = 0; i < plan->frames; i++)
+		plan->frames_written += plan->staged[i].temp[0] != '\0';
 	int others = stage_others(plan, record, plan->staged + plan->frames, err, err_size);
 	if (others < 0)
 		return -1;
@@ -539,10 +581,18 @@ void output_plan_print(const struct output_plan *plan, FILE *out)
 		fprintf(out, "output:  %s", quote_text(plan->names[0]));
 		if (plan->frames > 1)
 			fprintf(out, " .. %s", quote_text(plan->names[plan->frames - 1]));
+		if (plan->frames_written < plan->frames)
+			fprintf(out,
+				": the %d frame%s finished (interrupted; the frames not "
+				"finished are not written)",
+				plan->frames_written, plan->frames_written == 1 ? "" : "s");
 		fprintf(out, "\n");
 		return;
 	}
 	fprintf(out, "output:  %s", quote_text(r->image));
+	if (plan->checkpoints)
+		fprintf(out, " (%d checkpoint%s before it)", plan->checkpoints,
+			plan->checkpoints == 1 ? "" : "s");
 	for (int k = 0; k < OUTPUT_AOV_KINDS; k++)
 		if (r->aov & (1 << k))
 			fprintf(out, ", %s %s", output_aov_kind_name(k),

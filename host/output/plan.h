@@ -63,6 +63,10 @@ struct output_plan {
 	int names_too_long;	 /* a frame's name does not fit in PATH_MAX */
 	float **held;		 /* --mpi: frames kept in memory until all arrived */
 	struct staged_file *staged; /* the images, then the other outputs */
+	int frames_written;	    /* an animation's frames staged (fewer than frames
+				       when an interrupt stopped it) */
+	int checkpoints;	    /* written by output_plan_write_checkpoint */
+	int checkpoint_samples;	    /* the last one's samples per pixel */
 	char aov_names[OUTPUT_AOV_KINDS][PATH_MAX]; /* --aov's files, those asked for */
 	int aov_names_too_long;
 };
@@ -86,11 +90,19 @@ int output_same_file(const char *a, const char *b);
  * Returns 0, or -1 when it does not fit in name[PATH_MAX]. */
 int output_frame_name(const char *path, int frame, char *name);
 
-/* Stages image i (0 for one image; frame first + i of an animation) for the
- * commit. Thread-safe for distinct i. Returns 0, or -1 with one message in
- * err. */
-int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, char *err,
-			    size_t err_size);
+/* Stages image i (0 for one image; frame first + i of an animation), of
+ * `samples` samples per pixel (fewer than the job's: an interrupted render,
+ * which its description says), for the commit; the samples are recorded in
+ * the file's metadata (image.h). Thread-safe for distinct i. Returns 0, or
+ * -1 with one message in err. */
+int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, int samples,
+			    char *err, size_t err_size);
+
+/* --checkpoint: writes the one image now, of `samples` samples per pixel
+ * so far, staged and committed alone (the run's other outputs come at its
+ * end, with the final image). Returns 0, or -1 with one message in err. */
+int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples, char *err,
+				 size_t err_size);
 
 /* Under --mpi, rank 0 keeps every frame in host memory and creates nothing
  * in the output folder until all have arrived, because a rank that dies makes

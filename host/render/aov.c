@@ -16,6 +16,9 @@ int aov_render(struct device *dev, const struct render_settings *s, struct rende
 	size_t local[2] = {res->local_size[0], res->local_size[1]};
 	size_t global[2];
 	cl_int samples = settings_samples(s), status = CL_SUCCESS;
+	/* An interrupted image holds its first samples_done samples only. */
+	cl_int done = res->samples_done > 0 && res->samples_done < samples ? res->samples_done
+									 : samples;
 	const char *call = "clSetKernelArg";
 	double ms = 0;
 	int ret = -1;
@@ -41,7 +44,8 @@ int aov_render(struct device *dev, const struct render_settings *s, struct rende
 	if ((status = clSetKernelArg(kernel, 0, sizeof(cl_mem), &b->scene)) != CL_SUCCESS ||
 	    (status = clSetKernelArg(kernel, 1, local_bytes, NULL)) != CL_SUCCESS ||
 	    (status = clSetKernelArg(kernel, 2, sizeof(cl_mem), &out)) != CL_SUCCESS ||
-	    (status = clSetKernelArg(kernel, 3, sizeof(samples), &samples)) != CL_SUCCESS)
+	    (status = clSetKernelArg(kernel, 3, sizeof(samples), &samples)) != CL_SUCCESS ||
+	    (status = clSetKernelArg(kernel, 4, sizeof(done), &done)) != CL_SUCCESS)
 		goto out_failed;
 	status = launch_run(dev, kernel, 2, global, local, NULL, &ms, &call);
 	if (status != CL_SUCCESS)

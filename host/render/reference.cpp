@@ -710,51 +710,88 @@ int reference_render(const struct scene *scene, int width, int height, int max_d
 	return reference_render_samples(scene, width, height, max_depth, 1, rgb);
 }
 
+namespace
+{
+
+/* Adds sample k of n of every pixel to sums (3 doubles a pixel). */
+void add_sample(const tracer &tr, const scene_camera &cam, int width, int height, int k, int n,
+		double *sums)
+{
+	/* The tracer works relative to the eye (its origin, tracer's
+	 * constructor): the eye is at 0 there. */
+	const dvec3 eye(0.0);
+	dvec3 f = glm::normalize(to_dvec3(cam.look_at) - to_dvec3(cam.eye));
+	dvec3 r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
+	dvec3 u = glm::cross(r, f);
+	double h = std::tan(glm::radians(cam.fov) / 2.0);
+	double a = (double)width / (double)height;
+
+	for (int y = 0; y < height; y++) {
+		for (int x = 0; x < width; x++) {
+			const sample_id sample = {x, y, k, n};
+			double uv[2];
+			dvec3 c;
+			reference_sample_position(x, y, k, n, uv);
+			double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
+			double sy = (1.0 - 2.0 * (y + uv[1]) / height) * h;
+			dvec3 q = f + sx * r + sy * u;
+			if (cam.aperture > 0) {
+				/* RENDERING.md, "The thin lens" */
+				glm::dvec2 lens = sample_disk(x, y, k, n, 1);
+				dvec3 on_lens =
+					cam.aperture * lens.x * r + cam.aperture * lens.y * u;
+				dvec3 dir = glm::normalize(cam.focus_distance * q - on_lens);
+				c = tr.trace(eye + on_lens, dir, 0, sample);
+			} else {
+				c = tr.trace(eye, glm::normalize(q), 0, sample);
+			}
+			double *sum = sums + 3 * ((size_t)y * (size_t)width + (size_t)x);
+			sum[0] += c.r;
+			sum[1] += c.g;
+			sum[2] += c.b;
+		}
+	}
+}
+
+} // namespace
+
+extern "C" void reference_mean(const double *sums, size_t values, int samples, float *rgb)
+{
+	for (size_t i = 0; i < values; i++)
+		rgb[i] = (float)(sums[i] / (double)samples);
+}
+
+extern "C" int reference_render_sample(const struct scene *scene, int width, int height,
+				       int max_depth, int k, int samples, double *sums)
+{
+	if (!scene || !sums || width < 1 || height < 1 || max_depth < 0 || samples < 1 || k < 0 ||
+	    k >= samples)
+		return -1;
+	try {
+		const tracer tr(*scene, max_depth, to_dvec3(scene->camera.eye));
+		add_sample(tr, scene->camera, width, height, k, samples, sums);
+	} catch (const std::bad_alloc &) {
+		return -1;
+	}
+	return 0;
+}
+
 int reference_render_samples(const struct scene *scene, int width, int height, int max_depth,
 			     int samples, float *rgb)
 {
 	if (!scene || !rgb || width < 1 || height < 1 || max_depth < 0 || samples < 1)
 		return -1;
 
+	size_t values = (size_t)width * (size_t)height * 3;
 	try {
-		const scene_camera &cam = scene->camera;
-		const tracer tr(*scene, max_depth, to_dvec3(cam.eye));
-		const dvec3 eye(0.0); /* the tracer's origin */
-		dvec3 f = glm::normalize(to_dvec3(cam.look_at) - to_dvec3(cam.eye));
-		dvec3 r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
-		dvec3 u = glm::cross(r, f);
-		double h = std::tan(glm::radians(cam.fov) / 2.0);
-		double a = (double)width / (double)height;
-
-		for (int y = 0; y < height; y++) {
-			for (int x = 0; x < width; x++) {
-				dvec3 sum(0.0);
-				for (int k = 0; k < samples; k++) {
-					const sample_id sample = {x, y, k, samples};
-					double uv[2];
-					reference_sample_position(x, y, k, samples, uv);
-					double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
-					double sy = (1.0 - 2.0 * (y + uv[1]) / height) * h;
-					dvec3 q = f + sx * r + sy * u;
-					if (cam.aperture > 0) {
-						/* RENDERING.md, "The thin lens" */
-						glm::dvec2 lens = sample_disk(x, y, k, samples, 1);
-						dvec3 on_lens = cam.aperture * lens.x * r +
-								cam.aperture * lens.y * u;
-						dvec3 dir = glm::normalize(cam.focus_distance * q -
-									   on_lens);
-						sum += tr.trace(eye + on_lens, dir, 0, sample);
-						continue;
-					}
-					sum += tr.trace(eye, glm::normalize(q), 0, sample);
-				}
-				dvec3 c = sum / (double)samples;
-				float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);
-				out[0] = (float)c.r;
-				out[1] = (float)c.g;
-				out[2] = (float)c.b;
-			}
-		}
+		const tracer tr(*scene, max_depth, to_dvec3(scene->camera.eye));
+		std::vector<double> sums(values, 0.0);
+		/* Sample by sample over the image, each pixel's samples added in
+		 * order: the mean of a pixel's samples, as render_reference's
+		 * passes take it. */
+		for (int k = 0; k < samples; k++)
+			add_sample(tr, scene->camera, width, height, k, samples, sums.data());
+		reference_mean(sums.data(), values, samples, rgb);
 	} catch (const std::bad_alloc &) {
 		return -1;
 	}

@@ -6,6 +6,8 @@
 #ifndef RTCL_REFERENCE_H
 #define RTCL_REFERENCE_H
 
+#include <stddef.h>
+
 #include "scene/scene.h"
 
 #ifdef __cplusplus
@@ -25,6 +27,16 @@ int reference_render(const struct scene *scene, int width, int height, int max_d
  * refused (-1). reference_render is samples = 1. */
 int reference_render_samples(const struct scene *scene, int width, int height, int max_depth,
 			     int samples, float *rgb);
+
+/* Adds sample k of `samples` of every pixel to sums (3 doubles a pixel,
+ * row-major), the same colour reference_render_samples takes the mean of:
+ * called for k = 0, 1, ... in order, then reference_mean, it gives the same
+ * image. Returns 0, or -1 as reference_render_samples. */
+int reference_render_sample(const struct scene *scene, int width, int height, int max_depth, int k,
+			    int samples, double *sums);
+
+/* The mean of `values` sums of `samples` samples into rgb, as floats. */
+void reference_mean(const double *sums, size_t values, int samples, float *rgb);
 
 /* Sets uv to sample k (0 <= k < n) of pixel (x, y)'s position in the pixel, in
  * [0, 1)^2 from its top-left corner, as RENDERING.md defines it. */

@@ -285,6 +285,9 @@ json_t *report_document(const struct job *job, const struct record *record)
 	}
 	add_device_figures(doc, record);
 	add_accel_figures(doc, job, record);
+	/* Fewer than "samples" when an interrupt stopped the render. */
+	json_object_set_new(doc, "samples_done",
+			    json_integer(record_samples_done(&job->settings, record)));
 	if (record->shares.count) {
 		json_t *shares = shares_document(&record->shares);
 		if (shares && record->result.pieces)
