@@ -7,6 +7,7 @@ import json
 import math
 import os
 import pathlib
+import signal
 import subprocess
 
 import numpy as np
@@ -347,3 +348,25 @@ def test_path_traced_albedo_normal_and_denoise(tmp_path):
         return float(np.sqrt(np.mean((np.clip(a, 0, 1) - truth) ** 2)))
 
     assert rmse(denoised) < 0.8 * rmse(noisy), (rmse(denoised), rmse(noisy))
+
+
+def test_an_interrupted_render_keeps_its_auxiliary_images_of_the_samples_done(tmp_path):
+    """Ctrl-C between passes (test_partial.py): the auxiliary images average
+    the samples the image holds, exactly those of a render of that many."""
+    from test_partial import LONG, finish, png_samples, read_terminal, share_done, start
+    process, controller = start(*LONG, "-o", "out.png", "--aov", "albedo,normal,depth",
+                                cwd=tmp_path)
+    read_terminal(controller, share_done(5))
+    process.send_signal(signal.SIGINT)
+    stdout, _ = finish(process, controller)
+    assert process.returncode == 128 + signal.SIGINT, stdout
+    done, _ = png_samples(tmp_path / "out.png")
+    assert 16 <= done < 1024, done
+    whole = tmp_path / "whole"
+    whole.mkdir()
+    result = rtcl(*LONG[:2], "--spp", str(done), "--aov", "albedo,normal,depth", "-o",
+                  str(whole / "out.png"))
+    assert result.returncode == 0, result.stderr
+    for kind in KINDS:
+        assert ((tmp_path / f"out.{kind}.pfm").read_bytes()
+                == (whole / f"out.{kind}.pfm").read_bytes()), kind
