@@ -29,7 +29,9 @@
 # has numpy, matplotlib and pytest from `make deps`; the installed tools run with it), SAN=1 (sanitizers),
 # FUZZ_SECONDS (default 60), FUZZ_CC (default clang), PREFIX (default /usr/local),
 # DESTDIR (staging root for packaging, default empty), DEVICE, BENCH and OUT (experiments,
-# bench, results: the device options, more bench options, the results folder).
+# bench, results: the device options, more bench options, the results folder), OIDN_DIR
+# (default /usr/local/lib/rtcl-oidn: where make deps puts Open Image Denoise, and where
+# --denoise loads it from).
 
 OIIO ?= 1
 CC ?= gcc
@@ -60,7 +62,11 @@ CXXFLAGS += -std=c++17 $(WARNINGS)
 # a glTF file's JSON (host/meshread/gltf_read.c).
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
-LDLIBS = -lOpenCL -ljansson -lz -lm -pthread
+LDLIBS = -lOpenCL -ljansson -lz -lm -pthread -ldl
+# --denoise loads Intel Open Image Denoise from here at run time (host/output/denoise.c):
+# .ci/install-deps (make deps) installs the pyoidn wheel, which carries it, into this folder.
+OIDN_DIR ?= /usr/local/lib/rtcl-oidn
+CFLAGS += -DRTCL_OIDN_DIR='"$(OIDN_DIR)"'
 MESHREAD := $(BUILD)/rtcl-meshread
 
 ifeq ($(SAN),1)
@@ -109,13 +115,13 @@ HOST_MODULES := \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
 	render/checks render/probe render/buffers render/program render/block render/watch render/repeats \
-	render/launch render/singlepass render/wavefront render/renderer render/render \
+	render/launch render/singlepass render/wavefront render/renderer render/render render/aov \
 	render/reference \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
 	report/summary report/document report/simd report/devstats \
 	output/plan output/npy output/schedmap output/workmap output/image_common output/image_encode \
-	output/image_png \
+	output/image_png output/denoise \
 	run/image run/frames run/job_digest \
 	cmd/cli
 HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \
@@ -177,7 +183,7 @@ $(BUILD) $(BUILD)/tests:
 	mkdir -p $@
 
 deps:
-	bash .ci/install-deps
+	OIDN_DIR='$(OIDN_DIR)' bash .ci/install-deps
 
 render: rtcl
 	./rtcl

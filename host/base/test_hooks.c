@@ -115,6 +115,13 @@ void hook_sums_delay(void)
 		nanosleep(&(struct timespec){ms / 1000, ms % 1000 * 1000000L}, NULL);
 }
 
+const char *hook_oidn_filter(void)
+{
+	const char *name = getenv("RTCL_TEST_OIDN_FILTER");
+
+	return name && *name ? name : NULL;
+}
+
 int hook_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");

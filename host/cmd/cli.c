@@ -28,6 +28,8 @@ enum long_only_option {
 	OPT_WORK_MAP_SCALE,
 	OPT_WORK_MAP_BAR,
 	OPT_SCHEDULE_MAP,
+	OPT_AOV,
+	OPT_DENOISE,
 	OPT_VERSION,
 	OPT_SPP,
 	OPT_DEVICES,
@@ -86,6 +88,8 @@ static const struct option long_options[] = {
 	{"work-map-scale", required_argument, NULL, OPT_WORK_MAP_SCALE},
 	{"work-map-bar", required_argument, NULL, OPT_WORK_MAP_BAR},
 	{"schedule-map", required_argument, NULL, OPT_SCHEDULE_MAP},
+	{"aov", required_argument, NULL, OPT_AOV},
+	{"denoise", no_argument, NULL, OPT_DENOISE},
 	{"quiet", no_argument, NULL, 'q'},
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
@@ -157,6 +161,17 @@ static void print_help_after_kernels(FILE *out)
 		"                         the linear colours: the sRGB curve (default), or\n"
 		"                         round(255 c) as in the paper; EXR, HDR and PFM are\n"
 		"                         always linear\n"
+		"      --aov LIST         also write auxiliary images, LIST of albedo, normal\n"
+		"                         and depth (comma-separated), each the mean over the\n"
+		"                         pixel's samples of its primary rays' first hits, as\n"
+		"                         linear .pfm files beside -o: out.png gives\n"
+		"                         out.albedo.pfm, out.normal.pfm, out.depth.pfm\n"
+		"      --denoise          denoise the image with Intel Open Image Denoise (its\n"
+		"                         RT filter, on the host's CPU, fed with the albedo\n"
+		"                         and normal images); `make deps` installs it.\n"
+		"                         --aov and --denoise need one image on one OpenCL\n"
+		"                         device (not reference, --devices, --piece-rows,\n"
+		"                         --frames or --mpi)\n"
 		"      --mesh-time-limit SECONDS  refuse a mesh file whose import takes\n"
 		"                         longer (default 60; 0: no limit)\n"
 		"      --mesh-memory-limit MIB  the memory a mesh file's import may take\n"
@@ -259,6 +274,8 @@ static void print_help_after_kernels(FILE *out)
 		"Environment:\n"
 		"  RTCL_MESH_TIME_LIMIT=SECONDS  --mesh-time-limit, when not given\n"
 		"  RTCL_MESH_MEMORY_LIMIT=MIB  --mesh-memory-limit, when not given\n"
+		"  RTCL_OIDN_LIBRARY=FILE  the Open Image Denoise library --denoise loads\n"
+		"                           (default: the one `make deps` installs)\n"
 		"For kernel development:\n"
 		"  RTCL_CL_DIR=DIR          load the OpenCL sources from DIR instead of the\n"
 		"                           copies built into the binary\n"
@@ -508,6 +525,33 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 /* Applies option c with its value arg (NULL for an option without one).
  * Returns 0, or -1 with a message; a flat switch, one case per option. */
 /* One of two words: *second is set when it is the second. */
+/* --aov LIST: albedo, normal and depth, comma-separated, each once. */
+static int parse_aov(const char *text, int *bits, char *err, size_t err_size)
+{
+	const char *p = text;
+
+	*bits = 0;
+	for (;;) {
+		size_t length = strcspn(p, ",");
+		int kind = -1;
+		for (int k = 0; k < OUTPUT_AOV_KINDS; k++)
+			if (length == strlen(output_aov_kind_name(k)) &&
+			    strncmp(p, output_aov_kind_name(k), length) == 0)
+				kind = k;
+		if (kind < 0 || (*bits & (1 << kind))) {
+			snprintf(err, err_size,
+				 "--aov: %s is not a list of albedo, normal and depth, each once "
+				 "(e.g. --aov albedo,normal,depth)",
+				 quote_text(text));
+			return -1;
+		}
+		*bits |= 1 << kind;
+		if (p[length] == '\0')
+			return 0;
+		p += length + 1;
+	}
+}
+
 static int parse_choice(const char *option, const char *text, const char *first, const char *second,
 			int *is_second, char *err, size_t err_size)
 {
@@ -703,6 +747,11 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		o->work_map_scale_given = 1;
 		return parse_choice("--work-map-scale", arg, "linear", "log", &o->outputs.work_map_log, err,
 				    err_size);
+	case OPT_AOV:
+		return parse_aov(arg, &o->outputs.aov, err, err_size);
+	case OPT_DENOISE:
+		o->outputs.denoise = 1;
+		return 0;
 	case OPT_ENCODING:
 		return parse_choice("--encoding", arg, "srgb", "linear", &o->outputs.linear_encoding, err,
 				    err_size);
@@ -988,6 +1037,15 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 		snprintf(err, err_size,
 			 "--frames renders each frame once: -r/--repeat, --flops and --work-map "
 			 "do not apply");
+		return -1;
+	}
+	if ((o->outputs.aov || o->outputs.denoise) &&
+	    (strcmp(o->kernel, "reference") == 0 || o->devices.list_given || o->piece_rows ||
+	     o->frames_given || o->mpi)) {
+		snprintf(err, err_size,
+			 "--aov and --denoise render the auxiliary images on one OpenCL device "
+			 "after one image: not with -k reference, --devices, --piece-rows, "
+			 "--frames or --mpi");
 		return -1;
 	}
 	if (o->outputs.work_map_bar &&

@@ -162,6 +162,8 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	s->progress = 1; /* one image on one device: render() runs the line */
 	s->verbose = opt->verbose;
 	s->accel = opt->accel;
+	s->aov = opt->outputs.aov || opt->outputs.denoise;
+	job->denoise = opt->outputs.denoise;
 	job->counting = opt->outputs.flops || opt->outputs.work_map;
 	job->mapping = opt->outputs.schedule_map != NULL;
 	job->devices = opt->devices;

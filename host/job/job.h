@@ -36,6 +36,7 @@ struct job {
 	int mpi;		    /* --mpi */
 	int all_or_nothing;	    /* --no-partial: an interrupt writes nothing */
 	double checkpoint_seconds;  /* --checkpoint; 0: none */
+	int denoise;		    /* --denoise: settings.aov is set too */
 	int verbose, quiet;	    /* -v, -q */
 };
 

@@ -73,6 +73,7 @@ struct record {
 	double start;	    /* main began */
 	double device_ms;   /* platform and device set-up */
 	double counting_ms; /* the whole counting run */
+	double denoise_ms;  /* --denoise: the host's time in Open Image Denoise */
 	double write_start; /* the outputs began to be written */
 };
 

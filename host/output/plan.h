@@ -27,7 +27,26 @@ struct output_request {
 	const char *work_map_bar; /* --work-map-bar */
 	const char *schedule_map; /* --schedule-map */
 	int linear_encoding;	  /* --encoding linear */
+	int aov;		  /* --aov: OUTPUT_AOV_* bits */
+	int denoise;		  /* --denoise */
 };
+
+/* The auxiliary images --aov writes (docs/GUIDE.md, "Denoising and
+ * auxiliary images"), each beside -o as output_aov_name says. */
+enum {
+	OUTPUT_AOV_ALBEDO = 1,
+	OUTPUT_AOV_NORMAL = 2,
+	OUTPUT_AOV_DEPTH = 4,
+	OUTPUT_AOV_KINDS = 3,
+};
+
+/* The name of auxiliary image `kind` (0 albedo, 1 normal, 2 depth) of image
+ * path: its extension replaced by ".KIND.pfm" (out.png -> out.albedo.pfm).
+ * Returns 0, or -1 when it does not fit in name[PATH_MAX]. */
+int output_aov_name(const char *path, int kind, char *name);
+
+/* "albedo", "normal" or "depth". */
+const char *output_aov_kind_name(int kind);
 
 /* The most frames one run writes (each stays staged until all are done). */
 #define FRAMES_MAX 1000
@@ -48,6 +67,8 @@ struct output_plan {
 				       when an interrupt stopped it) */
 	int checkpoints;	    /* written by output_plan_write_checkpoint */
 	int checkpoint_samples;	    /* the last one's samples per pixel */
+	char aov_names[OUTPUT_AOV_KINDS][PATH_MAX]; /* --aov's files, those asked for */
+	int aov_names_too_long;
 };
 
 /* Prepares the plan of job's outputs (no file touched). Returns 0, or -1

@@ -18,7 +18,7 @@
 const char *const program_tracer_sources[] = {
 	"rtcl_shared.h", "tracer.cl", "sample.cl", "texture.cl", "intersect.cl", "traverse.cl",
 	"shade.cl",	 "walk.cl",   "bsdf.cl",   "light.cl",	 "path.cl",	 "pixel.cl",
-	"scheduling.cl"};
+	"scheduling.cl", "aov.cl"};
 const int program_tracer_source_count =
 	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
 
@@ -192,7 +192,7 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 /* The path integrator reads max_depth from the scene block and
 		  * needs no ray stack: one program for every depth. */
 		 f->path ? 0 : s->max_depth, s->batch > 0 ? s->batch : 1,
@@ -224,6 +224,8 @@ static int format_options(const struct device *dev, const struct render_settings
 		 s->count_flops && dev->simd_measurable ? " -DRTCL_SIMD_MEASURE" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 s->record_schedule ? " -DRTCL_SCHEDULE_MAP" : "",
+		 /* The auxiliary images' kernel (cl/aov.cl), only when asked for. */
+		 s->aov ? " -DRTCL_AOV" : "",
 		 /* The chunks done, for the progress line (cl/scheduling.cl). */
 		 program_counts_progress(s) ? " -DRTCL_PROGRESS" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",

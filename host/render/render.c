@@ -99,6 +99,9 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	if (repeats_end(res, err, err_size))
 		goto out_close;
 	res->times.kernels = timing_lap_ms(&lap);
+	if (s->aov && renderer_aov(&r, err, err_size))
+		goto out_close;
+	res->times.aov = timing_lap_ms(&lap);
 	if (renderer_read_back(&r, err, err_size))
 		goto out_close;
 	/* Stopped: the image buffer holds no means yet, the sums hold the
@@ -219,6 +222,8 @@ out_free:
 void render_result_free(struct render_result *res)
 {
 	free(res->rgb);
+	free(res->aov);
+	res->aov = NULL;
 	free(res->kernel_ms);
 	free(res->frame_ms);
 	free(res->item_flops);

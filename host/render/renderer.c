@@ -82,6 +82,11 @@ int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *
 	return r->ops->read_rows(r, piece, to, packed, err, err_size);
 }
 
+int renderer_aov(struct renderer *r, char *err, size_t err_size)
+{
+	return r->ops->aov(r, err, err_size);
+}
+
 void renderer_close(struct renderer *r)
 {
 	if (r->ops)

@@ -67,6 +67,8 @@ struct renderer_ops {
 	int (*read_sums)(struct renderer *r, cl_long *to, size_t first, size_t count,
 			 cl_event *event, char *err, size_t err_size);
 	void (*close)(struct renderer *r);
+	/* The auxiliary images into result->aov (aov_render). */
+	int (*aov)(struct renderer *r, char *err, size_t err_size);
 };
 
 /* Opens settings->kernel's renderer on dev for scene; result is zeroed first
@@ -105,6 +107,10 @@ int renderer_read_sums_part(struct renderer *r, cl_long *to, size_t first, size_
 			    cl_event *event, char *err, size_t err_size);
 
 void renderer_close(struct renderer *r);
+
+/* Renders the auxiliary images (cl/aov.cl) into r->result->aov; the
+ * settings must ask for them (settings.aov). */
+int renderer_aov(struct renderer *r, char *err, size_t err_size);
 
 /* Returns the piece of rows [y0, y0 + height), the image's whole width, with
  * samples [begin, end) of settings_samples(s). */

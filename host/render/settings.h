@@ -68,6 +68,8 @@ struct render_settings {
 				   surround it with guard zones (checks.h) */
 	int record_schedule;	/* build with RTCL_SCHEDULE_MAP and return each pixel's
 				   work-group, work-item and ticket (probe.h) */
+	int aov;		/* build cl/aov.cl's kernel and render the auxiliary
+				   images after the image (render_result.aov) */
 	int force_global_scene; /* read the scene from __global memory even if it
 				   would fit in __local memory */
 	int accel;		/* enum accel (--accel) */
@@ -87,6 +89,7 @@ struct render_times {
 	double build;	  /* the program build */
 	double scene;	  /* packing the scene, creating and filling the buffers */
 	double kernels;	  /* every launch, warm-up included, with its waits */
+	double aov;	  /* the auxiliary images' pass (settings.aov), read-back included */
 	double read_back; /* the image and counts back to the host */
 };
 
@@ -104,6 +107,10 @@ struct piece_record {
 
 struct render_result {
 	float *rgb; /* width*height*3 linear floats, row 0 at the top */
+	/* With settings.aov: width*height*7 floats, the albedo (3 a pixel), the
+	 * normal (3 a pixel), then the depth (1 a pixel), planes one after
+	 * another (cl/aov.cl). */
+	float *aov;
 	/* Each timed frame's time, in order, and their median, min and max: on
 	 * one device the sum of its launches' profiled kernel times; over
 	 * several devices (--devices) the frame's wall time. */

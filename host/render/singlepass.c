@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "rtcl_shared.h"
+#include "render/aov.h"
 #include "render/buffers.h"
 #include "base/test_hooks.h"
 #include "render/launch.h"
@@ -455,7 +456,14 @@ static void singlepass_close(struct renderer *r)
 	r->state = NULL;
 }
 
+static int singlepass_aov(struct renderer *r, char *err, size_t err_size)
+{
+	struct launch_state *st = r->state;
+
+	return aov_render(r->dev, r->settings, r->result, &st->b, err, err_size);
+}
+
 const struct renderer_ops singlepass_ops = {singlepass_open,	    singlepass_piece,
 					    singlepass_passes,	    singlepass_read_back,
 					    singlepass_read_rows, singlepass_read_sums,
-					    singlepass_close};
+					    singlepass_close,	    singlepass_aov};

@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "rtcl_shared.h"
+#include "render/aov.h"
 #include "render/buffers.h"
 #include "render/launch.h"
 #include "render/renderer.h"
@@ -382,7 +383,14 @@ static int wavefront_read_sums(struct renderer *r, cl_long *to, size_t first, si
 	return buffers_read_sums(r->dev, &w->b, to, first, count, event, err, err_size);
 }
 
+static int wavefront_aov(struct renderer *r, char *err, size_t err_size)
+{
+	struct wavefront *w = r->state;
+
+	return aov_render(r->dev, r->settings, r->result, &w->b, err, err_size);
+}
+
 const struct renderer_ops wavefront_ops = {wavefront_open,	   wavefront_piece,
 					   NULL,		   wavefront_read_back,
 					   wavefront_read_rows, wavefront_read_sums,
-					   wavefront_close};
+					   wavefront_close,	   wavefront_aov};

@@ -84,6 +84,11 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 		fprintf(out, "time:    %.3f ms %s", r->kernel_ms_median,
 			s->kernel ? "in the kernels" : "rendering");
 	print_time_in_all(out, record);
+	if (job->denoise)
+		fprintf(out,
+			"denoise: Open Image Denoise, RT filter with albedo and normal, on the "
+			"host's CPU: %.0f ms\n",
+			record->denoise_ms);
 	if (job->counting) {
 		const struct flop_summary *f = &record->flops;
 		fprintf(out, "work:    %.3f GFLOP, %.1f GFLOP/s; per work-item mean %.0f, max %.0f, min "
@@ -141,13 +146,17 @@ void report_print_times(const struct record *record)
 {
 	const struct render_times *t = &record->result.times;
 	double now = timing_now();
+	char aov[64] = "";
 
+	/* Only where --aov or --denoise asked for them. */
+	if (record->result.aov)
+		snprintf(aov, sizeof(aov), ", auxiliary images %.1f ms", t->aov);
 	fprintf(stderr,
 		"rtcl: time: device set-up %.1f ms, scene and upload %.1f ms, build %.1f ms%s, "
-		"kernels %.1f ms (%d launch%s), read-back %.1f ms, counting run %.1f ms, encoding "
+		"kernels %.1f ms (%d launch%s)%s, read-back %.1f ms, counting run %.1f ms, encoding "
 		"and writing %.1f ms; total %.1f ms\n",
 		record->device_ms, t->scene, t->build, record->result.build_cached ? " (cached)" : "",
-		t->kernels, record->result.launches, record->result.launches == 1 ? "" : "es",
+		t->kernels, record->result.launches, record->result.launches == 1 ? "" : "es", aov,
 		t->read_back, record->counting_ms, (now - record->write_start) * 1e3,
 		(now - record->start) * 1e3);
 }

@@ -9,6 +9,7 @@
 #include "base/test_hooks.h"
 #include "base/version.h"
 #include "base/timing.h"
+#include "output/denoise.h"
 #include "render/render.h"
 #include "report/simd.h"
 #include "report/summary.h"
@@ -179,6 +180,22 @@ static int render_on_devices(struct image_devices *d, const struct job *job,
 	return 0;
 }
 
+/* --denoise: the image denoised in place with the albedo and normal images,
+ * timed for the summary. */
+static int denoise_result(const struct job *job, struct record *record, char *err, size_t err_size)
+{
+	const struct render_settings *s = &job->settings;
+	struct render_result *res = &record->result;
+	size_t pixels = (size_t)s->width * s->height;
+	double start = timing_now();
+
+	if (denoise_image(res->rgb, res->aov, res->aov + 3 * pixels, s->width, s->height, err,
+			  err_size))
+		return -1;
+	record->denoise_ms = (timing_now() - start) * 1e3;
+	return 0;
+}
+
 /* --checkpoint's writer: the image so far, committed at once. */
 static int write_checkpoint(void *context, const float *rgb, int samples, char *err,
 			    size_t err_size)
@@ -202,6 +219,9 @@ static int image_render(struct mode_run *run, int checked, char *err, size_t err
 		return EXIT_FAILED;
 	}
 	run->state = d;
+	/* A missing library is said before the render, not after it. */
+	if (job->denoise && denoise_load(err, err_size))
+		return EXIT_FAILED;
 	timed.stoppable = job_stoppable(job);
 	timed.checkpoint = job->checkpoint_seconds > 0 ? &checkpoint : NULL;
 	if (!job->settings.kernel) {
@@ -212,6 +232,8 @@ static int image_render(struct mode_run *run, int checked, char *err, size_t err
 	} else {
 		failed = render_on_devices(d, job, &timed, record, err, err_size);
 	}
+	if (!failed && job->denoise)
+		failed = denoise_result(job, record, err, err_size);
 	if (!failed && job->verbose && job->settings.kernel)
 		fprintf(stderr, "rtcl: build options: %s\n", record->result.build_options);
 	return failed ? EXIT_FAILED : 0;
