@@ -17,6 +17,27 @@ extern "C" {
 #define SCENE_MAX_DEPTH 64
 #define SCENE_MAX_SAMPLES 65536 /* image.samples and --spp */
 
+/* A material's "bsdf" (SCENE.md, "A material's bsdf"): the path
+ * integrator's scattering. SCENE_BSDF_NONE, a material without one, maps
+ * from the Whitted fields (RENDERING.md, "The mapped BSDF"). The same numbers
+ * as cl/rtcl_shared.h's RT_BSDF_*. */
+enum {
+	SCENE_BSDF_NONE,
+	SCENE_BSDF_DIFFUSE,
+	SCENE_BSDF_CONDUCTOR,
+	SCENE_BSDF_DIELECTRIC,
+	SCENE_BSDF_PRINCIPLED,
+};
+
+struct scene_bsdf {
+	int type;		/* SCENE_BSDF_* */
+	double color[3];	/* diffuse and conductor reflectance, principled base_color */
+	double roughness;	/* perceptual: alpha = roughness^2 */
+	double ior;		/* dielectric and principled */
+	double metallic;	/* principled */
+	double transmission;	/* principled */
+};
+
 struct scene_material {
 	double color[3];
 	double ambient;	  /* ka */
@@ -34,6 +55,9 @@ struct scene_material {
 	int alpha_texture;   /* the cut-out's alpha texture */
 	double alpha_cutoff; /* > 0: hits of alpha below it are cut out; 0: none */
 	double alpha_scale;  /* the factor of the texture's alpha (glTF's b.a) */
+	/* The path integrator's (SCENE.md, "Path tracing"). */
+	struct scene_bsdf bsdf;
+	double emission[3]; /* radiance from the front side */
 };
 
 /* A material's "fresnel" (the same numbers as cl/rtcl_shared.h's RT_FRESNEL_*). */
@@ -131,6 +155,16 @@ struct scene_input {
 	const char *kind; /* "scene file", "mesh file" */
 };
 
+/* "integrator" (SCENE.md): the same numbers as --integrator's. */
+enum { SCENE_INTEGRATOR_WHITTED, SCENE_INTEGRATOR_PATH };
+
+/* "environment" (SCENE.md, "environment"): an equirectangular map. */
+struct scene_environment {
+	char *file; /* as the scene names it, joined to the scene's folder; NULL: none */
+	double scale;
+	double rotate; /* degrees about +y */
+};
+
 struct scene {
 	char *source;		    /* file name (or "name (built-in)") used in messages */
 	struct scene_input *inputs; /* the scene file (none for a string) and its mesh files */
@@ -140,8 +174,11 @@ struct scene {
 	struct scene_camera camera;
 	double background[3];
 	double ambient[3];
+	int ambient_given; /* under the path integrator it is warned about */
 	int max_depth;
 	double epsilon;
+	int integrator; /* SCENE_INTEGRATOR_*: the scene's, or --integrator's */
+	struct scene_environment environment;
 
 	/* Named materials first, then one per inline material, then the
 	 * default material if anything uses it. */
@@ -180,6 +217,12 @@ static inline int scene_has_area_lights(const struct scene *scene)
 		if (scene->lights[i].radius > 0 || scene->lights[i].directional)
 			return 1;
 	return 0;
+}
+
+/* Whether material m emits (path integrator). */
+static inline int scene_material_emits(const struct scene_material *m)
+{
+	return m->emission[0] > 0 || m->emission[1] > 0 || m->emission[2] > 0;
 }
 
 /* Whether a material of the scene has a texture or a cut-out: the device
