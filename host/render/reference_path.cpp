@@ -832,9 +832,12 @@ bool path_tracer::mis_weights(const dvec3 &o, const dvec3 &d, const sample_id &s
 		return false;
 	*w_l = w_light(ls.pdf, pdf_bsdf);
 
-	/* The BSDF ray along l, as "The path" weighs what it finds. */
+	/* The BSDF ray along l, as "The path" weighs what it finds: the light
+	 * sampled, when the shadow ray reaches it. */
 	dvec3 origin = glm::dot(ls.l, s.n_face) > 0.0 ? s.p + epsilon * s.n_face
 						      : s.p - epsilon * s.n_face;
+	if (ls.t_max > 0.0 && blocked(origin, ls.l, ls.t_max))
+		return false;
 	hit found;
 	double p_light;
 	if (!nearest_hit(origin, ls.l, &found)) {
