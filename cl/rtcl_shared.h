@@ -200,7 +200,53 @@ struct rt_scene {
 	/* The BVH's nodes: 2, struct rt_bvh_node; 4, struct rt_bvh4_node (a CPU
 	   device outside the counting build, RTCL_BVH4); 0 without a BVH. */
 	rt_int bvh_width;
-	rt_int bvh_pad[3];
+	/* The path integrator's data (struct rt_path, RTCL_PATH): its byte
+	   offset, 0 in a Whitted scene's block. */
+	rt_uint path_offset;
+	rt_int pad[2];
+};
+
+/* The path integrator (RENDERING.md, "Path tracing"), in the block only
+ * under "integrator": "path" and read only in programs built with
+ * RTCL_PATH: a header, a struct rt_bsdf per material, and the emitters (the
+ * emissive triangles in scene order, then the emissive spheres) with the
+ * cumulative distribution that chooses among them by power. */
+struct rt_path {
+	rt_uint bsdf_offset, emitter_offset; /* from the block's start */
+	rt_int emitter_count;
+	rt_int group_count;	      /* the light groups: lights, emitters, environment */
+	rt_float inv_emitter_weight;  /* 1 / sum of lum(Le) * area over the emitters */
+	rt_int environment;	      /* the background is a light (non-zero) */
+	rt_int pad[2];
+};
+
+/* A material's BSDF (SCENE.md "A material's bsdf"; the mapped one of a
+ * material without: RENDERING.md). */
+#define RT_BSDF_MAPPED 0
+#define RT_BSDF_DIFFUSE 1
+#define RT_BSDF_CONDUCTOR 2
+#define RT_BSDF_DIELECTRIC 3
+#define RT_BSDF_PRINCIPLED 4
+
+struct rt_bsdf {
+	rt_vec4 color;	  /* reflectance, F0 or base_color (the mapped BSDF takes the
+			     material's colour at the hit instead); w: GGX alpha */
+	rt_vec4 emission; /* Le from the front side; w: ior */
+	rt_int type;	  /* RT_BSDF_* */
+	rt_float metallic, transmission; /* principled */
+	rt_float diffuse;		 /* mapped: kd */
+	rt_float mirror;		 /* mapped: kr, the mirror's probability */
+	rt_int mirror_tint;		 /* mapped: the mirror is a Schlick conductor of C */
+	rt_int emits;			 /* emission is non-zero */
+	rt_int pad;
+};
+
+/* An emitter: the primitive (RT_PRIM_* kind | its device index) and the
+ * cumulative probability up to and with it (the last 1). */
+struct rt_emitter {
+	rt_uint prim;
+	rt_float cdf;
+	rt_int pad[2];
 };
 
 /* A triangle of a leaf, its three vertex positions inline: v0.w holds its
@@ -407,6 +453,10 @@ _Static_assert(offsetof(struct rt_scene, bvh_node_offset) == 160, "rt_scene layo
 _Static_assert(sizeof(struct rt_scene) % 16 == 0,
 	       "rt_scene: the arrays after it stay 16-byte aligned");
 _Static_assert(sizeof(struct rt_bvh_node) == 64, "rt_bvh_node layout");
+_Static_assert(offsetof(struct rt_scene, path_offset) == 212, "rt_scene layout");
+_Static_assert(sizeof(struct rt_path) == 32, "rt_path layout");
+_Static_assert(sizeof(struct rt_bsdf) == 64, "rt_bsdf layout");
+_Static_assert(sizeof(struct rt_emitter) == 16, "rt_emitter layout");
 _Static_assert(offsetof(struct rt_bvh_node, child[1].lo) == 32, "rt_bvh_node layout");
 #endif
 

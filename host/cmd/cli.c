@@ -44,6 +44,7 @@ enum long_only_option {
 	OPT_FOV,
 	OPT_APERTURE,
 	OPT_FOCUS_DISTANCE,
+	OPT_INTEGRATOR,
 };
 
 static const struct option long_options[] = {
@@ -57,6 +58,7 @@ static const struct option long_options[] = {
 	{"size", required_argument, NULL, OPT_SIZE},
 	{"depth", required_argument, NULL, OPT_DEPTH},
 	{"spp", required_argument, NULL, OPT_SPP},
+	{"integrator", required_argument, NULL, OPT_INTEGRATOR},
 	{"eye", required_argument, NULL, OPT_EYE},
 	{"look-at", required_argument, NULL, OPT_LOOK_AT},
 	{"fov", required_argument, NULL, OPT_FOV},
@@ -131,6 +133,10 @@ static void print_help_after_kernels(FILE *out)
 		"      --spp N            samples per pixel, overriding image.samples (1..%d;\n"
 		"                         default 1, the pixel centre): antialiasing with a\n"
 		"                         box filter, traced in passes with progress\n"
+		"      --integrator whitted|path  the light transport, overriding the scene's\n"
+		"                         integrator: Whitted ray tracing (the default), or a\n"
+		"                         path tracer (bounced light, BSDFs, emitters; converges\n"
+		"                         with --spp; not yet with -k wavefront or reference)\n"
 		"      --eye X,Y,Z        the camera's eye, overriding camera.eye\n"
 		"      --look-at X,Y,Z    the point the camera looks at, overriding\n"
 		"                         camera.look_at\n"
@@ -659,6 +665,9 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return 0;
 	case OPT_ACCEL:
 		return parse_accel(arg, &o->accel, err, err_size);
+	case OPT_INTEGRATOR:
+		return parse_choice("--integrator", arg, "whitted", "path", &o->integrator, err,
+				    err_size);
 	case OPT_MESH_TIME_LIMIT:
 		return parse_limit("--mesh-time-limit", arg, "seconds", MESH_TIME_LIMIT_MAX,
 				   &o->mesh_time_limit, err, err_size);
@@ -919,6 +928,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	o->workgroup[0] = o->workgroup[1] = 8;
 	o->outputs.image = "render.png";
 	o->depth = -1;
+	o->integrator = -1;
 	o->devices.platform = o->devices.device = -1;
 	o->repeat = 0; /* not given: one launch, no warm-up */
 	o->batch = 1;

@@ -25,6 +25,7 @@ struct options {
 	int size[2];		/* --size WxH; 0x0 when not given */
 	int depth;		/* --depth N; -1 when not given */
 	int spp;		/* --spp N; 0 when not given */
+	int integrator;		/* --integrator: SCENE_INTEGRATOR_*; -1 when not given */
 	struct camera_override camera; /* --eye, --look-at, --fov, --aperture, --focus-distance */
 	struct device_choice devices; /* -p, -d (-1 when not given), -t, --devices */
 	int list_devices;

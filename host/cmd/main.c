@@ -18,6 +18,7 @@
 #include "base/files.h"
 #include "base/interrupt.h"
 #include "base/progress.h"
+#include "base/quote.h"
 #include "base/test_hooks.h"
 #include "base/timing.h"
 #include "cmd/cli.h"
@@ -77,6 +78,35 @@ static void print_mesh_reports(const struct scene *scene)
 static int shows_progress(const struct options *opt)
 {
 	return !opt->quiet && (isatty(STDERR_FILENO) || (opt->mpi && isatty(STDOUT_FILENO)));
+}
+
+/* What the integrator makes of fields that only the other one reads
+ * (SCENE.md, "Path tracing"): warnings, and under -v a note per material. */
+static void print_integrator_warnings(const struct scene *scene, int verbose)
+{
+	const char *source = quote_text(scene->source);
+
+	if (scene->integrator == SCENE_INTEGRATOR_PATH && scene->ambient_given)
+		fprintf(stderr,
+			"rtcl: warning: %s: ambient: has no meaning under the path integrator "
+			"(indirect light is traced); it is ignored\n",
+			source);
+	if (scene->integrator == SCENE_INTEGRATOR_WHITTED && scene->environment.file)
+		fprintf(stderr,
+			"rtcl: warning: %s: environment: is used only by the path integrator; it "
+			"is ignored\n",
+			source);
+	if (scene->integrator != SCENE_INTEGRATOR_WHITTED || !verbose)
+		return;
+	for (int i = 0; i < scene->material_count; i++)
+		if (scene->materials[i].bsdf.type != SCENE_BSDF_NONE ||
+		    scene_material_emits(&scene->materials[i])) {
+			fprintf(stderr,
+				"rtcl: %s: materials have emission or bsdf, which only the path "
+				"integrator uses\n",
+				source);
+			return;
+		}
 }
 
 /* The job: the options, else the scene's own values. */
@@ -222,13 +252,21 @@ int main(int argc, char **argv)
 		scene_free(&scene);
 		return EXIT_USAGE;
 	}
+	if (opt.integrator >= 0)
+		scene.integrator = opt.integrator;
 	for (int i = 0; i < scene.warning_count; i++)
 		fprintf(stderr, "rtcl: warning: %s\n", scene.warnings[i]);
+	print_integrator_warnings(&scene, opt.verbose);
 	if (opt.verbose) {
 		print_mesh_reports(&scene);
 		print_scene_bounds(&scene);
 	}
 	make_job(&job, &opt, &scene);
+	if (render_check_integrator(&scene, &job.settings, err, sizeof(err))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		scene_free(&scene);
+		return EXIT_USAGE;
+	}
 	memset(&record, 0, sizeof(record));
 	record.start = start;
 	status = render_and_write(&job, &opt.outputs, &record, err, sizeof(err));

@@ -268,9 +268,35 @@ static size_t leaf_triangle_count(const struct bvh *bvh)
  * (scene_has_textures), else they are empty at the end. */
 struct layout {
 	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, leaf_triangle,
-		uv, material_map, texture, texture_table, texel, total;
+		uv, material_map, texture, texture_table, texel, path, bsdf, emitter, total;
 	int sphere_slots;
 };
+
+/* The emitters of the path integrator: the triangles and spheres whose
+ * material emits (RENDERING.md, "Lights and their selection"). */
+static int emitter_count(const struct scene *scene)
+{
+	int n = 0;
+
+	for (int i = 0; i < scene->triangle_count; i++)
+		n += scene_material_emits(&scene->materials[scene->triangles[i].material]);
+	for (int i = 0; i < scene->sphere_count; i++)
+		n += scene_material_emits(&scene->materials[scene->spheres[i].material]);
+	return n;
+}
+
+/* The path integrator's arrays after everything else, only in a scene
+ * it renders: the block of a Whitted scene is as before. */
+static void layout_path(struct layout *l, const struct scene *scene)
+{
+	l->path = l->bsdf = l->emitter = l->total;
+	if (scene->integrator != SCENE_INTEGRATOR_PATH)
+		return;
+	l->path = round16(l->total);
+	l->bsdf = l->path + sizeof(struct rt_path);
+	l->emitter = l->bsdf + (size_t)scene->material_count * sizeof(struct rt_bsdf);
+	l->total = l->emitter + (size_t)emitter_count(scene) * sizeof(struct rt_emitter);
+}
 
 static struct layout layout_of(const struct scene *scene, const struct mesh_block *mesh,
 			       const struct bvh *bvh)
@@ -293,14 +319,133 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	l.leaf_triangle = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
 	l.uv = l.leaf_triangle + leaf_triangle_count(bvh) * sizeof(struct rt_leaf_triangle);
 	l.material_map = l.texture = l.texture_table = l.texel = l.total = l.uv;
-	if (!scene_has_textures(scene))
+	if (!scene_has_textures(scene)) {
+		layout_path(&l, scene);
 		return l;
+	}
 	l.material_map = round16(l.uv + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_uv));
 	l.texture = l.material_map + (size_t)scene->material_count * sizeof(struct rt_material_map);
 	l.texture_table = l.texture + (size_t)scene->texture_count * sizeof(struct rt_texture);
 	l.texel = l.texture_table + RT_TEXTURE_TABLE * sizeof(float);
 	l.total = l.texel + scene_texture_bytes(scene);
+	layout_path(&l, scene);
 	return l;
+}
+
+static double luminance(const double c[3])
+{
+	return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+/* A material's BSDF as the path integrator reads it (RENDERING.md, "The
+ * BSDFs"): its own, or the mapping of the Whitted fields. */
+static void pack_bsdf(struct rt_bsdf *out, const struct scene_material *m)
+{
+	const struct scene_bsdf *b = &m->bsdf;
+	double ior = b->ior, roughness = b->roughness;
+
+	memset(out, 0, sizeof(*out));
+	out->type = b->type; /* SCENE_BSDF_* are RT_BSDF_* */
+	if (b->type == SCENE_BSDF_NONE && m->transmit > 0) {
+		out->type = RT_BSDF_DIELECTRIC; /* glass stays glass, smooth */
+		ior = m->ior;
+		roughness = 0;
+	} else if (b->type == SCENE_BSDF_NONE) {
+		out->diffuse = (float)m->diffuse;
+		out->mirror = (float)m->reflect;
+		out->mirror_tint = m->fresnel == SCENE_FRESNEL_CONDUCTOR;
+	}
+	double alpha = roughness * roughness;
+	if (b->type == SCENE_BSDF_PRINCIPLED && alpha < 0.001)
+		alpha = 0.001; /* RENDERING.md: no delta lobes */
+	out->color = vec4(b->color, alpha);
+	out->emission = vec4(m->emission, ior);
+	out->metallic = (float)b->metallic;
+	out->transmission = (float)b->transmission;
+	out->emits = scene_material_emits(m);
+}
+
+/* Emitter weights (RENDERING.md, "Lights and their selection"): lum(Le)
+ * times the area, in double; 0 for a primitive whose material does not emit. */
+static double triangle_emitter_weight(const struct scene *scene, int i)
+{
+	const struct scene_triangle *t = &scene->triangles[i];
+	const struct scene_material *m = &scene->materials[t->material];
+	double e1[3], e2[3], c[3];
+
+	for (int k = 0; k < 3; k++) {
+		e1[k] = t->v[1][k] - t->v[0][k];
+		e2[k] = t->v[2][k] - t->v[0][k];
+	}
+	vec3_cross(e1, e2, c);
+	return scene_material_emits(m) ? luminance(m->emission) * 0.5 * vec3_length(c) : 0;
+}
+
+static double sphere_emitter_weight(const struct scene *scene, int i)
+{
+	const struct scene_sphere *sp = &scene->spheres[i];
+	const struct scene_material *m = &scene->materials[sp->material];
+
+	return scene_material_emits(m) ? luminance(m->emission) * 4 * M_PI * sp->radius * sp->radius
+				       : 0;
+}
+
+/* Fills emitters[] in their order (the emissive triangles, then the
+ * emissive spheres, each in scene order), each cdf the sum of the weights
+ * up to and with it over total (rounded to float; the last 1), and returns
+ * the sum of the weights. With total 0 only the sum is taken. */
+static double fill_emitters(struct rt_emitter *emitters, const struct scene *scene,
+			    const int *device_sphere, double total)
+{
+	double sum = 0;
+	int n = 0, count = emitter_count(scene);
+
+	for (int i = 0; i < scene->triangle_count + scene->sphere_count; i++) {
+		int sphere = i >= scene->triangle_count, index = i - (sphere ? scene->triangle_count : 0);
+		if (!scene_material_emits(
+			    &scene->materials[sphere ? scene->spheres[index].material
+						     : scene->triangles[index].material]))
+			continue;
+		sum += sphere ? sphere_emitter_weight(scene, index)
+			      : triangle_emitter_weight(scene, index);
+		if (total > 0) {
+			emitters[n].prim = sphere ? (RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT) |
+							    (rt_uint)device_sphere[index]
+						  : (RT_PRIM_TRIANGLE << RT_PRIM_KIND_SHIFT) |
+							    (rt_uint)index;
+			emitters[n].cdf = n == count - 1 ? 1.0f : (float)(sum / total);
+		}
+		n++;
+	}
+	return sum;
+}
+
+/* The path integrator's header, BSDFs and emitters. device_sphere[i]:
+ * scene sphere i's index on the device. */
+static void pack_path(unsigned char *block, struct rt_scene *header, const struct layout *l,
+		      const struct scene *scene, const int *device_sphere)
+{
+	struct rt_path *path = (struct rt_path *)(block + l->path);
+	struct rt_bsdf *bsdfs = (struct rt_bsdf *)(block + l->bsdf);
+	struct rt_emitter *emitters = (struct rt_emitter *)(block + l->emitter);
+	int count = emitter_count(scene);
+	double total;
+
+	header->path_offset = (rt_uint)l->path;
+	path->bsdf_offset = (rt_uint)l->bsdf;
+	path->emitter_offset = (rt_uint)l->emitter;
+	for (int i = 0; i < scene->material_count; i++)
+		pack_bsdf(&bsdfs[i], &scene->materials[i]);
+	total = fill_emitters(emitters, scene, device_sphere, 0);
+	if (total > 0)
+		fill_emitters(emitters, scene, device_sphere, total);
+	else
+		count = 0; /* emission too faint for a double's luminance: none */
+	path->emitter_count = count;
+	path->inv_emitter_weight = count ? (float)(1.0 / total) : 0.0f;
+	path->environment = scene->background[0] > 0 || scene->background[1] > 0 ||
+			    scene->background[2] > 0;
+	path->group_count = scene->light_count + (count > 0) + path->environment;
 }
 
 /* The textures' arrays (RENDERING.md, "Textures"): the vertices' texture
@@ -407,6 +552,18 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
 	for (int i = 0; i < scene->sphere_count; i++)
 		pack_sphere(&spheres[i], scene, &scene->spheres[order[i]], order[i]);
+	if (scene->integrator == SCENE_INTEGRATOR_PATH) {
+		int *device_sphere = malloc((size_t)(scene->sphere_count + 1) * sizeof(int));
+		if (!device_sphere) {
+			free(order);
+			free(block);
+			return NULL;
+		}
+		for (int i = 0; i < scene->sphere_count; i++)
+			device_sphere[order[i]] = i;
+		pack_path(block, header, &l, scene, device_sphere);
+		free(device_sphere);
+	}
 	free(order);
 	/* The padding: radius² -1, which no squared distance is below. */
 	for (int i = scene->sphere_count; i < sphere_slots; i++)

@@ -239,8 +239,10 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 					    scene_has_area_lights(scene),
 					    scene_has_fresnel(scene->materials, scene->material_count),
 					    scene_has_textures(scene),
-					    scene->light_count == 0,
-					    res->bvh_width == 4};
+					    scene->light_count == 0 &&
+						    scene->integrator != SCENE_INTEGRATOR_PATH,
+					    res->bvh_width == 4,
+					    scene->integrator == SCENE_INTEGRATOR_PATH};
 	if (program_build(dev, s, &features, program, res->build_options, &res->build_cached, err,
 			  err_size))
 		return -1;

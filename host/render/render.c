@@ -10,6 +10,7 @@
 
 #include "render/repeats.h"
 #include "base/progress.h"
+#include "base/quote.h"
 #include "render/reference.h"
 #include "render/renderer.h"
 #include "render/singlepass.h"
@@ -44,6 +45,28 @@ const struct kernel_info *render_find_kernel(const char *name)
 		if (strcmp(render_kernels[i].name, name) == 0)
 			return &render_kernels[i];
 	return NULL;
+}
+
+int render_check_integrator(const struct scene *scene, const struct render_settings *s,
+			    char *err, size_t err_size)
+{
+	if (scene->integrator != SCENE_INTEGRATOR_PATH)
+		return 0;
+	if (!s->kernel || s->kernel->multi_pass) {
+		snprintf(err, err_size,
+			 "%s does not trace paths yet (the path integrator): use -k dynamic, "
+			 "naive, cyclic, persistent or serial, or --integrator whitted",
+			 s->kernel ? "the wavefront kernel" : "the CPU reference (-k reference)");
+		return -1;
+	}
+	if (scene->environment.file) {
+		snprintf(err, err_size,
+			 "%s: environment: maps are not rendered yet (the path integrator lights "
+			 "the scene with \"background\" only); leave \"environment\" out",
+			 quote_text(scene->source));
+		return -1;
+	}
+	return 0;
 }
 
 int render_pass_samples(const struct render_settings *s)
@@ -99,6 +122,8 @@ int render_reference(const struct scene *scene, const struct render_settings *s,
 		     struct render_result *res, char *err, size_t err_size)
 {
 	memset(res, 0, sizeof(*res));
+	if (render_check_integrator(scene, s, err, err_size))
+		return -1;
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
 	res->kernel_ms = calloc((size_t)s->repeat, sizeof(double));
 	if (!res->rgb || !res->kernel_ms) {

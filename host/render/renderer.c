@@ -2,6 +2,7 @@
  * functions (singlepass.c or wavefront.c), and the passes that cover every
  * sample of a piece. */
 #include "render/renderer.h"
+#include "render/render.h"
 
 #include <math.h>
 #include <stdio.h>
@@ -22,6 +23,8 @@ int renderer_open(struct renderer *r, struct device *dev, const struct scene *sc
 	r->result = res;
 	r->queues = renderer_queues(s, dev);
 	res->queues = 1;
+	if (render_check_integrator(scene, s, err, err_size))
+		return -1;
 	if (r->ops->open(r, scene, err, err_size) == 0)
 		return 0;
 	r->ops->close(r);

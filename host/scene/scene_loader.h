@@ -115,6 +115,13 @@ int loader_check_number(struct loader *ld, const struct path *p, json_t *v, enum
 int loader_read_number(struct loader *ld, const struct path *p, json_t *obj, const char *key,
 		       enum presence presence, enum range range, double *out);
 
+/* A string that must be one of the NULL-terminated names: *out its index
+ * (left as it is when an optional key is absent). A wrong one is refused
+ * with the names and the nearest one ("must be "whitted" or "path", got
+ * "paths"; did you mean "path"?"). */
+int loader_read_choice(struct loader *ld, const struct path *p, json_t *obj, const char *key,
+		       enum presence presence, const char *const *names, int *out);
+
 /* A JSON integer (not 2.0) in lo ... hi. */
 int loader_check_integer(struct loader *ld, const struct path *p, json_t *v, json_int_t lo,
 			 json_int_t hi, json_int_t *out);

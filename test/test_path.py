@@ -1,0 +1,201 @@
+"""The path integrator end to end (issue 40; SCENE.md "Path tracing",
+RENDERING.md "Path tracing"): every single-pass kernel gives the same
+path-traced image; white furnaces render what the physics says; the new
+fields' and option's messages; the kernels that cannot trace paths yet refuse
+them rather than render Whitted's image."""
+import json
+import os
+import subprocess
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+BOX = ROOT / "test" / "scenes" / "path_box.json"
+
+
+def rtcl(*args):
+    return subprocess.run([RTCL, *map(str, args)], capture_output=True, text=True, cwd=ROOT,
+                          timeout=300)
+
+
+def read_pfm(path):
+    with open(path, "rb") as f:
+        assert f.readline().strip() == b"PF"
+        width, height = map(int, f.readline().split())
+        scale = float(f.readline())
+        data = np.frombuffer(f.read(), dtype="<f4" if scale < 0 else ">f4")
+    return data.reshape(height, width, 3)[::-1]
+
+
+def render(scene, tmp_path, name, *args):
+    out = tmp_path / f"{name}.pfm"
+    result = rtcl(scene, "-o", out, "-q", *args)
+    assert result.returncode == 0, result.stderr
+    return out
+
+
+def write_scene(tmp_path, doc, name="s.json"):
+    path = tmp_path / name
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_every_single_pass_kernel_gives_the_same_image(tmp_path):
+    images = {k: render(BOX, tmp_path, k, "-k", k, "--size", "20x20", "--spp", "4")
+              for k in ["serial", "naive", "cyclic", "dynamic", "persistent"]}
+    first = images["serial"].read_bytes()
+    assert read_pfm(images["serial"]).mean() > 0.05  # lit, not black
+    for kernel, path in images.items():
+        assert path.read_bytes() == first, f"{kernel} differs from serial"
+
+
+def furnace(tmp_path, bsdf, samples=64, size="16x16"):
+    """A sphere filling the middle of the image under a uniform environment
+    of radiance 1: the mean of the pixels it covers."""
+    doc = {"format": "rtcl-scene", "version": 1, "integrator": "path", "max_depth": 64,
+           "image": {"width": 16, "height": 16},
+           "camera": {"eye": [0, 0, -4], "look_at": [0, 0, 0], "fov": 12},
+           "background": [1, 1, 1],
+           "spheres": [{"center": [0, 0, 0], "radius": 1, "material": {"bsdf": bsdf}}]}
+    image = read_pfm(render(write_scene(tmp_path, doc), tmp_path, "furnace", "--size", size,
+                            "--spp", samples))
+    return image.mean(axis=(0, 1))
+
+
+@pytest.mark.parametrize("rho", [0.3, 0.8])
+def test_white_furnace_diffuse_renders_its_albedo(tmp_path, rho):
+    mean = furnace(tmp_path, {"type": "diffuse", "reflectance": [rho] * 3})
+    assert np.allclose(mean, rho, rtol=0.01), mean
+
+
+def test_white_furnace_smooth_glass_is_invisible(tmp_path):
+    # A smooth dielectric loses no energy: radiance 1 all round stays 1.
+    mean = furnace(tmp_path, {"type": "dielectric", "ior": 1.5})
+    assert np.allclose(mean, 1.0, rtol=0.01), mean
+
+
+def test_white_furnace_principled_stays_below_one(tmp_path):
+    mean = furnace(tmp_path, {"type": "principled", "base_color": [1, 1, 1], "roughness": 0.4})
+    assert (mean <= 1.01).all() and (mean > 0.8).all(), mean
+
+
+def test_white_furnace_rough_conductor_loses_a_little(tmp_path):
+    # Single-scattering GGX loses energy at higher roughness, never gains.
+    mean = furnace(tmp_path, {"type": "conductor", "reflectance": [1, 1, 1], "roughness": 0.5})
+    assert (mean <= 1.005).all() and (mean > 0.85).all(), mean
+
+
+def test_whitted_scene_ignores_the_path_fields(tmp_path):
+    # bsdf and emission are read and checked but change nothing under Whitted.
+    with open(ROOT / "scenes" / "two_balls.json") as f:
+        doc = json.load(f)
+    plain = render(write_scene(tmp_path, doc, "a.json"), tmp_path, "a", "--size", "24x16")
+    for sphere in doc["spheres"]:
+        if isinstance(sphere.get("material"), dict):
+            sphere["material"]["emission"] = [5, 5, 5]
+            sphere["material"]["bsdf"] = {"type": "diffuse"}
+    marked = render(write_scene(tmp_path, doc, "b.json"), tmp_path, "b", "--size", "24x16")
+    assert plain.read_bytes() == marked.read_bytes()
+
+
+def test_integrator_option_overrides_the_scene(tmp_path):
+    whitted = render(BOX, tmp_path, "w", "--integrator", "whitted", "--size", "12x12")
+    path = render(BOX, tmp_path, "p", "--size", "12x12")
+    assert whitted.read_bytes() != path.read_bytes()
+    with open(BOX) as f:
+        doc = json.load(f)
+    del doc["integrator"]
+    scene = write_scene(tmp_path, doc)
+    again = render(scene, tmp_path, "again", "--integrator", "path", "--size", "12x12")
+    assert again.read_bytes() == path.read_bytes()
+
+
+def failure(result, message, status=None):
+    assert result.returncode != 0, result.stderr
+    if status is not None:
+        assert result.returncode == status
+    lines = result.stderr.splitlines()
+    assert len(lines) == 1, result.stderr
+    assert message in lines[0], lines[0]
+
+
+def box_with(tmp_path, change):
+    with open(BOX) as f:
+        doc = json.load(f)
+    change(doc)
+    return write_scene(tmp_path, doc)
+
+
+@pytest.mark.parametrize("change, message", [
+    (lambda d: d.update(integrator="paths"),
+     'integrator: must be "whitted" or "path", got "paths"; did you mean "path"?'),
+    (lambda d: d.update(integrator=1), 'integrator: must be "whitted" or "path", got an integer'),
+    (lambda d: d["materials"]["gold"]["bsdf"].update(type="condutor"),
+     'materials.gold.bsdf.type: must be "diffuse", "conductor", "dielectric" or "principled", '
+     'got "condutor"; did you mean "conductor"?'),
+    (lambda d: d["materials"]["gold"]["bsdf"].pop("type"),
+     "materials.gold.bsdf.type: required field is missing"),
+    (lambda d: d["materials"]["gold"]["bsdf"].update(ior=1.5),
+     'materials.gold.bsdf: unknown key "ior"'),
+    (lambda d: d["materials"]["gold"]["bsdf"].update(roughnes=0.2),
+     'materials.gold.bsdf: unknown key "roughnes"; did you mean "roughness"?'),
+    (lambda d: d["materials"]["gold"]["bsdf"].update(roughness=1.5),
+     "materials.gold.bsdf.roughness: must be between 0 and 1, got 1.5"),
+    (lambda d: d["materials"]["gold"]["bsdf"].update(reflectance=[1.2, 0.8, 0.3]),
+     "materials.gold.bsdf.reflectance: must be a color with parts between 0 and 1, got "
+     "[1.2, 0.8, 0.3]"),
+    (lambda d: d["materials"]["gold"].update(bsdf="gold"),
+     "materials.gold.bsdf: must be an object, got a string"),
+    (lambda d: d["materials"]["lamp"].update(emission=[-1, 0, 0]),
+     "materials.lamp.emission"),
+    (lambda d: d["materials"]["lamp"].update(emision=[1, 0, 0]),
+     'materials.lamp: unknown key "emision"; did you mean "emission"?'),
+    (lambda d: d.update(environment={"scale": 2}), 'environment: needs "file"'),
+    (lambda d: d.update(environment={"file": "sky.hdr", "rotat": 2}),
+     'environment: unknown key "rotat"; did you mean "rotate"?'),
+])
+def test_scene_errors(tmp_path, change, message):
+    failure(rtcl(box_with(tmp_path, change), "-o", tmp_path / "x.pfm"), message)
+    assert not (tmp_path / "x.pfm").exists()
+
+
+def test_integrator_option_error(tmp_path):
+    failure(rtcl(BOX, "--integrator", "pth", "-o", tmp_path / "x.pfm"),
+            'rtcl: --integrator: expected whitted or path, got "pth"', 2)
+
+
+@pytest.mark.parametrize("kernel, message", [
+    ("wavefront", "rtcl: the wavefront kernel does not trace paths yet (the path integrator): "
+                  "use -k dynamic, naive, cyclic, persistent or serial, or --integrator whitted"),
+    ("reference", "rtcl: the CPU reference (-k reference) does not trace paths yet"),
+])
+def test_kernels_without_paths_refuse_them(tmp_path, kernel, message):
+    failure(rtcl(BOX, "-k", kernel, "-o", tmp_path / "x.pfm"), message, 2)
+    assert not (tmp_path / "x.pfm").exists()
+
+
+def test_environment_map_is_refused_until_rendered(tmp_path):
+    scene = box_with(tmp_path, lambda d: d.update(environment={"file": "sky.hdr"}))
+    failure(rtcl(scene, "-o", tmp_path / "x.pfm"), "environment: maps are not rendered yet")
+
+
+def test_ambient_is_warned_about_under_path(tmp_path):
+    scene = box_with(tmp_path, lambda d: d.update(ambient=[0.2, 0.2, 0.2]))
+    result = rtcl(scene, "-o", tmp_path / "x.pfm", "-q", "--size", "8x8", "--spp", "2")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.splitlines() == [
+        f"rtcl: warning: {scene}: ambient: has no meaning under the path integrator "
+        "(indirect light is traced); it is ignored"]
+
+
+def test_environment_is_warned_about_under_whitted(tmp_path):
+    scene = box_with(tmp_path, lambda d: d.update(environment={"file": "sky.hdr"}))
+    result = rtcl(scene, "--integrator", "whitted", "-o", tmp_path / "x.pfm", "-q", "--size",
+                  "8x8")
+    assert result.returncode == 0, result.stderr
+    assert result.stderr.splitlines() == [
+        f"rtcl: warning: {scene}: environment: is used only by the path integrator; it is "
+        "ignored"]
