@@ -169,8 +169,8 @@ def test_integrator_option_error(tmp_path):
 
 @pytest.mark.parametrize("kernel, message", [
     ("wavefront", "rtcl: the wavefront kernel does not trace paths yet (the path integrator): "
-                  "use -k dynamic, naive, cyclic, persistent or serial, or --integrator whitted"),
-    ("reference", "rtcl: the CPU reference (-k reference) does not trace paths yet"),
+                  "use -k dynamic, naive, cyclic, persistent, serial or reference, or "
+                  "--integrator whitted"),
 ])
 def test_kernels_without_paths_refuse_them(tmp_path, kernel, message):
     failure(rtcl(BOX, "-k", kernel, "-o", tmp_path / "x.pfm"), message, 2)

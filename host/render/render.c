@@ -52,11 +52,11 @@ int render_check_integrator(const struct scene *scene, const struct render_setti
 {
 	if (scene->integrator != SCENE_INTEGRATOR_PATH)
 		return 0;
-	if (!s->kernel || s->kernel->multi_pass) {
+	if (s->kernel && s->kernel->multi_pass) {
 		snprintf(err, err_size,
-			 "%s does not trace paths yet (the path integrator): use -k dynamic, "
-			 "naive, cyclic, persistent or serial, or --integrator whitted",
-			 s->kernel ? "the wavefront kernel" : "the CPU reference (-k reference)");
+			 "the wavefront kernel does not trace paths yet (the path integrator): use "
+			 "-k dynamic, naive, cyclic, persistent, serial or reference, or "
+			 "--integrator whitted");
 		return -1;
 	}
 	if (scene->environment.file) {
