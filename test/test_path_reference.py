@@ -1,0 +1,172 @@
+"""The CPU reference's path tracer (host/render/reference_path.cpp) against a
+single-pass kernel on small path-traced scenes (docs/RENDERING.md "Path
+tracing": the two compute the same estimator from the same random numbers,
+the kernel in float, the reference in double, and must agree to >= 40 dB
+PSNR at the same samples). Each scene stresses a part of the estimator: an
+emitting quad in a diffuse box, smooth glass and mirrors (delta lobes and the
+mapped Whitted materials), rough conductors and dielectrics (GGX by visible
+normals), the lights of "lights" beside emitting spheres, a uniform
+environment, and the principled BSDF."""
+import json
+import math
+import os
+import pathlib
+import struct
+import subprocess
+
+import pytest
+
+ROOT = pathlib.Path(__file__).resolve().parent.parent
+RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
+SIZE, SPP = "32x32", 8
+
+
+def quad(a, b, c, d, material):
+    """Two triangles a b c, a c d: front side (b - a) x (c - a)."""
+    return [{"vertices": [a, b, c], "material": material},
+            {"vertices": [a, c, d], "material": material}]
+
+
+def box(lamp="lamp"):
+    """A Cornell-like box of side 2 around the origin, open towards -z (the
+    camera), walls facing in, an emitting quad under the ceiling facing down."""
+    return (quad([-1, -1, -1], [-1, -1, 1], [1, -1, 1], [1, -1, -1], "white")    # floor, up
+            + quad([-1, 1, -1], [1, 1, -1], [1, 1, 1], [-1, 1, 1], "white")      # ceiling, down
+            + quad([-1, -1, 1], [-1, 1, 1], [1, 1, 1], [1, -1, 1], "white")      # back, -z
+            + quad([-1, -1, -1], [-1, 1, -1], [-1, 1, 1], [-1, -1, 1], "red")    # left, +x
+            + quad([1, -1, -1], [1, -1, 1], [1, 1, 1], [1, 1, -1], "green")      # right, -x
+            + quad([-0.3, 0.99, -0.3], [0.3, 0.99, -0.3], [0.3, 0.99, 0.3], [-0.3, 0.99, 0.3],
+                   lamp))
+
+
+BOX_MATERIALS = {
+    "white": {"bsdf": {"type": "diffuse", "reflectance": [0.75, 0.75, 0.75]}},
+    "red": {"bsdf": {"type": "diffuse", "reflectance": [0.65, 0.06, 0.05]}},
+    "green": {"bsdf": {"type": "diffuse", "reflectance": [0.12, 0.45, 0.1]}},
+    "lamp": {"bsdf": {"type": "diffuse", "reflectance": [0, 0, 0]}, "emission": [15, 13, 9]},
+}
+BOX_CAMERA = {"eye": [0, 0, -3.4], "look_at": [0, 0, 0], "fov": 40}
+OUTDOOR_CAMERA = {"eye": [0, 1.2, -4], "look_at": [0, 0.4, 0], "fov": 40}
+
+
+def scene(**fields):
+    doc = {"format": "rtcl-scene", "version": 2, "integrator": "path", "max_depth": 6}
+    doc.update(fields)
+    return doc
+
+
+SCENES = {
+    # the diffuse box alone: emitter sampling by power, MIS, Russian roulette
+    "diffuse_box": scene(camera=BOX_CAMERA, materials=BOX_MATERIALS, triangles=box()),
+    # delta lobes: smooth glass, a smooth conductor, and the mapped Whitted
+    # materials (glass by kt, a Fresnel-conductor mirror mixed with diffuse)
+    "glass_and_mirror": scene(
+        camera=BOX_CAMERA, triangles=box(),
+        materials={**BOX_MATERIALS,
+                   "glass": {"bsdf": {"type": "dielectric", "ior": 1.5}},
+                   "mirror": {"bsdf": {"type": "conductor", "reflectance": [0.95, 0.95, 0.95]}},
+                   "whitted_glass": {"transmit": 0.9, "ior": 1.33},
+                   "whitted_metal": {"color": [0.9, 0.6, 0.3], "diffuse": 0.6, "reflect": 0.5,
+                                     "fresnel": "conductor"}},
+        spheres=[{"center": [-0.5, -0.6, 0.1], "radius": 0.35, "material": "glass"},
+                 {"center": [0.5, -0.6, 0.3], "radius": 0.35, "material": "mirror"},
+                 {"center": [0.1, 0.1, 0.5], "radius": 0.25, "material": "whitted_glass"},
+                 {"center": [-0.4, 0.3, 0.6], "radius": 0.2, "material": "whitted_metal"}]),
+    # GGX: rough conductor and dielectric, lit by the box's emitter
+    "rough": scene(
+        camera=BOX_CAMERA, triangles=box(),
+        materials={**BOX_MATERIALS,
+                   "copper": {"bsdf": {"type": "conductor", "reflectance": [0.95, 0.64, 0.54],
+                                       "roughness": 0.4}},
+                   "frosted": {"bsdf": {"type": "dielectric", "ior": 1.5, "roughness": 0.3}},
+                   "satin": {"bsdf": {"type": "conductor", "roughness": 0.15}}},
+        spheres=[{"center": [-0.45, -0.6, 0.2], "radius": 0.4, "material": "frosted"},
+                 {"center": [0.45, -0.6, -0.1], "radius": 0.4, "material": "copper"},
+                 {"center": [0.2, 0.2, 0.6], "radius": 0.25, "material": "satin"}]),
+    # the lights of "lights" (point, sphere, directional with a disk) beside an
+    # emitting sphere, on a checkered diffuse floor
+    "lights": scene(
+        camera=OUTDOOR_CAMERA,
+        materials={"floor": {"bsdf": {"type": "diffuse", "reflectance": [0.7, 0.7, 0.7]}},
+                   "ball": {"bsdf": {"type": "diffuse", "reflectance": [0.3, 0.5, 0.8]}},
+                   "metal": {"bsdf": {"type": "conductor", "reflectance": [0.9, 0.9, 0.9],
+                                      "roughness": 0.3}},
+                   "bulb": {"bsdf": {"type": "diffuse", "reflectance": [0, 0, 0]},
+                            "emission": [8, 6, 3]}},
+        lights=[{"position": [-2, 3, -1], "color": [6, 6, 6]},
+                {"position": [2, 2.5, -2], "radius": 0.4, "color": [4, 3, 5]},
+                {"direction": [0.3, -1, 0.5], "angle": 4, "color": [0.8, 0.7, 0.6]}],
+        spheres=[{"center": [-0.6, 0.5, 0.3], "radius": 0.5, "material": "ball"},
+                 {"center": [0.7, 0.5, 0.5], "radius": 0.5, "material": "metal"},
+                 {"center": [0, 1.5, 1.5], "radius": 0.2, "material": "bulb"}],
+        planes=[{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor",
+                 "checker": {"size": 0.5, "color": [0.2, 0.3, 0.2]}}]),
+    # a uniform environment as the only light: environment sampling and MIS
+    "environment": scene(
+        camera=OUTDOOR_CAMERA, background=[0.6, 0.7, 0.9],
+        materials={"floor": {"bsdf": {"type": "diffuse", "reflectance": [0.5, 0.45, 0.4]}},
+                   "ball": {"bsdf": {"type": "diffuse", "reflectance": [0.8, 0.3, 0.2]}},
+                   "glass": {"bsdf": {"type": "dielectric", "ior": 1.5, "roughness": 0.1}},
+                   "chrome": {"bsdf": {"type": "conductor"}}},
+        spheres=[{"center": [-0.9, 0.45, 0.2], "radius": 0.45, "material": "ball"},
+                 {"center": [0, 0.45, 0.6], "radius": 0.45, "material": "glass"},
+                 {"center": [0.9, 0.45, 0.2], "radius": 0.45, "material": "chrome"}],
+        planes=[{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor"}]),
+    # the principled BSDF's three lobes, lit by the box's emitter
+    "principled": scene(
+        camera=BOX_CAMERA, triangles=box(),
+        materials={**BOX_MATERIALS,
+                   "plastic": {"bsdf": {"type": "principled", "base_color": [0.2, 0.4, 0.8],
+                                        "roughness": 0.3}},
+                   "brass": {"bsdf": {"type": "principled", "base_color": [0.9, 0.7, 0.3],
+                                      "metallic": 1, "roughness": 0.4}},
+                   "tinted": {"bsdf": {"type": "principled", "base_color": [0.8, 1, 0.8],
+                                       "transmission": 0.8, "roughness": 0.2,
+                                       "metallic": 0.1}}},
+        spheres=[{"center": [-0.5, -0.6, 0.2], "radius": 0.4, "material": "plastic"},
+                 {"center": [0.5, -0.6, -0.1], "radius": 0.4, "material": "brass"},
+                 {"center": [0, 0.1, 0.5], "radius": 0.3, "material": "tinted"}]),
+}
+
+
+def read_pfm(path):
+    data = path.read_bytes()
+    header = data.split(b"\n", 3)
+    w, h = map(int, header[1].split())
+    scale = float(header[2])
+    return struct.unpack(("<" if scale < 0 else ">") + "f" * (3 * w * h),
+                         header[3][:12 * w * h])
+
+
+def srgb8(c):
+    """RENDERING.md "Writing the image": the 8-bit sRGB value of c."""
+    c = min(max(c, 0.0), 1.0)
+    return round(255 * (12.92 * c if c <= 0.0031308 else 1.055 * c ** (1 / 2.4) - 0.055))
+
+
+def psnr(a, b):
+    """PSNR of two images in 8-bit sRGB, as the kernel tests measure it."""
+    diff = [srgb8(x) - srgb8(y) for x, y in zip(a, b)]
+    mse = sum(d * d for d in diff) / len(diff)
+    return math.inf if mse == 0 else 10 * math.log10(255 ** 2 / mse)
+
+
+def render(path, kernel, out):
+    result = subprocess.run([RTCL, str(path), "-k", kernel, "--size", SIZE, "--spp", str(SPP),
+                             "-q", "-o", str(out)], capture_output=True, text=True, cwd=ROOT,
+                            timeout=300)
+    assert result.returncode == 0, result.stderr
+    return read_pfm(out)
+
+
+@pytest.mark.parametrize("name", sorted(SCENES))
+def test_reference_agrees_with_the_kernel(tmp_path, name):
+    path = tmp_path / f"{name}.json"
+    path.write_text(json.dumps(SCENES[name]))
+    reference = render(path, "reference", tmp_path / "reference.pfm")
+    kernel = render(path, "dynamic", tmp_path / "dynamic.pfm")
+    assert all(math.isfinite(c) and c >= 0 for c in reference)
+    assert max(reference) > 0.05, "the scene is lit"
+    db = psnr(reference, kernel)
+    print(f"{name}: PSNR {db:.2f} dB")
+    assert db >= 40, f"{name}: reference vs dynamic PSNR {db:.2f} dB"
