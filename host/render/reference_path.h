@@ -42,6 +42,8 @@ struct light_sample {
 	double pdf;   /* solid angle, with 1/G and P_e; for a delta light 1/G */
 	double t_max; /* how far the shadow ray looks */
 	bool mis;     /* emitters and the environment: weighted by MIS */
+	const void *emitter; /* the emitter's sphere or triangle, which does not
+				shadow its own point; null for the others */
 };
 
 class path_tracer : public scene_geometry

@@ -283,17 +283,19 @@ bool scene_geometry::nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const
 	return best.t > 0.0;
 }
 
-/* Whether any object (transparent ones too) lies on the ray at 0 < t < distance. */
-bool scene_geometry::blocked(const dvec3 &o, const dvec3 &d, double distance) const
+/* Whether any object (transparent ones too) lies on the ray at 0 < t <
+ * distance, but `skip` (a sphere or a triangle of the scene, or null). */
+bool scene_geometry::blocked(const dvec3 &o, const dvec3 &d, double distance,
+			     const void *skip) const
 {
 	for (const sphere &s : spheres) {
 		double t = intersect_sphere(s, o, d);
-		if (t > 0.0 && t < distance)
+		if (t > 0.0 && t < distance && &s != skip)
 			return true;
 	}
 	for (const triangle &tri : triangles) {
 		double u, v, t = intersect_triangle(tri, o, d, &u, &v);
-		if (t > 0.0 && t < distance && !cut_out(tri, u, v))
+		if (t > 0.0 && t < distance && &tri != skip && !cut_out(tri, u, v))
 			return true;
 	}
 	for (const plane &p : planes) {
@@ -303,6 +305,7 @@ bool scene_geometry::blocked(const dvec3 &o, const dvec3 &d, double distance) co
 	}
 	return false;
 }
+
 /* RENDERING.md, "Alpha cut-out": whether the triangle's material leaves it
  * out at barycentric (u, v). */
 bool scene_geometry::cut_out(const triangle &tri, double u, double v) const

@@ -109,9 +109,11 @@ class scene_geometry
 
 	/* Trace step 1 (cut-outs included); false when nothing is hit. */
 	bool nearest_hit(const dvec3 &o, const dvec3 &d, hit *out) const;
-	/* Whether any object (transparent ones too, not a cut-out) lies on
-	 * the ray at 0 < t < distance. */
-	bool blocked(const dvec3 &o, const dvec3 &d, double distance) const;
+	/* Whether any object (transparent ones too, not a cut-out) but
+	 * `skip` (a sphere or triangle of this scene) lies on the ray at
+	 * 0 < t < distance. */
+	bool blocked(const dvec3 &o, const dvec3 &d, double distance,
+		     const void *skip = nullptr) const;
 	/* Trace step 2 at hit h of the ray (o, d). */
 	surface surface_at(const hit &h, const dvec3 &o, const dvec3 &d) const;
 	/* Trace step 3: the base colour C at hit h, point p. */
