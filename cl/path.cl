@@ -102,6 +102,12 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 		COUNT_FLOPS(tr, 3);
 	} else {
 		out->color = b->color.xyz;
+#ifdef RTCL_TEXTURES
+		if (hit.triangle >= 0) /* a model's principled material: its texture */
+			out->color = fmin(triangle_base_color(tr, tr->triangles[hit.triangle].index,
+							      (float2)(hit.u, hit.v), out->color),
+					  (float3)(1.0f));
+#endif
 	}
 }
 

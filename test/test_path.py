@@ -199,3 +199,49 @@ def test_environment_is_warned_about_under_whitted(tmp_path):
     assert result.stderr.splitlines() == [
         f"rtcl: warning: {scene}: environment: is used only by the path integrator; it is "
         "ignored"]
+
+
+def test_model_emission_is_rendered_under_path(tmp_path):
+    """glTF emissiveFactor and MTL Ke are the materials' emission: with no
+    other light, a black emitting quad facing the camera shows its radiance;
+    one without stays black. (KHR_materials_emissive_strength is not read by
+    Assimp 5.2, the importer here: SCENE.md says so.)"""
+    import base64
+    import struct
+    quads = [[(-1.5 + i, -0.5, 0), (-0.5 + i, -0.5, 0), (-0.5 + i, 0.5, 0), (-1.5 + i, 0.5, 0)]
+             for i in range(2)]
+    blob = b"".join(struct.pack("<12f", *[c for v in q for c in v]) for q in quads)
+    blob += struct.pack("<6H", 0, 1, 2, 0, 2, 3)
+    black = {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 1}
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+           "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": i}, "indices": 2,
+                                       "material": i} for i in range(2)]}],
+           "materials": [{"pbrMetallicRoughness": black, "emissiveFactor": [1, 0.5, 0.25],
+                          "extensions": {"KHR_materials_emissive_strength":
+                                         {"emissiveStrength": 2}}},
+                         {"pbrMetallicRoughness": black}],
+           "extensionsUsed": ["KHR_materials_emissive_strength"],
+           "buffers": [{"byteLength": len(blob), "uri": "data:application/octet-stream;base64,"
+                        + base64.b64encode(blob).decode()}],
+           "bufferViews": [{"buffer": 0, "byteOffset": 48 * i, "byteLength": 48}
+                           for i in range(2)] + [{"buffer": 0, "byteOffset": 96,
+                                                   "byteLength": 12}],
+           "accessors": [{"bufferView": i, "componentType": 5126, "count": 4, "type": "VEC3",
+                          "min": [-1.5 + i, -0.5, 0], "max": [-0.5 + i, 0.5, 0]}
+                         for i in range(2)] + [{"bufferView": 2, "componentType": 5123,
+                                                "count": 6, "type": "SCALAR"}]}
+    (tmp_path / "m.gltf").write_text(json.dumps(doc))
+    (tmp_path / "q.obj").write_text("mtllib q.mtl\nv 0.6 -0.5 0\nv 1.6 -0.5 0\nv 1.6 0.5 0\n"
+                                    "v 0.6 0.5 0\nusemtl glow\nf 1 2 3 4\n")
+    (tmp_path / "q.mtl").write_text("newmtl glow\nKd 0 0 0\nKe 0.25 0.5 1\n")
+    scene = write_scene(tmp_path, {
+        "format": "rtcl-scene", "version": 2, "integrator": "path",
+        "camera": {"eye": [0, 0, 4], "look_at": [0, 0, 0], "fov": 45},
+        "meshes": [{"file": "m.gltf", "smooth": False}, {"file": "q.obj", "smooth": False}]})
+    image = read_pfm(render(scene, tmp_path, "e", "--size", "48x16", "--spp", "2"))
+    # The quads' normals face +z, the camera: seen from the front.
+    left, middle, right = image[8, 19], image[8, 24], image[8, 29]
+    assert np.allclose(left, [1, 0.5, 0.25], rtol=1e-5), left
+    assert np.allclose(middle, 0), middle
+    assert np.allclose(right, [0.25, 0.5, 1], rtol=1e-5), right

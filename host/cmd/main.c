@@ -81,8 +81,8 @@ static int shows_progress(const struct options *opt)
 }
 
 /* What the integrator makes of fields that only the other one reads
- * (SCENE.md, "Path tracing"): warnings, and under -v a note per material. */
-static void print_integrator_warnings(const struct scene *scene, int verbose)
+ * (SCENE.md, "Path tracing"). */
+static void print_integrator_warnings(const struct scene *scene)
 {
 	const char *source = quote_text(scene->source);
 
@@ -96,17 +96,6 @@ static void print_integrator_warnings(const struct scene *scene, int verbose)
 			"rtcl: warning: %s: environment: is used only by the path integrator; it "
 			"is ignored\n",
 			source);
-	if (scene->integrator != SCENE_INTEGRATOR_WHITTED || !verbose)
-		return;
-	for (int i = 0; i < scene->material_count; i++)
-		if (scene->materials[i].bsdf.type != SCENE_BSDF_NONE ||
-		    scene_material_emits(&scene->materials[i])) {
-			fprintf(stderr,
-				"rtcl: %s: materials have emission or bsdf, which only the path "
-				"integrator uses\n",
-				source);
-			return;
-		}
 }
 
 /* The job: the options, else the scene's own values. */
@@ -256,7 +245,7 @@ int main(int argc, char **argv)
 		scene.integrator = opt.integrator;
 	for (int i = 0; i < scene.warning_count; i++)
 		fprintf(stderr, "rtcl: warning: %s\n", scene.warnings[i]);
-	print_integrator_warnings(&scene, opt.verbose);
+	print_integrator_warnings(&scene);
 	if (opt.verbose) {
 		print_mesh_reports(&scene);
 		print_scene_bounds(&scene);

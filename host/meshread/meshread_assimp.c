@@ -251,7 +251,8 @@ static int understood(const char *key, int metallic_roughness)
 {
 	static const char *const always[] = {
 		"?mat.name",	 "$mat.shadingm", "$mat.twosided",	   "$clr.transparent",
-		"$mat.refracti", "$clr.emissive", "$mat.anisotropyFactor", NULL};
+		"$mat.refracti", "$clr.emissive", "$mat.anisotropyFactor", "$mat.emissiveIntensity",
+		NULL};
 	static const char *const phong[] = {"$clr.diffuse",
 					    "$clr.specular",
 					    "$clr.ambient",
@@ -320,9 +321,16 @@ static void survey(const struct aiMaterial *mat, struct mesh_material *m)
 			note(m, what);
 		}
 	}
+	/* Emission is rendered by the path integrator only (SCENE.md,
+	 * "Emission"): read, and under Whitted not drawn, as -v said before. */
 	if (numbers(mat, "$clr.emissive", emissive, 3) &&
-	    (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0))
+	    (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0)) {
+		double strength = 1;
+		numbers(mat, "$mat.emissiveIntensity", &strength, 1);
+		for (int i = 0; i < 3; i++)
+			m->emissive[i] = emissive[i] * strength;
 		note(m, "emissive");
+	}
 	if (numbers(mat, "$mat.anisotropyFactor", &anisotropy, 1) && anisotropy != 0)
 		note(m, "anisotropy");
 }

@@ -48,6 +48,9 @@ struct mesh_material {
 	/* What rtcl does not understand, comma-separated: "emissive", "normal
 	 * texture", an unknown property's key. */
 	char not_understood[MESH_NOTES_MAX];
+	/* The radiance it emits (the path integrator): glTF's emissiveFactor
+	 * times KHR_materials_emissive_strength, MTL's Ke. */
+	double emissive[3];
 };
 
 /* A triangle whose file gives no material index. */

@@ -284,6 +284,16 @@ static void from_metallic_roughness(const struct mesh_material *in, struct scene
 	m->reflect = metal * (1 - rough) * alpha;
 	m->transmit = 1 - alpha * (1 - (1 - metal) * t);
 	m->ior = in->has_ior ? in->ior : t > 0 ? 1.5 : 1;
+	/* The path integrator's principled BSDF takes the factors as glTF
+	 * gives them (RENDERING.md, "The BSDFs"). */
+	m->bsdf.type = SCENE_BSDF_PRINCIPLED;
+	for (int i = 0; i < 3; i++)
+		m->bsdf.color[i] = allowed(in->base[i], 0, 1);
+	m->bsdf.metallic = metal;
+	m->bsdf.roughness = rough;
+	m->bsdf.transmission = t;
+	m->bsdf.ior = in->has_ior && in->ior > 0 ? allowed(in->ior, 1e-18, SCENE_MAX_MAGNITUDE)
+						 : 1.5;
 	/* RENDERING.md, "Alpha cut-out": a = b.a times the texture's alpha;
 	 * the texture is the scene loader's to give (scene_mesh.c). */
 	if (in->alpha_mode == MESH_ALPHA_MASK) {
@@ -345,5 +355,7 @@ const char *loader_material_from_mesh(const struct mesh_material *in, struct sce
 	m->ior = allowed(m->ior, 0, SCENE_MAX_MAGNITUDE);
 	if (m->ior == 0)
 		m->ior = 1;
+	for (int i = 0; i < 3; i++)
+		m->emission[i] = allowed(in->emissive[i], 0, SCENE_MAX_MAGNITUDE);
 	return NULL;
 }
