@@ -101,9 +101,11 @@ SCENES = {
                  {"center": [0, 1.5, 1.5], "radius": 0.2, "material": "bulb"}],
         planes=[{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor",
                  "checker": {"size": 0.5, "color": [0.2, 0.3, 0.2]}}]),
-    # a uniform environment as the only light: environment sampling and MIS
+    # a uniform environment as the only light: environment sampling and MIS;
+    # a thin lens (pair 1) beside the path's pairs
     "environment": scene(
-        camera=OUTDOOR_CAMERA, background=[0.6, 0.7, 0.9],
+        camera={**OUTDOOR_CAMERA, "aperture": 0.08, "focus_distance": 4.2},
+        background=[0.6, 0.7, 0.9],
         materials={"floor": {"bsdf": {"type": "diffuse", "reflectance": [0.5, 0.45, 0.4]}},
                    "ball": {"bsdf": {"type": "diffuse", "reflectance": [0.8, 0.3, 0.2]}},
                    "glass": {"bsdf": {"type": "dielectric", "ior": 1.5, "roughness": 0.1}},
@@ -127,6 +129,27 @@ SCENES = {
                  {"center": [0.5, -0.6, -0.1], "radius": 0.4, "material": "brass"},
                  {"center": [0, 0.1, 0.5], "radius": 0.3, "material": "tinted"}]),
 }
+
+MODELS = pathlib.Path("/usr/share/assimp/models")
+if (MODELS / "OBJ" / "spider.obj").is_file():
+    # models: a glTF box's principled material and base colour texture, the
+    # spider's textures and smooth shading normals; an emitting sphere, an
+    # emitting plane (found by rays only), a checker under a bsdf
+    SCENES["models"] = scene(
+        max_depth=4, camera={"eye": [1.5, 1.8, 2.5], "look_at": [0, 0.3, 0], "fov": 45},
+        background=[0.3, 0.35, 0.4],
+        materials={"floor": {"bsdf": {"type": "diffuse", "reflectance": [0.6, 0.6, 0.6]}},
+                   "lamp": {"bsdf": {"type": "diffuse", "reflectance": [0, 0, 0]},
+                            "emission": [6, 6, 5]},
+                   "glow": {"color": [0.2, 0.8, 0.3], "emission": [0.5, 2, 1]}},
+        meshes=[{"file": str(MODELS / "glTF2" / "BoxTextured-glTF" / "BoxTextured.gltf"),
+                 "translate": [0, 0.5, 0]},
+                {"file": str(MODELS / "OBJ" / "spider.obj"), "scale": 0.02,
+                 "translate": [-0.9, 0, 0.3], "smooth": True}],
+        spheres=[{"center": [1, 2, 1], "radius": 0.3, "material": "lamp"}],
+        planes=[{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor",
+                 "checker": {"size": 0.4, "color": [0.9, 0.3, 0.2]}},
+                {"point": [0, 0, -2], "normal": [0, 0, 1], "material": "glow"}])
 
 
 def read_pfm(path):

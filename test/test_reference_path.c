@@ -315,8 +315,8 @@ Test(reference_path, mis_weights_of_a_light_sample_and_its_bsdf_ray_sum_to_one)
 				/* 1e-3: the BSDF ray starts epsilon off the surface and
 				 * meets the emitter epsilon away from the sampled point */
 				cr_expect(w[0] >= 0 && w[1] >= 0 && fabs(w[0] + w[1] - 1) < 1e-3,
-					  "pixel (%d, %d) sample %d: w_l %.12g + w_hit %.12g", x,
-					  y, k, w[0], w[1]);
+					  "pixel (%d, %d) sample %d: w_l %.12g + w_hit %.12g", x, y,
+					  k, w[0], w[1]);
 			}
 	cr_expect_gt(pairs, 100, "only %d samples had a pair", pairs);
 }

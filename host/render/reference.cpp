@@ -192,12 +192,14 @@ void tracer::secondary_colors(const material &m, const dvec3 &c, const dvec3 &p,
 				/* RENDERING.md, "Fresnel": the cosine on the thinner side */
 				double r0 = (m.ior - 1.0) / (m.ior + 1.0);
 				double cos_thin = eta > 1.0 ? std::sqrt(k) : cos_i;
-				double f = r0 * r0 + (1.0 - r0 * r0) * std::pow(1.0 - cos_thin, 5.0);
+				double f =
+					r0 * r0 + (1.0 - r0 * r0) * std::pow(1.0 - cos_thin, 5.0);
 				reflect_weight += f * m.kt;
 				transmit_weight = (1.0 - f) * m.kt;
 			}
 			dvec3 T = glm::normalize(eta * (d + cos_i * n) - std::sqrt(k) * n);
-			*refracted = transmit_weight * trace(p - epsilon * n_face, T, depth + 1, sample);
+			*refracted =
+				transmit_weight * trace(p - epsilon * n_face, T, depth + 1, sample);
 		}
 	}
 	if (reflect_weight > 0.0) {

@@ -200,8 +200,7 @@ bool transmission_side(const bsdf &b, const dvec3 &wi)
 /* ---- The lobes, f and pdf for a given wi (wi on its side) ---- */
 
 /* Rough conductor: f and pdf of reflection at wi. */
-dvec3 conductor_f(const dvec3 &f0, double alpha, const dvec3 &wo, const dvec3 &wi,
-		  const dvec3 &n)
+dvec3 conductor_f(const dvec3 &f0, double alpha, const dvec3 &wo, const dvec3 &wi, const dvec3 &n)
 {
 	dvec3 h = glm::normalize(wo + wi);
 	double on = glm::dot(wo, n), in = glm::dot(wi, n), oh = glm::dot(wo, h);
@@ -324,7 +323,8 @@ void bsdf_f_pdf(const bsdf &b, const dvec3 &wo, const dvec3 &wi, dvec3 *f, doubl
 			*pdf += m * reflection_pdf(b.alpha, wo, wi, b.n);
 			*f += (1.0 - m) * (1.0 - t) * plastic_f(b, wo, wi);
 			*pdf += (1.0 - m) * (1.0 - t) *
-				(p_s * reflection_pdf(b.alpha, wo, wi, b.n) + (1.0 - p_s) * in / pi);
+				(p_s * reflection_pdf(b.alpha, wo, wi, b.n) +
+				 (1.0 - p_s) * in / pi);
 		}
 		if ((reflection || transmission) && t > 0.0) {
 			dvec3 fg;
@@ -749,8 +749,8 @@ bool path_tracer::make_bsdf(const hit &h, const surface &s, const dvec3 &wo, bsd
 	b->type = bsdf::MAPPED;
 	b->color = glm::min(dvec3(1.0), m.kd * C);
 	b->kr = m.kr;
-	b->mirror = m.fresnel == SCENE_FRESNEL_CONDUCTOR ? schlick(C, glm::dot(wo, s.n))
-							  : dvec3(1.0);
+	b->mirror =
+		m.fresnel == SCENE_FRESNEL_CONDUCTOR ? schlick(C, glm::dot(wo, s.n)) : dvec3(1.0);
 	return true;
 }
 
@@ -811,7 +811,7 @@ dvec3 path_tracer::radiance(const dvec3 &o_, const dvec3 &d_, const sample_id &s
 		pdf_prev = bs.pdf;
 		x_prev = s.p;
 		o = glm::dot(bs.wi, s.n_face) > 0.0 ? s.p + epsilon * s.n_face
-						     : s.p - epsilon * s.n_face;
+						    : s.p - epsilon * s.n_face;
 		/* Unit to the last bit: intersect_sphere needs |d| = 1 (see
 		 * reference.cpp's secondary_colors). */
 		d = glm::normalize(bs.wi);
@@ -819,8 +819,8 @@ dvec3 path_tracer::radiance(const dvec3 &o_, const dvec3 &d_, const sample_id &s
 	return L;
 }
 
-bool path_tracer::mis_weights(const dvec3 &o, const dvec3 &d, const sample_id &sample,
-			      double *w_l, double *w_h) const
+bool path_tracer::mis_weights(const dvec3 &o, const dvec3 &d, const sample_id &sample, double *w_l,
+			      double *w_h) const
 {
 	hit h;
 	if (!nearest_hit(o, d, &h))

@@ -21,8 +21,8 @@ struct bsdf {
 	double ior;	 /* principled: F0_d's */
 	double metallic; /* principled */
 	double transmission;
-	double kr;	       /* mapped: the mirror's probability */
-	dvec3 mirror;	       /* mapped: the mirror's reflectance at wo */
+	double kr;		 /* mapped: the mirror's probability */
+	dvec3 mirror;		 /* mapped: the mirror's reflectance at wo */
 	dvec3 n, n_face, b1, b2; /* the shading normal, its frame, n_face */
 };
 
@@ -37,11 +37,11 @@ struct bsdf_sample {
 
 /* One light sample of next_event (RENDERING.md "next_event(i)"). */
 struct light_sample {
-	dvec3 l;      /* unit, from p */
-	dvec3 E;      /* the radiance (or its equivalent) arriving along l */
-	double pdf;   /* solid angle, with 1/G and P_e; for a delta light 1/G */
-	double t_max; /* how far the shadow ray looks */
-	bool mis;     /* emitters and the environment: weighted by MIS */
+	dvec3 l;	     /* unit, from p */
+	dvec3 E;	     /* the radiance (or its equivalent) arriving along l */
+	double pdf;	     /* solid angle, with 1/G and P_e; for a delta light 1/G */
+	double t_max;	     /* how far the shadow ray looks */
+	bool mis;	     /* emitters and the environment: weighted by MIS */
 	const void *emitter; /* the emitter's sphere or triangle, which does not
 				shadow its own point; null for the others */
 };

@@ -66,8 +66,10 @@ glm::dvec4 lookup(const texture &tex, const glm::dvec2 &uv)
 	double y = std::clamp((1.0 - uv.y) * tex.height - 0.5, -limit, limit);
 	double fi = std::floor(x), fj = std::floor(y), fx = x - fi, fy = y - fj;
 	long long i = (long long)fi, j = (long long)fj;
-	int i0 = wrap_index(i, tex.width, tex.wrap_s), i1 = wrap_index(i + 1, tex.width, tex.wrap_s);
-	int j0 = wrap_index(j, tex.height, tex.wrap_t), j1 = wrap_index(j + 1, tex.height, tex.wrap_t);
+	int i0 = wrap_index(i, tex.width, tex.wrap_s),
+	    i1 = wrap_index(i + 1, tex.width, tex.wrap_s);
+	int j0 = wrap_index(j, tex.height, tex.wrap_t),
+	    j1 = wrap_index(j + 1, tex.height, tex.wrap_t);
 	glm::dvec4 top = glm::mix(texel(tex, i0, j0), texel(tex, i1, j0), fx);
 	glm::dvec4 bottom = glm::mix(texel(tex, i0, j1), texel(tex, i1, j1), fx);
 	return glm::mix(top, bottom, fy);
@@ -390,7 +392,6 @@ surface scene_geometry::surface_at(const hit &h, const dvec3 &o, const dvec3 &d)
 	s.material = h.sphere ? h.sphere->material : h.tri ? h.tri->material : h.plane->material;
 	return s;
 }
-
 
 /* RENDERING.md, "More dimensions": pair j >= 1 of sample k is the sequence's
  * point permute(k) scrambled by the pair's own hashes. */
