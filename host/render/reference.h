@@ -13,8 +13,9 @@
 extern "C" {
 #endif
 
-/* Renders `scene` as RENDERING.md defines it, with width, height and
- * max_depth taken from the arguments (not from the scene). Writes the linear,
+/* Renders `scene` as RENDERING.md defines it, by its integrator (trace(), or
+ * "Path tracing"), with width, height and max_depth taken from the arguments
+ * (not from the scene). Writes the linear,
  * unclamped colour of pixel (x, y) to rgb[3 * (y * width + x) + c], c = 0, 1, 2
  * for red, green, blue; rgb must hold 3 * width * height floats.
  * Returns 0 on success, -1 on invalid arguments (NULL pointer, width or height
