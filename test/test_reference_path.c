@@ -284,6 +284,33 @@ Test(reference_path, emitting_sphere_and_sphere_light_over_a_diffuse_plane)
 	expect_near(got, want, want, want, 0.01, "sphere light");
 }
 
+/* An emitting square of half side a at height h above a diffuse plane, Le
+ * 1, facing it: the point under its centre gets irradiance pi Le F, F the
+ * form factor of four a x a rectangles with a corner above it, each
+ * (1/(2 pi)) (2 X/sqrt(1 + X^2) atan(X/sqrt(1 + X^2))), X = a/h; so
+ * L = rho Le F. The square reaches 70.5 degrees from the vertical, where the
+ * shadow ray, an epsilon off the plane, meets the emitter's plane nearer
+ * than dist - 2 epsilon (from 60 degrees on): only the emitter's own
+ * triangles may not shadow it. */
+Test(reference_path, emitting_square_over_a_diffuse_plane_by_its_form_factor)
+{
+	struct path_scene ps;
+	scene_init(&ps, 3, 3, 0.2);
+	set3(ps.scene.camera.eye, 0, 0.5, -0.5); /* under the square, looking at the origin */
+	set3(ps.scene.camera.look_at, 0, 0, 0);
+	add_plane(&ps, 0, 1, 0, add_bsdf(&ps, SCENE_BSDF_DIFFUSE, 0.5, 0.5, 0.5));
+	int lamp = add_bsdf(&ps, SCENE_BSDF_DIFFUSE, 0, 0, 0);
+	set3(ps.materials[lamp].emission, 1, 1, 1);
+	const double a[3][3] = {{-2, 1, -2}, {2, 1, -2}, {2, 1, 2}}; /* facing -y */
+	const double b[3][3] = {{-2, 1, -2}, {2, 1, 2}, {-2, 1, 2}};
+	add_triangle(&ps, a, lamp);
+	add_triangle(&ps, b, lamp);
+	double x = 2.0 / sqrt(5.0);
+	double want = 0.5 * 4 / (2 * M_PI) * 2 * x * atan(x), got[3];
+	render_mean(&ps, 0, 1024, 0, 0, 3, 3, got);
+	expect_near(got, want, want, want, 0.01, "emitting square");
+}
+
 /* RENDERING.md: w_l of a light sample and w_hit of a BSDF ray finding the
  * same light in the same direction sum to one; this holds only where the
  * light pdf of sampling (1/G, P_e, pdf_e) is the one a hit computes. */
