@@ -714,8 +714,9 @@ bool path_tracer::make_bsdf(const hit &h, const surface &s, const dvec3 &wo, bsd
 	b->metallic = sb.metallic;
 	b->transmission = sb.transmission;
 	/* The colour of diffuse, conductor and principled: times the base
-	 * colour texture, or min(1, checker colour) on an odd square. */
-	b->color = to_dvec3(sb.color) * texture_rgb(h);
+	 * colour texture (at most 1), or min(1, checker colour) on an odd
+	 * square. */
+	b->color = glm::min(to_dvec3(sb.color) * texture_rgb(h), dvec3(1.0));
 	if (odd_checker_square(h, s.p))
 		b->color = glm::min(h.plane->checker_color, dvec3(1.0));
 
