@@ -354,6 +354,19 @@ struct rt_ray {
 					       in origin.w */
 };
 
+/* A path waiting in the wavefront kernel's queue under the path integrator
+ * (RTCL_PATH; cl/path.cl's struct walk between two bounces): the next
+ * segment, the throughput in the w lanes, and the MIS state. */
+struct rt_path_ray {
+	rt_vec4 origin; /* w: the throughput's red */
+	rt_vec4 dir;	/* unit; w: its green */
+	rt_vec4 x_prev; /* where the last BSDF sample was taken; w: blue */
+	rt_int pixel;	/* y * width + x */
+	rt_int vertex;	/* of the next hit */
+	rt_float pdf_prev;
+	rt_int specular;
+};
+
 /* What one launch (or one wavefront pass) renders: a rectangle of the image
  * and a range of each of its pixels' samples. A plain render is one or more
  * pieces covering the whole image; a multi-device render hands pieces to
@@ -429,6 +442,7 @@ _Static_assert(sizeof(struct rt_piece) == 48, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, sample_begin) == 16, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, samples) == 24, "rt_piece layout");
 _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");
+_Static_assert(sizeof(struct rt_path_ray) == 64, "rt_path_ray layout");
 _Static_assert(sizeof(struct rt_material) == 48, "rt_material layout");
 _Static_assert(sizeof(struct rt_sphere) == 32, "rt_sphere layout");
 _Static_assert(offsetof(struct rt_sphere, material) == 24, "rt_sphere layout");

@@ -50,15 +50,9 @@ const struct kernel_info *render_find_kernel(const char *name)
 int render_check_integrator(const struct scene *scene, const struct render_settings *s,
 			    char *err, size_t err_size)
 {
+	(void)s;
 	if (scene->integrator != SCENE_INTEGRATOR_PATH)
 		return 0;
-	if (s->kernel && s->kernel->multi_pass) {
-		snprintf(err, err_size,
-			 "the wavefront kernel does not trace paths yet (the path integrator): use "
-			 "-k dynamic, naive, cyclic, persistent, serial or reference, or "
-			 "--integrator whitted");
-		return -1;
-	}
 	if (scene->environment.file) {
 		snprintf(err, err_size,
 			 "%s: environment: maps are not rendered yet (the path integrator lights "
