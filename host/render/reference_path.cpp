@@ -545,7 +545,9 @@ double path_tracer::emitter_pdf(const hit &h, const dvec3 &y, const dvec3 &x) co
 	return 1.0 / (2.0 * pi * one_minus_cos(sin2, c_max));
 }
 
-/* p_env(d) / pdf_env for the uniform environment: 1 / (4 pi). */
+/* p_env(d) = (1/G) pdf_env(d), pdf_env = 1/(4 pi) for the uniform
+ * environment; 0 without an environment group. (Maps, "The environment",
+ * are refused before rendering until they are implemented.) */
 double path_tracer::environment_pdf() const
 {
 	return environment_group < 0 ? 0.0 : 1.0 / (4.0 * pi) / group_count;
