@@ -29,6 +29,7 @@ struct light_sample {
 	float t_max;
 	float3 radiance_over_pdf;
 	float pdf;
+	int sphere, triangle; /* the emitter sampled, which cannot block it; or -1 */
 };
 
 /* The direction of cone(w, c_max, s, t): uniform in the cone of cosine
@@ -167,6 +168,7 @@ static bool emitter_sample(struct tracer *tr, float p_group, float t, float3 p, 
 	int index = (int)(prim & RT_PRIM_INDEX_MASK);
 	float3 le;
 	if (prim >> RT_PRIM_KIND_SHIFT == RT_PRIM_SPHERE) {
+		ls->sphere = index;
 		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[index];
 		float cone_pdf;
 		if (!sphere_sample(tr, p, s->center.xyz, s->radius, st, ls, &cone_pdf))
@@ -178,6 +180,7 @@ static bool emitter_sample(struct tracer *tr, float p_group, float t, float3 p, 
 		ls->t_max -= 2.0f * scene_epsilon(tr->scene); /* not the emitter itself */
 		COUNT_FLOPS(tr, 5 + 2 + 2);
 	} else {
+		ls->triangle = index;
 		uint4 tri = tr->triangles[index].index;
 		float3 v0, v1, v2;
 		float3 c = triangle_cross(tr, tri, &v0, &v1, &v2);
@@ -229,6 +232,7 @@ static bool light_sample(struct tracer *tr, uint g, float t, float2 st, float3 p
 	float p_group = 1.0f / (float)tr->path->group_count;
 
 	COUNT_FLOPS(tr, 1);
+	ls->sphere = ls->triangle = -1;
 	if ((int)g < lights)
 		return scene_light_sample(tr, (int)g, p_group, p, st, ls);
 	if ((int)g == lights && tr->path->emitter_count > 0)

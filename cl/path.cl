@@ -32,6 +32,7 @@ struct walk {
 	float3 shadow_origin, shadow_dir;
 	float shadow_max;
 	float3 shadow_color; /* what the light adds when the shadow ray is clear */
+	int shadow_sphere, shadow_triangle; /* its emitter, which does not block it */
 };
 
 static inline float2 path_pair(struct tracer *tr, uint pair)
@@ -148,6 +149,8 @@ static void path_next_event(struct tracer *tr, struct walk *w, const struct path
 	w->shadow_dir = ls.dir;
 	w->shadow_max = ls.t_max;
 	w->shadow_color = add;
+	w->shadow_sphere = ls.sphere;
+	w->shadow_triangle = ls.triangle;
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3);
 	COUNT_RAY(tr);
 }
@@ -237,8 +240,11 @@ static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting
 {
 	(void)waiting;
 	if (w->shadow) {
+		tr->skip_sphere = w->shadow_sphere;
+		tr->skip_triangle = w->shadow_triangle;
 		struct hit blocker =
 			intersect_scene(tr, w->shadow_origin, w->shadow_dir, w->shadow_max, true);
+		tr->skip_sphere = tr->skip_triangle = -1;
 		if (blocker.t == 0.0f) {
 			w->color += w->shadow_color;
 			COUNT_FLOPS(tr, FLOPS_ADD3);

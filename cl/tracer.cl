@@ -185,6 +185,9 @@ struct tracer {
 	RTCL_SCENE_SPACE const float *texture_table; /* RT_TEXTURE_TABLE */
 #endif
 #ifdef RTCL_PATH
+	/* The emitter a shadow ray goes to, which does not block it
+	   (RENDERING.md, "next_event"): a device sphere, a triangle, or -1. */
+	int skip_sphere, skip_triangle;
 	RTCL_SCENE_SPACE const struct rt_path *path;
 	RTCL_SCENE_SPACE const struct rt_bsdf *bsdfs;	    /* one per material */
 	RTCL_SCENE_SPACE const struct rt_emitter *emitters; /* path->emitter_count */
@@ -307,6 +310,7 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 	tr->texture_table = (RTCL_SCENE_SPACE const float *)(base + scene->texture_table_offset);
 #endif
 #ifdef RTCL_PATH
+	tr->skip_sphere = tr->skip_triangle = -1;
 	tr->path = (RTCL_SCENE_SPACE const struct rt_path *)(base + scene->path_offset);
 	tr->bsdfs = (RTCL_SCENE_SPACE const struct rt_bsdf *)(base + tr->path->bsdf_offset);
 	tr->emitters = (RTCL_SCENE_SPACE const struct rt_emitter *)(base + tr->path->emitter_offset);
@@ -323,6 +327,30 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 #ifdef RTCL_SIMD_MEASURE
 	for (int p = 0; p < RT_SIMD_PHASES; p++)
 		tr->lane_steps[p] = tr->warp_steps[p] = 0;
+#endif
+}
+
+/* Whether the shadow ray being traced ignores device sphere i or triangle
+ * i: its own emitter, under the path integrator. */
+static inline bool shadow_skips_sphere(const struct tracer *tr, int i)
+{
+#ifdef RTCL_PATH
+	return i == tr->skip_sphere;
+#else
+	(void)tr;
+	(void)i;
+	return false;
+#endif
+}
+
+static inline bool shadow_skips_triangle(const struct tracer *tr, int i)
+{
+#ifdef RTCL_PATH
+	return i == tr->skip_triangle;
+#else
+	(void)tr;
+	(void)i;
+	return false;
 #endif
 }
 
