@@ -182,15 +182,7 @@ def render(path, kernel, out):
     return read_pfm(out)
 
 
-# Until the kernels skip the sampled emitter in its shadow ray (RENDERING.md
-# "next_event(i)", a fix of the spec proposed with the reference's), their
-# direct light of the emitting sphere of "lights" is ~5 % darker: 39 dB.
-EMITTER_SHADOW = pytest.mark.xfail(strict=True, reason="the kernels' shadow rays stop at "
-                                   "the sampled emitter itself near its silhouette")
-
-
-@pytest.mark.parametrize("name", [pytest.param(name, marks=EMITTER_SHADOW) if name == "lights"
-                                  else name for name in sorted(SCENES)])
+@pytest.mark.parametrize("name", sorted(SCENES))
 def test_reference_agrees_with_the_kernel(tmp_path, name):
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps(SCENES[name]))
