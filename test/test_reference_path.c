@@ -15,7 +15,7 @@
 #define MAX_MATERIALS 8
 #define MAX_SPHERES 8
 #define MAX_PLANES 2
-#define MAX_LIGHTS 2
+#define MAX_LIGHTS 4
 #define MAX_TRIANGLES 4
 
 /* A scene built by hand (struct scene points into the arrays beside it: a
@@ -200,6 +200,60 @@ Test(reference_path, white_furnace_smooth_glass_sphere_is_invisible)
 	double got[3];
 	render_mean(&ps, 32, 64, 2, 2, 6, 6, got);
 	expect_near(got, 1, 1, 1, 0.01, "ior 1.5");
+}
+
+static void rough_copper(struct path_scene *ps, int m)
+{
+	ps->materials[m].bsdf.type = SCENE_BSDF_CONDUCTOR;
+	set3(ps->materials[m].bsdf.color, 0.95, 0.64, 0.54);
+	ps->materials[m].bsdf.roughness = 0.5;
+}
+
+static void frosted_glass(struct path_scene *ps, int m)
+{
+	ps->materials[m].bsdf.type = SCENE_BSDF_DIELECTRIC;
+	ps->materials[m].bsdf.ior = 1.5;
+	ps->materials[m].bsdf.roughness = 0.4;
+}
+
+static void principled_mix(struct path_scene *ps, int m)
+{
+	ps->materials[m].bsdf.type = SCENE_BSDF_PRINCIPLED;
+	set3(ps->materials[m].bsdf.color, 0.8, 0.5, 0.3);
+	ps->materials[m].bsdf.metallic = 0.3;
+	ps->materials[m].bsdf.transmission = 0.4;
+	ps->materials[m].bsdf.roughness = 0.5;
+	ps->materials[m].bsdf.ior = 1.45;
+}
+
+/* Light sampling and BSDF sampling, weighted by MIS, estimate the same
+ * integral only where a BSDF's pdf is the density of its sample and its
+ * weight is f |cos| / pdf. Two black point lights (G = 3 instead of 1) cut
+ * the environment's share of the light samples to a third and so move every
+ * MIS weight; the mean stays put only if the BSDF is self-consistent (a pdf
+ * 30 % off moves a rough conductor's by 1.4 %). */
+static void expect_mis_invariant(void (*furnace_material)(struct path_scene *, int),
+				 const char *what)
+{
+	struct path_scene ps;
+	double one[3], two[3];
+
+	furnace(&ps, furnace_material);
+	render_mean(&ps, 3, 512, 2, 2, 6, 6, one);
+	for (int i = 0; i < 2; i++) {
+		struct scene_light *l = &ps.lights[ps.scene.light_count++];
+		set3(l->position, 0, 10, i);
+	}
+	render_mean(&ps, 3, 512, 2, 2, 6, 6, two);
+	expect_near(two, one[0], one[1], one[2], 0.01, what);
+}
+
+Test(reference_path, mis_keeps_the_mean_of_rough_and_principled_bsdfs)
+{
+	expect_mis_invariant(rough_copper, "rough conductor");
+	expect_mis_invariant(frosted_glass, "rough dielectric");
+	expect_mis_invariant(principled_mix, "principled");
+	expect_mis_invariant(mapped_diffuse_and_mirror, "mapped");
 }
 
 /* Emitters are seen directly: the primary ray's hit of a front face adds
