@@ -216,36 +216,16 @@ template <typename Radiance>
 void render_pixels(const struct scene *scene, int width, int height, int samples, float *rgb,
 		   const Radiance &radiance)
 {
-	const scene_camera &cam = scene->camera;
-	dvec3 eye = to_dvec3(cam.eye);
-	dvec3 f = glm::normalize(to_dvec3(cam.look_at) - eye);
-	dvec3 r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
-	dvec3 u = glm::cross(r, f);
-	double h = std::tan(glm::radians(cam.fov) / 2.0);
-	double a = (double)width / (double)height;
+	const camera cam(scene->camera, width, height);
 
 	for (int y = 0; y < height; y++) {
 		for (int x = 0; x < width; x++) {
 			dvec3 sum(0.0);
 			for (int k = 0; k < samples; k++) {
 				const sample_id sample = {x, y, k, samples};
-				double uv[2];
-				reference_sample_position(x, y, k, samples, uv);
-				double sx = (2.0 * (x + uv[0]) / width - 1.0) * a * h;
-				double sy = (1.0 - 2.0 * (y + uv[1]) / height) * h;
-				dvec3 q = f + sx * r + sy * u;
-				if (cam.aperture > 0) {
-					/* RENDERING.md, "The thin lens" */
-					dvec2 st = sample_pair(sample, 1);
-					dvec2 lens = concentric_disk(st.x, st.y);
-					dvec3 on_lens = cam.aperture * lens.x * r +
-							cam.aperture * lens.y * u;
-					dvec3 dir =
-						glm::normalize(cam.focus_distance * q - on_lens);
-					sum += radiance(eye + on_lens, dir, sample);
-					continue;
-				}
-				sum += radiance(eye, glm::normalize(q), sample);
+				dvec3 o, d;
+				cam.primary_ray(sample, &o, &d);
+				sum += radiance(o, d, sample);
 			}
 			dvec3 c = sum / (double)samples;
 			float *out = rgb + 3 * ((size_t)y * (size_t)width + (size_t)x);

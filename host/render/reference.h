@@ -38,7 +38,7 @@ void reference_sample_position(int x, int y, int k, int n, double uv[2]);
 void reference_sample_pair(int x, int y, int k, int n, int pair, double st[2]);
 
 /* For tests of the path integrator (RENDERING.md "Path tracing"): at the hit
- * of sample k of n of pixel (x, y)'s pinhole ray in `scene` (its own image
+ * of sample k of n of pixel (x, y)'s primary ray in `scene` (its own image
  * size), the MIS weights of vertex 0's light sample (weights[0]) and of a
  * BSDF ray along the same direction finding the same emitter or the
  * environment (weights[1]). Returns 0, or -1 when that sample has no such

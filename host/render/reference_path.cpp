@@ -871,27 +871,14 @@ bool path_tracer::mis_weights(const dvec3 &o, const dvec3 &d, const sample_id &s
 extern "C" int reference_path_mis_weights(const struct scene *scene, int x, int y, int k, int n,
 					  double weights[2])
 {
-	/* The primary ray of sample k of pixel (x, y), pinhole: as
-	 * reference.cpp's camera, without the lens. */
 	using namespace reference;
-	const scene_camera &cam = scene->camera;
-	dvec3 eye = to_dvec3(cam.eye);
-	dvec3 f = glm::normalize(to_dvec3(cam.look_at) - eye);
-	dvec3 r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
-	dvec3 u = glm::cross(r, f);
-	double h = std::tan(glm::radians(cam.fov) / 2.0);
-	double a = (double)scene->width / (double)scene->height;
-	double uv[2];
-	reference_sample_position(x, y, k, n, uv);
-	double sx = (2.0 * (x + uv[0]) / scene->width - 1.0) * a * h;
-	double sy = (1.0 - 2.0 * (y + uv[1]) / scene->height) * h;
+	const sample_id sample = {x, y, k, n};
+	dvec3 o, d;
+	camera(scene->camera, scene->width, scene->height).primary_ray(sample, &o, &d);
 
 	try {
 		const path_tracer pt(*scene, scene->max_depth);
-		return pt.mis_weights(eye, glm::normalize(f + sx * r + sy * u), {x, y, k, n},
-				      &weights[0], &weights[1])
-			       ? 0
-			       : -1;
+		return pt.mis_weights(o, d, sample, &weights[0], &weights[1]) ? 0 : -1;
 	} catch (const std::bad_alloc &) {
 		return -1;
 	}

@@ -393,6 +393,37 @@ surface scene_geometry::surface_at(const hit &h, const dvec3 &o, const dvec3 &d)
 	return s;
 }
 
+camera::camera(const struct scene_camera &cam, int width_, int height_)
+    : eye(to_dvec3(cam.eye)), aperture(cam.aperture), focus_distance(cam.focus_distance),
+      width(width_), height(height_)
+{
+	f = glm::normalize(to_dvec3(cam.look_at) - eye);
+	r = glm::normalize(glm::cross(f, to_dvec3(cam.up)));
+	u = glm::cross(r, f);
+	h = std::tan(glm::radians(cam.fov) / 2.0);
+	a = (double)width / (double)height;
+}
+
+void camera::primary_ray(const sample_id &sample, dvec3 *o, dvec3 *d) const
+{
+	double uv[2];
+	reference_sample_position(sample.x, sample.y, sample.k, sample.n, uv);
+	double sx = (2.0 * (sample.x + uv[0]) / width - 1.0) * a * h;
+	double sy = (1.0 - 2.0 * (sample.y + uv[1]) / height) * h;
+	dvec3 q = f + sx * r + sy * u;
+	if (aperture > 0) {
+		/* RENDERING.md, "The thin lens" */
+		dvec2 st = sample_pair(sample, 1);
+		dvec2 lens = concentric_disk(st.x, st.y);
+		dvec3 on_lens = aperture * lens.x * r + aperture * lens.y * u;
+		*o = eye + on_lens;
+		*d = glm::normalize(focus_distance * q - on_lens);
+		return;
+	}
+	*o = eye;
+	*d = glm::normalize(q);
+}
+
 /* RENDERING.md, "More dimensions": pair j >= 1 of sample k is the sequence's
  * point permute(k) scrambled by the pair's own hashes. */
 void sample_pair_bits(const sample_id &sample, int pair, uint32_t bits[2])

@@ -143,6 +143,22 @@ struct sample_id {
 	int x, y, k, n;
 };
 
+/* RENDERING.md "Camera and pixels" and "The thin lens": the primary rays of
+ * a width x height image. */
+class camera
+{
+      public:
+	camera(const struct scene_camera &cam, int width, int height);
+	/* Sample k of pixel (x, y)'s ray: origin o, unit direction d. */
+	void primary_ray(const sample_id &sample, dvec3 *o, dvec3 *d) const;
+
+      private:
+	dvec3 eye, f, r, u;
+	double h, a;
+	double aperture, focus_distance;
+	int width, height;
+};
+
 /* Pair `pair` (>= 1) of the sample, RENDERING.md "More dimensions": the two
  * 24-bit integers, and the coordinates in [0, 1)^2 they scale to exactly. */
 void sample_pair_bits(const sample_id &sample, int pair, uint32_t bits[2]);
