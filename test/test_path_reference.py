@@ -114,6 +114,18 @@ SCENES = {
                  {"center": [0, 0.45, 0.6], "radius": 0.45, "material": "glass"},
                  {"center": [0.9, 0.45, 0.2], "radius": 0.45, "material": "chrome"}],
         planes=[{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor"}]),
+    # inside an emitting dome, whose emission leaves its outside only: a point
+    # on the dome must not sample the dome as a light; lit by a point light
+    # and an emitting sphere of glass, which must not sample itself either
+    "dome": scene(
+        camera={"eye": [0.3, 0.2, -2], "look_at": [0, 0, 0], "fov": 60},
+        materials={"dome": {"bsdf": {"type": "diffuse", "reflectance": [0.8, 0.8, 0.8]},
+                            "emission": [1, 1, 1]},
+                   "lamp": {"bsdf": {"type": "dielectric", "ior": 1.3},
+                            "emission": [2, 1.5, 1]}},
+        lights=[{"position": [0, 1, 1], "color": [2, 2, 2]}],
+        spheres=[{"center": [0, 0, 0], "radius": 5, "material": "dome"},
+                 {"center": [0, -0.5, 0.5], "radius": 0.5, "material": "lamp"}]),
     # the principled BSDF's three lobes, lit by the box's emitter
     "principled": scene(
         camera=BOX_CAMERA, triangles=box(),
@@ -184,7 +196,16 @@ def render(path, kernel, out):
     return read_pfm(out)
 
 
-@pytest.mark.parametrize("name", sorted(SCENES))
+# Until the kernels give an emitter no light sample at its own points
+# (RENDERING.md "next_event(i)", a fix of the spec proposed with the
+# reference's), the dome of "dome" lights itself there: 13 dB, its mean 0.47
+# for the reference's 0.27 (which is the dome's without its emission).
+OWN_EMITTER = pytest.mark.xfail(strict=True, reason="the kernels' points on an emitting "
+                                "sphere sample it as a light")
+
+
+@pytest.mark.parametrize("name", [pytest.param(name, marks=OWN_EMITTER) if name == "dome"
+                                  else name for name in sorted(SCENES)])
 def test_reference_agrees_with_the_kernel(tmp_path, name):
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps(SCENES[name]))

@@ -276,6 +276,28 @@ Test(reference_path, an_emitter_seen_directly_is_its_emission_from_the_front_onl
 	expect_near(got, 0, 0, 0, 0, "back");
 }
 
+/* Inside an emitting sphere (a dome of emission 1 around the camera, lit by
+ * a point light), nothing sees the emission, which leaves its outside only:
+ * the image is the same as without it (G = 2 instead of 1, the same mean).
+ * A point on the dome must not sample the dome as a light: from there the
+ * dome's D <= R is decided by rounding. */
+Test(reference_path, a_point_on_an_emitting_sphere_does_not_sample_it)
+{
+	struct path_scene ps;
+	scene_init(&ps, 8, 8, 60);
+	set3(ps.scene.camera.eye, 0.3, 0.2, 0.1);
+	int dome = add_bsdf(&ps, SCENE_BSDF_DIFFUSE, 0.9, 0.9, 0.9);
+	add_sphere(&ps, 0, 0, 0, 5, dome);
+	struct scene_light *l = &ps.lights[ps.scene.light_count++];
+	set3(l->position, 0, -1, 2);
+	set3(l->color, 1, 1, 1);
+	double dark[3], lit[3];
+	render_mean(&ps, 0, 256, 0, 0, 8, 8, dark);
+	set3(ps.materials[dome].emission, 1, 1, 1);
+	render_mean(&ps, 0, 256, 0, 0, 8, 8, lit);
+	expect_near(lit, dark[0], dark[1], dark[2], 0.02, "emitting dome");
+}
+
 /* A point light of intensity I at height d above a diffuse plane seen head
  * on: L = rho/pi * I/d^2 (a delta light: exact, weight 1). */
 Test(reference_path, point_light_over_a_diffuse_plane_in_closed_form)

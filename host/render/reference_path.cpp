@@ -657,10 +657,14 @@ bool path_tracer::sample_light(const surface &s, int vertex, const sample_id &sa
 		int e = 0;
 		while (e + 1 < (int)emitters.size() && !(t < emitters[e].cdf))
 			e++;
-		if (!sample_emitter(emitters[e], p, st, ls))
-			return false;
 		ls->emitter = emitters[e].tri ? (const void *)emitters[e].tri
 					      : (const void *)emitters[e].sph;
+		/* Not the emitter p lies on: none of it is seen from its own
+		 * surface (convex, emitting outwards), while D <= R or
+		 * l.n_e < 0 would be decided there by rounding (proposed
+		 * RENDERING.md fix). */
+		if (ls->emitter == s.object || !sample_emitter(emitters[e], p, st, ls))
+			return false;
 		ls->pdf *= group_pdf * emitter_probability(e);
 		return true;
 	}

@@ -390,6 +390,7 @@ surface scene_geometry::surface_at(const hit &h, const dvec3 &o, const dvec3 &d)
 	s.n_face = s.inside ? -s.n_g : s.n_g;
 	s.n = h.tri ? shading_normal(*h.tri, h.u, h.v, s.n_face) : s.n_face;
 	s.material = h.sphere ? h.sphere->material : h.tri ? h.tri->material : h.plane->material;
+	s.object = h.sphere ? (const void *)h.sphere : (const void *)h.tri;
 	return s;
 }
 

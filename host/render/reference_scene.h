@@ -98,6 +98,7 @@ struct surface {
 	dvec3 n_face;
 	dvec3 n;
 	int material;
+	const void *object; /* the sphere or triangle hit; null for a plane */
 };
 
 /* The scene as the reference renders it: world coordinates, double. */
