@@ -104,7 +104,7 @@ endif
 HOST_MODULES := \
 	base/timing base/files base/test_hooks base/quote base/suggest base/interrupt base/libdir base/progress \
 	scene/scene scene/scene_check scene/scene_literal scene/scene_material scene/scene_mesh \
-	scene/mesh_place scene/mesh_spawn \
+	scene/mesh_place scene/mesh_spawn scene/hdr_read \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
 	render/checks render/probe render/buffers render/program render/block render/watch render/repeats \

@@ -208,19 +208,136 @@ static bool emitter_sample(struct tracer *tr, float p_group, float t, float3 p, 
 	return ls->pdf > 0.0f;
 }
 
-/* The uniform environment's sample: the sphere of directions, pdf 1/(4 pi). */
-static void environment_sample(struct tracer *tr, float p_group, float2 st,
+/* The environment map (RENDERING.md, "The environment"): its arrays. */
+static inline RTCL_SCENE_SPACE const float4 *env_texels(struct tracer *tr)
+{
+	return (RTCL_SCENE_SPACE const float4 *)((RTCL_SCENE_SPACE const uchar *)tr->scene +
+						  tr->path->env_texel_offset);
+}
+
+static inline RTCL_SCENE_SPACE const float *env_cdf(struct tracer *tr, uint offset)
+{
+	return (RTCL_SCENE_SPACE const float *)((RTCL_SCENE_SPACE const uchar *)tr->scene + offset);
+}
+
+/* The weight of texel (j, k) over the sum of them all, times W H. */
+static inline float env_texel_density(struct tracer *tr, float3 radiance, int k)
+{
+	RTCL_SCENE_SPACE const struct rt_path *path = tr->path;
+	float sin_row = sin(M_PI_F * ((float)k + 0.5f) / (float)path->env_height);
+
+	COUNT_FLOPS(tr, 4 + 3);
+	return luminance(tr, radiance) * sin_row * path->env_inv_weight *
+	       (float)(path->env_width * path->env_height);
+}
+
+/* The map's direction of (u, v), turned about +y. */
+static float3 env_direction(struct tracer *tr, float u, float v, float *sin_theta)
+{
+	RTCL_SCENE_SPACE const struct rt_path *path = tr->path;
+	float theta = M_PI_F * v, phi = 2.0f * M_PI_F * u;
+	float st = sin(theta);
+	float3 d0 = (float3)(-st * sin(phi), cos(theta), st * cos(phi));
+
+	*sin_theta = st;
+	COUNT_FLOPS(tr, 3 + 5 + 2 + 6);
+	return (float3)(d0.x * path->env_cos + d0.z * path->env_sin, d0.y,
+			-d0.x * path->env_sin + d0.z * path->env_cos);
+}
+
+/* The texel direction d falls in (*j, *k), and sin(theta) of d. */
+static void env_texel_of(struct tracer *tr, float3 d, int *j, int *k, float *sin_theta)
+{
+	RTCL_SCENE_SPACE const struct rt_path *path = tr->path;
+	float x0 = d.x * path->env_cos - d.z * path->env_sin;
+	float z0 = d.x * path->env_sin + d.z * path->env_cos;
+	float y0 = clamp(d.y, -1.0f, 1.0f);
+	float phi = atan2(-x0, z0);
+
+	if (phi < 0.0f)
+		phi += 2.0f * M_PI_F;
+	*sin_theta = sqrt(fmax(0.0f, 1.0f - y0 * y0));
+	*j = min(path->env_width - 1, (int)floor((float)path->env_width * phi / (2.0f * M_PI_F)));
+	*k = min(path->env_height - 1, (int)floor((float)path->env_height * acos(y0) / M_PI_F));
+	*j = max(*j, 0);
+	*k = max(*k, 0);
+	COUNT_FLOPS(tr, 6 + 2 + 1 + 4 + 3 + 4);
+}
+
+/* The radiance of a ray leaving the scene along d, and *pdf, the density
+ * (selection included) with which next_event samples d; 0 where the
+ * environment is not a light. */
+static float3 environment_radiance(struct tracer *tr, float3 d, float *pdf)
+{
+	RTCL_SCENE_SPACE const struct rt_path *path = tr->path;
+	float p_group = path->env_is_light ? 1.0f / (float)path->group_count : 0.0f;
+
+	COUNT_FLOPS(tr, 1);
+	if (path->environment != RT_ENVIRONMENT_MAP) {
+		*pdf = p_group * (0.25f * M_1_PI_F);
+		COUNT_FLOPS(tr, 1);
+		return tr->scene->background.xyz;
+	}
+	int j, k;
+	float sin_theta;
+	env_texel_of(tr, d, &j, &k, &sin_theta);
+	float3 radiance = env_texels(tr)[k * path->env_width + j].xyz;
+	*pdf = sin_theta > 0.0f ? p_group * env_texel_density(tr, radiance, k) /
+					  (2.0f * M_PI_F * M_PI_F * sin_theta)
+				: 0.0f;
+	COUNT_FLOPS(tr, 4);
+	return radiance;
+}
+
+/* The first index i of cdf[0 .. n) with x < cdf[i] (the last is 1), and
+ * where x lies within its interval, in [0, 1). */
+static int cdf_find(RTCL_SCENE_SPACE const float *cdf, int n, float x, float *within)
+{
+	int lo = 0, hi = n - 1;
+
+	while (lo < hi) {
+		int mid = (lo + hi) / 2;
+		if (x < cdf[mid])
+			hi = mid;
+		else
+			lo = mid + 1;
+	}
+	float before = lo > 0 ? cdf[lo - 1] : 0.0f;
+	float width = cdf[lo] - before;
+	*within = width > 0.0f ? fmin((x - before) / width, 0x1.fffffep-1f) : 0.5f;
+	return lo;
+}
+
+/* The environment's sample: uniform on the sphere of directions (pdf
+ * 1/(4 pi)), or the map's by its weights. */
+static bool environment_sample(struct tracer *tr, float p_group, float2 st,
 			       struct light_sample *ls)
 {
-	float z = 1.0f - 2.0f * st.x;
-	float r = sqrt(fmax(0.0f, 1.0f - z * z));
-	float phi = 2.0f * M_PI_F * st.y;
+	RTCL_SCENE_SPACE const struct rt_path *path = tr->path;
 
-	ls->dir = (float3)(r * cos(phi), r * sin(phi), z);
 	ls->t_max = INFINITY;
-	ls->pdf = p_group * (0.25f * M_1_PI_F);
-	ls->radiance_over_pdf = tr->scene->background.xyz / ls->pdf;
-	COUNT_FLOPS(tr, 2 + 4 + 2 + 4 + 2 + FLOPS_MUL3);
+	if (path->environment != RT_ENVIRONMENT_MAP) {
+		float z = 1.0f - 2.0f * st.x;
+		float r = sqrt(fmax(0.0f, 1.0f - z * z));
+		float phi = 2.0f * M_PI_F * st.y;
+
+		ls->dir = (float3)(r * cos(phi), r * sin(phi), z);
+		ls->pdf = p_group * (0.25f * M_1_PI_F);
+		ls->radiance_over_pdf = tr->scene->background.xyz / ls->pdf;
+		COUNT_FLOPS(tr, 2 + 4 + 2 + 4 + 2 + FLOPS_MUL3);
+		return true;
+	}
+	float in_row, in_column, sin_theta;
+	int w = path->env_width, h = path->env_height;
+	int k = cdf_find(env_cdf(tr, path->env_row_cdf_offset), h, st.y, &in_row);
+	int j = cdf_find(env_cdf(tr, path->env_column_cdf_offset) + k * w, w, st.x, &in_column);
+	float u = ((float)j + in_column) / (float)w, v = ((float)k + in_row) / (float)h;
+	ls->dir = env_direction(tr, u, v, &sin_theta);
+	float3 radiance = env_texels(tr)[k * w + j].xyz;
+	ls->pdf = p_group * env_texel_density(tr, radiance, k) / (2.0f * M_PI_F * M_PI_F * sin_theta);
+	ls->radiance_over_pdf = radiance / ls->pdf;
+	COUNT_FLOPS(tr, 6 + 4 + 4 + 4 + FLOPS_MUL3);
+	return sin_theta > 0.0f && ls->pdf > 0.0f;
 }
 
 /* next_event's light: group g of the scene's, then the emitters' choice t
@@ -237,8 +354,7 @@ static bool light_sample(struct tracer *tr, uint g, float t, float2 st, float3 p
 		return scene_light_sample(tr, (int)g, p_group, p, st, ls);
 	if ((int)g == lights && tr->path->emitter_count > 0)
 		return emitter_sample(tr, p_group, t, p, st, ls);
-	environment_sample(tr, p_group, st, ls);
-	return true;
+	return environment_sample(tr, p_group, st, ls);
 }
 
 /* The light pdf (selection included) with which next_event would have

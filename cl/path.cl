@@ -221,14 +221,12 @@ static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit)
  * where next_event could have sampled it. */
 static void path_missed(struct tracer *tr, struct walk *w)
 {
-	float3 le = tr->scene->background.xyz;
+	float p_light;
+	float3 le = environment_radiance(tr, w->ray.dir, &p_light);
 	float weight = 1.0f;
 
-	if (!w->specular && tr->path->environment) {
-		float p_light = (0.25f * M_1_PI_F) / (float)tr->path->group_count;
+	if (!w->specular && p_light > 0.0f)
 		weight = mis_weight(tr, w->pdf_prev, p_light);
-		COUNT_FLOPS(tr, 1);
-	}
 	w->color += w->beta * le * weight;
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_ADD3);
 }

@@ -216,9 +216,22 @@ struct rt_path {
 	rt_int emitter_count;
 	rt_int group_count;	      /* the light groups: lights, emitters, environment */
 	rt_float inv_emitter_weight;  /* 1 / sum of lum(Le) * area over the emitters */
-	rt_int environment;	      /* the background is a light (non-zero) */
-	rt_int pad[2];
+	rt_int environment;	      /* RT_ENVIRONMENT_*: what rays that leave see */
+	rt_int env_width, env_height; /* the map's texels */
+	/* The map (RENDERING.md, "The environment"): env_width * env_height
+	   texels (float4, rgb the radiance with the scale, rows from the top),
+	   the rows' cumulative distribution (env_height floats) and each row's
+	   over its columns (env_width floats a row). */
+	rt_uint env_texel_offset, env_row_cdf_offset, env_column_cdf_offset;
+	rt_float env_inv_weight;      /* 1 / the sum of the texels' weights */
+	rt_float env_cos, env_sin;    /* of the rotation about +y */
+	rt_int env_is_light;	      /* a light group (its weights are not all 0) */
+	rt_int pad;
 };
+
+#define RT_ENVIRONMENT_NONE 0	 /* black: no light */
+#define RT_ENVIRONMENT_UNIFORM 1 /* the background's colour */
+#define RT_ENVIRONMENT_MAP 2
 
 /* A material's BSDF (SCENE.md "A material's bsdf"; the mapped one of a
  * material without: RENDERING.md). */
@@ -468,7 +481,7 @@ _Static_assert(sizeof(struct rt_scene) % 16 == 0,
 	       "rt_scene: the arrays after it stay 16-byte aligned");
 _Static_assert(sizeof(struct rt_bvh_node) == 64, "rt_bvh_node layout");
 _Static_assert(offsetof(struct rt_scene, path_offset) == 212, "rt_scene layout");
-_Static_assert(sizeof(struct rt_path) == 32, "rt_path layout");
+_Static_assert(sizeof(struct rt_path) == 64, "rt_path layout");
 _Static_assert(sizeof(struct rt_bsdf) == 64, "rt_bsdf layout");
 _Static_assert(sizeof(struct rt_emitter) == 16, "rt_emitter layout");
 _Static_assert(offsetof(struct rt_bvh_node, child[1].lo) == 32, "rt_bvh_node layout");

@@ -154,7 +154,7 @@ def box_with(tmp_path, change):
     (lambda d: d["materials"]["lamp"].update(emision=[1, 0, 0]),
      'materials.lamp: unknown key "emision"; did you mean "emission"?'),
     (lambda d: d.update(environment={"scale": 2}), 'environment: needs "file"'),
-    (lambda d: d.update(environment={"file": "sky.hdr", "rotat": 2}),
+    (lambda d: d.update(environment={"file": "nothere.hdr", "rotat": 2}),
      'environment: unknown key "rotat"; did you mean "rotate"?'),
 ])
 def test_scene_errors(tmp_path, change, message):
@@ -184,11 +184,6 @@ def test_counts_agree_between_kernels(tmp_path):
     assert (np.load(tmp_path / "dynamic.npy") == np.load(tmp_path / "wavefront.npy")).all()
 
 
-def test_environment_map_is_refused_until_rendered(tmp_path):
-    scene = box_with(tmp_path, lambda d: d.update(environment={"file": "sky.hdr"}))
-    failure(rtcl(scene, "-o", tmp_path / "x.pfm"), "environment: maps are not rendered yet")
-
-
 def test_ambient_is_warned_about_under_path(tmp_path):
     scene = box_with(tmp_path, lambda d: d.update(ambient=[0.2, 0.2, 0.2]))
     result = rtcl(scene, "-o", tmp_path / "x.pfm", "-q", "--size", "8x8", "--spp", "2")
@@ -199,6 +194,7 @@ def test_ambient_is_warned_about_under_path(tmp_path):
 
 
 def test_environment_is_warned_about_under_whitted(tmp_path):
+    write_hdr(tmp_path / "sky.hdr", [[(1.0, 1.0, 1.0)] * 8] * 2)
     scene = box_with(tmp_path, lambda d: d.update(environment={"file": "sky.hdr"}))
     result = rtcl(scene, "--integrator", "whitted", "-o", tmp_path / "x.pfm", "-q", "--size",
                   "8x8")
@@ -271,3 +267,88 @@ def test_an_emitting_sphere_lights_a_plane_as_the_formula_says(tmp_path, kernel)
     image = read_pfm(render(write_scene(tmp_path, doc), tmp_path, "sphere", "-k", kernel,
                             "--size", "8x8", "--spp", "1024"))
     assert np.allclose(image.mean(axis=(0, 1)), 0.25, rtol=0.01), image.mean(axis=(0, 1))
+
+
+def write_hdr(path, rows, rle=True):
+    """A Radiance .hdr of the given rows of (r, g, b) floats, each of the form
+    m * 2^(e - 136) exactly (the tests use 0, 0.5 and 1), run-length encoded
+    channel by channel or flat."""
+    def rgbe(c):
+        m = max(c)
+        if m <= 0:
+            return [0, 0, 0, 0]
+        e = 0
+        while m * 2.0 ** (136 - (e + 1)) < 128:  # m * 2^(136-e) in [128, 256)
+            e -= 1
+        while m * 2.0 ** (136 - e) >= 256:
+            e += 1
+        return [int(x * 2.0 ** (136 - e)) for x in c] + [e]
+    height, width = len(rows), len(rows[0])
+    out = bytearray(b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (height, width))
+    for row in rows:
+        pixels = [rgbe(c) for c in row]
+        if rle:
+            out += bytes([2, 2, width >> 8, width & 255])
+            for ch in range(4):
+                values = [p[ch] for p in pixels]
+                for at in range(0, width, 128):
+                    chunk = values[at:at + 128]
+                    out += bytes([len(chunk)]) + bytes(chunk)
+        else:
+            for p in pixels:
+                out += bytes(p)
+    path.write_bytes(bytes(out))
+
+
+@pytest.mark.parametrize("rle", [True, False])
+def test_environment_map_lights_a_plane_by_its_upper_half(tmp_path, rle):
+    """A map bright (radiance 1) in its upper half and black below: a diffuse
+    plane facing up sees the whole bright hemisphere and reflects rho, a
+    plane facing down sees nothing; the map sampled by its weights (its
+    black rows never chosen) and by the BSDF, combined by MIS. The turn
+    about +y changes nothing here."""
+    width, height = 16, 8
+    rows = [[(1.0, 1.0, 1.0) if k < height // 2 else (0.0, 0.0, 0.0)] * width
+            for k in range(height)]
+    write_hdr(tmp_path / "half.hdr", rows, rle)
+    doc = {"format": "rtcl-scene", "version": 1, "integrator": "path", "max_depth": 0,
+           "camera": {"eye": [0, 3, -3], "look_at": [0, 0, 0], "fov": 10},
+           "environment": {"file": "half.hdr", "rotate": 70},
+           "planes": [{"point": [0, 0, 0], "normal": [0, 1, 0],
+                       "material": {"bsdf": {"type": "diffuse",
+                                             "reflectance": [0.6, 0.6, 0.6]}}}]}
+    image = read_pfm(render(write_scene(tmp_path, doc), tmp_path, "half", "--size", "8x8",
+                            "--spp", "256"))
+    assert np.allclose(image.mean(axis=(0, 1)), 0.6, rtol=0.01), image.mean(axis=(0, 1))
+
+
+def test_environment_map_is_seen_where_rays_leave(tmp_path):
+    """The map's middle column looks along -z (rotate 0): a camera looking
+    along -z at the horizon sees the middle column's colour, and with
+    rotate 180 the edge's."""
+    width, height = 8, 4
+    rows = [[(0.5, 0.0, 0.0) if j in (3, 4) else (0.0, 0.0, 0.5) for j in range(width)]
+            for k in range(height)]
+    write_hdr(tmp_path / "m.hdr", rows)
+    for rotate, colour in [(0, [0.5, 0, 0]), (180, [0, 0, 0.5])]:
+        doc = {"format": "rtcl-scene", "version": 1, "integrator": "path",
+               "camera": {"eye": [0, 0, 0], "look_at": [0, 0, -1], "fov": 5},
+               "environment": {"file": "m.hdr", "rotate": rotate}}
+        image = read_pfm(render(write_scene(tmp_path, doc), tmp_path, f"m{rotate}", "--size",
+                                "4x4"))
+        assert np.allclose(image, colour), (rotate, image[2, 2])
+
+
+@pytest.mark.parametrize("content, message", [
+    (None, 'environment.file: cannot read "sky.hdr": No such file or directory'),
+    (b"P6\n1 1\n255\n...", '"sky.hdr" is not a Radiance HDR file (it does not start with "#?")'),
+    (b"#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n", 'its FORMAT is "32-bit_rle_xyze"'),
+    (b"#?RADIANCE\n\n+X 2 -Y 2\n", 'its size line is "+X 2 -Y 2"'),
+    (b"#?RADIANCE\n\n-Y 3 +X 2\n" + bytes(8 * 2), '"sky.hdr": its pixels end after row 2 of 3'),
+])
+def test_environment_map_errors(tmp_path, content, message):
+    if content is not None:
+        (tmp_path / "sky.hdr").write_bytes(content)
+    scene = box_with(tmp_path, lambda d: d.update(environment={"file": "sky.hdr"}))
+    failure(rtcl(scene, "-o", tmp_path / "x.pfm"), message)
+    assert not (tmp_path / "x.pfm").exists()

@@ -268,7 +268,8 @@ static size_t leaf_triangle_count(const struct bvh *bvh)
  * (scene_has_textures), else they are empty at the end. */
 struct layout {
 	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, leaf_triangle,
-		uv, material_map, texture, texture_table, texel, path, bsdf, emitter, total;
+		uv, material_map, texture, texture_table, texel, path, bsdf, emitter, env_texel,
+		env_row_cdf, env_column_cdf, total;
 	int sphere_slots;
 };
 
@@ -289,13 +290,21 @@ static int emitter_count(const struct scene *scene)
  * it renders: the block of a Whitted scene is as before. */
 static void layout_path(struct layout *l, const struct scene *scene)
 {
-	l->path = l->bsdf = l->emitter = l->total;
+	const struct scene_environment *env = &scene->environment;
+	size_t texels = env->rgb ? (size_t)env->width * env->height : 0;
+
+	l->path = l->bsdf = l->emitter = l->env_texel = l->env_row_cdf = l->env_column_cdf =
+		l->total;
 	if (scene->integrator != SCENE_INTEGRATOR_PATH)
 		return;
 	l->path = round16(l->total);
 	l->bsdf = l->path + sizeof(struct rt_path);
 	l->emitter = l->bsdf + (size_t)scene->material_count * sizeof(struct rt_bsdf);
-	l->total = l->emitter + (size_t)emitter_count(scene) * sizeof(struct rt_emitter);
+	l->env_texel = l->emitter + (size_t)emitter_count(scene) * sizeof(struct rt_emitter);
+	l->env_row_cdf = l->env_texel + texels * sizeof(rt_vec4);
+	l->env_column_cdf = round16(l->env_row_cdf + (env->rgb ? (size_t)env->height : 0) *
+							   sizeof(float));
+	l->total = round16(l->env_column_cdf + texels * sizeof(float));
 }
 
 static struct layout layout_of(const struct scene *scene, const struct mesh_block *mesh,
@@ -420,6 +429,64 @@ static double fill_emitters(struct rt_emitter *emitters, const struct scene *sce
 	return sum;
 }
 
+/* The environment map (RENDERING.md, "The environment"): its texels with
+ * the scale applied, and the cumulative distributions that sample it by
+ * weight, lum(texel) sin(theta at the row's centre), computed in double. */
+/* Texel (j, k)'s radiance with the scale, and its weight. */
+static double env_texel(const struct scene_environment *env, int j, int k, double rgb[3])
+{
+	const float *in = env->rgb + 3 * ((size_t)k * env->width + j);
+
+	for (int c = 0; c < 3; c++)
+		rgb[c] = in[c] * env->scale;
+	return luminance(rgb) * sin(M_PI * (k + 0.5) / env->height);
+}
+
+static double env_row_weight(const struct scene_environment *env, int k)
+{
+	double rgb[3], row = 0;
+
+	for (int j = 0; j < env->width; j++)
+		row += env_texel(env, j, k, rgb);
+	return row;
+}
+
+static void pack_environment(unsigned char *block, struct rt_path *path, const struct layout *l,
+			     const struct scene_environment *env)
+{
+	rt_vec4 *texels = (rt_vec4 *)(block + l->env_texel);
+	float *row_cdf = (float *)(block + l->env_row_cdf);
+	float *column_cdf = (float *)(block + l->env_column_cdf);
+	int w = env->width, h = env->height;
+	double total = 0, rows = 0;
+
+	path->environment = RT_ENVIRONMENT_MAP;
+	path->env_width = w;
+	path->env_height = h;
+	path->env_texel_offset = (rt_uint)l->env_texel;
+	path->env_row_cdf_offset = (rt_uint)l->env_row_cdf;
+	path->env_column_cdf_offset = (rt_uint)l->env_column_cdf;
+	path->env_cos = (float)cos(env->rotate * M_PI / 180);
+	path->env_sin = (float)sin(env->rotate * M_PI / 180);
+	for (int k = 0; k < h; k++)
+		total += env_row_weight(env, k);
+	for (int k = 0; k < h; k++) {
+		double row = env_row_weight(env, k), sum = 0, rgb[3];
+		for (int j = 0; j < w; j++) {
+			size_t t = (size_t)k * w + j;
+			sum += env_texel(env, j, k, rgb);
+			texels[t] = vec4(rgb, 0.0);
+			column_cdf[t] = j == w - 1 ? 1.0f
+				       : row > 0   ? (float)(sum / row)
+						   : (float)((j + 1.0) / w);
+		}
+		rows += row;
+		row_cdf[k] = k == h - 1 ? 1.0f : total > 0 ? (float)(rows / total) : 0.0f;
+	}
+	path->env_inv_weight = total > 0 ? (float)(1.0 / total) : 0.0f;
+	path->env_is_light = total > 0;
+}
+
 /* The path integrator's header, BSDFs and emitters. device_sphere[i]:
  * scene sphere i's index on the device. */
 static void pack_path(unsigned char *block, struct rt_scene *header, const struct layout *l,
@@ -444,8 +511,13 @@ static void pack_path(unsigned char *block, struct rt_scene *header, const struc
 	path->emitter_count = count;
 	path->inv_emitter_weight = count ? (float)(1.0 / total) : 0.0f;
 	path->environment = scene->background[0] > 0 || scene->background[1] > 0 ||
-			    scene->background[2] > 0;
-	path->group_count = scene->light_count + (count > 0) + path->environment;
+					    scene->background[2] > 0
+				    ? RT_ENVIRONMENT_UNIFORM
+				    : RT_ENVIRONMENT_NONE;
+	path->env_is_light = path->environment != RT_ENVIRONMENT_NONE;
+	if (scene->environment.rgb)
+		pack_environment(block, path, l, &scene->environment);
+	path->group_count = scene->light_count + (count > 0) + path->env_is_light;
 }
 
 /* The textures' arrays (RENDERING.md, "Textures"): the vertices' texture

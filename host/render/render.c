@@ -50,13 +50,12 @@ const struct kernel_info *render_find_kernel(const char *name)
 int render_check_integrator(const struct scene *scene, const struct render_settings *s,
 			    char *err, size_t err_size)
 {
-	(void)s;
 	if (scene->integrator != SCENE_INTEGRATOR_PATH)
 		return 0;
-	if (scene->environment.file) {
+	if (!s->kernel && scene->environment.file) {
 		snprintf(err, err_size,
-			 "%s: environment: maps are not rendered yet (the path integrator lights "
-			 "the scene with \"background\" only); leave \"environment\" out",
+			 "%s: environment: the CPU reference (-k reference) does not render maps "
+			 "yet; use a kernel, or leave \"environment\" out",
 			 quote_text(scene->source));
 		return -1;
 	}

@@ -23,6 +23,7 @@
 #include "base/files.h"
 #include "base/quote.h"
 #include "scene/scene_loader.h"
+#include "scene/hdr_read.h"
 
 /* Larger documents are refused before parsing: jansson needs many times the
  * text size in memory, and no sensible scene comes near this. */
@@ -288,7 +289,17 @@ static int read_environment(struct loader *ld, json_t *doc)
 		return -1;
 	}
 	snprintf(env->file, size, "%s%s", dir, name);
-	return 0;
+
+	struct hdr_image image;
+	struct path field = child_key(&p, "file");
+	char reason[512];
+	if (hdr_read(env->file, name, &image, reason, sizeof(reason)))
+		return loader_fail(ld, &field, "%s", reason);
+	env->width = image.width;
+	env->height = image.height;
+	env->rgb = image.rgb;
+	char *input = strdup(env->file);
+	return input ? loader_add_input(ld, input, "environment map") : -1;
 }
 
 static int read_image_and_globals(struct loader *ld, json_t *doc)
@@ -641,6 +652,7 @@ void scene_free(struct scene *scene)
 {
 	free(scene->source);
 	free(scene->environment.file);
+	free(scene->environment.rgb);
 	for (int i = 0; i < scene->input_count; i++)
 		free(scene->inputs[i].path);
 	free(scene->inputs);
@@ -735,6 +747,9 @@ unsigned long long scene_digest(const struct scene *scene)
 		digest_bytes(&h, scene->environment.file, strlen(scene->environment.file));
 		digest_doubles(&h, &scene->environment.scale, 1);
 		digest_doubles(&h, &scene->environment.rotate, 1);
+		digest_bytes(&h, scene->environment.rgb, (size_t)scene->environment.width *
+								 scene->environment.height * 3 *
+								 sizeof(float));
 	}
 	/* Field by field: the structs' padding holds whatever it held. */
 	digest_int(&h, scene->material_count);

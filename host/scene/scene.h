@@ -163,6 +163,8 @@ struct scene_environment {
 	char *file; /* as the scene names it, joined to the scene's folder; NULL: none */
 	double scale;
 	double rotate; /* degrees about +y */
+	int width, height;
+	float *rgb; /* the map's radiance (scale not applied), rows from the top */
 };
 
 struct scene {
