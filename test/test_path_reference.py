@@ -6,7 +6,8 @@ PSNR at the same samples). Each scene stresses a part of the estimator: an
 emitting quad in a diffuse box, smooth glass and mirrors (delta lobes and the
 mapped Whitted materials), rough conductors and dielectrics (GGX by visible
 normals), the lights of "lights" beside emitting spheres, a uniform
-environment, and the principled BSDF."""
+environment and a map, the principled BSDF, and emitters that must not light
+themselves."""
 import json
 import math
 import os
@@ -142,6 +143,52 @@ SCENES = {
                  {"center": [0, 0.1, 0.5], "radius": 0.3, "material": "tinted"}]),
 }
 
+# an environment map (written beside the scene as sky.hdr, SKY below): sky
+# and ground with a small bright sun, turned about +y; its importance
+# sampling and MIS
+SCENES["environment_map"] = scene(
+    camera=OUTDOOR_CAMERA, environment={"file": "sky.hdr", "rotate": 30, "scale": 0.8},
+    materials={"floor": {"bsdf": {"type": "diffuse", "reflectance": [0.5, 0.45, 0.4]}},
+               "ball": {"bsdf": {"type": "diffuse", "reflectance": [0.8, 0.3, 0.2]}},
+               "frosted": {"bsdf": {"type": "dielectric", "ior": 1.5, "roughness": 0.3}},
+               "copper": {"bsdf": {"type": "conductor", "reflectance": [0.95, 0.64, 0.54],
+                                   "roughness": 0.25}}},
+    spheres=[{"center": [-0.9, 0.45, 0.2], "radius": 0.45, "material": "ball"},
+             {"center": [0, 0.45, 0.6], "radius": 0.45, "material": "frosted"},
+             {"center": [0.9, 0.45, 0.2], "radius": 0.45, "material": "copper"}],
+    planes=[{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor"}])
+
+
+def sky(width=32, height=16):
+    """Rows (top first) of (r, g, b): a blue sky brightening to the horizon,
+    a grey-brown ground, and a sun of 2 x 2 texels 22 to 45 degrees from the
+    zenith, of radiance 15."""
+    rows = []
+    for k in range(height):
+        v = (k + 0.5) / height
+        if v < 0.5:
+            row = [(0.2 + 0.6 * v, 0.3 + 0.6 * v, 0.8) for _ in range(width)]
+        else:
+            row = [(0.25, 0.2, 0.15 + 0.1 * (j % 2)) for j in range(width)]
+        rows.append(row)
+    for k in (2, 3):
+        for j in (20, 21):
+            rows[k][j] = (15.0, 13.0, 10.0)
+    return rows
+
+
+def write_hdr(path, rows):
+    """A flat (not run-length encoded) Radiance .hdr of the rows."""
+    def rgbe(c):
+        m = max(c)
+        if m < 1e-32:
+            return bytes(4)
+        e = math.frexp(m)[1]
+        return bytes([int(x * 256 / 2 ** e) for x in c] + [e + 128])
+    out = b"#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y %d +X %d\n" % (len(rows), len(rows[0]))
+    path.write_bytes(out + b"".join(rgbe(c) for row in rows for c in row))
+
+
 MODELS = pathlib.Path("/usr/share/assimp/models")
 if (MODELS / "OBJ" / "spider.obj").is_file():
     # models: a glTF box's principled material and base colour texture, the
@@ -209,6 +256,7 @@ OWN_EMITTER = pytest.mark.xfail(strict=True, reason="the kernels' points on an e
 def test_reference_agrees_with_the_kernel(tmp_path, name):
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps(SCENES[name]))
+    write_hdr(tmp_path / "sky.hdr", sky())
     reference = render(path, "reference", tmp_path / "reference.pfm")
     kernel = render(path, "dynamic", tmp_path / "dynamic.pfm")
     assert all(math.isfinite(c) and c >= 0 for c in reference)

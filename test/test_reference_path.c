@@ -256,6 +256,45 @@ Test(reference_path, mis_keeps_the_mean_of_rough_and_principled_bsdfs)
 	expect_mis_invariant(mapped_diffuse_and_mirror, "mapped");
 }
 
+/* An environment map over a diffuse plane facing up (+y, the map's top):
+ * the plane's irradiance from row k of the upper half is pi E_k
+ * (sin^2 theta_(k+1) - sin^2 theta_k), E_k the row's mean radiance, so
+ * L = rho sum_k E_k (sin^2 theta_(k+1) - sin^2 theta_k), whatever the
+ * columns and the turn about +y. Texels of radiance 0 are never light
+ * samples (weight 0) but still met by BSDF rays; the lower half, behind the
+ * plane, is sampled and shadowed. */
+Test(reference_path, environment_map_over_a_diffuse_plane_by_rows)
+{
+	enum { W = 8, H = 6 };
+	float rgb[3 * W * H];
+	double want = 0;
+	for (int k = 0; k < H; k++) {
+		double row = 0;
+		for (int j = 0; j < W; j++) {
+			double e = (j * 7 + k * 3) % 5 == 0 ? 0.0 : 0.25 * (1 + (j * 5 + k) % 4);
+			for (int c = 0; c < 3; c++)
+				rgb[3 * (k * W + j) + c] = (float)e;
+			row += e / W;
+		}
+		double lo = sin(M_PI * k / H), hi = sin(M_PI * (k + 1) / H);
+		if (k < H / 2)
+			want += 0.6 * 1.5 * row * (hi * hi - lo * lo); /* rho, scale */
+	}
+	struct path_scene ps;
+	scene_init(&ps, 4, 4, 5);
+	set3(ps.scene.camera.eye, 0, 3, -3);
+	add_plane(&ps, 0, 1, 0, add_bsdf(&ps, SCENE_BSDF_DIFFUSE, 0.6, 0.6, 0.6));
+	ps.scene.environment = (struct scene_environment){.file = "map (hand-built)",
+							  .scale = 1.5,
+							  .rotate = 70,
+							  .width = W,
+							  .height = H,
+							  .rgb = rgb};
+	double got[3];
+	render_mean(&ps, 0, 1024, 0, 0, 4, 4, got);
+	expect_near(got, want, want, want, 0.01, "map");
+}
+
 /* Emitters are seen directly: the primary ray's hit of a front face adds
  * Le at weight 1, the back face nothing. */
 Test(reference_path, an_emitter_seen_directly_is_its_emission_from_the_front_only)

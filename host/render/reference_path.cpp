@@ -474,10 +474,130 @@ bool bsdf_sample_direction(const bsdf &b, const dvec3 &wo, dvec2 uc, double u, b
 
 } // namespace
 
+/* ---- "The environment" ---- */
+
+environment::environment(const struct scene &sc)
+    : background(to_dvec3(sc.background)), width(0), height(0), total(0.0)
+{
+	const scene_environment &map = sc.environment;
+	double psi = glm::radians(map.rotate);
+	cos_psi = std::cos(psi);
+	sin_psi = std::sin(psi);
+	if (!map.file || !map.rgb)
+		return;
+	width = map.width;
+	height = map.height;
+	texels.resize((size_t)width * height);
+	weight.resize(texels.size());
+	row_cdf.resize(height);
+	column_cdf.resize(texels.size());
+	for (int k = 0; k < height; k++) {
+		/* w(j, k) = lum(E(j, k)) sin(pi (k + 0.5) / H), E = scale texel
+		 * rounded once to float */
+		double sin_row = std::sin(pi * (k + 0.5) / height), row = 0.0;
+		for (int j = 0; j < width; j++) {
+			size_t at = (size_t)k * width + j;
+			const float *t = map.rgb + 3 * at;
+			for (int c = 0; c < 3; c++)
+				texels[at][c] = (float)(map.scale * t[c]);
+			weight[at] = luminance(texels[at]) * sin_row;
+			row += weight[at];
+			column_cdf[at] = row;
+		}
+		for (int j = 0; j < width; j++)
+			column_cdf[(size_t)k * width + j] =
+				row > 0.0 ? column_cdf[(size_t)k * width + j] / row : 0.0;
+		total += row;
+		row_cdf[k] = total;
+	}
+	for (int k = 0; k < height; k++)
+		row_cdf[k] = total > 0.0 ? row_cdf[k] / total : 0.0;
+}
+
+bool environment::is_light() const
+{
+	return width > 0 ? total > 0.0 : !is_black(background);
+}
+
+/* The direction of (u, v): theta = pi v, phi = 2 pi u, turned about +y. */
+dvec3 environment::direction(double u, double v) const
+{
+	double theta = pi * v, phi = 2.0 * pi * u;
+	dvec3 d0(-std::sin(theta) * std::sin(phi), std::cos(theta),
+		 std::sin(theta) * std::cos(phi));
+	return dvec3(d0.x * cos_psi + d0.z * sin_psi, d0.y, -d0.x * sin_psi + d0.z * cos_psi);
+}
+
+/* The texel (j, k) of direction d, and sin(theta) there. */
+bool environment::lookup(const dvec3 &d, int *j, int *k, double *sin_theta) const
+{
+	dvec3 d0(d.x * cos_psi - d.z * sin_psi, d.y, d.x * sin_psi + d.z * cos_psi);
+	double theta = std::acos(std::clamp(d0.y, -1.0, 1.0));
+	double phi = std::atan2(-d0.x, d0.z);
+	if (phi < 0.0)
+		phi += 2.0 * pi;
+	*j = std::min(width - 1, (int)std::floor(width * phi / (2.0 * pi)));
+	*k = std::min(height - 1, (int)std::floor(height * theta / pi));
+	*sin_theta = std::sin(theta);
+	return true;
+}
+
+dvec3 environment::radiance(const dvec3 &d) const
+{
+	if (width == 0)
+		return background;
+	int j, k;
+	double sin_theta;
+	lookup(d, &j, &k, &sin_theta);
+	return texels[(size_t)k * width + j];
+}
+
+/* pdf_env(d): 1/(4 pi) uniform; a map's w(j, k) W H / (sum w 2 pi^2 sin(theta)). */
+double environment::pdf(const dvec3 &d) const
+{
+	if (width == 0)
+		return 1.0 / (4.0 * pi);
+	int j, k;
+	double sin_theta;
+	lookup(d, &j, &k, &sin_theta);
+	double w = weight[(size_t)k * width + j];
+	if (sin_theta == 0.0 || w == 0.0)
+		return 0.0;
+	return w * width * height / (total * 2.0 * pi * pi * sin_theta);
+}
+
+/* The first index of cdf[0 .. n) that exceeds x (n - 1 at most), and x's
+ * position inside its interval. */
+static double invert_cdf(const double *cdf, int n, double x, int *index)
+{
+	int i = 0;
+	while (i + 1 < n && !(x < cdf[i]))
+		i++;
+	double lo = i > 0 ? cdf[i - 1] : 0.0;
+	*index = i;
+	return cdf[i] > lo ? (x - lo) / (cdf[i] - lo) : 0.5;
+}
+
+dvec3 environment::sample(dvec2 st) const
+{
+	if (width == 0) {
+		/* Uniform: z = 1 - 2s, phi = 2 pi t. */
+		double z = 1.0 - 2.0 * st.x;
+		double r = std::sqrt(std::max(0.0, 1.0 - z * z));
+		double phi = 2.0 * pi * st.y;
+		return dvec3(r * std::cos(phi), r * std::sin(phi), z);
+	}
+	/* The row by t, then the column within it by s. */
+	int j, k;
+	double fv = invert_cdf(row_cdf.data(), height, st.y, &k);
+	double fu = invert_cdf(column_cdf.data() + (size_t)k * width, width, st.x, &j);
+	return direction((j + fu) / width, (k + fv) / height);
+}
+
 /* ---- The scene's lights ---- */
 
 path_tracer::path_tracer(const struct scene &sc, int max_depth_)
-    : scene_geometry(sc), emitter_total(0.0), emitters_group(-1), environment_group(-1),
+    : scene_geometry(sc), emitter_total(0.0), emitters_group(-1), env(sc), environment_group(-1),
       max_depth(max_depth_)
 {
 	/* "Lights and their selection": the lights of `lights`, then the
@@ -516,7 +636,7 @@ path_tracer::path_tracer(const struct scene &sc, int max_depth_)
 	group_count = (int)lights.size();
 	if (!emitters.empty())
 		emitters_group = group_count++;
-	if (!is_black(background))
+	if (env.is_light())
 		environment_group = group_count++;
 }
 
@@ -545,19 +665,10 @@ double path_tracer::emitter_pdf(const hit &h, const dvec3 &y, const dvec3 &x) co
 	return 1.0 / (2.0 * pi * one_minus_cos(sin2, c_max));
 }
 
-/* p_env(d) = (1/G) pdf_env(d), pdf_env = 1/(4 pi) for the uniform
- * environment; 0 without an environment group. (Maps, "The environment",
- * are refused before rendering until they are implemented.) */
-double path_tracer::environment_pdf() const
+/* p_env(d) = (1/G) pdf_env(d); 0 without an environment group. */
+double path_tracer::environment_pdf(const dvec3 &d) const
 {
-	return environment_group < 0 ? 0.0 : 1.0 / (4.0 * pi) / group_count;
-}
-
-/* Le_env(d): "background", uniform. */
-dvec3 path_tracer::environment_radiance(const dvec3 &d) const
-{
-	(void)d;
-	return background;
+	return environment_group < 0 ? 0.0 : env.pdf(d) / group_count;
 }
 
 /* "next_event(i)": an emitter's sample from p with (s, t) = pair B(i), its
@@ -668,14 +779,10 @@ bool path_tracer::sample_light(const surface &s, int vertex, const sample_id &sa
 		ls->pdf *= group_pdf * emitter_probability(e);
 		return true;
 	}
-	/* The uniform environment: z = 1 - 2s, phi = 2 pi t. */
-	double z = 1.0 - 2.0 * st.x;
-	double r = std::sqrt(std::max(0.0, 1.0 - z * z));
-	double phi = 2.0 * pi * st.y;
-	ls->l = dvec3(r * std::cos(phi), r * std::sin(phi), z);
-	ls->E = environment_radiance(ls->l);
-	ls->pdf = environment_pdf();
-	return true;
+	ls->l = env.sample(st);
+	ls->E = env.radiance(ls->l);
+	ls->pdf = environment_pdf(ls->l);
+	return ls->pdf > 0.0;
 }
 
 /* "next_event(i)": one light sample's contribution at vertex i. */
@@ -773,8 +880,7 @@ dvec3 path_tracer::radiance(const dvec3 &o_, const dvec3 &d_, const sample_id &s
 	for (int i = 0;; i++) {
 		hit h;
 		if (!nearest_hit(o, d, &h)) {
-			L += beta * environment_radiance(d) *
-			     w_hit(specular, pdf_prev, environment_pdf());
+			L += beta * env.radiance(d) * w_hit(specular, pdf_prev, environment_pdf(d));
 			break;
 		}
 		surface s = surface_at(h, o, d);
@@ -856,7 +962,7 @@ bool path_tracer::mis_weights(const dvec3 &o, const dvec3 &d, const sample_id &s
 	hit found;
 	double p_light;
 	if (!nearest_hit(origin, ls.l, &found)) {
-		p_light = environment_pdf();
+		p_light = environment_pdf(ls.l);
 	} else {
 		surface sf = surface_at(found, origin, ls.l);
 		if (sf.inside || !(found.tri || found.sphere) ||

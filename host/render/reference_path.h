@@ -46,6 +46,38 @@ struct light_sample {
 				shadow its own point; null for the others */
 };
 
+/* RENDERING.md "The environment": what rays that leave the scene see, and
+ * the environment as a light: `background` (uniform) or a map. */
+class environment
+{
+      public:
+	/* May throw std::bad_alloc. */
+	explicit environment(const struct scene &sc);
+
+	/* Le_env(d). */
+	dvec3 radiance(const dvec3 &d) const;
+	/* pdf_env(d) in solid angle (0 where it is no light). */
+	double pdf(const dvec3 &d) const;
+	/* A direction by pair B(i) = st. */
+	dvec3 sample(dvec2 st) const;
+	/* Whether it is a light group: a non-zero background, or a map of
+	 * non-zero total weight. */
+	bool is_light() const;
+
+      private:
+	bool lookup(const dvec3 &d, int *j, int *k, double *sin_theta) const;
+	dvec3 direction(double u, double v) const;
+
+	dvec3 background;
+	int width, height;		/* 0: no map, the uniform background */
+	std::vector<dvec3> texels;	/* E(j, k), row k from the top */
+	std::vector<double> weight;	/* w(j, k) */
+	std::vector<double> row_cdf;	/* over k, of the rows' summed weights */
+	std::vector<double> column_cdf; /* over j within each row */
+	double total;			/* the sum of the weights */
+	double cos_psi, sin_psi;	/* the turn about +y */
+};
+
 class path_tracer : public scene_geometry
 {
       public:
@@ -79,14 +111,14 @@ class path_tracer : public scene_geometry
 	bool sample_emitter(const emitter &e, const dvec3 &p, dvec2 st, light_sample *ls) const;
 	double emitter_probability(int e) const;
 	double emitter_pdf(const hit &h, const dvec3 &y, const dvec3 &x) const;
-	double environment_pdf() const;
-	dvec3 environment_radiance(const dvec3 &d) const;
+	double environment_pdf(const dvec3 &d) const;
 
 	std::vector<emitter> emitters;
 	std::vector<int> triangle_emitter; /* per triangle: its emitter, or -1 */
 	std::vector<int> sphere_emitter;
 	double emitter_total; /* W */
 	int emitters_group;   /* the group's index, or -1 */
+	environment env;
 	int environment_group;
 	int group_count; /* G */
 	int max_depth;
