@@ -43,13 +43,23 @@ def write_scene(tmp_path, doc, name="s.json"):
     return path
 
 
-def test_every_kernel_gives_the_same_image(tmp_path):
+def same_image_from_kernels(tmp_path, kernels):
     images = {k: render(BOX, tmp_path, k, "-k", k, "--size", "20x20", "--spp", "4")
-              for k in ["serial", "naive", "cyclic", "dynamic", "persistent", "wavefront"]}
-    first = images["serial"].read_bytes()
-    assert read_pfm(images["serial"]).mean() > 0.05  # lit, not black
+              for k in kernels}
+    first = images[kernels[0]].read_bytes()
+    assert read_pfm(images[kernels[0]]).mean() > 0.05  # lit, not black
     for kernel, path in images.items():
-        assert path.read_bytes() == first, f"{kernel} differs from serial"
+        assert path.read_bytes() == first, f"{kernel} differs from {kernels[0]}"
+
+
+def test_dynamic_and_wavefront_give_the_same_image(tmp_path):
+    same_image_from_kernels(tmp_path, ["dynamic", "wavefront"])
+
+
+@pytest.mark.slow
+def test_every_kernel_gives_the_same_image(tmp_path):
+    same_image_from_kernels(tmp_path, ["serial", "naive", "cyclic", "dynamic", "persistent",
+                                       "wavefront"])
 
 
 def furnace(tmp_path, bsdf, samples=64, size="16x16"):
@@ -77,6 +87,7 @@ def test_white_furnace_smooth_glass_is_invisible(tmp_path):
     assert np.allclose(mean, 1.0, rtol=0.01), mean
 
 
+@pytest.mark.slow
 def test_white_furnace_principled_stays_below_one(tmp_path):
     mean = furnace(tmp_path, {"type": "principled", "base_color": [1, 1, 1], "roughness": 0.4})
     assert (mean <= 1.01).all() and (mean > 0.8).all(), mean
@@ -102,15 +113,20 @@ def test_whitted_scene_ignores_the_path_fields(tmp_path):
 
 
 def test_integrator_option_overrides_the_scene(tmp_path):
-    whitted = render(BOX, tmp_path, "w", "--integrator", "whitted", "--size", "12x12")
     path = render(BOX, tmp_path, "p", "--size", "12x12")
-    assert whitted.read_bytes() != path.read_bytes()
     with open(BOX) as f:
         doc = json.load(f)
     del doc["integrator"]
     scene = write_scene(tmp_path, doc)
     again = render(scene, tmp_path, "again", "--integrator", "path", "--size", "12x12")
     assert again.read_bytes() == path.read_bytes()
+
+
+@pytest.mark.slow
+def test_integrator_option_whitted_overrides_a_path_scene(tmp_path):
+    whitted = render(BOX, tmp_path, "w", "--integrator", "whitted", "--size", "12x12")
+    path = render(BOX, tmp_path, "p", "--size", "12x12")
+    assert whitted.read_bytes() != path.read_bytes()
 
 
 def failure(result, message, status=None):
@@ -167,6 +183,7 @@ def test_integrator_option_error(tmp_path):
             'rtcl: --integrator: expected whitted or path, got "pth"', 2)
 
 
+@pytest.mark.slow
 def test_counts_agree_between_kernels(tmp_path):
     """The flop count, rays and the work map of a path-traced render are the
     same whichever kernel traces it (the wavefront's bounces included)."""
@@ -250,7 +267,7 @@ def test_model_emission_is_rendered_under_path(tmp_path):
     assert np.allclose(right, [0.25, 0.5, 1], rtol=1e-5), right
 
 
-@pytest.mark.parametrize("kernel", ["dynamic", "wavefront"])
+@pytest.mark.parametrize("kernel", ["dynamic", pytest.param("wavefront", marks=pytest.mark.slow)])
 def test_an_emitting_sphere_lights_a_plane_as_the_formula_says(tmp_path, kernel):
     """A diffuse plane of albedo rho under an emitting sphere of radius R
     whose centre is D above it: the point below reflects rho Le R^2 / D^2
