@@ -152,7 +152,7 @@ static float3 triangle_cross(struct tracer *tr, uint4 index, float3 *v0, float3 
 /* The emitter chosen by t among the emitters (the first whose cdf exceeds
  * t), sampled from p. p_group: the emitters group's probability. */
 static bool emitter_sample(struct tracer *tr, float p_group, float t, float3 p, float2 st,
-			   struct light_sample *ls)
+			   struct hit at, struct light_sample *ls)
 {
 	RTCL_SCENE_SPACE const struct rt_path *path = tr->path;
 	int lo = 0, hi = path->emitter_count - 1;
@@ -167,6 +167,11 @@ static bool emitter_sample(struct tracer *tr, float p_group, float t, float3 p, 
 	uint prim = tr->emitters[lo].prim;
 	int index = (int)(prim & RT_PRIM_INDEX_MASK);
 	float3 le;
+	/* An emitter is no light at its own points: none of it is seen from
+	   its surface, which rounding could decide otherwise. */
+	if (prim >> RT_PRIM_KIND_SHIFT == RT_PRIM_SPHERE ? index == at.sphere
+							   : index == at.triangle)
+		return false;
 	if (prim >> RT_PRIM_KIND_SHIFT == RT_PRIM_SPHERE) {
 		ls->sphere = index;
 		RTCL_SCENE_SPACE const struct rt_sphere *s = &tr->spheres[index];
@@ -200,6 +205,14 @@ static bool emitter_sample(struct tracer *tr, float p_group, float t, float3 p, 
 		le = emitter_emission(tr, triangle_material(tri));
 		/* P_e pdf_e = lum area / W * dist^2 / (area cos): the area cancels */
 		ls->pdf = p_group * luminance(tr, le) * path->inv_emitter_weight * dist2 / cos_l;
+#ifdef RTCL_TEXTURES
+		int texture = tr->bsdfs[triangle_material(tri)].emissive_texture;
+		if (texture >= 0) { /* at y, of barycentric (r (1 - t), r t) */
+			float2 uv = triangle_uv(tr, tri, (float2)(r * (1.0f - st.y), r * st.y));
+			le *= texture_lookup(tr, texture, uv).xyz;
+			COUNT_FLOPS(tr, 3 + FLOPS_MUL3);
+		}
+#endif
 		ls->t_max = dist2 * inv - 2.0f * scene_epsilon(tr->scene);
 		COUNT_FLOPS(tr, 4 + 3);
 	}
@@ -341,8 +354,9 @@ static bool environment_sample(struct tracer *tr, float p_group, float2 st,
 }
 
 /* next_event's light: group g of the scene's, then the emitters' choice t
- * and the point st on the light, seen from p. False: none. */
-static bool light_sample(struct tracer *tr, uint g, float t, float2 st, float3 p,
+ * and the point st on the light, seen from p, the point of hit at. False:
+ * none. */
+static bool light_sample(struct tracer *tr, uint g, float t, float2 st, float3 p, struct hit at,
 			 struct light_sample *ls)
 {
 	int lights = tr->scene->light_count;
@@ -353,7 +367,7 @@ static bool light_sample(struct tracer *tr, uint g, float t, float2 st, float3 p
 	if ((int)g < lights)
 		return scene_light_sample(tr, (int)g, p_group, p, st, ls);
 	if ((int)g == lights && tr->path->emitter_count > 0)
-		return emitter_sample(tr, p_group, t, p, st, ls);
+		return emitter_sample(tr, p_group, t, p, st, at, ls);
 	return environment_sample(tr, p_group, st, ls);
 }
 

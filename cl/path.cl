@@ -58,11 +58,41 @@ static void walk_start(struct tracer *tr, struct walk *w, int x, int y, float2 o
 
 /* The hit being scattered: where, its normals and its BSDF. */
 struct path_hit {
+	struct hit hit;
+	float3 emission; /* Le from the front side, its texture applied */
 	float3 p, n, n_face;
 	bool inside;
 	int material;
 	struct bsdf bsdf;
 };
+
+#ifdef RTCL_TEXTURES
+/* A model's textures at a triangle's hit (RENDERING.md, "Models'
+ * textures"): the base colour, the metallic-roughness (G scales the
+ * roughness, B the metallic factor) and the emission. */
+static void path_model_textures(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_bsdf *b,
+				uint4 index, struct hit hit, struct path_hit *h)
+{
+	struct bsdf *out = &h->bsdf;
+	float2 barycentric = (float2)(hit.u, hit.v);
+
+	out->color = fmin(triangle_base_color(tr, index, barycentric, out->color), (float3)(1.0f));
+	if (b->metallic_roughness_texture < 0 && b->emissive_texture < 0)
+		return;
+	float2 uv = triangle_uv(tr, index, barycentric);
+	if (b->metallic_roughness_texture >= 0) {
+		float4 t = texture_lookup(tr, b->metallic_roughness_texture, uv);
+		float roughness = b->roughness * t.y;
+		out->metallic = b->metallic * t.z;
+		out->alpha = fmax(roughness * roughness, BSDF_SMOOTH_ALPHA);
+		COUNT_FLOPS(tr, 4);
+	}
+	if (b->emissive_texture >= 0) {
+		h->emission *= texture_lookup(tr, b->emissive_texture, uv).xyz;
+		COUNT_FLOPS(tr, FLOPS_MUL3);
+	}
+}
+#endif
 
 /* Fills h for the hit of ray (RENDERING.md trace step 2 for the normals;
  * "The BSDFs" for the colours at the hit). */
@@ -71,6 +101,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 {
 	struct shading sh;
 
+	h->hit = hit;
 	h->p = ray->origin + hit.t * ray->dir;
 	COUNT_FLOPS(tr, FLOPS_MUL3 + FLOPS_ADD3 + FLOPS_DOT3);
 	float3 normal = hit_surface(tr, hit, h->p, ray->dir, &sh);
@@ -103,13 +134,12 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 		COUNT_FLOPS(tr, 3);
 	} else {
 		out->color = b->color.xyz;
-#ifdef RTCL_TEXTURES
-		if (hit.triangle >= 0) /* a model's principled material: its texture */
-			out->color = fmin(triangle_base_color(tr, tr->triangles[hit.triangle].index,
-							      (float2)(hit.u, hit.v), out->color),
-					  (float3)(1.0f));
-#endif
 	}
+	h->emission = b->emission.xyz;
+#ifdef RTCL_TEXTURES
+	if (hit.triangle >= 0 && b->type != RT_BSDF_MAPPED)
+		path_model_textures(tr, b, tr->triangles[hit.triangle].index, hit, h);
+#endif
 }
 
 /* next_event (RENDERING.md): a light sampled from h's point; when it
@@ -124,7 +154,7 @@ static void path_next_event(struct tracer *tr, struct walk *w, const struct path
 	struct light_sample ls;
 
 	COUNT_FLOPS(tr, 1);
-	if (!light_sample(tr, g, t, path_pair(tr, PAIR_LIGHT_POINT(w->vertex)), h->p, &ls))
+	if (!light_sample(tr, g, t, path_pair(tr, PAIR_LIGHT_POINT(w->vertex)), h->p, h->hit, &ls))
 		return;
 	float3 l = to_local(tr, f, ls.dir);
 	bool front = dot3(ls.dir, h->n_face) > 0.0f;
@@ -167,10 +197,10 @@ static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit)
 	path_surface(tr, &w->ray, hit, &h);
 	RTCL_SCENE_SPACE const struct rt_bsdf *b = &tr->bsdfs[h.material];
 	if (!h.inside && b->emits) {
-		float3 le = b->emission.xyz;
+		float3 le = h.emission;
 		float weight = 1.0f;
 		if (!w->specular) {
-			float p_light = emitter_pdf(tr, hit, w->x_prev, h.p, le);
+			float p_light = emitter_pdf(tr, hit, w->x_prev, h.p, b->emission.xyz);
 			if (p_light > 0.0f)
 				weight = mis_weight(tr, w->pdf_prev, p_light);
 		}

@@ -154,6 +154,9 @@ struct rt_texture {
 /* Texels of 4 floats, linear (16-bit and float images); else 4 bytes, RGB
  * sRGB-encoded and alpha linear, decoded through the table. */
 #define RT_TEXTURE_FLOAT 16u
+/* 8-bit texels whose RGB are linear numbers (metallic-roughness), decoded
+ * by the table's linear half. */
+#define RT_TEXTURE_LINEAR 32u
 #define RT_TEXTURE_TABLE 512
 
 struct rt_scene {
@@ -251,7 +254,12 @@ struct rt_bsdf {
 	rt_float mirror;		 /* mapped: kr, the mirror's probability */
 	rt_int mirror_tint;		 /* mapped: the mirror is a Schlick conductor of C */
 	rt_int emits;			 /* emission is non-zero */
-	rt_int pad;
+	rt_float roughness;		 /* principled: the factor, before its texture */
+	/* A model's textures (RTCL_TEXTURES), indices or -1: glTF's
+	   metallic-roughness (G scales the roughness, B the metallic factor)
+	   and the emissive texture (multiplies the emission). */
+	rt_int metallic_roughness_texture, emissive_texture;
+	rt_int pad[2];
 };
 
 /* An emitter: the primitive (RT_PRIM_* kind | its device index) and the
@@ -482,7 +490,7 @@ _Static_assert(sizeof(struct rt_scene) % 16 == 0,
 _Static_assert(sizeof(struct rt_bvh_node) == 64, "rt_bvh_node layout");
 _Static_assert(offsetof(struct rt_scene, path_offset) == 212, "rt_scene layout");
 _Static_assert(sizeof(struct rt_path) == 64, "rt_path layout");
-_Static_assert(sizeof(struct rt_bsdf) == 64, "rt_bsdf layout");
+_Static_assert(sizeof(struct rt_bsdf) == 80, "rt_bsdf layout");
 _Static_assert(sizeof(struct rt_emitter) == 16, "rt_emitter layout");
 _Static_assert(offsetof(struct rt_bvh_node, child[1].lo) == 32, "rt_bvh_node layout");
 #endif

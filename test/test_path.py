@@ -369,3 +369,95 @@ def test_environment_map_errors(tmp_path, content, message):
     scene = box_with(tmp_path, lambda d: d.update(environment={"file": "sky.hdr"}))
     failure(rtcl(scene, "-o", tmp_path / "x.pfm"), message)
     assert not (tmp_path / "x.pfm").exists()
+
+
+def test_an_emitter_is_no_light_at_its_own_points(tmp_path):
+    """Inside an emitting sphere, whose emission leaves its outside only,
+    nothing is lit: a point on the dome must not sample the dome itself
+    (RENDERING.md, next_event), which rounding would otherwise decide."""
+    doc = {"format": "rtcl-scene", "version": 1, "integrator": "path", "max_depth": 3,
+           "camera": {"eye": [0.3, 0.2, -2], "look_at": [0, 0, 0], "fov": 60},
+           "spheres": [{"center": [0, 0, 0], "radius": 5,
+                        "material": {"bsdf": {"type": "diffuse", "reflectance": [0.8] * 3},
+                                     "emission": [1, 1, 1]}}]}
+    image = read_pfm(render(write_scene(tmp_path, doc), tmp_path, "dome", "--size", "16x16",
+                            "--spp", "16"))
+    assert image.max() == 0, image.mean()
+
+
+def png_rgba(rows):
+    """An 8-bit RGBA PNG of the rows (top first), written with zlib."""
+    import struct
+    import zlib
+    h, w = len(rows), len(rows[0])
+    raw = b"".join(b"\0" + b"".join(struct.pack(">BBBB", *p) for p in row) for row in rows)
+
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    return (b"\x89PNG\r\n\x1a\n" + chunk(b"IHDR", struct.pack(">IIBBBBB", w, h, 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def textured_quad(tmp_path, material, texels):
+    """A glTF quad over [-1, 1]^2 facing +z, its texture coordinates 0 ... 1
+    across, one texture (texels: a row of RGBA) clamped at its edges."""
+    import base64
+    import struct
+    pos = struct.pack("<12f", -1, -1, 0, 1, -1, 0, 1, 1, 0, -1, 1, 0)
+    uv = struct.pack("<8f", 0, 1, 1, 1, 1, 0, 0, 0)
+    buf = pos + uv + struct.pack("<6H", 0, 1, 2, 0, 2, 3)
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+           "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [{"attributes": {"POSITION": 0, "TEXCOORD_0": 1},
+                                       "indices": 2, "material": 0}]}],
+           "materials": [material],
+           "buffers": [{"byteLength": len(buf), "uri": "data:application/octet-stream;base64,"
+                        + base64.b64encode(buf).decode()}],
+           "bufferViews": [{"buffer": 0, "byteLength": 48},
+                           {"buffer": 0, "byteOffset": 48, "byteLength": 32},
+                           {"buffer": 0, "byteOffset": 80, "byteLength": 12}],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                          "min": [-1, -1, 0], "max": [1, 1, 0]},
+                         {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                         {"bufferView": 2, "componentType": 5123, "count": 6, "type": "SCALAR"}],
+           "samplers": [{"wrapS": 33071, "wrapT": 33071}],
+           "textures": [{"source": 0, "sampler": 0}],
+           "images": [{"uri": "data:image/png;base64,"
+                       + base64.b64encode(png_rgba([texels])).decode()}]}
+    (tmp_path / "q.gltf").write_text(json.dumps(doc))
+    return write_scene(tmp_path, {
+        "format": "rtcl-scene", "version": 2, "integrator": "path", "max_depth": 2,
+        "camera": {"eye": [0, 0, 3], "look_at": [0, 0, 0], "fov": 40},
+        "background": [1, 1, 1] if "emissiveFactor" not in material else [0, 0, 0],
+        "meshes": [{"file": "q.gltf", "smooth": False}]})
+
+
+def test_a_models_emissive_texture_colours_its_emission(tmp_path):
+    """glTF's emissiveTexture (sRGB) times emissiveFactor: red on the left
+    half of the quad, blue on the right."""
+    black = {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 1}
+    scene = textured_quad(tmp_path, {"pbrMetallicRoughness": black,
+                                     "emissiveFactor": [1, 0.5, 1],
+                                     "emissiveTexture": {"index": 0}},
+                          [(255, 0, 0, 255), (255, 0, 0, 255), (0, 0, 255, 255),
+                           (0, 0, 255, 255)])
+    image = read_pfm(render(scene, tmp_path, "e", "--size", "16x16", "--spp", "4"))
+    assert np.allclose(image[8, 4], [1, 0, 0], atol=1e-6), image[8, 4]
+    assert np.allclose(image[8, 11], [0, 0, 1], atol=1e-6), image[8, 11]
+
+
+def test_a_models_metallic_roughness_texture_scales_its_roughness(tmp_path):
+    """glTF's metallicRoughnessTexture (linear; G the roughness, B the
+    metallic factor's scale): a white metal whose left half is smooth (G 0)
+    mirrors the uniform environment of radiance 1, its right half (G 255,
+    roughness 1) loses some of it to single scattering."""
+    white = {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 1, "roughnessFactor": 1,
+             "metallicRoughnessTexture": {"index": 0}}
+    scene = textured_quad(tmp_path, {"pbrMetallicRoughness": white},
+                          [(0, 0, 255, 255), (0, 0, 255, 255), (0, 255, 255, 255),
+                           (0, 255, 255, 255)])
+    image = read_pfm(render(scene, tmp_path, "m", "--size", "16x16", "--spp", "64"))
+    smooth, rough = image[6:10, 3:5].mean(), image[6:10, 11:13].mean()
+    assert abs(smooth - 1) < 0.01, smooth
+    assert rough < 0.97, rough

@@ -372,6 +372,9 @@ static void pack_bsdf(struct rt_bsdf *out, const struct scene_material *m)
 	out->metallic = (float)b->metallic;
 	out->transmission = (float)b->transmission;
 	out->emits = scene_material_emits(m);
+	out->roughness = (float)roughness;
+	out->metallic_roughness_texture = m->metallic_roughness_texture - 1;
+	out->emissive_texture = m->emissive_texture - 1;
 }
 
 /* Emitter weights (RENDERING.md, "Lights and their selection"): lum(Le)
@@ -548,7 +551,8 @@ static void pack_textures(unsigned char *block, struct rt_scene *header, const s
 		textures[i].width = t->width;
 		textures[i].height = t->height;
 		textures[i].flags = (rt_uint)t->wrap_s | (rt_uint)t->wrap_t << RT_WRAP_T_SHIFT |
-				    (t->is_float ? RT_TEXTURE_FLOAT : 0u);
+				    (t->is_float ? RT_TEXTURE_FLOAT : 0u) |
+				    (t->is_linear ? RT_TEXTURE_LINEAR : 0u);
 		memcpy(block + texel, t->texels, t->bytes);
 		texel += round16(t->bytes);
 	}

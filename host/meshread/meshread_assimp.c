@@ -281,11 +281,15 @@ static int understood(const char *key, int metallic_roughness)
 	return 0;
 }
 
-/* The texture kinds rtcl reads: base colour and (cut-out) opacity. */
+/* The texture kinds rtcl reads: base colour, (cut-out) opacity, and for the
+ * path integrator glTF's metallic-roughness (Assimp 5.2's "unknown" type)
+ * and the emissive texture. */
 static int texture_read(unsigned semantic)
 {
 	return semantic == aiTextureType_DIFFUSE || semantic == aiTextureType_BASE_COLOR ||
-	       semantic == aiTextureType_OPACITY;
+	       semantic == aiTextureType_OPACITY || semantic == aiTextureType_UNKNOWN ||
+	       semantic == aiTextureType_METALNESS || semantic == aiTextureType_DIFFUSE_ROUGHNESS ||
+	       semantic == aiTextureType_EMISSIVE;
 }
 
 /* Counts the textures rtcl reads and notes the properties it does not
@@ -403,6 +407,7 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 
 	memset(m, 0, sizeof(*m));
 	m->base_texture = m->opacity_texture = -1;
+	m->metallic_roughness_texture = m->emissive_texture = -1;
 	string_of(mat, "?mat.name", m->name, sizeof(m->name));
 	int named = m->name[0] != '\0';
 	if (!named)
@@ -645,7 +650,19 @@ static int read_textures(const struct aiScene *sc, const char *path, struct mesh
 		if (m->kind == MESH_MATERIAL_PHONG)
 			m->opacity_texture = texture_of(sc, path, mat, aiTextureType_OPACITY,
 							MESH_TEXTURE_OPACITY, out);
-		textured |= m->base_texture >= 0 || m->opacity_texture >= 0;
+		/* glTF's metallicRoughnessTexture: Assimp 5.2 gives it as the
+		 * "unknown" type, later versions also as metalness */
+		if (m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+			m->metallic_roughness_texture = texture_of(
+				sc, path, mat,
+				aiGetMaterialTextureCount(mat, aiTextureType_UNKNOWN)
+					? aiTextureType_UNKNOWN
+					: aiTextureType_METALNESS,
+				MESH_TEXTURE_DATA, out);
+		m->emissive_texture =
+			texture_of(sc, path, mat, aiTextureType_EMISSIVE, MESH_TEXTURE_COLOR, out);
+		textured |= m->base_texture >= 0 || m->opacity_texture >= 0 ||
+			    m->metallic_roughness_texture >= 0 || m->emissive_texture >= 0;
 	}
 	free(used);
 	if (!textured)

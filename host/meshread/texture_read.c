@@ -179,7 +179,9 @@ int texture_decode(const unsigned char *bytes, size_t size, struct mesh_texture 
 				double x = ((const uint16_t *)in)[i] / 65535.0;
 				if (c == 3 && alpha_from_first)
 					x = ((const uint16_t *)in)[i - 3] / 65535.0;
-				out[i] = (float)(c == 3 ? x : texture_srgb_to_linear(x));
+				out[i] = (float)(c == 3 || t->role == MESH_TEXTURE_DATA
+							 ? x
+							 : texture_srgb_to_linear(x));
 			} else {
 				float x = ((const float *)in)[i];
 				if (c == 3 && alpha_from_first)

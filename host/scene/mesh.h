@@ -39,7 +39,12 @@ struct mesh_material {
 				     baseColorTexture): an index into the mesh's
 				     textures, or -1 */
 	int32_t opacity_texture;  /* MTL's map_d: an index, or -1 */
-	uint32_t pad[3];
+	/* Metallic-roughness: glTF's metallicRoughnessTexture (linear: G the
+	 * roughness, B the metallic factor's multiplier); any kind: the
+	 * emissive texture (glTF's emissiveTexture, MTL's map_Ke). Indices, or -1. */
+	int32_t metallic_roughness_texture;
+	int32_t emissive_texture;
+	uint32_t pad;
 	/* Phong: Kd, Ks, Ka, Ns, d (1 - Tr), Ni. */
 	double diffuse[3], specular[3], ambient[3], shininess, opacity, ior;
 	/* Metallic-roughness: the base colour factor (rgba), metallic, roughness,
@@ -71,7 +76,11 @@ enum mesh_texels {
 /* Which channel a texture's alpha comes from, as its role asks: a base colour
  * texture's alpha is its alpha channel (1 without); an opacity texture's
  * (map_d) is its alpha channel, or its first where it has none. */
-enum mesh_texture_role { MESH_TEXTURE_COLOR, MESH_TEXTURE_OPACITY };
+enum mesh_texture_role {
+	MESH_TEXTURE_COLOR,   /* RGB sRGB-encoded, alpha its own */
+	MESH_TEXTURE_OPACITY, /* the alpha, from the first channel without one */
+	MESH_TEXTURE_DATA     /* RGBA linear numbers (metallic-roughness) */
+};
 
 enum mesh_wrap { MESH_WRAP_REPEAT, MESH_WRAP_CLAMP, MESH_WRAP_MIRROR };
 

@@ -259,7 +259,7 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 		t->name[MESH_TEXTURE_NAME_MAX - 1] = t->reason[MESH_TEXTURE_REASON_MAX - 1] = '\0';
 		if (t->reason[0])
 			continue;
-		if (t->format > MESH_TEXELS_FLOAT || t->role > MESH_TEXTURE_OPACITY ||
+		if (t->format > MESH_TEXELS_FLOAT || t->role > MESH_TEXTURE_DATA ||
 		    t->wrap_s > MESH_WRAP_MIRROR || t->wrap_t > MESH_WRAP_MIRROR || t->width == 0 ||
 		    t->height == 0 || t->width > MESH_TEXTURE_MAX_SIDE ||
 		    t->height > MESH_TEXTURE_MAX_SIDE ||

@@ -55,6 +55,8 @@ struct scene_material {
 	int alpha_texture;   /* the cut-out's alpha texture */
 	double alpha_cutoff; /* > 0: hits of alpha below it are cut out; 0: none */
 	double alpha_scale;  /* the factor of the texture's alpha (glTF's b.a) */
+	int metallic_roughness_texture; /* the path integrator's (1 + index, 0: none) */
+	int emissive_texture;
 	/* The path integrator's (SCENE.md, "Path tracing"). */
 	struct scene_bsdf bsdf;
 	double emission[3]; /* radiance from the front side */
@@ -108,6 +110,7 @@ struct scene_texture {
 	int mesh;   /* the index of the mesh (meshes[i]) that brought it */
 	int width, height;
 	int is_float;
+	int is_linear; /* 8-bit RGB linear numbers (metallic-roughness), not sRGB */
 	int wrap_s, wrap_t; /* SCENE_WRAP_* */
 	void *texels;
 	size_t bytes;
@@ -233,7 +236,10 @@ static inline int scene_has_textures(const struct scene *scene)
 {
 	for (int i = 0; i < scene->material_count; i++)
 		if (scene->materials[i].texture || scene->materials[i].alpha_texture ||
-		    scene->materials[i].alpha_cutoff > 0)
+		    scene->materials[i].alpha_cutoff > 0 ||
+		    (scene->integrator == SCENE_INTEGRATOR_PATH &&
+		     (scene->materials[i].metallic_roughness_texture ||
+		      scene->materials[i].emissive_texture)))
 			return 1;
 	return 0;
 }

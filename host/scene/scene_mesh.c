@@ -453,13 +453,15 @@ static int add_texture(struct loader *ld, struct mesh_textures *mt, int i)
 	t->width = (int)in->width;
 	t->height = (int)in->height;
 	t->is_float = in->format == MESH_TEXELS_FLOAT;
+	t->is_linear = in->role == MESH_TEXTURE_DATA;
 	t->wrap_s = (int)in->wrap_s;
 	t->wrap_t = (int)in->wrap_t;
 	s->texture_count++;
 	loader_format_path(mt->file->parent, where, sizeof(where));
 	snprintf(line, sizeof(line), "%s \"%s\": texture \"%s\": %dx%d %s, %s/%s, %zu bytes", where,
 		 one_line(mt->name, text), one_line(in->name, tex), t->width, t->height,
-		 t->is_float ? "float linear" : "8-bit sRGB", wrap_names[t->wrap_s],
+		 t->is_float ? "float linear" : t->is_linear ? "8-bit linear" : "8-bit sRGB",
+		 wrap_names[t->wrap_s],
 		 wrap_names[t->wrap_t], t->bytes);
 	if (add_line(ld, &s->mesh_reports, &s->mesh_report_count, line))
 		return -1;
@@ -506,6 +508,13 @@ static int attach_textures(struct loader *ld, struct mesh_textures *mt,
 	    (opacity = use_texture(ld, mt, in->name, in->opacity_texture)) < 0)
 		return -1;
 	m->texture = base;
+	if (in->metallic_roughness_texture >= 0 &&
+	    (m->metallic_roughness_texture =
+		     use_texture(ld, mt, in->name, in->metallic_roughness_texture)) < 0)
+		return -1;
+	if (in->emissive_texture >= 0 &&
+	    (m->emissive_texture = use_texture(ld, mt, in->name, in->emissive_texture)) < 0)
+		return -1;
 	if (in->opacity_texture >= 0) { /* MTL's map_d: cut out below 0.5 */
 		m->alpha_texture = opacity;
 		m->alpha_cutoff = 0.5;
