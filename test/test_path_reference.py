@@ -243,16 +243,7 @@ def render(path, kernel, out):
     return read_pfm(out)
 
 
-# Until the kernels give an emitter no light sample at its own points
-# (RENDERING.md "next_event(i)", a fix of the spec proposed with the
-# reference's), the dome of "dome" lights itself there: 13 dB, its mean 0.47
-# for the reference's 0.27 (which is the dome's without its emission).
-OWN_EMITTER = pytest.mark.xfail(strict=True, reason="the kernels' points on an emitting "
-                                "sphere sample it as a light")
-
-
-@pytest.mark.parametrize("name", [pytest.param(name, marks=OWN_EMITTER) if name == "dome"
-                                  else name for name in sorted(SCENES)])
+@pytest.mark.parametrize("name", sorted(SCENES))
 def test_reference_agrees_with_the_kernel(tmp_path, name):
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps(SCENES[name]))
