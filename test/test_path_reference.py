@@ -8,12 +8,14 @@ mapped Whitted materials), rough conductors and dielectrics (GGX by visible
 normals), the lights of "lights" beside emitting spheres, a uniform
 environment and a map, the principled BSDF, and emitters that must not light
 themselves."""
+import base64
 import json
 import math
 import os
 import pathlib
 import struct
 import subprocess
+import zlib
 
 import pytest
 
@@ -189,6 +191,81 @@ def write_hdr(path, rows):
     path.write_bytes(out + b"".join(rgbe(c) for row in rows for c in row))
 
 
+# models' textures (RENDERING.md "Models' textures"): a glTF emitting quad
+# whose emissive texture colours its light (at hits and at light samples'
+# points), a glTF metal quad whose metallic-roughness texture (linear) varies
+# its roughness and metallic factor over a base colour texture (lamps.gltf,
+# written beside the scene by write_lamps below)
+SCENES["model_textures"] = scene(
+    camera=OUTDOOR_CAMERA, background=[0.15, 0.15, 0.2], max_depth=3,
+    materials={"floor": {"bsdf": {"type": "diffuse", "reflectance": [0.6, 0.6, 0.6]}}},
+    meshes=[{"file": "lamps.gltf", "smooth": False}],
+    planes=[{"point": [0, 0, 0], "normal": [0, 1, 0], "material": "floor"}])
+
+
+def png(rows):
+    """An 8-bit RGBA PNG of the rows (top first) of (r, g, b, a)."""
+    raw = b"".join(b"\0" + bytes(c for p in row for c in p) for row in rows)
+
+    def chunk(kind, data):
+        return (struct.pack(">I", len(data)) + kind + data
+                + struct.pack(">I", zlib.crc32(kind + data) & 0xffffffff))
+    return (b"\x89PNG\r\n\x1a\n"
+            + chunk(b"IHDR", struct.pack(">IIBBBBB", len(rows[0]), len(rows), 8, 6, 0, 0, 0))
+            + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
+
+
+def write_lamps(path):
+    """lamps.gltf: quad 0 under y = 1.5 facing down, emitting 4 times its
+    emissive texture (red, green, blue, white quarters); quad 1 standing at
+    z = 0.8 facing the camera, a principled metal (factors 1) whose
+    metallic-roughness texture has G (roughness) 0 ... 255 across and B
+    (metallic) 255 or 64 down, over a base colour texture."""
+    positions = [(-1, 1.5, -1), (1, 1.5, -1), (1, 1.5, 1), (-1, 1.5, 1),
+                 (-1, 0, 0.8), (-1, 1.2, 0.8), (1, 1.2, 0.8), (1, 0, 0.8)]
+    uvs = [(0, 0), (1, 0), (1, 1), (0, 1)] * 2
+    buf = (b"".join(struct.pack("<3f", *p) for p in positions)
+           + b"".join(struct.pack("<2f", *t) for t in uvs)
+           + struct.pack("<12H", 0, 1, 2, 0, 2, 3, 0, 1, 2, 0, 2, 3))
+
+    def view(offset, length):
+        return {"buffer": 0, "byteOffset": offset, "byteLength": length}
+
+    def image(rows):
+        return {"uri": "data:image/png;base64," + base64.b64encode(png(rows)).decode()}
+    quarters = [[(255, 0, 0, 255), (0, 255, 0, 255)], [(0, 0, 255, 255), (255, 255, 255, 255)]]
+    roughness = [[(0, g, b, 255) for g in (0, 60, 120, 180, 255)] for b in (255, 64)]
+    base = [[(230, 180, 90, 255), (200, 200, 210, 255)], [(120, 60, 40, 255), (240, 240, 240, 255)]]
+    black = {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 1}
+    doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
+           "nodes": [{"mesh": 0}],
+           "meshes": [{"primitives": [
+               {"attributes": {"POSITION": 2 * i, "TEXCOORD_0": 2 * i + 1}, "indices": 4 + i,
+                "material": i} for i in range(2)]}],
+           "materials": [{"pbrMetallicRoughness": black, "emissiveFactor": [1, 1, 1],
+                          "emissiveTexture": {"index": 0}},
+                         {"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1],
+                                                   "metallicFactor": 1, "roughnessFactor": 1,
+                                                   "baseColorTexture": {"index": 2},
+                                                   "metallicRoughnessTexture": {"index": 1}}}],
+           "buffers": [{"byteLength": len(buf), "uri": "data:application/octet-stream;base64,"
+                        + base64.b64encode(buf).decode()}],
+           "bufferViews": [view(0, 48), view(96, 32), view(48, 48), view(128, 32),
+                           view(160, 12), view(172, 12)],
+           "accessors": [{"bufferView": 0, "componentType": 5126, "count": 4, "type": "VEC3",
+                          "min": [-1, 1.5, -1], "max": [1, 1.5, 1]},
+                         {"bufferView": 1, "componentType": 5126, "count": 4, "type": "VEC2"},
+                         {"bufferView": 2, "componentType": 5126, "count": 4, "type": "VEC3",
+                          "min": [-1, 0, 0.8], "max": [1, 1.2, 0.8]},
+                         {"bufferView": 3, "componentType": 5126, "count": 4, "type": "VEC2"},
+                         {"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"},
+                         {"bufferView": 5, "componentType": 5123, "count": 6,
+                          "type": "SCALAR"}],
+           "textures": [{"source": i} for i in range(3)],
+           "images": [image(quarters), image(roughness), image(base)]}
+    path.write_text(json.dumps(doc))
+
+
 MODELS = pathlib.Path("/usr/share/assimp/models")
 if (MODELS / "OBJ" / "spider.obj").is_file():
     # models: a glTF box's principled material and base colour texture, the
@@ -248,6 +325,7 @@ def test_reference_agrees_with_the_kernel(tmp_path, name):
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps(SCENES[name]))
     write_hdr(tmp_path / "sky.hdr", sky())
+    write_lamps(tmp_path / "lamps.gltf")
     reference = render(path, "reference", tmp_path / "reference.pfm")
     kernel = render(path, "dynamic", tmp_path / "dynamic.pfm")
     assert all(math.isfinite(c) and c >= 0 for c in reference)

@@ -671,6 +671,16 @@ double path_tracer::environment_pdf(const dvec3 &d) const
 	return environment_group < 0 ? 0.0 : env.pdf(d) / group_count;
 }
 
+/* Le of material m (SCENE.md "Emission"), times its emissive texture at
+ * barycentric (u, v) of triangle tri ("Models' textures"). */
+dvec3 path_tracer::emission(int m, const triangle *tri, double u, double v) const
+{
+	const material &mat = materials[m];
+	if (!tri || mat.emissive_texture < 0)
+		return mat.emission;
+	return mat.emission * dvec3(texture_at(mat.emissive_texture, *tri, u, v));
+}
+
 /* "next_event(i)": an emitter's sample from p with (s, t) = pair B(i), its
  * pdf without 1/G and P_e. */
 bool path_tracer::sample_emitter(const emitter &e, const dvec3 &p, dvec2 st, light_sample *ls) const
@@ -687,7 +697,8 @@ bool path_tracer::sample_emitter(const emitter &e, const dvec3 &p, dvec2 st, lig
 		double cos_e = glm::dot(ls->l, tri.n_g);
 		if (!(cos_e < 0.0))
 			return false; /* y's front does not face p */
-		ls->E = materials[tri.material].emission;
+		/* y's barycentric coordinates of v1 and v2: (r (1 - t), r t) */
+		ls->E = emission(tri.material, &tri, r * (1.0 - st.y), r * st.y);
 		ls->pdf = dist * dist / (e.area * std::fabs(cos_e));
 		ls->t_max = dist - 2.0 * epsilon;
 		return true;
@@ -845,6 +856,13 @@ bool path_tracer::make_bsdf(const hit &h, const surface &s, const dvec3 &wo, bsd
 		return true;
 	case SCENE_BSDF_PRINCIPLED:
 		b->type = bsdf::PRINCIPLED;
+		if (h.tri && m.metallic_roughness_texture >= 0) {
+			/* "Models' textures": roughness r T.g, metallic m T.b */
+			glm::dvec4 T = texture_at(m.metallic_roughness_texture, *h.tri, h.u, h.v);
+			double roughness = sb.roughness * T.g;
+			b->alpha = roughness * roughness;
+			b->metallic = sb.metallic * T.b;
+		}
 		b->alpha = std::max(b->alpha, 0.001);
 		b->smooth = false;
 		return true;
@@ -885,8 +903,8 @@ dvec3 path_tracer::radiance(const dvec3 &o_, const dvec3 &d_, const sample_id &s
 		}
 		surface s = surface_at(h, o, d);
 		dvec3 wo = -d;
-		const dvec3 &Le = materials[s.material].emission;
-		if (!s.inside && !is_black(Le)) {
+		if (!s.inside && !is_black(materials[s.material].emission)) {
+			dvec3 Le = emission(s.material, h.tri, h.u, h.v);
 			double p_light = 0.0; /* an emitting plane is not a light */
 			if (h.tri || h.sphere) {
 				int e = h.tri ? triangle_emitter[h.tri - triangles.data()]

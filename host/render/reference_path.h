@@ -110,6 +110,7 @@ class path_tracer : public scene_geometry
 			  light_sample *ls) const;
 	bool sample_emitter(const emitter &e, const dvec3 &p, dvec2 st, light_sample *ls) const;
 	double emitter_probability(int e) const;
+	dvec3 emission(int material, const triangle *tri, double u, double v) const;
 	double emitter_pdf(const hit &h, const dvec3 &y, const dvec3 &x) const;
 	double environment_pdf(const dvec3 &d) const;
 

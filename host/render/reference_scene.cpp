@@ -54,6 +54,8 @@ glm::dvec4 texel(const texture &tex, int i, int j)
 		return glm::dvec4(f[0], f[1], f[2], f[3]);
 	}
 	const unsigned char *c = (const unsigned char *)tex.t->texels + at;
+	if (tex.t->is_linear) /* numbers, not colours: metallic-roughness */
+		return glm::dvec4(c[0] / 255.0, c[1] / 255.0, c[2] / 255.0, c[3] / 255.0);
 	return glm::dvec4(srgb_to_linear(c[0] / 255.0), srgb_to_linear(c[1] / 255.0),
 			  srgb_to_linear(c[2] / 255.0), c[3] / 255.0);
 }
@@ -219,7 +221,8 @@ scene_geometry::scene_geometry(const struct scene &sc)
 		materials.push_back({to_dvec3(m.color), m.ambient, m.diffuse, m.specular,
 				     m.shininess, m.reflect, m.transmit, m.ior, m.fresnel,
 				     m.texture - 1, m.alpha_texture - 1, m.alpha_cutoff,
-				     m.alpha_scale, m.bsdf, to_dvec3(m.emission)});
+				     m.alpha_scale, m.bsdf, to_dvec3(m.emission),
+				     m.metallic_roughness_texture - 1, m.emissive_texture - 1});
 	}
 	for (int i = 0; i < sc.texture_count; i++) {
 		const scene_texture &t = sc.textures[i];
@@ -331,6 +334,11 @@ dvec3 scene_geometry::texture_rgb(const hit &h) const
 	if (m.texture < 0)
 		return dvec3(1.0);
 	return dvec3(lookup(textures[m.texture], triangle_uv(*h.tri, h.u, h.v)));
+}
+
+glm::dvec4 scene_geometry::texture_at(int index, const triangle &tri, double u, double v) const
+{
+	return lookup(textures[index], triangle_uv(tri, u, v));
 }
 
 /* Trace step 3: whether p is on an odd square of a checkered plane: drop

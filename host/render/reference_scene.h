@@ -35,6 +35,8 @@ struct material {
 	double alpha_scale;
 	struct scene_bsdf bsdf; /* the path integrator's (SCENE_BSDF_NONE: mapped) */
 	dvec3 emission;
+	int metallic_roughness_texture; /* a model's principled material's, or -1 */
+	int emissive_texture;		/* or -1 */
 };
 
 /* A texture as RENDERING.md ("Textures") reads it. */
@@ -123,6 +125,8 @@ class scene_geometry
 	 * RGB at a triangle hit (1 without), and whether the hit is on an odd
 	 * square of a checkered plane. */
 	dvec3 texture_rgb(const hit &h) const;
+	/* Texture `index` at barycentric (u, v) of a triangle: RGBA, linear. */
+	glm::dvec4 texture_at(int index, const triangle &tri, double u, double v) const;
 	bool odd_checker_square(const hit &h, const dvec3 &p) const;
 
 	std::vector<material> materials;
