@@ -361,7 +361,11 @@ def test_environment_map_is_seen_where_rays_leave(tmp_path):
     (b"P6\n1 1\n255\n...", '"sky.hdr" is not a Radiance HDR file (it does not start with "#?")'),
     (b"#?RADIANCE\nFORMAT=32-bit_rle_xyze\n\n-Y 2 +X 2\n", 'its FORMAT is "32-bit_rle_xyze"'),
     (b"#?RADIANCE\n\n+X 2 -Y 2\n", 'its size line is "+X 2 -Y 2"'),
-    (b"#?RADIANCE\n\n-Y 3 +X 2\n" + bytes(8 * 2), '"sky.hdr": its pixels end after row 2 of 3'),
+    (b"#?RADIANCE\n\n-Y 3 +X 8\n" + bytes(32 * 2) + bytes([2, 2, 0, 8]),
+     '"sky.hdr": its pixels end after row 2 of 3'),
+    (b"#?RADIANCE\n\n-Y 16384 +X 16384\n" + bytes(100),
+     '"sky.hdr": its header declares 16384x16384 pixels, at least 16842752 bytes, but the '
+     'file holds 100 after its header'),
 ])
 def test_environment_map_errors(tmp_path, content, message):
     if content is not None:

@@ -126,6 +126,19 @@ int hdr_read(const char *path, const char *shown, struct hdr_image *out, char *e
 			 width, height, HDR_MAX_SIDE);
 		goto out;
 	}
+	/* The least a scanline takes: flat pixels of 4 bytes, or run-length
+	 * encoded runs of at most 128 values, 2 bytes a run and channel. So a
+	 * short file that declares a huge image is refused before its pixels
+	 * are allocated. */
+	size_t least = width >= 8 && width < 32768 ? 4 + 8 * (((size_t)width + 127) / 128)
+						   : 4 * (size_t)width;
+	if ((len - at) / least < (size_t)height) {
+		snprintf(err, err_size,
+			 "\"%s\": its header declares %dx%d pixels, at least %zu bytes, but the "
+			 "file holds %zu after its header",
+			 shown, width, height, least * (size_t)height, len - at);
+		goto out;
+	}
 	out->rgb = malloc((size_t)width * height * 3 * sizeof(float));
 	scanline = malloc((size_t)width * 4);
 	if (!out->rgb || !scanline) {
