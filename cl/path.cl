@@ -67,6 +67,43 @@ struct path_hit {
 };
 
 #ifdef RTCL_TEXTURES
+/* A model's normal texture at a triangle's hit (RENDERING.md, "Models'
+ * textures"): m = 2 T.rgb - 1 in the frame of the triangle's tangent dp/du
+ * (from its texture coordinates) made orthogonal to the shading normal on
+ * the front side, and its bitangent, turned to the side of dp/dv. The
+ * shading normal is left as it is where the coordinates are degenerate. */
+static void path_normal_map(struct tracer *tr, uint4 index, float3 texel, struct path_hit *h)
+{
+	float3 p0 = tr->vertices[index.x].position.xyz;
+	float3 e1 = tr->vertices[index.y].position.xyz - p0;
+	float3 e2 = tr->vertices[index.z].position.xyz - p0;
+	struct rt_vertex_uv t0 = tr->uvs[index.x], t1 = tr->uvs[index.y], t2 = tr->uvs[index.z];
+	float du1 = t1.u - t0.u, dv1 = t1.v - t0.v, du2 = t2.u - t0.u, dv2 = t2.v - t0.v;
+	float det = du1 * dv2 - du2 * dv1;
+	float3 n = h->inside ? -h->n : h->n; /* the front side's */
+
+	COUNT_FLOPS(tr, 2 * FLOPS_ADD3 + 4 + 3);
+	if (det == 0.0f)
+		return;
+	float3 dpdu = dv2 * e1 - dv1 * e2; /* times det, whose sign goes below */
+	float3 dpdv = du1 * e2 - du2 * e1;
+	float3 t = dpdu - dot3(n, dpdu) * n;
+	float length2 = dot3(t, t);
+	COUNT_FLOPS(tr, 4 * FLOPS_MUL3 + 2 * FLOPS_ADD3 + FLOPS_DOT3 + FLOPS_MUL3 + FLOPS_ADD3 +
+				FLOPS_DOT3);
+	if (!(length2 > 0.0f))
+		return;
+	t = t * (copysign(1.0f, det) * rsqrt(length2));
+	float3 bitangent = cross3(n, t);
+	if (dot3(bitangent, dpdv) * det < 0.0f)
+		bitangent = -bitangent;
+	float3 m = 2.0f * texel - 1.0f;
+	float3 mapped = normalize3(m.x * t + m.y * bitangent + m.z * n);
+	COUNT_FLOPS(tr, 2 + FLOPS_MUL3 + FLOPS_CROSS3 + FLOPS_DOT3 + 1 + 2 * FLOPS_ADD3 +
+				3 * FLOPS_MUL3 + 2 * FLOPS_ADD3 + FLOPS_NORMALIZE3);
+	h->n = h->inside ? -mapped : mapped;
+}
+
 /* A model's textures at a triangle's hit (RENDERING.md, "Models'
  * textures"): the base colour, the metallic-roughness (G scales the
  * roughness, B the metallic factor) and the emission. */
@@ -77,7 +114,7 @@ static void path_model_textures(struct tracer *tr, RTCL_SCENE_SPACE const struct
 	float2 barycentric = (float2)(hit.u, hit.v);
 
 	out->color = fmin(triangle_base_color(tr, index, barycentric, out->color), (float3)(1.0f));
-	if (b->metallic_roughness_texture < 0 && b->emissive_texture < 0)
+	if (b->metallic_roughness_texture < 0 && b->emissive_texture < 0 && b->normal_texture < 0)
 		return;
 	float2 uv = triangle_uv(tr, index, barycentric);
 	if (b->metallic_roughness_texture >= 0) {
@@ -91,6 +128,8 @@ static void path_model_textures(struct tracer *tr, RTCL_SCENE_SPACE const struct
 		h->emission *= texture_lookup(tr, b->emissive_texture, uv).xyz;
 		COUNT_FLOPS(tr, FLOPS_MUL3);
 	}
+	if (b->normal_texture >= 0)
+		path_normal_map(tr, index, texture_lookup(tr, b->normal_texture, uv).xyz, h);
 }
 #endif
 

@@ -259,7 +259,8 @@ struct rt_bsdf {
 	   metallic-roughness (G scales the roughness, B the metallic factor)
 	   and the emissive texture (multiplies the emission). */
 	rt_int metallic_roughness_texture, emissive_texture;
-	rt_int pad[2];
+	rt_int normal_texture; /* tangent space, linear: the shading normal */
+	rt_int pad;
 };
 
 /* An emitter: the primitive (RT_PRIM_* kind | its device index) and the

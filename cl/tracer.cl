@@ -22,7 +22,8 @@
  * independently from RENDERING.md: it is the readable version of it.
  *
  * Build-time options, set by the host (host/render/program.c):
- *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack
+ *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack (0 under
+ *                       RTCL_PATH, whose paths need none)
  *   RTCL_SCENE_IN_LOCAL copy the scene into __local memory per work-group;
  *                       without it the tracer reads it from __global memory
  *   RTCL_BVH            find sphere hits through the scene's BVH rather than

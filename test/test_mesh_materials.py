@@ -358,8 +358,8 @@ def test_a_textured_gltf_keeps_its_materials_and_its_texture(tmp_path):
     result = rtcl(path, "-o", out, "--size", "40x50", "-v")
     assert result.returncode == 0, result.stderr
     # its base colour texture, and for the path integrator its
-    # metallic-roughness (linear) and emissive textures (issue 40)
-    assert 'ClearCoatTest.gltf": 19 materials (19 used), 5 textures' in result.stderr
+    # metallic-roughness (linear), emissive and normal textures (issue 40)
+    assert 'ClearCoatTest.gltf": 19 materials (19 used), 11 textures' in result.stderr
     assert 'texture "PartialCoating_Alpha.png": 256x256 8-bit sRGB' in result.stderr
     assert 'texture "RoughnessStripes.png": 512x512 8-bit linear' in result.stderr
     colours = {p for row in read_ppm(out) for p in row}

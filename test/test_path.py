@@ -403,7 +403,7 @@ def png_rgba(rows):
             + chunk(b"IDAT", zlib.compress(raw)) + chunk(b"IEND", b""))
 
 
-def textured_quad(tmp_path, material, texels):
+def textured_quad(tmp_path, material, texels, **scene):
     """A glTF quad over [-1, 1]^2 facing +z, its texture coordinates 0 ... 1
     across, one texture (texels: a row of RGBA) clamped at its edges."""
     import base64
@@ -430,11 +430,11 @@ def textured_quad(tmp_path, material, texels):
            "images": [{"uri": "data:image/png;base64,"
                        + base64.b64encode(png_rgba([texels])).decode()}]}
     (tmp_path / "q.gltf").write_text(json.dumps(doc))
-    return write_scene(tmp_path, {
+    return write_scene(tmp_path, dict({
         "format": "rtcl-scene", "version": 2, "integrator": "path", "max_depth": 2,
         "camera": {"eye": [0, 0, 3], "look_at": [0, 0, 0], "fov": 40},
         "background": [1, 1, 1] if "emissiveFactor" not in material else [0, 0, 0],
-        "meshes": [{"file": "q.gltf", "smooth": False}]})
+        "meshes": [{"file": "q.gltf", "smooth": False}]}, **scene))
 
 
 def test_a_models_emissive_texture_colours_its_emission(tmp_path):
@@ -465,3 +465,19 @@ def test_a_models_metallic_roughness_texture_scales_its_roughness(tmp_path):
     smooth, rough = image[6:10, 3:5].mean(), image[6:10, 11:13].mean()
     assert abs(smooth - 1) < 0.01, smooth
     assert rough < 0.97, rough
+
+
+def test_a_models_normal_texture_turns_its_shading_normal(tmp_path):
+    """glTF's normalTexture (linear, tangent space: x along dp/du): the
+    quad's left half turned 30 degrees towards +x, towards a sun in the
+    +x +z quarter, is lit by cos 15 degrees; its right half, flat, by cos 45."""
+    white = {"baseColorFactor": [1, 1, 1, 1], "metallicFactor": 0, "roughnessFactor": 1}
+    tilted, flat = (191, 128, 238, 255), (128, 128, 255, 255)
+    scene = textured_quad(tmp_path, {"pbrMetallicRoughness": white,
+                                     "normalTexture": {"index": 0}},
+                          [tilted, tilted, flat, flat], background=[0, 0, 0],
+                          lights=[{"direction": [-1, 0, -1], "color": [1, 1, 1]}])
+    image = read_pfm(render(scene, tmp_path, "n", "--size", "16x16", "--spp", "16"))
+    left, right = image[6:10, 3:5].mean(), image[6:10, 11:13].mean()
+    assert right > 0.1, right
+    assert 1.2 < left / right < 1.5, (left, right)  # cos 15 / cos 45 = 1.37

@@ -375,6 +375,7 @@ static void pack_bsdf(struct rt_bsdf *out, const struct scene_material *m)
 	out->roughness = (float)roughness;
 	out->metallic_roughness_texture = m->metallic_roughness_texture - 1;
 	out->emissive_texture = m->emissive_texture - 1;
+	out->normal_texture = m->normal_texture - 1;
 }
 
 /* Emitter weights (RENDERING.md, "Lights and their selection"): lum(Le)

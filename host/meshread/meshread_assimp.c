@@ -289,7 +289,7 @@ static int texture_read(unsigned semantic)
 	return semantic == aiTextureType_DIFFUSE || semantic == aiTextureType_BASE_COLOR ||
 	       semantic == aiTextureType_OPACITY || semantic == aiTextureType_UNKNOWN ||
 	       semantic == aiTextureType_METALNESS || semantic == aiTextureType_DIFFUSE_ROUGHNESS ||
-	       semantic == aiTextureType_EMISSIVE;
+	       semantic == aiTextureType_EMISSIVE || semantic == aiTextureType_NORMALS;
 }
 
 /* Counts the textures rtcl reads and notes the properties it does not
@@ -407,7 +407,7 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 
 	memset(m, 0, sizeof(*m));
 	m->base_texture = m->opacity_texture = -1;
-	m->metallic_roughness_texture = m->emissive_texture = -1;
+	m->metallic_roughness_texture = m->emissive_texture = m->normal_texture = -1;
 	string_of(mat, "?mat.name", m->name, sizeof(m->name));
 	int named = m->name[0] != '\0';
 	if (!named)
@@ -661,8 +661,12 @@ static int read_textures(const struct aiScene *sc, const char *path, struct mesh
 				MESH_TEXTURE_DATA, out);
 		m->emissive_texture =
 			texture_of(sc, path, mat, aiTextureType_EMISSIVE, MESH_TEXTURE_COLOR, out);
+		if (m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+			m->normal_texture = texture_of(sc, path, mat, aiTextureType_NORMALS,
+						       MESH_TEXTURE_DATA, out);
 		textured |= m->base_texture >= 0 || m->opacity_texture >= 0 ||
-			    m->metallic_roughness_texture >= 0 || m->emissive_texture >= 0;
+			    m->metallic_roughness_texture >= 0 || m->emissive_texture >= 0 ||
+			    m->normal_texture >= 0;
 	}
 	free(used);
 	if (!textured)

@@ -193,7 +193,9 @@ static int format_options(const struct device *dev, const struct render_settings
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
 		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
-		 s->max_depth, s->batch > 0 ? s->batch : 1,
+		 /* The path integrator reads max_depth from the scene block and
+		  * needs no ray stack: one program for every depth. */
+		 f->path ? 0 : s->max_depth, s->batch > 0 ? s->batch : 1,
 		 /* A CPU device: the box test in its vector unit's way
 		  * (cl/traverse.cl, box_pair_hit); the same numbers. */
 		 dev->is_gpu ? "" : " -DRTCL_CPU",

@@ -44,7 +44,7 @@ struct mesh_material {
 	 * emissive texture (glTF's emissiveTexture, MTL's map_Ke). Indices, or -1. */
 	int32_t metallic_roughness_texture;
 	int32_t emissive_texture;
-	uint32_t pad;
+	int32_t normal_texture; /* metallic-roughness: glTF's normalTexture (linear), or -1 */
 	/* Phong: Kd, Ks, Ka, Ns, d (1 - Tr), Ni. */
 	double diffuse[3], specular[3], ambient[3], shininess, opacity, ior;
 	/* Metallic-roughness: the base colour factor (rgba), metallic, roughness,

@@ -57,6 +57,7 @@ struct scene_material {
 	double alpha_scale;  /* the factor of the texture's alpha (glTF's b.a) */
 	int metallic_roughness_texture; /* the path integrator's (1 + index, 0: none) */
 	int emissive_texture;
+	int normal_texture;
 	/* The path integrator's (SCENE.md, "Path tracing"). */
 	struct scene_bsdf bsdf;
 	double emission[3]; /* radiance from the front side */
@@ -239,7 +240,7 @@ static inline int scene_has_textures(const struct scene *scene)
 		    scene->materials[i].alpha_cutoff > 0 ||
 		    (scene->integrator == SCENE_INTEGRATOR_PATH &&
 		     (scene->materials[i].metallic_roughness_texture ||
-		      scene->materials[i].emissive_texture)))
+		      scene->materials[i].emissive_texture || scene->materials[i].normal_texture)))
 			return 1;
 	return 0;
 }

@@ -515,6 +515,9 @@ static int attach_textures(struct loader *ld, struct mesh_textures *mt,
 	if (in->emissive_texture >= 0 &&
 	    (m->emissive_texture = use_texture(ld, mt, in->name, in->emissive_texture)) < 0)
 		return -1;
+	if (in->normal_texture >= 0 &&
+	    (m->normal_texture = use_texture(ld, mt, in->name, in->normal_texture)) < 0)
+		return -1;
 	if (in->opacity_texture >= 0) { /* MTL's map_d: cut out below 0.5 */
 		m->alpha_texture = opacity;
 		m->alpha_cutoff = 0.5;
