@@ -194,8 +194,9 @@ def write_hdr(path, rows):
 # models' textures (RENDERING.md "Models' textures"): a glTF emitting quad
 # whose emissive texture colours its light (at hits and at light samples'
 # points), a glTF metal quad whose metallic-roughness texture (linear) varies
-# its roughness and metallic factor over a base colour texture (lamps.gltf,
-# written beside the scene by write_lamps below)
+# its roughness and metallic factor over a base colour texture, and whose
+# normal texture tilts its normals (lamps.gltf, written beside the scene by
+# write_lamps below)
 SCENES["model_textures"] = scene(
     camera=OUTDOOR_CAMERA, background=[0.15, 0.15, 0.2], max_depth=3,
     materials={"floor": {"bsdf": {"type": "diffuse", "reflectance": [0.6, 0.6, 0.6]}}},
@@ -220,7 +221,8 @@ def write_lamps(path):
     emissive texture (red, green, blue, white quarters); quad 1 standing at
     z = 0.8 facing the camera, a principled metal (factors 1) whose
     metallic-roughness texture has G (roughness) 0 ... 255 across and B
-    (metallic) 255 or 64 down, over a base colour texture."""
+    (metallic) 255 or 64 down, over a base colour texture, its normals
+    tilted by a normal texture."""
     positions = [(-1, 1.5, -1), (1, 1.5, -1), (1, 1.5, 1), (-1, 1.5, 1),
                  (-1, 0, 0.8), (-1, 1.2, 0.8), (1, 1.2, 0.8), (1, 0, 0.8)]
     uvs = [(0, 0), (1, 0), (1, 1), (0, 1)] * 2
@@ -236,6 +238,8 @@ def write_lamps(path):
     quarters = [[(255, 0, 0, 255), (0, 255, 0, 255)], [(0, 0, 255, 255), (255, 255, 255, 255)]]
     roughness = [[(0, g, b, 255) for g in (0, 60, 120, 180, 255)] for b in (255, 64)]
     base = [[(230, 180, 90, 255), (200, 200, 210, 255)], [(120, 60, 40, 255), (240, 240, 240, 255)]]
+    normals = [[(128, 128, 255, 255), (200, 128, 220, 255), (128, 60, 230, 255),
+                (70, 190, 210, 255)]]
     black = {"baseColorFactor": [0, 0, 0, 1], "metallicFactor": 0, "roughnessFactor": 1}
     doc = {"asset": {"version": "2.0"}, "scene": 0, "scenes": [{"nodes": [0]}],
            "nodes": [{"mesh": 0}],
@@ -247,7 +251,8 @@ def write_lamps(path):
                          {"pbrMetallicRoughness": {"baseColorFactor": [1, 1, 1, 1],
                                                    "metallicFactor": 1, "roughnessFactor": 1,
                                                    "baseColorTexture": {"index": 2},
-                                                   "metallicRoughnessTexture": {"index": 1}}}],
+                                                   "metallicRoughnessTexture": {"index": 1}},
+                          "normalTexture": {"index": 3}}],
            "buffers": [{"byteLength": len(buf), "uri": "data:application/octet-stream;base64,"
                         + base64.b64encode(buf).decode()}],
            "bufferViews": [view(0, 48), view(96, 32), view(48, 48), view(128, 32),
@@ -261,8 +266,8 @@ def write_lamps(path):
                          {"bufferView": 4, "componentType": 5123, "count": 6, "type": "SCALAR"},
                          {"bufferView": 5, "componentType": 5123, "count": 6,
                           "type": "SCALAR"}],
-           "textures": [{"source": i} for i in range(3)],
-           "images": [image(quarters), image(roughness), image(base)]}
+           "textures": [{"source": i} for i in range(4)],
+           "images": [image(quarters), image(roughness), image(base), image(normals)]}
     path.write_text(json.dumps(doc))
 
 

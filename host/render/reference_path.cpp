@@ -821,6 +821,38 @@ dvec3 path_tracer::next_event(const surface &s, const bsdf &b, const dvec3 &wo, 
 	return f * ls.E * std::fabs(glm::dot(ls.l, s.n)) / ls.pdf * w;
 }
 
+/* "Models' textures": a normal texture turns the shading normal, in the
+ * triangle's own tangent frame (from its edges and texture coordinates). */
+void path_tracer::apply_normal_texture(const hit &h, surface *s) const
+{
+	const material &m = materials[s->material];
+	if (!h.tri || m.normal_texture < 0)
+		return;
+	const triangle &tri = *h.tri;
+	dvec3 e1 = tri.v1 - tri.v0, e2 = tri.v2 - tri.v0;
+	dvec2 d1 = tri.uv[1] - tri.uv[0], d2 = tri.uv[2] - tri.uv[0];
+	double det = d1.x * d2.y - d2.x * d1.y;
+	if (det == 0.0)
+		return;
+	dvec3 n_f = s->inside ? -s->n : s->n; /* on the front side */
+	dvec3 dp_du = (d2.y * e1 - d1.y * e2) / det;
+	dvec3 dp_dv = (d1.x * e2 - d2.x * e1) / det;
+	dvec3 t = dp_du - glm::dot(n_f, dp_du) * n_f;
+	if (t == dvec3(0.0))
+		return;
+	t = glm::normalize(t);
+	dvec3 b = glm::cross(n_f, t);
+	if (glm::dot(b, dp_dv) < 0.0)
+		b = -b;
+	dvec3 N = dvec3(texture_at(m.normal_texture, tri, h.u, h.v));
+	dvec3 v = 2.0 * N - 1.0;
+	dvec3 n = v.x * t + v.y * b + v.z * n_f;
+	if (n == dvec3(0.0))
+		return; /* a texel of (0.5, 0.5, 0.5): no direction */
+	n = glm::normalize(n);
+	s->n = s->inside ? -n : n;
+}
+
 /* "The BSDFs": the material's BSDF at the hit, its colours there
  * (textures, checkers), in the frame of the shading normal. */
 bool path_tracer::make_bsdf(const hit &h, const surface &s, const dvec3 &wo, bsdf *b) const
@@ -902,6 +934,7 @@ dvec3 path_tracer::radiance(const dvec3 &o_, const dvec3 &d_, const sample_id &s
 			break;
 		}
 		surface s = surface_at(h, o, d);
+		apply_normal_texture(h, &s);
 		dvec3 wo = -d;
 		if (!s.inside && !is_black(materials[s.material].emission)) {
 			dvec3 Le = emission(s.material, h.tri, h.u, h.v);
@@ -957,6 +990,7 @@ bool path_tracer::mis_weights(const dvec3 &o, const dvec3 &d, const sample_id &s
 	if (!nearest_hit(o, d, &h))
 		return false;
 	surface s = surface_at(h, o, d);
+	apply_normal_texture(h, &s);
 	dvec3 wo = -d;
 	bsdf b;
 	make_bsdf(h, s, wo, &b);

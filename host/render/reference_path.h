@@ -103,6 +103,7 @@ class path_tracer : public scene_geometry
 		double cdf;    /* the sum of the weights up to this one's, over W */
 	};
 
+	void apply_normal_texture(const hit &h, surface *s) const;
 	bool make_bsdf(const hit &h, const surface &s, const dvec3 &wo, bsdf *b) const;
 	dvec3 next_event(const surface &s, const bsdf &b, const dvec3 &wo, int vertex,
 			 const sample_id &sample) const;

@@ -222,7 +222,8 @@ scene_geometry::scene_geometry(const struct scene &sc)
 				     m.shininess, m.reflect, m.transmit, m.ior, m.fresnel,
 				     m.texture - 1, m.alpha_texture - 1, m.alpha_cutoff,
 				     m.alpha_scale, m.bsdf, to_dvec3(m.emission),
-				     m.metallic_roughness_texture - 1, m.emissive_texture - 1});
+				     m.metallic_roughness_texture - 1, m.emissive_texture - 1,
+				     m.normal_texture - 1});
 	}
 	for (int i = 0; i < sc.texture_count; i++) {
 		const scene_texture &t = sc.textures[i];

@@ -37,6 +37,7 @@ struct material {
 	dvec3 emission;
 	int metallic_roughness_texture; /* a model's principled material's, or -1 */
 	int emissive_texture;		/* or -1 */
+	int normal_texture;		/* or -1 */
 };
 
 /* A texture as RENDERING.md ("Textures") reads it. */
