@@ -177,6 +177,25 @@ def test_the_reference_keeps_its_samples_too(tmp_path):
     assert decode(tmp_path / "out.png") == decode(tmp_path / "whole.png")
 
 
+@pytest.mark.slow
+def test_the_path_reference_keeps_its_samples_too(tmp_path):
+    # The path integrator's light samples depend on the samples per pixel
+    # (RENDERING.md, "More dimensions"), so a K-sample render is not the
+    # first K samples of a longer one; the Criterion test
+    # reference_path/sample_by_sample_is_the_same_image checks the sums.
+    process, _ = start("-k", "reference", "--integrator", "path", *LONG, "-o", "out.png",
+                       cwd=tmp_path, terminal=False)
+    time.sleep(1.5)
+    process.send_signal(signal.SIGINT)
+    stdout, _ = finish(process, None)
+    assert process.returncode == 128 + signal.SIGINT, stdout
+    done, _ = png_samples(tmp_path / "out.png")
+    assert 1 <= done < 1024
+    size, rgb = decode(tmp_path / "out.png")
+    assert size == (64, 64) and max(rgb) > 0  # a whole image, lit
+    assert sorted(os.listdir(tmp_path)) == ["out.png"]
+
+
 TWO = {"POCL_DEVICES": "pthread pthread"}
 
 

@@ -187,14 +187,6 @@ def test_integrator_option_error(tmp_path):
             'rtcl: --integrator: expected whitted or path, got "pth"', 2)
 
 
-def test_the_reference_refuses_paths_until_it_traces_them(tmp_path):
-    failure(rtcl(BOX, "-k", "reference", "-o", tmp_path / "x.pfm"),
-            "rtcl: the CPU reference (-k reference) does not trace paths yet (the path "
-            "integrator): use -k dynamic, naive, cyclic, persistent, serial or wavefront, or "
-            "--integrator whitted", 2)
-    assert not (tmp_path / "x.pfm").exists()
-
-
 @pytest.mark.slow
 def test_counts_agree_between_kernels(tmp_path):
     """The flop count, rays and the work map of a path-traced render are the

@@ -146,7 +146,7 @@ static void print_help_after_kernels(FILE *out)
 		"      --integrator whitted|path  the light transport, overriding the scene's\n"
 		"                         integrator: Whitted ray tracing (the default), or a\n"
 		"                         path tracer (bounced light, BSDFs, emitters; converges\n"
-		"                         with --spp; not yet with -k reference)\n"
+		"                         with --spp)\n"
 		"      --eye X,Y,Z        the camera's eye, overriding camera.eye\n"
 		"      --look-at X,Y,Z    the point the camera looks at, overriding\n"
 		"                         camera.look_at\n"

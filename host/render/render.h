@@ -13,11 +13,11 @@ extern const int render_kernel_count;
 const struct kernel_info *render_find_kernel(const char *name);
 
 /* Whether the settings' kernel (NULL: the CPU reference) renders the scene's
- * integrator: the path integrator (RENDERING.md, "Path tracing") is not yet
- * traced by the wavefront kernel, the CPU reference, nor with an
- * environment map. Returns 0, or -1 with one message in err that says what
- * to use instead. Checked before any work, and again by the renderers, so
- * that a path-traced scene is never silently rendered by Whitted's rules. */
+ * integrator: today every kernel and the reference render both (RENDERING.md,
+ * "Path tracing"), so it returns 0; otherwise -1 with one message in err that
+ * says what to use instead. Checked before any work, and again by the
+ * renderers, so that a path-traced scene is never silently rendered by
+ * Whitted's rules. */
 int render_check_integrator(const struct scene *scene, const struct render_settings *settings,
 			    char *err, size_t err_size);
 
