@@ -62,6 +62,7 @@ ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
 LDLIBS = -lOpenCL -ljansson -lz -lm -pthread
 MESHREAD := $(BUILD)/rtcl-meshread
+RAYS := $(BUILD)/rtcl-rays
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -126,9 +127,14 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 UNIT_TESTS := $(wildcard test/test_*.c)
 
 .PHONY: all deps render test test-long check layers experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
-all: $(BIN)
+all: $(BIN) $(RAYS)
 
 $(BIN): $(BUILD)/cmd/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
+
+# rtcl's traversal over rays from a file, timed (host/cmd/rays.c): the
+# instrument of rtcl-peer-compare --rays (docs/bvh.md).
+$(RAYS): $(BUILD)/cmd/rays.o $(HOST_OBJS) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
 
 # The mesh import helper: Assimp in a process of its own.
