@@ -25,11 +25,11 @@
 //     (L - o) / |L - o|, t_max |L - o|.
 //   Everything in float32, as written here: the two sides read the same file.
 //
-// peer_rays trace TRIS.bin RAYS HITS [passes]
-//   traces RAYS with TinyBVH's CPU traversals (BVH built HQ, BVH4_CPU,
-//   BVH8_CPU) on every hardware thread: Intersect, or IsOccluded for an
-//   any-hit file; prints each one's build and median trace time of `passes`
-//   (default 5) after one untimed, and writes the first's hits to HITS in
+// peer_rays trace TRIS.bin passes RAYS HITS [RAYS HITS ...]
+//   traces each RAYS with TinyBVH's CPU traversals (BVH built HQ, BVH4_CPU,
+//   BVH8_CPU, each built once) on every hardware thread: Intersect, or
+//   IsOccluded for an any-hit file; prints each one's build and median trace
+//   time of `passes` after one untimed, and writes the first's hits to HITS in
 //   rtcl-rays's layout (float t, int32 triangle; t 0 and -1 for none; for an
 //   any-hit file t 1 when occluded).
 #define TINYBVH_IMPLEMENTATION
@@ -157,46 +157,55 @@ static int make(int argc, char** argv)
 
 static int trace(int argc, char** argv)
 {
-	if (argc < 5) { fprintf(stderr, "usage: peer_rays trace TRIS.bin RAYS HITS [passes]\n"); return 2; }
+	if (argc < 6 || argc % 2) { fprintf(stderr, "usage: peer_rays trace TRIS.bin passes RAYS HITS [RAYS HITS ...]\n"); return 2; }
 	uint32_t n; bvhvec4* tris = read_tris(argv[2], n);
-	uint32_t flags; std::vector<FileRay> file = read_rays(argv[3], flags);
-	bool any = flags & 1; int passes = argc > 5 ? atoi(argv[5]) : 5;
-	std::vector<Ray> rays(file.size()); std::vector<uint8_t> occluded(file.size());
-	std::vector<float> out; bool written = false;
+	int passes = atoi(argv[3]);
+	struct Set { const char *rays, *hits; uint32_t flags; std::vector<FileRay> file; std::vector<float> out; };
+	std::vector<Set> sets((argc - 4) / 2);
+	for (size_t s = 0; s < sets.size(); s++) {
+		sets[s].rays = argv[4 + 2 * s]; sets[s].hits = argv[5 + 2 * s];
+		sets[s].file = read_rays(sets[s].rays, sets[s].flags);
+	}
 	unsigned T = std::max(1u, std::thread::hardware_concurrency());
-	printf("triangles %u, %zu %s rays, %u threads\n", n, file.size(), any ? "any-hit" : "closest-hit", T);
+	printf("triangles %u, %u threads, %d timed passes (median, min)\n", n, T, passes);
 	auto bench = [&](const char* name, auto& bvh, double build) {
-		std::vector<double> ts;
-		for (int p = 0; p < passes + 1; p++) {
-			for (size_t i = 0; i < file.size(); i++) {
-				const FileRay& f = file[i];
-				rays[i] = Ray(bvhvec3(f.o[0], f.o[1], f.o[2]), bvhvec3(f.d[0], f.d[1], f.d[2]), f.tmax);
+		for (Set& set : sets) {
+			const std::vector<FileRay>& file = set.file;
+			bool any = set.flags & 1;
+			std::vector<Ray> rays(file.size()); std::vector<uint8_t> occluded(file.size());
+			std::vector<double> ts;
+			for (int p = 0; p < passes + 1; p++) {
+				for (size_t i = 0; i < file.size(); i++) {
+					const FileRay& f = file[i];
+					rays[i] = Ray(bvhvec3(f.o[0], f.o[1], f.o[2]), bvhvec3(f.d[0], f.d[1], f.d[2]), f.tmax);
+				}
+				double t0 = now();
+				if (any) parallel(rays.size(), [&](size_t j) { occluded[j] = bvh.IsOccluded(rays[j]); });
+				else parallel(rays.size(), [&](size_t j) { bvh.Intersect(rays[j]); });
+				if (p) ts.push_back(now() - t0);
 			}
-			double t0 = now();
-			if (any) parallel(rays.size(), [&](size_t j) { occluded[j] = bvh.IsOccluded(rays[j]); });
-			else parallel(rays.size(), [&](size_t j) { bvh.Intersect(rays[j]); });
-			if (p) ts.push_back(now() - t0);
+			std::sort(ts.begin(), ts.end());
+			size_t hit = 0;
+			for (size_t i = 0; i < rays.size(); i++) hit += any ? occluded[i] : rays[i].hit.t < file[i].tmax;
+			double median = ts[ts.size() / 2];
+			printf("%s: %zu %s rays\n%-12s build %8.1f ms  trace median %9.3f ms  min %9.3f ms -> %7.2f Mrays/s, hits %zu\n", set.rays, rays.size(), any ? "any-hit" : "closest-hit", name, build, median * 1e3, ts[0] * 1e3, rays.size() / median * 1e-6, hit);
+			if (!set.out.empty()) continue;
+			set.out.resize(rays.size() * 2);
+			for (size_t i = 0; i < rays.size(); i++) {
+				bool h = any ? occluded[i] : rays[i].hit.t < file[i].tmax;
+				int32_t prim = h && !any ? (int32_t)rays[i].hit.prim : -1;
+				set.out[2 * i] = h ? (any ? 1.0f : rays[i].hit.t) : 0.0f;
+				memcpy(&set.out[2 * i + 1], &prim, 4);
+			}
 		}
-		std::sort(ts.begin(), ts.end());
-		size_t hit = 0;
-		for (size_t i = 0; i < rays.size(); i++) hit += any ? occluded[i] : rays[i].hit.t < file[i].tmax;
-		double median = ts[ts.size() / 2];
-		printf("%-12s build %8.1f ms  trace median %9.3f ms  min %9.3f ms -> %7.2f Mrays/s, hits %zu\n", name, build, median * 1e3, ts[0] * 1e3, rays.size() / median * 1e-6, hit);
-		if (written) return;
-		out.resize(rays.size() * 2);
-		for (size_t i = 0; i < rays.size(); i++) {
-			bool h = any ? occluded[i] : rays[i].hit.t < file[i].tmax;
-			int32_t prim = h && !any ? (int32_t)rays[i].hit.prim : -1;
-			out[2 * i] = h ? (any ? 1.0f : rays[i].hit.t) : 0.0f;
-			memcpy(&out[2 * i + 1], &prim, 4);
-		}
-		written = true;
 	};
 	{ double t0 = now(); BVH b; b.BuildHQ(tris, n); bench("BVH (HQ)", b, (now() - t0) * 1e3); }
 	{ double t0 = now(); BVH4_CPU b; b.BuildHQ(tris, n); bench("BVH4_CPU", b, (now() - t0) * 1e3); }
 	{ double t0 = now(); BVH8_CPU b; b.BuildHQ(tris, n); bench("BVH8_CPU", b, (now() - t0) * 1e3); }
-	FILE* f = fopen(argv[4], "wb");
-	if (!f || fwrite(out.data(), 4, out.size(), f) != out.size() || fclose(f) != 0) { fprintf(stderr, "peer_rays: cannot write %s\n", argv[4]); return 1; }
+	for (Set& set : sets) {
+		FILE* f = fopen(set.hits, "wb");
+		if (!f || fwrite(set.out.data(), 4, set.out.size(), f) != set.out.size() || fclose(f) != 0) { fprintf(stderr, "peer_rays: cannot write %s\n", set.hits); return 1; }
+	}
 	return 0;
 }
 
@@ -205,6 +214,6 @@ int main(int argc, char** argv)
 	if (argc > 1 && !strcmp(argv[1], "make")) return make(argc, argv);
 	if (argc > 1 && !strcmp(argv[1], "trace")) return trace(argc, argv);
 	fprintf(stderr, "usage: peer_rays make TRIS.bin W H ex ey ez lx ly lz fov ux uy uz OUTDIR\n"
-		"       peer_rays trace TRIS.bin RAYS HITS [passes]\n");
+		"       peer_rays trace TRIS.bin passes RAYS HITS [RAYS HITS ...]\n");
 	return 2;
 }

@@ -527,33 +527,44 @@ def build_ray_programs(args, out):
     return maker, gpu, folder
 
 
-def trace_rays(args, programs, rtcl_rays, platform, name, bin_path, scene_path, rays_file, out):
-    """Both sides over one ray file: ((count, any hit, rtcl median, min),
-    [(peer traversal, median, min)], (rtcl hits, peer hits, agreeing))."""
-    maker, gpu, gpu_folder = programs
+def time_rtcl_rays(args, rtcl_rays, platform, name, scene_path, rays_file, out):
+    """rtcl-rays over one ray file: (count, any hit, median ms, min ms)."""
     kind = rays_file.stem
-    folder = rays_file.parent
+    log = out / "raw" / f"rtcl-rays-{name}-{kind}.txt"
     device = ["-p", platform] if platform else []
     line = run([rtcl_rays, *device, "-r", args.repeat, scene_path, rays_file,
-                folder / f"{kind}.rtcl-hits"], out / "raw" / f"rtcl-rays-{name}-{kind}.txt")
+                rays_file.with_suffix(".rtcl-hits")], log)
     match = RAYS_LINE.search(line)
     if not match:
-        raise Failure(f"rtcl-rays printed no timing ({out / 'raw' / f'rtcl-rays-{name}-{kind}.txt'})")
-    count, any_hit = int(match.group(1)), match.group(2) == "any-hit"
-    log = out / "raw" / f"peer-rays-{name}-{kind}.txt"
+        raise Failure(f"rtcl-rays printed no timing ({log})")
+    return int(match.group(1)), match.group(2) == "any-hit", float(match.group(3)), \
+        float(match.group(4))
+
+
+def time_peer_rays(args, programs, name, bin_path, folder, out):
+    """The peer over every ray file of folder, each layout built once:
+    {kind: [(traversal, median ms, min ms)]}."""
+    maker, gpu, gpu_folder = programs
+    pairs = [str(path.resolve()) for kind in RAY_KINDS
+             for path in (folder / f"{kind}.rays", folder / f"{kind}.peer-hits")]
+    log = out / "raw" / f"peer-rays-{name}.txt"
     if gpu:
-        output = run([gpu, bin_path.resolve(), rays_file.resolve(),
-                      (folder / f"{kind}.peer-hits").resolve(), args.repeat, args.variants],
-                     log, cwd=gpu_folder)
+        output = run([gpu, bin_path.resolve(), args.repeat, args.variants, *pairs], log,
+                     cwd=gpu_folder)
     else:
-        output = run([maker, "trace", bin_path, rays_file, folder / f"{kind}.peer-hits",
-                      args.repeat], log)
-    peer = [(m.group(1).strip(), float(m.group(3)), float(m.group(4)))
-            for m in map(PEER_RAYS_LINE.match, output.splitlines()) if m]
-    if not peer:
-        raise Failure(f"the peer printed no timing ({log})")
-    agree = hits_agreeing(folder / f"{kind}.rtcl-hits", folder / f"{kind}.peer-hits", any_hit)
-    return (count, any_hit, float(match.group(3)), float(match.group(4))), peer, agree
+        output = run([maker, "trace", bin_path.resolve(), args.repeat, *pairs], log)
+    found, kind = {}, None
+    for line in output.splitlines():
+        section = re.match(r"^(.*)\.rays: \d+ ", line)
+        match = PEER_RAYS_LINE.match(line)
+        if section:
+            kind = pathlib.Path(section.group(1)).name
+        elif match and kind:
+            found.setdefault(kind, []).append((match.group(1).strip(), float(match.group(3)),
+                                               float(match.group(4))))
+    if set(found) != set(RAY_KINDS):
+        raise Failure(f"the peer printed no timing for some rays ({log})")
+    return found
 
 
 def rays(args, rtcl, out):
@@ -572,10 +583,14 @@ def rays(args, rtcl, out):
                     *camera["look_at"], camera.get("fov", 45), *camera.get("up", [0, 1, 0]),
                     folder], out / "raw" / f"peer-rays-make-{name}.txt")
         triangles = int(re.search(r"triangles (\d+)", made).group(1))
+        timed = {kind: time_rtcl_rays(args, rtcl_rays, platform, name, scene_path,
+                                      folder / f"{kind}.rays", out) for kind in RAY_KINDS}
+        peers = time_peer_rays(args, programs, name, bin_path, folder, out)
         for kind in RAY_KINDS:
-            (count, any_hit, median, low), peer, agree = trace_rays(
-                args, programs, rtcl_rays, platform, name, bin_path, scene_path,
-                folder / f"{kind}.rays", out)
+            count, any_hit, median, low = timed[kind]
+            peer = peers[kind]
+            agree = hits_agreeing(folder / f"{kind}.rtcl-hits", folder / f"{kind}.peer-hits",
+                                  any_hit)
             if device is None:
                 device = re.search(r"^rtcl-rays: (.*?); ", (out / "raw" / f"rtcl-rays-{name}-{kind}.txt")
                                    .read_text(), re.M).group(1)
