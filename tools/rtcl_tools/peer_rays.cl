@@ -12,7 +12,7 @@ void kernel occluded_ailalaine( const global struct BVHNode* bvhNode, const glob
 	if (i >= count) return;
 	const float4 O = rayData[i].O;
 	const bool hit = isoccluded_ailalaine( bvhNode, idx, verts, 0, O.xyz, rayData[i].D.xyz, rayData[i].rD.xyz, O.w );
-	rayData[i].hit = (float4)( hit ? 1 : 0, 0, 0, 0 );
+	rayData[i].hit = (float4)( hit ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f );
 }
 
 void kernel occluded_gpu4way( const global float4* alt4Node, global struct Ray* rayData, const uint count )
@@ -21,7 +21,7 @@ void kernel occluded_gpu4way( const global float4* alt4Node, global struct Ray* 
 	if (i >= count) return;
 	const float4 O = rayData[i].O;
 	const bool hit = isoccluded_gpu4way( alt4Node, O.xyz, rayData[i].D.xyz, rayData[i].rD.xyz, O.w );
-	rayData[i].hit = (float4)( hit ? 1 : 0, 0, 0, 0 );
+	rayData[i].hit = (float4)( hit ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f );
 }
 
 void kernel occluded_cwbvh( global const float4* cwbvhNodes, global const float4* cwbvhTris, global struct Ray* rayData, const uint count )
@@ -37,5 +37,5 @@ void kernel occluded_cwbvh( global const float4* cwbvhNodes, global const float4
 #else
 	const bool hit = isoccluded_cwbvh( cwbvhNodes, cwbvhTris, rayData[i].O.xyz, rayData[i].D.xyz, rayData[i].rD.xyz, tmax );
 #endif
-	rayData[i].hit = (float4)( hit ? 1 : 0, 0, 0, 0 );
+	rayData[i].hit = (float4)( hit ? 1.0f : 0.0f, 0.0f, 0.0f, 0.0f );
 }
