@@ -210,11 +210,11 @@ TEST_START := $(shell date +%s.%N)
 QUICK_TEST_ENV := POCL_WORK_GROUP_SPECIALIZATION=0 POCL_EXTRA_BUILD_FLAGS=-cl-opt-disable
 PYTEST = RTCL=$(abspath $(BIN)) RTCL_TEST_START=$(TEST_START) $(PYTHON) -m pytest -q -n $(TEST_JOBS)
 
-test: $(BIN) $(BUILD)/unit_tests
+test: $(BIN) $(RAYS) $(BUILD)/unit_tests
 	$(QUICK_TEST_ENV) $(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '!(*_slow)/*'
 	$(QUICK_TEST_ENV) RTCL_TEST_WHAT="make test" $(PYTEST) -m "not slow" test
 
-test-long: $(BIN) $(BUILD)/unit_tests
+test-long: $(BIN) $(RAYS) $(BUILD)/unit_tests
 	$(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '*_slow/*'
 	RTCL_TEST_WHAT="make test-long" $(PYTEST) -m slow test
 
