@@ -1,4 +1,4 @@
-"""rtcl's traversal against a peer's on the same primary rays (issue 26).
+"""rtcl's traversal against a peer's on the same rays: primary, bounce and shadow rays.
 
 The peer is TinyBVH's OpenCL harness (a folder holding side.cpp, its .cl files,
 tiny_bvh.h, tiny_ocl.h and ply2bin.py, given as PEER): its `side` program traces
@@ -51,7 +51,8 @@ hardware thread) against rtcl on a CPU OpenCL device (PoCL). rays.md and
 rays.csv give, per mesh and kind of ray, each side's median time and rays
 per second, the ratio, the hits of each and how many rays the two sides
 agree on (the same hit or miss; for closest hits the same triangle or the
-same distance within 1e-4 of it).
+same distance within 1e-4 of it); --rounds N runs the two sides in turn N
+times (each side's time the median of its rounds, each round's ratio shown).
 
     rtcl-peer-compare ../shared/bench/tinybvh --meshes tetra:8,mount:9,lake -r 10
     rtcl-peer-compare PEER --ply bunny.ply --size 1000x1000
@@ -88,8 +89,8 @@ RAYS_LINE = re.compile(r"^rtcl-rays: .*?; (\d+) (closest-hit|any-hit) rays, medi
                        r"min ([\d.]+) ms .*hits (\d+);")
 PEER_RAYS_LINE = re.compile(r"^(.+?)\s+build\s+([\d.]+) ms\s+trace median\s+([\d.]+) ms\s+"
                             r"min\s+([\d.]+) ms.*?(?:hits (\d+))?$")
-RAYS_CSV = ("mesh", "triangles", "rays", "count", "side", "traversal", "median_ms", "min_ms",
-            "mrays_per_s", "hits")
+RAYS_CSV = ("mesh", "triangles", "rays", "count", "round", "side", "traversal", "median_ms",
+            "min_ms", "mrays_per_s", "hits")
 COUNTS_LINE = re.compile(r"^(BVH_GPU \w+): iterations per ray ([\d.]+), triangle tests per "
                          r"ray ([\d.]+), hits (\d+), nodes (\d+), build ms ([\d.]+)")
 CSV_COLUMNS = ("mesh", "triangles", "side", "kernel", "median_ms", "min_ms", "grays_per_s")
@@ -127,6 +128,9 @@ def parse_arguments(argv):
                         help="trace primary rays, one diffuse bounce from each primary hit "
                              "and shadow rays to a point light, the same rays on both "
                              "sides from files made once (rays.md); with --cpu on a CPU")
+    parser.add_argument("--rounds", default="1",
+                        help="with --rays: rounds of both sides in turn, each side's time "
+                             "the median of its rounds (default 1)")
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--counts", action="store_true",
                       help="count node visits and triangle tests per ray on both sides "
@@ -531,10 +535,10 @@ def build_ray_programs(args, out):
     return maker, gpu, folder
 
 
-def time_rtcl_rays(args, rtcl_rays, platform, name, scene_path, rays_file, out):
+def time_rtcl_rays(args, rtcl_rays, platform, name, scene_path, rays_file, out, tag=""):
     """rtcl-rays over one ray file: (count, any hit, median ms, min ms)."""
     kind = rays_file.stem
-    log = out / "raw" / f"rtcl-rays-{name}-{kind}.txt"
+    log = out / "raw" / f"rtcl-rays-{name}-{kind}{tag}.txt"
     device = ["-p", platform] if platform else []
     line = run([rtcl_rays, *device, "-r", args.repeat, scene_path, rays_file,
                 rays_file.with_suffix(".rtcl-hits")], log)
@@ -545,13 +549,13 @@ def time_rtcl_rays(args, rtcl_rays, platform, name, scene_path, rays_file, out):
         float(match.group(4))
 
 
-def time_peer_rays(args, programs, name, bin_path, folder, out):
+def time_peer_rays(args, programs, name, bin_path, folder, out, tag=""):
     """The peer over every ray file of folder, each layout built once:
     {kind: [(traversal, median ms, min ms)]}."""
     maker, gpu, gpu_folder = programs
     pairs = [str(path.resolve()) for kind in RAY_KINDS
              for path in (folder / f"{kind}.rays", folder / f"{kind}.peer-hits")]
-    log = out / "raw" / f"peer-rays-{name}.txt"
+    log = out / "raw" / f"peer-rays-{name}{tag}.txt"
     if gpu:
         output = run([gpu, bin_path.resolve(), args.repeat, args.variants, *pairs], log,
                      cwd=gpu_folder)
@@ -575,6 +579,7 @@ def rays(args, rtcl, out):
     """--rays: primary, bounce and shadow rays from one file each, both sides."""
     width, height = args.size
     args.repeat = str(check_positive_int("-r/--repeat", args.repeat))
+    args.rounds = check_positive_int("--rounds", args.rounds)
     rtcl_rays = find_rtcl_rays(rtcl)
     programs = build_ray_programs(args, out)
     platform = args.platform if args.cpu else args.platform or nvidia_platform(rtcl, out)
@@ -587,41 +592,61 @@ def rays(args, rtcl, out):
                     *camera["look_at"], camera.get("fov", 45), *camera.get("up", [0, 1, 0]),
                     folder], out / "raw" / f"peer-rays-make-{name}.txt")
         triangles = int(re.search(r"triangles (\d+)", made).group(1))
-        timed = {kind: time_rtcl_rays(args, rtcl_rays, platform, name, scene_path,
-                                      folder / f"{kind}.rays", out) for kind in RAY_KINDS}
-        peers = time_peer_rays(args, programs, name, bin_path, folder, out)
+        # Rounds interleave the two sides, so that a machine busy with other
+        # work slows both alike; each side's time is the median of its rounds.
+        rounds = []
+        for number in range(1, args.rounds + 1):
+            tag = f"-round{number}" if args.rounds > 1 else ""
+            rtcl_times = {kind: time_rtcl_rays(args, rtcl_rays, platform, name, scene_path,
+                                               folder / f"{kind}.rays", out, tag)
+                          for kind in RAY_KINDS}
+            rounds.append((rtcl_times, time_peer_rays(args, programs, name, bin_path, folder,
+                                                      out, tag)))
         for kind in RAY_KINDS:
-            count, any_hit, median, low = timed[kind]
-            peer = peers[kind]
+            count, any_hit = rounds[0][0][kind][:2]
+            median = statistics.median(r[0][kind][2] for r in rounds)
+            low = min(r[0][kind][3] for r in rounds)
+            names = [row[0] for row in rounds[0][1][kind]]
+            peer = [(traversal, statistics.median(r[1][kind][i][1] for r in rounds),
+                     min(r[1][kind][i][2] for r in rounds)) for i, traversal in enumerate(names)]
+            per_round = [min(row[1] for row in r[1][kind]) / r[0][kind][2] for r in rounds]
             agree = hits_agreeing(folder / f"{kind}.rtcl-hits", folder / f"{kind}.peer-hits",
                                   any_hit)
             if device is None:
-                device = re.search(r"^rtcl-rays: (.*?); ", (out / "raw" / f"rtcl-rays-{name}-{kind}.txt")
-                                   .read_text(), re.M).group(1)
+                device = re.search(r"^rtcl-rays: (.*?); ", next((out / "raw").glob(
+                    f"rtcl-rays-{name}-{kind}*.txt")).read_text(), re.M).group(1)
             best = min(peer, key=lambda row: row[1])
-            csv_rows.append(dict(zip(RAYS_CSV, (name, triangles, kind, count, "rtcl", "rtcl-rays",
-                                                median, low, count / median * 1e-3, agree[0]))))
-            for traversal, peer_median, peer_low in peer:
-                csv_rows.append(dict(zip(RAYS_CSV, (name, triangles, kind, count, "peer", traversal,
-                                                    peer_median, peer_low,
-                                                    count / peer_median * 1e-3, agree[1]))))
+            for number, (rtcl_times, peer_times) in enumerate(rounds, 1):
+                csv_rows.append(dict(zip(RAYS_CSV, (
+                    name, triangles, kind, count, number, "rtcl", "rtcl-rays",
+                    rtcl_times[kind][2], rtcl_times[kind][3],
+                    count / rtcl_times[kind][2] * 1e-3, agree[0]))))
+                for traversal, peer_median, peer_low in peer_times[kind]:
+                    csv_rows.append(dict(zip(RAYS_CSV, (
+                        name, triangles, kind, count, number, "peer", traversal, peer_median,
+                        peer_low, count / peer_median * 1e-3, agree[1]))))
             table.append((name, f"{triangles:,}", kind + (" (any hit)" if any_hit else ""),
                           f"{count:,}", f"{median:.3f}", f"{count / median * 1e-3:.1f}",
                           f"{best[0]} {best[1]:.3f}", f"{count / best[1] * 1e-3:.1f}",
                           f"{best[1] / median:.2f}x",
+                          " / ".join(f"{ratio:.2f}" for ratio in per_round),
                           " / ".join(f"{row[0]} {row[1]:.3f}" for row in peer),
                           f"{agree[0]:,} / {agree[1]:,}", f"{agree[2]:,} of {count:,}"))
             print(f"{name} {kind}: rtcl {median:.3f} ms, peer {best[0]} {best[1]:.3f} ms: "
-                  f"{best[1] / median:.2f}x; agreeing {agree[2]:,} of {count:,}", flush=True)
+                  f"{best[1] / median:.2f}x (rounds: "
+                  f"{', '.join(f'{ratio:.2f}' for ratio in per_round)}); "
+                  f"agreeing {agree[2]:,} of {count:,}", flush=True)
     header = ("mesh", "triangles", "rays", "count", "rtcl ms", "rtcl M rays/s",
-              "peer fastest (ms)", "peer M rays/s", "rtcl / peer", "every peer traversal (ms)",
-              "hits rtcl / peer", "rays agreeing")
+              "peer fastest (ms)", "peer M rays/s", "rtcl / peer", "each round",
+              "every peer traversal (ms)", "hits rtcl / peer", "rays agreeing")
     where = ("the peer's CPU traversals on every hardware thread of this machine (median of "
              f"{args.repeat} passes)" if args.cpu else
              f"the peer's GPU kernels ({args.variants}), median of {args.repeat} launches")
     report = (f"# rtcl against the peer on primary, diffuse bounce and shadow rays\n\n"
               f"rtcl-rays on {device} (median of {args.repeat} launches, OpenCL profiling "
-              f"events) against {where}; rays from a {width}x{height} image: the same rays on "
+              f"events) against {where}; {args.rounds} round{'s' if args.rounds > 1 else ''}, "
+              "the two sides in turn, each side's time the median of its rounds; "
+              f"rays from a {width}x{height} image: the same rays on "
               f"both sides, read from the files peer_rays.cpp made (docs/bvh.md, \"Incoherent "
               f"rays against TinyBVH\"); rtcl {git_commit() or 'commit unknown'}, {utc_now()}. "
               f"Peer: {args.peer}. rtcl / peer above 1: rtcl is faster. Agreeing: the same hit "
