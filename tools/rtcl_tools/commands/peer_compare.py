@@ -516,9 +516,6 @@ def hits_agreeing(rtcl_hits, peer_hits, any_hit):
 def build_ray_programs(args, out):
     """peer_rays (the rays' maker and the peer's CPU traversals) and, for the
     GPU, peer_rays_gpu in a folder with the peer's kernels: (maker, gpu, its folder)."""
-    for name in ("tiny_bvh.h",) + (() if args.cpu else ("tiny_ocl.h", "traverse.cl")):
-        if not (args.peer / name).is_file():
-            raise Failure(f"{args.peer} is not the peer's folder: no {name}")
     folder = out / "peer"
     folder.mkdir(parents=True, exist_ok=True)
     maker = folder / "peer_rays"
@@ -580,6 +577,10 @@ def rays(args, rtcl, out):
     width, height = args.size
     args.repeat = str(check_positive_int("-r/--repeat", args.repeat))
     args.rounds = check_positive_int("--rounds", args.rounds)
+    needed = ("tiny_bvh.h", "ply2bin.py") + (() if args.cpu else ("tiny_ocl.h", "traverse.cl"))
+    missing = [name for name in needed if not (args.peer / name).is_file()]
+    if missing:
+        raise Failure(f"{args.peer} is not the peer's folder: no {', '.join(missing)}")
     rtcl_rays = find_rtcl_rays(rtcl)
     programs = build_ray_programs(args, out)
     platform = args.platform if args.cpu else args.platform or nvidia_platform(rtcl, out)
