@@ -85,6 +85,26 @@ def test_rtcl_rays_traces_the_rays_it_is_given(tmp_path):
         assert re.search(r"hits 1;", result.stdout), result.stdout
 
 
+def test_rtcl_rays_counts_the_work_per_ray(tmp_path):
+    """-c: the counting build's node visits, leaf visits and tests per ray;
+    one ray meets the lone sphere's leaf, the other misses the root's box."""
+    if not RTCL_RAYS.is_file():
+        pytest.skip("build/rtcl-rays is not built (make)")
+    (tmp_path / "s.json").write_text(SCENE)
+    body = np.array([(0, 0, 0, 1e30, 0, 0, -1, 0), (0, 0, 0, 1e30, 1, 0, 0, 0)], dtype="<f4")
+    (tmp_path / "r.rays").write_bytes(b"RTCLRAY1" + struct.pack("<II", 2, 0) + body.tobytes())
+    result = subprocess.run([RTCL_RAYS, "-c", tmp_path / "s.json", tmp_path / "r.rays",
+                             tmp_path / "hits"], capture_output=True, text=True, timeout=300,
+                            env={**os.environ, "POCL_WORK_GROUP_SPECIALIZATION": "0"})
+    assert result.returncode == 0, result.stderr
+    match = re.search(r"2 closest-hit rays counted \(2\); per ray: node visits ([\d.]+), "
+                      r"leaf visits ([\d.]+), primitive tests ([\d.]+)", result.stdout)
+    assert match, result.stdout
+    nodes, leaves, tests = map(float, match.groups())
+    assert nodes == 1 and leaves >= 0.5 and tests >= 0.5
+    assert not (tmp_path / "hits").exists()
+
+
 @pytest.mark.slow
 @pytest.mark.skipif(PEER is None, reason="the peer's folder (TinyBVH) is not here; set RTCL_PEER")
 def test_both_sides_trace_the_documented_rays_and_agree_on_every_hit(tmp_path):

@@ -7,7 +7,11 @@
  * trace_rays, one work-item per ray, once untimed and then -r times, timed by
  * OpenCL profiling events.
  *
- * usage: rtcl-rays SCENE RAYS HITS [-p PLATFORM] [-d DEVICE] [-r N] [-w N]
+ * usage: rtcl-rays SCENE RAYS HITS [-p PLATFORM] [-d DEVICE] [-r N] [-w N] [-c]
+ *
+ * -c/--counts: instead of timing, one launch of the counting build
+ * (RTCL_COUNT_FLOPS, the binary tree on every device, as rtcl --flops): prints
+ * the node visits, leaf visits and primitive tests per ray; HITS is not written.
  *
  * RAYS (little-endian): the 8 bytes "RTCLRAY1", uint32 count, uint32 flags
  * (bit 0: any hit, shadow rays), then count rays of 8 floats: origin x y z,
@@ -40,14 +44,14 @@
 
 struct rays_options {
 	const char *scene, *rays, *hits;
-	int platform, device, repeat, group;
+	int platform, device, repeat, group, counts;
 };
 
 static int usage(const char *message)
 {
 	fprintf(stderr,
 		"rtcl-rays: %s\nusage: rtcl-rays SCENE RAYS HITS [-p PLATFORM] [-d DEVICE] "
-		"[-r N] [-w N]\n(docs/bvh.md, \"Incoherent rays against TinyBVH\")\n",
+		"[-r N] [-w N] [-c]\n(docs/bvh.md, \"Incoherent rays against TinyBVH\")\n",
 		message);
 	return 2;
 }
@@ -65,12 +69,17 @@ static int parse_int(const char *text, int low, int high, int *out)
 
 static int parse_options(int argc, char **argv, struct rays_options *o)
 {
-	static const struct option longs[] = {{"help", no_argument, 0, 'h'}, {0, 0, 0, 0}};
+	static const struct option longs[] = {
+		{"help", no_argument, 0, 'h'}, {"counts", no_argument, 0, 'c'}, {0, 0, 0, 0}};
 	char message[160];
 	int c;
 
 	*o = (struct rays_options){.platform = -1, .device = -1, .repeat = 10, .group = 64};
-	while ((c = getopt_long(argc, argv, "p:d:r:w:h", longs, NULL)) != -1) {
+	while ((c = getopt_long(argc, argv, "p:d:r:w:hc", longs, NULL)) != -1) {
+		if (c == 'c') {
+			o->counts = 1;
+			continue;
+		}
 		int *to = c == 'p' ? &o->platform : c == 'd' ? &o->device : c == 'r' ? &o->repeat
 										 : &o->group;
 		int low = c == 'r' || c == 'w' ? 1 : 0, high = c == 'r' ? REPEAT_MAX : 1024;
@@ -148,7 +157,7 @@ static int compare_ms(const void *a, const void *b)
 
 /* What one run holds on the device, released by release(). */
 struct trace {
-	cl_mem scene, rays, hits;
+	cl_mem scene, rays, hits, counts;
 	cl_program program;
 	cl_kernel kernel;
 };
@@ -161,6 +170,8 @@ static void release(struct trace *t)
 		clReleaseProgram(t->program);
 	if (t->hits)
 		clReleaseMemObject(t->hits);
+	if (t->counts)
+		clReleaseMemObject(t->counts);
 	if (t->rays)
 		clReleaseMemObject(t->rays);
 	if (t->scene)
@@ -196,10 +207,46 @@ static int launch(struct device *dev, struct trace *t, size_t global, size_t loc
 	return 0;
 }
 
+/* -c: the counting launch's node visits, leaf visits and primitive tests
+ * per ray, summed over the work-items. */
+static int print_counts(struct device *dev, struct trace *t, uint32_t count, int any_hit,
+			char *err, size_t err_size)
+{
+	size_t words = (size_t)count * RT_ITEM_COUNTS;
+	cl_ulong *c = malloc(words * sizeof(*c));
+	double nodes = 0, leaves = 0, tests = 0, rays = 0;
+
+	if (!c) {
+		snprintf(err, err_size, "out of host memory for the counts of %u rays", count);
+		return -1;
+	}
+	cl_int status = clEnqueueReadBuffer(dev->queue, t->counts, CL_TRUE, 0,
+					    words * sizeof(*c), c, 0, NULL, NULL);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "reading the counts back failed: %s", cl_error_name(status));
+		free(c);
+		return -1;
+	}
+	for (uint32_t i = 0; i < count; i++) {
+		const cl_ulong *item = c + (size_t)i * RT_ITEM_COUNTS;
+		rays += (double)item[RT_ITEM_RAYS];
+		nodes += (double)item[RT_ITEM_NODE_VISITS];
+		leaves += (double)item[RT_ITEM_LEAF_VISITS];
+		tests += (double)item[RT_ITEM_PRIM_TESTS];
+	}
+	free(c);
+	printf("rtcl-rays: %s; %u %s rays counted (%.0f); per ray: node visits %.3f, leaf visits "
+	       "%.3f, primitive tests %.3f\n",
+	       dev->name, count, any_hit ? "any-hit" : "closest-hit", rays, nodes / count,
+	       leaves / count, tests / count);
+	return 0;
+}
+
 static int trace(const struct rays_options *o, char *err, size_t err_size)
 {
 	static const struct kernel_info kernel = {.name = "rays"};
-	struct render_settings s = {.kernel = &kernel, .accel = ACCEL_BVH, .repeat = o->repeat};
+	struct render_settings s = {.kernel = &kernel, .accel = ACCEL_BVH, .repeat = o->repeat,
+				    .count_flops = o->counts};
 	struct render_result res = {0};
 	struct scene scene = {0};
 	struct device dev = {0};
@@ -268,6 +315,11 @@ static int trace(const struct rays_options *o, char *err, size_t err_size)
 				      err, err_size);
 	if (!t.hits)
 		goto out_release;
+	size_t count_bytes = o->counts ? global * RT_ITEM_COUNTS * sizeof(cl_ulong) : 8;
+	t.counts = device_create_buffer(&dev, CL_MEM_READ_WRITE, count_bytes, NULL, "the counts",
+					err, err_size);
+	if (!t.counts)
+		goto out_release;
 	cl_uint n = count;
 	cl_int flag = any_hit;
 	cl_int status = clSetKernelArg(t.kernel, 0, sizeof(cl_mem), &t.scene);
@@ -278,12 +330,17 @@ static int trace(const struct rays_options *o, char *err, size_t err_size)
 	status |= clSetKernelArg(t.kernel, 3, sizeof(cl_mem), &t.hits);
 	status |= clSetKernelArg(t.kernel, 4, sizeof(n), &n);
 	status |= clSetKernelArg(t.kernel, 5, sizeof(flag), &flag);
+	status |= clSetKernelArg(t.kernel, 6, sizeof(cl_mem), &t.counts);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "clSetKernelArg failed for trace_rays");
 		goto out_release;
 	}
-	if (launch(&dev, &t, global, local, o->repeat, ms, err, err_size))
+	if (launch(&dev, &t, global, local, o->counts ? 0 : o->repeat, ms, err, err_size))
 		goto out_release;
+	if (o->counts) {
+		ret = print_counts(&dev, &t, count, any_hit, err, err_size);
+		goto out_release;
+	}
 	status = clEnqueueReadBuffer(dev.queue, t.hits, CL_TRUE, 0, (size_t)count * 8, hits, 0,
 				     NULL, NULL);
 	if (status != CL_SUCCESS) {
