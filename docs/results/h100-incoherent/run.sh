@@ -3,8 +3,8 @@
 # on the same primary, diffuse-bounce and shadow rays (rtcl-peer-compare --rays,
 # docs/bvh.md "Incoherent rays against TinyBVH"): SPD mount 8 (131,072
 # triangles), SPD tetra 10 (1,048,576) and the lake (2,097,152), rays of a
-# 2000x2000 image, -r 10; the peer's BVH_GPU built HQ and SAH and CWBVH built HQ
-# (--variants aAc). rtcl-rays builds its programs from source (fresh cache).
+# 2000x2000 image, -r 10; the peer's BVH_GPU built HQ and SAH, BVH4_GPU and CWBVH built HQ
+# (--variants aAqc). rtcl-rays builds its programs from source (fresh cache).
 #
 # Everything it needs is in the folder this script is in (.gpu/incoherent of
 # the tree the device runs in): rtcl, rtcl-rays and rtcl-meshread built with
@@ -28,7 +28,7 @@ if [ "${RAYS_LOCAL:-0}" = 1 ]; then
   MODE=(--cpu --meshes tetra:5 --size 96x64 -r 2)
 else
   nvidia-smi -L
-  MODE=(--meshes mount:8,tetra:10,lake --size 2000x2000 -r 10 --variants aAc)
+  MODE=(--meshes mount:8,tetra:10,lake --size 2000x2000 -r 10 --variants aAqc)
 fi
 "$G/rtcl" --list-devices | grep -i "platform" | head -4
 start=$(date +%s)
