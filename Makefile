@@ -68,6 +68,7 @@ LDLIBS = -lOpenCL -ljansson -lz -lm -pthread -ldl
 OIDN_DIR ?= /usr/local/lib/rtcl-oidn
 CFLAGS += -DRTCL_OIDN_DIR='"$(OIDN_DIR)"'
 MESHREAD := $(BUILD)/rtcl-meshread
+RAYS := $(BUILD)/rtcl-rays
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -132,9 +133,14 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 UNIT_TESTS := $(wildcard test/test_*.c)
 
 .PHONY: all deps render test test-long check layers experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
-all: $(BIN)
+all: $(BIN) $(RAYS)
 
 $(BIN): $(BUILD)/cmd/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
+
+# rtcl's traversal over rays from a file, timed (host/cmd/rays.c): the
+# instrument of rtcl-peer-compare --rays (docs/bvh.md).
+$(RAYS): $(BUILD)/cmd/rays.o $(HOST_OBJS) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
 
 # The mesh import helper: Assimp in a process of its own.
@@ -210,11 +216,11 @@ TEST_START := $(shell date +%s.%N)
 QUICK_TEST_ENV := POCL_WORK_GROUP_SPECIALIZATION=0 POCL_EXTRA_BUILD_FLAGS=-cl-opt-disable
 PYTEST = RTCL=$(abspath $(BIN)) RTCL_TEST_START=$(TEST_START) $(PYTHON) -m pytest -q -n $(TEST_JOBS)
 
-test: $(BIN) $(BUILD)/unit_tests
+test: $(BIN) $(RAYS) $(BUILD)/unit_tests
 	$(QUICK_TEST_ENV) $(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '!(*_slow)/*'
 	$(QUICK_TEST_ENV) RTCL_TEST_WHAT="make test" $(PYTEST) -m "not slow" test
 
-test-long: $(BIN) $(BUILD)/unit_tests
+test-long: $(BIN) $(RAYS) $(BUILD)/unit_tests
 	$(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '*_slow/*'
 	RTCL_TEST_WHAT="make test-long" $(PYTEST) -m slow test
 
