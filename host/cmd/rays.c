@@ -281,11 +281,14 @@ static int trace(const struct rays_options *o, char *err, size_t err_size)
 	s.workgroup[1] = 1;
 	if (block_prepare_scene(&dev, &scene, &s, &res, &block, err, err_size))
 		goto out_device;
-	struct program_features features = {res.scene_in_local, res.bvh_nodes > 0,
-					    scene.triangle_count > 0,
-					    res.bvh_nodes > 0 && scene.sphere_count == 0,
-					    0, 0, 0, 0, scene.light_count == 0,
-					    res.bvh_width == 4};
+	struct program_features features = {
+		.scene_in_local = res.scene_in_local,
+		.use_bvh = res.bvh_nodes > 0,
+		.has_triangles = scene.triangle_count > 0,
+		.leaf_triangles_only = res.bvh_nodes > 0 && scene.sphere_count == 0,
+		.no_lights = scene.light_count == 0,
+		.bvh4 = res.bvh_width == 4,
+	};
 	int cached;
 	double lap = timing_now();
 	if (program_build(&dev, &s, &features, &t.program, res.build_options, &cached, err,
