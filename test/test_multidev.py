@@ -736,6 +736,33 @@ def test_mpi_sample_split_matches_one_device(tmp_path):
 
 
 @needs_mpi
+@pytest.mark.parametrize("messages", ["0", "1"])
+def test_mpi_ranks_sums_add_up_to_one_devices_image(tmp_path, messages):
+    # The sample split's sums are added over the ranks: in the node's shared
+    # memory, each rank a third of the pixels (every rank on one node), or by
+    # MPI_Ireduce in a tree (RTCL_TEST_SUMS_BY_MESSAGES, as across nodes).
+    # Radiance that overflows float saturates the fixed-point sums: the
+    # saturation marks are joined, not added, so the image is one device's,
+    # the saturated channels written as the largest float.
+    from test_encoding import hot_scene  # noqa: E402 (test/ is on the path)
+    common = ["-s", str(hot_scene(tmp_path)), "--size", "24x16", "--spp", "6", "-k", "dynamic"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.pfm"))
+    assert one.returncode == 0, one.stderr
+    result = mpi_run(*common, "--split", "samples", "-o", str(tmp_path / "ranks.pfm"),
+                     "--stats", str(tmp_path / "s.json"),
+                     env={**CHECK, "RTCL_TEST_SUMS_BY_MESSAGES": messages})
+    assert result.returncode == 0, result.stderr
+    data = (tmp_path / "one.pfm").read_bytes()
+    assert data == (tmp_path / "ranks.pfm").read_bytes()
+    assert struct.pack("<f", 3.4028234663852886e38) in data  # FLT_MAX, little-endian
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert md["split"] == "samples" and md["ranks"] == 3
+    assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
+    added_by = {"0": "shared memory", "1": "MPI_Ireduce"}[messages]
+    assert md["rank_sums"]["added_by"] == added_by and md["rank_sums"]["ms"] >= 0
+
+
+@needs_mpi
 @pytest.mark.slow  # the message itself: test_sample_split_needs_a_sample_per_device
 def test_mpi_sample_split_needs_a_sample_per_device(tmp_path):
     result = mpi_run(*SMALL, "--split", "samples", "--spp", "2", "-o", str(tmp_path / "x.ppm"))

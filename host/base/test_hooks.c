@@ -115,6 +115,11 @@ void hook_sums_delay(void)
 		nanosleep(&(struct timespec){ms / 1000, ms % 1000 * 1000000L}, NULL);
 }
 
+int hook_sums_by_messages(void)
+{
+	return env_is_one("RTCL_TEST_SUMS_BY_MESSAGES");
+}
+
 int hook_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");

@@ -69,17 +69,24 @@ struct mpi_job {
 	struct device *all_devs;
 	struct device_work *all_work;
 	int *arrived; /* image: how often each band arrived */
-	cl_long *sums;	 /* by_samples: the devices' sums added so far */
+	cl_long *sums;	 /* by_samples: this rank's devices' sums added so far;
+			    on rank 0 after reduce_sums, every rank's */
+	int shared;	 /* by_samples: every rank on one node, each rank's sums
+			    in the node's shared memory (win) */
+	MPI_Win win;
+	cl_long **slots;      /* shared: each rank's sums, in win */
+	MPI_Datatype pixel;   /* not shared: a pixel's sum, 4 int64 */
+	MPI_Op add_op;	      /* not shared: sample_sums' add of two */
 	pthread_mutex_t sums_lock; /* sums and arrived, by_samples: not `lock`,
 				      which the other ranks' requests for
 				      pieces wait on meanwhile */
-	char *received; /* by_samples: where another rank's sums arrive */
 	double wall_ms;
 	int bound_ranks; /* ranks bound to one core of several (note_binding) */
 	double setup_ms[DEVICES_MAX]; /* image: each device's set-up, before the
 					 clock (open_before_clock) */
 	int initialized; /* MPI_Init_thread succeeded */
 	int threads;	 /* with MPI_THREAD_MULTIPLE */
+	double reduce_ms; /* by_samples: reduce_sums on this rank */
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -334,8 +341,8 @@ static void place_band(struct mpi_job *j, int band, const float *rgb)
 	tiles_pack_piece(&p, j->settings.width, rgb, j->record->result.rgb, 1);
 }
 
-/* Rank 0, by_samples: piece g's sums (device g's range of the samples) added
- * to the image's. */
+/* By_samples: piece g's sums (device g's range of the samples) added to
+ * this rank's (reduce_sums adds the ranks'). */
 static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 {
 	const struct render_settings *s = &j->settings;
@@ -354,29 +361,18 @@ static int writes_wrong(struct tiles_job *t, int device, char *err, size_t err_s
 					     tiles_check_device(t, device, err, err_size));
 }
 
-/* By_samples: the device is done: its sums to rank 0 (one message), or on
- * rank 0 into the image's. */
-static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
+/* By_samples: the device is done: its sums into this rank's, which
+ * reduce_sums adds to the other ranks' once all of this rank's devices are
+ * done. */
+static int add_device_sums(struct mpi_job *j, int device, char *err, size_t err_size)
 {
 	struct tiles_job *t = &j->tiles;
-	const struct render_settings *s = &j->settings;
-	size_t bytes = image_sum_bytes(s->width, s->height);
 
 	if (writes_wrong(t, device, err, err_size))
 		return -1;
-	for (int g = 0; g < t->piece_count; g++) {
-		if (t->owner[g] != device)
-			continue;
-		if (j->rank == ROOT) {
+	for (int g = 0; g < t->piece_count; g++)
+		if (t->owner[g] == device)
 			add_piece_sums(j, g, t->dev[device].sums);
-			continue;
-		}
-		/* The sums lie RESULT_HEADER bytes into their block: one message,
-		 * no copy. */
-		memcpy(t->dev[device].block, &g, sizeof(int));
-		if (send_kept(t->dev[device].block, bytes, err, err_size))
-			return -1;
-	}
 	return 0;
 }
 
@@ -422,7 +418,7 @@ static void finish_bands(struct mpi_job *j, int device)
 	const struct device *d = &j->devs[device];
 
 	if (j->device_failed[device] ||
-	    (j->by_samples ? send_sums(j, device, err, sizeof(err))
+	    (j->by_samples ? add_device_sums(j, device, err, sizeof(err))
 			   : send_bands(j, device, err, sizeof(err))) == 0)
 		return;
 	snprintf(message, sizeof(message), "device %d:%d (%s): %s", d->platform_index,
@@ -498,8 +494,6 @@ static size_t piece_bytes(const struct mpi_job *j, int piece)
 
 	if (!j->image)
 		return image_float_bytes(s->width, s->height);
-	if (j->by_samples)
-		return image_sum_bytes(s->width, s->height);
 	p = tiles_job_band(&j->tiles, piece, 0, 1);
 	return image_float_bytes(p.width, p.height);
 }
@@ -510,21 +504,17 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	int bytes = 0, piece = -1;
 
 	MPI_Get_count(status, MPI_BYTE, &bytes);
-	/* A device's sums go to the buffer kept for them (its pages touched
-	 * before the render), others to one of their own. */
-	int kept = j->by_samples && (size_t)bytes == RESULT_HEADER + piece_bytes(j, 0);
-	message = kept ? j->received : malloc(bytes > 0 ? (size_t)bytes : 1);
+	message = malloc(bytes > 0 ? (size_t)bytes : 1);
 	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
 		 MPI_STATUS_IGNORE);
 	if (message && (size_t)bytes >= RESULT_HEADER)
 		memcpy(&piece, message, sizeof(int));
 	const float *rgb = (const float *)(message + RESULT_HEADER);
-	if (piece < 0 || piece >= piece_count(j)) {
+	if (piece < 0 || piece >= piece_count(j) || j->by_samples) {
+		/* By_samples: the sums travel in reduce_sums, not as pieces. */
 		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
 	} else if ((size_t)bytes != RESULT_HEADER + piece_bytes(j, piece)) {
 		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
-	} else if (j->by_samples) {
-		add_piece_sums(j, piece, (const cl_long *)(message + RESULT_HEADER));
 	} else if (j->image) {
 		place_band(j, piece, rgb);
 	} else {
@@ -534,8 +524,7 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 			record_failure(j, status->MPI_SOURCE, err);
 		return;
 	}
-	if (!kept)
-		free(message);
+	free(message);
 }
 
 static void serve_fail(struct mpi_job *j, const MPI_Status *status)
@@ -668,6 +657,156 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 	return 0;
 }
 
+/* ---- the sample split's sums, added over the ranks ---------------------
+ *
+ * Each rank adds its devices' sums into its own; then the ranks' sums are
+ * added together. Rank 0 receiving and adding the others' one after another
+ * took 126-127 ms after the last device on four H100s (128 MB a rank at
+ * 2000x2000, docs/results/h100x4, batch 95). With every rank on one node
+ * (the usual case: one rank a GPU), each rank's sums lie in the node's
+ * shared memory and each rank adds a quarter (1/size) of every pixel's
+ * sums, from all ranks at once, into rank 0's; across nodes, MPI_Ireduce
+ * adds them in a tree. Integer sums and joined saturation marks (cl/sample.cl,
+ * sample_sums): the same whatever the order, so the same image as one
+ * device's. */
+
+/* MPI_Op over pixels' sums (4 int64 each): the channels added, the
+ * saturation marks joined, as sample_sums. */
+static void add_sums_op(void *in, void *inout, int *len, MPI_Datatype *type)
+{
+	const cl_long *a = in;
+	cl_long *b = inout;
+
+	(void)type;
+	for (size_t i = 0; i < 4 * (size_t)*len; i += 4) {
+		b[i] += a[i];
+		b[i + 1] += a[i + 1];
+		b[i + 2] += a[i + 2];
+		b[i + 3] |= a[i + 3];
+	}
+}
+
+/* Whether every rank runs on this one node (then node is the world's ranks
+ * in the same order). */
+static int one_node(struct mpi_job *j, MPI_Comm *node)
+{
+	int node_size = 0, node_rank = -1, mine, all = 0;
+
+	if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, node) !=
+	    MPI_SUCCESS) {
+		*node = MPI_COMM_NULL;
+	} else {
+		MPI_Comm_size(*node, &node_size);
+		MPI_Comm_rank(*node, &node_rank);
+	}
+	mine = node_size == j->size && node_rank == j->rank && !hook_sums_by_messages();
+	if (MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS)
+		return 0;
+	return all;
+}
+
+/* By_samples, every rank, before the clock: where this rank's sums are
+ * added, and how the ranks' are. Returns 0, or -1 (out of memory). */
+static int setup_reduction(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	size_t bytes = image_sum_bytes(s->width, s->height);
+	MPI_Comm node;
+	void *base = NULL;
+	int made = 0, all = 0;
+
+	if (one_node(j, &node))
+		made = MPI_Win_allocate_shared((MPI_Aint)bytes, 1, MPI_INFO_NULL, node, &base,
+					       &j->win) == MPI_SUCCESS;
+	/* A window made on some ranks only is left to MPI_Finalize. */
+	if (MPI_Allreduce(&made, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS)
+		all = 0;
+	if (node != MPI_COMM_NULL)
+		MPI_Comm_free(&node);
+	if (all) {
+		j->slots = calloc((size_t)j->size, sizeof(*j->slots));
+		for (int r = 0; j->slots && r < j->size; r++) {
+			MPI_Aint size;
+			int unit;
+			if (MPI_Win_shared_query(j->win, r, &size, &unit, &j->slots[r]) !=
+			    MPI_SUCCESS)
+				return -1;
+		}
+		if (!j->slots)
+			return -1;
+		j->shared = 1;
+		j->sums = j->slots[j->rank];
+	} else {
+		j->sums = malloc(bytes);
+		if (!j->sums ||
+		    MPI_Type_contiguous(4, MPI_INT64_T, &j->pixel) != MPI_SUCCESS ||
+		    MPI_Type_commit(&j->pixel) != MPI_SUCCESS ||
+		    MPI_Op_create(add_sums_op, 1, &j->add_op) != MPI_SUCCESS)
+			return -1;
+	}
+	/* Zeroed and mapped now, by this rank, before the render's clock. */
+	memset(j->sums, 0, bytes);
+	return 0;
+}
+
+/* MPI_Barrier, in naps. */
+static int wait_barrier(void)
+{
+	MPI_Request request;
+
+	return MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS || wait_request(&request);
+}
+
+/* By_samples, every rank, once its devices are done: every rank's sums
+ * added into rank 0's j->sums, and the pieces' arrivals counted there.
+ * Returns 0, or -1 when MPI failed. */
+static int reduce_sums(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	size_t pixels = (size_t)s->width * s->height;
+	MPI_Request request;
+	int root = j->rank == ROOT, failed;
+	double start = timing_now();
+
+	if (j->shared) {
+		const cl_long *parts[DEVICES_MAX];
+		size_t begin = pixels * j->rank / j->size, end = pixels * (j->rank + 1) / j->size;
+		long cores = sysconf(_SC_NPROCESSORS_ONLN);
+		if (j->size > DEVICES_MAX || wait_barrier())
+			return -1;
+		for (int r = 0; r < j->size; r++)
+			parts[r] = j->slots[r] + 4 * begin;
+		/* The node's cores shared among its ranks. */
+		tiles_sum_parts(parts, j->size, j->slots[ROOT] + 4 * begin, end - begin,
+				(int)(cores / j->size));
+		if (wait_barrier())
+			return -1;
+	} else if (MPI_Ireduce(root ? MPI_IN_PLACE : j->sums, j->sums, (int)pixels, j->pixel,
+			       j->add_op, ROOT, MPI_COMM_WORLD, &request) != MPI_SUCCESS ||
+		   wait_request(&request)) {
+		return -1;
+	}
+	failed = MPI_Ireduce(root ? MPI_IN_PLACE : j->arrived, j->arrived, j->pieces, MPI_INT,
+			     MPI_SUM, ROOT, MPI_COMM_WORLD, &request) != MPI_SUCCESS ||
+		 wait_request(&request);
+	j->reduce_ms = (timing_now() - start) * 1e3;
+	return failed ? -1 : 0;
+}
+
+/* By_samples, every rank, before MPI_Finalize: the window, type and op. */
+static void end_reduction(struct mpi_job *j)
+{
+	if (j->shared) {
+		MPI_Win_free(&j->win);
+		j->shared = 0;
+		j->sums = NULL; /* was the window's */
+	}
+	if (j->add_op != MPI_OP_NULL)
+		MPI_Op_free(&j->add_op);
+	if (j->pixel != MPI_DATATYPE_NULL)
+		MPI_Type_free(&j->pixel);
+}
+
 /* choose_pieces: --split samples cannot split this job (said on rank 0). */
 #define CHOSEN_BADLY 2
 
@@ -748,26 +887,18 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 					NULL))
 			return -1;
 		j->pieces = total;
-		/* Each device's sums, sent as they lie (send_sums), allocated now,
-		 * before the render's clock. */
-		j->tiles.sums_header = RESULT_HEADER;
-		for (int k = 0; k < j->count; k++)
-			if (tiles_alloc_sums(&j->tiles, k, err, sizeof(err)))
-				return -1;
-	}
-	if (j->rank != ROOT)
-		return 0;
-	if (j->by_samples) {
-		size_t bytes = image_sum_bytes(s->width, s->height);
-		j->sums = calloc(1, bytes);
-		j->received = calloc(1, RESULT_HEADER + bytes);
-		if (!j->sums || !j->received)
+		/* Each device's sums are read back into pinned memory, allocated
+		 * as its renderer opens (tiles_open), before the render's clock;
+		 * this rank's added, and the ranks' reduced, in memory set up
+		 * now. */
+		if (setup_reduction(j))
 			return -1;
-		/* Mapped now, as the image below. */
-		pages_touch(j->sums, bytes);
-		pages_touch(j->received, RESULT_HEADER + bytes);
 	}
+	if (j->rank != ROOT && !j->by_samples)
+		return 0;
 	j->arrived = calloc((size_t)j->pieces, sizeof(int));
+	if (j->rank != ROOT)
+		return j->arrived ? 0 : -1;
 	j->record->result.rgb = calloc(1, image_float_bytes(s->width, s->height));
 	if (!j->arrived || !j->record->result.rgb)
 		return -1;
@@ -888,6 +1019,8 @@ static int finish_root(struct mpi_job *j)
 		.work = j->all_work,
 		.count = j->total,
 		.ranks_count = j->image ? j->size : 0,
+		.rank_sums = !j->by_samples ? NULL : j->shared ? "shared memory" : "MPI_Ireduce",
+		.rank_sums_ms = j->reduce_ms,
 		.split = j->by_samples ? SPLIT_SAMPLES : j->job->split,
 		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
 		.wall_ms = j->wall_ms,
@@ -959,6 +1092,11 @@ static int render_all(struct mpi_job *j)
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
 	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
+	if (j->by_samples && reduce_sums(j)) {
+		fprintf(stderr, "rtcl: rank %d: --mpi: adding the ranks' sample sums failed\n",
+			j->rank);
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
 		progress_end();
@@ -978,8 +1116,9 @@ static void free_job(struct mpi_job *j)
 	tiles_job_free(&j->tiles); /* the renderers, before their devices */
 	devices_close(j->devs, j->count);
 	free(j->arrived);
-	free(j->sums);
-	free(j->received);
+	if (!j->shared)
+		free(j->sums);
+	free(j->slots);
 	free(j->first);
 	free(j->rank_of);
 	dispenser_free(&j->dispenser);
@@ -1017,6 +1156,8 @@ static int mpi_begin(struct mode_run *run, char *err, size_t err_size)
 		return EXIT_FAILED;
 	}
 	j->initialized = 1;
+	j->pixel = MPI_DATATYPE_NULL;
+	j->add_op = MPI_OP_NULL;
 	j->threads = provided >= MPI_THREAD_MULTIPLE;
 	MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
 	MPI_Comm_rank(MPI_COMM_WORLD, &j->rank);
@@ -1101,6 +1242,7 @@ static void mpi_end(struct mode_run *run, int status)
 
 	if (!j || !j->initialized)
 		return;
+	end_reduction(j);
 	MPI_Finalize();
 	if (j->rank != ROOT && status == 0)
 		interrupt_set_outcome(

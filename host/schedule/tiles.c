@@ -613,15 +613,14 @@ static void *combine_range(void *arg)
  * over up to TILES_SUM_THREADS threads (a 2000 x 2000 image is 4 million
  * pixels' sums; on two H200s' host the image was assembled in 10-13 ms, 139
  * ms on one thread with both images read back first). */
-static void combine_sums(const cl_long *const *parts, int count, cl_long *to, float *rgb,
-			 float scale, size_t pixels)
+static void combine_on(const cl_long *const *parts, int count, cl_long *to, float *rgb,
+		       float scale, size_t pixels, int threads)
 {
-	long cores = sysconf(_SC_NPROCESSORS_ONLN);
-	int threads = cores < 1 ? 1 : cores > TILES_SUM_THREADS ? TILES_SUM_THREADS : (int)cores;
 	struct sums_range ranges[TILES_SUM_THREADS];
 	pthread_t ids[TILES_SUM_THREADS];
 	int started[TILES_SUM_THREADS] = {0};
 
+	threads = threads < 1 ? 1 : threads > TILES_SUM_THREADS ? TILES_SUM_THREADS : threads;
 	if (pixels < ((size_t)1 << 14))
 		threads = 1;
 	for (int i = 0; i < threads; i++) {
@@ -635,6 +634,20 @@ static void combine_sums(const cl_long *const *parts, int count, cl_long *to, fl
 	for (int i = 1; i < threads; i++)
 		if (started[i])
 			pthread_join(ids[i], NULL);
+}
+
+static void combine_sums(const cl_long *const *parts, int count, cl_long *to, float *rgb,
+			 float scale, size_t pixels)
+{
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+
+	combine_on(parts, count, to, rgb, scale, pixels, cores < 1 ? 1 : (int)cores);
+}
+
+void tiles_sum_parts(const cl_long *const *parts, int count, cl_long *to, size_t pixels,
+		     int threads)
+{
+	combine_on(parts, count, to, NULL, 0, pixels, threads);
 }
 
 void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels)

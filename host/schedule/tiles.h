@@ -309,6 +309,11 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size);
  * pixel, the channels' sums added, their saturation bits joined). */
 void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels);
 
+/* The sum of `count` parts' sums of `pixels` pixels into to (which may be
+ * one of the parts), as tiles_add_sums, over up to `threads` threads. */
+void tiles_sum_parts(const cl_long *const *parts, int count, cl_long *to, size_t pixels,
+		     int threads);
+
 /* The image's mean colours from every pixel's sum of all its samples
  * (docs/RENDERING.md, "Samples per pixel"): float(S) times the mean's
  * scale, as a kernel's last pass takes it; +inf where a channel saturated. */
