@@ -81,6 +81,32 @@ def test_every_frame_rendered_once_and_accounted(tmp_path):
     assert "f_0001.ppm .. " in result.stdout and "f_0007.ppm" in result.stdout
 
 
+@pytest.mark.parametrize("frames, pieces", [("0:2", [2, 2]), ("0:0", [1, 1])])
+def test_gpus_share_the_last_frames_when_fewer_remain_than_gpus(tmp_path, frames, pieces):
+    # With GPUs alone (RTCL_TEST_AS_GPUS: PoCL's devices count as GPUs), the
+    # last n mod G frames are each rendered over a group of the GPUs, so none
+    # idles: 3 frames on 2 devices are one each, then the third over both (1
+    # frame: over both at once). Every frame is one device's, byte for byte.
+    one, two = tmp_path / "one", tmp_path / "two"
+    one.mkdir()
+    two.mkdir()
+    common = ["--frames", frames, "--spp", "4"]
+    frames_run(one, *common, "-d", "0")
+    result, stats = frames_run(two, *common, "--devices", "0:0,0:1",
+                               env={"RTCL_TEST_AS_GPUS": "1"})
+    names = sorted(p.name for p in one.iterdir() if p.suffix == ".ppm")
+    assert len(names) == (3 if frames == "0:2" else 1)
+    for name in names:
+        assert (one / name).read_bytes() == (two / name).read_bytes(), name
+    md = stats["multidevice"]
+    # A shared frame is a piece of each device of its group, which writes a
+    # share of its pixels.
+    assert [d["pieces"] for d in md["devices"]] == pieces
+    done = [d["pixels"] for d in md["devices"]]
+    assert sum(done) == len(names) * 32 * 24
+    assert all(p > (pieces[0] - 1) * 32 * 24 for p in done), done
+
+
 def test_dynamic_split_gives_a_slow_device_fewer_pieces(tmp_path):
     _, stats = frames_run(tmp_path, "--frames", "0:9", "--devices", "0:0,0:1",
                           env={"RTCL_TEST_SLOW_DEVICE": "1:400"})

@@ -809,12 +809,15 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 	char devices[32];
 
 	snprintf(devices, sizeof(devices), "%d device%s", t->count, t->count == 1 ? "" : "s");
-	if (frames > 0)
+	/* The line is the caller's without progress (--frames' last frames,
+	 * render_shared_frames), as for render(). */
+	if (frames > 0 && t->settings->progress)
 		repeats_progress_begin(t->settings, frames, devices);
 	for (int f = 0; f < frames; f++) {
 		double start = timing_now();
 		t->frame_start = start;
-		repeats_progress_step(t->settings, out, f, frames);
+		if (t->settings->progress)
+			repeats_progress_step(t->settings, out, f, frames);
 		if (t->adaptive) {
 			adapt_new_frame(&t->adapt);
 			t->piece_count = 0;
@@ -986,7 +989,8 @@ int tiles_render(struct tiles_request *r, const struct render_settings *s,
 	}
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);
-	progress_end();
+	if (s->progress)
+		progress_end();
 	if (frames < 0 || repeats_end(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
