@@ -266,9 +266,9 @@ def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
 def test_mpi_ranks_bound_to_one_core_get_a_note_and_bands(tmp_path):
     """Open MPI binds one or two ranks to a core each by default, where a rank's
     BVH build and sums then run alone: rank 0 says so once, and GPUs alone
-    (RTCL_TEST_AS_GPUS) split the image in bands; unbound, they split its
-    samples, as in one process (docs/results/multidevice/README.md, "MPI").
-    Both give the same image."""
+    (RTCL_TEST_AS_GPUS) split the image in bands; unbound, the devices'
+    probes choose, as in one process (docs/results/multidevice/README.md,
+    "MPI"). Both give the same image."""
     def run(binding):
         out = tmp_path / binding
         out.mkdir()
@@ -278,14 +278,17 @@ def test_mpi_ranks_bound_to_one_core_get_a_note_and_bands(tmp_path):
                                 capture_output=True, text=True, cwd=ROOT, timeout=300,
                                 env={**os.environ, **MPI_ENV, "RTCL_TEST_AS_GPUS": "1"})
         assert result.returncode == 0, result.stderr
-        split = json.loads((out / "s.json").read_text())["multidevice"]["split"]
-        return result, split, (out / "x.ppm").read_bytes()
+        md = json.loads((out / "s.json").read_text())["multidevice"]
+        return result, (md["split"], md.get("split_choice")), (out / "x.ppm").read_bytes()
     (bound, bound_split, bound_image), (free, free_split, free_image) = run("core"), run("none")
     notes = [line for line in own_messages(bound.stderr) if line.startswith("rtcl: note:")]
     assert len(notes) == 1 and "bound 2 of 2 rank(s) to one core each" in notes[0], bound.stderr
     assert "--bind-to none" in notes[0]
     assert "rtcl: note:" not in free.stderr, free.stderr
-    assert (bound_split, free_split) == ("dynamic", "samples")
+    assert bound_split == ("dynamic", None)
+    choice = free_split[1]
+    cheap = choice["sums_ms"] + choice["add_ms"] <= choice["penalty_ms"]
+    assert free_split[0] == ("samples" if cheap else "dynamic"), free_split
     assert bound_image == free_image
 
 
@@ -786,6 +789,41 @@ def test_mpi_ranks_sums_add_up_to_one_devices_image(tmp_path, messages):
     assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
     added_by = {"0": "shared memory", "1": "MPI_Ireduce"}[messages]
     assert md["rank_sums"]["added_by"] == added_by and md["rank_sums"]["ms"] >= 0
+
+
+@needs_mpi
+@pytest.mark.parametrize("slow_sums, split", [("0", "samples"), ("1000", "dynamic")])
+def test_mpi_default_split_is_measured_over_the_ranks(tmp_path, slow_sums, split):
+    # GPUs alone (RTCL_TEST_AS_GPUS) split the samples by default only when
+    # the devices' probes, exchanged by the ranks, say that reading back and
+    # adding the sums costs less than a share of the pixels would
+    # (tiles_prefer_samples, as in one process); a read-back 1 s slower at
+    # set-up (RTCL_TEST_SLOW_SUMS) makes it the bands. Before, a fixed 128
+    # samples a device chose. Every rank decides alike; one device's image,
+    # every pixel written once a pass, the probe's included (CHECK).
+    common = ["--size", "48x32", "--spp", "256", "-k", "dynamic"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = mpi_run(*common, "-o", str(tmp_path / "ranks.ppm"), "--stats",
+                     str(tmp_path / "s.json"),
+                     env={**CHECK, "RTCL_TEST_AS_GPUS": "1", "RTCL_TEST_SLOW_SUMS": slow_sums})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    choice = md["split_choice"]
+    if split == "samples" and choice["sums_ms"] + choice["add_ms"] > choice["penalty_ms"]:
+        split = "dynamic"  # this busy 2-core host's timings chose the bands after all
+    assert md["split"] == split, md
+    assert choice["pass_ms"] > 0 and choice["sums_ms"] > 0 and choice["add_ms"] > 0
+    if split == "samples":
+        assert choice["sums_ms"] + choice["add_ms"] <= choice["penalty_ms"], choice
+        assert md["rank_sums"]["added_by"] == "shared memory"
+        assert [d["pieces"] for d in md["devices"]] == [1, 1, 1]
+    else:
+        assert choice["sums_ms"] >= 1000 > choice["penalty_ms"], choice
+        assert "rank_sums" not in md and md["piece"] == "band"
+        assert sum(d["pixels"] for d in md["devices"]) == 48 * 32
+    assert "split:   " + split + ", measured:" in result.stdout
 
 
 @needs_mpi

@@ -53,6 +53,9 @@ struct mpi_job {
 	int image;			/* one image in bands (tiles.h), not --frames */
 	int by_samples;			/* image: each device a range of the samples
 					   (SPLIT_SAMPLES), not bands */
+	int measure;			/* by_samples by default: kept only if the
+					   devices' probes favour it (choose_measured) */
+	struct split_choice choice;	/* how it was chosen */
 	int pieces;			/* frames, or bands */
 	struct tiles_job tiles;		/* image: this rank's devices and bands */
 	int device_failed[DEVICES_MAX]; /* image: a piece of this device failed */
@@ -807,21 +810,96 @@ static void end_reduction(struct mpi_job *j)
 		MPI_Type_free(&j->pixel);
 }
 
+/* Each of the total devices a range of the samples, in whole passes. */
+static int split_rank_samples(struct mpi_job *j, int total)
+{
+	const struct render_settings *s = &j->settings;
+
+	return tiles_split_samples(&j->tiles, total,
+				   renderer_pass_samples(s, (long long)s->width * s->height, 1),
+				   NULL);
+}
+
+/* Rank 0: the dispenser and arrivals for j->pieces pieces again (the
+ * measured choice took the bands). */
+static int plan_pieces_again(struct mpi_job *j)
+{
+	dispenser_free(&j->dispenser);
+	free(j->arrived);
+	j->arrived = calloc((size_t)j->pieces, sizeof(int));
+	return !j->arrived ||
+	       dispenser_init(&j->dispenser, piece_count(j), j->total, j->job->split);
+}
+
+/* j->measure, every rank, before the clock, once its devices are open and
+ * probed (tiles_open): the ranks exchange their devices' probes, and each
+ * times the ranks' add of the sums (reduce_sums, of the zeroed sums: they
+ * stay zero); every rank then decides the same from the same figures, as
+ * one process does (tiles_prefer_samples): the samples, or bands. Returns
+ * 0, or -1 when MPI or memory failed. */
+static int choose_measured(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	/* Per rank: its device count, its pass's samples, then each device's
+	 * pass and read-back. */
+	enum { ROW = 2 + 2 * DEVICES_MAX };
+	double mine[ROW] = {0}, *all = calloc((size_t)j->size * ROW, sizeof(double));
+	double pass_ms[DEVICES_MAX], sums_ms[DEVICES_MAX], add_ms = 0;
+	int unit = tiles_sample_unit(s, j->devs, j->count), n = 0;
+
+	if (!all)
+		return -1;
+	mine[0] = j->count;
+	mine[1] = unit < settings_samples(s) ? unit : 1;
+	for (int k = 0; k < j->count; k++) {
+		mine[2 + 2 * k] = j->tiles.dev[k].probe_ms;
+		mine[3 + 2 * k] = j->tiles.dev[k].sums_ms;
+	}
+	/* Timed from when all are here: the ranks open their devices at
+	 * different speeds. */
+	if (wait_barrier())
+		goto fail;
+	double start = timing_now();
+	if (reduce_sums(j))
+		goto fail;
+	double mine_ms = (timing_now() - start) * 1e3;
+	if (MPI_Allreduce(&mine_ms, &add_ms, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD) !=
+		    MPI_SUCCESS ||
+	    MPI_Allgather(mine, ROW, MPI_DOUBLE, all, ROW, MPI_DOUBLE, MPI_COMM_WORLD) !=
+		    MPI_SUCCESS)
+		goto fail;
+	for (int r = 0; r < j->size; r++)
+		for (int k = 0; k < (int)all[r * ROW] && n < DEVICES_MAX; k++, n++) {
+			pass_ms[n] = all[r * ROW + 2 + 2 * k];
+			sums_ms[n] = all[r * ROW + 3 + 2 * k];
+		}
+	/* Rank 0's pass, so that every rank decides alike. */
+	int samples = tiles_prefer_samples(pass_ms, sums_ms, n, (int)all[1], settings_samples(s),
+					   add_ms, &j->choice);
+	free(all);
+	memset(j->arrived, 0, (size_t)j->pieces * sizeof(int)); /* the trial's */
+	j->measure = 0;
+	if (samples)
+		return split_rank_samples(j, n);
+	j->by_samples = 0;
+	tiles_drop_sums(&j->tiles);
+	j->pieces = j->tiles.bands;
+	return j->rank == ROOT ? plan_pieces_again(j) : 0;
+
+fail:
+	free(all);
+	return -1;
+}
+
 /* choose_pieces: --split samples cannot split this job (said on rank 0). */
 #define CHOSEN_BADLY 2
 
-/* Under --mpi the default splits the samples when each device takes this
- * many of every pixel or more (one process chooses by measured costs
- * instead, tiles_prefer_samples: the ranks would have to exchange their
- * probes first). Two H200s, default scene 2000x2000 (docs/results/
- * multidevice, batches 70-71): 64 spp took 34.4 ms split by samples, 26.2 by
- * pixels; 256 spp 102.9-104.6 and 100.8; 512 spp 195.0 and 200.8. */
-#define MPI_SAMPLES_MIN 128
-
-/* Whether the image is split by samples without --split samples: when every
- * device of every rank is a GPU and
- * takes MPI_SAMPLES_MIN samples of each pixel or more, and also only when
- * no rank is bound to one core (note_binding), where rank 0 adds the sums.
+/* Whether the image may be split by samples without --split samples, as
+ * the devices' probes decide before the clock (choose_measured): when every
+ * device of every rank is a GPU and the samples fit (tiles_samples_fit),
+ * and only when no rank is bound to one core (note_binding), where the
+ * ranks add the sums. (Before, a fixed 128 samples a device or more: four
+ * H100 ranks took the lake at 256 spp in bands, 2.37 times one rank.)
  * On two H200s (batch 82, docs/results/multidevice/README.md, "MPI") two
  * ranks took 780-789 ms split by samples against 816-833 in bands, and 855-869
  * against 832-835 with each rank bound to one core. */
@@ -832,7 +910,6 @@ static int samples_by_default(const struct mpi_job *j, int total, int gpus)
 
 	return !job->split_given && !job->row_order_given && total >= 2 && gpus == total &&
 	       j->bound_ranks == 0 && tiles_samples_fit(s, total, job->piece_rows) &&
-	       settings_samples(s) >= total * MPI_SAMPLES_MIN &&
 	       !message_too_large(image_sum_bytes(s->width, s->height));
 }
 
@@ -880,12 +957,17 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 				s->width, s->height, sum_bytes);
 		return CHOSEN_BADLY;
 	}
-	j->by_samples = job->split == SPLIT_SAMPLES || samples_by_default(j, total, gpus);
+	j->measure = job->split != SPLIT_SAMPLES && samples_by_default(j, total, gpus);
+	j->by_samples = job->split == SPLIT_SAMPLES || j->measure;
+	if (j->measure) {
+		/* Each device probed as its renderer opens (tiles_open); the
+		 * sample pieces made once the probes favour them. */
+		j->tiles.by_samples = 1;
+		j->tiles.probe = 1;
+	} else if (j->by_samples && split_rank_samples(j, total)) {
+		return -1;
+	}
 	if (j->by_samples) {
-		if (tiles_split_samples(&j->tiles, total,
-					renderer_pass_samples(s, (long long)s->width * s->height, 1),
-					NULL))
-			return -1;
 		j->pieces = total;
 		/* Each device's sums are read back into pinned memory, allocated
 		 * as its renderer opens (tiles_open), before the render's clock;
@@ -1025,6 +1107,7 @@ static int finish_root(struct mpi_job *j)
 		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
 		.wall_ms = j->wall_ms,
 		.row_order_given = j->image,
+		.choice = j->choice,
 	};
 	if (j->image)
 		j->record->shares.rows = j->tiles.row_map;
@@ -1055,6 +1138,12 @@ static void open_before_clock(struct mpi_job *j)
 	tiles_open_all(&j->tiles, setup, err, sizeof(err));
 	for (int k = 0; k < j->count; k++)
 		j->setup_ms[k] = setup[k].setup_ms;
+	if (j->measure && choose_measured(j)) {
+		fprintf(stderr, "rtcl: rank %d: --mpi: choosing the split from the devices' "
+				"probes failed\n",
+			j->rank);
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
 	if (MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS || wait_request(&request))
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 }
@@ -1063,6 +1152,8 @@ static void open_before_clock(struct mpi_job *j)
  * rank learns whether the render succeeded. Returns the exit status. */
 static int render_all(struct mpi_job *j)
 {
+	if (j->image)
+		open_before_clock(j); /* may choose the split (choose_measured) */
 	struct multidev_job job = {.piece_count = piece_count(j),
 				   .split =
 					   j->job->split == SPLIT_DYNAMIC && !j->by_samples
@@ -1078,8 +1169,6 @@ static int render_all(struct mpi_job *j)
 	pthread_t server;
 	int status = 0;
 
-	if (j->image)
-		open_before_clock(j);
 	double start = timing_now();
 
 	if (j->rank == ROOT) {

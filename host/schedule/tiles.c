@@ -445,9 +445,11 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 {
 	const struct render_settings *s = t->settings;
 	const uint32_t *counts = t->dev[k].result.write_counts;
+	/* Set-up's probe (probe_device) wrote every pixel too. */
+	uint32_t probed = (uint32_t)t->dev[k].probe_launches;
 
 	if (counts && t->by_samples) { /* every pixel, once a pass of its pieces */
-		uint32_t expected = 0;
+		uint32_t expected = probed;
 		for (int b = 0; b < t->piece_count; b++)
 			if (t->owner[b] == k)
 				expected += (uint32_t)tiles_piece_launches(s, &t->pieces[b],
@@ -457,7 +459,9 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	for (int b = 0; counts && b < t->piece_count; b++) {
 		const struct rt_piece *p = &t->pieces[b];
 		uint32_t expected =
-			t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p, t->devs[k].is_gpu) : 0;
+			probed +
+			(t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p, t->devs[k].is_gpu)
+					  : 0);
 		for (int v = p->y0; v < p->y0 + p->height; v++)
 			if (tiles_check_counts(counts + (size_t)rt_piece_row(p, v) * s->width + p->x0,
 					       p->width, 1,
@@ -949,8 +953,14 @@ static void choose_by_probes(struct tiles_request *r, struct tiles_job *t)
 		return;
 	}
 	r->split = SPLIT_DYNAMIC;
-	t->by_samples = 0;
 	t->adaptive = 1; /* tiles_render made the job adaptive for this */
+	tiles_drop_sums(t);
+}
+
+void tiles_drop_sums(struct tiles_job *t)
+{
+	t->by_samples = 0;
+	t->probe = 0;
 	for (int k = 0; k < t->count; k++) { /* no sums to read */
 		device_pinned_free(&t->devs[k], t->dev[k].pinned, t->dev[k].sums);
 		pages_free(t->dev[k].block, t->sums_header);
