@@ -81,21 +81,25 @@ def test_every_frame_rendered_once_and_accounted(tmp_path):
     assert "f_0001.ppm .. " in result.stdout and "f_0007.ppm" in result.stdout
 
 
-@pytest.mark.parametrize("frames, pieces", [("0:2", [2, 2]), ("0:0", [1, 1])])
+@pytest.mark.parametrize("frames, pieces", [("0:2", [2, 2]), ("0:0", [1, 1]),
+                                            ("0:1", [1, 1, 1, 1])])
 def test_gpus_share_the_last_frames_when_fewer_remain_than_gpus(tmp_path, frames, pieces):
     # With GPUs alone (RTCL_TEST_AS_GPUS: PoCL's devices count as GPUs), the
     # last n mod G frames are each rendered over a group of the GPUs, so none
     # idles: 3 frames on 2 devices are one each, then the third over both (1
-    # frame: over both at once). Every frame is one device's, byte for byte.
+    # frame: over both at once); 2 frames on 4 devices, two groups of 2 at
+    # once (multidev_run's workers were static: the groups' jobs mixed their
+    # devices). Every frame is one device's, byte for byte.
     one, two = tmp_path / "one", tmp_path / "two"
     one.mkdir()
     two.mkdir()
     common = ["--frames", frames, "--spp", "4"]
     frames_run(one, *common, "-d", "0")
-    result, stats = frames_run(two, *common, "--devices", "0:0,0:1",
-                               env={"RTCL_TEST_AS_GPUS": "1"})
+    devices = ",".join(f"0:{k}" for k in range(len(pieces)))
+    result, stats = frames_run(two, *common, "--devices", devices,
+                               env={**FOUR, "RTCL_TEST_AS_GPUS": "1"})
     names = sorted(p.name for p in one.iterdir() if p.suffix == ".ppm")
-    assert len(names) == (3 if frames == "0:2" else 1)
+    assert len(names) == int(frames[2:]) + 1
     for name in names:
         assert (one / name).read_bytes() == (two / name).read_bytes(), name
     md = stats["multidevice"]
