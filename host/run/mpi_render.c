@@ -718,6 +718,26 @@ static int one_node(struct mpi_job *j, MPI_Comm *node)
 	return all;
 }
 
+/* Shared: once every rank has zeroed its sums, this rank's block of every
+ * rank's sums (what reduce_sums reads and writes) mapped into this process
+ * too, a read a page, before the clock. */
+static int prefault_block(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	size_t pixels = (size_t)s->width * s->height;
+	size_t begin = 4 * (pixels * j->rank / j->size), end = 4 * (pixels * (j->rank + 1) / j->size);
+	size_t step = (size_t)sysconf(_SC_PAGESIZE) / sizeof(cl_long);
+	volatile cl_long sink = 0;
+
+	if (MPI_Barrier(MPI_COMM_WORLD) != MPI_SUCCESS)
+		return -1;
+	for (int r = 0; r < j->size; r++)
+		for (size_t i = begin; i < end; i += step ? step : 1)
+			sink += ((volatile cl_long *)j->slots[r])[i];
+	(void)sink;
+	return 0;
+}
+
 /* By_samples, every rank, before the clock: where this rank's sums are
  * added, and how the ranks' are. Returns 0, or -1 (out of memory). */
 static int setup_reduction(struct mpi_job *j)
@@ -759,6 +779,8 @@ static int setup_reduction(struct mpi_job *j)
 	}
 	/* Zeroed and mapped now, by this rank, before the render's clock. */
 	memset(j->sums, 0, bytes);
+	if (j->shared && prefault_block(j))
+		return -1;
 	return 0;
 }
 
