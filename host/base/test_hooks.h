@@ -56,7 +56,7 @@ int hook_devices_as_gpus(void);
 void hook_sums_delay(void);
 
 /* RTCL_TEST_SUMS_BY_MESSAGES=1: under --mpi the sample split's sums are
- * reduced over the ranks by MPI_Ireduce, as for ranks on several nodes,
+ * reduced over the ranks by MPI_Reduce, as for ranks on several nodes,
  * even when every rank shares one node (host/run/mpi_render.c). */
 int hook_sums_by_messages(void);
 

@@ -41,7 +41,7 @@ struct device_shares {
 	int count;
 	int ranks_count;   /* MPI ranks; 0 without --mpi */
 	const char *rank_sums; /* --mpi's sample split: how the ranks' sums were
-				  added ("shared memory", "MPI_Ireduce"), or
+				  added ("shared memory", "MPI_Reduce"), or
 				  NULL */
 	double rank_sums_ms;   /* on rank 0, from its devices' end to the sum */
 	enum split split;

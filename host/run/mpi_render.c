@@ -1148,7 +1148,7 @@ static int finish_root(struct mpi_job *j)
 		.work = j->all_work,
 		.count = j->total,
 		.ranks_count = j->image ? j->size : 0,
-		.rank_sums = !j->by_samples ? NULL : j->shared ? "shared memory" : "MPI_Ireduce",
+		.rank_sums = !j->by_samples ? NULL : j->shared ? "shared memory" : "MPI_Reduce",
 		.rank_sums_ms = j->reduce_ms,
 		.split = j->by_samples ? SPLIT_SAMPLES : j->job->split,
 		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
