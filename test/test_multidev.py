@@ -81,15 +81,18 @@ def test_every_frame_rendered_once_and_accounted(tmp_path):
     assert "f_0001.ppm .. " in result.stdout and "f_0007.ppm" in result.stdout
 
 
-@pytest.mark.parametrize("frames, pieces", [("0:2", [2, 2]), ("0:0", [1, 1]),
-                                            ("0:1", [1, 1, 1, 1])])
+@pytest.mark.parametrize("frames, pieces", [("0:2", [2, 2]), ("0:5", [2, 2, 2, 2]),
+                                            ("0:0", [1, 0])])
 def test_gpus_share_the_last_frames_when_fewer_remain_than_gpus(tmp_path, frames, pieces):
     # With GPUs alone (RTCL_TEST_AS_GPUS: PoCL's devices count as GPUs), the
-    # last n mod G frames are each rendered over a group of the GPUs, so none
-    # idles: 3 frames on 2 devices are one each, then the third over both (1
-    # frame: over both at once); 2 frames on 4 devices, two groups of 2 at
-    # once (multidev_run's workers were static: the groups' jobs mixed their
-    # devices). Every frame is one device's, byte for byte.
+    # last n mod G frames are each rendered over a group of the GPUs when the
+    # frames so far say it pays (run/frames.c: these tiny frames take far
+    # longer than a group's set-up), so none idles: 3 frames on 2 devices are
+    # one each, then the third over both; 6 frames on 4 devices, one each,
+    # then two groups of 2 at once (multidev_run's workers were static: the
+    # groups' jobs mixed their devices). One frame on 2 devices is not shared:
+    # no frame came before to say what a frame costs. Every frame is one
+    # device's, byte for byte.
     one, two = tmp_path / "one", tmp_path / "two"
     one.mkdir()
     two.mkdir()
@@ -105,10 +108,10 @@ def test_gpus_share_the_last_frames_when_fewer_remain_than_gpus(tmp_path, frames
     md = stats["multidevice"]
     # A shared frame is a piece of each device of its group, which writes a
     # share of its pixels.
-    assert [d["pieces"] for d in md["devices"]] == pieces
+    assert sorted(d["pieces"] for d in md["devices"]) == sorted(pieces)
     done = [d["pixels"] for d in md["devices"]]
     assert sum(done) == len(names) * 32 * 24
-    assert all(p > (pieces[0] - 1) * 32 * 24 for p in done), done
+    assert all(p > (pieces[0] - 1) * 32 * 24 for p in done) or sorted(done) == [0, 32 * 24], done
 
 
 def test_dynamic_split_gives_a_slow_device_fewer_pieces(tmp_path):
@@ -773,7 +776,7 @@ def test_mpi_sample_split_matches_one_device(tmp_path):
 def test_mpi_ranks_sums_add_up_to_one_devices_image(tmp_path, messages):
     # The sample split's sums are added over the ranks: in the node's shared
     # memory, each rank a third of the pixels (every rank on one node), or by
-    # MPI_Ireduce in a tree (RTCL_TEST_SUMS_BY_MESSAGES, as across nodes).
+    # MPI_Reduce in a tree (RTCL_TEST_SUMS_BY_MESSAGES, as across nodes).
     # Radiance that overflows float saturates the fixed-point sums: the
     # saturation marks are joined, not added, so the image is one device's,
     # the saturated channels written as the largest float.

@@ -171,6 +171,20 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	return finish_staging(st, err, err_size);
 }
 
+/* render_frames_whole's frames: piece i is frame first + i. */
+struct frames_tail {
+	struct frames_state *f;
+	int first;
+};
+
+static int render_tail_piece(void *context, int device, int piece, struct piece_work *done,
+			     char *err, size_t err_size)
+{
+	struct frames_tail *tail = context;
+
+	return render_frame_piece(tail->f, device, tail->first + piece, done, err, err_size);
+}
+
 /* A multidev end: the device's last frame staged (a failure is reported
  * after the job, frames_render). */
 static void end_frames(void *context, int device)
@@ -189,9 +203,18 @@ static void end_frames(void *context, int device)
  * Frames are dealt one at a time to whichever device is free, so with G
  * GPUs the last n mod G frames would leave the other GPUs idle (6 frames on
  * four H100s, docs/results/h100x4 batch 97: 64-85 % device-level
- * efficiency). With GPUs alone those last frames are rendered side by side,
- * each as one image over a group of the GPUs (tiles_render, its split chosen
- * as for one image: the same image as one device's). */
+ * efficiency). With GPUs alone those last frames may be rendered side by
+ * side, each as one image over a group of the GPUs (tiles_render, its split
+ * chosen as for one image: the same image as one device's), once the others
+ * are done. That pays only for long frames: one image over several devices
+ * first opens a renderer on each, allocates its pinned sums and probes it,
+ * which took 260-300 ms a device for a 2000x2000 frame on four H100s (batch
+ * 98, 6 frames at 256 spp: 874-896 ms against about 450 for two rounds of
+ * whole frames), against 95-100 ms of kernels saved. So a frame is shared
+ * only when the frames so far took each device longer, per frame, than
+ * FRAMES_SHARE_SETUP_NS a pixel beyond what a group's share of it would
+ * take; with no frame rendered yet (fewer frames than GPUs) none is. */
+#define FRAMES_SHARE_SETUP_NS 70.0 /* 280 ms / 4 M pixels, batch 98 */
 
 /* One of the last frames, over devices [first, first + count). */
 struct shared_frame {
@@ -205,15 +228,35 @@ struct shared_frame {
 	char err[1024];
 };
 
-/* The frames at the end rendered by groups of devices: n mod count when
- * every device is a GPU (RTCL_TEST_AS_GPUS: PoCL's count as GPUs), else 0. */
+/* The frames at the end that groups of devices may render: n mod count when
+ * every device is a GPU (RTCL_TEST_AS_GPUS: PoCL's count as GPUs) and some
+ * frames come before them, else 0. */
 static int shared_frame_count(const struct frames_state *f, int n)
 {
 	int gpus = 0;
 
 	for (int k = 0; k < f->count; k++)
 		gpus += f->devs[k].is_gpu != 0 || hook_devices_as_gpus();
-	return f->count >= 2 && gpus == f->count ? n % f->count : 0;
+	return f->count >= 2 && gpus == f->count && n > f->count ? n % f->count : 0;
+}
+
+/* Whether the last `shared` frames are worth sharing, from the others: a
+ * frame's mean time on a device, less its share over the smallest group,
+ * against a group's set-up (FRAMES_SHARE_SETUP_NS a pixel). */
+static int sharing_pays(const struct frames_state *f, int shared)
+{
+	double busy = 0;
+	int pieces = 0, group = f->count / shared;
+
+	for (int k = 0; k < f->count; k++) {
+		busy += f->work[k].busy_ms;
+		pieces += f->work[k].pieces;
+	}
+	if (pieces == 0 || group < 2)
+		return 0;
+	double frame_ms = busy / pieces;
+	double setup_ms = FRAMES_SHARE_SETUP_NS * 1e-6 * f->settings.width * f->settings.height;
+	return frame_ms * (1 - 1.0 / group) > setup_ms;
 }
 
 static void *render_shared_frame(void *arg)
@@ -302,6 +345,31 @@ static int render_shared_frames(struct frames_state *f, int n, int shared, doubl
 	return failed ? -1 : 0;
 }
 
+/* The last `shared` frames after all, each whole on a device, dealt as the
+ * others were (each device's last frame staged meanwhile). */
+static int render_frames_whole(struct frames_state *f, int n, int shared, char *err,
+			       size_t err_size)
+{
+	struct frames_tail tail = {.f = f, .first = n - shared};
+	struct device_work work[DEVICES_MAX];
+	struct multidev_job pieces = {.piece_count = shared,
+				      .split = f->job->split,
+				      .render_piece = render_tail_piece,
+				      .context = &tail};
+	int failed = multidev_run(&pieces, f->devs, f->count, work, err, err_size);
+
+	for (int k = 0; k < f->count; k++) {
+		f->work[k].pieces += work[k].pieces;
+		f->work[k].pixels += work[k].pixels;
+		f->work[k].busy_ms += work[k].busy_ms;
+		f->work[k].kernel_ms += work[k].kernel_ms;
+		f->work[k].launches += work[k].launches;
+		if (work[k].pieces)
+			f->work[k].last_piece_ms = work[k].last_piece_ms;
+	}
+	return failed;
+}
+
 static int frames_render(struct mode_run *run, int checked, char *err, size_t err_size)
 {
 	const struct job *job = run->job;
@@ -339,7 +407,9 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 			     ? multidev_run(&pieces, f->devs, f->count, f->work, err, err_size)
 			     : 0;
 	if (!failed && shared)
-		failed = render_shared_frames(f, n, shared, start, err, err_size);
+		failed = sharing_pays(f, shared)
+				 ? render_shared_frames(f, n, shared, start, err, err_size)
+				 : render_frames_whole(f, n, shared, err, err_size);
 	/* A device's last frame may fail to stage after its job: that message,
 	 * unless a piece failed first. */
 	for (int k = 0; k < f->count; k++) {
