@@ -203,13 +203,6 @@ static int take_rank_piece(void *context, int device)
  * that the floats or cl_long after it are aligned. */
 #define RESULT_HEADER 8
 
-/* Whether a message of `bytes` after the header is too large for one
- * MPI_Send (a count of int). */
-static int message_too_large(size_t bytes)
-{
-	return bytes + RESULT_HEADER > INT_MAX;
-}
-
 /* A message to rank 0 of a piece's number and bytes of pixels, the pixels
  * left for the caller to write at result_pixels(message), on a page
  * (base/pages.h); NULL (with err set) when it cannot be made. Free it with
@@ -959,8 +952,7 @@ static int samples_by_default(const struct mpi_job *j, int total, int gpus)
 	const struct render_settings *s = &j->settings;
 
 	return !job->split_given && !job->row_order_given && total >= 2 && gpus == total &&
-	       j->bound_ranks == 0 && tiles_samples_fit(s, total, job->piece_rows) &&
-	       !message_too_large(image_sum_bytes(s->width, s->height));
+	       j->bound_ranks == 0 && tiles_samples_fit(s, total, job->piece_rows);
 }
 
 /* The pieces, once every rank's device count is known: the frames, or the
@@ -988,9 +980,6 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 			   0, &map, j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
-	/* --split samples: every device the whole image, an equal range of the
-	 * samples in whole passes, its sums to rank 0 (32 bytes a pixel). */
-	size_t sum_bytes = image_sum_bytes(s->width, s->height);
 	/* Every rank decides the same from the same job and counts: rank 0
 	 * says why, and all stop. */
 	if (job->split == SPLIT_SAMPLES && tiles_check_sample_split(s, total, err, sizeof(err))) {
@@ -998,15 +987,9 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 			fprintf(stderr, "rtcl: %s\n", err);
 		return CHOSEN_BADLY;
 	}
-	if (job->split == SPLIT_SAMPLES && message_too_large(sum_bytes)) {
-		if (j->rank == ROOT)
-			fprintf(stderr,
-				"rtcl: --split samples under --mpi sends each device's sums of the "
-				"image in one message of at most 2 GiB, and a %dx%d image's are "
-				"%zu bytes: use --split dynamic or a smaller image\n",
-				s->width, s->height, sum_bytes);
-		return CHOSEN_BADLY;
-	}
+	/* The sums travel in no message of their own (reduce_sums; MPI_Reduce
+	 * counts pixels, at most 32768 squared, in an int): no limit of 2 GiB
+	 * a message, as when each rank sent rank 0 its sums. */
 	j->measure = job->split != SPLIT_SAMPLES && samples_by_default(j, total, gpus);
 	j->by_samples = job->split == SPLIT_SAMPLES || j->measure;
 	if (j->measure) {
