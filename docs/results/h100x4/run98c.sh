@@ -2,19 +2,23 @@
 # Issue 43, the lake rows batch 98 lacked (NOT RUN in this session: the brief
 # allowed two device calls, and both lake attempts failed at the scene's
 # load). Four H100s (nvidia-h100-x4), branch gpu4b at COMMIT, with
-# .gpu/gpu4b/b99/rtcl-meshread built from the same commit: .gpu/rtcl-meshread
+# .gpu/gpu4b/head/rtcl-meshread built from the same commit: .gpu/rtcl-meshread
 # (built before the mesh helper's protocol grew its file and camera lists)
 # makes this rtcl fail on the lake with "out of memory for 2097152
 # triangles". Two interleaved rounds: one process 1/2/4 GPUs (-r 3) and MPI
 # 1/2/4 ranks (default split, measured), the lake at 256 spp, 2000x2000;
-# then MPI 4 ranks --split samples and cf14357's MPI for comparison. About
-# 120 s of commands.
-#   COMMIT=<commit> bash .gpu/gpu4b/run98c.sh
+# then MPI 4 ranks --split samples and cf14357's MPI for comparison, and
+# --frames 0:5 on 4 GPUs twice (738095d shares the last 2 frames only when
+# the frames so far say it pays: here they should be dealt whole, about 450
+# ms against batch 98's 874-896) and 0:15 on 4. About 130 s of commands.
+# Binaries: .gpu/gpu4b/head/ (rtcl, rtcl-meshread: make OIIO=0 MPI=0;
+# rtcl-mpi: make OIIO=0), commit 307fe86.
+#   COMMIT=307fe86 bash .gpu/gpu4b/run98c.sh
 set -u
 echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
 export LD_LIBRARY_PATH=/usr/local/nvidia/lib64:$PWD/.gpu/lib:${LD_LIBRARY_PATH:-}
-export RTCL_MESHREAD=$PWD/.gpu/gpu4b/b99/rtcl-meshread
-G=$PWD/.gpu; B=$G/gpu4b/b99; T=$(mktemp -d); O=$T/b98c; mkdir -p $O
+export RTCL_MESHREAD=$PWD/.gpu/gpu4b/head/rtcl-meshread
+G=$PWD/.gpu; B=$G/gpu4b/head; T=$(mktemp -d); O=$T/b98c; mkdir -p $O
 exec > >(tee $OUT/run98c.txt) 2>&1
 echo "commit: $COMMIT"; nvidia-smi -L; nproc; df -h /dev/shm | tail -1; date -u
 P=$($B/rtcl --list-devices | awk '/^Platform/ && /NVIDIA/ {sub("#","",$2); sub(":","",$2); print $2}')
@@ -64,4 +68,7 @@ done
 echo "== once: MPI 4 ranks --split samples; cf14357's MPI on 4 ranks"
 m mL4-sam $B/rtcl-mpi 4 L --split samples
 m mL4-old $G/rtcl-mpi 4 L; m mL4-old-sam $G/rtcl-mpi 4 L --split samples
+echo "== --frames: 0:5 on 1 GPU, on 4 GPUs twice; 0:15 on 4 GPUs"
+fr six-ONE $B/rtcl ONE 5; fr six-1 $B/rtcl FOUR 5; fr six-2 $B/rtcl FOUR 5; fr fr-FOUR $B/rtcl FOUR 15
+for k in 0000 0003 0004 0005; do same $T/six-ONE/f_$k.ppm $T/six-1/f_$k.ppm; same $T/six-ONE/f_$k.ppm $T/six-2/f_$k.ppm; done
 tar czf $OUT/batch98c-json.tgz -C $T b98c; date -u
