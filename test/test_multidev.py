@@ -799,7 +799,8 @@ def test_mpi_ranks_sums_add_up_to_one_devices_image(tmp_path, messages):
 
 
 @needs_mpi
-@pytest.mark.parametrize("slow_sums, split", [("0", "samples"), ("1000", "dynamic")])
+@pytest.mark.parametrize("slow_sums, split", [
+    ("0", "samples"), pytest.param("1000", "dynamic", marks=pytest.mark.slow)])
 def test_mpi_default_split_is_measured_over_the_ranks(tmp_path, slow_sums, split):
     # GPUs alone (RTCL_TEST_AS_GPUS) split the samples by default only when
     # the devices' probes, exchanged by the ranks, say that reading back and
