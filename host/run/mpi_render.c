@@ -922,6 +922,7 @@ static int choose_measured(struct mpi_job *j)
 	free(all);
 	memset(j->arrived, 0, (size_t)j->pieces * sizeof(int)); /* the trial's */
 	j->measure = 0;
+	j->tiles.probe = 0; /* a device opened again by the render's begin is not */
 	if (samples)
 		return split_rank_samples(j, n);
 	j->by_samples = 0;
