@@ -194,6 +194,32 @@ Test(image, encode_8bit_srgb_and_linear)
 	cr_assert_eq(image_encode_8bit(0.18f, IMAGE_LINEAR), 46);
 }
 
+/* image_encode_all splits a large image over threads: every value exactly
+ * image_encode_8bit's, the ranges' ends included. */
+Test(image, encode_all_matches_one_value_at_a_time)
+{
+	size_t count = 3 * 700 * 500 + 7; /* several threads, ragged ranges */
+	float *in = malloc(count * sizeof(float));
+	unsigned char *out = malloc(count);
+
+	cr_assert(in && out);
+	for (size_t i = 0; i < count; i++)
+		in[i] = (float)((i * 2654435761u) % 1200003) / 1000000.0f - 0.1f;
+	in[0] = NAN;
+	in[count - 1] = INFINITY;
+	for (int e = 0; e < 2; e++) {
+		enum image_encoding encoding = e ? IMAGE_SRGB : IMAGE_LINEAR;
+		memset(out, 0xaa, count);
+		image_encode_all(in, count, encoding, out);
+		for (size_t i = 0; i < count; i++)
+			if (out[i] != image_encode_8bit(in[i], encoding))
+				cr_assert_fail("value %zu (%g): %d, not %d", i, in[i], out[i],
+					       image_encode_8bit(in[i], encoding));
+	}
+	free(in);
+	free(out);
+}
+
 Test(image, to_8bit_edges)
 {
 	cr_assert_eq(image_to_8bit(0.0f), 0);

@@ -81,6 +81,39 @@ def test_every_frame_rendered_once_and_accounted(tmp_path):
     assert "f_0001.ppm .. " in result.stdout and "f_0007.ppm" in result.stdout
 
 
+@pytest.mark.parametrize("frames, pieces", [("0:2", [2, 2]), ("0:5", [2, 2, 2, 2]),
+                                            ("0:0", [1, 0])])
+def test_gpus_share_the_last_frames_when_fewer_remain_than_gpus(tmp_path, frames, pieces):
+    # With GPUs alone (RTCL_TEST_AS_GPUS: PoCL's devices count as GPUs), the
+    # last n mod G frames are each rendered over a group of the GPUs when the
+    # frames so far say it pays (run/frames.c: these tiny frames take far
+    # longer than a group's set-up), so none idles: 3 frames on 2 devices are
+    # one each, then the third over both; 6 frames on 4 devices, one each,
+    # then two groups of 2 at once (multidev_run's workers were static: the
+    # groups' jobs mixed their devices). One frame on 2 devices is not shared:
+    # no frame came before to say what a frame costs. Every frame is one
+    # device's, byte for byte.
+    one, two = tmp_path / "one", tmp_path / "two"
+    one.mkdir()
+    two.mkdir()
+    common = ["--frames", frames, "--spp", "4"]
+    frames_run(one, *common, "-d", "0")
+    devices = ",".join(f"0:{k}" for k in range(len(pieces)))
+    result, stats = frames_run(two, *common, "--devices", devices,
+                               env={**FOUR, "RTCL_TEST_AS_GPUS": "1"})
+    names = sorted(p.name for p in one.iterdir() if p.suffix == ".ppm")
+    assert len(names) == int(frames[2:]) + 1
+    for name in names:
+        assert (one / name).read_bytes() == (two / name).read_bytes(), name
+    md = stats["multidevice"]
+    # A shared frame is a piece of each device of its group, which writes a
+    # share of its pixels.
+    assert sorted(d["pieces"] for d in md["devices"]) == sorted(pieces)
+    done = [d["pixels"] for d in md["devices"]]
+    assert sum(done) == len(names) * 32 * 24
+    assert all(p > (pieces[0] - 1) * 32 * 24 for p in done) or sorted(done) == [0, 32 * 24], done
+
+
 def test_dynamic_split_gives_a_slow_device_fewer_pieces(tmp_path):
     _, stats = frames_run(tmp_path, "--frames", "0:9", "--devices", "0:0,0:1",
                           env={"RTCL_TEST_SLOW_DEVICE": "1:400"})
@@ -240,9 +273,9 @@ def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
 def test_mpi_ranks_bound_to_one_core_get_a_note_and_bands(tmp_path):
     """Open MPI binds one or two ranks to a core each by default, where a rank's
     BVH build and sums then run alone: rank 0 says so once, and GPUs alone
-    (RTCL_TEST_AS_GPUS) split the image in bands; unbound, they split its
-    samples, as in one process (docs/results/multidevice/README.md, "MPI").
-    Both give the same image."""
+    (RTCL_TEST_AS_GPUS) split the image in bands; unbound, the devices'
+    probes choose, as in one process (docs/results/multidevice/README.md,
+    "MPI"). Both give the same image."""
     def run(binding):
         out = tmp_path / binding
         out.mkdir()
@@ -252,14 +285,17 @@ def test_mpi_ranks_bound_to_one_core_get_a_note_and_bands(tmp_path):
                                 capture_output=True, text=True, cwd=ROOT, timeout=300,
                                 env={**os.environ, **MPI_ENV, "RTCL_TEST_AS_GPUS": "1"})
         assert result.returncode == 0, result.stderr
-        split = json.loads((out / "s.json").read_text())["multidevice"]["split"]
-        return result, split, (out / "x.ppm").read_bytes()
+        md = json.loads((out / "s.json").read_text())["multidevice"]
+        return result, (md["split"], md.get("split_choice")), (out / "x.ppm").read_bytes()
     (bound, bound_split, bound_image), (free, free_split, free_image) = run("core"), run("none")
     notes = [line for line in own_messages(bound.stderr) if line.startswith("rtcl: note:")]
     assert len(notes) == 1 and "bound 2 of 2 rank(s) to one core each" in notes[0], bound.stderr
     assert "--bind-to none" in notes[0]
     assert "rtcl: note:" not in free.stderr, free.stderr
-    assert (bound_split, free_split) == ("dynamic", "samples")
+    assert bound_split == ("dynamic", None)
+    choice = free_split[1]
+    cheap = choice["sums_ms"] + choice["add_ms"] <= choice["penalty_ms"]
+    assert free_split[0] == ("samples" if cheap else "dynamic"), free_split
     assert bound_image == free_image
 
 
@@ -733,6 +769,69 @@ def test_mpi_sample_split_matches_one_device(tmp_path):
     assert [d["pieces"] for d in md["devices"]] == [1, 1, 1]
     assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
     assert abs(sum(d["pixels"] for d in md["devices"]) - 16 * 8) <= 2
+
+
+@needs_mpi
+@pytest.mark.parametrize("messages", ["0", "1"])
+def test_mpi_ranks_sums_add_up_to_one_devices_image(tmp_path, messages):
+    # The sample split's sums are added over the ranks: in the node's shared
+    # memory, each rank a third of the pixels (every rank on one node), or by
+    # MPI_Reduce in a tree (RTCL_TEST_SUMS_BY_MESSAGES, as across nodes).
+    # Radiance that overflows float saturates the fixed-point sums: the
+    # saturation marks are joined, not added, so the image is one device's,
+    # the saturated channels written as the largest float.
+    from test_encoding import hot_scene  # noqa: E402 (test/ is on the path)
+    common = ["-s", str(hot_scene(tmp_path)), "--size", "24x16", "--spp", "6", "-k", "dynamic"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.pfm"))
+    assert one.returncode == 0, one.stderr
+    result = mpi_run(*common, "--split", "samples", "-o", str(tmp_path / "ranks.pfm"),
+                     "--stats", str(tmp_path / "s.json"),
+                     env={**CHECK, "RTCL_TEST_SUMS_BY_MESSAGES": messages})
+    assert result.returncode == 0, result.stderr
+    data = (tmp_path / "one.pfm").read_bytes()
+    assert data == (tmp_path / "ranks.pfm").read_bytes()
+    assert struct.pack("<f", 3.4028234663852886e38) in data  # FLT_MAX, little-endian
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    assert md["split"] == "samples" and md["ranks"] == 3
+    assert sorted(d["rank"] for d in md["devices"]) == [0, 1, 2]
+    added_by = {"0": "shared memory", "1": "MPI_Reduce"}[messages]
+    assert md["rank_sums"]["added_by"] == added_by and md["rank_sums"]["ms"] >= 0
+
+
+@needs_mpi
+@pytest.mark.parametrize("slow_sums, split", [
+    ("0", "samples"), pytest.param("1000", "dynamic", marks=pytest.mark.slow)])
+def test_mpi_default_split_is_measured_over_the_ranks(tmp_path, slow_sums, split):
+    # GPUs alone (RTCL_TEST_AS_GPUS) split the samples by default only when
+    # the devices' probes, exchanged by the ranks, say that reading back and
+    # adding the sums costs less than a share of the pixels would
+    # (tiles_prefer_samples, as in one process); a read-back 1 s slower at
+    # set-up (RTCL_TEST_SLOW_SUMS) makes it the bands. Before, a fixed 128
+    # samples a device chose. Every rank decides alike; one device's image,
+    # every pixel written once a pass, the probe's included (CHECK).
+    common = ["--size", "48x32", "--spp", "256", "-k", "dynamic"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    result = mpi_run(*common, "-o", str(tmp_path / "ranks.ppm"), "--stats",
+                     str(tmp_path / "s.json"),
+                     env={**CHECK, "RTCL_TEST_AS_GPUS": "1", "RTCL_TEST_SLOW_SUMS": slow_sums})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    choice = md["split_choice"]
+    if split == "samples" and choice["sums_ms"] + choice["add_ms"] > choice["penalty_ms"]:
+        split = "dynamic"  # this busy 2-core host's timings chose the bands after all
+    assert md["split"] == split, md
+    assert choice["pass_ms"] > 0 and choice["sums_ms"] > 0 and choice["add_ms"] > 0
+    if split == "samples":
+        assert choice["sums_ms"] + choice["add_ms"] <= choice["penalty_ms"], choice
+        assert md["rank_sums"]["added_by"] == "shared memory"
+        assert [d["pieces"] for d in md["devices"]] == [1, 1, 1]
+    else:
+        assert choice["sums_ms"] >= 1000 > choice["penalty_ms"], choice
+        assert "rank_sums" not in md and md["piece"] == "band"
+        assert sum(d["pixels"] for d in md["devices"]) == 48 * 32
+    assert "split:   " + split + ", measured:" in result.stdout
 
 
 @needs_mpi

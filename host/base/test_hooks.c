@@ -122,6 +122,11 @@ const char *hook_oidn_filter(void)
 	return name && *name ? name : NULL;
 }
 
+int hook_sums_by_messages(void)
+{
+	return env_is_one("RTCL_TEST_SUMS_BY_MESSAGES");
+}
+
 int hook_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");

@@ -55,6 +55,11 @@ int hook_devices_as_gpus(void);
  * be made to take the pixels. */
 void hook_sums_delay(void);
 
+/* RTCL_TEST_SUMS_BY_MESSAGES=1: under --mpi the sample split's sums are
+ * reduced over the ranks by MPI_Reduce, as for ranks on several nodes,
+ * even when every rank shares one node (host/run/mpi_render.c). */
+int hook_sums_by_messages(void);
+
 /* RTCL_TEST_DOUBLE_BAND=1: several devices in one process render band 0 a
  * second time on another device, which the write-count check must catch. */
 int hook_double_band(void);

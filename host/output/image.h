@@ -81,6 +81,14 @@ double image_srgb_curve(double c);
  * for IMAGE_SRGB and the identity otherwise: the one 8-bit conversion. */
 unsigned char image_encode_8bit(float c, enum image_encoding encoding);
 
+/* out[i] = image_encode_8bit(in[i], encoding) for count values, over up to
+ * IMAGE_ENCODE_THREADS threads for a large image: on four H100s' host one
+ * thread took about 450 ms for a 2000x2000 frame (the sRGB curve's pow),
+ * which bounded --frames over four GPUs (docs/results/h100x4, batch 97). */
+#define IMAGE_ENCODE_THREADS 16
+void image_encode_all(const float *in, size_t count, enum image_encoding encoding,
+		      unsigned char *out);
+
 /* The encoding a meta asks for (IMAGE_LINEAR for NULL). */
 static inline enum image_encoding image_meta_encoding(const struct image_meta *meta)
 {

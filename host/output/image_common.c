@@ -87,10 +87,9 @@ static int write_ppm(FILE *file, const float *rgb, int width, int height,
 		     const struct image_meta *meta)
 {
 	size_t row_length = 3 * (size_t)width;
-	unsigned char *row = malloc(row_length);
-	int x, y;
+	unsigned char *bytes = malloc(row_length * (size_t)height);
 
-	if (!row)
+	if (!bytes)
 		return -1;
 	fputs("P6\n", file);
 	if (meta && meta->software)
@@ -102,16 +101,9 @@ static int write_ppm(FILE *file, const float *rgb, int width, int height,
 	if (meta && meta->samples > 0)
 		fprintf(file, "# %s: %d\n", IMAGE_SAMPLES_KEY, meta->samples);
 	fprintf(file, "%d %d\n255\n", width, height);
-
-	for (y = 0; y < height; y++) {
-		const float *in = rgb + (size_t)y * row_length;
-
-		for (x = 0; x < 3 * width; x++)
-			row[x] = image_encode_8bit(in[x], image_meta_encoding(meta));
-		if (fwrite(row, 1, row_length, file) != row_length)
-			break;
-	}
-	free(row);
+	image_encode_all(rgb, row_length * (size_t)height, image_meta_encoding(meta), bytes);
+	fwrite(bytes, 1, row_length * (size_t)height, file);
+	free(bytes);
 	return ferror(file) ? -1 : 0;
 }
 

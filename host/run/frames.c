@@ -8,6 +8,7 @@
 
 #include "base/interrupt.h"
 #include "base/progress.h"
+#include "base/test_hooks.h"
 #include "base/timing.h"
 #include "base/vec3.h"
 #include "base/version.h"
@@ -15,6 +16,7 @@
 #include "render/render.h"
 #include "report/summary.h"
 #include "run/mode.h"
+#include "schedule/tiles.h"
 
 #define PI 3.14159265358979323846
 
@@ -191,6 +193,20 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	return finish_staging(st, err, err_size);
 }
 
+/* render_frames_whole's frames: piece i is frame first + i. */
+struct frames_tail {
+	struct frames_state *f;
+	int first;
+};
+
+static int render_tail_piece(void *context, int device, int piece, struct piece_work *done,
+			     char *err, size_t err_size)
+{
+	struct frames_tail *tail = context;
+
+	return render_frame_piece(tail->f, device, tail->first + piece, done, err, err_size);
+}
+
 /* A multidev end: the device's last frame staged (a failure is reported
  * after the job, frames_render). */
 static void end_frames(void *context, int device)
@@ -202,6 +218,182 @@ static void end_frames(void *context, int device)
 		pthread_join(st->thread, NULL);
 		st->running = 0;
 	}
+}
+
+/* ---- the last frames, shared ----------------------------------------------
+ *
+ * Frames are dealt one at a time to whichever device is free, so with G
+ * GPUs the last n mod G frames would leave the other GPUs idle (6 frames on
+ * four H100s, docs/results/h100x4 batch 97: 64-85 % device-level
+ * efficiency). With GPUs alone those last frames may be rendered side by
+ * side, each as one image over a group of the GPUs (tiles_render, its split
+ * chosen as for one image: the same image as one device's), once the others
+ * are done. That pays only for long frames: one image over several devices
+ * first opens a renderer on each, allocates its pinned sums and probes it,
+ * which took 260-300 ms a device for a 2000x2000 frame on four H100s (batch
+ * 98, 6 frames at 256 spp: 874-896 ms against about 450 for two rounds of
+ * whole frames), against 95-100 ms of kernels saved. So a frame is shared
+ * only when the frames so far took each device longer, per frame, than
+ * FRAMES_SHARE_SETUP_NS a pixel beyond what a group's share of it would
+ * take; with no frame rendered yet (fewer frames than GPUs) none is. */
+#define FRAMES_SHARE_SETUP_NS 70.0 /* 280 ms / 4 M pixels, batch 98 */
+
+/* One of the last frames, over devices [first, first + count). */
+struct shared_frame {
+	struct frames_state *f;
+	int piece, first, count;
+	struct device_work work[DEVICES_MAX];
+	double start;
+	pthread_t thread;
+	int running;
+	int failed;
+	char err[1024];
+};
+
+/* The frames at the end that groups of devices may render: n mod count when
+ * every device is a GPU (RTCL_TEST_AS_GPUS: PoCL's count as GPUs) and some
+ * frames come before them, else 0. */
+static int shared_frame_count(const struct frames_state *f, int n)
+{
+	int gpus = 0;
+
+	for (int k = 0; k < f->count; k++)
+		gpus += f->devs[k].is_gpu != 0 || hook_devices_as_gpus();
+	return f->count >= 2 && gpus == f->count && n > f->count ? n % f->count : 0;
+}
+
+/* Whether the last `shared` frames are worth sharing, from the others: a
+ * frame's mean time on a device, less its share over the smallest group,
+ * against a group's set-up (FRAMES_SHARE_SETUP_NS a pixel). */
+static int sharing_pays(const struct frames_state *f, int shared)
+{
+	double busy = 0;
+	int pieces = 0, group = f->count / shared;
+
+	for (int k = 0; k < f->count; k++) {
+		busy += f->work[k].busy_ms;
+		pieces += f->work[k].pieces;
+	}
+	if (pieces == 0 || group < 2)
+		return 0;
+	double frame_ms = busy / pieces;
+	double setup_ms = FRAMES_SHARE_SETUP_NS * 1e-6 * f->settings.width * f->settings.height;
+	return frame_ms * (1 - 1.0 / group) > setup_ms;
+}
+
+static void *render_shared_frame(void *arg)
+{
+	struct shared_frame *sf = arg;
+	struct frames_state *f = sf->f;
+	const struct job *job = f->job;
+	struct scene scene = *job->scene;
+	struct render_result result;
+	int failed;
+
+	memset(&result, 0, sizeof(result));
+	frames_orbit(&job->scene->camera, job->first_frame + sf->piece, job->first_frame,
+		     job->last_frame, &scene.camera);
+	if (sf->count == 1) {
+		double lap = timing_now();
+		failed = render(&f->devs[sf->first], &scene, &f->settings, &result, sf->err,
+				sizeof(sf->err));
+		struct piece_work done = failed ? (struct piece_work){0}
+						: frames_piece_work(&f->settings, &result);
+		sf->work[0] = (struct device_work){.pixels = (long long)done.pixels,
+						   .busy_ms = timing_lap_ms(&lap),
+						   .kernel_ms = done.kernel_ms,
+						   .launches = (int)done.launches};
+	} else {
+		struct tiles_request r = {.scene = &scene,
+					  .devs = f->devs + sf->first,
+					  .count = sf->count,
+					  .split = SPLIT_DYNAMIC};
+		failed = tiles_choose_split(&r, &f->settings, 0, &r.split, &r.measure, sf->err,
+					    sizeof(sf->err)) ||
+			 tiles_render(&r, &f->settings, sf->work, &result, sf->err, sizeof(sf->err));
+	}
+	/* A frame an interrupt stopped is not written (an animation's frames
+	 * hold all their samples). */
+	if (!failed && result.samples_done >= settings_samples(&f->settings)) {
+		show_frame(f, sf->piece, 1);
+		failed = output_plan_stage_image(f->plan, sf->piece, result.rgb,
+						 result.samples_done, sf->err, sizeof(sf->err)) != 0;
+		if (!failed)
+			__atomic_add_fetch(&f->kept, 1, __ATOMIC_RELAXED);
+	}
+	render_result_free(&result);
+	sf->failed = failed;
+	return NULL;
+}
+
+/* Renders the last `shared` of n frames side by side, each over a group of
+ * the devices, once the others are done; adds what each device did to its
+ * work (each frame a piece of every device of its group). Returns 0, or -1
+ * with the first failure's message in err. */
+static int render_shared_frames(struct frames_state *f, int n, int shared, double start,
+				char *err, size_t err_size)
+{
+	struct shared_frame frames[DEVICES_MAX];
+	int failed = 0;
+
+	for (int i = 0; i < shared; i++) {
+		int first = f->count * i / shared, end = f->count * (i + 1) / shared;
+		frames[i] = (struct shared_frame){.f = f, .piece = n - shared + i, .first = first,
+						  .count = end - first};
+		frames[i].running =
+			pthread_create(&frames[i].thread, NULL, render_shared_frame, &frames[i]) == 0;
+		if (!frames[i].running)
+			render_shared_frame(&frames[i]);
+	}
+	for (int i = 0; i < shared; i++) {
+		struct shared_frame *sf = &frames[i];
+		if (sf->running)
+			pthread_join(sf->thread, NULL);
+		if (sf->failed && !failed) {
+			snprintf(err, err_size, "frame %d over %d device%s: %s",
+				 f->job->first_frame + sf->piece, sf->count, sf->count == 1 ? "" : "s",
+				 sf->err);
+			failed = 1;
+		}
+		double done_ms = (timing_now() - start) * 1e3;
+		for (int k = 0; k < sf->count; k++) {
+			struct device_work *to = &f->work[sf->first + k], *w = &sf->work[k];
+			to->pieces++;
+			to->pixels += w->pixels;
+			to->busy_ms += w->busy_ms;
+			to->kernel_ms += w->kernel_ms;
+			to->launches += w->launches;
+			to->setup_ms += w->setup_ms;
+			to->last_piece_ms = w->busy_ms;
+			to->finish_ms = done_ms;
+		}
+	}
+	return failed ? -1 : 0;
+}
+
+/* The last `shared` frames after all, each whole on a device, dealt as the
+ * others were (each device's last frame staged meanwhile). */
+static int render_frames_whole(struct frames_state *f, int n, int shared, char *err,
+			       size_t err_size)
+{
+	struct frames_tail tail = {.f = f, .first = n - shared};
+	struct device_work work[DEVICES_MAX];
+	struct multidev_job pieces = {.piece_count = shared,
+				      .split = f->job->split,
+				      .render_piece = render_tail_piece,
+				      .context = &tail};
+	int failed = multidev_run(&pieces, f->devs, f->count, work, err, err_size);
+
+	for (int k = 0; k < f->count; k++) {
+		f->work[k].pieces += work[k].pieces;
+		f->work[k].pixels += work[k].pixels;
+		f->work[k].busy_ms += work[k].busy_ms;
+		f->work[k].kernel_ms += work[k].kernel_ms;
+		f->work[k].launches += work[k].launches;
+		if (work[k].pieces)
+			f->work[k].last_piece_ms = work[k].last_piece_ms;
+	}
+	return failed;
 }
 
 static int frames_render(struct mode_run *run, int checked, char *err, size_t err_size)
@@ -225,10 +417,13 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 		f->count = 0;
 		return EXIT_FAILED;
 	}
-	struct multidev_job pieces = {.piece_count = n,
+	int shared = shared_frame_count(f, n);
+	/* The last frames shared, after the others: each device's last frame
+	 * of those staged meanwhile (joined below). */
+	struct multidev_job pieces = {.piece_count = n - shared,
 				      .split = job->split,
 				      .render_piece = render_frame_piece,
-				      .end = end_frames,
+				      .end = shared ? NULL : end_frames,
 				      .context = f};
 	/* One line for every frame: render() only adds to it. */
 	f->settings.progress = 0;
@@ -236,7 +431,13 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	snprintf(devices, sizeof(devices), "%d devices", f->count);
 	repeats_progress_begin(&f->settings, n, f->count > 1 ? devices : NULL);
 	double start = timing_now();
-	int failed = multidev_run(&pieces, f->devs, f->count, f->work, err, err_size);
+	int failed = n - shared > 0
+			     ? multidev_run(&pieces, f->devs, f->count, f->work, err, err_size)
+			     : 0;
+	if (!failed && shared)
+		failed = sharing_pays(f, shared)
+				 ? render_shared_frames(f, n, shared, start, err, err_size)
+				 : render_frames_whole(f, n, shared, err, err_size);
 	/* A device's last frame may fail to stage after its job: that message,
 	 * unless a piece failed first. */
 	for (int k = 0; k < f->count; k++) {

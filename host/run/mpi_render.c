@@ -53,6 +53,9 @@ struct mpi_job {
 	int image;			/* one image in bands (tiles.h), not --frames */
 	int by_samples;			/* image: each device a range of the samples
 					   (SPLIT_SAMPLES), not bands */
+	int measure;			/* by_samples by default: kept only if the
+					   devices' probes favour it (choose_measured) */
+	struct split_choice choice;	/* how it was chosen */
 	int pieces;			/* frames, or bands */
 	struct tiles_job tiles;		/* image: this rank's devices and bands */
 	int device_failed[DEVICES_MAX]; /* image: a piece of this device failed */
@@ -69,17 +72,26 @@ struct mpi_job {
 	struct device *all_devs;
 	struct device_work *all_work;
 	int *arrived; /* image: how often each band arrived */
-	cl_long *sums;	 /* by_samples: the devices' sums added so far */
+	cl_long *sums;	 /* by_samples: this rank's devices' sums added so far;
+			    on rank 0 after reduce_sums, every rank's */
+	int shared;	 /* by_samples: every rank on one node, each rank's sums
+			    in the node's shared memory (win) */
+	int node_ranks;	 /* by_samples: the ranks on this rank's node */
+	int sums_added;	 /* by_samples: this rank's devices' sums in sums */
+	MPI_Win win;
+	cl_long **slots;      /* shared: each rank's sums, in win */
+	MPI_Datatype pixel;   /* not shared: a pixel's sum, 4 int64 */
+	MPI_Op add_op;	      /* not shared: sample_sums' add of two */
 	pthread_mutex_t sums_lock; /* sums and arrived, by_samples: not `lock`,
 				      which the other ranks' requests for
 				      pieces wait on meanwhile */
-	char *received; /* by_samples: where another rank's sums arrive */
 	double wall_ms;
 	int bound_ranks; /* ranks bound to one core of several (note_binding) */
 	double setup_ms[DEVICES_MAX]; /* image: each device's set-up, before the
 					 clock (open_before_clock) */
 	int initialized; /* MPI_Init_thread succeeded */
 	int threads;	 /* with MPI_THREAD_MULTIPLE */
+	double reduce_ms; /* by_samples: reduce_sums on this rank */
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -190,13 +202,6 @@ static int take_rank_piece(void *context, int device)
 /* A result message starts with the piece's number in a header of 8 bytes, so
  * that the floats or cl_long after it are aligned. */
 #define RESULT_HEADER 8
-
-/* Whether a message of `bytes` after the header is too large for one
- * MPI_Send (a count of int). */
-static int message_too_large(size_t bytes)
-{
-	return bytes + RESULT_HEADER > INT_MAX;
-}
 
 /* A message to rank 0 of a piece's number and bytes of pixels, the pixels
  * left for the caller to write at result_pixels(message), on a page
@@ -334,14 +339,21 @@ static void place_band(struct mpi_job *j, int band, const float *rgb)
 	tiles_pack_piece(&p, j->settings.width, rgb, j->record->result.rgb, 1);
 }
 
-/* Rank 0, by_samples: piece g's sums (device g's range of the samples) added
- * to the image's. */
+/* By_samples: piece g's sums (device g's range of the samples) added to
+ * this rank's (reduce_sums adds the ranks'). */
 static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 {
 	const struct render_settings *s = &j->settings;
+	const cl_long *parts[2] = {sums, j->sums};
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
 
 	pthread_mutex_lock(&j->sums_lock);
-	tiles_add_sums(j->sums, sums, (size_t)s->width * s->height);
+	/* The first copied, not added to the zeroes (a third less memory
+	 * traffic), over this rank's share of the node's cores: the ranks of
+	 * one node do this at about the same time. */
+	tiles_sum_parts(parts, j->sums_added ? 2 : 1, j->sums, (size_t)s->width * s->height,
+			(int)(cores / j->node_ranks));
+	j->sums_added++;
 	j->arrived[piece]++;
 	pthread_mutex_unlock(&j->sums_lock);
 }
@@ -354,29 +366,18 @@ static int writes_wrong(struct tiles_job *t, int device, char *err, size_t err_s
 					     tiles_check_device(t, device, err, err_size));
 }
 
-/* By_samples: the device is done: its sums to rank 0 (one message), or on
- * rank 0 into the image's. */
-static int send_sums(struct mpi_job *j, int device, char *err, size_t err_size)
+/* By_samples: the device is done: its sums into this rank's, which
+ * reduce_sums adds to the other ranks' once all of this rank's devices are
+ * done. */
+static int add_device_sums(struct mpi_job *j, int device, char *err, size_t err_size)
 {
 	struct tiles_job *t = &j->tiles;
-	const struct render_settings *s = &j->settings;
-	size_t bytes = image_sum_bytes(s->width, s->height);
 
 	if (writes_wrong(t, device, err, err_size))
 		return -1;
-	for (int g = 0; g < t->piece_count; g++) {
-		if (t->owner[g] != device)
-			continue;
-		if (j->rank == ROOT) {
+	for (int g = 0; g < t->piece_count; g++)
+		if (t->owner[g] == device)
 			add_piece_sums(j, g, t->dev[device].sums);
-			continue;
-		}
-		/* The sums lie RESULT_HEADER bytes into their block: one message,
-		 * no copy. */
-		memcpy(t->dev[device].block, &g, sizeof(int));
-		if (send_kept(t->dev[device].block, bytes, err, err_size))
-			return -1;
-	}
 	return 0;
 }
 
@@ -422,7 +423,7 @@ static void finish_bands(struct mpi_job *j, int device)
 	const struct device *d = &j->devs[device];
 
 	if (j->device_failed[device] ||
-	    (j->by_samples ? send_sums(j, device, err, sizeof(err))
+	    (j->by_samples ? add_device_sums(j, device, err, sizeof(err))
 			   : send_bands(j, device, err, sizeof(err))) == 0)
 		return;
 	snprintf(message, sizeof(message), "device %d:%d (%s): %s", d->platform_index,
@@ -498,8 +499,6 @@ static size_t piece_bytes(const struct mpi_job *j, int piece)
 
 	if (!j->image)
 		return image_float_bytes(s->width, s->height);
-	if (j->by_samples)
-		return image_sum_bytes(s->width, s->height);
 	p = tiles_job_band(&j->tiles, piece, 0, 1);
 	return image_float_bytes(p.width, p.height);
 }
@@ -510,21 +509,17 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 	int bytes = 0, piece = -1;
 
 	MPI_Get_count(status, MPI_BYTE, &bytes);
-	/* A device's sums go to the buffer kept for them (its pages touched
-	 * before the render), others to one of their own. */
-	int kept = j->by_samples && (size_t)bytes == RESULT_HEADER + piece_bytes(j, 0);
-	message = kept ? j->received : malloc(bytes > 0 ? (size_t)bytes : 1);
+	message = malloc(bytes > 0 ? (size_t)bytes : 1);
 	MPI_Recv(message, bytes, MPI_BYTE, status->MPI_SOURCE, TAG_RESULT, MPI_COMM_WORLD,
 		 MPI_STATUS_IGNORE);
 	if (message && (size_t)bytes >= RESULT_HEADER)
 		memcpy(&piece, message, sizeof(int));
 	const float *rgb = (const float *)(message + RESULT_HEADER);
-	if (piece < 0 || piece >= piece_count(j)) {
+	if (piece < 0 || piece >= piece_count(j) || j->by_samples) {
+		/* By_samples: the sums travel in reduce_sums, not as pieces. */
 		record_failure(j, status->MPI_SOURCE, "a piece number out of range arrived");
 	} else if ((size_t)bytes != RESULT_HEADER + piece_bytes(j, piece)) {
 		record_failure(j, status->MPI_SOURCE, "a piece arrived incomplete");
-	} else if (j->by_samples) {
-		add_piece_sums(j, piece, (const cl_long *)(message + RESULT_HEADER));
 	} else if (j->image) {
 		place_band(j, piece, rgb);
 	} else {
@@ -534,8 +529,7 @@ static void serve_result(struct mpi_job *j, const MPI_Status *status)
 			record_failure(j, status->MPI_SOURCE, err);
 		return;
 	}
-	if (!kept)
-		free(message);
+	free(message);
 }
 
 static void serve_fail(struct mpi_job *j, const MPI_Status *status)
@@ -668,21 +662,288 @@ static int plan_devices(struct mpi_job *j, const int *counts)
 	return 0;
 }
 
+/* ---- the sample split's sums, added over the ranks ---------------------
+ *
+ * Each rank adds its devices' sums into its own; then the ranks' sums are
+ * added together. Rank 0 receiving and adding the others' one after another
+ * took 126-127 ms after the last device on four H100s (128 MB a rank at
+ * 2000x2000, docs/results/h100x4, batch 95). With every rank on one node
+ * (the usual case: one rank a GPU), each rank's sums lie in the node's
+ * shared memory and each rank adds a quarter (1/size) of every pixel's
+ * sums, from all ranks at once, into rank 0's: 8.5-10.3 ms after rank 0's
+ * device on four H100s (batch 98). Across nodes MPI_Reduce adds them in a
+ * tree, with a user op: it took 306 ms for four ranks of one node there
+ * (RTCL_TEST_SUMS_BY_MESSAGES), which the measured choice of the split
+ * (choose_measured) then weighs against the bands. Integer sums and joined saturation marks (cl/sample.cl,
+ * sample_sums): the same whatever the order, so the same image as one
+ * device's. */
+
+/* MPI_Op over pixels' sums (4 int64 each): the channels added, the
+ * saturation marks joined, as sample_sums. */
+static void add_sums_op(void *in, void *inout, int *len, MPI_Datatype *type)
+{
+	const cl_long *a = in;
+	cl_long *b = inout;
+
+	(void)type;
+	for (size_t i = 0; i < 4 * (size_t)*len; i += 4) {
+		b[i] += a[i];
+		b[i + 1] += a[i + 1];
+		b[i + 2] += a[i + 2];
+		b[i + 3] |= a[i + 3];
+	}
+}
+
+/* Whether every rank runs on this one node (then node is the world's ranks
+ * in the same order). */
+static int one_node(struct mpi_job *j, MPI_Comm *node)
+{
+	int node_size = 0, node_rank = -1, mine, all = 0;
+
+	if (MPI_Comm_split_type(MPI_COMM_WORLD, MPI_COMM_TYPE_SHARED, 0, MPI_INFO_NULL, node) !=
+	    MPI_SUCCESS) {
+		*node = MPI_COMM_NULL;
+	} else {
+		MPI_Comm_size(*node, &node_size);
+		MPI_Comm_rank(*node, &node_rank);
+	}
+	j->node_ranks = node_size > 0 ? node_size : 1;
+	mine = node_size == j->size && node_rank == j->rank && !hook_sums_by_messages();
+	if (MPI_Allreduce(&mine, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS)
+		return 0;
+	return all;
+}
+
+/* Shared: once every rank has zeroed its sums, this rank's block of every
+ * rank's sums (what reduce_sums reads and writes) mapped into this process
+ * too, a read a page, before the clock. */
+static int prefault_block(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	size_t pixels = (size_t)s->width * s->height;
+	size_t begin = 4 * (pixels * j->rank / j->size), end = 4 * (pixels * (j->rank + 1) / j->size);
+	size_t step = (size_t)sysconf(_SC_PAGESIZE) / sizeof(cl_long);
+	volatile cl_long sink = 0;
+
+	if (MPI_Barrier(MPI_COMM_WORLD) != MPI_SUCCESS)
+		return -1;
+	for (int r = 0; r < j->size; r++)
+		for (size_t i = begin; i < end; i += step ? step : 1)
+			sink += ((volatile cl_long *)j->slots[r])[i];
+	(void)sink;
+	return 0;
+}
+
+/* By_samples, every rank, before the clock: where this rank's sums are
+ * added, and how the ranks' are. Returns 0, or -1 (out of memory). */
+static int setup_reduction(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	size_t bytes = image_sum_bytes(s->width, s->height);
+	MPI_Comm node;
+	void *base = NULL;
+	int made = 0, all = 0;
+
+	if (one_node(j, &node))
+		made = MPI_Win_allocate_shared((MPI_Aint)bytes, 1, MPI_INFO_NULL, node, &base,
+					       &j->win) == MPI_SUCCESS;
+	/* A window made on some ranks only is left to MPI_Finalize. */
+	if (MPI_Allreduce(&made, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS)
+		all = 0;
+	if (node != MPI_COMM_NULL)
+		MPI_Comm_free(&node);
+	if (all) {
+		j->slots = calloc((size_t)j->size, sizeof(*j->slots));
+		for (int r = 0; j->slots && r < j->size; r++) {
+			MPI_Aint size;
+			int unit;
+			if (MPI_Win_shared_query(j->win, r, &size, &unit, &j->slots[r]) !=
+			    MPI_SUCCESS)
+				return -1;
+		}
+		if (!j->slots)
+			return -1;
+		j->shared = 1;
+		j->sums = j->slots[j->rank];
+	} else {
+		j->sums = malloc(bytes);
+		if (!j->sums ||
+		    MPI_Type_contiguous(4, MPI_INT64_T, &j->pixel) != MPI_SUCCESS ||
+		    MPI_Type_commit(&j->pixel) != MPI_SUCCESS ||
+		    MPI_Op_create(add_sums_op, 1, &j->add_op) != MPI_SUCCESS)
+			return -1;
+	}
+	/* Zeroed and mapped now, by this rank, before the render's clock. */
+	memset(j->sums, 0, bytes);
+	if (j->shared && prefault_block(j))
+		return -1;
+	return 0;
+}
+
+/* MPI_Barrier, in naps of MPI_NAP_MIN_NS (the ranks' devices end within
+ * milliseconds of each other: wait_request's longer naps would add up to
+ * one). */
+static int wait_barrier(void)
+{
+	MPI_Request request;
+	struct timespec t = {0, MPI_NAP_MIN_NS};
+	int done = 0;
+
+	if (MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS)
+		return -1;
+	for (;;) {
+		if (MPI_Test(&request, &done, MPI_STATUS_IGNORE) != MPI_SUCCESS)
+			return -1;
+		if (done)
+			return 0;
+		nanosleep(&t, NULL);
+	}
+}
+
+/* By_samples, every rank, once its devices are done: every rank's sums
+ * added into rank 0's j->sums, and the pieces' arrivals counted there.
+ * Returns 0, or -1 when MPI failed. */
+static int reduce_sums(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	size_t pixels = (size_t)s->width * s->height;
+	int root = j->rank == ROOT, failed = 0;
+	double start = timing_now();
+
+	/* Once every rank is here (its devices done), blocking calls: nothing
+	 * of this job is left for the cores they spin on. MPI_Ireduce with
+	 * naps took 2.5 s for 128 MB a rank on four H100s' host (batch 98):
+	 * a nonblocking collective moves only inside MPI calls. */
+	if (wait_barrier())
+		return -1;
+	if (j->shared) {
+		const cl_long **parts = calloc((size_t)j->size, sizeof(*parts));
+		size_t begin = pixels * j->rank / j->size, end = pixels * (j->rank + 1) / j->size;
+		long cores = sysconf(_SC_NPROCESSORS_ONLN);
+		if (!parts)
+			return -1;
+		for (int r = 0; r < j->size; r++)
+			parts[r] = j->slots[r] + 4 * begin;
+		/* The node's cores shared among its ranks. */
+		tiles_sum_parts(parts, j->size, j->slots[ROOT] + 4 * begin, end - begin,
+				(int)(cores / j->size));
+		free(parts);
+		failed = MPI_Barrier(MPI_COMM_WORLD) != MPI_SUCCESS;
+	} else {
+		failed = MPI_Reduce(root ? MPI_IN_PLACE : j->sums, j->sums, (int)pixels, j->pixel,
+				    j->add_op, ROOT, MPI_COMM_WORLD) != MPI_SUCCESS;
+	}
+	failed = failed || MPI_Reduce(root ? MPI_IN_PLACE : j->arrived, j->arrived, j->pieces,
+				      MPI_INT, MPI_SUM, ROOT, MPI_COMM_WORLD) != MPI_SUCCESS;
+	j->reduce_ms = (timing_now() - start) * 1e3;
+	return failed ? -1 : 0;
+}
+
+/* By_samples, every rank, before MPI_Finalize: the window, type and op. */
+static void end_reduction(struct mpi_job *j)
+{
+	if (j->shared) {
+		MPI_Win_free(&j->win);
+		j->shared = 0;
+		j->sums = NULL; /* was the window's */
+	}
+	if (j->add_op != MPI_OP_NULL)
+		MPI_Op_free(&j->add_op);
+	if (j->pixel != MPI_DATATYPE_NULL)
+		MPI_Type_free(&j->pixel);
+}
+
+/* Each of the total devices a range of the samples, in whole passes. */
+static int split_rank_samples(struct mpi_job *j, int total)
+{
+	const struct render_settings *s = &j->settings;
+
+	return tiles_split_samples(&j->tiles, total,
+				   renderer_pass_samples(s, (long long)s->width * s->height, 1),
+				   NULL);
+}
+
+/* Rank 0: the dispenser and arrivals for j->pieces pieces again (the
+ * measured choice took the bands). */
+static int plan_pieces_again(struct mpi_job *j)
+{
+	dispenser_free(&j->dispenser);
+	free(j->arrived);
+	j->arrived = calloc((size_t)j->pieces, sizeof(int));
+	return !j->arrived ||
+	       dispenser_init(&j->dispenser, piece_count(j), j->total, j->job->split);
+}
+
+/* j->measure, every rank, before the clock, once its devices are open and
+ * probed (tiles_open): the ranks exchange their devices' probes, and each
+ * times the ranks' add of the sums (reduce_sums, of the zeroed sums: they
+ * stay zero); every rank then decides the same from the same figures, as
+ * one process does (tiles_prefer_samples): the samples, or bands. Returns
+ * 0, or -1 when MPI or memory failed. */
+static int choose_measured(struct mpi_job *j)
+{
+	const struct render_settings *s = &j->settings;
+	/* Per rank: its device count, its pass's samples, then each device's
+	 * pass and read-back. */
+	enum { ROW = 2 + 2 * DEVICES_MAX };
+	double mine[ROW] = {0}, *all = calloc((size_t)j->size * ROW, sizeof(double));
+	double pass_ms[DEVICES_MAX], sums_ms[DEVICES_MAX], add_ms = 0;
+	int unit = tiles_sample_unit(s, j->devs, j->count), n = 0;
+
+	if (!all)
+		return -1;
+	mine[0] = j->count;
+	mine[1] = unit < settings_samples(s) ? unit : 1;
+	for (int k = 0; k < j->count; k++) {
+		mine[2 + 2 * k] = j->tiles.dev[k].probe_ms;
+		mine[3 + 2 * k] = j->tiles.dev[k].sums_ms;
+	}
+	/* Timed from when all are here: the ranks open their devices at
+	 * different speeds. */
+	if (wait_barrier())
+		goto fail;
+	double start = timing_now();
+	if (reduce_sums(j))
+		goto fail;
+	double mine_ms = (timing_now() - start) * 1e3;
+	if (MPI_Allreduce(&mine_ms, &add_ms, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD) !=
+		    MPI_SUCCESS ||
+	    MPI_Allgather(mine, ROW, MPI_DOUBLE, all, ROW, MPI_DOUBLE, MPI_COMM_WORLD) !=
+		    MPI_SUCCESS)
+		goto fail;
+	for (int r = 0; r < j->size; r++)
+		for (int k = 0; k < (int)all[r * ROW] && n < DEVICES_MAX; k++, n++) {
+			pass_ms[n] = all[r * ROW + 2 + 2 * k];
+			sums_ms[n] = all[r * ROW + 3 + 2 * k];
+		}
+	/* Rank 0's pass, so that every rank decides alike. */
+	int samples = tiles_prefer_samples(pass_ms, sums_ms, n, (int)all[1], settings_samples(s),
+					   add_ms, &j->choice);
+	free(all);
+	memset(j->arrived, 0, (size_t)j->pieces * sizeof(int)); /* the trial's */
+	j->measure = 0;
+	j->tiles.probe = 0; /* a device opened again by the render's begin is not */
+	if (samples)
+		return split_rank_samples(j, n);
+	j->by_samples = 0;
+	tiles_drop_sums(&j->tiles);
+	j->pieces = j->tiles.bands;
+	return j->rank == ROOT ? plan_pieces_again(j) : 0;
+
+fail:
+	free(all);
+	return -1;
+}
+
 /* choose_pieces: --split samples cannot split this job (said on rank 0). */
 #define CHOSEN_BADLY 2
 
-/* Under --mpi the default splits the samples when each device takes this
- * many of every pixel or more (one process chooses by measured costs
- * instead, tiles_prefer_samples: the ranks would have to exchange their
- * probes first). Two H200s, default scene 2000x2000 (docs/results/
- * multidevice, batches 70-71): 64 spp took 34.4 ms split by samples, 26.2 by
- * pixels; 256 spp 102.9-104.6 and 100.8; 512 spp 195.0 and 200.8. */
-#define MPI_SAMPLES_MIN 128
-
-/* Whether the image is split by samples without --split samples: when every
- * device of every rank is a GPU and
- * takes MPI_SAMPLES_MIN samples of each pixel or more, and also only when
- * no rank is bound to one core (note_binding), where rank 0 adds the sums.
+/* Whether the image may be split by samples without --split samples, as
+ * the devices' probes decide before the clock (choose_measured): when every
+ * device of every rank is a GPU and the samples fit (tiles_samples_fit),
+ * and only when no rank is bound to one core (note_binding), where the
+ * ranks add the sums. (Before, a fixed 128 samples a device or more: four
+ * H100 ranks took the lake at 256 spp in bands, 2.37 times one rank.)
  * On two H200s (batch 82, docs/results/multidevice/README.md, "MPI") two
  * ranks took 780-789 ms split by samples against 816-833 in bands, and 855-869
  * against 832-835 with each rank bound to one core. */
@@ -692,9 +953,7 @@ static int samples_by_default(const struct mpi_job *j, int total, int gpus)
 	const struct render_settings *s = &j->settings;
 
 	return !job->split_given && !job->row_order_given && total >= 2 && gpus == total &&
-	       j->bound_ranks == 0 && tiles_samples_fit(s, total, job->piece_rows) &&
-	       settings_samples(s) >= total * MPI_SAMPLES_MIN &&
-	       !message_too_large(image_sum_bytes(s->width, s->height));
+	       j->bound_ranks == 0 && tiles_samples_fit(s, total, job->piece_rows);
 }
 
 /* The pieces, once every rank's device count is known: the frames, or the
@@ -722,9 +981,6 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 			   0, &map, j->devs, j->count, err, sizeof(err)))
 		return -1;
 	j->pieces = j->tiles.bands;
-	/* --split samples: every device the whole image, an equal range of the
-	 * samples in whole passes, its sums to rank 0 (32 bytes a pixel). */
-	size_t sum_bytes = image_sum_bytes(s->width, s->height);
 	/* Every rank decides the same from the same job and counts: rank 0
 	 * says why, and all stop. */
 	if (job->split == SPLIT_SAMPLES && tiles_check_sample_split(s, total, err, sizeof(err))) {
@@ -732,42 +988,33 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 			fprintf(stderr, "rtcl: %s\n", err);
 		return CHOSEN_BADLY;
 	}
-	if (job->split == SPLIT_SAMPLES && message_too_large(sum_bytes)) {
-		if (j->rank == ROOT)
-			fprintf(stderr,
-				"rtcl: --split samples under --mpi sends each device's sums of the "
-				"image in one message of at most 2 GiB, and a %dx%d image's are "
-				"%zu bytes: use --split dynamic or a smaller image\n",
-				s->width, s->height, sum_bytes);
-		return CHOSEN_BADLY;
+	/* The sums travel in no message of their own (reduce_sums; MPI_Reduce
+	 * counts pixels, at most 32768 squared, in an int): no limit of 2 GiB
+	 * a message, as when each rank sent rank 0 its sums. */
+	j->measure = job->split != SPLIT_SAMPLES && samples_by_default(j, total, gpus);
+	j->by_samples = job->split == SPLIT_SAMPLES || j->measure;
+	if (j->measure) {
+		/* Each device probed as its renderer opens (tiles_open); the
+		 * sample pieces made once the probes favour them. */
+		j->tiles.by_samples = 1;
+		j->tiles.probe = 1;
+	} else if (j->by_samples && split_rank_samples(j, total)) {
+		return -1;
 	}
-	j->by_samples = job->split == SPLIT_SAMPLES || samples_by_default(j, total, gpus);
 	if (j->by_samples) {
-		if (tiles_split_samples(&j->tiles, total,
-					renderer_pass_samples(s, (long long)s->width * s->height, 1),
-					NULL))
-			return -1;
 		j->pieces = total;
-		/* Each device's sums, sent as they lie (send_sums), allocated now,
-		 * before the render's clock. */
-		j->tiles.sums_header = RESULT_HEADER;
-		for (int k = 0; k < j->count; k++)
-			if (tiles_alloc_sums(&j->tiles, k, err, sizeof(err)))
-				return -1;
-	}
-	if (j->rank != ROOT)
-		return 0;
-	if (j->by_samples) {
-		size_t bytes = image_sum_bytes(s->width, s->height);
-		j->sums = calloc(1, bytes);
-		j->received = calloc(1, RESULT_HEADER + bytes);
-		if (!j->sums || !j->received)
+		/* Each device's sums are read back into pinned memory, allocated
+		 * as its renderer opens (tiles_open), before the render's clock;
+		 * this rank's added, and the ranks' reduced, in memory set up
+		 * now. */
+		if (setup_reduction(j))
 			return -1;
-		/* Mapped now, as the image below. */
-		pages_touch(j->sums, bytes);
-		pages_touch(j->received, RESULT_HEADER + bytes);
 	}
+	if (j->rank != ROOT && !j->by_samples)
+		return 0;
 	j->arrived = calloc((size_t)j->pieces, sizeof(int));
+	if (j->rank != ROOT)
+		return j->arrived ? 0 : -1;
 	j->record->result.rgb = calloc(1, image_float_bytes(s->width, s->height));
 	if (!j->arrived || !j->record->result.rgb)
 		return -1;
@@ -888,10 +1135,13 @@ static int finish_root(struct mpi_job *j)
 		.work = j->all_work,
 		.count = j->total,
 		.ranks_count = j->image ? j->size : 0,
+		.rank_sums = !j->by_samples ? NULL : j->shared ? "shared memory" : "MPI_Reduce",
+		.rank_sums_ms = j->reduce_ms,
 		.split = j->by_samples ? SPLIT_SAMPLES : j->job->split,
 		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
 		.wall_ms = j->wall_ms,
 		.row_order_given = j->image,
+		.choice = j->choice,
 	};
 	if (j->image)
 		j->record->shares.rows = j->tiles.row_map;
@@ -922,6 +1172,12 @@ static void open_before_clock(struct mpi_job *j)
 	tiles_open_all(&j->tiles, setup, err, sizeof(err));
 	for (int k = 0; k < j->count; k++)
 		j->setup_ms[k] = setup[k].setup_ms;
+	if (j->measure && choose_measured(j)) {
+		fprintf(stderr, "rtcl: rank %d: --mpi: choosing the split from the devices' "
+				"probes failed\n",
+			j->rank);
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
 	if (MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS || wait_request(&request))
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 }
@@ -930,6 +1186,8 @@ static void open_before_clock(struct mpi_job *j)
  * rank learns whether the render succeeded. Returns the exit status. */
 static int render_all(struct mpi_job *j)
 {
+	if (j->image)
+		open_before_clock(j); /* may choose the split (choose_measured) */
 	struct multidev_job job = {.piece_count = piece_count(j),
 				   .split =
 					   j->job->split == SPLIT_DYNAMIC && !j->by_samples
@@ -945,8 +1203,6 @@ static int render_all(struct mpi_job *j)
 	pthread_t server;
 	int status = 0;
 
-	if (j->image)
-		open_before_clock(j);
 	double start = timing_now();
 
 	if (j->rank == ROOT) {
@@ -959,6 +1215,11 @@ static int render_all(struct mpi_job *j)
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
 	multidev_run(&job, j->devs, j->count, j->work, err, sizeof(err));
+	if (j->by_samples && reduce_sums(j)) {
+		fprintf(stderr, "rtcl: rank %d: --mpi: adding the ranks' sample sums failed\n",
+			j->rank);
+		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
 		progress_end();
@@ -978,8 +1239,9 @@ static void free_job(struct mpi_job *j)
 	tiles_job_free(&j->tiles); /* the renderers, before their devices */
 	devices_close(j->devs, j->count);
 	free(j->arrived);
-	free(j->sums);
-	free(j->received);
+	if (!j->shared)
+		free(j->sums);
+	free(j->slots);
 	free(j->first);
 	free(j->rank_of);
 	dispenser_free(&j->dispenser);
@@ -1017,6 +1279,8 @@ static int mpi_begin(struct mode_run *run, char *err, size_t err_size)
 		return EXIT_FAILED;
 	}
 	j->initialized = 1;
+	j->pixel = MPI_DATATYPE_NULL;
+	j->add_op = MPI_OP_NULL;
 	j->threads = provided >= MPI_THREAD_MULTIPLE;
 	MPI_Comm_set_errhandler(MPI_COMM_WORLD, MPI_ERRORS_RETURN);
 	MPI_Comm_rank(MPI_COMM_WORLD, &j->rank);
@@ -1101,6 +1365,7 @@ static void mpi_end(struct mode_run *run, int status)
 
 	if (!j || !j->initialized)
 		return;
+	end_reduction(j);
 	MPI_Finalize();
 	if (j->rank != ROOT && status == 0)
 		interrupt_set_outcome(

@@ -2,6 +2,7 @@
 
 #include <pthread.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "base/test_hooks.h"
@@ -148,13 +149,16 @@ static void report_failure(const struct worker *workers, int count, char *err, s
 int multidev_run(const struct multidev_job *job, struct device *devs, int count,
 		 struct device_work *work, char *err, size_t err_size)
 {
-	static struct worker workers[DEVICES_MAX];
+	/* Each call its own workers: several jobs may run at once on disjoint
+	 * devices (--frames' last frames, run/frames.c). */
+	struct worker *workers = calloc((size_t)(count > 0 ? count : 1), sizeof(*workers));
 	pthread_t threads[DEVICES_MAX];
 	struct pool pool;
 	int started = 0, failed = 0;
 
 	memset(work, 0, (size_t)count * sizeof(*work));
-	if (init_pool(&pool, job, count)) {
+	if (!workers || init_pool(&pool, job, count)) {
+		free(workers);
 		snprintf(err, err_size, "out of host memory for the pieces of %d devices", count);
 		return -1;
 	}
@@ -176,6 +180,7 @@ int multidev_run(const struct multidev_job *job, struct device *devs, int count,
 		failed |= workers[k].failed;
 	if (failed && started == count)
 		report_failure(workers, count, err, err_size);
+	free(workers);
 	return failed ? -1 : 0;
 }
 

@@ -447,9 +447,11 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 {
 	const struct render_settings *s = t->settings;
 	const uint32_t *counts = t->dev[k].result.write_counts;
+	/* Set-up's probe (probe_device) wrote every pixel too. */
+	uint32_t probed = (uint32_t)t->dev[k].probe_launches;
 
 	if (counts && t->by_samples) { /* every pixel, once a pass of its pieces */
-		uint32_t expected = 0;
+		uint32_t expected = probed;
 		for (int b = 0; b < t->piece_count; b++)
 			if (t->owner[b] == k)
 				expected += (uint32_t)tiles_piece_launches(s, &t->pieces[b],
@@ -459,7 +461,9 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	for (int b = 0; counts && b < t->piece_count; b++) {
 		const struct rt_piece *p = &t->pieces[b];
 		uint32_t expected =
-			t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p, t->devs[k].is_gpu) : 0;
+			probed +
+			(t->owner[b] == k ? (uint32_t)tiles_piece_launches(s, p, t->devs[k].is_gpu)
+					  : 0);
 		for (int v = p->y0; v < p->y0 + p->height; v++)
 			if (tiles_check_counts(counts + (size_t)rt_piece_row(p, v) * s->width + p->x0,
 					       p->width, 1,
@@ -615,15 +619,14 @@ static void *combine_range(void *arg)
  * over up to TILES_SUM_THREADS threads (a 2000 x 2000 image is 4 million
  * pixels' sums; on two H200s' host the image was assembled in 10-13 ms, 139
  * ms on one thread with both images read back first). */
-static void combine_sums(const cl_long *const *parts, int count, cl_long *to, float *rgb,
-			 float scale, size_t pixels)
+static void combine_on(const cl_long *const *parts, int count, cl_long *to, float *rgb,
+		       float scale, size_t pixels, int threads)
 {
-	long cores = sysconf(_SC_NPROCESSORS_ONLN);
-	int threads = cores < 1 ? 1 : cores > TILES_SUM_THREADS ? TILES_SUM_THREADS : (int)cores;
 	struct sums_range ranges[TILES_SUM_THREADS];
 	pthread_t ids[TILES_SUM_THREADS];
 	int started[TILES_SUM_THREADS] = {0};
 
+	threads = threads < 1 ? 1 : threads > TILES_SUM_THREADS ? TILES_SUM_THREADS : threads;
 	if (pixels < ((size_t)1 << 14))
 		threads = 1;
 	for (int i = 0; i < threads; i++) {
@@ -637,6 +640,20 @@ static void combine_sums(const cl_long *const *parts, int count, cl_long *to, fl
 	for (int i = 1; i < threads; i++)
 		if (started[i])
 			pthread_join(ids[i], NULL);
+}
+
+static void combine_sums(const cl_long *const *parts, int count, cl_long *to, float *rgb,
+			 float scale, size_t pixels)
+{
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+
+	combine_on(parts, count, to, rgb, scale, pixels, cores < 1 ? 1 : (int)cores);
+}
+
+void tiles_sum_parts(const cl_long *const *parts, int count, cl_long *to, size_t pixels,
+		     int threads)
+{
+	combine_on(parts, count, to, NULL, 0, pixels, threads);
 }
 
 void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels)
@@ -799,12 +816,15 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 	char devices[32];
 
 	snprintf(devices, sizeof(devices), "%d device%s", t->count, t->count == 1 ? "" : "s");
-	if (frames > 0)
+	/* The line is the caller's without progress (--frames' last frames,
+	 * render_shared_frames), as for render(). */
+	if (frames > 0 && t->settings->progress)
 		repeats_progress_begin(t->settings, frames, devices);
 	for (int f = 0; f < frames; f++) {
 		double start = timing_now();
 		t->frame_start = start;
-		repeats_progress_step(t->settings, out, f, frames);
+		if (t->settings->progress)
+			repeats_progress_step(t->settings, out, f, frames);
 		if (t->adaptive) {
 			adapt_new_frame(&t->adapt);
 			t->piece_count = 0;
@@ -937,8 +957,14 @@ static void choose_by_probes(struct tiles_request *r, struct tiles_job *t)
 		return;
 	}
 	r->split = SPLIT_DYNAMIC;
-	t->by_samples = 0;
 	t->adaptive = 1; /* tiles_render made the job adaptive for this */
+	tiles_drop_sums(t);
+}
+
+void tiles_drop_sums(struct tiles_job *t)
+{
+	t->by_samples = 0;
+	t->probe = 0;
 	for (int k = 0; k < t->count; k++) { /* no sums to read */
 		device_pinned_free(&t->devs[k], t->dev[k].pinned, t->dev[k].sums);
 		pages_free(t->dev[k].block, t->sums_header);
@@ -977,7 +1003,8 @@ int tiles_render(struct tiles_request *r, const struct render_settings *s,
 	}
 	double lap = timing_now();
 	frames = render_tile_frames(&t, r->split != SPLIT_DYNAMIC, work, out, err, err_size);
-	progress_end();
+	if (s->progress)
+		progress_end();
 	if (frames < 0 || repeats_end(out, err, err_size) || double_band(&t, err, err_size))
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);

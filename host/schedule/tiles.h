@@ -212,7 +212,8 @@ int tiles_check_counts(const uint32_t *counts, int width, int height, uint32_t e
 void tiles_copy_facts(const struct render_result *from, struct render_result *to);
 
 /* With check_writes, after one frame: device k's write counts are each
- * piece's launches in the pieces it rendered and 0 elsewhere. Returns 0, or -1
+ * piece's launches in the pieces it rendered and 0 elsewhere, plus its
+ * set-up probe's launches (probe_ms) everywhere. Returns 0, or -1
  * with the first pixel that was not in err. */
 int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_size);
 
@@ -311,6 +312,15 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size);
 /* Adds from's sums of `pixels` pixels to to's (cl/sample.cl: 4 cl_long a
  * pixel, the channels' sums added, their saturation bits joined). */
 void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels);
+
+/* The job splits no samples after all (the measured choice took the
+ * pixels): by_samples cleared, each device's sums freed. */
+void tiles_drop_sums(struct tiles_job *t);
+
+/* The sum of `count` parts' sums of `pixels` pixels into to (which may be
+ * one of the parts), as tiles_add_sums, over up to `threads` threads. */
+void tiles_sum_parts(const cl_long *const *parts, int count, cl_long *to, size_t pixels,
+		     int threads);
 
 /* The image's mean colours from every pixel's sum of all its samples
  * (docs/RENDERING.md, "Samples per pixel"): float(S) times the mean's
