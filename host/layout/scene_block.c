@@ -305,9 +305,10 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 
 /* The textures' arrays (RENDERING.md, "Textures"): the vertices' texture
  * coordinates, what each material takes from textures, each texture's
- * header and texels, and the decode table of 8-bit texels. */
+ * header and, with texels, its texels, and the decode table of 8-bit
+ * texels. */
 static void pack_textures(unsigned char *block, struct rt_scene *header, const struct layout *l,
-			  const struct scene *scene, const struct mesh_block *mesh)
+			  const struct scene *scene, const struct mesh_block *mesh, int texels)
 {
 	struct rt_material_map *maps = (struct rt_material_map *)(block + l->material_map);
 	struct rt_texture *textures = (struct rt_texture *)(block + l->texture);
@@ -332,7 +333,8 @@ static void pack_textures(unsigned char *block, struct rt_scene *header, const s
 		textures[i].height = t->height;
 		textures[i].flags = (rt_uint)t->wrap_s | (rt_uint)t->wrap_t << RT_WRAP_T_SHIFT |
 				    (t->is_float ? RT_TEXTURE_FLOAT : 0u);
-		memcpy(block + texel, t->texels, t->bytes);
+		if (texels && t->bytes)
+			memcpy(block + texel, t->texels, t->bytes);
 		texel += round16(t->bytes);
 	}
 	/* Computed in double, rounded once to float. */
@@ -348,8 +350,18 @@ size_t scene_block_bytes(const struct scene *scene, const struct mesh_block *mes
 	return layout_of(scene, mesh, bvh).total;
 }
 
-void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
-		    int width, int height, int max_depth, size_t *bytes)
+size_t scene_block_head_bytes(const void *block)
+{
+	const struct rt_scene *header = block;
+	const struct rt_texture *textures =
+		(const struct rt_texture *)((const unsigned char *)block + header->texture_offset);
+
+	return header->texture_count ? textures[0].offset : header->total_bytes;
+}
+
+/* scene_block_pack, and scene_block_pack_head without texels. */
+static void *pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
+		  int width, int height, int max_depth, int texels, size_t *bytes)
 {
 	struct layout l = layout_of(scene, mesh, bvh);
 	size_t material_offset = l.material, sphere_offset = l.sphere, plane_offset = l.plane;
@@ -360,7 +372,7 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 	/* The header's offsets are 32-bit (block_prepare_scene refuses more). */
 	if (total > DEVSCENE_MAX_BYTES)
 		return NULL;
-	block = calloc(1, total);
+	block = calloc(1, texels ? total : l.texel);
 	if (!block)
 		return NULL;
 
@@ -429,10 +441,23 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal));
 	}
 	if (scene_has_textures(scene))
-		pack_textures(block, header, &l, scene, mesh);
+		pack_textures(block, header, &l, scene, mesh, texels);
 
 	*bytes = total;
 	return block;
+}
+
+void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
+		    int width, int height, int max_depth, size_t *bytes)
+{
+	return pack(scene, mesh, bvh, width, height, max_depth, 1, bytes);
+}
+
+void *scene_block_pack_head(const struct scene *scene, const struct mesh_block *mesh,
+			    const struct bvh *bvh, int width, int height, int max_depth,
+			    size_t *bytes)
+{
+	return pack(scene, mesh, bvh, width, height, max_depth, 0, bytes);
 }
 
 /* The float step at distance d from the eye: the spacing of floats there. */
