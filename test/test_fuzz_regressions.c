@@ -57,8 +57,8 @@ static void expect_head_and_texels(const char *path, const struct scene *s,
 				   const unsigned char *whole, size_t whole_bytes)
 {
 	size_t bytes = 0, head = scene_block_head_bytes(whole);
-	unsigned char *packed = scene_block_pack_head(s, mesh, bvh, s->width, s->height,
-						      s->max_depth, &bytes);
+	unsigned char *packed =
+		scene_block_pack_head(s, mesh, bvh, s->width, s->height, s->max_depth, &bytes);
 	const struct rt_scene *h = (const struct rt_scene *)whole;
 	const struct rt_texture *t = (const struct rt_texture *)(whole + h->texture_offset);
 
@@ -68,12 +68,11 @@ static void expect_head_and_texels(const char *path, const struct scene *s,
 	cr_expect_eq(scene_block_head_bytes(packed), head, "%s", path);
 	cr_expect(head <= whole_bytes && memcmp(packed, whole, head) == 0,
 		  "%s: the head differs from the block's first %zu bytes", path, head);
-	cr_expect_eq(h->texture_count,
-		     scene_has_textures(s) ? s->texture_count : 0, "%s", path);
+	cr_expect_eq(h->texture_count, scene_has_textures(s) ? s->texture_count : 0, "%s", path);
 	for (rt_int i = 0; i < h->texture_count; i++) {
 		cr_expect_geq(t[i].offset, head, "%s: texture %d inside the head", path, i);
-		cr_expect(memcmp(whole + t[i].offset, s->textures[i].texels, s->textures[i].bytes) ==
-				  0,
+		cr_expect(memcmp(whole + t[i].offset, s->textures[i].texels,
+				 s->textures[i].bytes) == 0,
 			  "%s: texture %d's texels are not where its header says", path, i);
 	}
 	free(packed);

@@ -447,8 +447,8 @@ static void *pack(const struct scene *scene, const struct mesh_block *mesh, cons
 	return block;
 }
 
-void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
-		    int width, int height, int max_depth, size_t *bytes)
+void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
+		       const struct bvh *bvh, int width, int height, int max_depth, size_t *bytes)
 {
 	return pack(scene, mesh, bvh, width, height, max_depth, 1, bytes);
 }

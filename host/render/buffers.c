@@ -22,8 +22,8 @@ static int buffers_place(struct device *dev, struct render_buffers *b, char *err
  * packed into the block, the scene's, the block's and the device buffer's
  * (issue 39, finding 14). The block is freed once written. */
 static int create_scene_buffer(struct device *dev, const struct scene *scene,
-			       const struct render_result *res, struct render_buffers *b,
-			       char *err, size_t err_size)
+			       const struct render_result *res, struct render_buffers *b, char *err,
+			       size_t err_size)
 {
 	static const unsigned char zeros[16];
 	const struct rt_scene *header = b->scene_block;
@@ -32,8 +32,8 @@ static int create_scene_buffer(struct device *dev, const struct scene *scene,
 					    header->texture_offset);
 	cl_int status;
 
-	b->scene = device_create_buffer(dev, CL_MEM_READ_ONLY, res->scene_bytes, NULL, "scene",
-					err, err_size);
+	b->scene = device_create_buffer(dev, CL_MEM_READ_ONLY, res->scene_bytes, NULL, "scene", err,
+					err_size);
 	if (!b->scene)
 		return -1;
 	status = clEnqueueWriteBuffer(dev->queue, b->scene, CL_TRUE, 0,
@@ -48,8 +48,8 @@ static int create_scene_buffer(struct device *dev, const struct scene *scene,
 						      NULL, NULL);
 		if (status == CL_SUCCESS && pad)
 			status = clEnqueueWriteBuffer(dev->queue, b->scene, CL_TRUE,
-						      textures[i].offset + t->bytes, pad, zeros,
-						      0, NULL, NULL);
+						      textures[i].offset + t->bytes, pad, zeros, 0,
+						      NULL, NULL);
 	}
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "writing the scene's %zu bytes to %s failed: %s",

@@ -117,8 +117,8 @@ static int create_buffers(struct device *dev, const struct scene *scene,
 			  const struct render_settings *s, struct launch_state *st,
 			  struct render_result *res, char *err, size_t err_size)
 {
-	if (buffers_create(dev, scene, s, res, &st->b, (size_t)counts_bytes(s, res), "flop counts", err,
-			   err_size) ||
+	if (buffers_create(dev, scene, s, res, &st->b, (size_t)counts_bytes(s, res), "flop counts",
+			   err, err_size) ||
 	    watch_create_counter(dev, dev->queue, progress_enabled(), &st->work_counter, err,
 				 err_size))
 		return -1;

@@ -97,8 +97,8 @@ static int create_wavefront_buffers(struct device *dev, const struct scene *scen
 	size_t pixels = (size_t)s->width * s->height;
 	size_t flops_bytes = s->count_flops ? pixels * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES;
 
-	if (buffers_create(dev, scene, s, res, &w->b, pixels * sizeof(cl_ulong), "per-pixel counts", err,
-			   err_size))
+	if (buffers_create(dev, scene, s, res, &w->b, pixels * sizeof(cl_ulong), "per-pixel counts",
+			   err, err_size))
 		return -1;
 	w->next_count = device_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 					     "queue counter", err, err_size);
