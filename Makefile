@@ -29,7 +29,9 @@
 # has numpy, matplotlib and pytest from `make deps`; the installed tools run with it), SAN=1 (sanitizers),
 # FUZZ_SECONDS (default 60), FUZZ_CC (default clang), PREFIX (default /usr/local),
 # DESTDIR (staging root for packaging, default empty), DEVICE, BENCH and OUT (experiments,
-# bench, results: the device options, more bench options, the results folder).
+# bench, results: the device options, more bench options, the results folder), OIDN_DIR
+# (default /usr/local/lib/rtcl-oidn: where make deps puts Open Image Denoise, and where
+# --denoise loads it from).
 
 OIIO ?= 1
 CC ?= gcc
@@ -60,8 +62,13 @@ CXXFLAGS += -std=c++17 $(WARNINGS)
 # a glTF file's JSON (host/meshread/gltf_read.c).
 ASSIMP_CFLAGS = $(shell pkg-config --cflags assimp 2>/dev/null)
 ASSIMP_LIBS = $(shell pkg-config --libs assimp 2>/dev/null || echo -lassimp)
-LDLIBS = -lOpenCL -ljansson -lz -lm -pthread
+LDLIBS = -lOpenCL -ljansson -lz -lm -pthread -ldl
+# --denoise loads Intel Open Image Denoise from here at run time (host/output/denoise.c):
+# .ci/install-deps (make deps) installs the pyoidn wheel, which carries it, into this folder.
+OIDN_DIR ?= /usr/local/lib/rtcl-oidn
+CFLAGS += -DRTCL_OIDN_DIR='"$(OIDN_DIR)"'
 MESHREAD := $(BUILD)/rtcl-meshread
+RAYS := $(BUILD)/rtcl-rays
 
 ifeq ($(SAN),1)
 SAN_FLAGS := -fsanitize=address,undefined -fno-omit-frame-pointer -fno-sanitize-recover=all
@@ -105,17 +112,17 @@ endif
 HOST_MODULES := \
 	base/timing base/files base/test_hooks base/quote base/suggest base/interrupt base/libdir base/progress \
 	scene/scene scene/scene_check scene/scene_literal scene/scene_material scene/scene_mesh \
-	scene/mesh_place scene/mesh_spawn \
+	scene/mesh_place scene/mesh_spawn scene/scene_model scene/hdr_read \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
 	render/checks render/probe render/buffers render/program render/block render/watch render/repeats \
-	render/launch render/singlepass render/wavefront render/renderer render/render \
-	render/reference \
+	render/launch render/singlepass render/wavefront render/renderer render/render render/aov \
+	render/reference render/reference_scene render/reference_path \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
 	report/summary report/document report/simd report/devstats \
 	output/plan output/npy output/schedmap output/workmap output/image_common output/image_encode \
-	output/image_png \
+	output/image_png output/denoise \
 	run/image run/frames run/job_digest \
 	cmd/cli
 HOST_OBJS := $(addprefix $(BUILD)/, $(addsuffix .o,$(HOST_MODULES)) embedded.o) \
@@ -126,9 +133,14 @@ EMBEDDED := $(CL_SOURCES) scenes/paper60.json
 UNIT_TESTS := $(wildcard test/test_*.c)
 
 .PHONY: all deps render test test-long check layers experiments bench results bench-scenes clean fuzz fuzz-mesh valgrind install uninstall
-all: $(BIN)
+all: $(BIN) $(RAYS)
 
 $(BIN): $(BUILD)/cmd/main.o $(HOST_OBJS) $(OIIO_MODULE) $(MESHREAD)
+	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
+
+# rtcl's traversal over rays from a file, timed (host/cmd/rays.c): the
+# instrument of rtcl-peer-compare --rays (docs/bvh.md).
+$(RAYS): $(BUILD)/cmd/rays.o $(HOST_OBJS) $(MESHREAD)
 	$(CC) $(LDFLAGS) -o $@ $(filter %.o,$^) $(LDLIBS)
 
 # The mesh import helper: Assimp in a process of its own.
@@ -177,7 +189,7 @@ $(BUILD) $(BUILD)/tests:
 	mkdir -p $@
 
 deps:
-	bash .ci/install-deps
+	OIDN_DIR='$(OIDN_DIR)' bash .ci/install-deps
 
 render: rtcl
 	./rtcl
@@ -204,11 +216,11 @@ TEST_START := $(shell date +%s.%N)
 QUICK_TEST_ENV := POCL_WORK_GROUP_SPECIALIZATION=0 POCL_EXTRA_BUILD_FLAGS=-cl-opt-disable
 PYTEST = RTCL=$(abspath $(BIN)) RTCL_TEST_START=$(TEST_START) $(PYTHON) -m pytest -q -n $(TEST_JOBS)
 
-test: $(BIN) $(BUILD)/unit_tests
+test: $(BIN) $(RAYS) $(BUILD)/unit_tests
 	$(QUICK_TEST_ENV) $(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '!(*_slow)/*'
 	$(QUICK_TEST_ENV) RTCL_TEST_WHAT="make test" $(PYTEST) -m "not slow" test
 
-test-long: $(BIN) $(BUILD)/unit_tests
+test-long: $(BIN) $(RAYS) $(BUILD)/unit_tests
 	$(BUILD)/unit_tests --jobs $(TEST_JOBS) --filter '*_slow/*'
 	RTCL_TEST_WHAT="make test-long" $(PYTEST) -m slow test
 
@@ -259,11 +271,12 @@ FUZZ_FLAGS := -g -O1 -fsanitize=fuzzer,address,undefined -fno-sanitize-recover=a
 # starts the helper; the helper (build/fuzz/rtcl-meshread) is built with the
 # same sanitizers, and its reports fail the run (host/scene/mesh.h).
 FUZZ_SOURCES := host/scene/scene.c host/scene/scene_check.c host/scene/scene_literal.c host/scene/scene_material.c host/base/suggest.c \
-	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/base/files.c host/base/quote.c \
+	host/scene/scene_mesh.c host/scene/mesh_spawn.c host/base/libdir.c host/scene/mesh_place.c host/scene/hdr_read.c \
+	host/base/files.c host/base/quote.c \
 	host/base/interrupt.c host/layout/scene_block.c \
 	host/layout/mesh_block.c host/layout/bvh.c
 FUZZ_HEADERS := test/scene_block_check.h host/scene/scene.h host/scene/scene_loader.h host/scene/mesh.h \
-	host/scene/mesh_place.h host/base/files.h host/base/quote.h host/layout/scene_block.h host/layout/mesh_block.h host/layout/bvh.h host/base/libdir.h \
+	host/scene/mesh_place.h host/scene/hdr_read.h host/base/files.h host/base/quote.h host/layout/scene_block.h host/layout/mesh_block.h host/layout/bvh.h host/base/libdir.h \
 	cl/rtcl_shared.h
 FUZZ_MODULE_DIR := -DRTCL_MODULE_DIR='"$(abspath $(FUZZ_DIR))"'
 
@@ -326,7 +339,9 @@ TOOL_COMMAND_MODULES := $(wildcard tools/rtcl_tools/commands/*.py)
 TOOL_COMMANDS := $(addprefix rtcl-,$(subst _,-,$(basename $(notdir $(TOOL_SCRIPTS)))))
 SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
 # The mesh files the version 2 scenes place, relative to them.
-SCENE_MODELS := $(wildcard scenes/models/*)
+# Every file under scenes/models, its folders kept (models/cornell/...).
+SCENE_MODELS := $(sort $(shell find scenes/models -type f))
+SCENE_MODEL_DIRS := $(sort $(shell find scenes/models -mindepth 1 -type d))
 
 install: $(BIN)
 	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(LIBDIR) $(DATADIR)/scenes \
@@ -337,8 +352,10 @@ install: $(BIN)
 	sed -e 's|/usr/local/|$(PREFIX)/|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
 	$(INSTALL) -m 644 $(SCENE_FILES) $(DATADIR)/scenes
-	$(INSTALL) -d $(DATADIR)/scenes/models
-	$(INSTALL) -m 644 $(SCENE_MODELS) $(DATADIR)/scenes/models
+	$(INSTALL) -d $(DATADIR)/scenes/models $(addprefix $(DATADIR)/,$(SCENE_MODEL_DIRS))
+	for file in $(SCENE_MODELS); do \
+		$(INSTALL) -m 644 "$$file" "$(DATADIR)/$$file" || exit 1; \
+	done
 	$(INSTALL) -m 644 $(TOOL_MODULES) $(DATADIR)/tools/rtcl_tools
 	$(INSTALL) -m 644 $(TOOL_COMMAND_MODULES) $(DATADIR)/tools/rtcl_tools/commands
 	for script in $(TOOL_SCRIPTS); do \
@@ -357,12 +374,13 @@ uninstall:
 	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
 	rm -f $(LIBDIR)/rtcl-oiio.so $(LIBDIR)/rtcl-meshread
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
-	rm -f $(addprefix $(DATADIR)/scenes/models/,$(notdir $(SCENE_MODELS)))
+	rm -f $(addprefix $(DATADIR)/,$(SCENE_MODELS))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/commands/,$(notdir $(TOOL_COMMAND_MODULES)))
 	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__ \
 		$(DATADIR)/tools/rtcl_tools/commands/__pycache__
-	for dir in $(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools/commands \
+	for dir in $(addprefix $(DATADIR)/,$(SCENE_MODEL_DIRS)) \
+			$(DATADIR)/scenes/models $(DATADIR)/scenes $(DATADIR)/tools/rtcl_tools/commands \
 			$(DATADIR)/tools/rtcl_tools \
 			$(DATADIR)/tools $(DATADIR) $(LIBDIR); do \
 		if [ -d $$dir ] && [ -z "$$(ls -A $$dir)" ]; then rmdir $$dir; fi; \

@@ -64,7 +64,8 @@ static void sphere_consider(struct tracer *tr, float4 sphere, float gap, float3 
 {
 	float radius2 = sphere_radius2(sphere);
 
-	if (!(gap <= radius2) || (any_hit && (best->sphere >= 0 || best->triangle >= 0)))
+	if (!(gap <= radius2) || (any_hit && (best->sphere >= 0 || best->triangle >= 0)) ||
+	    shadow_skips_sphere(tr, i))
 		return;
 	float3 oc = o - sphere.xyz;
 	float b = dot3(oc, d);
@@ -168,7 +169,8 @@ static void triangles_brute_force(struct tracer *tr, float3 o, float3 d, bool an
 		float t;
 		float2 uv;
 
-		if (!triangle_hit(tr, i, o, d, *nearest, &t, &uv) || triangle_cut_out(tr, i, uv))
+		if (shadow_skips_triangle(tr, i) || !triangle_hit(tr, i, o, d, *nearest, &t, &uv) ||
+		    triangle_cut_out(tr, i, uv))
 			continue;
 		*nearest = t;
 		best->sphere = -1;
@@ -192,7 +194,7 @@ static void triangle_take(struct tracer *tr, int i, float t, float2 uv, float *n
 			  struct hit *best)
 {
 	if ((t < *nearest || (t == *nearest && best->sphere < 0 && i < best->triangle)) &&
-	    !triangle_cut_out(tr, i, uv)) {
+	    !shadow_skips_triangle(tr, i) && !triangle_cut_out(tr, i, uv)) {
 		*nearest = t;
 		best->sphere = -1;
 		best->triangle = i;

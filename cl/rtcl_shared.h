@@ -128,7 +128,8 @@ struct rt_vertex_normal {
  * unit); per material what it takes from textures; per texture where its
  * texels are; the decode table of 8-bit texels (RT_TEXTURE_TABLE floats:
  * sRGB[i] = E^-1(i/255), then linear[i] = i/255); and the texels, each
- * texture's rows top first, 16-byte aligned. */
+ * texture's rows top first, 16-byte aligned, the block's last array (after
+ * the path integrator's). */
 struct rt_vertex_uv {
 	rt_float u, v;
 };
@@ -154,6 +155,9 @@ struct rt_texture {
 /* Texels of 4 floats, linear (16-bit and float images); else 4 bytes, RGB
  * sRGB-encoded and alpha linear, decoded through the table. */
 #define RT_TEXTURE_FLOAT 16u
+/* 8-bit texels whose RGB are linear numbers (metallic-roughness), decoded
+ * by the table's linear half. */
+#define RT_TEXTURE_LINEAR 32u
 #define RT_TEXTURE_TABLE 512
 
 struct rt_scene {
@@ -200,7 +204,72 @@ struct rt_scene {
 	/* The BVH's nodes: 2, struct rt_bvh_node; 4, struct rt_bvh4_node (a CPU
 	   device outside the counting build, RTCL_BVH4); 0 without a BVH. */
 	rt_int bvh_width;
-	rt_int bvh_pad[3];
+	/* The path integrator's data (struct rt_path, RTCL_PATH): its byte
+	   offset, 0 in a Whitted scene's block. */
+	rt_uint path_offset;
+	rt_int pad[2];
+};
+
+/* The path integrator (RENDERING.md, "Path tracing"), in the block only
+ * under "integrator": "path" and read only in programs built with
+ * RTCL_PATH: a header, a struct rt_bsdf per material, and the emitters (the
+ * emissive triangles in scene order, then the emissive spheres) with the
+ * cumulative distribution that chooses among them by power. */
+struct rt_path {
+	rt_uint bsdf_offset, emitter_offset; /* from the block's start */
+	rt_int emitter_count;
+	rt_int group_count;	      /* the light groups: lights, emitters, environment */
+	rt_float inv_emitter_weight;  /* 1 / sum of lum(Le) * area over the emitters */
+	rt_int environment;	      /* RT_ENVIRONMENT_*: what rays that leave see */
+	rt_int env_width, env_height; /* the map's texels */
+	/* The map (RENDERING.md, "The environment"): env_width * env_height
+	   texels (float4, rgb the radiance with the scale, rows from the top),
+	   the rows' cumulative distribution (env_height floats) and each row's
+	   over its columns (env_width floats a row). */
+	rt_uint env_texel_offset, env_row_cdf_offset, env_column_cdf_offset;
+	rt_float env_inv_weight;      /* 1 / the sum of the texels' weights */
+	rt_float env_cos, env_sin;    /* of the rotation about +y */
+	rt_int env_is_light;	      /* a light group (its weights are not all 0) */
+	rt_int pad;
+};
+
+#define RT_ENVIRONMENT_NONE 0	 /* black: no light */
+#define RT_ENVIRONMENT_UNIFORM 1 /* the background's colour */
+#define RT_ENVIRONMENT_MAP 2
+
+/* A material's BSDF (SCENE.md "A material's bsdf"; the mapped one of a
+ * material without: RENDERING.md). */
+#define RT_BSDF_MAPPED 0
+#define RT_BSDF_DIFFUSE 1
+#define RT_BSDF_CONDUCTOR 2
+#define RT_BSDF_DIELECTRIC 3
+#define RT_BSDF_PRINCIPLED 4
+
+struct rt_bsdf {
+	rt_vec4 color;	  /* reflectance, F0 or base_color (the mapped BSDF takes the
+			     material's colour at the hit instead); w: GGX alpha */
+	rt_vec4 emission; /* Le from the front side; w: ior */
+	rt_int type;	  /* RT_BSDF_* */
+	rt_float metallic, transmission; /* principled */
+	rt_float diffuse;		 /* mapped: kd */
+	rt_float mirror;		 /* mapped: kr, the mirror's probability */
+	rt_int mirror_tint;		 /* mapped: the mirror is a Schlick conductor of C */
+	rt_int emits;			 /* emission is non-zero */
+	rt_float roughness;		 /* principled: the factor, before its texture */
+	/* A model's textures (RTCL_TEXTURES), indices or -1: glTF's
+	   metallic-roughness (G scales the roughness, B the metallic factor)
+	   and the emissive texture (multiplies the emission). */
+	rt_int metallic_roughness_texture, emissive_texture;
+	rt_int normal_texture; /* tangent space, linear: the shading normal */
+	rt_int pad;
+};
+
+/* An emitter: the primitive (RT_PRIM_* kind | its device index) and the
+ * cumulative probability up to and with it (the last 1). */
+struct rt_emitter {
+	rt_uint prim;
+	rt_float cdf;
+	rt_int pad[2];
 };
 
 /* A triangle of a leaf, its three vertex positions inline: v0.w holds its
@@ -308,6 +377,19 @@ struct rt_ray {
 					       in origin.w */
 };
 
+/* A path waiting in the wavefront kernel's queue under the path integrator
+ * (RTCL_PATH; cl/path.cl's struct walk between two bounces): the next
+ * segment, the throughput in the w lanes, and the MIS state. */
+struct rt_path_ray {
+	rt_vec4 origin; /* w: the throughput's red */
+	rt_vec4 dir;	/* unit; w: its green */
+	rt_vec4 x_prev; /* where the last BSDF sample was taken; w: blue */
+	rt_int pixel;	/* y * width + x */
+	rt_int vertex;	/* of the next hit */
+	rt_float pdf_prev;
+	rt_int specular;
+};
+
 /* What one launch (or one wavefront pass) renders: a rectangle of the image
  * and a range of each of its pixels' samples. A plain render is one or more
  * pieces covering the whole image; a multi-device render hands pieces to
@@ -383,6 +465,7 @@ _Static_assert(sizeof(struct rt_piece) == 48, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, sample_begin) == 16, "rt_piece layout");
 _Static_assert(offsetof(struct rt_piece, samples) == 24, "rt_piece layout");
 _Static_assert(sizeof(struct rt_ray) == 48, "rt_ray layout");
+_Static_assert(sizeof(struct rt_path_ray) == 64, "rt_path_ray layout");
 _Static_assert(sizeof(struct rt_material) == 48, "rt_material layout");
 _Static_assert(sizeof(struct rt_sphere) == 32, "rt_sphere layout");
 _Static_assert(offsetof(struct rt_sphere, material) == 24, "rt_sphere layout");
@@ -407,6 +490,10 @@ _Static_assert(offsetof(struct rt_scene, bvh_node_offset) == 160, "rt_scene layo
 _Static_assert(sizeof(struct rt_scene) % 16 == 0,
 	       "rt_scene: the arrays after it stay 16-byte aligned");
 _Static_assert(sizeof(struct rt_bvh_node) == 64, "rt_bvh_node layout");
+_Static_assert(offsetof(struct rt_scene, path_offset) == 212, "rt_scene layout");
+_Static_assert(sizeof(struct rt_path) == 64, "rt_path layout");
+_Static_assert(sizeof(struct rt_bsdf) == 80, "rt_bsdf layout");
+_Static_assert(sizeof(struct rt_emitter) == 16, "rt_emitter layout");
 _Static_assert(offsetof(struct rt_bvh_node, child[1].lo) == 32, "rt_bvh_node layout");
 #endif
 

@@ -237,13 +237,18 @@ static inline uint sample_permute(uint i, uint n, uint p)
  * same scrambled (0,2)-sequence as the pixel position, its samples shuffled
  * per pixel and pair so that the pairs do not move together. Counted 2, the
  * two scalings. */
-static inline float2 sample_pair(struct tracer *tr, int x, int y, uint k, uint n, uint pair)
+static inline uint2 sample_pair_bits(int x, int y, uint k, uint n, uint pair)
 {
 	uint seed = sample_hash(sample_hash(sample_hash((uint)x) ^ (uint)y) ^ sample_hash(pair));
 	uint a = sample_hash(seed), b = sample_hash(a);
 	uint i = sample_permute(k, n, seed);
-	uint2 bits = (uint2)((sobol_dim0(i) ^ a) >> (32 - SAMPLE_BITS),
-			     (sobol_dim1(i) ^ b) >> (32 - SAMPLE_BITS));
+	return (uint2)((sobol_dim0(i) ^ a) >> (32 - SAMPLE_BITS),
+		       (sobol_dim1(i) ^ b) >> (32 - SAMPLE_BITS));
+}
+
+static inline float2 sample_pair(struct tracer *tr, int x, int y, uint k, uint n, uint pair)
+{
+	uint2 bits = sample_pair_bits(x, y, k, n, pair);
 
 	COUNT_FLOPS(tr, 2);
 	return convert_float2(bits) * 0x1p-24f;

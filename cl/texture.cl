@@ -54,7 +54,8 @@ static float4 texture_texel(struct tracer *tr, RTCL_SCENE_SPACE const struct rt_
 		return vload4(at, (RTCL_SCENE_SPACE const float *)(base + tex->offset));
 	uchar4 c = vload4(at, base + tex->offset);
 	RTCL_SCENE_SPACE const float *table = tr->texture_table;
-	return (float4)(table[c.x], table[c.y], table[c.z], table[256 + c.w]);
+	RTCL_SCENE_SPACE const float *rgb = table + (tex->flags & RT_TEXTURE_LINEAR ? 256 : 0);
+	return (float4)(rgb[c.x], rgb[c.y], rgb[c.z], table[256 + c.w]);
 }
 
 /* a + f·(b − a), per channel, each product and sum rounded. */

@@ -1,7 +1,7 @@
 /* The tracer: what a pixel is (docs/RENDERING.md), written once and used by
  * every scheduling kernel. OpenCL C 1.2.
  *
- * The tracer is eight files, built in this order before the kernel file
+ * The tracer is twelve files, built in this order before the kernel file
  * (host/render/program.c lists them) and read best in the same order:
  *   tracer.cl      counting, the scene as the tracer sees it, vector helpers
  *   sample.cl      where a pixel's samples lie
@@ -10,14 +10,20 @@
  *   traverse.cl    the same over the spheres and triangles through the BVH
  *                  (RTCL_BVH)
  *   shade.cl       the base colour, lights and shadow rays, spawned rays
- *   walk.cl        ray_step, one ray by one intersection; the pixel's walk
+ *   walk.cl        ray_step, one ray by one intersection; the Whitted walk;
+ *                  primary rays
+ *   bsdf.cl        the path integrator's BSDFs (RTCL_PATH; empty without)
+ *   light.cl       its lights: choosing one, sampling it, its pdf (RTCL_PATH)
+ *   path.cl        its walk: a path, one intersection at a time (RTCL_PATH)
+ *   pixel.cl       a pixel's samples walked and summed (render_pixel)
  *   scheduling.cl  what the scheduling kernels share: scene loading, counts,
  *                  the chunk grid over the piece being rendered
  * host/render/reference.cpp computes the same model in double precision, written
  * independently from RENDERING.md: it is the readable version of it.
  *
  * Build-time options, set by the host (host/render/program.c):
- *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack
+ *   RTCL_MAX_DEPTH      the scene's max_depth; sizes the ray stack (0 under
+ *                       RTCL_PATH, whose paths need none)
  *   RTCL_SCENE_IN_LOCAL copy the scene into __local memory per work-group;
  *                       without it the tracer reads it from __global memory
  *   RTCL_BVH            find sphere hits through the scene's BVH rather than
@@ -26,6 +32,8 @@
  *   RTCL_COUNT_FLOPS    count floating-point operations, rays and BVH node
  *                       visits per work-item
  *   RTCL_COUNT_WRITES   count writes per pixel (tests only)
+ *   RTCL_PATH           the path integrator (RENDERING.md, "Path tracing")
+ *                       instead of Whitted's trace
  *
  * Contraction into fused multiply-adds is off so that the same source gives the
  * same bits whichever kernel it is inlined into, and so that the flop counts
@@ -177,6 +185,14 @@ struct tracer {
 	RTCL_SCENE_SPACE const struct rt_texture *textures;
 	RTCL_SCENE_SPACE const float *texture_table; /* RT_TEXTURE_TABLE */
 #endif
+#ifdef RTCL_PATH
+	/* The emitter a shadow ray goes to, which does not block it
+	   (RENDERING.md, "next_event"): a device sphere, a triangle, or -1. */
+	int skip_sphere, skip_triangle;
+	RTCL_SCENE_SPACE const struct rt_path *path;
+	RTCL_SCENE_SPACE const struct rt_bsdf *bsdfs;	    /* one per material */
+	RTCL_SCENE_SPACE const struct rt_emitter *emitters; /* path->emitter_count */
+#endif
 	__global ulong *item_counts;	   /* RT_ITEM_COUNTS per work-item, when counting */
 	__global ulong *pixel_flops;	   /* flops spent on each pixel, when counting */
 #ifdef RTCL_COUNT_FLOPS
@@ -190,9 +206,9 @@ struct tracer {
 	ulong lane_steps[RT_SIMD_PHASES]; /* steps this work-item took */
 	ulong warp_steps[RT_SIMD_PHASES]; /* of them, those it led for its warp */
 #endif
-#ifdef RTCL_AREA_LIGHTS
+#if defined(RTCL_AREA_LIGHTS) || defined(RTCL_PATH)
 	/* The sample being traced, whose further pairs place the light samples
-	   (tracer_set_sample). */
+	   and the path's bounces (tracer_set_sample). */
 	int pixel_x, pixel_y;
 	uint sample, samples;
 #endif
@@ -294,6 +310,12 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 	tr->textures = (RTCL_SCENE_SPACE const struct rt_texture *)(base + scene->texture_offset);
 	tr->texture_table = (RTCL_SCENE_SPACE const float *)(base + scene->texture_table_offset);
 #endif
+#ifdef RTCL_PATH
+	tr->skip_sphere = tr->skip_triangle = -1;
+	tr->path = (RTCL_SCENE_SPACE const struct rt_path *)(base + scene->path_offset);
+	tr->bsdfs = (RTCL_SCENE_SPACE const struct rt_bsdf *)(base + tr->path->bsdf_offset);
+	tr->emitters = (RTCL_SCENE_SPACE const struct rt_emitter *)(base + tr->path->emitter_offset);
+#endif
 	tr->item_counts = item_counts;
 	tr->pixel_flops = pixel_flops;
 #ifdef RTCL_COUNT_FLOPS
@@ -309,11 +331,35 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 #endif
 }
 
+/* Whether the shadow ray being traced ignores device sphere i or triangle
+ * i: its own emitter, under the path integrator. */
+static inline bool shadow_skips_sphere(const struct tracer *tr, int i)
+{
+#ifdef RTCL_PATH
+	return i == tr->skip_sphere;
+#else
+	(void)tr;
+	(void)i;
+	return false;
+#endif
+}
+
+static inline bool shadow_skips_triangle(const struct tracer *tr, int i)
+{
+#ifdef RTCL_PATH
+	return i == tr->skip_triangle;
+#else
+	(void)tr;
+	(void)i;
+	return false;
+#endif
+}
+
 /* Sets the sample being traced: sample k of n of pixel (x, y). Only the
  * light samples need it (RTCL_AREA_LIGHTS). */
 static inline void tracer_set_sample(struct tracer *tr, int x, int y, uint k, uint n)
 {
-#ifdef RTCL_AREA_LIGHTS
+#if defined(RTCL_AREA_LIGHTS) || defined(RTCL_PATH)
 	tr->pixel_x = x;
 	tr->pixel_y = y;
 	tr->sample = k;

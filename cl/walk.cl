@@ -1,7 +1,9 @@
 /* Walking a pixel's ray tree: ray_step advances one ray by one
- * intersection; render_pixel walks the tree depth first with a stack, and
- * trace_one gives the wavefront kernel one ray's colour and children. Part
- * of the tracer: built after shade.cl. */
+ * intersection; walk_step walks the tree depth first with a stack (for
+ * render_pixel, pixel.cl), and trace_one gives the wavefront kernel one
+ * ray's colour and children; the primary rays of every integrator. Part of
+ * the tracer: built after shade.cl. Under the path integrator (RTCL_PATH)
+ * path.cl gives the walk instead. */
 
 /* One ray of a pixel's tree being traced (RENDERING.md trace, steps 1-5),
  * one intersection at a time: first the ray itself, then a shadow ray for
@@ -103,24 +105,6 @@ static float3 trace_one(struct tracer *tr, const struct ray_job *ray, struct ray
 	return color;
 }
 
-/* A pixel's ray tree being walked depth first (OpenCL C has no recursion),
- * each ray's shadow rays right after it, one ray_step at a time, so that in
- * the persistent kernel a work-item on a new pixel and one deep in a tree
- * still step together.
- *
- * The walk goes on with the last ray a hit spawns, which stays in registers;
- * a refracted ray that has a reflected sibling waits on a stack in private
- * memory, waiting[RAY_STACK_SIZE], kept apart from struct walk: a compiler
- * puts a struct with a dynamically indexed array in it wholly in memory, and
- * the walk's other fields are used at every step (docs/performance.md step
- * 5). This is the order of a stack onto which both children are pushed, and
- * the sums are those of trace_one. */
-struct walk {
-	int top; /* rays waiting */
-	struct ray_progress rp;
-	float3 color;
-};
-
 /* Returns the direction of pixel (x, y)'s pinhole ray through the point
  * offset (in [0, 1)^2, from the pixel's top-left corner; 0.5 is the centre),
  * before normalising: its component along forward is 1. */
@@ -166,6 +150,25 @@ static inline void primary_ray(struct tracer *tr, int x, int y, float2 offset, u
 #endif
 }
 
+#ifndef RTCL_PATH /* the path integrator's walk is path.cl's */
+/* A pixel's ray tree being walked depth first (OpenCL C has no recursion),
+ * each ray's shadow rays right after it, one ray_step at a time, so that in
+ * the persistent kernel a work-item on a new pixel and one deep in a tree
+ * still step together.
+ *
+ * The walk goes on with the last ray a hit spawns, which stays in registers;
+ * a refracted ray that has a reflected sibling waits on a stack in private
+ * memory, waiting[RAY_STACK_SIZE], kept apart from struct walk: a compiler
+ * puts a struct with a dynamically indexed array in it wholly in memory, and
+ * the walk's other fields are used at every step (docs/performance.md step
+ * 5). This is the order of a stack onto which both children are pushed, and
+ * the sums are those of trace_one. */
+struct walk {
+	int top; /* rays waiting */
+	struct ray_progress rp;
+	float3 color;
+};
+
 /* Starts the walk of pixel (x, y)'s sample k of n at offset; the pixel must
  * lie inside the image. */
 static void walk_start(struct tracer *tr, struct walk *w, int x, int y, float2 offset, uint k,
@@ -202,114 +205,4 @@ static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting
 		return true;
 	return false;
 }
-
-/* Counts a write of pixel, when the tests ask for it (RTCL_COUNT_WRITES):
- * probe holds one count per pixel then. */
-static inline void count_write(__global uint *probe, int pixel)
-{
-#ifdef RTCL_COUNT_WRITES
-	atomic_inc(&probe[pixel]);
-#else
-	(void)probe;
-	(void)pixel;
 #endif
-}
-
-/* With RTCL_SCHEDULE_MAP (--schedule-map): records who starts pixel, and
- * when, as its first sample begins: the work-group and the work-item in it,
- * row-major, and a ticket from the counter after the image's words
- * (docs/RENDERING.md, "The schedule map"). */
-static inline void record_schedule(__global uint *probe, int pixel, int pixels,
-				   const struct rt_piece *piece)
-{
-#ifdef RTCL_SCHEDULE_MAP
-	if (piece->sample_begin > 0)
-		return;
-	__global uint *words = probe + RT_SCHEDULE_WORDS * pixel;
-	words[RT_SCHEDULE_GROUP] = get_group_id(1) * get_num_groups(0) + get_group_id(0);
-	words[RT_SCHEDULE_ITEM] = get_local_id(1) * get_local_size(0) + get_local_id(0);
-	words[RT_SCHEDULE_TICKET] = atomic_inc(probe + RT_SCHEDULE_WORDS * pixels);
-#else
-	(void)probe;
-	(void)pixel;
-	(void)pixels;
-	(void)piece;
-#endif
-}
-
-/* Adds flops to pixel's cost, when counting. Every piece and pass that
- * traces the pixel adds its part; one work-item at a time does. */
-static inline void count_pixel_flops(__global ulong *pixel_flops, int pixel, ulong flops)
-{
-#ifdef RTCL_COUNT_FLOPS
-	pixel_flops[pixel] += flops;
-#else
-	(void)pixel_flops;
-	(void)pixel;
-	(void)flops;
-#endif
-}
-
-/* Traces samples [sample_begin, sample_end) of pixel (x, y), which must lie
- * inside the image, and stores the sum of its sample colours in sums, or
- * after the last sample their mean in image (sample.cl); one sample's colour
- * goes to image as it is. */
-static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __global float *image,
-			 __global long *sums, __global uint *probe, int x, int y)
-{
-	struct walk w;
-	struct ray_job waiting[RAY_STACK_SIZE];
-	int pixel = y * tr->scene->width + x;
-	ulong flops_before = tracer_flops(tr);
-
-	record_schedule(probe, pixel, tr->scene->width * tr->scene->height, piece);
-#ifdef RTCL_ONE_SAMPLE
-	/* One sample per pixel (the host builds --spp 1 with RTCL_ONE_SAMPLE):
-	 * what the loop below does for it, the centre stored as it is, with no
-	 * sum or sample index live across the trace (fewer registers). */
-	walk_start(tr, &w, x, y, (float2)(0.5f), 0, 1);
-	while (!walk_step(tr, &w, waiting))
-		;
-	vstore3(w.color, pixel, image);
-#else
-	/* Each sample's colour goes to the pixel's sum in the sums buffer (in
-	 * place, or summed over the pass in registers and added after it:
-	 * sample.cl); the pass that ends the pixel stores its mean, and one
-	 * sample its colour as it is. */
-	bool held = sample_sum_held(piece, piece->sample_begin);
-	long4 sum = (long4)(0);
-
-	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
-		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples), k,
-			   piece->samples);
-		while (!walk_step(tr, &w, waiting))
-			;
-		if (piece->samples == 1)
-			continue;
-#ifdef RTCL_SUM_IN_PLACE
-		sample_add_in_place(sums, pixel, sample_term(tr, w.color),
-				    held || k > piece->sample_begin);
-#else
-		sum = sample_sums(sum, sample_term(tr, w.color));
-#endif
-	}
-	if (piece->samples == 1) {
-		vstore3(w.color, pixel, image);
-	} else {
-#ifdef RTCL_SUM_IN_PLACE
-		if (sample_ends_pixel(piece, piece->sample_end))
-			vstore3(sample_mean(tr, sample_read_in_place(sums, pixel), piece), pixel,
-				image);
-#else
-		if (held)
-			sum = sample_sums(sum, vload4(pixel, sums));
-		if (sample_ends_pixel(piece, piece->sample_end))
-			vstore3(sample_mean(tr, sum, piece), pixel, image);
-		else
-			vstore4(sum, pixel, sums);
-#endif
-	}
-#endif
-	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
-	count_write(probe, pixel);
-}

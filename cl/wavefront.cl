@@ -65,6 +65,45 @@ static void store_ray(__global struct rt_ray *queue, uint slot, const struct ray
 	queue[slot].depth = ray->depth;
 }
 
+#ifdef RTCL_PATH
+/* Under the path integrator a queue holds paths (struct rt_path_ray): each
+ * bounce takes a path one vertex further (cl/path.cl), with its shadow ray,
+ * and queues it again unless it ends; a pixel has one path per sample, so
+ * its colour is read and written by one work-item per bounce, in the order
+ * the single-pass kernels add the same terms: the same image. */
+typedef struct rt_path_ray queue_entry;
+
+static void store_path(__global struct rt_path_ray *queue, uint slot, const struct walk *w,
+		       int pixel)
+{
+	queue[slot].origin = (float4)(w->ray.origin, w->beta.x);
+	queue[slot].dir = (float4)(w->ray.dir, w->beta.y);
+	queue[slot].x_prev = (float4)(w->x_prev, w->beta.z);
+	queue[slot].pixel = pixel;
+	queue[slot].vertex = w->vertex;
+	queue[slot].pdf_prev = w->pdf_prev;
+	queue[slot].specular = w->specular;
+}
+
+static struct walk load_path(__global const struct rt_path_ray *queue, uint i)
+{
+	struct walk w;
+	float4 origin = queue[i].origin, dir = queue[i].dir, x_prev = queue[i].x_prev;
+
+	w.ray = (struct ray_job){origin.xyz, dir.xyz, (ray_weight_t)(1.0f), 0};
+	w.beta = (float3)(origin.w, dir.w, x_prev.w);
+	w.x_prev = x_prev.xyz;
+	w.vertex = queue[i].vertex;
+	w.pdf_prev = queue[i].pdf_prev;
+	w.specular = queue[i].specular != 0;
+	w.shadow = false;
+	w.done = false;
+	return w;
+}
+#else
+typedef struct rt_ray queue_entry;
+#endif
+
 /* Returns what sample_flops holds for pixel, 0 when not counting (the buffer
  * is then a placeholder). */
 static inline ulong sample_pixel_flops(__global const ulong *sample_flops, int pixel)
@@ -102,7 +141,7 @@ static inline void start_sample_flops(__global ulong *sample_flops, int pixel, u
  * y0 + dy, rt_piece_row); the sample's colour
  * cleared. */
 __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 *scene_local,
-			      __global struct rt_ray *queue, __global ulong *item_counts,
+			      __global queue_entry *queue, __global ulong *item_counts,
 			      __global ulong *sample_flops, __global float *sample_rgb,
 			      struct rt_piece piece, uint sample)
 {
@@ -113,11 +152,18 @@ __kernel void wavefront_start(__global const uint4 *scene_global, __local uint4 
 	if (dx < piece.width && dy < piece.height) {
 		int x = piece.x0 + dx, y = rt_piece_row(&piece, piece.y0 + dy);
 		int pixel = y * tr.scene->width + x;
+#ifdef RTCL_PATH
+		struct walk w;
+		walk_start(&tr, &w, x, y, sample_offset(&tr, x, y, sample, piece.samples), sample,
+			   piece.samples);
+		store_path(queue, dy * piece.width + dx, &w, pixel);
+#else
 		struct ray_job ray;
 
 		primary_ray(&tr, x, y, sample_offset(&tr, x, y, sample, piece.samples), sample,
 			    piece.samples, &ray);
 		store_ray(queue, dy * piece.width + dx, &ray, pixel);
+#endif
 		vstore3((float3)(0.0f), pixel, sample_rgb);
 		start_sample_flops(sample_flops, pixel, tracer_flops(&tr)); /* bounces add theirs */
 	}
@@ -170,8 +216,8 @@ __kernel void wavefront_accumulate(__global const uint4 *scene_global, __local u
  * next[atomic_inc(next_count)]; one that finds the queue full sets *overflow
  * and is dropped, and the host renders the frame again with larger queues. */
 __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4 *scene_local,
-			       __global const struct rt_ray *queue, uint queued,
-			       __global struct rt_ray *next, __global uint *next_count,
+			       __global const queue_entry *queue, uint queued,
+			       __global queue_entry *next, __global uint *next_count,
 			       uint capacity, __global uint *overflow, __global float *image,
 			       __global ulong *item_counts, __global ulong *pixel_flops,
 			       uint sample, uint samples)
@@ -180,6 +226,30 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 	uint i = get_global_id(0);
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+#ifdef RTCL_PATH
+	if (i < queued) {
+		struct walk w = load_path(queue, i);
+		int pixel = queue[i].pixel;
+
+		tracer_set_sample(&tr, pixel % tr.scene->width, pixel / tr.scene->width, sample,
+				  samples);
+		/* walk_step's two steps, the segment and its shadow ray, on the
+		 * pixel's colour so far */
+		w.color = vload3(pixel, image);
+		bool done = walk_step(&tr, &w, NULL);
+		if (w.shadow)
+			done = walk_step(&tr, &w, NULL);
+		vstore3(w.color, pixel, image);
+		if (!done) {
+			uint slot = atomic_inc(next_count);
+			if (slot < capacity)
+				store_path(next, slot, &w, pixel);
+			else
+				atomic_or(overflow, 1u);
+		}
+		add_pixel_flops(pixel_flops, pixel, tracer_flops(&tr));
+	}
+#else
 	if (i < queued) {
 		float4 origin = queue[i].origin;
 #ifdef RTCL_FRESNEL
@@ -207,5 +277,6 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 		}
 		add_pixel_flops(pixel_flops, pixel, tracer_flops(&tr));
 	}
+#endif
 	store_counts(&tr, global_item());
 }

@@ -167,12 +167,17 @@ static const char *textures_problem(const struct rt_scene *h)
 	const unsigned char *block = (const void *)h;
 	size_t vertices = (h->normal_offset - h->vertex_offset) / sizeof(struct rt_vertex);
 
+	/* The path integrator's arrays follow the textures' (path_problem), but
+	 * for the texels, which come last. */
+	size_t end = h->path_offset ? h->path_offset : h->total_bytes;
+
 	if (h->uv_offset < h->bvh_triangle_offset || h->material_map_offset < h->uv_offset ||
 	    h->texture_offset < h->material_map_offset ||
-	    h->texture_table_offset < h->texture_offset || h->total_bytes < h->texture_table_offset)
+	    h->texture_table_offset < h->texture_offset || end < h->texture_table_offset)
 		return "texture arrays out of order";
 	if (h->material_map_offset == h->uv_offset) /* no textures */
-		return h->total_bytes == h->uv_offset && h->texture_count == 0
+		return end - h->uv_offset < 16 && (h->path_offset || end == h->uv_offset) &&
+				       h->texture_count == 0
 			       ? NULL
 			       : "texture arrays without their maps";
 	const struct rt_vertex_uv *uv = (const void *)(block + h->uv_offset);
@@ -185,7 +190,7 @@ static const char *textures_problem(const struct rt_scene *h)
 	    h->texture_offset - h->material_map_offset !=
 		    (size_t)h->material_count * sizeof(*map) ||
 	    h->texture_table_offset - h->texture_offset != (size_t)h->texture_count * sizeof(*t) ||
-	    h->total_bytes < texels)
+	    end < texels)
 		return "texture arrays of the wrong size";
 	for (size_t i = 0; i < vertices; i++)
 		if (!isfinite(uv[i].u) || !isfinite(uv[i].v))
@@ -205,11 +210,76 @@ static const char *textures_problem(const struct rt_scene *h)
 		    t[i].height > 16384 || (t[i].flags & RT_WRAP_MASK) > RT_WRAP_MIRROR ||
 		    ((t[i].flags >> RT_WRAP_T_SHIFT) & RT_WRAP_MASK) > RT_WRAP_MIRROR)
 			return "texture size or wrap mode out of range";
+		/* The texels last, after the path integrator's arrays too. */
 		if (t[i].offset % 16 || t[i].offset < texels ||
+		    (h->path_offset && t[i].offset < h->path_offset) ||
 		    t[i].offset + (size_t)t[i].width * t[i].height * size > h->total_bytes)
 			return "texture texels outside the block";
 	}
 	return NULL;
+}
+
+/* The path integrator's arrays (cl/rtcl_shared.h, struct rt_path), where
+ * the block has them: inside the block, a BSDF per material of finite
+ * numbers and texture indices the block has, the emitters' primitives the
+ * scene has and their cdf rising to 1, the environment map's cdfs within
+ * 0 ... 1 and ending at 1, its texels finite. */
+static const char *path_problem(const struct rt_scene *h)
+{
+	const unsigned char *block = (const void *)h;
+	const struct rt_path *path = (const void *)(block + h->path_offset);
+
+	if (!h->path_offset)
+		return NULL;
+	if (h->path_offset % 16 || h->path_offset + sizeof(*path) > h->total_bytes ||
+	    path->bsdf_offset + (size_t)h->material_count * sizeof(struct rt_bsdf) > h->total_bytes ||
+	    path->emitter_offset + (size_t)path->emitter_count * sizeof(struct rt_emitter) >
+		    h->total_bytes)
+		return "path arrays outside the block";
+	const struct rt_bsdf *b = (const void *)(block + path->bsdf_offset);
+	for (int i = 0; i < h->material_count; i++)
+		if (!vec4_finite(b[i].color) || !vec4_finite(b[i].emission) ||
+		    !(b[i].type >= RT_BSDF_MAPPED && b[i].type <= RT_BSDF_PRINCIPLED) ||
+		    !(b[i].emission.s[3] > 0) || !(b[i].color.s[3] >= 0) ||
+		    b[i].metallic_roughness_texture >= h->texture_count ||
+		    b[i].emissive_texture >= h->texture_count ||
+		    b[i].normal_texture >= h->texture_count)
+			return "BSDF out of range";
+	const struct rt_emitter *e = (const void *)(block + path->emitter_offset);
+	float before = 0;
+	for (int i = 0; i < path->emitter_count; i++) {
+		int index = (int)(e[i].prim & RT_PRIM_INDEX_MASK);
+		if (e[i].prim >> RT_PRIM_KIND_SHIFT == RT_PRIM_SPHERE ? index >= h->sphere_count
+									: index >= h->triangle_count)
+			return "emitter naming no primitive";
+		if (!(e[i].cdf >= before && e[i].cdf <= 1))
+			return "emitter cdf not rising within 0 ... 1";
+		before = e[i].cdf;
+	}
+	if (path->emitter_count && (e[path->emitter_count - 1].cdf != 1 ||
+				    !float_positive(path->inv_emitter_weight)))
+		return "emitter cdf not ending at 1";
+	if (path->group_count < 0 || path->group_count > h->light_count + 2)
+		return "light groups out of range";
+	if (path->environment != RT_ENVIRONMENT_MAP)
+		return NULL;
+	size_t texels = (size_t)path->env_width * path->env_height;
+	if (path->env_width < 1 || path->env_height < 1 ||
+	    path->env_texel_offset + texels * sizeof(rt_vec4) > h->total_bytes ||
+	    path->env_row_cdf_offset + (size_t)path->env_height * 4 > h->total_bytes ||
+	    path->env_column_cdf_offset + texels * 4 > h->total_bytes)
+		return "environment map outside the block";
+	const rt_vec4 *t = (const void *)(block + path->env_texel_offset);
+	const float *rows = (const void *)(block + path->env_row_cdf_offset);
+	const float *columns = (const void *)(block + path->env_column_cdf_offset);
+	for (size_t i = 0; i < texels; i++)
+		if (!vec4_finite(t[i]) || !(columns[i] >= 0 && columns[i] <= 1))
+			return "environment texel or cdf out of range";
+	for (int k = 0; k < path->env_height; k++)
+		if (!(rows[k] >= 0 && rows[k] <= 1) || columns[(size_t)k * path->env_width +
+							       path->env_width - 1] != 1)
+			return "environment cdf out of range";
+	return rows[path->env_height - 1] == 1 ? NULL : "environment cdf not ending at 1";
 }
 
 /* Returns NULL when the packed scene is usable, else what is wrong. */
@@ -259,6 +329,8 @@ static const char *scene_block_problem(const void *packed)
 	const char *problem = triangles_problem(packed);
 	if (!problem)
 		problem = textures_problem(h);
+	if (!problem)
+		problem = path_problem(h);
 	return problem ? problem : bvh_problem(packed);
 }
 

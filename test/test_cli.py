@@ -735,3 +735,22 @@ def test_dump_binary_into_a_missing_folder_fails_before_any_output(tmp_path):
     assert len(result.stderr.strip().splitlines()) == 1
     assert "nope/p.bin" in result.stderr
     assert not out.exists()
+
+
+def test_the_summary_gives_the_kernel_time_and_the_time_in_all(tmp_path):
+    """Issue 44: the summary's time was the kernels' only, a first render's
+    program build left out; it says the time in all, and the build when it
+    was not cached."""
+    import re
+    env = {**os.environ, "XDG_CACHE_HOME": str(tmp_path / "cache")}
+    first, second = (subprocess.run([RTCL, *SMALL, "-o", str(tmp_path / "x.ppm")],
+                                    capture_output=True, text=True, timeout=300, env=env)
+                     for _ in range(2))
+    pattern = r"time:    ([\d.]+) ms in the kernels; ([\d.]+) s in all(, ([\d.]+) s of it " \
+              r"the program build \(not cached\))?\n"
+    built, cached = re.search(pattern, first.stdout), re.search(pattern, second.stdout)
+    assert built and built[4] is not None, first.stdout
+    assert cached and cached[4] is None, second.stdout
+    for m in (built, cached):
+        assert float(m[2]) * 1e3 >= float(m[1])
+    assert float(built[2]) >= float(built[4])

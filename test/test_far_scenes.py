@@ -89,3 +89,45 @@ def test_the_reference_image_does_not_depend_on_where_the_scene_lies(tmp_path, x
     near = render(far_scene(tmp_path, 0.0, "near"), tmp_path / "near.pfm", "-k", "reference")
     far = render(far_scene(tmp_path, x, "far"), tmp_path / "far.pfm", "-k", "reference")
     assert near.read_bytes() == far.read_bytes()
+
+
+def path_far_scene(directory, x, name):
+    """far_scene's sphere under the path integrator, lit by every kind of
+    light: an emitting triangle and an emitting sphere beside it, a sphere
+    light, a directional light with an angle and a uniform environment, over
+    a floor. Every position is x plus a multiple of 1/2, exact in double at
+    1e15, so relative to the eye the scene is the one at 0."""
+    scene = {"format": "rtcl-scene", "version": 2, "integrator": "path", "max_depth": 3,
+             "image": {"width": 32, "height": 24, "samples": 4},
+             "camera": {"eye": [x, 0, -10], "look_at": [x, 0, 0], "fov": 40},
+             "background": [0.05, 0.05, 0.1],
+             "materials": {
+                 "m": {"bsdf": {"type": "diffuse", "reflectance": [0.8, 0.3, 0.2]}},
+                 "gold": {"bsdf": {"type": "conductor", "reflectance": [1.0, 0.78, 0.34],
+                                   "roughness": 0.3}},
+                 "lamp": {"bsdf": {"type": "diffuse", "reflectance": [0, 0, 0]},
+                          "emission": [6, 5, 4]}},
+             "lights": [{"position": [x - 5, 5, -10], "radius": 0.5, "color": [20, 20, 20]},
+                        {"direction": [1, -1, 1], "angle": 2, "color": [0.5, 0.5, 0.5]}],
+             "spheres": [{"center": [x, 0, 0], "radius": 1, "material": "m"},
+                         {"center": [x + 2, 1, 1], "radius": 0.5, "material": "lamp"},
+                         {"center": [x - 2, 0, 1], "radius": 0.5, "material": "gold"}],
+             "triangles": [{"vertices": [[x - 1, 3, -1], [x + 1, 3, -1], [x + 1, 3, 1]],
+                            "material": "lamp"}],
+             "planes": [{"point": [x, -1, 0], "normal": [0, 1, 0], "material": "m"}]}
+    path = directory / f"{name}.json"
+    path.write_text(json.dumps(scene))
+    return path
+
+
+@pytest.mark.parametrize("x", [1e13, 1e15])
+def test_the_path_reference_image_does_not_depend_on_where_the_scene_lies(tmp_path, x):
+    """The reference's path integrator works relative to the eye as its
+    Whitted one does: its emitters, lights, floor and camera are the scene's
+    at 0, byte for byte, and so is the image (in world coordinates the
+    sphere at 1e15 is a blur of 1/8 steps, its shadow rays start inside it
+    and the emitters' sample points round)."""
+    near = render(path_far_scene(tmp_path, 0.0, "near"), tmp_path / "near.pfm",
+                  "-k", "reference")
+    far = render(path_far_scene(tmp_path, x, "far"), tmp_path / "far.pfm", "-k", "reference")
+    assert near.read_bytes() == far.read_bytes()

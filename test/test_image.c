@@ -20,7 +20,7 @@
 
 #define ERR_SIZE 512
 
-static const struct image_meta test_meta = {"rtcl test", "scene: test\nline two", IMAGE_LINEAR};
+static const struct image_meta test_meta = {"rtcl test", "scene: test\nline two", IMAGE_LINEAR, 0};
 
 /* A fresh empty directory; remove_dir() deletes it and its files. */
 static char *make_dir(void)

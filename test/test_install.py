@@ -71,8 +71,8 @@ def expected_files():
              f"{share}/scenes/README.md"}
             | {f"{PREFIX}/bin/rtcl-" + path.stem.replace("_", "-") for path in tools}
             | {f"{share}/scenes/{path.name}" for path in (ROOT / "scenes").glob("*.json")}
-            | {f"{share}/scenes/models/{path.name}"
-               for path in (ROOT / "scenes" / "models").glob("*")}
+            | {f"{share}/scenes/models/{path.relative_to(ROOT / 'scenes' / 'models')}"
+               for path in (ROOT / "scenes" / "models").rglob("*") if path.is_file()}
             | {f"{share}/tools/rtcl_tools/{path.name}"
                for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")}
             | {f"{share}/tools/rtcl_tools/commands/{path.name}"
@@ -306,7 +306,8 @@ def test_man_page_environment_covers_help_and_output_dates():
     in_man = {match for line in man_sections()["ENVIRONMENT"]
               for match in re.findall(r"^\.BI ([A-Z_]+)= ", line)}
     assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "RTCL_CACHE",
-                       "POCL_CACHE_DIR", "RTCL_MESH_TIME_LIMIT", "RTCL_MESH_MEMORY_LIMIT"}
+                       "POCL_CACHE_DIR", "RTCL_MESH_TIME_LIMIT", "RTCL_MESH_MEMORY_LIMIT",
+                       "RTCL_OIDN_LIBRARY"}
     assert in_man == in_help | {"SOURCE_DATE_EPOCH", "XDG_CACHE_HOME", "RTCL_MESHREAD"}
 
 

@@ -357,8 +357,11 @@ def test_a_textured_gltf_keeps_its_materials_and_its_texture(tmp_path):
     out = tmp_path / "o.ppm"
     result = rtcl(path, "-o", out, "--size", "40x50", "-v")
     assert result.returncode == 0, result.stderr
-    assert 'ClearCoatTest.gltf": 19 materials (19 used), 1 texture' in result.stderr
+    # its base colour texture, and for the path integrator its
+    # metallic-roughness (linear), emissive and normal textures (issue 40)
+    assert 'ClearCoatTest.gltf": 19 materials (19 used), 11 textures' in result.stderr
     assert 'texture "PartialCoating_Alpha.png": 256x256 8-bit sRGB' in result.stderr
+    assert 'texture "RoughnessStripes.png": 512x512 8-bit linear' in result.stderr
     colours = {p for row in read_ppm(out) for p in row}
     assert any(r > g + 80 and r > b + 80 for r, g, b in colours)  # the red row
     assert any(b > r + 30 and b > g + 30 for r, g, b in colours)  # the blue rows

@@ -258,8 +258,11 @@ def test_an_immutable_target_replaces_nothing(tmp_path):
 # ---- 3. the RTCL_DUMP_BINARY program is an output like the others -----------
 
 def test_an_interrupt_leaves_the_dump_binary_target_untouched(tmp_path):
+    # All or nothing (--no-partial): an interrupted animation keeps its
+    # finished frames otherwise, with the other outputs (test_partial.py).
     (tmp_path / "out.png").write_bytes(PREVIOUS)
-    process = subprocess.Popen([RTCL, *SMALL, "--frames", "1:2", "-o", "f.png"], cwd=tmp_path,
+    process = subprocess.Popen([RTCL, *SMALL, "--frames", "1:2", "--no-partial", "-o", "f.png"],
+                               cwd=tmp_path,
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
                                env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:800",
                                     "RTCL_DUMP_BINARY": "out.png"})
@@ -270,6 +273,21 @@ def test_an_interrupt_leaves_the_dump_binary_target_untouched(tmp_path):
     assert stderr.endswith("rtcl: interrupted; no output written\n"), stderr
     assert (tmp_path / "out.png").read_bytes() == PREVIOUS
     assert listing(tmp_path) == ["out.png"]
+
+
+def test_an_interrupted_animation_writes_its_finished_frames_with_the_other_outputs(tmp_path):
+    (tmp_path / "out.png").write_bytes(PREVIOUS)
+    process = subprocess.Popen([RTCL, *SMALL, "--frames", "1:3", "-o", "f.png"], cwd=tmp_path,
+                               stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                               env={**os.environ, "RTCL_TEST_SLOW_DEVICE": "0:800",
+                                    "RTCL_DUMP_BINARY": "out.png"})
+    wait_for(lambda: staged(tmp_path, "f_0001.png"), process)  # frame 1 done
+    process.send_signal(signal.SIGINT)  # in the device's 800 ms after it
+    _, stderr = process.communicate(timeout=60)
+    assert process.returncode == 128 + signal.SIGINT, stderr
+    assert stderr.endswith("rtcl: interrupted; wrote the 1 frame finished of 3\n"), stderr
+    assert (tmp_path / "out.png").read_bytes() != PREVIOUS  # the program, dumped
+    assert listing(tmp_path) == ["f_0001.png", "out.png"]
 
 
 def test_the_dump_binary_is_written_with_the_frames(tmp_path):

@@ -166,3 +166,24 @@ def test_without_flops_there_is_no_model(tmp_path):
     result = rtcl("-k", "naive", "-o", "x.ppm", "--schedule-map", "s.npy", cwd=tmp_path)
     assert result.returncode == 0, result.stderr
     assert "simd:" not in result.stdout  # no counting run
+
+
+def test_no_group_colour_is_near_the_replays_not_started_grey(tmp_path):
+    # Issue 44: a group coloured (38, 38, 38) looked like the replay's "not
+    # started" (40, 40, 40). Every group's brightest channel is 0.45 or more.
+    from rtcl_tools.commands.schedule_replay import UNSTARTED, group_colours
+    colours = group_colours(np.arange(1 << 20, dtype=np.uint32)).astype(int)
+    assert colours.max(axis=1).min() >= round(0.45 * 255)
+    assert np.abs(colours - np.array(UNSTARTED)).max(axis=1).min() >= 70
+    # rtcl's picture gives the same colours: one group a pixel, 1536 groups.
+    result = subprocess.run([RTCL, "-q", "--size", "48x32", "-w", "1x1", "-k", "naive", "-o",
+                             "x.ppm", "--schedule-map", "p.ppm"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    result = subprocess.run([RTCL, "-q", "--size", "48x32", "-w", "1x1", "-k", "naive", "-o",
+                             "x.ppm", "--schedule-map", "s.npy"], cwd=tmp_path,
+                            capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    (_, _), data = ppm.pixels(tmp_path / "p.ppm")
+    picture = np.frombuffer(data, dtype=np.uint8).reshape(32, 48, 3)
+    assert np.array_equal(picture, group_colours(np.load(tmp_path / "s.npy")[..., 0]))

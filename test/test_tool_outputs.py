@@ -85,6 +85,8 @@ WRITERS = [
                                         "-o", "{repo}/c"]),
     ("peer_compare.py", "u/cpu.md", ["/nonexistent-peer", "--cpu", "--rtcl", "{rtcl}",
                                      "-o", "{repo}/u"]),
+    ("peer_compare.py", "r/rays.md", ["/nonexistent-peer", "--rays", "--rtcl", "{rtcl}",
+                                      "-o", "{repo}/r"]),
 ]
 
 
@@ -215,6 +217,22 @@ def test_peer_compare_names_a_folder_that_is_not_the_peers(tmp_path, marking_rtc
     assert on_cpu.stderr.strip().splitlines() == [
         f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no cside.cpp "
         "or tiny_bvh.h"]
+    rays = run_tool("peer_compare.py", tmp_path / "peer", "--rays", "--rtcl", marking_rtcl,
+                    "-o", tmp_path / "out", cwd=tmp_path)
+    assert rays.returncode == 1
+    assert rays.stderr.strip().splitlines() == [
+        f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no "
+        "tiny_bvh.h, ply2bin.py, tiny_ocl.h, traverse.cl"]
+    rays_cpu = run_tool("peer_compare.py", tmp_path / "peer", "--rays", "--cpu", "--rtcl",
+                        marking_rtcl, "-o", tmp_path / "out", cwd=tmp_path)
+    assert rays_cpu.stderr.strip().splitlines() == [
+        f"peer_compare.py: error: {tmp_path / 'peer'} is not the peer's folder: no "
+        "tiny_bvh.h, ply2bin.py"]
+    rays_counts = run_tool("peer_compare.py", tmp_path / "peer", "--rays", "--counts",
+                           "-o", tmp_path / "out", cwd=tmp_path)
+    assert rays_counts.returncode == 1
+    assert rays_counts.stderr.strip().splitlines() == [
+        "peer_compare.py: error: --rays and --counts do not go together: --rays times"]
     both = run_tool("peer_compare.py", tmp_path / "peer", "--cpu", "--counts", cwd=tmp_path)
     assert both.returncode == 2 and "not allowed with argument" in both.stderr
     assert not (tmp_path / "rtcl-ran").exists()

@@ -130,3 +130,15 @@ def test_a_bar_format_that_cannot_be_written_leaves_no_files(tmp_path):
     assert len(result.stderr.splitlines()) == 1, result.stderr
     assert "bar.unknown-format" in result.stderr
     assert os.listdir(tmp_path) == []
+
+
+def test_the_help_says_the_bar_is_a_file_of_its_own():
+    """Issue 44: --work-map's help promised "a picture with a colour scale bar",
+    which --work-map-bar writes to another file."""
+    text = subprocess.run([RTCL, "--help"], capture_output=True, text=True,
+                          timeout=60).stdout
+    entry = text.split("  --work-map FILE", 1)[1].split("\n      --work-map-scale", 1)[0]
+    assert "with a colour scale bar" not in entry
+    assert "bar --work-map-bar writes to a file of its own" in " ".join(entry.split())
+    bar = text.split("  --work-map-bar FILE", 1)[1].split("\n      --schedule-map", 1)[0]
+    assert "needs --work-map with a picture" in " ".join(bar.split())

@@ -573,12 +573,20 @@ int files_commit(struct staged_file *files, int count, char *err, size_t err_siz
 	struct old_file *old = calloc(count > 0 ? (size_t)count : 1, sizeof(*old));
 	int ret;
 
+	/* The staged ones: an entry with no temporary file (an animation's
+	 * frame an interrupt left unrendered) has nothing to commit. */
+	struct staged_file *live = malloc((count > 0 ? (size_t)count : 1) * sizeof(*live));
+	int live_count = 0;
+
+	for (int i = 0; live && i < count; i++)
+		if (files[i].temp[0])
+			live[live_count++] = files[i];
 	interrupt_hold();
-	if (!old) {
+	if (!old || !live) {
 		snprintf(err, err_size, "out of host memory to replace %d files", count);
 		ret = -1;
 	} else {
-		ret = commit(files, old, count, err, err_size);
+		ret = commit(live, old, live_count, err, err_size);
 	}
 	for (int i = 0; i < count; i++) {
 		struct staged_file *f = &files[i];
@@ -592,6 +600,7 @@ int files_commit(struct staged_file *files, int count, char *err, size_t err_siz
 		release_stage(f->stage);
 	}
 	interrupt_release();
+	free(live);
 	free(old);
 	return ret;
 }

@@ -49,8 +49,9 @@ int files_stage(struct staged_file *file, const char *target, char *err, size_t 
  * interrupt_hold() (an interrupt waits until it is done), it checks that each
  * target is still a regular file, keeps each old target under a second name
  * in the staging folder, renames the new files in, and removes the old ones;
- * a rename that fails puts every old file back. Returns 0, or -1 with one
- * message in err (the staged files are discarded either way). */
+ * a rename that fails puts every old file back. An entry with nothing
+ * staged (temp "") is passed over. Returns 0, or -1 with one message in err
+ * (the staged files are discarded either way). */
 int files_commit(struct staged_file *files, int count, char *err, size_t err_size);
 
 /* For tests (base/test_hooks.h, RTCL_TEST_FAIL_RENAME): the nth rename of a new file

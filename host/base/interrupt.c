@@ -17,6 +17,8 @@ static sigset_t signals;
 static volatile sig_atomic_t received; /* a signal taken, its handling under way */
 static int blocks_sigcont;	       /* under mpirun (interrupt_setup) */
 static int watches_mpirun;	       /* interrupt_watch_mpirun() was called */
+static int stop_allowed;	       /* interrupt_allow_stop() */
+static volatile sig_atomic_t stop_signal; /* the signal that asked to stop */
 
 static void init_lock(void)
 {
@@ -76,6 +78,19 @@ static void *take_signals(void *unused)
 			continue;
 		received = signal_number; /* before the lock: interrupt_settle() */
 		lock_held();
+		if (stop_allowed && !stop_signal &&
+		    (signal_number == SIGINT || signal_number == SIGTERM)) {
+			/* A request to stop (interrupt_allow_stop), not an end. */
+			stop_signal = signal_number;
+			received = 0;
+			dprintf(STDERR_FILENO,
+				"%srtcl: interrupted; stopping after the pass under way to write "
+				"what is done (interrupt again to stop at once, writing "
+				"nothing)\n",
+				progress_on_stderr ? "\n" : "");
+			pthread_mutex_unlock(&lock);
+			continue;
+		}
 		leave(signal_number);
 	}
 	return NULL;
@@ -149,6 +164,18 @@ void interrupt_untrack(const char *path)
 	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
 		if (tracked[i] == path)
 			tracked[i] = NULL;
+}
+
+void interrupt_allow_stop(int allowed)
+{
+	lock_held();
+	stop_allowed = allowed;
+	pthread_mutex_unlock(&lock);
+}
+
+int interrupt_stop_signal(void)
+{
+	return stop_signal;
 }
 
 void interrupt_set_outcome(const char *text)

@@ -39,6 +39,18 @@ void interrupt_untrack(const char *path);
  * and said why; under --mpi, mpirun may still end the rank). */
 void interrupt_set_outcome(const char *outcome);
 
+/* Stopping a render early, keeping what it has done: while allowed
+ * (interrupt_allow_stop(1), between a render's first and last pass), the
+ * first SIGINT or SIGTERM does not end the process: it is taken as a
+ * request to stop after the pass under way, said on stderr, and
+ * interrupt_stop_signal() returns it from then on; the render then writes
+ * the samples it has. A second signal, or any while stopping is not
+ * allowed, ends the process as above. */
+void interrupt_allow_stop(int allowed);
+
+/* The signal that asked the render to stop (SIGINT or SIGTERM), or 0. */
+int interrupt_stop_signal(void);
+
 /* At the end of a successful run, before the process exits: a signal that
  * came while the run ended (its handling waiting, say, for a commit) ends
  * the process as it would have, with its message and status, rather than

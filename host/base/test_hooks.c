@@ -115,6 +115,13 @@ void hook_sums_delay(void)
 		nanosleep(&(struct timespec){ms / 1000, ms % 1000 * 1000000L}, NULL);
 }
 
+const char *hook_oidn_filter(void)
+{
+	const char *name = getenv("RTCL_TEST_OIDN_FILTER");
+
+	return name && *name ? name : NULL;
+}
+
 int hook_double_band(void)
 {
 	return env_is_one("RTCL_TEST_DOUBLE_BAND");
@@ -123,6 +130,18 @@ int hook_double_band(void)
 int hook_rename_fault(void)
 {
 	const char *value = getenv("RTCL_TEST_FAIL_RENAME");
+	char *end;
+	long n;
+
+	if (!value)
+		return 0;
+	n = strtol(value, &end, 10);
+	return end != value && *end == '\0' && n > 0 && n < 1000000 ? (int)n : 0;
+}
+
+int hook_pass_samples(void)
+{
+	const char *value = getenv("RTCL_TEST_PASS_SAMPLES");
 	char *end;
 	long n;
 

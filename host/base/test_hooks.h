@@ -4,7 +4,7 @@
  * set: RTCL_TEST_DEVICE_FAULT, RTCL_TEST_SLOW_DEVICE, RTCL_TEST_FAIL_DEVICE,
  * RTCL_TEST_RANK_DIES, RTCL_TEST_CHECK_WRITES, RTCL_TEST_AS_GPUS, RTCL_TEST_DOUBLE_BAND,
  * RTCL_TEST_FAIL_RENAME, RTCL_TEST_SLOW_CACHE_WRITE, RTCL_TEST_COMMIT_DELAY,
- * RTCL_TEST_SLOW_SUMS. */
+ * RTCL_TEST_SLOW_SUMS, RTCL_TEST_PASS_SAMPLES, RTCL_TEST_OIDN_FILTER. */
 #ifndef RTCL_TEST_HOOKS_H
 #define RTCL_TEST_HOOKS_H
 
@@ -64,9 +64,20 @@ int hook_double_band(void);
  * be replaced (a bind-mounted file) makes it fail. Returns N, or 0. */
 int hook_rename_fault(void);
 
+/* RTCL_TEST_PASS_SAMPLES=N: every pass traces N samples of every pixel
+ * (render_settings.samples_per_pass), as a device fast enough for short
+ * passes does, so that a small test image is rendered in many passes that
+ * an interrupt or a checkpoint can come between. Returns N, or 0. */
+int hook_pass_samples(void);
+
 /* RTCL_TEST_COMMIT_DELAY=MS: the commit of the outputs takes MS milliseconds
  * more after its renames, as on a slow file system, with interrupts held:
  * a signal then comes while the outputs are committed. */
 void hook_commit_delay(void);
+
+/* RTCL_TEST_OIDN_FILTER=NAME: --denoise asks Open Image Denoise for the
+ * filter NAME instead of "RT", so that a test can make the library fail
+ * (an unknown filter) as no input makes it fail on demand. NULL when unset. */
+const char *hook_oidn_filter(void);
 
 #endif

@@ -28,6 +28,8 @@ enum long_only_option {
 	OPT_WORK_MAP_SCALE,
 	OPT_WORK_MAP_BAR,
 	OPT_SCHEDULE_MAP,
+	OPT_AOV,
+	OPT_DENOISE,
 	OPT_VERSION,
 	OPT_SPP,
 	OPT_DEVICES,
@@ -44,6 +46,9 @@ enum long_only_option {
 	OPT_FOV,
 	OPT_APERTURE,
 	OPT_FOCUS_DISTANCE,
+	OPT_CHECKPOINT,
+	OPT_NO_PARTIAL,
+	OPT_INTEGRATOR,
 };
 
 static const struct option long_options[] = {
@@ -57,6 +62,7 @@ static const struct option long_options[] = {
 	{"size", required_argument, NULL, OPT_SIZE},
 	{"depth", required_argument, NULL, OPT_DEPTH},
 	{"spp", required_argument, NULL, OPT_SPP},
+	{"integrator", required_argument, NULL, OPT_INTEGRATOR},
 	{"eye", required_argument, NULL, OPT_EYE},
 	{"look-at", required_argument, NULL, OPT_LOOK_AT},
 	{"fov", required_argument, NULL, OPT_FOV},
@@ -73,6 +79,8 @@ static const struct option long_options[] = {
 	{"piece-rows", required_argument, NULL, OPT_PIECE_ROWS},
 	{"row-order", required_argument, NULL, OPT_ROW_ORDER},
 	{"repeat", required_argument, NULL, 'r'},
+	{"checkpoint", required_argument, NULL, OPT_CHECKPOINT},
+	{"no-partial", no_argument, NULL, OPT_NO_PARTIAL},
 	{"stats", required_argument, NULL, OPT_STATS},
 	{"flops", required_argument, NULL, OPT_FLOPS},
 	{"work-map", required_argument, NULL, OPT_WORK_MAP},
@@ -80,6 +88,8 @@ static const struct option long_options[] = {
 	{"work-map-scale", required_argument, NULL, OPT_WORK_MAP_SCALE},
 	{"work-map-bar", required_argument, NULL, OPT_WORK_MAP_BAR},
 	{"schedule-map", required_argument, NULL, OPT_SCHEDULE_MAP},
+	{"aov", required_argument, NULL, OPT_AOV},
+	{"denoise", no_argument, NULL, OPT_DENOISE},
 	{"quiet", no_argument, NULL, 'q'},
 	{"verbose", no_argument, NULL, 'v'},
 	{"help", no_argument, NULL, 'h'},
@@ -122,7 +132,8 @@ static void print_help_after_kernels(FILE *out)
 		"                         of them\n"
 		"\n"
 		"Scene and image:\n"
-		"  -s, --scene FILE       scene file (SCENE.md), the same as giving it as SCENE;\n"
+		"  -s, --scene FILE       scene file (SCENE.md), the same as giving it as SCENE\n"
+		"                         (a model file is given as MODEL, not with -s);\n"
 		"                         default: the built-in paper60\n"
 		"  -o, --output FILE      image file, format from the extension (default "
 		"render.png)\n"
@@ -132,6 +143,10 @@ static void print_help_after_kernels(FILE *out)
 		"      --spp N            samples per pixel, overriding image.samples (1..%d;\n"
 		"                         default 1, the pixel centre): antialiasing with a\n"
 		"                         box filter, traced in passes with progress\n"
+		"      --integrator whitted|path  the light transport, overriding the scene's\n"
+		"                         integrator: Whitted ray tracing (the default), or a\n"
+		"                         path tracer (bounced light, BSDFs, emitters; converges\n"
+		"                         with --spp)\n"
 		"      --eye X,Y,Z        the camera's eye, overriding camera.eye\n"
 		"      --look-at X,Y,Z    the point the camera looks at, overriding\n"
 		"                         camera.look_at\n"
@@ -146,6 +161,17 @@ static void print_help_after_kernels(FILE *out)
 		"                         the linear colours: the sRGB curve (default), or\n"
 		"                         round(255 c) as in the paper; EXR, HDR and PFM are\n"
 		"                         always linear\n"
+		"      --aov LIST         also write auxiliary images, LIST of albedo, normal\n"
+		"                         and depth (comma-separated), each the mean over the\n"
+		"                         pixel's samples of its primary rays' first hits, as\n"
+		"                         linear .pfm files beside -o: out.png gives\n"
+		"                         out.albedo.pfm, out.normal.pfm, out.depth.pfm\n"
+		"      --denoise          denoise the image with Intel Open Image Denoise (its\n"
+		"                         RT filter, on the host's CPU, fed with the albedo\n"
+		"                         and normal images); `make deps` installs it.\n"
+		"                         --aov and --denoise need one image on one OpenCL\n"
+		"                         device (not reference, --devices, --piece-rows,\n"
+		"                         --frames or --mpi)\n"
 		"      --mesh-time-limit SECONDS  refuse a mesh file whose import takes\n"
 		"                         longer (default 60; 0: no limit)\n"
 		"      --mesh-memory-limit MIB  the memory a mesh file's import may take\n"
@@ -195,6 +221,19 @@ static void print_help_after_kernels(FILE *out)
 		"                         every rank's devices), so an equal share of the\n"
 		"                         image is every S-th band; or the rows in order\n"
 		"\n"
+		"Interrupts and long renders:\n"
+		"      Ctrl-C (SIGINT) or SIGTERM during a render of several passes stops it\n"
+		"                         after the pass under way and writes the image of\n"
+		"                         the samples done, saying how many (the summary,\n"
+		"                         the file's metadata); a second one stops at once,\n"
+		"                         writing nothing. --frames keeps the frames\n"
+		"                         finished; -r, --mpi and pieces of pixels over\n"
+		"                         several devices write nothing\n"
+		"      --checkpoint SECONDS  also write the image of the samples done every\n"
+		"                         SECONDS (1..%d) during the passes, each a\n"
+		"                         complete file; one device or -k reference\n"
+		"      --no-partial       all or nothing: an interrupt writes nothing\n"
+		"\n"
 		"Measuring:\n"
 		"  -r, --repeat N         N timed launches after one warm-up launch; without\n"
 		"                         -r, one launch: the image, timed, no warm-up;\n"
@@ -209,10 +248,12 @@ static void print_help_after_kernels(FILE *out)
 		"                         run): FILE.npy or a float image (.exr, .pfm, .hdr)\n"
 		"                         holds the counts themselves (uint64 in the .npy,\n"
 		"                         height x width); any other image format, a picture\n"
-		"                         with a colour scale bar\n"
+		"                         of them the size of the render, whose colour scale\n"
+		"                         bar --work-map-bar writes to a file of its own\n"
 		"      --work-map-scale linear|log  the picture's colour scale (default linear);\n"
 		"                         log spreads the many cheap pixels\n"
-		"      --work-map-bar FILE  write the picture's scale bar to the image FILE: as\n"
+		"      --work-map-bar FILE  write the --work-map picture's colour scale bar to\n"
+		"                         the image FILE (needs --work-map with a picture): as\n"
 		"                         wide as the render (at least 170 pixels), labels 0,\n"
 		"                         middle and max, and the unit \"flops per pixel\"\n"
 		"      --schedule-map FILE  record which work-item traced each pixel, and when\n"
@@ -233,6 +274,8 @@ static void print_help_after_kernels(FILE *out)
 		"Environment:\n"
 		"  RTCL_MESH_TIME_LIMIT=SECONDS  --mesh-time-limit, when not given\n"
 		"  RTCL_MESH_MEMORY_LIMIT=MIB  --mesh-memory-limit, when not given\n"
+		"  RTCL_OIDN_LIBRARY=FILE  the Open Image Denoise library --denoise loads\n"
+		"                           (default: the one `make deps` installs)\n"
 		"For kernel development:\n"
 		"  RTCL_CL_DIR=DIR          load the OpenCL sources from DIR instead of the\n"
 		"                           copies built into the binary\n"
@@ -249,21 +292,37 @@ static void print_help_after_kernels(FILE *out)
 		"picture, --split without --devices or --mpi.\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX);
+		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
+		CHECKPOINT_MAX_SECONDS);
 }
 
 void cli_print_help(FILE *out)
 {
 	fprintf(out,
-		"Usage: rtcl [OPTION]... [SCENE]\n"
+		"Usage: rtcl [OPTION]... [SCENE | MODEL]\n"
 		"Ray-trace a scene with OpenCL, scheduling pixels over work-items with one of\n"
 		"several kernels, and write the image. SCENE is a scene file (SCENE.md), as\n"
-		"with -s; without one, the built-in 60-ball scene.\n"
+		"with -s; without one, the built-in 60-ball scene. MODEL is a model file\n"
+		"(OBJ, PLY, STL, glTF 2.0, FBX, ...: what the Open Asset Import Library\n"
+		"reads) rendered alone with its own materials, textures, camera and lights;\n"
+		"without a camera, a view framed from its bounds, without lights a default\n"
+		"stage (SCENE.md, \"A model file alone\").\n"
+		"Scenes hold spheres, triangle meshes with their own materials, textures\n"
+		"and alpha cut-outs, and planes with an optional checkerboard, lit by point\n"
+		"lights, sphere lights and directional lights (soft shadows from the last\n"
+		"two), shaded Whitted-style (Blinn-Phong, shadows, reflection, refraction,\n"
+		"an optional Fresnel term), seen through a pinhole, a thin lens (depth of\n"
+		"field) or a glTF camera, with antialiasing (--spp). Or a physically based\n"
+		"path tracer (--integrator path): global illumination, emission, microfacet\n"
+		"BSDFs (diffuse, GGX conductor, rough or smooth glass, glTF's principled),\n"
+		"multiple importance sampling, a uniform sky or an environment map (.hdr).\n"
 		"\n"
 		"Examples:\n"
+		"  rtcl scenes/cornell.json              a path-traced Cornell box\n"
 		"  rtcl                                  the built-in 60-ball scene, dynamic "
 		"kernel\n"
 		"  rtcl scenes/two_balls.json -o balls.exr --size 800x600\n"
+		"  rtcl scenes/models/crate.obj -o crate.png  a model alone, framed and lit\n"
 		"  rtcl -k cyclic -w 8x8 --groups 25x25  the paper's cyclic geometry\n"
 		"  rtcl -k naive -r 10 --stats run.json  median of 10 timed launches, as JSON\n"
 		"  rtcl -t cpu -v                        on the first CPU device, saying more\n"
@@ -466,6 +525,33 @@ static int check_kernel(const char *name, char *err, size_t err_size)
 /* Applies option c with its value arg (NULL for an option without one).
  * Returns 0, or -1 with a message; a flat switch, one case per option. */
 /* One of two words: *second is set when it is the second. */
+/* --aov LIST: albedo, normal and depth, comma-separated, each once. */
+static int parse_aov(const char *text, int *bits, char *err, size_t err_size)
+{
+	const char *p = text;
+
+	*bits = 0;
+	for (;;) {
+		size_t length = strcspn(p, ",");
+		int kind = -1;
+		for (int k = 0; k < OUTPUT_AOV_KINDS; k++)
+			if (length == strlen(output_aov_kind_name(k)) &&
+			    strncmp(p, output_aov_kind_name(k), length) == 0)
+				kind = k;
+		if (kind < 0 || (*bits & (1 << kind))) {
+			snprintf(err, err_size,
+				 "--aov: %s is not a list of albedo, normal and depth, each once "
+				 "(e.g. --aov albedo,normal,depth)",
+				 quote_text(text));
+			return -1;
+		}
+		*bits |= 1 << kind;
+		if (p[length] == '\0')
+			return 0;
+		p += length + 1;
+	}
+}
+
 static int parse_choice(const char *option, const char *text, const char *first, const char *second,
 			int *is_second, char *err, size_t err_size)
 {
@@ -605,6 +691,17 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return parse_shape("--size", arg, SCENE_MAX_IMAGE_SIDE, o->size, err, err_size);
 	case OPT_DEPTH:
 		return parse_bounded("--depth", arg, 0, SCENE_MAX_DEPTH, &o->depth, err, err_size);
+	case OPT_CHECKPOINT: {
+		int seconds;
+		if (parse_bounded("--checkpoint", arg, 1, CHECKPOINT_MAX_SECONDS, &seconds, err,
+				  err_size))
+			return -1;
+		o->checkpoint_seconds = seconds;
+		return 0;
+	}
+	case OPT_NO_PARTIAL:
+		o->no_partial = 1;
+		return 0;
 	case OPT_SPP:
 		return parse_bounded("--spp", arg, 1, SCENE_MAX_SAMPLES, &o->spp, err, err_size);
 	case OPT_EYE:
@@ -650,6 +747,11 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		o->work_map_scale_given = 1;
 		return parse_choice("--work-map-scale", arg, "linear", "log", &o->outputs.work_map_log, err,
 				    err_size);
+	case OPT_AOV:
+		return parse_aov(arg, &o->outputs.aov, err, err_size);
+	case OPT_DENOISE:
+		o->outputs.denoise = 1;
+		return 0;
 	case OPT_ENCODING:
 		return parse_choice("--encoding", arg, "srgb", "linear", &o->outputs.linear_encoding, err,
 				    err_size);
@@ -667,6 +769,9 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 		return 0;
 	case OPT_ACCEL:
 		return parse_accel(arg, &o->accel, err, err_size);
+	case OPT_INTEGRATOR:
+		return parse_choice("--integrator", arg, "whitted", "path", &o->integrator, err,
+				    err_size);
 	case OPT_MESH_TIME_LIMIT:
 		return parse_limit("--mesh-time-limit", arg, "seconds", MESH_TIME_LIMIT_MAX,
 				   &o->mesh_time_limit, err, err_size);
@@ -832,6 +937,25 @@ static int check_several_devices(const struct options *o, char *err, size_t err_
 	return 0;
 }
 
+/* --checkpoint and --no-partial: what a render stopped early keeps. */
+static int check_partial(const struct options *o, char *err, size_t err_size)
+{
+	const char *other = o->frames_given ? "--frames (an interrupt keeps the frames finished)"
+			    : o->mpi	    ? "--mpi"
+			    : o->repeat	    ? "-r/--repeat, whose launches are timed"
+			    : o->no_partial ? "--no-partial"
+					    : NULL;
+
+	if (o->checkpoint_seconds > 0 && other) {
+		snprintf(err, err_size,
+			 "--checkpoint writes the image of one render as it goes: it does not go "
+			 "with %s",
+			 other);
+		return -1;
+	}
+	return 0;
+}
+
 /* --schedule-map: one launch's work-items over the whole image. */
 static int check_schedule_map(const struct options *o, char *err, size_t err_size)
 {
@@ -915,6 +1039,15 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 			 "do not apply");
 		return -1;
 	}
+	if ((o->outputs.aov || o->outputs.denoise) &&
+	    (strcmp(o->kernel, "reference") == 0 || o->devices.list_given || o->piece_rows ||
+	     o->frames_given || o->mpi)) {
+		snprintf(err, err_size,
+			 "--aov and --denoise render the auxiliary images on one OpenCL device "
+			 "after one image: not with -k reference, --devices, --piece-rows, "
+			 "--frames or --mpi");
+		return -1;
+	}
 	if (o->outputs.work_map_bar &&
 	    (!o->outputs.work_map || workmap_kind(o->outputs.work_map) != WORKMAP_PICTURE)) {
 		snprintf(err, err_size,
@@ -930,7 +1063,7 @@ static int check_combination(const struct options *o, char *err, size_t err_size
 		return -1;
 	}
 	if (check_kernel_options(o, err, err_size) || check_several_devices(o, err, err_size) ||
-	    check_schedule_map(o, err, err_size))
+	    check_schedule_map(o, err, err_size) || check_partial(o, err, err_size))
 		return -1;
 	if (o->quiet && o->verbose) {
 		snprintf(err, err_size, "-q/--quiet and -v/--verbose contradict each other");
@@ -954,6 +1087,7 @@ static int take_scene_argument(int count, char **args, struct options *o, char *
 			 quote_text(o->scene_path ? args[0] : args[1]));
 		return -1;
 	}
+	o->scene_is_argument = 1;
 	return take_file_name("the scene argument", args[0], &o->scene_path, err, err_size);
 }
 
@@ -966,6 +1100,7 @@ int cli_parse(int argc, char **argv, struct options *o, char *err, size_t err_si
 	o->workgroup[0] = o->workgroup[1] = 8;
 	o->outputs.image = "render.png";
 	o->depth = -1;
+	o->integrator = -1;
 	o->devices.platform = o->devices.device = -1;
 	o->repeat = 0; /* not given: one launch, no warm-up */
 	o->batch = 1;

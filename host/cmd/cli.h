@@ -23,9 +23,11 @@ struct options {
 	int batch_given;
 	int queues;		/* --queues N (0: the default) */
 	const char *scene_path; /* -s or the argument; NULL: the built-in paper60 scene */
+	int scene_is_argument;	/* the argument gave it: a scene or a model file */
 	int size[2];		/* --size WxH; 0x0 when not given */
 	int depth;		/* --depth N; -1 when not given */
 	int spp;		/* --spp N; 0 when not given */
+	int integrator;		/* --integrator: SCENE_INTEGRATOR_*; -1 when not given */
 	struct camera_override camera; /* --eye, --look-at, --fov, --aperture, --focus-distance */
 	struct device_choice devices; /* -p, -d (-1 when not given), -t, --devices */
 	int list_devices;
@@ -39,6 +41,8 @@ struct options {
 	int mpi;	/* --mpi: rank 0 hands out the pieces (run/mpi_render.h) */
 	int piece_rows; /* --piece-rows N; 0: chosen (schedule/tiles.h) */
 	int repeat;	/* -r N; 0 when not given */
+	int checkpoint_seconds;	       /* --checkpoint SECONDS; 0: none */
+	int no_partial;		       /* --no-partial */
 	struct output_request outputs; /* -o, --stats, --flops, --work-map, ... */
 	int work_map_scale_given;      /* --work-map-scale given */
 	int accel;		       /* --accel: enum accel (render/settings.h) */
@@ -48,6 +52,9 @@ struct options {
 	 * environment variables (mesh.h); ULONG_MAX when neither is given. */
 	unsigned long mesh_time_limit, mesh_memory_limit;
 };
+
+/* The longest --checkpoint interval: a week. */
+#define CHECKPOINT_MAX_SECONDS 604800
 
 /* Parses argv into o. Returns 0, or -1 with one message in err (the caller
  * exits with EXIT_USAGE). */

@@ -18,6 +18,7 @@
 #include "base/files.h"
 #include "base/interrupt.h"
 #include "base/progress.h"
+#include "base/quote.h"
 #include "base/test_hooks.h"
 #include "base/timing.h"
 #include "cmd/cli.h"
@@ -35,8 +36,21 @@
 
 static int load_scene(const struct options *opt, struct scene *scene, char *err, size_t err_size)
 {
-	if (opt->scene_path)
-		return scene_load_file(scene, opt->scene_path, err, err_size);
+	/* The argument may be a model file to render alone; -s names a scene. */
+	if (opt->scene_path && opt->scene_is_argument && scene_is_model_file(opt->scene_path)) {
+		struct model_view view = {opt->size[0], opt->size[1],
+					  opt->camera.fov_given ? opt->camera.fov : 0};
+		return scene_load_model(scene, opt->scene_path, &view, err, err_size);
+	}
+	if (opt->scene_path) {
+		char hint[2 * PATH_MAX + 200];
+		int failed = scene_load_file(scene, opt->scene_path, err, err_size);
+		size_t length = strlen(err);
+		if (failed)
+			snprintf(err + length, err_size - length, "%s",
+				 scene_model_hint(opt->scene_path, hint, sizeof(hint)));
+		return failed;
+	}
 	return scene_load_string(scene, embedded_file(DEFAULT_SCENE), DEFAULT_SCENE " (built-in)",
 				 err, err_size);
 }
@@ -79,6 +93,52 @@ static int shows_progress(const struct options *opt)
 	return !opt->quiet && (isatty(STDERR_FILENO) || (opt->mpi && isatty(STDOUT_FILENO)));
 }
 
+/* What the integrator makes of fields that only the other one reads
+ * (SCENE.md, "Path tracing"). */
+static void print_integrator_warnings(const struct scene *scene)
+{
+	const char *source = quote_text(scene->source);
+
+	if (scene->integrator == SCENE_INTEGRATOR_PATH && scene->ambient_given)
+		fprintf(stderr,
+			"rtcl: warning: %s: ambient: has no meaning under the path integrator "
+			"(indirect light is traced); it is ignored\n",
+			source);
+	if (scene->integrator == SCENE_INTEGRATOR_WHITTED && scene->environment.file)
+		fprintf(stderr,
+			"rtcl: warning: %s: environment: is used only by the path integrator; it "
+			"is ignored\n",
+			source);
+}
+
+/* Under -v and the path integrator, what lights the scene (RENDERING.md,
+ * "Lights and their selection"): the scene's lights, the emitting triangles
+ * and spheres, the environment. */
+static void print_path_lights(const struct scene *scene)
+{
+	const struct scene_environment *env = &scene->environment;
+	int triangles = 0, spheres = 0;
+
+	if (scene->integrator != SCENE_INTEGRATOR_PATH)
+		return;
+	for (int i = 0; i < scene->triangle_count; i++)
+		triangles += scene_material_emits(&scene->materials[scene->triangles[i].material]);
+	for (int i = 0; i < scene->sphere_count; i++)
+		spheres += scene_material_emits(&scene->materials[scene->spheres[i].material]);
+	fprintf(stderr, "rtcl: path integrator: %d light%s, %d emitting triangle%s, %d emitting "
+			"sphere%s, ",
+		scene->light_count, scene->light_count == 1 ? "" : "s", triangles,
+		triangles == 1 ? "" : "s", spheres, spheres == 1 ? "" : "s");
+	if (env->rgb)
+		fprintf(stderr, "environment map %dx%d (scale %g, rotate %g)\n", env->width,
+			env->height, env->scale, env->rotate);
+	else if (scene->background[0] > 0 || scene->background[1] > 0 || scene->background[2] > 0)
+		fprintf(stderr, "uniform environment [%g, %g, %g]\n", scene->background[0],
+			scene->background[1], scene->background[2]);
+	else
+		fprintf(stderr, "no environment\n");
+}
+
 /* The job: the options, else the scene's own values. */
 static void make_job(struct job *job, const struct options *opt, const struct scene *scene)
 {
@@ -93,6 +153,7 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	s->height = opt->size[1] ? opt->size[1] : scene->height;
 	s->max_depth = opt->depth >= 0 ? opt->depth : scene->max_depth;
 	s->samples = opt->spp ? opt->spp : scene->samples;
+	s->samples_per_pass = hook_pass_samples();
 	s->repeat = opt->repeat ? opt->repeat : 1;
 	s->warm_up = opt->repeat > 0;
 	s->batch = opt->batch;
@@ -101,6 +162,8 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	s->progress = 1; /* one image on one device: render() runs the line */
 	s->verbose = opt->verbose;
 	s->accel = opt->accel;
+	s->aov = opt->outputs.aov || opt->outputs.denoise;
+	job->denoise = opt->outputs.denoise;
 	job->counting = opt->outputs.flops || opt->outputs.work_map;
 	job->mapping = opt->outputs.schedule_map != NULL;
 	job->devices = opt->devices;
@@ -114,6 +177,8 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	job->first_frame = opt->frames[0];
 	job->last_frame = opt->frames[1];
 	job->mpi = opt->mpi;
+	job->all_or_nothing = opt->no_partial;
+	job->checkpoint_seconds = opt->checkpoint_seconds;
 	job->verbose = opt->verbose;
 	job->quiet = opt->quiet;
 }
@@ -124,6 +189,27 @@ static int fail(const char *err, int status)
 	if (err[0])
 		fprintf(stderr, "rtcl: %s\n", err);
 	return status;
+}
+
+/* After a render an interrupt stopped (interrupt_allow_stop) and whose
+ * outputs were written: says what they hold, returns the interrupt's exit
+ * status. */
+static int report_stopped(const struct job *job, const struct record *record,
+			  const struct output_plan *plan)
+{
+	int samples = settings_samples(&job->settings),
+	    done = record_samples_done(&job->settings, record);
+
+	if (job->animation)
+		fprintf(stderr, "rtcl: interrupted; wrote the %d frame%s finished of %d\n",
+			plan->frames_written, plan->frames_written == 1 ? "" : "s", plan->frames);
+	else if (done < samples)
+		fprintf(stderr, "rtcl: interrupted; wrote %s with %d of %d samples per pixel\n",
+			quote_text(plan->request->image), done, samples);
+	else
+		fprintf(stderr,
+			"rtcl: interrupted after the last pass; the outputs were written\n");
+	return 128 + interrupt_stop_signal();
 }
 
 /* The pipeline every mode shares: the output plan checked before any work,
@@ -156,6 +242,10 @@ static int render_and_write(const struct job *job, const struct output_request *
 		fail(err, status);
 	else if (run.writes && !job->quiet)
 		mode->summary(&run, stdout);
+	if (status == 0 && run.writes && interrupt_stop_signal()) {
+		fflush(stdout);
+		status = report_stopped(job, record, &plan);
+	}
 	if (mode->release)
 		mode->release(&run);
 	output_plan_close(&plan);
@@ -222,13 +312,22 @@ int main(int argc, char **argv)
 		scene_free(&scene);
 		return EXIT_USAGE;
 	}
+	if (opt.integrator >= 0)
+		scene.integrator = opt.integrator;
 	for (int i = 0; i < scene.warning_count; i++)
 		fprintf(stderr, "rtcl: warning: %s\n", scene.warnings[i]);
+	print_integrator_warnings(&scene);
 	if (opt.verbose) {
 		print_mesh_reports(&scene);
 		print_scene_bounds(&scene);
+		print_path_lights(&scene);
 	}
 	make_job(&job, &opt, &scene);
+	if (render_check_integrator(&scene, &job.settings, err, sizeof(err))) {
+		fprintf(stderr, "rtcl: %s\n", err);
+		scene_free(&scene);
+		return EXIT_USAGE;
+	}
 	memset(&record, 0, sizeof(record));
 	record.start = start;
 	status = render_and_write(&job, &opt.outputs, &record, err, sizeof(err));

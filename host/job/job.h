@@ -34,6 +34,9 @@ struct job {
 	int animation;		    /* --frames given */
 	int first_frame, last_frame; /* --frames A:B */
 	int mpi;		    /* --mpi */
+	int all_or_nothing;	    /* --no-partial: an interrupt writes nothing */
+	double checkpoint_seconds;  /* --checkpoint; 0: none */
+	int denoise;		    /* --denoise: settings.aov is set too */
 	int verbose, quiet;	    /* -v, -q */
 };
 
@@ -49,6 +52,17 @@ static inline int job_frame_count(const struct job *job)
 static inline int job_in_pieces(const struct job *job, int device_count)
 {
 	return device_count > 1 || job->piece_rows > 0;
+}
+
+/* Whether an interrupt of the job's render keeps the samples done
+ * (render_settings.stoppable): one frame of several samples, not timed
+ * repeats (-r), unless --no-partial; the modes narrow it further. */
+static inline int job_stoppable(const struct job *job)
+{
+	const struct render_settings *s = &job->settings;
+
+	return !job->all_or_nothing && !job->mpi && settings_samples(s) > 1 && s->repeat == 1 &&
+	       !s->warm_up && !s->check_writes;
 }
 
 /* Opens the devices the job names into devs[DEVICES_MAX], *count of them.

@@ -73,6 +73,7 @@ struct record {
 	double start;	    /* main began */
 	double device_ms;   /* platform and device set-up */
 	double counting_ms; /* the whole counting run */
+	double denoise_ms;  /* --denoise: the host's time in Open Image Denoise */
 	double write_start; /* the outputs began to be written */
 };
 
@@ -90,5 +91,16 @@ void record_devices(struct record *record, const struct device *devs, int count)
 
 /* Frees both results. */
 void record_free(struct record *record);
+
+/* The samples of every pixel the image holds: the job's, or fewer where an
+ * interrupt stopped the render (render_result.samples_done; a mode that
+ * does not set it rendered them all). */
+static inline int record_samples_done(const struct render_settings *settings,
+				      const struct record *record)
+{
+	int done = record->result.samples_done, samples = settings_samples(settings);
+
+	return done > 0 && done < samples ? done : samples;
+}
 
 #endif

@@ -264,13 +264,49 @@ static size_t leaf_triangle_count(const struct bvh *bvh)
 }
 
 /* Where the arrays go in the block (byte offsets) and its size. The
- * textures' arrays (uv ... texel) only in a scene with textures
- * (scene_has_textures), else they are empty at the end. */
+ * textures' arrays (uv ... texture_table, and the texels, the block's last
+ * array, after the path integrator's) only in a scene with textures
+ * (scene_has_textures), else they are empty. */
 struct layout {
 	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, leaf_triangle,
-		uv, material_map, texture, texture_table, texel, total;
+		uv, material_map, texture, texture_table, texel, path, bsdf, emitter, env_texel,
+		env_row_cdf, env_column_cdf, total;
 	int sphere_slots;
 };
+
+/* The emitters of the path integrator: the triangles and spheres whose
+ * material emits (RENDERING.md, "Lights and their selection"). */
+static int emitter_count(const struct scene *scene)
+{
+	int n = 0;
+
+	for (int i = 0; i < scene->triangle_count; i++)
+		n += scene_material_emits(&scene->materials[scene->triangles[i].material]);
+	for (int i = 0; i < scene->sphere_count; i++)
+		n += scene_material_emits(&scene->materials[scene->spheres[i].material]);
+	return n;
+}
+
+/* The path integrator's arrays after everything else, only in a scene
+ * it renders: the block of a Whitted scene is as before. */
+static void layout_path(struct layout *l, const struct scene *scene)
+{
+	const struct scene_environment *env = &scene->environment;
+	size_t texels = env->rgb ? (size_t)env->width * env->height : 0;
+
+	l->path = l->bsdf = l->emitter = l->env_texel = l->env_row_cdf = l->env_column_cdf =
+		l->total;
+	if (scene->integrator != SCENE_INTEGRATOR_PATH)
+		return;
+	l->path = round16(l->total);
+	l->bsdf = l->path + sizeof(struct rt_path);
+	l->emitter = l->bsdf + (size_t)scene->material_count * sizeof(struct rt_bsdf);
+	l->env_texel = l->emitter + (size_t)emitter_count(scene) * sizeof(struct rt_emitter);
+	l->env_row_cdf = l->env_texel + texels * sizeof(rt_vec4);
+	l->env_column_cdf = round16(l->env_row_cdf + (env->rgb ? (size_t)env->height : 0) *
+							   sizeof(float));
+	l->total = round16(l->env_column_cdf + texels * sizeof(float));
+}
 
 static struct layout layout_of(const struct scene *scene, const struct mesh_block *mesh,
 			       const struct bvh *bvh)
@@ -293,14 +329,205 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	l.leaf_triangle = round16(l.ref + (bvh ? (size_t)bvh->ref_count * sizeof(*bvh->refs) : 0));
 	l.uv = l.leaf_triangle + leaf_triangle_count(bvh) * sizeof(struct rt_leaf_triangle);
 	l.material_map = l.texture = l.texture_table = l.texel = l.total = l.uv;
-	if (!scene_has_textures(scene))
+	if (!scene_has_textures(scene)) {
+		layout_path(&l, scene);
+		l.texel = l.total; /* none: scene_block_pack_head packs the whole block */
 		return l;
+	}
 	l.material_map = round16(l.uv + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_uv));
 	l.texture = l.material_map + (size_t)scene->material_count * sizeof(struct rt_material_map);
 	l.texture_table = l.texture + (size_t)scene->texture_count * sizeof(struct rt_texture);
-	l.texel = l.texture_table + RT_TEXTURE_TABLE * sizeof(float);
+	l.total = l.texture_table + RT_TEXTURE_TABLE * sizeof(float);
+	layout_path(&l, scene);
+	/* The texels last, so that all else is one block before them, which a
+	 * renderer packs without them (scene_block_pack_head). */
+	l.texel = round16(l.total);
 	l.total = l.texel + scene_texture_bytes(scene);
 	return l;
+}
+
+static double luminance(const double c[3])
+{
+	return 0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2];
+}
+
+/* A material's BSDF as the path integrator reads it (RENDERING.md, "The
+ * BSDFs"): its own, or the mapping of the Whitted fields. */
+static void pack_bsdf(struct rt_bsdf *out, const struct scene_material *m)
+{
+	const struct scene_bsdf *b = &m->bsdf;
+	double ior = b->ior, roughness = b->roughness;
+
+	memset(out, 0, sizeof(*out));
+	out->type = b->type; /* SCENE_BSDF_* are RT_BSDF_* */
+	if (b->type == SCENE_BSDF_NONE && m->transmit > 0) {
+		out->type = RT_BSDF_DIELECTRIC; /* glass stays glass, smooth */
+		ior = m->ior;
+		roughness = 0;
+	} else if (b->type == SCENE_BSDF_NONE) {
+		ior = m->ior; /* unused by the mapped BSDF, but a number */
+		out->diffuse = (float)m->diffuse;
+		out->mirror = (float)m->reflect;
+		out->mirror_tint = m->fresnel == SCENE_FRESNEL_CONDUCTOR;
+	}
+	double alpha = roughness * roughness;
+	if (b->type == SCENE_BSDF_PRINCIPLED && alpha < 0.001)
+		alpha = 0.001; /* RENDERING.md: no delta lobes */
+	out->color = vec4(b->color, alpha);
+	out->emission = vec4(m->emission, ior);
+	out->metallic = (float)b->metallic;
+	out->transmission = (float)b->transmission;
+	out->emits = scene_material_emits(m);
+	out->roughness = (float)roughness;
+	out->metallic_roughness_texture = m->metallic_roughness_texture - 1;
+	out->emissive_texture = m->emissive_texture - 1;
+	out->normal_texture = m->normal_texture - 1;
+}
+
+/* Emitter weights (RENDERING.md, "Lights and their selection"): lum(Le)
+ * times the area, in double; 0 for a primitive whose material does not emit. */
+static double triangle_emitter_weight(const struct scene *scene, int i)
+{
+	const struct scene_triangle *t = &scene->triangles[i];
+	const struct scene_material *m = &scene->materials[t->material];
+	double e1[3], e2[3], c[3];
+
+	for (int k = 0; k < 3; k++) {
+		e1[k] = t->v[1][k] - t->v[0][k];
+		e2[k] = t->v[2][k] - t->v[0][k];
+	}
+	vec3_cross(e1, e2, c);
+	return scene_material_emits(m) ? luminance(m->emission) * 0.5 * vec3_length(c) : 0;
+}
+
+static double sphere_emitter_weight(const struct scene *scene, int i)
+{
+	const struct scene_sphere *sp = &scene->spheres[i];
+	const struct scene_material *m = &scene->materials[sp->material];
+
+	return scene_material_emits(m) ? luminance(m->emission) * 4 * M_PI * sp->radius * sp->radius
+				       : 0;
+}
+
+/* Fills emitters[] in their order (the emissive triangles, then the
+ * emissive spheres, each in scene order), each cdf the sum of the weights
+ * up to and with it over total (rounded to float; the last 1), and returns
+ * the sum of the weights. With total 0 only the sum is taken. */
+static double fill_emitters(struct rt_emitter *emitters, const struct scene *scene,
+			    const int *device_sphere, double total)
+{
+	double sum = 0;
+	int n = 0, count = emitter_count(scene);
+
+	for (int i = 0; i < scene->triangle_count + scene->sphere_count; i++) {
+		int sphere = i >= scene->triangle_count, index = i - (sphere ? scene->triangle_count : 0);
+		if (!scene_material_emits(
+			    &scene->materials[sphere ? scene->spheres[index].material
+						     : scene->triangles[index].material]))
+			continue;
+		sum += sphere ? sphere_emitter_weight(scene, index)
+			      : triangle_emitter_weight(scene, index);
+		if (total > 0) {
+			emitters[n].prim = sphere ? (RT_PRIM_SPHERE << RT_PRIM_KIND_SHIFT) |
+							    (rt_uint)device_sphere[index]
+						  : (RT_PRIM_TRIANGLE << RT_PRIM_KIND_SHIFT) |
+							    (rt_uint)index;
+			emitters[n].cdf = n == count - 1 ? 1.0f : (float)(sum / total);
+		}
+		n++;
+	}
+	return sum;
+}
+
+/* The environment map (RENDERING.md, "The environment"): its texels with
+ * the scale applied, and the cumulative distributions that sample it by
+ * weight, lum(texel) sin(theta at the row's centre), computed in double. */
+/* Texel (j, k)'s radiance with the scale, and its weight. */
+static double env_texel(const struct scene_environment *env, int j, int k, double rgb[3])
+{
+	const float *in = env->rgb + 3 * ((size_t)k * env->width + j);
+
+	for (int c = 0; c < 3; c++)
+		rgb[c] = in[c] * env->scale;
+	return luminance(rgb) * sin(M_PI * (k + 0.5) / env->height);
+}
+
+static double env_row_weight(const struct scene_environment *env, int k)
+{
+	double rgb[3], row = 0;
+
+	for (int j = 0; j < env->width; j++)
+		row += env_texel(env, j, k, rgb);
+	return row;
+}
+
+static void pack_environment(unsigned char *block, struct rt_path *path, const struct layout *l,
+			     const struct scene_environment *env)
+{
+	rt_vec4 *texels = (rt_vec4 *)(block + l->env_texel);
+	float *row_cdf = (float *)(block + l->env_row_cdf);
+	float *column_cdf = (float *)(block + l->env_column_cdf);
+	int w = env->width, h = env->height;
+	double total = 0, rows = 0;
+
+	path->environment = RT_ENVIRONMENT_MAP;
+	path->env_width = w;
+	path->env_height = h;
+	path->env_texel_offset = (rt_uint)l->env_texel;
+	path->env_row_cdf_offset = (rt_uint)l->env_row_cdf;
+	path->env_column_cdf_offset = (rt_uint)l->env_column_cdf;
+	path->env_cos = (float)cos(env->rotate * M_PI / 180);
+	path->env_sin = (float)sin(env->rotate * M_PI / 180);
+	for (int k = 0; k < h; k++)
+		total += env_row_weight(env, k);
+	for (int k = 0; k < h; k++) {
+		double row = env_row_weight(env, k), sum = 0, rgb[3];
+		for (int j = 0; j < w; j++) {
+			size_t t = (size_t)k * w + j;
+			sum += env_texel(env, j, k, rgb);
+			texels[t] = vec4(rgb, 0.0);
+			column_cdf[t] = j == w - 1 ? 1.0f
+				       : row > 0   ? (float)(sum / row)
+						   : (float)((j + 1.0) / w);
+		}
+		rows += row;
+		row_cdf[k] = k == h - 1 ? 1.0f : total > 0 ? (float)(rows / total) : 0.0f;
+	}
+	path->env_inv_weight = total > 0 ? (float)(1.0 / total) : 0.0f;
+	path->env_is_light = total > 0;
+}
+
+/* The path integrator's header, BSDFs and emitters. device_sphere[i]:
+ * scene sphere i's index on the device. */
+static void pack_path(unsigned char *block, struct rt_scene *header, const struct layout *l,
+		      const struct scene *scene, const int *device_sphere)
+{
+	struct rt_path *path = (struct rt_path *)(block + l->path);
+	struct rt_bsdf *bsdfs = (struct rt_bsdf *)(block + l->bsdf);
+	struct rt_emitter *emitters = (struct rt_emitter *)(block + l->emitter);
+	int count = emitter_count(scene);
+	double total;
+
+	header->path_offset = (rt_uint)l->path;
+	path->bsdf_offset = (rt_uint)l->bsdf;
+	path->emitter_offset = (rt_uint)l->emitter;
+	for (int i = 0; i < scene->material_count; i++)
+		pack_bsdf(&bsdfs[i], &scene->materials[i]);
+	total = fill_emitters(emitters, scene, device_sphere, 0);
+	if (total > 0)
+		fill_emitters(emitters, scene, device_sphere, total);
+	else
+		count = 0; /* emission too faint for a double's luminance: none */
+	path->emitter_count = count;
+	path->inv_emitter_weight = count ? (float)(1.0 / total) : 0.0f;
+	path->environment = scene->background[0] > 0 || scene->background[1] > 0 ||
+					    scene->background[2] > 0
+				    ? RT_ENVIRONMENT_UNIFORM
+				    : RT_ENVIRONMENT_NONE;
+	path->env_is_light = path->environment != RT_ENVIRONMENT_NONE;
+	if (scene->environment.rgb)
+		pack_environment(block, path, l, &scene->environment);
+	path->group_count = scene->light_count + (count > 0) + path->env_is_light;
 }
 
 /* The textures' arrays (RENDERING.md, "Textures"): the vertices' texture
@@ -332,7 +559,8 @@ static void pack_textures(unsigned char *block, struct rt_scene *header, const s
 		textures[i].width = t->width;
 		textures[i].height = t->height;
 		textures[i].flags = (rt_uint)t->wrap_s | (rt_uint)t->wrap_t << RT_WRAP_T_SHIFT |
-				    (t->is_float ? RT_TEXTURE_FLOAT : 0u);
+				    (t->is_float ? RT_TEXTURE_FLOAT : 0u) |
+				    (t->is_linear ? RT_TEXTURE_LINEAR : 0u);
 		if (texels && t->bytes)
 			memcpy(block + texel, t->texels, t->bytes);
 		texel += round16(t->bytes);
@@ -419,6 +647,18 @@ static void *pack(const struct scene *scene, const struct mesh_block *mesh, cons
 	struct rt_sphere *spheres = (struct rt_sphere *)(block + sphere_offset);
 	for (int i = 0; i < scene->sphere_count; i++)
 		pack_sphere(&spheres[i], scene, &scene->spheres[order[i]], order[i]);
+	if (scene->integrator == SCENE_INTEGRATOR_PATH) {
+		int *device_sphere = malloc((size_t)(scene->sphere_count + 1) * sizeof(int));
+		if (!device_sphere) {
+			free(order);
+			free(block);
+			return NULL;
+		}
+		for (int i = 0; i < scene->sphere_count; i++)
+			device_sphere[order[i]] = i;
+		pack_path(block, header, &l, scene, device_sphere);
+		free(device_sphere);
+	}
 	free(order);
 	/* The padding: radius² -1, which no squared distance is below. */
 	for (int i = scene->sphere_count; i < sphere_slots; i++)

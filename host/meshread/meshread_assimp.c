@@ -20,6 +20,7 @@
 #include <assimp/postprocess.h>
 #include <assimp/scene.h>
 #include <assimp/version.h>
+#include <jansson.h>
 
 #include "meshread/gltf_read.h"
 #include "meshread/mtl_read.h"
@@ -341,7 +342,8 @@ static int understood(const char *key, int metallic_roughness)
 {
 	static const char *const always[] = {
 		"?mat.name",	 "$mat.shadingm", "$mat.twosided",	   "$clr.transparent",
-		"$mat.refracti", "$clr.emissive", "$mat.anisotropyFactor", NULL};
+		"$mat.refracti", "$clr.emissive", "$mat.anisotropyFactor", "$mat.emissiveIntensity",
+		NULL};
 	static const char *const phong[] = {"$clr.diffuse",
 					    "$clr.specular",
 					    "$clr.ambient",
@@ -370,11 +372,15 @@ static int understood(const char *key, int metallic_roughness)
 	return 0;
 }
 
-/* The texture kinds rtcl reads: base colour and (cut-out) opacity. */
+/* The texture kinds rtcl reads: base colour, (cut-out) opacity, and for the
+ * path integrator glTF's metallic-roughness (Assimp 5.2's "unknown" type)
+ * and the emissive texture. */
 static int texture_read(unsigned semantic)
 {
 	return semantic == aiTextureType_DIFFUSE || semantic == aiTextureType_BASE_COLOR ||
-	       semantic == aiTextureType_OPACITY;
+	       semantic == aiTextureType_OPACITY || semantic == aiTextureType_UNKNOWN ||
+	       semantic == aiTextureType_METALNESS || semantic == aiTextureType_DIFFUSE_ROUGHNESS ||
+	       semantic == aiTextureType_EMISSIVE || semantic == aiTextureType_NORMALS;
 }
 
 /* Counts the textures rtcl reads and notes the properties it does not
@@ -410,9 +416,16 @@ static void survey(const struct aiMaterial *mat, struct mesh_material *m)
 			note(m, what);
 		}
 	}
+	/* Emission is rendered by the path integrator only (SCENE.md,
+	 * "Emission"): read, and under Whitted not drawn, as -v said before. */
 	if (numbers(mat, "$clr.emissive", emissive, 3) &&
-	    (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0))
+	    (emissive[0] != 0 || emissive[1] != 0 || emissive[2] != 0)) {
+		double strength = 1;
+		numbers(mat, "$mat.emissiveIntensity", &strength, 1);
+		for (int i = 0; i < 3; i++)
+			m->emissive[i] = emissive[i] * strength;
 		note(m, "emissive");
+	}
 	if (numbers(mat, "$mat.anisotropyFactor", &anisotropy, 1) && anisotropy != 0)
 		note(m, "anisotropy");
 }
@@ -485,6 +498,7 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 
 	memset(m, 0, sizeof(*m));
 	m->base_texture = m->opacity_texture = -1;
+	m->metallic_roughness_texture = m->emissive_texture = m->normal_texture = -1;
 	string_of(mat, "?mat.name", m->name, sizeof(m->name));
 	int named = m->name[0] != '\0';
 	if (!named)
@@ -497,6 +511,31 @@ static void read_material(const struct aiMaterial *mat, unsigned index, struct m
 	if (missing(m, named)) {
 		m->kind = MESH_MATERIAL_MISSING;
 		m->not_understood[0] = '\0';
+	}
+}
+
+/* KHR_materials_emissive_strength, which Assimp 5.2 does not read (later
+ * versions give it as $mat.emissiveIntensity, which survey applies): the
+ * glTF's material i is Assimp's material i (Assimp appends its default
+ * material after them). */
+static void gltf_emissive_strengths(const struct aiScene *sc, const json_t *doc,
+				    struct mesh_data *out)
+{
+	json_t *materials = doc ? json_object_get(doc, "materials") : NULL;
+	double given;
+
+	for (size_t i = 0; json_is_array(materials) && i < json_array_size(materials) &&
+			   i < out->material_count;
+	     i++) {
+		json_t *strength = json_object_get(
+			json_object_get(json_object_get(json_array_get(materials, i), "extensions"),
+					"KHR_materials_emissive_strength"),
+			"emissiveStrength");
+		double x = json_is_number(strength) ? json_number_value(strength) : 1;
+		if (x == 1 || numbers(sc->mMaterials[i], "$mat.emissiveIntensity", &given, 1))
+			continue;
+		for (int c = 0; c < 3; c++)
+			out->materials[i].emissive[c] *= x;
 	}
 }
 
@@ -891,9 +930,26 @@ static int read_textures(const struct aiScene *sc, const char *path, const json_
 		if (m->kind == MESH_MATERIAL_PHONG)
 			m->opacity_texture = texture_of(sc, path, doc, mat, aiTextureType_OPACITY,
 							MESH_TEXTURE_OPACITY, out);
-		textured |= m->base_texture >= 0 || m->opacity_texture >= 0;
-		if (m->base_texture == TEXTURE_NO_MEMORY ||
-		    m->opacity_texture == TEXTURE_NO_MEMORY) {
+		/* glTF's metallicRoughnessTexture: Assimp 5.2 gives it as the
+		 * "unknown" type, later versions also as metalness */
+		if (m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+			m->metallic_roughness_texture = texture_of(
+				sc, path, doc, mat,
+				aiGetMaterialTextureCount(mat, aiTextureType_UNKNOWN)
+					? aiTextureType_UNKNOWN
+					: aiTextureType_METALNESS,
+				MESH_TEXTURE_DATA, out);
+		m->emissive_texture =
+			texture_of(sc, path, doc, mat, aiTextureType_EMISSIVE, MESH_TEXTURE_COLOR, out);
+		if (m->kind == MESH_MATERIAL_METALLIC_ROUGHNESS)
+			m->normal_texture = texture_of(sc, path, doc, mat, aiTextureType_NORMALS,
+						       MESH_TEXTURE_DATA, out);
+		textured |= m->base_texture >= 0 || m->opacity_texture >= 0 ||
+			    m->metallic_roughness_texture >= 0 || m->emissive_texture >= 0 ||
+			    m->normal_texture >= 0;
+		if (m->base_texture == TEXTURE_NO_MEMORY || m->opacity_texture == TEXTURE_NO_MEMORY ||
+		    m->metallic_roughness_texture == TEXTURE_NO_MEMORY ||
+		    m->emissive_texture == TEXTURE_NO_MEMORY || m->normal_texture == TEXTURE_NO_MEMORY) {
 			free(used);
 			return -1;
 		}
@@ -933,6 +989,44 @@ static int read_textures(const struct aiScene *sc, const char *path, const json_
 	return 0;
 }
 
+/* ---- Nodes: where a light sits ---- */
+
+/* The node called name, depth first (Assimp's FindNode), or NULL. */
+static const struct aiNode *find_node(const struct aiNode *node, const struct aiString *name)
+{
+	if (node->mName.length == name->length &&
+	    memcmp(node->mName.data, name->data, name->length) == 0)
+		return node;
+	for (unsigned i = 0; i < node->mNumChildren; i++) {
+		const struct aiNode *found = find_node(node->mChildren[i], name);
+		if (found)
+			return found;
+	}
+	return NULL;
+}
+
+/* The node's global transform, its parents' applied, in double (rows of
+ * a 3x4 matrix: p' = M [p 1]). */
+static void global_transform(const struct aiNode *node, double m[3][4])
+{
+	for (int i = 0; i < 3; i++)
+		for (int j = 0; j < 4; j++)
+			m[i][j] = i == j;
+	for (; node; node = node->mParent) {
+		const struct aiMatrix4x4 *t = &node->mTransformation;
+		const double p[3][4] = {{t->a1, t->a2, t->a3, t->a4},
+					{t->b1, t->b2, t->b3, t->b4},
+					{t->c1, t->c2, t->c3, t->c4}};
+		double r[3][4];
+
+		for (int i = 0; i < 3; i++)
+			for (int j = 0; j < 4; j++)
+				r[i][j] = p[i][0] * m[0][j] + p[i][1] * m[1][j] + p[i][2] * m[2][j] +
+					  (j == 3 ? p[i][3] : 0);
+		memcpy(m, r, sizeof(r));
+	}
+}
+
 /* ---- Cameras (docs/SCENE.md, "The camera from a mesh file") ---- */
 
 /* The cameras of a file of another format than glTF 2.0 (whose cameras
@@ -959,17 +1053,72 @@ static int read_cameras(const struct aiScene *sc, struct mesh_data *out)
 	return 0;
 }
 
-/* The cameras of a file that has some, from a second import without
- * post-processing: PreTransformVertices renames every camera "cam_N" and
- * flattens the node hierarchy, and applying the steps to a scene already
- * imported (aiApplyPostProcessing) frees it twice in Assimp 5.2 when a step
- * fails (found by test/fuzz_mesh.c). Only files with cameras are read twice.
- * Returns -1 when out of memory; a second import that fails leaves the file
- * without cameras. */
-static int import_cameras(const char *path, struct aiFileIO *io, struct mesh_data *out)
+/* The lights that a node places, in the file's world space, with their
+ * colour times their intensity (Assimp's mColorDiffuse). A glTF light sits
+ * at its node's origin shining down its -z (KHR_lights_punctual), whatever
+ * Assimp copies into mPosition (as for cameras, read_cameras); another
+ * format's at mPosition along mDirection, in its node's space. Returns -1
+ * when out of memory. */
+static int read_lights(const struct aiScene *sc, struct mesh_data *out)
+{
+	int gltf = from_gltf2(sc);
+
+	out->lights = calloc(sc->mNumLights ? sc->mNumLights : 1, sizeof(*out->lights));
+	if (!out->lights)
+		return -1;
+	for (unsigned i = 0; i < sc->mNumLights; i++) {
+		const struct aiLight *light = sc->mLights[i];
+		const struct aiNode *node = light && light->mName.length && sc->mRootNode
+						    ? find_node(sc->mRootNode, &light->mName)
+						    : NULL;
+		struct mesh_light *l = &out->lights[out->light_count];
+		double m[3][4], local[3] = {0, 0, -1}, at[3] = {0, 0, 0};
+
+		if (!node)
+			continue; /* no node places it */
+		if (!gltf) {
+			local[0] = light->mDirection.x, local[1] = light->mDirection.y;
+			local[2] = light->mDirection.z;
+			at[0] = light->mPosition.x, at[1] = light->mPosition.y;
+			at[2] = light->mPosition.z;
+		}
+		snprintf(l->name, sizeof(l->name), "%.*s", (int)sizeof(l->name) - 1,
+			 light->mName.data);
+		for (char *ch = l->name; *ch; ch++) /* names go into messages on one line */
+			if ((unsigned char)*ch < 0x20 || *ch == 0x7f)
+				*ch = '?';
+		out->light_count++;
+		l->kind = light->mType == aiLightSource_POINT	      ? MESH_LIGHT_POINT
+			  : light->mType == aiLightSource_DIRECTIONAL ? MESH_LIGHT_DIRECTIONAL
+			  : light->mType == aiLightSource_SPOT	      ? MESH_LIGHT_SPOT
+								      : MESH_LIGHT_OTHER;
+		global_transform(node, m);
+		for (int k = 0; k < 3; k++) {
+			l->position[k] =
+				m[k][0] * at[0] + m[k][1] * at[1] + m[k][2] * at[2] + m[k][3];
+			l->direction[k] =
+				m[k][0] * local[0] + m[k][1] * local[1] + m[k][2] * local[2];
+		}
+		l->color[0] = light->mColorDiffuse.r;
+		l->color[1] = light->mColorDiffuse.g;
+		l->color[2] = light->mColorDiffuse.b;
+	}
+	return 0;
+}
+
+/* The cameras and lights of a file that has some, from a second import
+ * without post-processing: PreTransformVertices renames every camera
+ * "cam_N" and flattens the node hierarchy, and applying the steps to a scene
+ * already imported (aiApplyPostProcessing) frees it twice in Assimp 5.2 when a
+ * step fails (found by test/fuzz_mesh.c). Only files with cameras or lights
+ * are read twice; cameras only where `cameras` is set (a glTF file's come
+ * from gltf_read_cameras). Returns -1 when out of memory; a second import
+ * that fails leaves the file without cameras and lights. */
+static int import_views(const char *path, struct aiFileIO *io, int cameras,
+			struct mesh_data *out)
 {
 	const struct aiScene *sc = aiImportFileEx(path, 0, io);
-	int ret = sc ? read_cameras(sc, out) : 0;
+	int ret = sc ? (cameras && read_cameras(sc, out)) || read_lights(sc, out) : 0;
 
 	if (sc)
 		aiReleaseImport(sc);
@@ -1061,17 +1210,23 @@ int mesh_import_here(const char *path, struct mesh_data *out, char *reason, size
 	for (unsigned m = 0; m < sc->mNumMaterials; m++)
 		read_material(sc->mMaterials[m], m, &out->materials[m]);
 	out->material_count = sc->mNumMaterials;
+	gltf_emissive_strengths(sc, doc, out);
 	if (read_textures(sc, path, doc, out)) {
 		snprintf(reason, reason_size, "out of memory for its textures");
 		goto out_release_scene;
 	}
-	/* glTF's cameras from its JSON, each placed by the node that holds
-	 * it; other formats' from a second import. */
-	if (!doc && sc->mNumCameras) {
+	/* Cameras and lights from a second import (import_views); glTF's
+	 * cameras from its JSON instead, each placed by the node that holds
+	 * it. */
+	if (sc->mNumCameras || sc->mNumLights) {
 		aiReleaseImport(sc);
 		sc = NULL;
+		if (import_views(path, &io, !doc, out)) {
+			snprintf(reason, reason_size, "out of memory for its cameras and lights");
+			goto out_release_scene;
+		}
 	}
-	if (doc ? gltf_read_cameras(doc, out) : !sc && import_cameras(path, &io, out)) {
+	if (doc && gltf_read_cameras(doc, out)) {
 		snprintf(reason, reason_size, "out of memory for its cameras");
 		goto out_release_scene;
 	}

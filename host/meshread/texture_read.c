@@ -381,7 +381,9 @@ int texture_decode(const unsigned char *bytes, size_t size, struct mesh_texture 
 			if (im.wide) {
 				const uint16_t *in16 = (const uint16_t *)out;
 				double x = in16[c == 3 && alpha_from_first ? i - 3 : i] / 65535.0;
-				out[i] = (float)(c == 3 ? x : texture_srgb_to_linear(x));
+				out[i] = (float)(c == 3 || t->role == MESH_TEXTURE_DATA
+							 ? x
+							 : texture_srgb_to_linear(x));
 			} else {
 				out[i] = finite_channel(out[c == 3 && alpha_from_first ? i - 3 : i]);
 			}

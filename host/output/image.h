@@ -37,7 +37,14 @@ struct image_meta {
 	const char
 		*description; /* e.g. "scene: scenes/paper60.json, kernel dynamic"; NULL for none */
 	enum image_encoding encoding; /* a NULL meta: IMAGE_LINEAR */
+	/* Samples per pixel the image holds (0: not said), recorded as
+	 * IMAGE_SAMPLES_KEY: a PNG tEXt chunk, a PPM comment, an attribute of
+	 * the formats OpenImageIO writes (EXR...) but TIFF; PFM has no room. */
+	int samples;
 };
+
+/* The key a rendered image's samples per pixel are recorded under. */
+#define IMAGE_SAMPLES_KEY "rtcl:samples_per_pixel"
 
 /* Checks, before any rendering, that `path` can be written: its extension
  * names a format this build can write, its directory exists and a file can

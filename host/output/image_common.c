@@ -99,6 +99,8 @@ static int write_ppm(FILE *file, const float *rgb, int width, int height,
 		write_comment(file, "ImageDescription", meta->description);
 	if (meta)
 		write_comment(file, "Encoding", meta->encoding == IMAGE_LINEAR ? "linear" : "sRGB");
+	if (meta && meta->samples > 0)
+		fprintf(file, "# %s: %d\n", IMAGE_SAMPLES_KEY, meta->samples);
 	fprintf(file, "%d %d\n255\n", width, height);
 
 	for (y = 0; y < height; y++) {

@@ -157,6 +157,8 @@ int encode(const char *path, const char *tmp_path, int tmp_fd, const float *rgb,
 	// Not TIFF: OIIO 2.4 records sRGB there in an EXIF directory, which its
 	// TIFF writer cannot add through the write-only I/O proxy (the file then
 	// does not read back); a TIFF has no other place for it.
+	if (std::strcmp(out->format_name(), "tiff") != 0 && meta && meta->samples > 0)
+		spec.attribute(IMAGE_SAMPLES_KEY, meta->samples);
 	if (std::strcmp(out->format_name(), "tiff") != 0)
 		spec.attribute("oiio:ColorSpace",
 			       is_float || image_meta_encoding(meta) == IMAGE_LINEAR ? "linear"

@@ -84,6 +84,12 @@ static int header(FILE *file, int width, int height, const struct image_meta *me
 		return -1;
 	if (meta && meta->description && text_chunk(file, "Description", meta->description))
 		return -1;
+	if (meta && meta->samples > 0) {
+		char samples[16];
+		snprintf(samples, sizeof(samples), "%d", meta->samples);
+		if (text_chunk(file, IMAGE_SAMPLES_KEY, samples))
+			return -1;
+	}
 	return text_chunk(file, "oiio:ColorSpace", linear ? "linear" : "sRGB");
 }
 

@@ -29,7 +29,7 @@
 #define CANONICAL_SIZE (2 * PATH_MAX)
 /* Besides the images: the work map and its bar, the schedule map, the flops
  * and their sidecar, the stats, RTCL_DUMP_BINARY. */
-#define MAX_OTHER_OUTPUTS 7
+#define MAX_OTHER_OUTPUTS (7 + OUTPUT_AOV_KINDS)
 
 /* One output file of the run besides the images, and the option that named
  * it. */
@@ -43,6 +43,22 @@ int output_frame_name(const char *path, int frame, char *name)
 	const char *ext = files_extension(path);
 	int stem = (int)(ext - path);
 	int n = snprintf(name, PATH_MAX, "%.*s_%04d%s", stem, path, frame, ext);
+
+	return n < 0 || n >= PATH_MAX ? -1 : 0;
+}
+
+const char *output_aov_kind_name(int kind)
+{
+	static const char *const names[OUTPUT_AOV_KINDS] = {"albedo", "normal", "depth"};
+
+	return names[kind];
+}
+
+int output_aov_name(const char *path, int kind, char *name)
+{
+	const char *ext = files_extension(path);
+	int n = snprintf(name, PATH_MAX, "%.*s.%s.pfm", (int)(ext - path), path,
+			 output_aov_kind_name(kind));
 
 	return n < 0 || n >= PATH_MAX ? -1 : 0;
 }
@@ -78,6 +94,10 @@ int output_plan_open(struct output_plan *plan, const struct output_request *requ
 		snprintf(err, err_size, "out of host memory for %d frames", n);
 		return -1;
 	}
+	for (int k = 0; k < OUTPUT_AOV_KINDS; k++)
+		if ((request->aov & (1 << k)) &&
+		    output_aov_name(request->image, k, plan->aov_names[k]))
+			plan->aov_names_too_long = 1;
 	if (!job->animation) {
 		snprintf(plan->names[0], PATH_MAX, "%s", request->image);
 		return 0;
@@ -90,12 +110,16 @@ int output_plan_open(struct output_plan *plan, const struct output_request *requ
 	return 0;
 }
 
-/* Lists the outputs the request asks for besides the images, the sidecar
- * written into sidecar. */
-static int list_outputs(const struct output_request *r, char *sidecar, struct output *out)
+/* Lists the outputs the plan's request asks for besides the images, the
+ * sidecar written into sidecar. */
+static int list_outputs(const struct output_plan *plan, char *sidecar, struct output *out)
 {
+	const struct output_request *r = plan->request;
 	int n = 0;
 
+	for (int k = 0; k < OUTPUT_AOV_KINDS; k++)
+		if (r->aov & (1 << k))
+			out[n++] = (struct output){"--aov", plan->aov_names[k]};
 	if (r->work_map)
 		out[n++] = (struct output){"--work-map", r->work_map};
 	if (r->work_map_bar)
@@ -244,7 +268,12 @@ int output_plan_check(const struct output_plan *plan, char *err, size_t err_size
 	if (!plan->job->animation)
 		out[n++] = (struct output){"-o/--output", r->image};
 	int others = n;
-	n += list_outputs(r, sidecar, out + n);
+	n += list_outputs(plan, sidecar, out + n);
+	if (plan->aov_names_too_long) {
+		snprintf(err, err_size, "--aov: %s: the auxiliary images' names are too long",
+			 quote_text(r->image));
+		return -1;
+	}
 	if (plan->names_too_long) {
 		snprintf(err, err_size, "-o/--output: %s: the frame names are too long",
 			 quote_text(r->image));
@@ -260,7 +289,7 @@ int output_plan_check(const struct output_plan *plan, char *err, size_t err_size
 		const char *path = out[i].path;
 		int image = ((path == r->work_map || path == r->schedule_map) &&
 			     workmap_kind(path) != WORKMAP_NPY) ||
-			    path == r->work_map_bar;
+			    path == r->work_map_bar || strcmp(out[i].option, "--aov") == 0;
 		if (image ? image_check_writable(path, err, err_size)
 			  : files_check_writable(path, err, err_size))
 			return -1;
@@ -268,23 +297,59 @@ int output_plan_check(const struct output_plan *plan, char *err, size_t err_size
 	return 0;
 }
 
-int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, char *err,
-			    size_t err_size)
+/* Stages image i, which holds `samples` samples per pixel, into staged. */
+static int stage_image(const struct output_plan *plan, struct staged_file *staged, int i,
+		       const float *rgb, int samples, const char *why, char *err, size_t err_size)
 {
 	const struct job *job = plan->job;
 	const struct render_settings *s = &job->settings;
+	int planned = settings_samples(s);
 	char description[1024];
 	struct image_meta meta = {"rtcl " RTCL_VERSION, description,
-				  plan->request->linear_encoding ? IMAGE_LINEAR : IMAGE_SRGB};
-	int n = snprintf(description, sizeof(description), "scene %s, kernel %s, %dx%d, max depth %d",
-			 job->scene->source, s->kernel ? s->kernel->name : "reference", s->width,
-			 s->height, s->max_depth);
+				  plan->request->linear_encoding ? IMAGE_LINEAR : IMAGE_SRGB,
+				  samples};
+	size_t n = (size_t)snprintf(description, sizeof(description),
+				    "scene %s, kernel %s, %dx%d, max depth %d", job->scene->source,
+				    s->kernel ? s->kernel->name : "reference", s->width, s->height,
+				    s->max_depth);
+	if (job->animation && n < sizeof(description))
+		n += (size_t)snprintf(description + n, sizeof(description) - n,
+				      ", frame %d of %d..%d", job->first_frame + i,
+				      job->first_frame, job->last_frame);
+	if (samples < planned && n < sizeof(description))
+		snprintf(description + n, sizeof(description) - n,
+			 ", %d of %d samples per pixel (%s)", samples, planned, why);
+	else if (n < sizeof(description))
+		snprintf(description + n, sizeof(description) - n, ", %d sample%s per pixel",
+			 samples, samples == 1 ? "" : "s");
+	return image_stage(staged, plan->names[i], rgb, s->width, s->height, &meta, err, err_size);
+}
 
-	if (job->animation && n > 0 && (size_t)n < sizeof(description))
-		snprintf(description + n, sizeof(description) - (size_t)n, ", frame %d of %d..%d",
-			 job->first_frame + i, job->first_frame, job->last_frame);
-	return image_stage(&plan->staged[i], plan->names[i], rgb, s->width, s->height, &meta, err,
-			   err_size);
+int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, int samples,
+			    char *err, size_t err_size)
+{
+	return stage_image(plan, &plan->staged[i], i, rgb, samples, "interrupted", err, err_size);
+}
+
+int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples, char *err,
+				 size_t err_size)
+{
+	struct staged_file staged;
+
+	memset(&staged, 0, sizeof(staged));
+	if (stage_image(plan, &staged, 0, rgb, samples, "a checkpoint", err, err_size))
+		return -1;
+	/* One step for an interrupt: the rename and what the message says. */
+	interrupt_hold();
+	if (files_commit(&staged, 1, err, err_size)) {
+		interrupt_release();
+		return -1;
+	}
+	interrupt_set_outcome("the image's last checkpoint was written, no other output");
+	interrupt_release();
+	plan->checkpoints++;
+	plan->checkpoint_samples = samples;
+	return 0;
 }
 
 int output_plan_check_memory(const struct output_plan *plan, char *err, size_t err_size)
@@ -345,7 +410,8 @@ static int stage_held(struct output_plan *plan, char *err, size_t err_size)
 	if (output_plan_check_held(plan, err, err_size))
 		return -1;
 	for (int i = 0; i < plan->frames; i++) {
-		if (output_plan_stage_image(plan, i, plan->held[i], err, err_size))
+		if (output_plan_stage_image(plan, i, plan->held[i],
+					    settings_samples(&plan->job->settings), err, err_size))
 			return -1;
 		free(plan->held[i]);
 		plan->held[i] = NULL;
@@ -409,6 +475,36 @@ static int stage_schedule_map(struct staged_file *staged, const struct output_pl
 	return schedmap_stage(staged, path, schedule, w, h, err, err_size);
 }
 
+/* Auxiliary image `kind` (render_result.aov) as linear RGB in a .pfm: the
+ * depth in all three channels. */
+static int stage_aov(struct staged_file *staged, const struct output_plan *plan,
+		     const struct record *record, int kind, char *err, size_t err_size)
+{
+	int w = plan->job->settings.width, h = plan->job->settings.height;
+	size_t pixels = (size_t)w * h;
+	const float *aov = record->result.aov;
+	float *grey = NULL;
+	int ret;
+
+	if (!aov) {
+		snprintf(err, err_size, "internal error: no auxiliary images were rendered");
+		return -1;
+	}
+	if (kind == 2) {
+		grey = malloc(pixels * 3 * sizeof(float));
+		if (!grey) {
+			snprintf(err, err_size, "out of host memory for the depth image");
+			return -1;
+		}
+		for (size_t i = 0; i < pixels; i++)
+			grey[3 * i] = grey[3 * i + 1] = grey[3 * i + 2] = aov[6 * pixels + i];
+	}
+	ret = image_stage(staged, plan->aov_names[kind], grey ? grey : aov + 3 * pixels * kind, w,
+			  h, NULL, err, err_size);
+	free(grey);
+	return ret;
+}
+
 /* Stages the outputs besides the images into staged[]; returns how many,
  * or -1. */
 static int stage_others(const struct output_plan *plan, const struct record *record,
@@ -419,6 +515,9 @@ static int stage_others(const struct output_plan *plan, const struct record *rec
 	char sidecar[SIDECAR_PATH_SIZE];
 	int n = 0;
 
+	for (int k = 0; k < OUTPUT_AOV_KINDS; k++)
+		if ((r->aov & (1 << k)) && stage_aov(&staged[n++], plan, record, k, err, err_size))
+			return -1;
 	if (r->work_map && stage_work_map(&staged[n++], plan, record, err, err_size))
 		return -1;
 	if (r->work_map_bar &&
@@ -452,9 +551,14 @@ int output_plan_commit(struct output_plan *plan, struct record *record, char *er
 	if (any_held(plan))
 		failed = stage_held(plan, err, err_size);
 	else if (!plan->job->animation)
-		failed = output_plan_stage_image(plan, 0, record->result.rgb, err, err_size);
+		failed = output_plan_stage_image(plan, 0, record->result.rgb,
+						 record_samples_done(&plan->job->settings, record),
+						 err, err_size);
 	if (failed)
 		return -1;
+	plan->frames_written = 0;
+	for (int i = 0; i < plan->frames; i++)
+		plan->frames_written += plan->staged[i].temp[0] != '\0';
 	int others = stage_others(plan, record, plan->staged + plan->frames, err, err_size);
 	if (others < 0)
 		return -1;
@@ -477,10 +581,22 @@ void output_plan_print(const struct output_plan *plan, FILE *out)
 		fprintf(out, "output:  %s", quote_text(plan->names[0]));
 		if (plan->frames > 1)
 			fprintf(out, " .. %s", quote_text(plan->names[plan->frames - 1]));
+		if (plan->frames_written < plan->frames)
+			fprintf(out,
+				": the %d frame%s finished (interrupted; the frames not "
+				"finished are not written)",
+				plan->frames_written, plan->frames_written == 1 ? "" : "s");
 		fprintf(out, "\n");
 		return;
 	}
 	fprintf(out, "output:  %s", quote_text(r->image));
+	if (plan->checkpoints)
+		fprintf(out, " (%d checkpoint%s before it)", plan->checkpoints,
+			plan->checkpoints == 1 ? "" : "s");
+	for (int k = 0; k < OUTPUT_AOV_KINDS; k++)
+		if (r->aov & (1 << k))
+			fprintf(out, ", %s %s", output_aov_kind_name(k),
+				quote_text(plan->aov_names[k]));
 	if (r->work_map)
 		fprintf(out, ", work map %s", quote_text(r->work_map));
 	if (r->flops)

@@ -27,7 +27,26 @@ struct output_request {
 	const char *work_map_bar; /* --work-map-bar */
 	const char *schedule_map; /* --schedule-map */
 	int linear_encoding;	  /* --encoding linear */
+	int aov;		  /* --aov: OUTPUT_AOV_* bits */
+	int denoise;		  /* --denoise */
 };
+
+/* The auxiliary images --aov writes (docs/GUIDE.md, "Denoising and
+ * auxiliary images"), each beside -o as output_aov_name says. */
+enum {
+	OUTPUT_AOV_ALBEDO = 1,
+	OUTPUT_AOV_NORMAL = 2,
+	OUTPUT_AOV_DEPTH = 4,
+	OUTPUT_AOV_KINDS = 3,
+};
+
+/* The name of auxiliary image `kind` (0 albedo, 1 normal, 2 depth) of image
+ * path: its extension replaced by ".KIND.pfm" (out.png -> out.albedo.pfm).
+ * Returns 0, or -1 when it does not fit in name[PATH_MAX]. */
+int output_aov_name(const char *path, int kind, char *name);
+
+/* "albedo", "normal" or "depth". */
+const char *output_aov_kind_name(int kind);
 
 /* The most frames one run writes (each stays staged until all are done). */
 #define FRAMES_MAX 1000
@@ -44,6 +63,12 @@ struct output_plan {
 	int names_too_long;	 /* a frame's name does not fit in PATH_MAX */
 	float **held;		 /* --mpi: frames kept in memory until all arrived */
 	struct staged_file *staged; /* the images, then the other outputs */
+	int frames_written;	    /* an animation's frames staged (fewer than frames
+				       when an interrupt stopped it) */
+	int checkpoints;	    /* written by output_plan_write_checkpoint */
+	int checkpoint_samples;	    /* the last one's samples per pixel */
+	char aov_names[OUTPUT_AOV_KINDS][PATH_MAX]; /* --aov's files, those asked for */
+	int aov_names_too_long;
 };
 
 /* Prepares the plan of job's outputs (no file touched). Returns 0, or -1
@@ -65,11 +90,19 @@ int output_same_file(const char *a, const char *b);
  * Returns 0, or -1 when it does not fit in name[PATH_MAX]. */
 int output_frame_name(const char *path, int frame, char *name);
 
-/* Stages image i (0 for one image; frame first + i of an animation) for the
- * commit. Thread-safe for distinct i. Returns 0, or -1 with one message in
- * err. */
-int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, char *err,
-			    size_t err_size);
+/* Stages image i (0 for one image; frame first + i of an animation), of
+ * `samples` samples per pixel (fewer than the job's: an interrupted render,
+ * which its description says), for the commit; the samples are recorded in
+ * the file's metadata (image.h). Thread-safe for distinct i. Returns 0, or
+ * -1 with one message in err. */
+int output_plan_stage_image(struct output_plan *plan, int i, const float *rgb, int samples,
+			    char *err, size_t err_size);
+
+/* --checkpoint: writes the one image now, of `samples` samples per pixel
+ * so far, staged and committed alone (the run's other outputs come at its
+ * end, with the final image). Returns 0, or -1 with one message in err. */
+int output_plan_write_checkpoint(struct output_plan *plan, const float *rgb, int samples, char *err,
+				 size_t err_size);
 
 /* Under --mpi, rank 0 keeps every frame in host memory and creates nothing
  * in the output folder until all have arrived, because a rank that dies makes

@@ -22,10 +22,20 @@ static uint32_t mix(uint32_t x)
 void schedmap_group_colour(uint32_t group, float rgb[3])
 {
 	uint32_t h = mix(group);
+	float brightest = 0;
 
-	for (int c = 0; c < 3; c++)
+	for (int c = 0; c < 3; c++) {
 		rgb[c] = group == 0xffffffffu ? 0.0f
 					      : 0.15f + 0.8f * (float)((h >> (8 * c)) & 0xff) / 255.0f;
+		brightest = rgb[c] > brightest ? rgb[c] : brightest;
+	}
+	/* A dark colour is lifted until its brightest channel is
+	 * SCHEDMAP_MIN_BRIGHTEST: no group is near the black of a pixel no
+	 * group started or the grey (40, 40, 40) of one the replay has not
+	 * reached yet (rtcl-schedule-replay), which one looked like before. */
+	if (group != 0xffffffffu && brightest < SCHEDMAP_MIN_BRIGHTEST)
+		for (int c = 0; c < 3; c++)
+			rgb[c] += SCHEDMAP_MIN_BRIGHTEST - brightest;
 }
 
 int schedmap_stage(struct staged_file *staged, const char *path, const uint32_t *schedule,
@@ -34,7 +44,7 @@ int schedmap_stage(struct staged_file *staged, const char *path, const uint32_t 
 	size_t pixels = (size_t)width * (size_t)height;
 	float *rgb = malloc(pixels * 3 * sizeof(float));
 	char description[128];
-	struct image_meta meta = {"rtcl " RTCL_VERSION, description, IMAGE_DISPLAY};
+	struct image_meta meta = {"rtcl " RTCL_VERSION, description, IMAGE_DISPLAY, 0};
 
 	if (!rgb) {
 		snprintf(err, err_size, "out of host memory for the schedule map");

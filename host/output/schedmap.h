@@ -10,8 +10,11 @@
 struct staged_file;
 
 /* The colour of work-group `group` (linear RGB in [0, 1]): a fixed hash of
- * the number, so neighbouring groups differ; black for a pixel no group
- * started (0xffffffff). */
+ * the number, so neighbouring groups differ, each channel 0.15 + 0.8 of one
+ * byte of it, lifted where its brightest channel is below
+ * SCHEDMAP_MIN_BRIGHTEST; black for a pixel no group started (0xffffffff).
+ * tools/rtcl_tools/commands/schedule_replay.py computes the same. */
+#define SCHEDMAP_MIN_BRIGHTEST 0.45f
 void schedmap_group_colour(uint32_t group, float rgb[3]);
 
 /* Stages the picture of schedule (RT_SCHEDULE_WORDS per pixel, row-major) in

@@ -366,6 +366,7 @@ static int stage_picture(struct staged_file *staged, const char *path, const flo
 	meta.software = "rtcl " RTCL_VERSION;
 	meta.description = description;
 	meta.encoding = IMAGE_DISPLAY; /* viridis is a scale of display colours */
+	meta.samples = 0;
 	return image_stage(staged, path, rgb, width, height, &meta, err, err_size);
 }
 
@@ -463,7 +464,7 @@ int workmap_stage_counts(struct staged_file *staged, const char *path, const uin
 	size_t pixels = (size_t)width * (size_t)height;
 	struct image_meta meta = {"rtcl " RTCL_VERSION,
 				  "flops per pixel: the counts, the same in every channel",
-				  IMAGE_LINEAR};
+				  IMAGE_LINEAR, 0};
 	float *rgb = malloc(3 * sizeof(float) * pixels);
 	int status;
 

@@ -231,16 +231,20 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	    block_prepare_scene(dev, scene, s, res, scene_block, err, err_size))
 		return -1;
 	res->times.scene = timing_lap_ms(&lap);
+	int path = scene->integrator == SCENE_INTEGRATOR_PATH;
 	struct program_features features = {res->scene_in_local, res->bvh_nodes > 0,
 					    scene->triangle_count > 0,
 					    res->bvh_nodes > 0 && scene->sphere_count == 0 &&
 						    s->accel == ACCEL_BVH,
 					    scene->camera.aperture > 0,
-					    scene_has_area_lights(scene),
-					    scene_has_fresnel(scene->materials, scene->material_count),
+					    /* Whitted's own switches; the path integrator
+					       samples every light and has its own BSDFs */
+					    !path && scene_has_area_lights(scene),
+					    !path && scene_has_fresnel(scene->materials,
+								       scene->material_count),
 					    scene_has_textures(scene),
-					    scene->light_count == 0,
-					    res->bvh_width == 4};
+					    scene->light_count == 0 && !path,
+					    res->bvh_width == 4, path};
 	if (program_build(dev, s, &features, program, res->build_options, &res->build_cached, err,
 			  err_size))
 		return -1;

@@ -15,14 +15,15 @@
 
 /* The tracer's sources, in the order the compiler sees them; the kernel's own
  * cl/NAME.cl follows. */
-const char *const program_tracer_sources[] = {"rtcl_shared.h", "tracer.cl", "sample.cl",
-					      "texture.cl",    "intersect.cl", "traverse.cl",
-					      "shade.cl",      "walk.cl",   "scheduling.cl"};
+const char *const program_tracer_sources[] = {
+	"rtcl_shared.h", "tracer.cl", "sample.cl", "texture.cl", "intersect.cl", "traverse.cl",
+	"shade.cl",	 "walk.cl",   "bsdf.cl",   "light.cl",	 "path.cl",	 "pixel.cl",
+	"scheduling.cl", "aov.cl"};
 const int program_tracer_source_count =
 	sizeof(program_tracer_sources) / sizeof(program_tracer_sources[0]);
 
 /* The tracer's sources and the kernel's own. */
-#define MAX_SOURCES 12
+#define MAX_SOURCES 16
 
 /* A kernel source read from RTCL_CL_DIR is at most this large. */
 #define KERNEL_SOURCE_MAX_BYTES ((size_t)16 << 20)
@@ -191,8 +192,10 @@ static int format_options(const struct device *dev, const struct render_settings
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
-		 s->max_depth, s->batch > 0 ? s->batch : 1,
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 /* The path integrator reads max_depth from the scene block and
+		  * needs no ray stack: one program for every depth. */
+		 f->path ? 0 : s->max_depth, s->batch > 0 ? s->batch : 1,
 		 /* A CPU device: the box test in its vector unit's way
 		  * (cl/traverse.cl, box_pair_hit); the same numbers. */
 		 dev->is_gpu ? "" : " -DRTCL_CPU",
@@ -212,12 +215,17 @@ static int format_options(const struct device *dev, const struct render_settings
 		 f->textures ? " -DRTCL_TEXTURES" : "",
 		 /* No light, no shadow rays: their code is left out. */
 		 f->no_lights ? " -DRTCL_NO_LIGHTS" : "",
+		 /* The path integrator's files (bsdf.cl, light.cl, path.cl) are
+		  * empty without it: a Whitted program is the one of before. */
+		 f->path ? " -DRTCL_PATH" : "",
 		 s->samples > 1 ? "" : " -DRTCL_ONE_SAMPLE",
 		 s->count_flops ? " -DRTCL_COUNT_FLOPS" : "",
 		 /* SIMD efficiency, measured where the device lets software see it. */
 		 s->count_flops && dev->simd_measurable ? " -DRTCL_SIMD_MEASURE" : "",
 		 s->check_writes ? " -DRTCL_COUNT_WRITES" : "",
 		 s->record_schedule ? " -DRTCL_SCHEDULE_MAP" : "",
+		 /* The auxiliary images' kernel (cl/aov.cl), only when asked for. */
+		 s->aov ? " -DRTCL_AOV" : "",
 		 /* The chunks done, for the progress line (cl/scheduling.cl). */
 		 program_counts_progress(s) ? " -DRTCL_PROGRESS" : "",
 		 dev->nv_compiler_options ? " " NV_REGISTER_CAP : "", extra && *extra ? " " : "",

@@ -24,6 +24,7 @@ struct program_features {
 	int textures;	    /* a texture or an alpha cut-out (scene_has_textures) */
 	int no_lights;	    /* no light: the shadow rays' code is left out */
 	int bvh4;	    /* the BVH's nodes are four-wide (a CPU's, rt_bvh4_node) */
+	int path;	    /* the path integrator (RENDERING.md, "Path tracing") */
 };
 
 /* Builds the tracer's sources and cl/KERNEL.cl for the settings, or loads

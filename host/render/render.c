@@ -8,6 +8,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/interrupt.h"
 #include "render/repeats.h"
 #include "base/progress.h"
 #include "render/reference.h"
@@ -46,6 +47,14 @@ const struct kernel_info *render_find_kernel(const char *name)
 	return NULL;
 }
 
+int render_check_integrator(const struct scene *scene, const struct render_settings *s,
+			    char *err, size_t err_size)
+{
+	/* Every kernel and the reference render both integrators. */
+	(void)scene, (void)s, (void)err, (void)err_size;
+	return 0;
+}
+
 int render_pass_samples(const struct render_settings *s)
 {
 	return renderer_pass_samples(s, (long long)s->width * s->height, 0);
@@ -74,13 +83,23 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 		if (renderer_all_samples(&r, &whole, &out, err, err_size))
 			goto out_close;
 		repeats_record(res, frame, frames, out.kernel_ms, (timing_now() - start) * 1e3);
+		res->samples_done = out.samples;
+		res->passes_done = out.passes;
 	}
 	if (s->progress)
 		progress_end();
 	if (repeats_end(res, err, err_size))
 		goto out_close;
 	res->times.kernels = timing_lap_ms(&lap);
+	if (s->aov && renderer_aov(&r, err, err_size))
+		goto out_close;
+	res->times.aov = timing_lap_ms(&lap);
 	if (renderer_read_back(&r, err, err_size))
+		goto out_close;
+	/* Stopped: the image buffer holds no means yet, the sums hold the
+	 * samples done. */
+	if (res->samples_done < settings_samples(s) &&
+	    renderer_read_mean(&r, res->samples_done, res->rgb, err, err_size))
 		goto out_close;
 	res->times.read_back = timing_lap_ms(&lap);
 	renderer_close(&r);
@@ -95,29 +114,90 @@ out_free:
 	return -1;
 }
 
+/* The CPU reference's checkpoint: the mean of every pixel's first
+ * `samples` samples from their sums. */
+static int reference_checkpoint(const struct render_settings *s, const double *sums, int samples,
+				char *err, size_t err_size)
+{
+	const struct render_checkpoint *c = s->checkpoint;
+	size_t values = (size_t)s->width * s->height * 3;
+	float *rgb = malloc(image_float_bytes(s->width, s->height));
+	int failed;
+
+	if (!rgb) {
+		snprintf(err, err_size, "out of host memory for a %dx%d checkpoint", s->width,
+			 s->height);
+		return -1;
+	}
+	reference_mean(sums, values, samples, rgb);
+	failed = c->write(c->context, rgb, samples, err, err_size);
+	free(rgb);
+	return failed;
+}
+
+/* One frame of the reference: every pixel's samples one at a time over the
+ * image, added in sample order into sums (the same mean as one pixel's
+ * samples at a time), with stops and checkpoints between them as
+ * renderer_all_samples has between passes. Returns the samples done, or
+ * -1 with one message in err. */
+static int reference_frame(const struct scene *scene, const struct render_settings *s, double *sums,
+			   char *err, size_t err_size)
+{
+	int samples = settings_samples(s);
+	double next_checkpoint = s->checkpoint ? timing_now() + s->checkpoint->seconds : 0;
+
+	memset(sums, 0, (size_t)s->width * s->height * 3 * sizeof(double));
+	for (int k = 0; k < samples; k++) {
+		if (k > 0 && s->stoppable && interrupt_stop_signal())
+			return k;
+		if (k > 0 && s->checkpoint && timing_now() >= next_checkpoint) {
+			if (reference_checkpoint(s, sums, k, err, err_size))
+				return -1;
+			next_checkpoint = timing_now() + s->checkpoint->seconds;
+		}
+		if (reference_render_sample(scene, s->width, s->height, s->max_depth, k, samples,
+					    sums)) {
+			snprintf(err, err_size,
+				 "the CPU reference renderer failed (out of memory)");
+			return -1;
+		}
+		if (k == 0 && s->stoppable)
+			interrupt_allow_stop(1);
+	}
+	return samples;
+}
+
 int render_reference(const struct scene *scene, const struct render_settings *s,
 		     struct render_result *res, char *err, size_t err_size)
 {
+	size_t values = (size_t)s->width * s->height * 3;
+	double *sums = malloc(values * sizeof(double));
+
 	memset(res, 0, sizeof(*res));
+	if (render_check_integrator(scene, s, err, err_size))
+		return -1;
 	res->rgb = malloc(image_float_bytes(s->width, s->height));
 	res->kernel_ms = calloc((size_t)s->repeat, sizeof(double));
-	if (!res->rgb || !res->kernel_ms) {
+	if (!res->rgb || !res->kernel_ms || !sums) {
 		snprintf(err, err_size, "out of host memory for a %dx%d image", s->width,
 			 s->height);
 		goto out_free;
 	}
 	for (int i = 0; i < s->repeat; i++) {
 		double start = timing_now();
-		if (reference_render_samples(scene, s->width, s->height, s->max_depth,
-					     settings_samples(s), res->rgb)) {
-			snprintf(err, err_size,
-				 "the CPU reference renderer failed (out of memory)");
+		int done = reference_frame(scene, s, sums, err, err_size);
+		if (done < 0)
 			goto out_free;
-		}
+		reference_mean(sums, values, done, res->rgb);
 		res->kernel_ms[i] = (timing_now() - start) * 1e3;
+		res->samples_done = done;
+		res->passes_done = done;
 	}
+	free(sums);
+	sums = NULL;
 	res->repeat = s->repeat;
 	res->launches = s->repeat;
+	res->passes = settings_samples(s);
 	for (int i = 0; i < s->repeat; i++)
 		res->times.kernels += res->kernel_ms[i];
 	res->groups[0] = res->groups[1] = 1;
@@ -126,6 +206,7 @@ int render_reference(const struct scene *scene, const struct render_settings *s,
 		return 0;
 
 out_free:
+	free(sums);
 	render_result_free(res);
 	return -1;
 }
@@ -133,6 +214,8 @@ out_free:
 void render_result_free(struct render_result *res)
 {
 	free(res->rgb);
+	free(res->aov);
+	res->aov = NULL;
 	free(res->kernel_ms);
 	free(res->frame_ms);
 	free(res->item_flops);

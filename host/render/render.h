@@ -12,6 +12,15 @@ extern const int render_kernel_count;
 /* Returns the kernel named `name`, or NULL. */
 const struct kernel_info *render_find_kernel(const char *name);
 
+/* Whether the settings' kernel (NULL: the CPU reference) renders the scene's
+ * integrator: today every kernel and the reference render both (RENDERING.md,
+ * "Path tracing"), so it returns 0; otherwise -1 with one message in err that
+ * says what to use instead. Checked before any work, and again by the
+ * renderers, so that a path-traced scene is never silently rendered by
+ * Whitted's rules. */
+int render_check_integrator(const struct scene *scene, const struct render_settings *settings,
+			    char *err, size_t err_size);
+
 /* renderer_pass_samples() for the whole image on a device that is not a
  * GPU: one pass of render() there. */
 int render_pass_samples(const struct render_settings *settings);

@@ -2,11 +2,14 @@
  * functions (singlepass.c or wavefront.c), and the passes that cover every
  * sample of a piece. */
 #include "render/renderer.h"
+#include "render/render.h"
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
+#include "base/interrupt.h"
 #include "base/progress.h"
 #include "base/timing.h"
 
@@ -22,6 +25,8 @@ int renderer_open(struct renderer *r, struct device *dev, const struct scene *sc
 	r->result = res;
 	r->queues = renderer_queues(s, dev);
 	res->queues = 1;
+	if (render_check_integrator(scene, s, err, err_size))
+		return -1;
 	if (r->ops->open(r, scene, err, err_size) == 0)
 		return 0;
 	r->ops->close(r);
@@ -75,6 +80,11 @@ int renderer_read_rows(struct renderer *r, const struct rt_piece *piece, float *
 		       char *err, size_t err_size)
 {
 	return r->ops->read_rows(r, piece, to, packed, err, err_size);
+}
+
+int renderer_aov(struct renderer *r, char *err, size_t err_size)
+{
+	return r->ops->aov(r, err, err_size);
 }
 
 void renderer_close(struct renderer *r)
@@ -187,6 +197,67 @@ static int split_columns(const struct renderer *r, const struct rt_piece *piece,
 	return count;
 }
 
+int renderer_stopping(const struct renderer *r)
+{
+	if (!r->settings->stoppable)
+		return 0;
+	/* From the first pass on an interrupt asks to stop, no more ends the
+	 * process (interrupt.h): the caller ends allowing it. */
+	interrupt_allow_stop(1);
+	return interrupt_stop_signal() != 0;
+}
+
+int renderer_checkpoint_due(const struct renderer *r)
+{
+	return r->settings->checkpoint && r->next_checkpoint > 0 &&
+	       timing_now() >= r->next_checkpoint;
+}
+
+void renderer_mean_of_sums(const cl_long *sums, size_t pixels, int samples, float *rgb)
+{
+	float scale = settings_mean_scale(samples);
+
+	for (size_t i = 0; i < pixels; i++) {
+		const cl_long *sum = sums + 4 * i;
+		for (int c = 0; c < 3; c++)
+			rgb[3 * i + c] = sum[3] & (1 << c) ? INFINITY : (float)sum[c] * scale;
+	}
+}
+
+int renderer_read_mean(struct renderer *r, int samples, float *rgb, char *err, size_t err_size)
+{
+	const struct render_settings *s = r->settings;
+	cl_long *sums = malloc(image_sum_bytes(s->width, s->height));
+
+	if (!sums) {
+		snprintf(err, err_size, "out of host memory for the sums of a %dx%d image",
+			 s->width, s->height);
+		return -1;
+	}
+	int failed = renderer_read_sums(r, sums, err, err_size);
+	if (!failed)
+		renderer_mean_of_sums(sums, (size_t)s->width * s->height, samples, rgb);
+	free(sums);
+	return failed;
+}
+
+int renderer_checkpoint(struct renderer *r, int samples, char *err, size_t err_size)
+{
+	const struct render_settings *s = r->settings;
+	const struct render_checkpoint *c = s->checkpoint;
+	float *rgb = malloc(image_float_bytes(s->width, s->height));
+	int failed = -1;
+
+	if (!rgb)
+		snprintf(err, err_size, "out of host memory for a %dx%d checkpoint", s->width,
+			 s->height);
+	else if (renderer_read_mean(r, samples, rgb, err, err_size) == 0)
+		failed = c->write(c->context, rgb, samples, err, err_size);
+	free(rgb);
+	r->next_checkpoint = timing_now() + c->seconds;
+	return failed;
+}
+
 int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struct piece_result *out,
 			 char *err, size_t err_size)
 {
@@ -194,6 +265,8 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 		renderer_pass_samples(r->settings, (long long)whole->width * whole->height,
 				      r->dev->is_gpu);
 
+	if (r->settings->checkpoint && r->next_checkpoint == 0)
+		r->next_checkpoint = timing_now() + r->settings->checkpoint->seconds;
 	int queues = piece_queues(
 		r, whole, (whole->sample_end - whole->sample_begin + per_pass - 1) / per_pass);
 	if (queues > 1) {
@@ -206,9 +279,16 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 	}
 	out->kernel_ms = 0;
 	out->launches = 0;
+	out->samples = 0;
+	out->passes = 0;
 	for (int begin = whole->sample_begin; begin < whole->sample_end; begin += per_pass) {
 		struct rt_piece piece = *whole;
 		struct piece_result pass;
+		if (begin > whole->sample_begin && renderer_stopping(r))
+			break;
+		if (begin > whole->sample_begin && renderer_checkpoint_due(r) &&
+		    renderer_checkpoint(r, begin - whole->sample_begin, err, err_size))
+			return -1;
 		piece.sample_begin = begin;
 		piece.sample_end =
 			whole->sample_end - begin > per_pass ? begin + per_pass : whole->sample_end;
@@ -216,7 +296,8 @@ int renderer_all_samples(struct renderer *r, const struct rt_piece *whole, struc
 			return -1;
 		out->kernel_ms += pass.kernel_ms;
 		out->launches += pass.launches;
+		out->samples = piece.sample_end - whole->sample_begin;
+		out->passes++;
 	}
 	return 0;
 }
-

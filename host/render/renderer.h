@@ -30,6 +30,9 @@
 struct piece_result {
 	double kernel_ms; /* the profiled time of its launches */
 	int launches;
+	int samples; /* of every pixel of the piece (renderer_all_samples): its
+			whole range, or fewer when stopped (render_settings.stoppable) */
+	int passes;  /* the passes that ran */
 };
 
 /* The most in-order queues one device renders with (--queues). */
@@ -44,6 +47,8 @@ struct renderer {
 	struct render_result *result; /* the plan, scene and build facts; read_back
 					 fills the image and counts */
 	void *state;		      /* the renderer's own, behind ops */
+	double next_checkpoint;	      /* when the next is due (settings->checkpoint),
+					 on timing_now()'s clock; 0: not started */
 };
 
 /* The functions a family of kernels provides (kernel_info.ops). Each returns
@@ -62,6 +67,8 @@ struct renderer_ops {
 	int (*read_sums)(struct renderer *r, cl_long *to, size_t first, size_t count,
 			 cl_event *event, char *err, size_t err_size);
 	void (*close)(struct renderer *r);
+	/* The auxiliary images into result->aov (aov_render). */
+	int (*aov)(struct renderer *r, char *err, size_t err_size);
 };
 
 /* Opens settings->kernel's renderer on dev for scene; result is zeroed first
@@ -100,6 +107,10 @@ int renderer_read_sums_part(struct renderer *r, cl_long *to, size_t first, size_
 			    cl_event *event, char *err, size_t err_size);
 
 void renderer_close(struct renderer *r);
+
+/* Renders the auxiliary images (cl/aov.cl) into r->result->aov; the
+ * settings must ask for them (settings.aov). */
+int renderer_aov(struct renderer *r, char *err, size_t err_size);
 
 /* Returns the piece of rows [y0, y0 + height), the image's whole width, with
  * samples [begin, end) of settings_samples(s). */
@@ -151,9 +162,35 @@ int renderer_queues(const struct render_settings *settings, const struct device 
  * fills the device while another's ends, and the host enqueues ahead
  * instead of waiting between passes. A pixel's samples still come in order,
  * so the image is the same; kernel_ms is then the time any launch of the
- * piece ran (launch_busy_ms), not the sum of the launches' times. */
+ * piece ran (launch_busy_ms), not the sum of the launches' times. Between
+ * passes it writes the checkpoints that are due and stops where
+ * renderer_stopping() says, out->samples then telling how many samples of
+ * every pixel were traced. */
 int renderer_all_samples(struct renderer *r, const struct rt_piece *piece, struct piece_result *out,
 			 char *err, size_t err_size);
+
+/* Between two passes of renderer_all_samples: whether the render stops
+ * there (settings->stoppable and an interrupt asked it to). */
+int renderer_stopping(const struct renderer *r);
+
+/* Whether a checkpoint (settings->checkpoint) is due between two passes. */
+int renderer_checkpoint_due(const struct renderer *r);
+
+/* Writes a checkpoint of the whole image, `samples` samples of every pixel
+ * done and no launch in flight, and sets when the next is due. Returns 0,
+ * or -1 with one message in err. */
+int renderer_checkpoint(struct renderer *r, int samples, char *err, size_t err_size);
+
+/* The mean of every pixel's first `samples` samples (1 < samples <=
+ * settings_samples()), from its fixed-point sum on the device, into rgb
+ * (width × height × 3 floats): the image of a render stopped after that
+ * many, by the kernels' rule (docs/RENDERING.md, "Samples per pixel").
+ * Returns 0, or -1 with one message in err. */
+int renderer_read_mean(struct renderer *r, int samples, float *rgb, char *err, size_t err_size);
+
+/* The mean of `pixels` fixed-point sums (4 cl_long each, cl/sample.cl) of
+ * `samples` samples each into rgb: a saturated channel is +inf. */
+void renderer_mean_of_sums(const cl_long *sums, size_t pixels, int samples, float *rgb);
 
 /* A pass of a long render traces about this many samples in all (pixels ×
  * samples of the pass), at least one sample of every pixel: on an H100 a few

@@ -39,6 +39,17 @@ enum accel {
 /* The --accel word of an enum accel: "none", "bvh", "bvh-compact". */
 const char *accel_name(int accel);
 
+/* --checkpoint: every `seconds` of a render's passes, the image of the
+ * samples done so far (the mean of every pixel's first `samples`) goes to
+ * write(context, ...), which returns 0, or -1 with one message in err (the
+ * render then fails). Only for a render of the whole image on one device
+ * (render(), render_reference()). */
+struct render_checkpoint {
+	double seconds;
+	int (*write)(void *context, const float *rgb, int samples, char *err, size_t err_size);
+	void *context;
+};
+
 struct render_settings {
 	const struct kernel_info *kernel; /* NULL: the CPU reference */
 	int workgroup[2];		  /* local size, e.g. 8x8 */
@@ -57,6 +68,8 @@ struct render_settings {
 				   surround it with guard zones (checks.h) */
 	int record_schedule;	/* build with RTCL_SCHEDULE_MAP and return each pixel's
 				   work-group, work-item and ticket (probe.h) */
+	int aov;		/* build cl/aov.cl's kernel and render the auxiliary
+				   images after the image (render_result.aov) */
 	int force_global_scene; /* read the scene from __global memory even if it
 				   would fit in __local memory */
 	int accel;		/* enum accel (--accel) */
@@ -64,6 +77,10 @@ struct render_settings {
 				   embedded copies (development) */
 	int progress;		/* render() runs the progress line (progress.h) itself;
 				   else its caller does, and render() adds to it */
+	int stoppable;		/* an interrupt between passes stops the render, which
+				   keeps the samples done (interrupt_stop_signal;
+				   render_result.samples_done); one frame, no -r */
+	const struct render_checkpoint *checkpoint; /* NULL: none */
 	int verbose;
 };
 
@@ -72,6 +89,7 @@ struct render_times {
 	double build;	  /* the program build */
 	double scene;	  /* packing the scene, creating and filling the buffers */
 	double kernels;	  /* every launch, warm-up included, with its waits */
+	double aov;	  /* the auxiliary images' pass (settings.aov), read-back included */
 	double read_back; /* the image and counts back to the host */
 };
 
@@ -89,6 +107,10 @@ struct piece_record {
 
 struct render_result {
 	float *rgb; /* width*height*3 linear floats, row 0 at the top */
+	/* With settings.aov: width*height*7 floats, the albedo (3 a pixel), the
+	 * normal (3 a pixel), then the depth (1 a pixel), planes one after
+	 * another (cl/aov.cl). */
+	float *aov;
 	/* Each timed frame's time, in order, and their median, min and max: on
 	 * one device the sum of its launches' profiled kernel times; over
 	 * several devices (--devices) the frame's wall time. */
@@ -103,6 +125,9 @@ struct render_result {
 	int repeat;
 	int launches; /* frames rendered: the timed ones and any warm-up */
 	int passes;   /* passes per frame, each a range of the samples */
+	int samples_done; /* samples of every pixel in rgb: settings_samples(),
+			     or fewer when an interrupt stopped the render */
+	int passes_done;  /* passes that ran: passes, or fewer when stopped */
 	struct render_times times;
 	int groups[2]; /* as launched (1x1 for serial; the NDRange's for naive) */
 	size_t global_size[2], local_size[2];

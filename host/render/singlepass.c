@@ -8,6 +8,7 @@
 #include <string.h>
 
 #include "rtcl_shared.h"
+#include "render/aov.h"
 #include "render/buffers.h"
 #include "base/test_hooks.h"
 #include "render/launch.h"
@@ -261,11 +262,34 @@ static cl_int finish_launch(struct renderer *r, struct in_flight *f, struct laun
 	return status;
 }
 
+/* How many passes each lane has enqueued ahead (singlepass_passes). */
+#define LANE_DEPTH 2
+
+/* Waits for every launch still in flight on the lanes, in the order they
+ * were enqueued (passes before `pass`); the first failure is returned. */
+static cl_int drain_lanes(struct renderer *r, struct in_flight (*flight)[LANE_DEPTH], int count,
+			  int pass, struct launch_span *spans, int *span_count)
+{
+	cl_int status = CL_SUCCESS;
+
+	for (int p = pass; p < pass + LANE_DEPTH; p++)
+		for (int i = 0; i < count; i++) {
+			struct in_flight *f = &flight[i][p % LANE_DEPTH];
+			if (!f->event)
+				continue;
+			cl_int done = finish_launch(r, f, spans, span_count);
+			if (status == CL_SUCCESS)
+				status = done;
+		}
+	return status;
+}
+
 /* Renders the samples of the disjoint parts (the same range for each), part
  * i on lane i, in passes of per_pass samples: each lane's launches are enqueued LANE_DEPTH ahead of
  * the host, so that a lane's next launch is waiting when its last one ends
- * and another lane's launch can fill the device while one ends. */
-#define LANE_DEPTH 2
+ * and another lane's launch can fill the device while one ends. Between
+ * passes, a checkpoint waits for every lane (renderer_checkpoint), and a
+ * stop (renderer_stopping) enqueues no more. */
 static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, int count,
 			     int per_pass, struct piece_result *out, char *err, size_t err_size)
 {
@@ -275,7 +299,7 @@ static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, i
 	int begin = parts[0].sample_begin, end = parts[0].sample_end;
 	int passes = (end - begin + per_pass - 1) / per_pass;
 	struct launch_span *spans = malloc((size_t)passes * count * sizeof(*spans));
-	int span_count = 0;
+	int span_count = 0, pass;
 	const char *call = "malloc";
 	cl_int status = spans ? CL_SUCCESS : CL_OUT_OF_HOST_MEMORY;
 
@@ -287,7 +311,19 @@ static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, i
 		status = clFinish(r->dev->queue);
 	}
 
-	for (int pass = 0; pass < passes && status == CL_SUCCESS; pass++) {
+	for (pass = 0; pass < passes && status == CL_SUCCESS; pass++) {
+		if (pass > 0 && renderer_stopping(r))
+			break;
+		if (pass > 0 && renderer_checkpoint_due(r)) {
+			call = "waiting for the kernel";
+			status = drain_lanes(r, flight, count, pass, spans, &span_count);
+			if (status != CL_SUCCESS)
+				break;
+			if (renderer_checkpoint(r, pass * per_pass, err, err_size)) {
+				free(spans);
+				return -1;
+			}
+		}
 		for (int i = 0; i < count && status == CL_SUCCESS; i++) {
 			cl_command_queue queue = i ? st->lanes[i].queue : r->dev->queue;
 			cl_kernel kernel = i ? st->lanes[i].kernel : st->kernel;
@@ -329,23 +365,19 @@ static int singlepass_passes(struct renderer *r, const struct rt_piece *parts, i
 		}
 	}
 	/* Every launch still in flight, in the order they were enqueued. */
-	for (int pass = passes; pass < passes + LANE_DEPTH; pass++)
-		for (int i = 0; i < count; i++) {
-			struct in_flight *f = &flight[i][pass % LANE_DEPTH];
-			if (!f->event)
-				continue;
-			cl_int done = finish_launch(r, f, spans, &span_count);
-			if (status == CL_SUCCESS) {
-				call = "waiting for the kernel";
-				status = done;
-			}
-		}
+	cl_int done = drain_lanes(r, flight, count, pass, spans, &span_count);
+	if (status == CL_SUCCESS) {
+		call = "waiting for the kernel";
+		status = done;
+	}
 	if (status == CL_SUCCESS && hook_device_fault()) {
 		call = "waiting for the kernel";
 		status = CL_OUT_OF_RESOURCES;
 	}
 	out->launches = span_count;
 	out->kernel_ms = spans ? launch_busy_ms(spans, span_count) : 0;
+	out->passes = pass;
+	out->samples = pass * per_pass < end - begin ? pass * per_pass : end - begin;
 	free(spans);
 	if (status != CL_SUCCESS) {
 		snprintf(err, err_size, "%s failed (kernel '%s' on %s, %d queues): %s", call,
@@ -424,7 +456,14 @@ static void singlepass_close(struct renderer *r)
 	r->state = NULL;
 }
 
+static int singlepass_aov(struct renderer *r, char *err, size_t err_size)
+{
+	struct launch_state *st = r->state;
+
+	return aov_render(r->dev, r->settings, r->result, &st->b, err, err_size);
+}
+
 const struct renderer_ops singlepass_ops = {singlepass_open,	    singlepass_piece,
 					    singlepass_passes,	    singlepass_read_back,
 					    singlepass_read_rows, singlepass_read_sums,
-					    singlepass_close};
+					    singlepass_close,	    singlepass_aov};

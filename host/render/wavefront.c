@@ -15,6 +15,7 @@
 #include <string.h>
 
 #include "rtcl_shared.h"
+#include "render/aov.h"
 #include "render/buffers.h"
 #include "render/launch.h"
 #include "render/renderer.h"
@@ -34,6 +35,8 @@ struct wavefront {
 	size_t item_capacity;		 /* work-items whose counts item_counts holds */
 	size_t bounce_local;		 /* 1D work-group size of the bounce launches */
 	size_t item_alloc;		 /* b.item_flops' room */
+	size_t entry_bytes;		 /* a queued ray's: struct rt_ray, or under the
+					    path integrator struct rt_path_ray */
 };
 
 static void release_queues(struct wavefront *w)
@@ -68,7 +71,7 @@ static void release_all(struct wavefront *w)
 static int create_queues(struct device *dev, const struct render_settings *s, struct wavefront *w,
 			 char *err, size_t err_size)
 {
-	size_t bytes = w->capacity * sizeof(struct rt_ray);
+	size_t bytes = w->capacity * w->entry_bytes;
 	char what[96];
 
 	release_queues(w);
@@ -340,6 +343,8 @@ static int wavefront_open(struct renderer *r, const struct scene *scene, char *e
 		return -1;
 	}
 	r->state = w;
+	w->entry_bytes = scene->integrator == SCENE_INTEGRATOR_PATH ? sizeof(struct rt_path_ray)
+								    : sizeof(struct rt_ray);
 	/* The per-pixel launches cover the image as the naive kernel does. */
 	if (launch_setup(r->dev, scene, s, res, &w->b.scene_block, &w->b.program, err, err_size))
 		return -1;
@@ -378,7 +383,14 @@ static int wavefront_read_sums(struct renderer *r, cl_long *to, size_t first, si
 	return buffers_read_sums(r->dev, &w->b, to, first, count, event, err, err_size);
 }
 
+static int wavefront_aov(struct renderer *r, char *err, size_t err_size)
+{
+	struct wavefront *w = r->state;
+
+	return aov_render(r->dev, r->settings, r->result, &w->b, err, err_size);
+}
+
 const struct renderer_ops wavefront_ops = {wavefront_open,	   wavefront_piece,
 					   NULL,		   wavefront_read_back,
 					   wavefront_read_rows, wavefront_read_sums,
-					   wavefront_close};
+					   wavefront_close,	   wavefront_aov};

@@ -156,11 +156,19 @@ static json_t *times_document(const struct record *record)
 	const struct render_times *t = &record->result.times;
 	double now = timing_now();
 
-	return json_pack("{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:i}", "device_setup",
-			 record->device_ms, "scene_and_upload", t->scene, "build", t->build, "kernels",
-			 t->kernels, "read_back", t->read_back, "counting_run", record->counting_ms,
-			 "encode_and_write", (now - record->write_start) * 1e3, "total",
-			 (now - record->start) * 1e3, "launches", record->result.launches);
+	json_t *doc = json_pack(
+		"{s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:f, s:i}", "device_setup", record->device_ms,
+		"scene_and_upload", t->scene, "build", t->build, "kernels", t->kernels, "read_back",
+		t->read_back, "counting_run", record->counting_ms, "encode_and_write",
+		(now - record->write_start) * 1e3, "total", (now - record->start) * 1e3, "launches",
+		record->result.launches);
+
+	/* Only where --aov or --denoise asked for them. */
+	if (doc && record->result.aov)
+		json_object_set_new(doc, "auxiliary_images", json_real(t->aov));
+	if (doc && record->denoise_ms > 0)
+		json_object_set_new(doc, "denoise", json_real(record->denoise_ms));
+	return doc;
 }
 
 /* Several devices: who did what (devstats.h), and the bands. */
@@ -277,6 +285,9 @@ json_t *report_document(const struct job *job, const struct record *record)
 	}
 	add_device_figures(doc, record);
 	add_accel_figures(doc, job, record);
+	/* Fewer than "samples" when an interrupt stopped the render. */
+	json_object_set_new(doc, "samples_done",
+			    json_integer(record_samples_done(&job->settings, record)));
 	if (record->shares.count) {
 		json_t *shares = shares_document(&record->shares);
 		if (shares && record->result.pieces)

@@ -38,6 +38,21 @@ static void print_simd(FILE *out, const struct record *record)
 		fprintf(out, "; modelled with --schedule-map\n");
 }
 
+/* The end of the summary's time line: the whole run's time, from the start
+ * of the process to now (the outputs written), and the program build in it
+ * when the build was not cached: a first render's time is mostly that
+ * (issue 44: "737 ms" printed, 7.6 s taken). */
+static void print_time_in_all(FILE *out, const struct record *record)
+{
+	const struct render_result *r = &record->result;
+	double build = r->times.build + record->counted.times.build;
+
+	fprintf(out, "; %.2f s in all", timing_now() - record->start);
+	if (build > 0 && !r->build_cached)
+		fprintf(out, ", %.2f s of it the program build (not cached)", build * 1e-3);
+	fprintf(out, "\n");
+}
+
 void report_print_image(FILE *out, const struct job *job, const struct record *record)
 {
 	const struct render_settings *s = &job->settings;
@@ -54,14 +69,26 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 		       r->groups[1], r->global_size[0], r->global_size[1]);
 	fprintf(out, "image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
 	       quote_text(job->scene->source));
-	if (s->samples > 1)
+	if (record_samples_done(&job->settings, record) < settings_samples(s))
+		fprintf(out,
+			"samples: %d of %d per pixel (interrupted; the image holds the "
+			"samples done)\n",
+			r->samples_done, s->samples);
+	else if (s->samples > 1)
 		fprintf(out, "samples: %d per pixel in %d pass%s\n", s->samples, r->passes,
 		       r->passes == 1 ? "" : "es");
 	if (r->repeat > 1)
-		fprintf(out, "time:    %.3f ms median of %d launches (min %.3f, max %.3f)\n",
-		       r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
+		fprintf(out, "time:    %.3f ms median of %d launches (min %.3f, max %.3f)",
+			r->kernel_ms_median, r->repeat, r->kernel_ms_min, r->kernel_ms_max);
 	else
-		fprintf(out, "time:    %.3f ms\n", r->kernel_ms_median);
+		fprintf(out, "time:    %.3f ms %s", r->kernel_ms_median,
+			s->kernel ? "in the kernels" : "rendering");
+	print_time_in_all(out, record);
+	if (job->denoise)
+		fprintf(out,
+			"denoise: Open Image Denoise, RT filter with albedo and normal, on the "
+			"host's CPU: %.0f ms\n",
+			record->denoise_ms);
 	if (job->counting) {
 		const struct flop_summary *f = &record->flops;
 		fprintf(out, "work:    %.3f GFLOP, %.1f GFLOP/s; per work-item mean %.0f, max %.0f, min "
@@ -93,8 +120,9 @@ void report_print_frames(FILE *out, const struct job *job, const struct record *
 		job->first_frame, job->last_frame, n, s->width, s->height, s->max_depth,
 		quote_text(job->scene->source), s->kernel->name);
 	devstats_print(out, d->devs, d->ranks, d->work, d->count, d->piece);
-	fprintf(out, "time:    %.1f ms for %d frame%s (%.1f ms each), %s split\n", d->wall_ms, n,
+	fprintf(out, "time:    %.1f ms for %d frame%s (%.1f ms each), %s split", d->wall_ms, n,
 		n == 1 ? "" : "s", d->wall_ms / n, split_name(d->split));
+	print_time_in_all(out, record);
 }
 
 void report_print_shares(FILE *out, const struct record *record)
@@ -118,13 +146,17 @@ void report_print_times(const struct record *record)
 {
 	const struct render_times *t = &record->result.times;
 	double now = timing_now();
+	char aov[64] = "";
 
+	/* Only where --aov or --denoise asked for them. */
+	if (record->result.aov)
+		snprintf(aov, sizeof(aov), ", auxiliary images %.1f ms", t->aov);
 	fprintf(stderr,
 		"rtcl: time: device set-up %.1f ms, scene and upload %.1f ms, build %.1f ms%s, "
-		"kernels %.1f ms (%d launch%s), read-back %.1f ms, counting run %.1f ms, encoding "
+		"kernels %.1f ms (%d launch%s)%s, read-back %.1f ms, counting run %.1f ms, encoding "
 		"and writing %.1f ms; total %.1f ms\n",
 		record->device_ms, t->scene, t->build, record->result.build_cached ? " (cached)" : "",
-		t->kernels, record->result.launches, record->result.launches == 1 ? "" : "es",
+		t->kernels, record->result.launches, record->result.launches == 1 ? "" : "es", aov,
 		t->read_back, record->counting_ms, (now - record->write_start) * 1e3,
 		(now - record->start) * 1e3);
 }

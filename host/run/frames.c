@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/interrupt.h"
 #include "base/progress.h"
 #include "base/timing.h"
 #include "base/vec3.h"
@@ -78,6 +79,7 @@ struct stager {
 	int running; /* thread started and not yet joined */
 	int piece;
 	float *rgb; /* the frame's image, freed once staged */
+	int samples; /* its samples per pixel */
 	int failed;
 	char err[1024];
 };
@@ -92,6 +94,8 @@ struct frames_state {
 	int count;
 	int done; /* frames rendered, for the progress line */
 	struct stager stagers[DEVICES_MAX]; /* each device's frame being staged */
+	int keeps; /* an interrupt keeps the frames finished (not --no-partial) */
+	int kept;  /* frames staged */
 };
 
 /* Names the frame under way on the progress line: with one device "frame k
@@ -116,8 +120,10 @@ static void *stage_frame(void *arg)
 {
 	struct stager *st = arg;
 
-	st->failed = output_plan_stage_image(st->f->plan, st->piece, st->rgb, st->err,
-					     sizeof(st->err)) != 0;
+	st->failed = output_plan_stage_image(st->f->plan, st->piece, st->rgb, st->samples,
+					     st->err, sizeof(st->err)) != 0;
+	if (!st->failed)
+		__atomic_add_fetch(&st->f->kept, 1, __ATOMIC_RELAXED);
 	free(st->rgb);
 	st->rgb = NULL;
 	return NULL;
@@ -148,17 +154,33 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	struct stager *st = &f->stagers[device];
 	struct render_result result;
 
+	/* Interrupted: no frame starts; one under way stops after its pass and
+	 * is not written (an animation's frames hold all their samples). */
+	*done = (struct piece_work){0, 0, 0};
+	if (f->keeps && interrupt_stop_signal())
+		return 0;
 	show_frame(f, piece, 0);
 	if (frames_render_frame(f->job, &f->settings, &f->devs[device], piece, &result, err,
 				err_size))
 		return -1;
 	show_frame(f, piece, 1);
+	/* A frame stopped by an interrupt is not written (an animation's
+	 * frames hold all their samples). */
+	if (result.samples_done < settings_samples(&f->settings)) {
+		render_result_free(&result);
+		return 0;
+	}
+	/* A frame is done: an interrupt from now on keeps the finished ones
+	 * (this one staged first: frames_render waits for every stager). */
+	if (f->keeps)
+		interrupt_allow_stop(1);
 	*done = frames_piece_work(&f->settings, &result);
 	if (finish_staging(st, err, err_size)) {
 		render_result_free(&result);
 		return -1;
 	}
-	*st = (struct stager){.f = f, .piece = piece, .rgb = result.rgb};
+	*st = (struct stager){
+		.f = f, .piece = piece, .rgb = result.rgb, .samples = result.samples_done};
 	result.rgb = NULL; /* the stager's now */
 	render_result_free(&result);
 	if (pthread_create(&st->thread, NULL, stage_frame, st) == 0) {
@@ -196,6 +218,8 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	run->state = f;
 	f->job = job;
 	f->settings = job->settings;
+	f->settings.stoppable = job_stoppable(job);
+	f->keeps = !job->all_or_nothing;
 	f->plan = run->plan;
 	if (job_open_devices(job, f->devs, &f->count, err, err_size)) {
 		f->count = 0;
@@ -222,6 +246,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 			failed = 1;
 		}
 	}
+	interrupt_allow_stop(0);
 	progress_end();
 	run->record->shares = (struct device_shares){
 		.devs = f->devs,
@@ -231,6 +256,11 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 		.piece = "frame",
 		.wall_ms = (timing_now() - start) * 1e3,
 	};
+	if (!failed && f->kept == 0 && interrupt_stop_signal()) {
+		snprintf(err, err_size,
+			 "interrupted before a frame was finished; no output written");
+		return 128 + interrupt_stop_signal();
+	}
 	return failed ? EXIT_FAILED : 0;
 }
 

@@ -5,9 +5,11 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/interrupt.h"
 #include "base/test_hooks.h"
 #include "base/version.h"
 #include "base/timing.h"
+#include "output/denoise.h"
 #include "render/render.h"
 #include "report/simd.h"
 #include "report/summary.h"
@@ -67,13 +69,17 @@ static int render_counted(struct image_devices *d, const struct job *job,
 			  const struct render_settings *s, render_fn fn, struct record *record,
 			  char *err, size_t err_size)
 {
+	int failed;
+
 	if (job->counting || job->mapping) {
 		struct render_settings counting = *s;
 		double lap = timing_now();
 
 		counting.count_flops = job->counting;
 		counting.record_schedule = job->mapping;
-		int failed = fn(d, job, &counting, &record->counted, err, err_size);
+		counting.stoppable = 0;
+		counting.checkpoint = NULL;
+		failed = fn(d, job, &counting, &record->counted, err, err_size);
 		record->counting_ms = timing_lap_ms(&lap);
 		if (failed)
 			return -1;
@@ -82,12 +88,18 @@ static int render_counted(struct image_devices *d, const struct job *job,
 		if (job->counting && job->mapping && model_simd(job, record, err, err_size))
 			return -1;
 	}
-	return fn(d, job, s, &record->result, err, err_size);
+	failed = fn(d, job, s, &record->result, err, err_size);
+	/* An interrupt from now on ends the run (interrupt.h). */
+	interrupt_allow_stop(0);
+	return failed;
 }
 
-/* One image on the devices the job names; several share it in pieces. */
-static int render_on_devices(struct image_devices *d, const struct job *job, struct record *record,
-			     char *err, size_t err_size)
+/* One image on the devices the job names; several share it in pieces.
+ * timed: the job's settings for the timed run, with its stop and
+ * checkpoints. */
+static int render_on_devices(struct image_devices *d, const struct job *job,
+			     const struct render_settings *timed, struct record *record, char *err,
+			     size_t err_size)
 {
 	double lap = timing_now();
 
@@ -102,9 +114,16 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 			fprintf(stderr, "rtcl: platform %d, device %d: %s\n",
 				d->devs[0].platform_index, d->devs[0].device_index,
 				record->device.name);
-		return render_counted(d, job, &job->settings, render_one, record, err, err_size);
+		return render_counted(d, job, timed, render_one, record, err, err_size);
 	}
-	struct render_settings s = job->settings;
+	if (timed->checkpoint) {
+		snprintf(err, err_size,
+			 "--checkpoint writes the image of a render on one device (or -k "
+			 "reference): render on one (-p/-d, or a --devices list of one), or drop "
+			 "--checkpoint");
+		return -1;
+	}
+	struct render_settings s = *timed;
 	s.check_writes |= hook_count_writes();
 	d->tiles = (struct tiles_request){.scene = job->scene,
 					  .devs = d->devs,
@@ -141,6 +160,14 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	};
 	tiles_row_map(&record->shares.rows, &s, job->row_order,
 		      job->row_classes ? job->row_classes : tiles_row_classes(d->devs, d->count));
+	/* Pieces of pixels stopped early would leave parts of the image
+	 * unrendered: only a split of the samples keeps an interrupted
+	 * render's (every device's samples so far, added). A split still to be
+	 * chosen by measurement (d->tiles.measure) may turn into pieces of
+	 * pixels after the probes, so it does not either. The write counts of
+	 * tests expect every launch. */
+	if (d->tiles.split != SPLIT_SAMPLES || d->tiles.measure || s.check_writes)
+		s.stoppable = 0;
 	if (render_counted(d, job, &s, render_pieces, record, err, err_size))
 		return -1;
 	/* The default split is chosen at set-up, by measurement. */
@@ -153,11 +180,37 @@ static int render_on_devices(struct image_devices *d, const struct job *job, str
 	return 0;
 }
 
+/* --denoise: the image denoised in place with the albedo and normal images,
+ * timed for the summary. */
+static int denoise_result(const struct job *job, struct record *record, char *err, size_t err_size)
+{
+	const struct render_settings *s = &job->settings;
+	struct render_result *res = &record->result;
+	size_t pixels = (size_t)s->width * s->height;
+	double start = timing_now();
+
+	if (denoise_image(res->rgb, res->aov, res->aov + 3 * pixels, s->width, s->height, err,
+			  err_size))
+		return -1;
+	record->denoise_ms = (timing_now() - start) * 1e3;
+	return 0;
+}
+
+/* --checkpoint's writer: the image so far, committed at once. */
+static int write_checkpoint(void *context, const float *rgb, int samples, char *err,
+			    size_t err_size)
+{
+	return output_plan_write_checkpoint(context, rgb, samples, err, err_size);
+}
+
 static int image_render(struct mode_run *run, int checked, char *err, size_t err_size)
 {
 	const struct job *job = run->job;
 	struct record *record = run->record;
 	struct image_devices *d = calloc(1, sizeof(*d));
+	struct render_settings timed = job->settings;
+	struct render_checkpoint checkpoint = {job->checkpoint_seconds, write_checkpoint,
+					       run->plan};
 	int failed;
 
 	(void)checked; /* not called with a failed check */
@@ -166,14 +219,21 @@ static int image_render(struct mode_run *run, int checked, char *err, size_t err
 		return EXIT_FAILED;
 	}
 	run->state = d;
+	/* A missing library is said before the render, not after it. */
+	if (job->denoise && denoise_load(err, err_size))
+		return EXIT_FAILED;
+	timed.stoppable = job_stoppable(job);
+	timed.checkpoint = job->checkpoint_seconds > 0 ? &checkpoint : NULL;
 	if (!job->settings.kernel) {
 		snprintf(record->device.name, sizeof(record->device.name),
 			 "CPU reference (C++, GLM, double precision, one core)");
-		failed = render_reference(job->scene, &job->settings, &record->result, err,
-					  err_size);
+		failed = render_reference(job->scene, &timed, &record->result, err, err_size);
+		interrupt_allow_stop(0);
 	} else {
-		failed = render_on_devices(d, job, record, err, err_size);
+		failed = render_on_devices(d, job, &timed, record, err, err_size);
 	}
+	if (!failed && job->denoise)
+		failed = denoise_result(job, record, err, err_size);
 	if (!failed && job->verbose && job->settings.kernel)
 		fprintf(stderr, "rtcl: build options: %s\n", record->result.build_options);
 	return failed ? EXIT_FAILED : 0;

@@ -41,7 +41,12 @@ struct mesh_material {
 				     baseColorTexture): an index into the mesh's
 				     textures, or -1 */
 	int32_t opacity_texture;  /* MTL's map_d: an index, or -1 */
-	uint32_t pad[3];
+	/* Metallic-roughness: glTF's metallicRoughnessTexture (linear: G the
+	 * roughness, B the metallic factor's multiplier); any kind: the
+	 * emissive texture (glTF's emissiveTexture, MTL's map_Ke). Indices, or -1. */
+	int32_t metallic_roughness_texture;
+	int32_t emissive_texture;
+	int32_t normal_texture; /* metallic-roughness: glTF's normalTexture (linear), or -1 */
 	/* Phong: Kd, Ks, Ka, Ns, d (1 - Tr), Ni. */
 	double diffuse[3], specular[3], ambient[3], shininess, opacity, ior;
 	/* Metallic-roughness: the base colour factor (rgba), metallic, roughness,
@@ -50,6 +55,9 @@ struct mesh_material {
 	/* What rtcl does not understand, comma-separated: "emissive", "normal
 	 * texture", an unknown property's key. */
 	char not_understood[MESH_NOTES_MAX];
+	/* The radiance it emits (the path integrator): glTF's emissiveFactor
+	 * times KHR_materials_emissive_strength, MTL's Ke. */
+	double emissive[3];
 };
 
 /* A triangle whose file gives no material index. */
@@ -76,7 +84,11 @@ enum mesh_texels {
 /* Which channel a texture's alpha comes from, as its role asks: a base colour
  * texture's alpha is its alpha channel (1 without); an opacity texture's
  * (map_d) is its alpha channel, or its first where it has none. */
-enum mesh_texture_role { MESH_TEXTURE_COLOR, MESH_TEXTURE_OPACITY };
+enum mesh_texture_role {
+	MESH_TEXTURE_COLOR,   /* RGB sRGB-encoded, alpha its own */
+	MESH_TEXTURE_OPACITY, /* the alpha, from the first channel without one */
+	MESH_TEXTURE_DATA     /* RGBA linear numbers (metallic-roughness) */
+};
 
 enum mesh_wrap { MESH_WRAP_REPEAT, MESH_WRAP_CLAMP, MESH_WRAP_MIRROR };
 
@@ -123,6 +135,26 @@ struct mesh_file {
 	uint32_t kind; /* enum mesh_file_kind */
 };
 
+/* A light of the file (glTF 2.0's KHR_lights_punctual, or another
+ * format's), in the file's world space: its node's transform and those of
+ * the node's parents applied (glTF: at the node's origin, shining down its
+ * -z). Only a model rendered alone uses them (docs/SCENE.md, "A model file
+ * alone"). Fixed-size so that it crosses the pipe as it is. */
+enum mesh_light_kind {
+	MESH_LIGHT_POINT,
+	MESH_LIGHT_DIRECTIONAL,
+	MESH_LIGHT_SPOT,
+	MESH_LIGHT_OTHER /* an area or ambient light: not read */
+};
+
+struct mesh_light {
+	char name[MESH_NAME_MAX]; /* its node's name */
+	uint32_t kind;		  /* enum mesh_light_kind */
+	uint32_t pad;
+	double position[3], direction[3]; /* direction not unit */
+	double color[3];		  /* the file's colour times its intensity */
+};
+
 struct mesh_data {
 	double *positions;	      /* 3 per vertex */
 	double *normals;	      /* 3 per vertex, or NULL where the file has none */
@@ -139,6 +171,8 @@ struct mesh_data {
 	size_t camera_count;
 	struct mesh_file *files; /* every other file the import read */
 	size_t file_count;
+	struct mesh_light *lights; /* the lights that a node of the file places */
+	size_t light_count;
 };
 
 /* What mesh_import returns besides 0. */

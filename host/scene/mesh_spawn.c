@@ -43,6 +43,7 @@ struct reply {
 	uint32_t has_uvs, pad;
 	uint64_t texture_count, texel_bytes; /* then the uvs, textures and texels */
 	uint64_t camera_count;		     /* then the cameras */
+	uint64_t light_count;		     /* then the lights */
 	uint64_t file_count;		     /* then the textures' names, then the files read */
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
@@ -157,6 +158,7 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	r.texel_bytes = mesh->texel_bytes;
 	r.camera_count = mesh->camera_count;
 	r.file_count = mesh->file_count;
+	r.light_count = mesh->light_count;
 	if (write_all(fd, &r, sizeof(r)) ||
 	    write_all(fd, mesh->positions, 3 * mesh->vertex_count * sizeof(double)) ||
 	    (mesh->normals &&
@@ -168,6 +170,7 @@ int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 	    write_all(fd, mesh->textures, mesh->texture_count * sizeof(struct mesh_texture)) ||
 	    write_all(fd, mesh->texels, mesh->texel_bytes) ||
 	    write_all(fd, mesh->cameras, mesh->camera_count * sizeof(struct mesh_camera)) ||
+	    write_all(fd, mesh->lights, mesh->light_count * sizeof(struct mesh_light)) ||
 	    write_names(fd, mesh))
 		return -1;
 	return 0;
@@ -189,6 +192,7 @@ void mesh_data_free(struct mesh_data *mesh)
 	free(mesh->files);
 	free(mesh->texels);
 	free(mesh->cameras);
+	free(mesh->lights);
 	memset(mesh, 0, sizeof(*mesh));
 }
 
@@ -275,7 +279,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->texels = alloc_array(r.texel_bytes, 1);
 	out->cameras = alloc_array(r.camera_count, sizeof(struct mesh_camera));
 	out->files = alloc_array(r.file_count, sizeof(struct mesh_file));
-	if (!out->cameras || !out->files || !out->positions || (r.has_normals && !out->normals) ||
+	out->lights = alloc_array(r.light_count, sizeof(struct mesh_light));
+	if (!out->cameras || !out->files || !out->lights || !out->positions || (r.has_normals && !out->normals) ||
 	    !out->indices || !out->triangle_materials || !out->materials ||
 	    (r.has_uvs && !out->uvs) || !out->textures || !out->texels) {
 		snprintf(reason, reason_size, "out of memory for %llu triangles",
@@ -288,6 +293,7 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	out->texture_count = (size_t)r.texture_count;
 	out->texel_bytes = (size_t)r.texel_bytes;
 	out->camera_count = (size_t)r.camera_count;
+	out->light_count = (size_t)r.light_count;
 	out->file_count = (size_t)r.file_count;
 	/* Nothing for mesh_data_free to free before it is read. */
 	memset(out->textures, 0, out->texture_count * sizeof(struct mesh_texture));
@@ -313,6 +319,8 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 		got = read_all(fd, out->texels, out->texel_bytes);
 	if (!got)
 		got = read_all(fd, out->cameras, out->camera_count * sizeof(struct mesh_camera));
+	if (!got)
+		got = read_all(fd, out->lights, out->light_count * sizeof(struct mesh_light));
 	if (!got)
 		got = read_names(fd, out);
 	if (got == NONSENSE || got == OUT_OF_MEMORY) {
@@ -343,7 +351,7 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 		t->reason[MESH_TEXTURE_REASON_MAX - 1] = '\0';
 		if (t->reason[0])
 			continue;
-		if (t->format > MESH_TEXELS_FLOAT || t->role > MESH_TEXTURE_OPACITY ||
+		if (t->format > MESH_TEXELS_FLOAT || t->role > MESH_TEXTURE_DATA ||
 		    t->wrap_s > MESH_WRAP_MIRROR || t->wrap_t > MESH_WRAP_MIRROR || t->width == 0 ||
 		    t->height == 0 || t->width > MESH_TEXTURE_MAX_SIDE ||
 		    t->height > MESH_TEXTURE_MAX_SIDE ||
@@ -355,6 +363,11 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 	for (size_t i = 0; i < out->camera_count; i++) {
 		out->cameras[i].name[MESH_NAME_MAX - 1] = '\0';
 		if (out->cameras[i].kind > MESH_CAMERA_NOT_GLTF)
+			return NONSENSE;
+	}
+	for (size_t i = 0; i < out->light_count; i++) {
+		out->lights[i].name[MESH_NAME_MAX - 1] = '\0';
+		if (out->lights[i].kind > MESH_LIGHT_OTHER)
 			return NONSENSE;
 	}
 	return 0;

@@ -23,6 +23,7 @@
 #include "base/files.h"
 #include "base/quote.h"
 #include "scene/scene_loader.h"
+#include "scene/hdr_read.h"
 
 /* Larger documents are refused before parsing: jansson needs many times the
  * text size in memory, and no sensible scene comes near this. */
@@ -204,6 +205,10 @@ static int read_camera(struct loader *ld, json_t *doc)
 	cam->focus_distance = 0;
 	if (from_mesh >= 0 && !valid)
 		return 0; /* meshes[from_mesh].camera is refused with its own words */
+	/* A model's view is its file's camera or framed from its bounds
+	 * (scene_model.c). */
+	if (ld->model && !json_object_get(doc, "camera"))
+		return 0;
 	if (loader_get_field(ld, &root_path, doc, "camera", from_mesh >= 0 ? OPTIONAL : REQUIRED,
 			     &obj) ||
 	    (obj && loader_expect_object(ld, &p, obj, keys)))
@@ -259,6 +264,55 @@ int scene_override_camera(struct scene *scene, const struct camera_override *o, 
 	return 0;
 }
 
+/* "environment" (SCENE.md): the map's file joined to the scene's folder,
+ * its scale and rotation; read by the path integrator. */
+static int read_environment(struct loader *ld, json_t *doc)
+{
+	static const char *const keys[] = {"file", "scale", "rotate", NULL};
+	struct path p = child_key(&root_path, "environment");
+	struct scene_environment *env = &ld->scene->environment;
+	json_t *obj, *file;
+
+	env->scale = 1;
+	env->rotate = 0;
+	if (loader_get_field(ld, &root_path, doc, "environment", OPTIONAL, &obj))
+		return -1;
+	if (!obj)
+		return 0;
+	if (loader_expect_object(ld, &p, obj, keys) ||
+	    loader_read_number(ld, &p, obj, "scale", OPTIONAL, NON_NEGATIVE, &env->scale) ||
+	    loader_read_number(ld, &p, obj, "rotate", OPTIONAL, ANY, &env->rotate))
+		return -1;
+	file = json_object_get(obj, "file");
+	if (!file)
+		return loader_fail(ld, &p, "needs \"file\"");
+	if (!json_is_string(file) || json_string_value(file)[0] == '\0') {
+		struct path field = child_key(&p, "file");
+		return loader_fail(ld, &field, "must be a file name, got %s",
+				   json_is_string(file) ? "\"\"" : loader_type_name(file));
+	}
+	const char *name = json_string_value(file);
+	const char *dir = name[0] == '/' || !ld->base_dir ? "" : ld->base_dir;
+	size_t size = strlen(dir) + strlen(name) + 1;
+	env->file = malloc(size);
+	if (!env->file) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	snprintf(env->file, size, "%s%s", dir, name);
+
+	struct hdr_image image;
+	struct path field = child_key(&p, "file");
+	char reason[512];
+	if (hdr_read(env->file, name, &image, reason, sizeof(reason)))
+		return loader_fail(ld, &field, "%s", reason);
+	env->width = image.width;
+	env->height = image.height;
+	env->rgb = image.rgb;
+	char *input = strdup(env->file);
+	return input ? loader_add_input(ld, input, "environment map") : -1;
+}
+
 static int read_image_and_globals(struct loader *ld, json_t *doc)
 {
 	static const char *const image_keys[] = {"width", "height", "samples", NULL};
@@ -284,7 +338,13 @@ static int read_image_and_globals(struct loader *ld, json_t *doc)
 		    loader_read_int(ld, &image, obj, "samples", OPTIONAL, 1, SCENE_MAX_SAMPLES,
 				    &s->samples)))
 		return -1;
-	if (read_camera(ld, doc) ||
+	static const char *const integrators[] = {"whitted", "path", NULL};
+
+	s->integrator = SCENE_INTEGRATOR_WHITTED;
+	s->ambient_given = json_object_get(doc, "ambient") != NULL;
+	if (loader_read_choice(ld, &root_path, doc, "integrator", OPTIONAL, integrators,
+			       &s->integrator) ||
+	    read_environment(ld, doc) || read_camera(ld, doc) ||
 	    loader_read_vec3(ld, &root_path, doc, "background", OPTIONAL, NON_NEGATIVE,
 			     s->background) ||
 	    loader_read_vec3(ld, &root_path, doc, "ambient", OPTIONAL, NON_NEGATIVE, s->ambient) ||
@@ -434,7 +494,8 @@ static int read_planes(struct loader *ld, json_t *array)
 static const char *const top_level_keys[] = {
 	"format",  "version",	"image",   "camera",	"background",
 	"ambient", "max_depth", "epsilon", "materials", "lights",
-	"spheres", "planes",	"meshes",  "triangles", NULL,
+	"spheres", "planes",	"meshes",  "triangles", "integrator",
+	"environment", NULL,
 };
 
 /* Fills ld->scene from the parsed document; on failure the caller frees
@@ -497,9 +558,8 @@ static int read_scene(struct loader *ld, json_t *doc)
  * file; SCENE.md allows it there. */
 static const char utf8_bom[] = "\xef\xbb\xbf";
 
-/* Parses and validates `len` bytes of JSON; `source` names them in messages. */
-static int load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
-		       const char *base_dir, char *err, size_t err_size)
+int loader_load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
+		       const char *base_dir, int model, char *err, size_t err_size)
 {
 	/* Messages show the name with its control bytes escaped (quote.h). */
 	char *shown = strdup(quote_text(source));
@@ -507,7 +567,8 @@ static int load_buffer(struct scene *scene, const char *json, size_t len, const 
 			    .err = err,
 			    .err_size = err_size,
 			    .scene = scene,
-			    .base_dir = base_dir};
+			    .base_dir = base_dir,
+			    .model = model};
 	json_error_t jerr;
 	json_t *doc;
 	int ret;
@@ -564,7 +625,7 @@ int scene_load_file(struct scene *scene, const char *path, char *err, size_t err
 	ret = files_read(path, "scene", SCENE_MAX_BYTES, &buf, &len, err, err_size);
 	if (ret == 0) {
 		/* Mesh files are found relative to the scene file's folder. */
-		ret = load_buffer(scene, buf, len, path, dir, err, err_size);
+		ret = loader_load_buffer(scene, buf, len, path, dir, 0, err, err_size);
 		free(buf);
 	}
 	if (ret == 0) {
@@ -595,12 +656,14 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		loader_write_err(&ld, "%s: no scene text", quote_text(name));
 		return -1;
 	}
-	return load_buffer(scene, json, strlen(json), name, NULL, err, err_size);
+	return loader_load_buffer(scene, json, strlen(json), name, NULL, 0, err, err_size);
 }
 
 void scene_free(struct scene *scene)
 {
 	free(scene->source);
+	free(scene->environment.file);
+	free(scene->environment.rgb);
 	for (int i = 0; i < scene->input_count; i++)
 		free(scene->inputs[i].path);
 	free(scene->inputs);
@@ -689,6 +752,16 @@ unsigned long long scene_digest(const struct scene *scene)
 	digest_doubles(&h, scene->background, 3);
 	digest_doubles(&h, scene->ambient, 3);
 	digest_doubles(&h, &scene->epsilon, 1);
+	digest_int(&h, scene->integrator);
+	digest_int(&h, scene->environment.file != NULL);
+	if (scene->environment.file) {
+		digest_bytes(&h, scene->environment.file, strlen(scene->environment.file));
+		digest_doubles(&h, &scene->environment.scale, 1);
+		digest_doubles(&h, &scene->environment.rotate, 1);
+		digest_bytes(&h, scene->environment.rgb, (size_t)scene->environment.width *
+								 scene->environment.height * 3 *
+								 sizeof(float));
+	}
 	/* Field by field: the structs' padding holds whatever it held. */
 	digest_int(&h, scene->material_count);
 	for (int i = 0; i < scene->material_count; i++) {
@@ -702,6 +775,12 @@ unsigned long long scene_digest(const struct scene *scene)
 		digest_int(&h, m->alpha_texture);
 		digest_doubles(&h, &m->alpha_cutoff, 1);
 		digest_doubles(&h, &m->alpha_scale, 1);
+		double bsdf[] = {m->bsdf.roughness, m->bsdf.ior, m->bsdf.metallic,
+				 m->bsdf.transmission};
+		digest_int(&h, m->bsdf.type);
+		digest_doubles(&h, m->bsdf.color, 3);
+		digest_doubles(&h, bsdf, sizeof(bsdf) / sizeof(bsdf[0]));
+		digest_doubles(&h, m->emission, 3);
 	}
 	digest_int(&h, scene->texture_count);
 	for (int i = 0; i < scene->texture_count; i++) {

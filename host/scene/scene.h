@@ -17,6 +17,27 @@ extern "C" {
 #define SCENE_MAX_DEPTH 64
 #define SCENE_MAX_SAMPLES 65536 /* image.samples and --spp */
 
+/* A material's "bsdf" (SCENE.md, "A material's bsdf"): the path
+ * integrator's scattering. SCENE_BSDF_NONE, a material without one, maps
+ * from the Whitted fields (RENDERING.md, "The mapped BSDF"). The same numbers
+ * as cl/rtcl_shared.h's RT_BSDF_*. */
+enum {
+	SCENE_BSDF_NONE,
+	SCENE_BSDF_DIFFUSE,
+	SCENE_BSDF_CONDUCTOR,
+	SCENE_BSDF_DIELECTRIC,
+	SCENE_BSDF_PRINCIPLED,
+};
+
+struct scene_bsdf {
+	int type;		/* SCENE_BSDF_* */
+	double color[3];	/* diffuse and conductor reflectance, principled base_color */
+	double roughness;	/* perceptual: alpha = roughness^2 */
+	double ior;		/* dielectric and principled */
+	double metallic;	/* principled */
+	double transmission;	/* principled */
+};
+
 struct scene_material {
 	double color[3];
 	double ambient;	  /* ka */
@@ -34,6 +55,12 @@ struct scene_material {
 	int alpha_texture;   /* the cut-out's alpha texture */
 	double alpha_cutoff; /* > 0: hits of alpha below it are cut out; 0: none */
 	double alpha_scale;  /* the factor of the texture's alpha (glTF's b.a) */
+	int metallic_roughness_texture; /* the path integrator's (1 + index, 0: none) */
+	int emissive_texture;
+	int normal_texture;
+	/* The path integrator's (SCENE.md, "Path tracing"). */
+	struct scene_bsdf bsdf;
+	double emission[3]; /* radiance from the front side */
 };
 
 /* A material's "fresnel" (the same numbers as cl/rtcl_shared.h's RT_FRESNEL_*). */
@@ -84,6 +111,7 @@ struct scene_texture {
 	int mesh;   /* the index of the mesh (meshes[i]) that brought it */
 	int width, height;
 	int is_float;
+	int is_linear; /* 8-bit RGB linear numbers (metallic-roughness), not sRGB */
 	int wrap_s, wrap_t; /* SCENE_WRAP_* */
 	void *texels;
 	size_t bytes;
@@ -134,6 +162,18 @@ struct scene_input {
 	const char *kind; /* "scene file", "mesh file", "texture", "glTF buffer", ... */
 };
 
+/* "integrator" (SCENE.md): the same numbers as --integrator's. */
+enum { SCENE_INTEGRATOR_WHITTED, SCENE_INTEGRATOR_PATH };
+
+/* "environment" (SCENE.md, "environment"): an equirectangular map. */
+struct scene_environment {
+	char *file; /* as the scene names it, joined to the scene's folder; NULL: none */
+	double scale;
+	double rotate; /* degrees about +y */
+	int width, height;
+	float *rgb; /* the map's radiance (scale not applied), rows from the top */
+};
+
 struct scene {
 	char *source;		    /* file name (or "name (built-in)") used in messages */
 	struct scene_input *inputs; /* the scene file (none for a string), its mesh files, theirs */
@@ -143,8 +183,11 @@ struct scene {
 	struct scene_camera camera;
 	double background[3];
 	double ambient[3];
+	int ambient_given; /* under the path integrator it is warned about */
 	int max_depth;
 	double epsilon;
+	int integrator; /* SCENE_INTEGRATOR_*: the scene's, or --integrator's */
+	struct scene_environment environment;
 
 	/* Named materials first, then one per inline material, then the
 	 * default material if anything uses it. */
@@ -185,13 +228,22 @@ static inline int scene_has_area_lights(const struct scene *scene)
 	return 0;
 }
 
+/* Whether material m emits (path integrator). */
+static inline int scene_material_emits(const struct scene_material *m)
+{
+	return m->emission[0] > 0 || m->emission[1] > 0 || m->emission[2] > 0;
+}
+
 /* Whether a material of the scene has a texture or a cut-out: the device
  * then gets texture coordinates and textures (RTCL_TEXTURES). */
 static inline int scene_has_textures(const struct scene *scene)
 {
 	for (int i = 0; i < scene->material_count; i++)
 		if (scene->materials[i].texture || scene->materials[i].alpha_texture ||
-		    scene->materials[i].alpha_cutoff > 0)
+		    scene->materials[i].alpha_cutoff > 0 ||
+		    (scene->integrator == SCENE_INTEGRATOR_PATH &&
+		     (scene->materials[i].metallic_roughness_texture ||
+		      scene->materials[i].emissive_texture || scene->materials[i].normal_texture)))
 			return 1;
 	return 0;
 }
@@ -219,6 +271,30 @@ int scene_load_string(struct scene *scene, const char *json, const char *name, c
 		      size_t err_size);
 
 void scene_free(struct scene *scene);
+
+/* A model file rendered alone (docs/SCENE.md, "A model file alone";
+ * scene_model.c): the image size and vertical field of view the command
+ * line gives, 0 for the defaults, which the framed view is made for. */
+struct model_view {
+	int width, height;
+	double fov;
+};
+
+/* Whether path names a model file (a mesh file the importer reads) rather
+ * than an rtcl scene: not named .json, and .gltf or .glb, or not a JSON
+ * object, or a glTF document (one with an "asset"). */
+int scene_is_model_file(const char *path);
+
+/* Loads the model file at path as a scene: its own materials, textures and
+ * camera; where it has no camera, a view framed from its bounds; where it
+ * has no light, the default stage. Returns 0, or -1 with one message in err
+ * and nothing held. */
+int scene_load_model(struct scene *scene, const char *path, const struct model_view *view,
+		     char *err, size_t err_size);
+
+/* What a scene file's message adds when the file is a model: "; PATH is a
+ * model file ...: render it alone with ...", or "" (into out). */
+const char *scene_model_hint(const char *path, char *out, size_t size);
 
 /* Applies the command line's camera to a loaded scene, and checks the
  * camera again as the loader does (the eye and look_at must differ, up not

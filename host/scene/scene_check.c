@@ -428,3 +428,36 @@ int loader_add_input(struct loader *ld, char *path, const char *kind)
 	scene->inputs[scene->input_count++] = (struct scene_input){path, kind};
 	return 0;
 }
+
+int loader_read_choice(struct loader *ld, const struct path *p, json_t *obj, const char *key,
+		       enum presence presence, const char *const *names, int *out)
+{
+	struct path field = child_key(p, key);
+	char rule[200];
+	size_t count = 0, used = 0;
+	json_t *v;
+
+	if (loader_get_field(ld, p, obj, key, presence, &v))
+		return -1;
+	if (!v)
+		return 0;
+	while (names[count])
+		count++;
+	/* must be "a", "b" or "c", got */
+	used += (size_t)snprintf(rule, sizeof(rule), "must be ");
+	for (size_t i = 0; i < count && used < sizeof(rule); i++)
+		used += (size_t)snprintf(rule + used, sizeof(rule) - used, "\"%s\"%s", names[i],
+					 i + 2 < count ? ", " : i + 2 == count ? " or " : "");
+	if (used < sizeof(rule))
+		snprintf(rule + used, sizeof(rule) - used, ", got ");
+	if (!json_is_string(v))
+		return loader_fail(ld, &field, "%s%s", rule, loader_type_name(v));
+	for (size_t i = 0; i < count; i++)
+		if (strcmp(json_string_value(v), names[i]) == 0) {
+			*out = (int)i;
+			return 0;
+		}
+	loader_fail_quoted(ld, &field, rule, json_string_value(v));
+	suggest_append(ld->err, ld->err_size, json_string_value(v), names, count, "");
+	return -1;
+}

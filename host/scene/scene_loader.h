@@ -43,6 +43,9 @@ struct loader {
 	size_t material_capacity; /* room in scene->materials */
 	size_t camera_mesh;	  /* 1 + the index of the mesh entry whose file
 				     gave the camera; 0: none did */
+	int model;		  /* a model file rendered alone (scene_model.c): the
+				     camera may be left out, and the mesh takes its
+				     file's first camera where it is a usable one */
 };
 
 /* A key below `parent`; top-level keys get a root-less path. */
@@ -115,6 +118,13 @@ int loader_check_number(struct loader *ld, const struct path *p, json_t *v, enum
 int loader_read_number(struct loader *ld, const struct path *p, json_t *obj, const char *key,
 		       enum presence presence, enum range range, double *out);
 
+/* A string that must be one of the NULL-terminated names: *out its index
+ * (left as it is when an optional key is absent). A wrong one is refused
+ * with the names and the nearest one ("must be "whitted" or "path", got
+ * "paths"; did you mean "path"?"). */
+int loader_read_choice(struct loader *ld, const struct path *p, json_t *obj, const char *key,
+		       enum presence presence, const char *const *names, int *out);
+
 /* A JSON integer (not 2.0) in lo ... hi. */
 int loader_check_integer(struct loader *ld, const struct path *p, json_t *v, json_int_t lo,
 			 json_int_t hi, json_int_t *out);
@@ -170,6 +180,13 @@ const char *loader_material_from_mesh(const struct mesh_material *in, struct sce
 /* Version 2 (scene_mesh.c): the "meshes" and the inline "triangles",
  * appended to scene->triangles in that order. */
 int loader_read_meshes(struct loader *ld, json_t *array);
+
+/* Parses and validates `len` bytes of JSON into scene; `source` names them
+ * in messages, mesh files are relative to base_dir (NULL: the working
+ * folder); model: as struct loader's. Returns 0, or -1 with one message in
+ * err and nothing held. */
+int loader_load_buffer(struct scene *scene, const char *json, size_t len, const char *source,
+		       const char *base_dir, int model, char *err, size_t err_size);
 int loader_read_triangles(struct loader *ld, json_t *array);
 
 const char *loader_fmt_vec3(const double v[3], char buf[100]);

@@ -43,13 +43,80 @@ static int read_fresnel(struct loader *ld, const struct path *p, json_t *obj, in
 	return 0;
 }
 
+/* A bsdf's colour (reflectance, base_color): a color whose parts are at
+ * most 1 (SCENE.md, "A material's bsdf"). */
+static int read_reflectance(struct loader *ld, const struct path *p, json_t *obj, const char *key,
+			    double out[3])
+{
+	struct path field = child_key(p, key);
+	char buf[100];
+
+	if (loader_read_vec3(ld, p, obj, key, OPTIONAL, NON_NEGATIVE, out))
+		return -1;
+	if (out[0] > 1 || out[1] > 1 || out[2] > 1)
+		return loader_fail(ld, &field,
+				   "must be a color with parts between 0 and 1, got %s",
+				   loader_fmt_vec3(out, buf));
+	return 0;
+}
+
+/* "bsdf" (SCENE.md, "A material's bsdf"): its type, then the fields of
+ * that type with their defaults. */
+static int read_bsdf(struct loader *ld, const struct path *p, json_t *obj, struct scene_bsdf *b)
+{
+	static const char *const types[] = {"diffuse", "conductor", "dielectric", "principled",
+					    NULL};
+	static const char *const diffuse_keys[] = {"type", "reflectance", NULL};
+	static const char *const conductor_keys[] = {"type", "reflectance", "roughness", NULL};
+	static const char *const dielectric_keys[] = {"type", "ior", "roughness", NULL};
+	static const char *const principled_keys[] = {"type",	      "base_color", "metallic",
+						      "roughness",    "transmission", "ior",
+						      NULL};
+	static const char *const *const keys[] = {diffuse_keys, conductor_keys, dielectric_keys,
+						  principled_keys};
+	struct path field = child_key(p, "bsdf");
+	json_t *v = json_object_get(obj, "bsdf");
+	int type = 0;
+
+	if (!v)
+		return 0;
+	if (!json_is_object(v))
+		return loader_fail(ld, &field, "must be an object, got %s", loader_type_name(v));
+	if (loader_read_choice(ld, &field, v, "type", REQUIRED, types, &type) ||
+	    loader_check_keys(ld, &field, v, keys[type]))
+		return -1;
+	b->type = SCENE_BSDF_DIFFUSE + type;
+	b->roughness = b->type == SCENE_BSDF_PRINCIPLED ? 0.5 : 0;
+	b->ior = 1.5;
+	b->metallic = b->transmission = 0;
+	for (int i = 0; i < 3; i++)
+		b->color[i] = b->type == SCENE_BSDF_DIFFUSE ? 0.5 : 1;
+	switch (b->type) {
+	case SCENE_BSDF_DIFFUSE:
+		return read_reflectance(ld, &field, v, "reflectance", b->color);
+	case SCENE_BSDF_CONDUCTOR:
+		return read_reflectance(ld, &field, v, "reflectance", b->color) ||
+		       loader_read_number(ld, &field, v, "roughness", OPTIONAL, UNIT, &b->roughness);
+	case SCENE_BSDF_DIELECTRIC:
+		return loader_read_number(ld, &field, v, "ior", OPTIONAL, POSITIVE, &b->ior) ||
+		       loader_read_number(ld, &field, v, "roughness", OPTIONAL, UNIT, &b->roughness);
+	default:
+		return read_reflectance(ld, &field, v, "base_color", b->color) ||
+		       loader_read_number(ld, &field, v, "metallic", OPTIONAL, UNIT, &b->metallic) ||
+		       loader_read_number(ld, &field, v, "roughness", OPTIONAL, UNIT,
+					  &b->roughness) ||
+		       loader_read_number(ld, &field, v, "transmission", OPTIONAL, UNIT,
+					  &b->transmission) ||
+		       loader_read_number(ld, &field, v, "ior", OPTIONAL, POSITIVE, &b->ior);
+	}
+}
+
 static int read_material_fields(struct loader *ld, const struct path *p, json_t *obj,
 				struct scene_material *m)
 {
-	static const char *const keys[] = {"color",    "ambient",   "diffuse",
-					   "specular", "shininess", "reflect",
-					   "transmit", "ior",	    "fresnel",
-					   NULL};
+	static const char *const keys[] = {"color",    "ambient",  "diffuse", "specular",
+					   "shininess", "reflect",  "transmit", "ior",
+					   "fresnel",  "bsdf",	   "emission", NULL};
 
 	*m = loader_default_material;
 	if (loader_expect_object(ld, p, obj, keys) ||
@@ -61,7 +128,8 @@ static int read_material_fields(struct loader *ld, const struct path *p, json_t 
 	    loader_read_number(ld, p, obj, "reflect", OPTIONAL, UNIT, &m->reflect) ||
 	    loader_read_number(ld, p, obj, "transmit", OPTIONAL, UNIT, &m->transmit) ||
 	    loader_read_number(ld, p, obj, "ior", OPTIONAL, POSITIVE, &m->ior) ||
-	    read_fresnel(ld, p, obj, &m->fresnel))
+	    read_fresnel(ld, p, obj, &m->fresnel) || read_bsdf(ld, p, obj, &m->bsdf) ||
+	    loader_read_vec3(ld, p, obj, "emission", OPTIONAL, NON_NEGATIVE, m->emission))
 		return -1;
 	return 0;
 }
@@ -216,6 +284,16 @@ static void from_metallic_roughness(const struct mesh_material *in, struct scene
 	m->reflect = metal * (1 - rough) * alpha;
 	m->transmit = 1 - alpha * (1 - (1 - metal) * t);
 	m->ior = in->has_ior ? in->ior : t > 0 ? 1.5 : 1;
+	/* The path integrator's principled BSDF takes the factors as glTF
+	 * gives them (RENDERING.md, "The BSDFs"). */
+	m->bsdf.type = SCENE_BSDF_PRINCIPLED;
+	for (int i = 0; i < 3; i++)
+		m->bsdf.color[i] = allowed(in->base[i], 0, 1);
+	m->bsdf.metallic = metal;
+	m->bsdf.roughness = rough;
+	m->bsdf.transmission = t;
+	m->bsdf.ior = in->has_ior && in->ior > 0 ? allowed(in->ior, 1e-18, SCENE_MAX_MAGNITUDE)
+						 : 1.5;
 	/* RENDERING.md, "Alpha cut-out": a = b.a times the texture's alpha;
 	 * the texture is the scene loader's to give (scene_mesh.c). */
 	if (in->alpha_mode == MESH_ALPHA_MASK) {
@@ -277,5 +355,7 @@ const char *loader_material_from_mesh(const struct mesh_material *in, struct sce
 	m->ior = allowed(m->ior, 0, SCENE_MAX_MAGNITUDE);
 	if (m->ior == 0)
 		m->ior = 1;
+	for (int i = 0; i < 3; i++)
+		m->emission[i] = allowed(in->emissive[i], 0, SCENE_MAX_MAGNITUDE);
 	return NULL;
 }

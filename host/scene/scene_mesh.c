@@ -10,6 +10,8 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
+#include <sys/stat.h>
 
 #include "base/quote.h"
 #include "base/suggest.h"
@@ -503,13 +505,15 @@ static int add_texture(struct loader *ld, struct mesh_textures *mt, int i)
 	t->width = (int)in->width;
 	t->height = (int)in->height;
 	t->is_float = in->format == MESH_TEXELS_FLOAT;
+	t->is_linear = in->role == MESH_TEXTURE_DATA;
 	t->wrap_s = (int)in->wrap_s;
 	t->wrap_t = (int)in->wrap_t;
 	s->texture_count++;
 	loader_format_path(mt->file->parent, where, sizeof(where));
 	snprintf(line, sizeof(line), "%s \"%s\": texture \"%s\": %dx%d %s, %s/%s, %zu bytes", where,
 		 one_line(mt->name, text), one_line(in->name, tex), t->width, t->height,
-		 t->is_float ? "float linear" : "8-bit sRGB", wrap_names[t->wrap_s],
+		 t->is_float ? "float linear" : t->is_linear ? "8-bit linear" : "8-bit sRGB",
+		 wrap_names[t->wrap_s],
 		 wrap_names[t->wrap_t], t->bytes);
 	if (add_line(ld, &s->mesh_reports, &s->mesh_report_count, line))
 		return -1;
@@ -557,6 +561,16 @@ static int attach_textures(struct loader *ld, struct mesh_textures *mt,
 	    (opacity = use_texture(ld, mt, in->name, in->opacity_texture)) < 0)
 		return -1;
 	m->texture = base;
+	if (in->metallic_roughness_texture >= 0 &&
+	    (m->metallic_roughness_texture =
+		     use_texture(ld, mt, in->name, in->metallic_roughness_texture)) < 0)
+		return -1;
+	if (in->emissive_texture >= 0 &&
+	    (m->emissive_texture = use_texture(ld, mt, in->name, in->emissive_texture)) < 0)
+		return -1;
+	if (in->normal_texture >= 0 &&
+	    (m->normal_texture = use_texture(ld, mt, in->name, in->normal_texture)) < 0)
+		return -1;
 	if (in->opacity_texture >= 0) { /* MTL's map_d: cut out below 0.5 */
 		m->alpha_texture = opacity;
 		m->alpha_cutoff = 0.5;
@@ -820,6 +834,101 @@ static int add_mesh_inputs(struct loader *ld, const struct mesh_data *mesh)
 	return 0;
 }
 
+/* A model rendered alone takes its file's lights (docs/SCENE.md, "A model
+ * file alone"), placed as its triangles are, with the file's colours times
+ * intensities: scene_model.c scales them. A spot light is lit as a point
+ * light (rtcl has no cone), an area or ambient light is not read; -v says
+ * so. */
+static int take_lights(struct loader *ld, const struct path *item, const char *name,
+		       const struct mesh_data *mesh, const struct placement *pl)
+{
+	struct scene *s = ld->scene;
+	char where[200], text[MESSAGE_TEXT_MAX], lname[MESSAGE_TEXT_MAX],
+		line[sizeof(where) + 2 * MESSAGE_TEXT_MAX + 64];
+
+	if (mesh->light_count == 0)
+		return 0;
+	struct scene_light *grown =
+		realloc(s->lights, (size_t)(s->light_count + mesh->light_count) * sizeof(*grown));
+	if (!grown) {
+		loader_write_err(ld, "%s: out of memory", ld->source);
+		return -1;
+	}
+	s->lights = grown;
+	loader_format_path(item, where, sizeof(where));
+	one_line(name, text);
+	for (size_t i = 0; i < mesh->light_count; i++) {
+		const struct mesh_light *m = &mesh->lights[i];
+		struct scene_light *l = &s->lights[s->light_count];
+		const char *note = NULL;
+		int usable = m->kind != MESH_LIGHT_OTHER;
+
+		memset(l, 0, sizeof(*l));
+		short_name(m->name, lname);
+		place_point(pl, m->position, l->position);
+		place_vector(pl, m->direction, l->direction);
+		for (int k = 0; k < 3; k++) {
+			l->color[k] = isfinite(m->color[k]) && m->color[k] > 0 ? m->color[k] : 0;
+			usable &= fabs(l->position[k]) <= SCENE_MAX_MAGNITUDE;
+		}
+		l->directional = m->kind == MESH_LIGHT_DIRECTIONAL;
+		if (l->directional)
+			usable &= place_unit(l->direction);
+		if (m->kind == MESH_LIGHT_OTHER)
+			note = "an area or ambient light, not read";
+		else if (!usable)
+			note = "not finite after placement, not read";
+		else if (m->kind == MESH_LIGHT_SPOT)
+			note = "a spot light, lit as a point light (rtcl has no cone)";
+		if (note) {
+			snprintf(line, sizeof(line), "%s \"%s\": light \"%s\": %s", where, text,
+				 lname, note);
+			if (add_line(ld, &s->mesh_reports, &s->mesh_report_count, line))
+				return -1;
+		}
+		if (usable)
+			s->light_count++;
+	}
+	return 0;
+}
+
+/* Whether the file at path is glTF 1.0: a .glb of container version 1, or
+ * a .gltf whose "asset" says version 1.x (glTF 2.0 requires the asset). Its
+ * materials (techniques and shaders) are not glTF 2.0's, which the importer
+ * reads as none: such a model rendered black (issue 44). */
+static int is_gltf_1(const char *path)
+{
+	const char *ext = strrchr(path, '.');
+	unsigned char head[12];
+	char text[65537], *at;
+	size_t n;
+	struct stat st;
+	FILE *file;
+	int old = 0;
+
+	if (!ext || (strcasecmp(ext, ".gltf") != 0 && strcasecmp(ext, ".glb") != 0))
+		return 0;
+	if (stat(path, &st) != 0 || !S_ISREG(st.st_mode))
+		return 0; /* the importer's to refuse, without blocking on a FIFO */
+	file = fopen(path, "rb");
+	if (!file)
+		return 0; /* the importer says why */
+	if (strcasecmp(ext, ".glb") == 0) {
+		old = fread(head, 1, sizeof(head), file) == sizeof(head) &&
+		      memcmp(head, "glTF", 4) == 0 && head[4] == 1 && !head[5] && !head[6] &&
+		      !head[7];
+	} else {
+		n = fread(text, 1, sizeof(text) - 1, file);
+		text[n] = '\0';
+		at = strstr(text, "\"asset\"");
+		at = at ? strstr(at, "\"version\"") : NULL;
+		at = at ? strchr(at + 9, '"') : NULL;
+		old = at && at[1] == '1' && (at[2] == '.' || at[2] == '"');
+	}
+	fclose(file);
+	return old;
+}
+
 static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 {
 	static const char *const keys[] = {"file",	 "material", "materials",
@@ -864,6 +973,15 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 		loader_write_err(ld, "%s: out of memory", ld->source);
 		return -1;
 	}
+	if (is_gltf_1(path)) {
+		ret = loader_fail(ld, &file,
+				  "\"%s\" is a glTF 1.0 file, whose materials rtcl cannot read: "
+				  "convert it to glTF 2.0 (e.g. \"npx gltf-pipeline -i %s -o "
+				  "converted.gltf\", which upgrades 1.0 files) and render that",
+				  one_line(name, text), text);
+		free(path);
+		return ret;
+	}
 	ret = mesh_import(path, &mesh, reason, sizeof(reason));
 	if (loader_add_input(ld, path, "mesh file")) {
 		if (ret == 0)
@@ -899,8 +1017,14 @@ static int read_mesh(struct loader *ld, const struct path *item, json_t *obj)
 	} else if ((ret = report_mesh(ld, item, name, &mesh, 1))) {
 		goto out_free;
 	}
+	/* A model rendered alone takes its file's first camera, where that is
+	 * a perspective glTF camera; else its view is framed (scene_model.c). */
+	if (ld->model && !camera && mesh.camera_count > 0 &&
+	    mesh.cameras[0].kind == MESH_CAMERA_PERSPECTIVE)
+		camera = json_true();
 	ret = place_mesh(ld, &file, name, &mesh, &pl, material, map) ||
-			      (camera && take_camera(ld, item, name, &mesh, &pl, camera))
+			      (camera && take_camera(ld, item, name, &mesh, &pl, camera)) ||
+			      (ld->model && take_lights(ld, item, name, &mesh, &pl))
 		      ? -1
 		      : 0;
 out_free:

@@ -361,6 +361,8 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	done->kernel_ms += out.kernel_ms;
 	done->launches += out.launches;
 	t->owner[band] = k; /* pieces are distinct: no two threads write one */
+	if (t->by_samples)
+		__atomic_add_fetch(&t->frame_samples, out.samples, __ATOMIC_RELAXED);
 	expect_writes(t, k, &whole, 1);
 	/* A range of every pixel's samples counts as that share of the pixels. */
 	done->pixels += (long long)((double)whole.width * whole.height *
@@ -650,14 +652,15 @@ void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, fl
 		     (size_t)s->width * s->height);
 }
 
-/* SPLIT_SAMPLES: the image from the devices' sums of the last frame. */
+/* SPLIT_SAMPLES: the image from the devices' sums of the last frame, the
+ * mean of the samples they traced (all, or fewer when stopped). */
 static void add_sums(const struct tiles_job *t, float *rgb)
 {
 	const cl_long *parts[DEVICES_MAX];
 
 	for (int k = 0; k < t->count; k++)
 		parts[k] = t->dev[k].sums;
-	combine_sums(parts, t->count, NULL, rgb, settings_mean_scale(settings_samples(t->settings)),
+	combine_sums(parts, t->count, NULL, rgb, settings_mean_scale(t->frame_samples),
 		     (size_t)t->settings->width * t->settings->height);
 }
 
@@ -808,6 +811,7 @@ static int render_tile_frames(struct tiles_job *t, int split_static, struct devi
 		}
 		if (t->by_samples)
 			split_samples(t);
+		t->frame_samples = 0;
 		if (multidev_run(&job, t->devs, t->count, work, err, err_size))
 			return -1;
 		/* The next frame's split: each device's samples over its busy
@@ -978,6 +982,8 @@ int tiles_render(struct tiles_request *r, const struct render_settings *s,
 		goto out_free;
 	out->times.kernels = timing_lap_ms(&lap);
 	out->passes = tiles_piece_launches(s, &t.pieces[0], t.devs[t.owner[0]].is_gpu);
+	out->samples_done = t.by_samples ? t.frame_samples : settings_samples(s);
+	out->passes_done = out->passes;
 	if (assemble(&t, out, err, err_size))
 		goto out_free;
 	out->times.read_back = timing_lap_ms(&lap);

@@ -146,6 +146,9 @@ struct tiles_job {
 	double *piece_ms;	 /* each piece's start, end (from frame_start) and
 				    kernel time, 3 per piece */
 	double frame_start;	 /* the frame's start (timing_now, seconds) */
+	int frame_samples;	 /* by_samples: the samples of every pixel the frame's
+				    pieces traced, all of them or fewer when an
+				    interrupt stopped them (settings->stoppable) */
 	int piece_count, piece_cap;
 	uint32_t *expected; /* check_writes: each pixel's launches so far, all frames */
 	struct adapt adapt;

@@ -38,11 +38,19 @@ VERSIONS = (1, 2)
 TOP_KEYS = ("format", "version", "image", "camera", "background", "ambient", "max_depth",
             "epsilon", "materials", "lights", "spheres", "planes")
 VERSION_2_KEYS = ("meshes", "triangles")
+PATH_KEYS = ("integrator", "environment")    # SCENE.md, "Path tracing"
+INTEGRATORS = ("whitted", "path")
+BSDF_KEYS = {"diffuse": ("type", "reflectance"),
+             "conductor": ("type", "reflectance", "roughness"),
+             "dielectric": ("type", "ior", "roughness"),
+             "principled": ("type", "base_color", "metallic", "roughness", "transmission",
+                            "ior")}
 MESH_KEYS = ("file", "material", "materials", "scale", "rotate", "translate", "smooth",
              "missing_textures", "camera")
 MATERIAL_DEFAULTS = {"color": (1.0, 1.0, 1.0), "ambient": 1.0, "diffuse": 0.7,
                      "specular": 0.3, "shininess": 32.0, "reflect": 0.0,
-                     "transmit": 0.0, "ior": 1.5, "fresnel": False}
+                     "transmit": 0.0, "ior": 1.5, "fresnel": False, "bsdf": None,
+                     "emission": (0.0, 0.0, 0.0)}
 # Material fields in rtcl's order, each with its range.
 MATERIAL_RANGES = (("ambient", "non-negative"), ("diffuse", "non-negative"),
                    ("specular", "non-negative"), ("shininess", "non-negative"),
@@ -68,7 +76,7 @@ def read_header(doc):
     for key in VERSION_2_KEYS:
         if key in doc and version < 2:
             fail(key, f'needs "version": 2 (the file says "version": {version})')
-    check_keys(doc, "", TOP_KEYS + VERSION_2_KEYS)
+    check_keys(doc, "", TOP_KEYS + VERSION_2_KEYS + PATH_KEYS)
     return version
 
 
@@ -127,6 +135,35 @@ def read_camera(doc):
     return camera
 
 
+def choice(obj, key, path, names, default):
+    """One of names (rtcl's loader_read_choice): 'must be "a", "b" or "c", got ...'."""
+    if key not in obj:
+        return default
+    value, where = obj[key], child(path, key)
+    rule = "must be " + ", ".join(f'"{n}"' for n in names[:-1]) + f' or "{names[-1]}", got '
+    if not isinstance(value, str):
+        fail(where, rule + type_name(value))
+    if value not in names:
+        fail(where, rule + f'"{_escaped(value)}"' + did_you_mean(value, names))
+    return value
+
+
+def read_environment(doc):
+    """SCENE.md's "environment" (path only): the map's file, scale and rotation."""
+    if "environment" not in doc:
+        return None
+    env = check_keys(doc["environment"], "environment", ("file", "scale", "rotate"))
+    scale = optional(env, "scale", "environment", number, 1.0, "non-negative")
+    rotate = optional(env, "rotate", "environment", number, 0.0)
+    if "file" not in env:
+        fail("environment", 'needs "file"')
+    file = env["file"]
+    if not isinstance(file, str) or not file:
+        fail("environment.file", "must be a file name, got " +
+             ('""' if isinstance(file, str) else type_name(file)))
+    return {"file": file, "scale": scale, "rotate": rotate}
+
+
 def read_globals(doc):
     """Returns the image size, camera and the global settings, in rtcl's order."""
     size, samples = (640, 480), 1
@@ -135,7 +172,10 @@ def read_globals(doc):
         size = tuple(optional(image, key, "image", integer, default, 1, MAX_IMAGE_SIDE)
                      for key, default in (("width", 640), ("height", 480)))
         samples = optional(image, "samples", "image", integer, 1, 1, MAX_SAMPLES)
-    return {"size": size, "samples": samples, "camera": read_camera(doc),
+    integrator = choice(doc, "integrator", "", INTEGRATORS, "whitted")
+    environment = read_environment(doc)
+    return {"size": size, "samples": samples, "integrator": integrator,
+            "environment": environment, "camera": read_camera(doc),
             "background": optional(doc, "background", "", vec3, (0.0, 0.0, 0.0),
                                    "non-negative"),
             "ambient": optional(doc, "ambient", "", vec3, (0.1, 0.1, 0.1), "non-negative"),
@@ -155,7 +195,48 @@ def read_material(value, path):
             "true" if fresnel is True else type_name(fresnel)
         fail(child(path, "fresnel"), f'must be "dielectric", "conductor" or false, got {got}')
     material["fresnel"] = fresnel
+    material["bsdf"] = read_bsdf(value, path)
+    material["emission"] = optional(value, "emission", path, vec3, material["emission"],
+                                    "non-negative")
     return material
+
+
+def reflectance(bsdf, key, path, default):
+    """A bsdf's colour: a color whose parts are at most 1."""
+    colour = optional(bsdf, key, path, vec3, default, "non-negative")
+    if max(colour) > 1:
+        fail(child(path, key), "must be a color with parts between 0 and 1, got "
+                               f"{format_vector(colour)}")
+    return colour
+
+
+def read_bsdf(value, path):
+    """SCENE.md's "A material's bsdf": its type, then that type's fields."""
+    if "bsdf" not in value:
+        return None
+    bsdf, where = value["bsdf"], child(path, "bsdf")
+    if not isinstance(bsdf, dict):
+        fail(where, f"must be an object, got {type_name(bsdf)}")
+    kind = choice(bsdf, "type", where, tuple(BSDF_KEYS), None)
+    if kind is None:
+        fail(child(where, "type"), "required field is missing")
+    check_keys(bsdf, where, BSDF_KEYS[kind])
+    out = {"type": kind}
+    if kind in ("diffuse", "conductor"):
+        out["reflectance"] = reflectance(bsdf, "reflectance", where,
+                                         (0.5,) * 3 if kind == "diffuse" else (1.0,) * 3)
+    if kind == "principled":
+        out["base_color"] = reflectance(bsdf, "base_color", where, (1.0,) * 3)
+        out["metallic"] = optional(bsdf, "metallic", where, number, 0.0, "unit")
+    if kind == "dielectric":
+        out["ior"] = optional(bsdf, "ior", where, number, 1.5, "positive")
+    if kind != "diffuse":
+        out["roughness"] = optional(bsdf, "roughness", where, number,
+                                    0.5 if kind == "principled" else 0.0, "unit")
+    if kind == "principled":
+        out["transmission"] = optional(bsdf, "transmission", where, number, 0.0, "unit")
+        out["ior"] = optional(bsdf, "ior", where, number, 1.5, "positive")
+    return out
 
 
 def material_of(obj, path, materials):

@@ -1,4 +1,4 @@
-"""rtcl's traversal against a peer's on the same primary rays (issue 26).
+"""rtcl's traversal against a peer's on the same rays: primary, bounce and shadow rays.
 
 The peer is TinyBVH's OpenCL harness (a folder holding side.cpp, its .cl files,
 tiny_bvh.h, tiny_ocl.h and ply2bin.py, given as PEER): its `side` program traces
@@ -36,10 +36,30 @@ rtcl's default device), into cpu.md: where rtcl stands on a CPU. It writes to
 -o/--out DIR, by default a new folder rtcl-results/peer-<YYYYmmdd-HHMMSS>; a
 file tracked by git is replaced only with --update-committed.
 
+--rays traces incoherent rays too (issue 42): for every mesh, peer_rays.cpp
+(built here against the peer's tiny_bvh.h) makes three ray files once --
+the primary rays (rtcl's camera, one a pixel in 8x4 tiles), one diffuse
+bounce from each primary hit (cosine-distributed about the hit triangle's
+normal, from an integer hash of the pixel: peer_rays.cpp documents it) and a
+shadow ray from each of those hit points to a point light (any hit) -- and
+both sides trace the very same rays from those files: rtcl with rtcl-rays
+(its traversal, the BVH and program a render builds, one work-item a ray;
+built beside rtcl by make) and the peer with its GPU kernels
+(peer_rays_gpu.cpp, the --variants; needs g++ and the OpenCL headers), or,
+with --cpu, with its CPU traversals (BVH, BVH4_CPU, BVH8_CPU on every
+hardware thread) against rtcl on a CPU OpenCL device (PoCL). rays.md and
+rays.csv give, per mesh and kind of ray, each side's median time and rays
+per second, the ratio, the hits of each and how many rays the two sides
+agree on (the same hit or miss; for closest hits the same triangle or the
+same distance within 1e-4 of it); --rounds N runs the two sides in turn N
+times (each side's time the median of its rounds, each round's ratio shown).
+
     rtcl-peer-compare ../shared/bench/tinybvh --meshes tetra:8,mount:9,lake -r 10
     rtcl-peer-compare PEER --ply bunny.ply --size 1000x1000
     rtcl-peer-compare PEER --counts -o counts      # work per ray, no GPU needed
     rtcl-peer-compare PEER --cpu --meshes tetra:8,mount:8 -o cpu   # on PoCL
+    rtcl-peer-compare PEER --rays --meshes tetra:8,mount:9,lake -r 10     # on the GPU
+    rtcl-peer-compare PEER --rays --cpu --meshes mount:8 --size 500x500 -r 3
 """
 import argparse
 import json
@@ -61,6 +81,16 @@ DEFAULT_MESHES = "tetra:8,mount:8,mount:9,lake"
 BACKGROUND = (1, 0, 1)
 PEER_SOURCES = ("side.cpp", "tiny_bvh.h", "tiny_ocl.h", "ply2bin.py")
 COUNTER_SOURCE = pathlib.Path(__file__).resolve().parent.parent / "peer_counts.cpp"
+RAYS_SOURCE = COUNTER_SOURCE.with_name("peer_rays.cpp")
+RAYS_GPU_SOURCE = COUNTER_SOURCE.with_name("peer_rays_gpu.cpp")
+RAYS_KERNELS = COUNTER_SOURCE.with_name("peer_rays.cl")
+RAY_KINDS = ("primary", "bounce", "shadow")
+RAYS_LINE = re.compile(r"^rtcl-rays: .*?; (\d+) (closest-hit|any-hit) rays, median ([\d.]+) ms, "
+                       r"min ([\d.]+) ms .*hits (\d+);")
+PEER_RAYS_LINE = re.compile(r"^(.+?)\s+build\s+([\d.]+) ms\s+trace median\s+([\d.]+) ms\s+"
+                            r"min\s+([\d.]+) ms.*?(?:hits (\d+))?$")
+RAYS_CSV = ("mesh", "triangles", "rays", "count", "round", "side", "traversal", "median_ms",
+            "min_ms", "mrays_per_s", "hits")
 COUNTS_LINE = re.compile(r"^(BVH_GPU \w+): iterations per ray ([\d.]+), triangle tests per "
                          r"ray ([\d.]+), hits (\d+), nodes (\d+), build ms ([\d.]+)")
 CSV_COLUMNS = ("mesh", "triangles", "side", "kernel", "median_ms", "min_ms", "grays_per_s")
@@ -94,6 +124,13 @@ def parse_arguments(argv):
     add_rtcl_option(parser)
     parser.add_argument("-p", "--platform", help="rtcl's OpenCL platform (default: NVIDIA's; "
                                                  "with --counts, rtcl's default device)")
+    parser.add_argument("--rays", action="store_true",
+                        help="trace primary rays, one diffuse bounce from each primary hit "
+                             "and shadow rays to a point light, the same rays on both "
+                             "sides from files made once (rays.md); with --cpu on a CPU")
+    parser.add_argument("--rounds", default="1",
+                        help="with --rays: rounds of both sides in turn, each side's time "
+                             "the median of its rounds (default 1)")
     mode = parser.add_mutually_exclusive_group()
     mode.add_argument("--counts", action="store_true",
                       help="count node visits and triangle tests per ray on both sides "
@@ -446,6 +483,182 @@ def compare(args, rtcl, out):
     print(report)
 
 
+def find_rtcl_rays(rtcl):
+    """rtcl-rays beside rtcl (an installed rtcl, or build/ of the source tree)."""
+    here = pathlib.Path(rtcl).resolve().parent
+    for candidate in (here / "rtcl-rays", here / "build" / "rtcl-rays",
+                      locations.SOURCE_ROOT / "build" / "rtcl-rays"):
+        if locations.is_program(candidate):
+            return candidate
+    raise Failure(f"no rtcl-rays beside {rtcl} or in build/: build it with make")
+
+
+def hits_agreeing(rtcl_hits, peer_hits, any_hit):
+    """(rtcl's hits, the peer's, the rays on which both agree): the same hit or
+    miss and, for closest hits, the same triangle or the same distance within
+    1e-4 of it (bounce rays meet triangles next to their origin, where both
+    sides' distances differ by float rounding in their last bits)."""
+    import numpy as np
+
+    ours = np.fromfile(rtcl_hits, dtype="<f4").reshape(-1, 2)
+    theirs = np.fromfile(peer_hits, dtype="<f4").reshape(-1, 2)
+    if ours.shape != theirs.shape:
+        raise Failure(f"{rtcl_hits} and {peer_hits} hold different numbers of rays")
+    hit, peer_hit = ours[:, 0] > 0, theirs[:, 0] > 0
+    same = hit == peer_hit
+    if not any_hit:
+        same_triangle = ours[:, 1].view("<i4") == theirs[:, 1].view("<i4")
+        near = np.abs(ours[:, 0] - theirs[:, 0]) <= 1e-4 * np.abs(theirs[:, 0])
+        same &= ~hit | same_triangle | near
+    return int(hit.sum()), int(peer_hit.sum()), int(same.sum())
+
+
+def build_ray_programs(args, out):
+    """peer_rays (the rays' maker and the peer's CPU traversals) and, for the
+    GPU, peer_rays_gpu in a folder with the peer's kernels: (maker, gpu, its folder)."""
+    folder = out / "peer"
+    folder.mkdir(parents=True, exist_ok=True)
+    maker = folder / "peer_rays"
+    run(["g++", "-O3", "-march=native", "-std=c++20", "-I", args.peer, RAYS_SOURCE, "-o", maker,
+         "-lpthread"], out / "raw" / "build-peer-rays.txt")
+    if args.cpu:
+        return maker, None, None
+    for source in list(args.peer.glob("*.cl")) + [RAYS_KERNELS]:
+        files.copy_file(source, folder / source.name)
+    gpu = folder / "peer_rays_gpu"
+    run(["g++", "-O3", "-march=x86-64-v3", "-std=c++20", "-I", args.peer, "-I/usr/include/CL",
+         RAYS_GPU_SOURCE, "-o", gpu, "-lOpenCL", "-lpthread"],
+        out / "raw" / "build-peer-rays-gpu.txt")
+    return maker, gpu, folder
+
+
+def time_rtcl_rays(args, rtcl_rays, platform, name, scene_path, rays_file, out, tag=""):
+    """rtcl-rays over one ray file: (count, any hit, median ms, min ms)."""
+    kind = rays_file.stem
+    log = out / "raw" / f"rtcl-rays-{name}-{kind}{tag}.txt"
+    device = ["-p", platform] if platform else []
+    line = run([rtcl_rays, *device, "-r", args.repeat, scene_path, rays_file,
+                rays_file.with_suffix(".rtcl-hits")], log)
+    match = RAYS_LINE.search(line)
+    if not match:
+        raise Failure(f"rtcl-rays printed no timing ({log})")
+    return int(match.group(1)), match.group(2) == "any-hit", float(match.group(3)), \
+        float(match.group(4))
+
+
+def time_peer_rays(args, programs, name, bin_path, folder, out, tag=""):
+    """The peer over every ray file of folder, each layout built once:
+    {kind: [(traversal, median ms, min ms)]}."""
+    maker, gpu, gpu_folder = programs
+    pairs = [str(path.resolve()) for kind in RAY_KINDS
+             for path in (folder / f"{kind}.rays", folder / f"{kind}.peer-hits")]
+    log = out / "raw" / f"peer-rays-{name}{tag}.txt"
+    if gpu:
+        output = run([gpu, bin_path.resolve(), args.repeat, args.variants, *pairs], log,
+                     cwd=gpu_folder)
+    else:
+        output = run([maker, "trace", bin_path.resolve(), args.repeat, *pairs], log)
+    found, kind = {}, None
+    for line in output.splitlines():
+        section = re.match(r"^(.*)\.rays: \d+ ", line)
+        match = PEER_RAYS_LINE.match(line)
+        if section:
+            kind = pathlib.Path(section.group(1)).name
+        elif match and kind:
+            found.setdefault(kind, []).append((match.group(1).strip(), float(match.group(3)),
+                                               float(match.group(4))))
+    if set(found) != set(RAY_KINDS):
+        raise Failure(f"the peer printed no timing for some rays ({log})")
+    return found
+
+
+def rays(args, rtcl, out):
+    """--rays: primary, bounce and shadow rays from one file each, both sides."""
+    width, height = args.size
+    args.repeat = str(check_positive_int("-r/--repeat", args.repeat))
+    args.rounds = check_positive_int("--rounds", args.rounds)
+    needed = ("tiny_bvh.h", "ply2bin.py") + (() if args.cpu else ("tiny_ocl.h", "traverse.cl"))
+    missing = [name for name in needed if not (args.peer / name).is_file()]
+    if missing:
+        raise Failure(f"{args.peer} is not the peer's folder: no {', '.join(missing)}")
+    rtcl_rays = find_rtcl_rays(rtcl)
+    programs = build_ray_programs(args, out)
+    platform = args.platform if args.cpu else args.platform or nvidia_platform(rtcl, out)
+    table, csv_rows, device = [], [], None
+    for name, bin_path, scene, scene_path in mesh_scenes(args, out, width, height):
+        camera = scene["camera"]
+        folder = out / "rays" / name
+        folder.mkdir(parents=True, exist_ok=True)
+        made = run([programs[0], "make", bin_path, width, height, *camera["eye"],
+                    *camera["look_at"], camera.get("fov", 45), *camera.get("up", [0, 1, 0]),
+                    folder], out / "raw" / f"peer-rays-make-{name}.txt")
+        triangles = int(re.search(r"triangles (\d+)", made).group(1))
+        # Rounds interleave the two sides, so that a machine busy with other
+        # work slows both alike; each side's time is the median of its rounds.
+        rounds = []
+        for number in range(1, args.rounds + 1):
+            tag = f"-round{number}" if args.rounds > 1 else ""
+            rtcl_times = {kind: time_rtcl_rays(args, rtcl_rays, platform, name, scene_path,
+                                               folder / f"{kind}.rays", out, tag)
+                          for kind in RAY_KINDS}
+            rounds.append((rtcl_times, time_peer_rays(args, programs, name, bin_path, folder,
+                                                      out, tag)))
+        for kind in RAY_KINDS:
+            count, any_hit = rounds[0][0][kind][:2]
+            median = statistics.median(r[0][kind][2] for r in rounds)
+            low = min(r[0][kind][3] for r in rounds)
+            names = [row[0] for row in rounds[0][1][kind]]
+            peer = [(traversal, statistics.median(r[1][kind][i][1] for r in rounds),
+                     min(r[1][kind][i][2] for r in rounds)) for i, traversal in enumerate(names)]
+            per_round = [min(row[1] for row in r[1][kind]) / r[0][kind][2] for r in rounds]
+            agree = hits_agreeing(folder / f"{kind}.rtcl-hits", folder / f"{kind}.peer-hits",
+                                  any_hit)
+            if device is None:
+                device = re.search(r"^rtcl-rays: (.*?); ", next((out / "raw").glob(
+                    f"rtcl-rays-{name}-{kind}*.txt")).read_text(), re.M).group(1)
+            best = min(peer, key=lambda row: row[1])
+            for number, (rtcl_times, peer_times) in enumerate(rounds, 1):
+                csv_rows.append(dict(zip(RAYS_CSV, (
+                    name, triangles, kind, count, number, "rtcl", "rtcl-rays",
+                    rtcl_times[kind][2], rtcl_times[kind][3],
+                    count / rtcl_times[kind][2] * 1e-3, agree[0]))))
+                for traversal, peer_median, peer_low in peer_times[kind]:
+                    csv_rows.append(dict(zip(RAYS_CSV, (
+                        name, triangles, kind, count, number, "peer", traversal, peer_median,
+                        peer_low, count / peer_median * 1e-3, agree[1]))))
+            table.append((name, f"{triangles:,}", kind + (" (any hit)" if any_hit else ""),
+                          f"{count:,}", f"{median:.3f}", f"{count / median * 1e-3:.1f}",
+                          f"{best[0]} {best[1]:.3f}", f"{count / best[1] * 1e-3:.1f}",
+                          f"{best[1] / median:.2f}x",
+                          " / ".join(f"{ratio:.2f}" for ratio in per_round),
+                          " / ".join(f"{row[0]} {row[1]:.3f}" for row in peer),
+                          f"{agree[0]:,} / {agree[1]:,}", f"{agree[2]:,} of {count:,}"))
+            print(f"{name} {kind}: rtcl {median:.3f} ms, peer {best[0]} {best[1]:.3f} ms: "
+                  f"{best[1] / median:.2f}x (rounds: "
+                  f"{', '.join(f'{ratio:.2f}' for ratio in per_round)}); "
+                  f"agreeing {agree[2]:,} of {count:,}", flush=True)
+    header = ("mesh", "triangles", "rays", "count", "rtcl ms", "rtcl M rays/s",
+              "peer fastest (ms)", "peer M rays/s", "rtcl / peer", "each round",
+              "every peer traversal (ms)", "hits rtcl / peer", "rays agreeing")
+    where = ("the peer's CPU traversals on every hardware thread of this machine (median of "
+             f"{args.repeat} passes)" if args.cpu else
+             f"the peer's GPU kernels ({args.variants}), median of {args.repeat} launches")
+    report = (f"# rtcl against the peer on primary, diffuse bounce and shadow rays\n\n"
+              f"rtcl-rays on {device} (median of {args.repeat} launches, OpenCL profiling "
+              f"events) against {where}; {args.rounds} round{'s' if args.rounds > 1 else ''}, "
+              "the two sides in turn, each side's time the median of its rounds; "
+              f"rays from a {width}x{height} image: the same rays on "
+              f"both sides, read from the files peer_rays.cpp made (docs/bvh.md, \"Incoherent "
+              f"rays against TinyBVH\"); rtcl {git_commit() or 'commit unknown'}, {utc_now()}. "
+              f"Peer: {args.peer}. rtcl / peer above 1: rtcl is faster. Agreeing: the same hit "
+              "or miss and, for closest hits, the same triangle or the same distance within "
+              "1e-4 of it.\n\n"
+              + markdown_table(header, table) + "\n")
+    files.write_text(out / "rays.md", report)
+    files.write_text(out / "rays.csv", to_csv(RAYS_CSV, csv_rows))
+    print(report)
+
+
 @interruptible
 def main(argv=None):
     args = parse_arguments(argv)
@@ -453,13 +666,17 @@ def main(argv=None):
     try:
         with files.committed_files_allowed(args.update_committed):
             out = args.out or locations.new_results_folder("peer")
-            outputs = ([out / "counts.md"] if args.counts else [out / "cpu.md"] if args.cpu
+            if args.rays and args.counts:
+                raise UsageError("--rays and --counts do not go together: --rays times")
+            outputs = ([out / "rays.md", out / "rays.csv"] if args.rays
+                       else [out / "counts.md"] if args.counts else [out / "cpu.md"] if args.cpu
                        else [out / "compare.md", out / "compare.csv"])
             files.reading(args.ply)
             files.check_output_folder(out, [path.name for path in outputs])
             rtcl = locations.find_rtcl(args.rtcl)
             (out / "raw").mkdir(parents=True, exist_ok=True)
-            (counts if args.counts else cpu if args.cpu else compare)(args, rtcl, out)
+            (rays if args.rays else counts if args.counts else cpu if args.cpu
+             else compare)(args, rtcl, out)
     except (Failure, locations.NotFound, UsageError, OSError) as error:
         return report_error(program, one_line(error))
     print(f"{program}: results in {out}", file=sys.stderr)

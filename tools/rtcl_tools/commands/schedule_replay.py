@@ -37,6 +37,7 @@ from ..usage import add_update_committed, program_name, report_error  # noqa: E4
 LABEL_HEIGHT = 16
 GAP = 8
 UNSTARTED = (40, 40, 40)
+MIN_BRIGHTEST = 0.45  # output/schedmap.h, SCHEDMAP_MIN_BRIGHTEST
 
 
 def parse_arguments(argv):
@@ -71,7 +72,9 @@ def parse_arguments(argv):
 
 def group_colours(groups):
     """rtcl's colour of each work-group (output/schedmap.c): a lowbias32 hash of
-    the number, each channel 0.15 + 0.8 of one byte of it; 8-bit, unencoded."""
+    the number, each channel 0.15 + 0.8 of one byte of it, a colour whose
+    brightest channel is below MIN_BRIGHTEST lifted by the difference (so that
+    no group is near UNSTARTED's grey); 8-bit, unencoded."""
     h = groups.astype(np.uint32)
     with np.errstate(over="ignore"):
         h = h ^ (h >> 16)
@@ -81,6 +84,8 @@ def group_colours(groups):
         h = h ^ (h >> 16)
     rgb = np.stack([(h >> (8 * c)) & 0xFF for c in range(3)], axis=-1).astype(np.float64)
     rgb = 0.15 + 0.8 * rgb / 255.0
+    brightest = rgb.max(axis=-1, keepdims=True)
+    rgb = np.where(brightest < MIN_BRIGHTEST, rgb + (MIN_BRIGHTEST - brightest), rgb)
     rgb[groups == UNSTARTED_GROUP] = 0.0
     return np.clip(np.rint(rgb * 255), 0, 255).astype(np.uint8)
 

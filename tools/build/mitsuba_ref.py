@@ -1,0 +1,603 @@
+#!/usr/bin/env python3
+"""Renders an rtcl path-tracing scene with Mitsuba 3, the independent oracle of
+issue 40, and writes the reference image as data (docs/oracle.md).
+
+    python3 tools/build/mitsuba_ref.py SCENE.json -o test/oracle/refs/NAME.npz \\
+        [--spp N] [--batches K] [--size WxH] [--threads T] [--aov albedo]
+
+The scene is read by this script's own reading of docs/SCENE.md, not by rtcl,
+and turned into a Mitsuba scene by the rules of docs/oracle.md ("Mappings"):
+the same triangles (OBJ files parsed here, placed by scale, rotate, translate)
+and spheres, the same pinhole camera (fov_axis "y", a box pixel filter), the
+same BSDFs (GGX alpha = roughness^2; the Schlick conductor as Mitsuba's
+`principled` with metallic 1; rtcl's principled as Mitsuba blendbsdf
+mixtures of that, `roughdielectric` and the BSDF `gltf` below), emission on
+the front side, `background` as a uniform environment, the environment map
+sampled finely enough to keep its integral. What it cannot map exactly is
+refused with a message, never approximated silently.
+
+The N samples a pixel are rendered as K batches of N/K, each with its own seed
+of Mitsuba's independent sampler. The output (.npz) holds
+  image            float32 H x W x 3, linear radiance, rows from the top: the mean
+  block_sample_std float32 H/8 x W/8 x 3: the standard deviation of ONE sample's
+                   contribution to the mean of an 8 x 8 block, estimated from the
+                   spread of the K batches' block means (std x sqrt(64 N/K)); a
+                   renderer's block mean at n samples a pixel then has the Monte
+                   Carlo error block_sample_std / sqrt(64 n)
+  meta             a JSON string: the scene, its SHA-256, spp, batches, Mitsuba's
+                   version and variant, the command, seconds taken
+Needs `pip install mitsuba` (tools/requirements-oracle.txt); rtcl's tests do
+not: they read the committed .npz files.
+"""
+import argparse
+import hashlib
+import json
+import math
+import os
+import pathlib
+import struct
+import sys
+import tempfile
+import time
+
+import numpy as np
+
+BLOCK = 8
+
+
+class SceneError(Exception):
+    """A scene this script cannot turn into the same Mitsuba scene."""
+
+
+# ---------------------------------------------------------------- the scene
+
+def vec(value, where):
+    if not (isinstance(value, list) and len(value) == 3
+            and all(isinstance(c, (int, float)) for c in value)):
+        raise SceneError(f"{where}: expected three numbers, got {value!r}")
+    return [float(c) for c in value]
+
+
+def rotation(degrees):
+    """SCENE.md's meshes[i].rotate: degrees about x, then y, then z (world axes)."""
+    ax, ay, az = (math.radians(d) for d in degrees)
+    rx = np.array([[1, 0, 0], [0, math.cos(ax), -math.sin(ax)], [0, math.sin(ax), math.cos(ax)]])
+    ry = np.array([[math.cos(ay), 0, math.sin(ay)], [0, 1, 0], [-math.sin(ay), 0, math.cos(ay)]])
+    rz = np.array([[math.cos(az), -math.sin(az), 0], [math.sin(az), math.cos(az), 0], [0, 0, 1]])
+    return rz @ ry @ rx
+
+
+def read_obj(path):
+    """The triangles of an OBJ file by material name: {name: [[v0, v1, v2], ...]}.
+    Polygons are fanned from their first vertex, as Assimp triangulates a convex
+    polygon; faces before the first `usemtl` have the material None."""
+    vertices, groups, material = [], {}, None
+    for number, line in enumerate(path.read_text().splitlines(), 1):
+        fields = line.split()
+        if not fields or fields[0].startswith("#"):
+            continue
+        if fields[0] == "v":
+            vertices.append([float(c) for c in fields[1:4]])
+        elif fields[0] == "usemtl":
+            material = fields[1]
+        elif fields[0] == "f":
+            index = []
+            for field in fields[1:]:
+                i = int(field.split("/")[0])
+                index.append(i - 1 if i > 0 else len(vertices) + i)
+            for k in range(1, len(index) - 1):
+                groups.setdefault(material, []).append(
+                    [vertices[index[0]], vertices[index[k]], vertices[index[k + 1]]])
+        elif fields[0] in ("vn", "vt"):
+            raise SceneError(f"{path}:{number}: vertex normals and texture coordinates are "
+                             "not mapped (give flat, untextured meshes)")
+        elif fields[0] not in ("o", "g", "s", "mtllib"):
+            raise SceneError(f"{path}:{number}: unknown OBJ statement {fields[0]!r}")
+    return groups
+
+
+class Scene:
+    """An rtcl scene (docs/SCENE.md) as far as the oracle maps it."""
+
+    KNOWN = {"format", "version", "image", "camera", "background", "max_depth", "materials",
+             "spheres", "meshes", "triangles", "integrator", "environment", "epsilon",
+             "lights", "planes", "ambient"}
+
+    def __init__(self, path):
+        self.path = pathlib.Path(path)
+        self.doc = json.loads(self.path.read_text())
+        unknown = set(self.doc) - self.KNOWN
+        if unknown:
+            raise SceneError(f"{path}: keys the oracle does not map: {sorted(unknown)}")
+        if self.doc.get("planes"):
+            raise SceneError(f"{path}: planes: not mapped (infinite; give triangles)")
+        if self.doc.get("integrator", "whitted") != "path":
+            raise SceneError(f'{path}: integrator: the oracle renders "path" scenes only')
+        self.materials = self.doc.get("materials", {})
+
+    def material(self, ref, where):
+        if isinstance(ref, str):
+            if ref not in self.materials:
+                raise SceneError(f"{where}: unknown material {ref!r}")
+            return ref, self.materials[ref]
+        if isinstance(ref, dict):
+            return None, ref
+        raise SceneError(f"{where}: a material must be named or given, got {ref!r}")
+
+    def shapes(self):
+        """Yields (kind, geometry, (name, material), where): kind "sphere" with
+        (center, radius) or "triangles" with an N x 3 x 3 float64 array."""
+        for i, sphere in enumerate(self.doc.get("spheres", [])):
+            where = f"spheres[{i}]"
+            if "material" not in sphere:
+                raise SceneError(f"{where}: give a material with a bsdf")
+            yield ("sphere", (vec(sphere["center"], where), float(sphere["radius"])),
+                   self.material(sphere["material"], where), where)
+        for i, tri in enumerate(self.doc.get("triangles", [])):
+            where = f"triangles[{i}]"
+            geometry = np.array([vec(v, where) for v in tri["vertices"]])[None]
+            yield "triangles", geometry, self.material(tri["material"], where), where
+        for i, mesh in enumerate(self.doc.get("meshes", [])):
+            yield from self.mesh_shapes(i, mesh)
+
+    def mesh_shapes(self, i, mesh):
+        where = f"meshes[{i}]"
+        extra = set(mesh) - {"file", "material", "materials", "scale", "rotate", "translate",
+                             "smooth"}
+        if extra:
+            raise SceneError(f"{where}: keys the oracle does not map: {sorted(extra)}")
+        if mesh.get("smooth", True):
+            raise SceneError(f'{where}: give "smooth": false (the oracle maps flat meshes)')
+        file = self.path.parent / mesh["file"]
+        if file.suffix.lower() != ".obj":
+            raise SceneError(f"{where}.file: the oracle reads OBJ files only")
+        scale = mesh.get("scale", 1)
+        scale = np.array([float(scale)] * 3 if isinstance(scale, (int, float))
+                         else vec(scale, where + ".scale"))
+        turn = rotation(vec(mesh.get("rotate", [0, 0, 0]), where + ".rotate"))
+        shift = np.array(vec(mesh.get("translate", [0, 0, 0]), where + ".translate"))
+        mirror = np.prod(np.sign(scale)) < 0
+        for name, triangles in read_obj(file).items():
+            if "material" in mesh:
+                ref = mesh["material"]
+            elif name in mesh.get("materials", {}):
+                ref = mesh["materials"][name]
+            else:
+                raise SceneError(f"{where}: the file's material {name!r} needs a scene "
+                                 "material with a bsdf (meshes[i].materials)")
+            tri = np.array(triangles, dtype=np.float64) * scale
+            tri = tri @ turn.T + shift
+            if mirror:
+                tri = tri[:, ::-1]
+            yield "triangles", tri, self.material(ref, f"{where}.materials.{name}"), where
+
+
+# ---------------------------------------------------------------- the mapping
+
+def rgb(value, where):
+    return {"type": "rgb", "value": vec(value, where)}
+
+
+def number_in(material, key, default, where, low=0.0, high=1.0):
+    value = float(material.get(key, default))
+    if not low <= value <= high:
+        raise SceneError(f"{where}.{key}: must be in [{low}, {high}], got {value}")
+    return value
+
+
+def mitsuba_bsdf(material, where):
+    """The Mitsuba BSDF of an rtcl material's "bsdf" (docs/oracle.md, "Mappings")."""
+    if "bsdf" not in material:
+        raise SceneError(f"{where}: the oracle maps materials with a \"bsdf\" only")
+    bsdf = material["bsdf"]
+    kind = bsdf.get("type")
+    where = where + ".bsdf"
+    if kind == "diffuse":
+        inner = {"type": "diffuse",
+                 "reflectance": rgb(bsdf.get("reflectance", [0.5] * 3), where)}
+    elif kind == "conductor":
+        # Schlick's Fresnel with F0 = reflectance, GGX alpha = roughness^2: exactly
+        # Mitsuba's principled with metallic 1 (its calc_schlick(base_color, wi.m)),
+        # whose alpha is max(0.001, roughness^2).
+        inner = {"type": "principled",
+                 "base_color": rgb(bsdf.get("reflectance", [1.0] * 3), where),
+                 "metallic": 1.0,
+                 "roughness": number_in(bsdf, "roughness", 0, where)}
+    elif kind == "dielectric":
+        ior = float(bsdf.get("ior", 1.5))
+        roughness = number_in(bsdf, "roughness", 0, where)
+        if roughness == 0:
+            return {"type": "dielectric", "int_ior": ior, "ext_ior": 1.0}
+        return {"type": "roughdielectric", "distribution": "ggx", "alpha": roughness ** 2,
+                "int_ior": ior, "ext_ior": 1.0, "sample_visible": True}
+    elif kind == "principled":
+        return principled(bsdf, where)
+    else:
+        raise SceneError(f"{where}.type: unknown BSDF {kind!r}")
+    # rtcl's opaque BSDFs reflect on both sides of a surface; Mitsuba's on the
+    # front only unless wrapped.
+    return {"type": "twosided", "bsdf": inner}
+
+
+def principled(bsdf, where):
+    """RENDERING.md's principled BSDF, f = m f_metal + (1 - m) t f_glass +
+    (1 - m)(1 - t) f_plastic, as Mitsuba blendbsdf mixtures (whose sample
+    weight and pdf are the mixture's): f_metal the Schlick conductor above,
+    f_glass Mitsuba's roughdielectric with its transmission tinted by the base
+    colour, f_plastic the BSDF "gltf" (glTF's fresnel_mix, below). alpha =
+    max(roughness^2, 0.001) for all three, as rtcl clamps it."""
+    base = vec(bsdf.get("base_color", [1, 1, 1]), where + ".base_color")
+    metallic = number_in(bsdf, "metallic", 0, where)
+    roughness = number_in(bsdf, "roughness", 0.5, where)
+    transmission = number_in(bsdf, "transmission", 0, where)
+    ior = float(bsdf.get("ior", 1.5))
+    alpha = max(roughness ** 2, 0.001)
+    register_gltf()
+    plastic = {"type": "twosided", "bsdf": {"type": "gltf", "base_color": base,
+                                            "alpha": alpha, "ior": ior}}
+    glass = {"type": "roughdielectric", "distribution": "ggx", "alpha": alpha,
+             "int_ior": ior, "ext_ior": 1.0, "sample_visible": True,
+             "specular_transmittance": rgb(base, where + ".base_color")}
+    metal = {"type": "twosided", "bsdf": {
+        "type": "principled", "base_color": rgb(base, where + ".base_color"),
+        "metallic": 1.0, "roughness": math.sqrt(alpha)}}
+    dielectric = plastic
+    if transmission > 0:
+        dielectric = {"type": "blendbsdf", "weight": transmission,
+                      "bsdf_0": plastic, "bsdf_1": glass}
+    if metallic == 0:
+        return dielectric
+    if metallic == 1:
+        return metal
+    return {"type": "blendbsdf", "weight": metallic, "bsdf_0": dielectric, "bsdf_1": metal}
+
+
+def mitsuba_light(light, where):
+    """SCENE.md's lights under "path": a point light's color is its intensity
+    (Mitsuba's `point`), a directional light's its irradiance (`directional`,
+    `direction` the way the light travels in both). Sphere lights and
+    directional lights with an angle are refused: rtcl's are not seen by rays
+    and block nothing, which no Mitsuba emitter of a finite size matches."""
+    extra = set(light) - {"position", "direction", "color", "radius", "angle"}
+    if extra:
+        raise SceneError(f"{where}: keys the oracle does not map: {sorted(extra)}")
+    color = rgb(light.get("color", [1, 1, 1]), where + ".color")
+    if light.get("radius", 0) or light.get("angle", 0):
+        raise SceneError(f"{where}: sphere lights and directional lights with an angle "
+                         "are not mapped (docs/oracle.md)")
+    if "position" in light:
+        return {"type": "point", "position": vec(light["position"], where + ".position"),
+                "intensity": color}
+    return {"type": "directional", "direction": vec(light["direction"], where + ".direction"),
+            "irradiance": color}
+
+
+def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
+    import mitsuba as mi
+    doc = scene.doc
+    image = doc.get("image", {})
+    width = width or image.get("width", 640)
+    height = height or image.get("height", 480)
+    camera = doc["camera"]
+    if camera.get("aperture", 0) != 0:
+        raise SceneError("camera.aperture: the oracle maps the pinhole camera only")
+    eye = vec(camera["eye"], "camera.eye")
+    look_at = vec(camera["look_at"], "camera.look_at")
+    up = vec(camera.get("up", [0, 1, 0]), "camera.up")
+    # rtcl's max_depth counts the bounces after the first hit (0: direct light);
+    # Mitsuba's counts path segments (1: emitters seen, 2: direct light).
+    max_depth = int(doc.get("max_depth", 5)) + 2
+    out = {
+        "type": "scene",
+        "integrator": ({"type": "aov", "aovs": "albedo:albedo"} if aov else
+                       {"type": "path", "max_depth": max_depth, "hide_emitters": False}),
+        "sensor": {
+            "type": "perspective",
+            "fov_axis": "y",
+            "fov": float(camera.get("fov", 45)),
+            "near_clip": 1e-4,
+            "far_clip": 1e6,
+            "to_world": mi.ScalarTransform4f().look_at(origin=eye, target=look_at, up=up),
+            "sampler": {"type": "independent", "sample_count": spp},
+            "film": {"type": "hdrfilm", "width": width, "height": height,
+                     "rfilter": {"type": "box"}, "pixel_format": "rgb",
+                     "component_format": "float32"},
+        },
+    }
+    background = vec(doc.get("background", [0, 0, 0]), "background")
+    if "environment" in doc:
+        out["background"] = environment(doc["environment"], scene.path.parent)
+    elif any(background):
+        out["background"] = {"type": "constant", "radiance": rgb(background, "background")}
+    for i, light in enumerate(doc.get("lights", [])):
+        out[f"light{i}"] = mitsuba_light(light, f"lights[{i}]")
+    tmp = tempfile.mkdtemp(prefix="mitsuba_ref.")
+    bsdfs = {}
+    for k, (kind, geometry, (name, material), where) in enumerate(scene.shapes()):
+        if name is None:                       # an inline material: its own BSDF
+            bsdf = mitsuba_bsdf(material, where)
+        else:
+            if name not in bsdfs:
+                bsdfs[name] = mitsuba_bsdf(material, f"materials.{name}")
+            bsdf = bsdfs[name]
+        shape = {"bsdf": bsdf}
+        if any(material.get("emission", [0, 0, 0])):
+            shape["emitter"] = {"type": "area", "radiance": rgb(material["emission"], where)}
+        if kind == "sphere":
+            shape.update(type="sphere", center=geometry[0], radius=geometry[1])
+        else:
+            ply = pathlib.Path(tmp) / f"shape{k}.ply"
+            write_ply(ply, geometry)
+            shape.update(type="ply", filename=str(ply), face_normals=True)
+        out[f"shape{k}"] = shape
+    return out
+
+
+ENV_UPSAMPLE = 8
+
+
+def environment(env, folder):
+    """RENDERING.md's environment map as Mitsuba's `envmap`. rtcl's map is
+    constant over each texel (j, k), u in [j/W, (j+1)/W), v in [k/H, (k+1)/H),
+    and its u = 0.5 looks along -z; Mitsuba's interpolates bilinearly between
+    samples at u = (c + 0.5)/W' (its u = 0 along -z: rtcl's u is Mitsuba's u -
+    0.5) and v = r/(H' - 1). Mitsuba gets a grid ENV_UPSAMPLE times finer, W' =
+    U W columns and H' = U H + 1 rows, so that each of rtcl's texel edges lies
+    midway between two columns or exactly on a row; a row on an edge holds the
+    mean of the texels on either side. Mitsuba's map then differs from rtcl's
+    only within 1/(2U) of a texel of its edges, where it ramps linearly from one
+    texel to the next, and has the same integral over each texel's rows and
+    columns (up to the change of sin(theta) across 1/U of a texel). `rotate`
+    is the same right-handed turn about +y in both."""
+    import mitsuba as mi
+    extra = set(env) - {"file", "scale", "rotate"}
+    if extra:
+        raise SceneError(f"environment: keys the oracle does not map: {sorted(extra)}")
+    texels = read_hdr(folder / env["file"])
+    height, width, _ = texels.shape
+    u = ((np.arange(ENV_UPSAMPLE * width) + 0.5) / (ENV_UPSAMPLE * width) - 0.5) % 1.0
+    columns = texels[:, np.minimum(width - 1, np.floor(width * u).astype(int))]
+    rows = []
+    for r in range(ENV_UPSAMPLE * height + 1):
+        k, on_edge = divmod(r, ENV_UPSAMPLE)
+        if on_edge:                                    # inside texel row k
+            rows.append(columns[k])
+        else:                                          # on the edge above row k
+            rows.append(0.5 * (columns[max(k - 1, 0)] + columns[min(k, height - 1)]))
+    image = np.array(rows, dtype=np.float32)
+    return {"type": "envmap", "bitmap": mi.Bitmap(image),
+            "scale": float(env.get("scale", 1.0)),
+            "to_world": mi.ScalarTransform4f().rotate([0, 1, 0], float(env.get("rotate", 0)))}
+
+
+def read_hdr(path):
+    """A Radiance RGBE file (flat or run-length encoded scanlines, -Y H +X W) as
+    an H x W x 3 float64 array, row 0 at the top; a texel is m * 2^(e - 136)
+    (e > 0), as stb_image and rtcl decode it, without Radiance's own + 0.5."""
+    data = pathlib.Path(path).read_bytes()
+    if not data.startswith(b"#?"):
+        raise SceneError(f"{path}: not a Radiance HDR file")
+    end = data.index(b"\n\n") + 2
+    line_end = data.index(b"\n", end)
+    fields = data[end:line_end].split()
+    if fields[0] != b"-Y" or fields[2] != b"+X":
+        raise SceneError(f"{path}: only -Y H +X W files are read")
+    height, width = int(fields[1]), int(fields[3])
+    pos, rows = line_end + 1, []
+    for _ in range(height):
+        if data[pos] == 2 and data[pos + 1] == 2 and not data[pos + 2] & 0x80:
+            pos += 4
+            row = np.zeros((4, width), np.uint8)
+            for channel in range(4):
+                x = 0
+                while x < width:
+                    count = data[pos]
+                    if count > 128:
+                        row[channel, x:x + count - 128] = data[pos + 1]
+                        x, pos = x + count - 128, pos + 2
+                    else:
+                        row[channel, x:x + count] = list(data[pos + 1:pos + 1 + count])
+                        x, pos = x + count, pos + 1 + count
+            rows.append(row.T)
+        else:
+            rows.append(np.frombuffer(data[pos:pos + 4 * width], np.uint8).reshape(width, 4))
+            pos += 4 * width
+    rgbe = np.array(rows).astype(np.float64)
+    scale = np.where(rgbe[..., 3] > 0, np.ldexp(1.0, rgbe[..., 3].astype(int) - 136), 0.0)
+    return rgbe[..., :3] * scale[..., None]
+
+
+def write_ply(path, triangles):
+    """N triangles (N x 3 x 3) as a binary PLY, float32 vertices, unshared."""
+    tri = np.asarray(triangles, dtype="<f4").reshape(-1, 3)
+    count = len(triangles)
+    header = ("ply\nformat binary_little_endian 1.0\n"
+              f"element vertex {3 * count}\nproperty float x\nproperty float y\n"
+              f"property float z\nelement face {count}\n"
+              "property list uchar int vertex_indices\nend_header\n").encode()
+    faces = bytearray()
+    for i in range(count):
+        faces += struct.pack("<Biii", 3, 3 * i, 3 * i + 1, 3 * i + 2)
+    path.write_bytes(header + tri.tobytes() + bytes(faces))
+
+
+# ---------------------------------------------------------------- glTF's BSDF
+
+_GLTF_REGISTERED = False
+
+
+def register_gltf():
+    """Registers the Mitsuba BSDF "gltf": the dielectric part of glTF 2.0's
+    metallic-roughness BRDF (the glTF specification, Appendix B), transcribed
+    term by term, which Mitsuba has no plugin for:
+
+        f = mix(C / pi, specular_brdf, F)              (glTF's fresnel_mix)
+          = F specular_brdf + (1 - F) C / pi,  F = F0 + (1 - F0) (1 - |V.H|)^5
+        specular_brdf = D(H) G1(V, H) G1(L, H) / (4 |N.L| |N.V|)   (GGX, separable Smith)
+        F0 = ((ior - 1) / (ior + 1))^2, C the base colour, alpha given
+
+    sampled by Mitsuba's GGX visible normals or the cosine, chosen with a fixed
+    probability (the pdf is their mixture, so the choice is free). Reflection
+    only, on the side of the normal (wrapped in "twosided")."""
+    global _GLTF_REGISTERED
+    if _GLTF_REGISTERED:
+        return
+    import drjit as dr
+    import mitsuba as mi
+
+    class GltfBSDF(mi.BSDF):
+        def __init__(self, props):
+            mi.BSDF.__init__(self, props)
+            self.base = mi.Color3f(props["base_color"])
+            self.dist = mi.MicrofacetDistribution(mi.MicrofacetType.GGX,
+                                                  mi.Float(props["alpha"]), True)
+            ior = mi.Float(props["ior"])
+            self.f0 = dr.square((ior - 1) / (ior + 1))
+            self.p_spec = mi.Float(0.25)  # how often the specular lobe is sampled
+            reflection = mi.BSDFFlags.GlossyReflection | mi.BSDFFlags.DiffuseReflection
+            self.m_components = [reflection]
+            self.m_flags = reflection
+
+        # In scalar variants a cosine is a Python float, whose division by 0
+        # raises: both cosines are checked first (0 outside the hemisphere).
+        def f(self, wi, wo):
+            cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
+            active = (cos_i > 0) & (cos_o > 0)
+            h = dr.normalize(wi + wo)
+            fresnel = self.f0 + (1 - self.f0) * dr.power(1 - dr.abs(dr.dot(wi, h)), 5)
+            spec = self.dist.eval(h) * self.dist.G(wi, wo, h) / dr.select(
+                active, 4 * cos_i * cos_o, 1)
+            value = spec * fresnel + self.base * dr.inv_pi * (1 - fresnel)
+            return dr.select(active, value * cos_o, 0)
+
+        def pdf_of(self, wi, wo):
+            cos_i, cos_o = mi.Frame3f.cos_theta(wi), mi.Frame3f.cos_theta(wo)
+            active = (cos_i > 0) & (cos_o > 0)
+            h = dr.normalize(wi + wo)
+            spec = self.dist.eval(h) * self.dist.smith_g1(wi, h) / dr.select(
+                active, 4 * cos_i, 1)
+            pdf = self.p_spec * spec + (1 - self.p_spec) * cos_o * dr.inv_pi
+            return dr.select(active, pdf, 0)
+
+        def sample(self, ctx, si, sample1, sample2, active=True):
+            wi = si.wi
+            m, _ = self.dist.sample(wi, sample2)
+            wo = dr.select(sample1 < self.p_spec, mi.reflect(wi, m),
+                           mi.warp.square_to_cosine_hemisphere(sample2))
+            bs = mi.BSDFSample3f()
+            bs.wo = wo
+            bs.pdf = self.pdf_of(wi, wo)
+            bs.eta = 1.0
+            bs.sampled_type = mi.UInt32(+mi.BSDFFlags.GlossyReflection)
+            bs.sampled_component = 0
+            ok = active & (bs.pdf > 0)
+            return bs, dr.select(ok, self.f(wi, wo) / dr.select(ok, bs.pdf, 1), 0)
+
+        def eval(self, ctx, si, wo, active=True):
+            return self.f(si.wi, wo)
+
+        def pdf(self, ctx, si, wo, active=True):
+            return self.pdf_of(si.wi, wo)
+
+        def eval_pdf(self, ctx, si, wo, active=True):
+            return self.f(si.wi, wo), self.pdf_of(si.wi, wo)
+
+        def to_string(self):
+            return "GltfBSDF[]"
+
+    mi.register_bsdf("gltf", lambda props: GltfBSDF(props))
+    _GLTF_REGISTERED = True
+
+
+# ---------------------------------------------------------------- rendering
+
+def block_means(image):
+    h, w, c = image.shape
+    return image.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(1, 3))
+
+
+def render(scene_path, spp, batches, size=None, threads=1, aov=None, seed=0):
+    import drjit as dr
+    import mitsuba as mi
+    mi.set_variant("scalar_rgb")
+    dr.set_thread_count(threads)
+    scene = Scene(scene_path)
+    width, height = size or (None, None)
+    if spp % batches:
+        raise SceneError(f"--spp {spp} is not a multiple of --batches {batches}")
+    per_batch = spp // batches
+    loaded = mi.load_dict(mitsuba_scene(scene, per_batch, width, height, aov))
+    total, blocks = None, []
+    start = time.time()
+    for batch in range(batches):
+        image = np.array(mi.render(loaded, spp=per_batch, seed=seed + batch),
+                         dtype=np.float64)
+        image = image[..., :3]
+        total = image if total is None else total + image
+        if image.shape[0] % BLOCK == 0 and image.shape[1] % BLOCK == 0:
+            blocks.append(block_means(image))
+    seconds = time.time() - start
+    mean = (total / batches).astype(np.float32)
+    if blocks and batches > 1:
+        spread = np.std(np.array(blocks), axis=0, ddof=1)
+        sample_std = (spread * math.sqrt(BLOCK * BLOCK * per_batch)).astype(np.float32)
+    else:
+        sample_std = np.zeros((0,), np.float32)
+    return mean, sample_std, seconds, mi.__version__
+
+
+def input_digests(scene_path, folder):
+    """The SHA-256 of every file the render read: the scene, its mesh files
+    and its environment map, by their paths relative to folder."""
+    scene_path = pathlib.Path(scene_path)
+    doc = json.loads(scene_path.read_text())
+    files = [scene_path] + [scene_path.parent / m["file"] for m in doc.get("meshes", [])]
+    if "environment" in doc:
+        files.append(scene_path.parent / doc["environment"]["file"])
+    return {os.path.relpath(f, folder): hashlib.sha256(f.read_bytes()).hexdigest()
+            for f in files}
+
+
+def main(argv=None):
+    parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    parser.add_argument("scene")
+    parser.add_argument("-o", "--output", required=True, help="the .npz to write")
+    parser.add_argument("--spp", type=int, default=4096)
+    parser.add_argument("--batches", type=int, default=16)
+    parser.add_argument("--size", help="WxH (default: the scene's image)")
+    parser.add_argument("--threads", type=int, default=1,
+                        help="rendering threads (default 1: the machine is shared)")
+    parser.add_argument("--seed", type=int, default=0,
+                        help="the first batch's seed (batch k: seed + k)")
+    parser.add_argument("--aov", choices=["albedo"],
+                        help="render the surfaces' albedo instead (the camera and geometry check)")
+    args = parser.parse_args(argv)
+    size = None
+    if args.size:
+        width, _, height = args.size.partition("x")
+        size = (int(width), int(height))
+    try:
+        mean, sample_std, seconds, version = render(args.scene, args.spp, args.batches, size,
+                                                    args.threads, args.aov, args.seed)
+    except SceneError as error:
+        sys.exit(f"mitsuba_ref.py: {error}")
+    scene_bytes = pathlib.Path(args.scene).read_bytes()
+    meta = {
+        "scene": os.path.relpath(args.scene, pathlib.Path(args.output).parent),
+        "scene_sha256": hashlib.sha256(scene_bytes).hexdigest(),
+        "inputs": input_digests(args.scene, pathlib.Path(args.output).parent),
+        "spp": args.spp, "batches": args.batches, "seed": args.seed, "aov": args.aov,
+        "width": int(mean.shape[1]), "height": int(mean.shape[0]),
+        "mitsuba": version, "variant": "scalar_rgb", "threads": args.threads,
+        "seconds": round(seconds, 1),
+        "command": "python3 tools/build/mitsuba_ref.py " + " ".join(argv or sys.argv[1:]),
+    }
+    tmp = pathlib.Path(args.output).with_suffix(".tmp.npz")
+    np.savez_compressed(tmp, image=mean, block_sample_std=sample_std,
+                        meta=np.array(json.dumps(meta, sort_keys=True)))
+    os.replace(tmp, args.output)
+    print(json.dumps(meta, sort_keys=True))
+
+
+if __name__ == "__main__":
+    main()
