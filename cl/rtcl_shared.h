@@ -128,7 +128,8 @@ struct rt_vertex_normal {
  * unit); per material what it takes from textures; per texture where its
  * texels are; the decode table of 8-bit texels (RT_TEXTURE_TABLE floats:
  * sRGB[i] = E^-1(i/255), then linear[i] = i/255); and the texels, each
- * texture's rows top first, 16-byte aligned. */
+ * texture's rows top first, 16-byte aligned, the block's last array (after
+ * the path integrator's). */
 struct rt_vertex_uv {
 	rt_float u, v;
 };

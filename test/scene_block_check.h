@@ -167,7 +167,8 @@ static const char *textures_problem(const struct rt_scene *h)
 	const unsigned char *block = (const void *)h;
 	size_t vertices = (h->normal_offset - h->vertex_offset) / sizeof(struct rt_vertex);
 
-	/* The path integrator's arrays follow the textures' (path_problem). */
+	/* The path integrator's arrays follow the textures' (path_problem), but
+	 * for the texels, which come last. */
 	size_t end = h->path_offset ? h->path_offset : h->total_bytes;
 
 	if (h->uv_offset < h->bvh_triangle_offset || h->material_map_offset < h->uv_offset ||
@@ -209,8 +210,10 @@ static const char *textures_problem(const struct rt_scene *h)
 		    t[i].height > 16384 || (t[i].flags & RT_WRAP_MASK) > RT_WRAP_MIRROR ||
 		    ((t[i].flags >> RT_WRAP_T_SHIFT) & RT_WRAP_MASK) > RT_WRAP_MIRROR)
 			return "texture size or wrap mode out of range";
+		/* The texels last, after the path integrator's arrays too. */
 		if (t[i].offset % 16 || t[i].offset < texels ||
-		    t[i].offset + (size_t)t[i].width * t[i].height * size > end)
+		    (h->path_offset && t[i].offset < h->path_offset) ||
+		    t[i].offset + (size_t)t[i].width * t[i].height * size > h->total_bytes)
 			return "texture texels outside the block";
 	}
 	return NULL;

@@ -12,6 +12,7 @@
 #define _POSIX_C_SOURCE 200809L
 
 #include "layout/scene_block.h"
+#include "rtcl_shared.h"
 #include "scene_block_check.h"
 #include "scene/mesh.h"
 #include "scene/scene.h"
@@ -48,6 +49,35 @@ static char *read_all(const char *path)
 	return buf;
 }
 
+/* The block a renderer packs (scene_block_pack_head) is the whole block up
+ * to its texels, and the whole block holds each texture's texels, from the
+ * scene, where its struct rt_texture says: the renderer writes them there. */
+static void expect_head_and_texels(const char *path, const struct scene *s,
+				   const struct mesh_block *mesh, const struct bvh *bvh,
+				   const unsigned char *whole, size_t whole_bytes)
+{
+	size_t bytes = 0, head = scene_block_head_bytes(whole);
+	unsigned char *packed =
+		scene_block_pack_head(s, mesh, bvh, s->width, s->height, s->max_depth, &bytes);
+	const struct rt_scene *h = (const struct rt_scene *)whole;
+	const struct rt_texture *t = (const struct rt_texture *)(whole + h->texture_offset);
+
+	cr_assert_not_null(packed, "%s: scene_block_pack_head failed", path);
+	cr_expect_eq(bytes, whole_bytes, "%s: the head says %zu bytes, the block %zu", path, bytes,
+		     whole_bytes);
+	cr_expect_eq(scene_block_head_bytes(packed), head, "%s", path);
+	cr_expect(head <= whole_bytes && memcmp(packed, whole, head) == 0,
+		  "%s: the head differs from the block's first %zu bytes", path, head);
+	cr_expect_eq(h->texture_count, scene_has_textures(s) ? s->texture_count : 0, "%s", path);
+	for (rt_int i = 0; i < h->texture_count; i++) {
+		cr_expect_geq(t[i].offset, head, "%s: texture %d inside the head", path, i);
+		cr_expect(memcmp(whole + t[i].offset, s->textures[i].texels,
+				 s->textures[i].bytes) == 0,
+			  "%s: texture %d's texels are not where its header says", path, i);
+	}
+	free(packed);
+}
+
 /* Loads the scene document json (named path in the messages) as the
  * fuzzers do. */
 static void check_load(const char *path, const char *json)
@@ -72,6 +102,7 @@ static void check_load(const char *path, const char *json)
 			cr_expect_null(scene_block_problem(packed),
 				       "%s: accepted, but packs (%s nodes) with %s", path,
 				       wide ? "four-wide" : "binary", scene_block_problem(packed));
+			expect_head_and_texels(path, &s, &mesh, &bvh, packed, bytes);
 			free(packed);
 		}
 		bvh_free(&bvh);

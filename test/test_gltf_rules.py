@@ -269,3 +269,17 @@ def test_khronos_texture_transform_sample_arrows_point_at_the_green_markers(tmp_
     for x0, x1 in ((100, 200), (200, 285), (285, 380)):  # rotation, scale, all
         assert dark_near(centre(x0, x1, green)) > 0, (x0, x1)
     assert dark_near(centre(100, 200, red)) == 0
+
+
+def test_a_control_byte_in_a_camera_name_is_shown_escaped(tmp_path):
+    """GUIDE.md: a name read from a file shows its control bytes as \\x1b, in the list
+    of cameras and in -v. Before: "Ca?m"; the exact name was not found."""
+    text = camera_gltf([{"name": "Ca\x1bm", "camera": 0, "translation": [0, 0, 5]}],
+                       [PERSPECTIVE])
+    assert refused(scene_of(tmp_path, text, {"camera": "Cam"}, camera=False)) == (
+        's.json: meshes[0].camera: "m.gltf" has no camera "Cam"; its cameras are "Ca\\x1bm"')
+    path = scene_of(tmp_path, text, {"camera": "Ca\x1bm"}, camera=False)
+    result = rtcl(path, "-o", tmp_path / "o.ppm", "--size", "8x8", "-v")
+    assert result.returncode == 0, result.stderr
+    assert 'rtcl: meshes[0] "m.gltf": camera "Ca\\x1bm": eye [0, 0, 5]' in result.stderr
+    assert "\x1b" not in result.stderr

@@ -58,3 +58,35 @@ def test_a_mistyped_name_gets_the_nearest_suggested(tmp_path):
     path = scene(tmp_path, {"materials": {"rde": {"color": [0, 0, 1]}}})
     assert refused(tmp_path, path).endswith('its materials are "red", "green", "undefined";'
                                             ' did you mean "red"?')
+
+
+def escaped_name_scene(tmp_path, materials):
+    """A glTF quad whose material is named "pa<ESC>int"."""
+    import test_gltf_rules as g
+    doc = g.triangle_gltf()
+    doc["materials"] = [{"name": "pa\x1bint", "pbrMetallicRoughness": {"baseColorFactor":
+                                                                      [1, 0, 0, 1]}}]
+    doc["meshes"][0]["primitives"][0]["material"] = 0
+    (tmp_path / "m.gltf").write_text(json.dumps(doc))
+    path = scene(tmp_path, {"materials": materials})
+    doc = json.loads(path.read_text())
+    doc["meshes"][0]["file"] = "m.gltf"
+    path.write_text(json.dumps(doc))
+    return path
+
+
+def test_a_control_byte_in_a_material_name_is_shown_escaped(tmp_path):
+    """GUIDE.md: a name read from a file shows its control bytes as \\x1b. Before:
+    "pa?int", here and in the suggestion."""
+    path = escaped_name_scene(tmp_path, {"paint": {"color": [0, 0, 1]}})
+    assert refused(tmp_path, path) == (
+        f'{path}: meshes[0].materials: "m.gltf" has no material "paint"; its materials are'
+        ' "pa\\x1bint"; did you mean "pa\\x1bint"?')
+
+
+def test_a_material_name_with_a_control_byte_is_taken_by_its_exact_name(tmp_path):
+    """Before: the file's name was read as "pa?int", and its own name refused."""
+    path = escaped_name_scene(tmp_path, {"pa\x1bint": {"color": [0, 0, 1]}})
+    image, err = render(tmp_path, path)
+    middle = quad(image, 1)
+    assert middle[2] > middle[0] + 60, middle  # blue as the override, not the file's red

@@ -7,6 +7,7 @@ only the header is read before a refusal."""
 import json
 import os
 import pathlib
+import resource
 import struct
 import subprocess
 import time
@@ -123,3 +124,41 @@ def test_a_16_bit_rgba_png_within_the_limits_loads_under_a_tight_memory_limit(tm
     assert result.returncode == 0, result.stderr
     assert 'texture "t.png": 4096x4096 float linear, repeat/repeat, 268435456 bytes' \
         in result.stderr
+
+
+def address_space_needed(path, out, low, high, step=16):
+    """The least address space (MiB, to step) under which rtcl renders path:
+    bisected between low (too little) and high (enough)."""
+    def renders(mib):
+        def limit():
+            resource.setrlimit(resource.RLIMIT_AS, (mib << 20, mib << 20))
+        result = subprocess.run([RTCL, path, "-o", out, "--size", "8x8"], cwd=ROOT,
+                                capture_output=True, preexec_fn=limit, timeout=300)
+        return result.returncode == 0
+    assert renders(high), f"rtcl does not render {path} in {high} MiB"
+    while high - low > step:
+        middle = (low + high) // 2
+        low, high = (low, middle) if renders(middle) else (middle, high)
+    return high
+
+
+@pytest.mark.skipif(ASAN, reason="AddressSanitizer reserves terabytes of address space")
+def test_a_large_texture_is_held_twice_at_most_while_rendering(tmp_path):
+    """A 4096² 16-bit texture (256 MiB of float texels) renders within the address
+    space the same scene needs with an 8² texture plus three times the texels:
+    rtcl holds two copies, the scene's and the device buffer's (the helper that
+    decodes it is a process of its own). Before, the packed scene block held a
+    third: it needed 3.4 times the texels more (875 MiB), now 2.4 (612 MiB, the
+    allocators' slack included); its peak RSS went from 864 MB to 602 MB."""
+    texels = 4096 * 4096 * 16 >> 20
+    path = scene(tmp_path)
+    (tmp_path / "t.png").write_bytes(png_zeros(8, 8, 16))
+    small = address_space_needed(path, tmp_path / "o.ppm", 0, 4096)
+    (tmp_path / "t.png").write_bytes(png_zeros(4096, 4096, 16))
+    limit = small + 3 * texels
+
+    def limited():
+        resource.setrlimit(resource.RLIMIT_AS, (limit << 20, limit << 20))
+    result = subprocess.run([RTCL, path, "-o", tmp_path / "o.ppm", "--size", "8x8"], cwd=ROOT,
+                            capture_output=True, text=True, preexec_fn=limited, timeout=300)
+    assert result.returncode == 0, f"in {limit} MiB ({small} + 3 x {texels}): {result.stderr}"

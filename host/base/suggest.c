@@ -4,6 +4,8 @@
 #include <stdio.h>
 #include <string.h>
 
+#include "base/quote.h"
+
 int suggest_distance(const char *a, const char *b)
 {
 	size_t n = strlen(a), m = strlen(b);
@@ -57,5 +59,6 @@ void suggest_append(char *buf, size_t size, const char *word, const char *const 
 	size_t used = strlen(buf);
 
 	if (nearest && used < size)
-		snprintf(buf + used, size - used, "; did you mean \"%s%s\"?", prefix, nearest);
+		snprintf(buf + used, size - used, "; did you mean \"%s%s\"?", prefix,
+			 quote_text(nearest)); /* a file's name may hold control bytes */
 }

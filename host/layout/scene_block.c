@@ -264,8 +264,9 @@ static size_t leaf_triangle_count(const struct bvh *bvh)
 }
 
 /* Where the arrays go in the block (byte offsets) and its size. The
- * textures' arrays (uv ... texel) only in a scene with textures
- * (scene_has_textures), else they are empty at the end. */
+ * textures' arrays (uv ... texture_table, and the texels, the block's last
+ * array, after the path integrator's) only in a scene with textures
+ * (scene_has_textures), else they are empty. */
 struct layout {
 	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, leaf_triangle,
 		uv, material_map, texture, texture_table, texel, path, bsdf, emitter, env_texel,
@@ -330,14 +331,18 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	l.material_map = l.texture = l.texture_table = l.texel = l.total = l.uv;
 	if (!scene_has_textures(scene)) {
 		layout_path(&l, scene);
+		l.texel = l.total; /* none: scene_block_pack_head packs the whole block */
 		return l;
 	}
 	l.material_map = round16(l.uv + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_uv));
 	l.texture = l.material_map + (size_t)scene->material_count * sizeof(struct rt_material_map);
 	l.texture_table = l.texture + (size_t)scene->texture_count * sizeof(struct rt_texture);
-	l.texel = l.texture_table + RT_TEXTURE_TABLE * sizeof(float);
-	l.total = l.texel + scene_texture_bytes(scene);
+	l.total = l.texture_table + RT_TEXTURE_TABLE * sizeof(float);
 	layout_path(&l, scene);
+	/* The texels last, so that all else is one block before them, which a
+	 * renderer packs without them (scene_block_pack_head). */
+	l.texel = round16(l.total);
+	l.total = l.texel + scene_texture_bytes(scene);
 	return l;
 }
 
@@ -527,9 +532,10 @@ static void pack_path(unsigned char *block, struct rt_scene *header, const struc
 
 /* The textures' arrays (RENDERING.md, "Textures"): the vertices' texture
  * coordinates, what each material takes from textures, each texture's
- * header and texels, and the decode table of 8-bit texels. */
+ * header and, with texels, its texels, and the decode table of 8-bit
+ * texels. */
 static void pack_textures(unsigned char *block, struct rt_scene *header, const struct layout *l,
-			  const struct scene *scene, const struct mesh_block *mesh)
+			  const struct scene *scene, const struct mesh_block *mesh, int texels)
 {
 	struct rt_material_map *maps = (struct rt_material_map *)(block + l->material_map);
 	struct rt_texture *textures = (struct rt_texture *)(block + l->texture);
@@ -555,7 +561,8 @@ static void pack_textures(unsigned char *block, struct rt_scene *header, const s
 		textures[i].flags = (rt_uint)t->wrap_s | (rt_uint)t->wrap_t << RT_WRAP_T_SHIFT |
 				    (t->is_float ? RT_TEXTURE_FLOAT : 0u) |
 				    (t->is_linear ? RT_TEXTURE_LINEAR : 0u);
-		memcpy(block + texel, t->texels, t->bytes);
+		if (texels && t->bytes)
+			memcpy(block + texel, t->texels, t->bytes);
 		texel += round16(t->bytes);
 	}
 	/* Computed in double, rounded once to float. */
@@ -571,8 +578,18 @@ size_t scene_block_bytes(const struct scene *scene, const struct mesh_block *mes
 	return layout_of(scene, mesh, bvh).total;
 }
 
-void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
-		    int width, int height, int max_depth, size_t *bytes)
+size_t scene_block_head_bytes(const void *block)
+{
+	const struct rt_scene *header = block;
+	const struct rt_texture *textures =
+		(const struct rt_texture *)((const unsigned char *)block + header->texture_offset);
+
+	return header->texture_count ? textures[0].offset : header->total_bytes;
+}
+
+/* scene_block_pack, and scene_block_pack_head without texels. */
+static void *pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
+		  int width, int height, int max_depth, int texels, size_t *bytes)
 {
 	struct layout l = layout_of(scene, mesh, bvh);
 	size_t material_offset = l.material, sphere_offset = l.sphere, plane_offset = l.plane;
@@ -583,7 +600,7 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 	/* The header's offsets are 32-bit (block_prepare_scene refuses more). */
 	if (total > DEVSCENE_MAX_BYTES)
 		return NULL;
-	block = calloc(1, total);
+	block = calloc(1, texels ? total : l.texel);
 	if (!block)
 		return NULL;
 
@@ -664,10 +681,23 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 		       (size_t)mesh->vertex_count * sizeof(struct rt_vertex_normal));
 	}
 	if (scene_has_textures(scene))
-		pack_textures(block, header, &l, scene, mesh);
+		pack_textures(block, header, &l, scene, mesh, texels);
 
 	*bytes = total;
 	return block;
+}
+
+void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
+		       const struct bvh *bvh, int width, int height, int max_depth, size_t *bytes)
+{
+	return pack(scene, mesh, bvh, width, height, max_depth, 1, bytes);
+}
+
+void *scene_block_pack_head(const struct scene *scene, const struct mesh_block *mesh,
+			    const struct bvh *bvh, int width, int height, int max_depth,
+			    size_t *bytes)
+{
+	return pack(scene, mesh, bvh, width, height, max_depth, 0, bytes);
 }
 
 /* The float step at distance d from the eye: the spacing of floats there. */

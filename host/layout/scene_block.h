@@ -34,4 +34,18 @@ int scene_block_check_resolution(const struct scene *scene, char *err, size_t er
 void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh, const struct bvh *bvh,
 		    int width, int height, int max_depth, size_t *bytes);
 
+/* scene_block_pack without the texels: the malloc'd block ends where they
+ * begin, at scene_block_head_bytes of its *bytes; texture i's texels
+ * (scene->textures[i].texels) go at the offset of its struct rt_texture, each
+ * padded with zeros to 16 bytes. A renderer writes them into the device's
+ * buffer from the scene, so that no second copy of them is made on the host
+ * (issue 39, finding 14). */
+void *scene_block_pack_head(const struct scene *scene, const struct mesh_block *mesh,
+			    const struct bvh *bvh, int width, int height, int max_depth,
+			    size_t *bytes);
+
+/* The bytes of a block (whole or from scene_block_pack_head) before its
+ * texels: its whole size where it has no texture. */
+size_t scene_block_head_bytes(const void *block);
+
 #endif

@@ -112,11 +112,8 @@ int gltf_check_required(const json_t *doc, char *reason, size_t reason_size)
 		while (*s && strcmp(*s, name) != 0)
 			s++;
 		if (!*s) {
-			char shown[80];
+			char shown[80]; /* its control bytes escaped by the message's reader */
 			snprintf(shown, sizeof(shown), "%s", name);
-			for (char *c = shown; *c; c++) /* one line */
-				if ((unsigned char)*c < 0x20 || *c == 0x7f)
-					*c = '?';
 			snprintf(
 				reason, reason_size,
 				"it requires the glTF extension \"%s\" (extensionsRequired), which "
@@ -234,9 +231,7 @@ static void walk(struct camera_walk *w, size_t n, const double parent[3][4], int
 			snprintf(c->name, sizeof(c->name), "%s", name);
 		else
 			snprintf(c->name, sizeof(c->name), "nodes[%zu]", n);
-		for (char *ch = c->name; *ch; ch++) /* names go into messages on one line */
-			if ((unsigned char)*ch < 0x20 || *ch == 0x7f)
-				*ch = '?';
+		/* Control bytes kept: messages escape them (base/quote.h). */
 		c->kind = type && strcmp(type, "orthographic") == 0 ? MESH_CAMERA_ORTHOGRAPHIC
 								    : MESH_CAMERA_PERSPECTIVE;
 		for (int k = 0; k < 3; k++) {

@@ -321,10 +321,7 @@ static void string_of(const struct aiMaterial *mat, const char *key, char *out, 
 	if (length >= size)
 		length = (uint32_t)size - 1;
 	memcpy(out, prop->mData + sizeof(length), length);
-	out[length] = '\0';
-	for (char *c = out; *c; c++) /* names go into messages on one line */
-		if ((unsigned char)*c < 0x20 || *c == 0x7f)
-			*c = '?';
+	out[length] = '\0'; /* control bytes kept: messages escape them (base/quote.h) */
 }
 
 /* Adds what (once) to the comma-separated notes. */
@@ -1047,11 +1044,9 @@ static int read_cameras(const struct aiScene *sc, struct mesh_data *out)
 
 		if (!cam || !cam->mName.length)
 			continue;
+		/* Control bytes kept: messages escape them (base/quote.h). */
 		snprintf(c->name, sizeof(c->name), "%.*s", (int)sizeof(c->name) - 1,
 			 cam->mName.data);
-		for (char *ch = c->name; *ch; ch++) /* names go into messages on one line */
-			if ((unsigned char)*ch < 0x20 || *ch == 0x7f)
-				*ch = '?';
 		c->kind = MESH_CAMERA_NOT_GLTF;
 		out->camera_count++;
 	}

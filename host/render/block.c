@@ -116,8 +116,9 @@ static int pack_scene(struct device *dev, const struct scene *scene,
 	res->bvh_device_nodes = bvh.wide ? bvh.wide_count : bvh.node_count;
 	if (block_check_scene_fits(dev, scene, &mesh, use_bvh ? &bvh : NULL, err, err_size))
 		goto free_bvh;
-	*block = scene_block_pack(scene, &mesh, use_bvh ? &bvh : NULL, s->width, s->height,
-				  s->max_depth, &res->scene_bytes);
+	/* Without its texels: buffers_create writes them from the scene. */
+	*block = scene_block_pack_head(scene, &mesh, use_bvh ? &bvh : NULL, s->width, s->height,
+				       s->max_depth, &res->scene_bytes);
 	if (!*block)
 		snprintf(err, err_size, "out of host memory for the scene's %zu bytes",
 			 scene_block_bytes(scene, &mesh, use_bvh ? &bvh : NULL));

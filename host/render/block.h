@@ -23,7 +23,8 @@ int block_check_scene_fits(const struct device *dev, const struct scene *scene,
 			   size_t err_size);
 
 /* Builds the BVH (--accel bvh), packs the scene into *block
- * (result->scene_bytes), allocates result->rgb and decides whether the scene
+ * (scene_block_pack_head: all but its texels, result->scene_bytes with
+ * them), allocates result->rgb and decides whether the scene
  * lives in __local memory. */
 int block_prepare_scene(struct device *dev, const struct scene *scene,
 			const struct render_settings *settings, struct render_result *result,

@@ -4,6 +4,7 @@
 #include <stdlib.h>
 
 #include "rtcl_shared.h"
+#include "layout/scene_block.h"
 #include "render/launch.h"
 
 /* Bytes of the per-pixel flops at the head of the flop-count buffer. */
@@ -15,13 +16,57 @@ static size_t pixel_flops_bytes(const struct render_settings *s)
 static int buffers_place(struct device *dev, struct render_buffers *b, char *err,
 			 size_t err_size);
 
-int buffers_create(struct device *dev, const struct render_settings *s,
+/* The scene buffer: the packed block, then each texture's texels written
+ * from the scene's own (scene_block_pack_head), so that the host holds no
+ * second copy of them: a 256 MiB texture took rtcl 869 MB with the texels
+ * packed into the block, the scene's, the block's and the device buffer's
+ * (issue 39, finding 14). The block is freed once written. */
+static int create_scene_buffer(struct device *dev, const struct scene *scene,
+			       const struct render_result *res, struct render_buffers *b, char *err,
+			       size_t err_size)
+{
+	static const unsigned char zeros[16];
+	const struct rt_scene *header = b->scene_block;
+	const struct rt_texture *textures =
+		(const struct rt_texture *)((const unsigned char *)b->scene_block +
+					    header->texture_offset);
+	cl_int status;
+
+	b->scene = device_create_buffer(dev, CL_MEM_READ_ONLY, res->scene_bytes, NULL, "scene", err,
+					err_size);
+	if (!b->scene)
+		return -1;
+	status = clEnqueueWriteBuffer(dev->queue, b->scene, CL_TRUE, 0,
+				      scene_block_head_bytes(b->scene_block), b->scene_block, 0,
+				      NULL, NULL);
+	for (int i = 0; status == CL_SUCCESS && i < header->texture_count; i++) {
+		const struct scene_texture *t = &scene->textures[i];
+		size_t pad = (16 - t->bytes % 16) % 16;
+		if (t->bytes)
+			status = clEnqueueWriteBuffer(dev->queue, b->scene, CL_TRUE,
+						      textures[i].offset, t->bytes, t->texels, 0,
+						      NULL, NULL);
+		if (status == CL_SUCCESS && pad)
+			status = clEnqueueWriteBuffer(dev->queue, b->scene, CL_TRUE,
+						      textures[i].offset + t->bytes, pad, zeros, 0,
+						      NULL, NULL);
+	}
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "writing the scene's %zu bytes to %s failed: %s",
+			 res->scene_bytes, dev->name, cl_error_name(status));
+		return -1;
+	}
+	free(b->scene_block);
+	b->scene_block = NULL;
+	return 0;
+}
+
+int buffers_create(struct device *dev, const struct scene *scene, const struct render_settings *s,
 		   const struct render_result *res, struct render_buffers *b, size_t flops_bytes,
 		   const char *flops_what, char *err, size_t err_size)
 {
-	b->scene = device_create_buffer(dev, CL_MEM_READ_ONLY | CL_MEM_COPY_HOST_PTR,
-					res->scene_bytes, b->scene_block, "scene", err, err_size);
-	if (!b->scene || checks_create_image(dev, s, &b->image, err, err_size))
+	if (create_scene_buffer(dev, scene, res, b, err, err_size) ||
+	    checks_create_image(dev, s, &b->image, err, err_size))
 		return -1;
 	b->sums = device_create_buffer(dev, CL_MEM_READ_WRITE,
 				       settings_samples(s) > 1 ? image_sum_bytes(s->width, s->height)

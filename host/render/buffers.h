@@ -18,7 +18,7 @@ struct trace_counts {
 
 struct render_buffers {
 	cl_program program;
-	void *scene_block; /* the packed scene (launch_setup) */
+	void *scene_block; /* the packed scene but its texels (launch_setup), till buffers_create */
 	cl_mem scene;
 	struct guarded_image image;
 	cl_mem sums;	      /* each pixel's fixed-point sum of its samples' colours
@@ -30,11 +30,12 @@ struct render_buffers {
 	struct trace_counts counts; /* summed over every work-item read back */
 };
 
-/* Creates the scene buffer from b->scene_block, the image, the flop-count
- * buffer `flops_what` of flops_bytes (a placeholder without count_flops) and
- * the write counts, and places them all on the device before it returns.
+/* Creates the scene buffer from b->scene_block (freed then: the device
+ * holds it) and the scene's texels, the image, the flop-count buffer
+ * `flops_what` of flops_bytes (a placeholder without count_flops) and the
+ * write counts, and places them all on the device before it returns.
  * Returns 0, or -1 with one message in err. */
-int buffers_create(struct device *dev, const struct render_settings *s,
+int buffers_create(struct device *dev, const struct scene *scene, const struct render_settings *s,
 		   const struct render_result *res, struct render_buffers *b, size_t flops_bytes,
 		   const char *flops_what, char *err, size_t err_size);
 

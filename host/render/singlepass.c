@@ -114,12 +114,12 @@ static int set_args(const struct launch_state *st, cl_kernel kernel, const struc
 	return 0;
 }
 
-static int create_buffers(struct device *dev, const struct render_settings *s,
-			  struct launch_state *st, struct render_result *res, char *err,
-			  size_t err_size)
+static int create_buffers(struct device *dev, const struct scene *scene,
+			  const struct render_settings *s, struct launch_state *st,
+			  struct render_result *res, char *err, size_t err_size)
 {
-	if (buffers_create(dev, s, res, &st->b, (size_t)counts_bytes(s, res), "flop counts", err,
-			   err_size) ||
+	if (buffers_create(dev, scene, s, res, &st->b, (size_t)counts_bytes(s, res), "flop counts",
+			   err, err_size) ||
 	    watch_create_counter(dev, dev->queue, progress_enabled(), &st->work_counter, err,
 				 err_size))
 		return -1;
@@ -434,7 +434,7 @@ static int singlepass_open(struct renderer *r, const struct scene *scene, char *
 	    launch_check_kernel(dev, st->kernel, res, s->kernel->name, err, err_size))
 		return -1;
 	double lap = timing_now();
-	if (create_buffers(dev, s, st, res, err, err_size) ||
+	if (create_buffers(dev, scene, s, st, res, err, err_size) ||
 	    open_lanes(r, r->queues, err, err_size))
 		return -1;
 	st->b.item_flops = calloc(res->item_count, sizeof(uint64_t));

@@ -93,15 +93,15 @@ static int create_queues(struct device *dev, const struct render_settings *s, st
 	return w->item_counts ? 0 : -1;
 }
 
-static int create_wavefront_buffers(struct device *dev, const struct render_settings *s,
-				    struct render_result *res, struct wavefront *w, char *err,
-				    size_t err_size)
+static int create_wavefront_buffers(struct device *dev, const struct scene *scene,
+				    const struct render_settings *s, struct render_result *res,
+				    struct wavefront *w, char *err, size_t err_size)
 {
 	size_t pixels = (size_t)s->width * s->height;
 	size_t flops_bytes = s->count_flops ? pixels * sizeof(cl_ulong) : UNUSED_BUFFER_BYTES;
 
-	if (buffers_create(dev, s, res, &w->b, pixels * sizeof(cl_ulong), "per-pixel counts", err,
-			   err_size))
+	if (buffers_create(dev, scene, s, res, &w->b, pixels * sizeof(cl_ulong), "per-pixel counts",
+			   err, err_size))
 		return -1;
 	w->next_count = device_create_buffer(dev, CL_MEM_READ_WRITE, sizeof(cl_uint), NULL,
 					     "queue counter", err, err_size);
@@ -360,7 +360,7 @@ static int wavefront_open(struct renderer *r, const struct scene *scene, char *e
 							  err_size)
 				  : NULL;
 	double lap = timing_now();
-	if (!w->accumulate || create_wavefront_buffers(r->dev, s, res, w, err, err_size) ||
+	if (!w->accumulate || create_wavefront_buffers(r->dev, scene, s, res, w, err, err_size) ||
 	    buffers_clear(r->dev, s, &w->b, err, err_size))
 		return -1;
 	res->times.scene += timing_lap_ms(&lap);

@@ -454,7 +454,7 @@ static int fail_unknown_file_material(struct loader *ld, const struct path *fiel
 struct mesh_textures {
 	const struct path *file; /* meshes[i].file, where messages point */
 	const char *name;	 /* the file's name as the scene gives it */
-	const struct mesh_data *mesh;
+	struct mesh_data *mesh; /* its texels taken by add_texture where one texture has them all */
 	int *scene_index; /* per texture of the file: 0 not yet used, -1 left
 			     out (warned), else 1 + its index in scene.textures */
 	int warn;	  /* "missing_textures": "warn" */
@@ -481,7 +481,18 @@ static int add_texture(struct loader *ld, struct mesh_textures *mt, int i)
 	t = &s->textures[s->texture_count];
 	memset(t, 0, sizeof(*t));
 	t->name = strdup(in->name);
-	t->texels = malloc(in->bytes ? (size_t)in->bytes : 1);
+	/* The file's only texels (the common case, a large texture among them)
+	 * are taken, not copied: the import held them twice (issue 39,
+	 * finding 14). */
+	if (in->bytes && in->offset == 0 && in->bytes == mt->mesh->texel_bytes) {
+		t->texels = mt->mesh->texels;
+		mt->mesh->texels = NULL;
+		mt->mesh->texel_bytes = 0;
+	} else {
+		t->texels = malloc(in->bytes ? (size_t)in->bytes : 1);
+		if (t->texels && in->bytes)
+			memcpy(t->texels, mt->mesh->texels + in->offset, (size_t)in->bytes);
+	}
 	if (!t->name || !t->texels) {
 		free(t->name);
 		free(t->texels);
@@ -489,7 +500,6 @@ static int add_texture(struct loader *ld, struct mesh_textures *mt, int i)
 				 one_line(in->name, tex));
 		return -1;
 	}
-	memcpy(t->texels, mt->mesh->texels + in->offset, (size_t)in->bytes);
 	t->bytes = (size_t)in->bytes;
 	t->mesh = (int)mt->file->parent->index;
 	t->width = (int)in->width;
