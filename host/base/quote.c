@@ -18,28 +18,34 @@ const char *quote_byte(unsigned char c, int quoted, char out[QUOTE_BYTE_SIZE])
 	return out;
 }
 
-const char *quote_text(const char *text)
+char *quote_bytes(const char *text, size_t n, char *out, size_t max)
 {
-	/* Thread-local: the devices' threads build messages at the same time. */
-	static _Thread_local char slots[QUOTE_SLOTS][QUOTE_TEXT_MAX + 4];
-	static _Thread_local unsigned next;
-	char *out = slots[next++ % QUOTE_SLOTS];
 	size_t len = 0;
 
-	for (const char *s = text ? text : ""; *s; s++) {
+	for (size_t i = 0; i < n; i++) {
 		char escaped[QUOTE_BYTE_SIZE];
-		size_t n = strlen(quote_byte((unsigned char)*s, 0, escaped));
+		size_t e = strlen(quote_byte((unsigned char)text[i], 0, escaped));
 
-		if (len + n > QUOTE_TEXT_MAX) {
+		if (len + e > max) {
 			while (len > 0 && ((unsigned char)out[len - 1] & 0x80))
 				len--; /* no part of a UTF-8 character left */
 			memcpy(out + len, "...", 3);
 			len += 3;
 			break;
 		}
-		memcpy(out + len, escaped, n);
-		len += n;
+		memcpy(out + len, escaped, e);
+		len += e;
 	}
 	out[len] = '\0';
 	return out;
+}
+
+const char *quote_text(const char *text)
+{
+	/* Thread-local: the devices' threads build messages at the same time. */
+	static _Thread_local char slots[QUOTE_SLOTS][QUOTE_TEXT_MAX + 4];
+	static _Thread_local unsigned next;
+
+	text = text ? text : "";
+	return quote_bytes(text, strlen(text), slots[next++ % QUOTE_SLOTS], QUOTE_TEXT_MAX);
 }

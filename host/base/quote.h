@@ -21,6 +21,10 @@ const char *quote_byte(unsigned char c, int quoted, char out[QUOTE_BYTE_SIZE]);
  * QUOTE_SLOTS more calls in the same thread. A text whose escaped form
  * exceeds QUOTE_TEXT_MAX bytes is cut, ending in "...". NULL gives "". */
 #define QUOTE_SLOTS 4
+/* The first n bytes of text escaped as quote_text does into out, cut with
+ * "..." where the escaped text would pass max bytes (out holds max + 4). */
+char *quote_bytes(const char *text, size_t n, char *out, size_t max);
+
 #define QUOTE_TEXT_MAX 4200
 const char *quote_text(const char *text);
 

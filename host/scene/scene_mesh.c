@@ -31,27 +31,12 @@
 
 static const char *one_line(const char *text, char buf[MESSAGE_TEXT_MAX])
 {
-	size_t n = strlen(text), len = 0;
+	size_t n = strlen(text);
 
 	/* The importer ends some reasons with a newline or a space. */
 	while (n > 0 && ((unsigned char)text[n - 1] <= ' ' || text[n - 1] == 0x7f))
 		n--;
-	for (size_t i = 0; i < n; i++) {
-		char escaped[QUOTE_BYTE_SIZE];
-		size_t e = strlen(quote_byte((unsigned char)text[i], 0, escaped));
-
-		if (len + e + 4 > MESSAGE_TEXT_MAX) {
-			while (len > 0 && ((unsigned char)buf[len - 1] & 0x80))
-				len--; /* no part of a UTF-8 character left */
-			memcpy(buf + len, "...", 3);
-			len += 3;
-			break;
-		}
-		memcpy(buf + len, escaped, e);
-		len += e;
-	}
-	buf[len] = '\0';
-	return buf;
+	return quote_bytes(text, n, buf, MESSAGE_TEXT_MAX - 4);
 }
 
 /* Makes room for `more` triangles in scene->triangles. */
