@@ -126,6 +126,8 @@ def assert_same_across_kernels(tmp_path, kernels, spp, scene=str(ROOT / "scenes"
         assert files == first, kernel
 
 
+# make test-long: make test keeps the path-traced identity and denoise test.
+@pytest.mark.slow
 def test_auxiliary_images_identical_across_kernels(tmp_path):
     """One of each family: a persistent single-pass kernel, one work-item a
     pixel, and the wavefront's launches per bounce."""
@@ -214,6 +216,8 @@ def require_oidn(tmp_path):
     assert "denoise: Open Image Denoise, RT filter with albedo and normal" in probe.stdout
 
 
+# make test-long: make test keeps the path-traced identity and denoise test.
+@pytest.mark.slow
 def test_denoise_lowers_the_error_of_a_noisy_image(tmp_path):
     require_oidn(tmp_path)
     # Soft shadows of a large sphere light: noisy at a few samples per pixel.
@@ -260,6 +264,8 @@ def test_albedo_takes_the_image_sample_positions(tmp_path):
     assert len(np.unique(albedo[..., 0])) > 6  # edges mixed, not only the materials
 
 
+# make test-long: make test keeps the path-traced identity and denoise test.
+@pytest.mark.slow
 def test_albedo_of_textures_and_a_lens(tmp_path):
     """The studio (textured crate, cut-out trellis, a thin lens) lit by an
     ambient light of 1 alone: its image is its albedo, texture, cut-outs and

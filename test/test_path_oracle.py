@@ -204,6 +204,8 @@ def test_cornell_box_at_max_depth_1_matches_mitsuba(tmp_path):
             "cornell_depth1", 256)
 
 
+# make test-long: make test keeps test_path.py's diffuse furnace.
+@pytest.mark.slow
 def test_white_furnace_diffuse_sphere_renders_its_albedo(tmp_path):
     """Analytic: a diffuse sphere of albedo rho under a uniform environment of
     radiance 1 reflects exactly rho (a convex object sees only the

@@ -325,7 +325,12 @@ def render(path, kernel, out):
     return read_pfm(out)
 
 
-@pytest.mark.parametrize("name", sorted(SCENES))
+# The two slowest scenes to make test-long; make test keeps the other eight.
+SLOW_SCENES = {"models", "environment"}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.slow) if n in SLOW_SCENES
+                                  else n for n in sorted(SCENES)])
 def test_reference_agrees_with_the_kernel(tmp_path, name):
     path = tmp_path / f"{name}.json"
     path.write_text(json.dumps(SCENES[name]))
