@@ -251,5 +251,8 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 			  err_size))
 		return -1;
 	res->times.build = timing_lap_ms(&lap);
+	res->fetch_lanes = s->fetch == FETCH_GROUP ? s->workgroup[0] * s->workgroup[1]
+			   : s->fetch == FETCH_SUBGROUP && dev->simd_measurable ? 32
+										 : 1;
 	return 0;
 }

@@ -149,6 +149,10 @@ struct render_result {
 	int vertex_count; /* the triangles' distinct vertices (host/layout/mesh_block.h) */
 	char build_options[BUILD_OPTIONS_SIZE];
 	int build_cached; /* the program came from rtcl's cache (progcache.h) */
+	int fetch_lanes;  /* the persistent kernel's work-items one fetch from the
+			     global counter serves at most (settings.fetch): 1 for
+			     item, the work-group's for group, the warp's (32) for
+			     subgroup where the device has warp primitives, else 1 */
 	int queues;	  /* the most in-order queues a piece rendered with
 			     (renderer_all_samples) */
 
