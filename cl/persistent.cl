@@ -38,6 +38,23 @@
  * one per work-item of the group. */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 
+/* The block lives in the kernels' __local argument, after the scene when
+ * the scene is there (the host makes room: singlepass.c,
+ * local_argument_bytes). Not a kernel-scope __local variable: PoCL 3.1 gave
+ * one to every work-group running at once when a function took its address
+ * (two groups drew from one block and a block went untraced). */
+static volatile __local ulong *group_block(__global const uint4 *scene_global,
+					  __local uint4 *scene_local)
+{
+#ifdef RTCL_SCENE_IN_LOCAL
+	uint words = (((__global const struct rt_scene *)scene_global)->total_bytes + 15) / 16;
+#else
+	uint words = 0;
+	(void)scene_global;
+#endif
+	return (volatile __local ulong *)(scene_local + words);
+}
+
 static inline ulong block_word(uint first_pixel, uint drawn)
 {
 	return (ulong)first_pixel << 32 | drawn;
@@ -196,19 +213,16 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 		     __global uint *next_pixel_counter,
 		     __global ulong *counts, __global uint *probe, struct rt_piece piece)
 {
-#ifdef RTCL_FETCH_GROUP
-	__local ulong group_block;
-	volatile __local ulong *block = &group_block;
-#else
-	volatile __local ulong *block = 0; /* no block */
-#endif
 	struct tracer tr;
 	uint slots = get_local_size(0) * get_local_size(1);
 
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
 	struct chunk_grid grid = chunk_grid(&piece);
 #ifdef RTCL_FETCH_GROUP
+	volatile __local ulong *block = group_block(scene_global, scene_local);
 	block_init(block, next_pixel_counter, slots);
+#else
+	volatile __local ulong *block = 0; /* no block */
 #endif
 #ifdef RTCL_REGENERATE
 	struct walk w;

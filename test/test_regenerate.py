@@ -162,3 +162,17 @@ def test_regenerate_needs_the_path_integrator(tmp_path):
     failure(rtcl(BOX, "--integrator", "whitted", "-k", "persistent", "--regenerate", "-o",
                  tmp_path / "x.pfm"), message)
     assert not (tmp_path / "x.pfm").exists()
+
+
+@pytest.mark.slow
+def test_group_blocks_are_the_groups_own(tmp_path):
+    """--fetch group with work-groups running at once (PoCL's optimised
+    build, make test-long's): each group draws from its own block. With the
+    block a kernel-scope __local variable, PoCL 3.1 shared it between the
+    groups it ran at once, and a block's chunk went untraced in 5 renders of
+    8 of this one."""
+    want = render(tmp_path, "dynamic", CORNELL, "-k", "dynamic", size="24x24", spp=4)
+    for i in range(6):
+        got = render(tmp_path, f"group{i}", CORNELL, "-k", "persistent", "--regenerate",
+                     "--fetch", "group", size="24x24", spp=4)
+        assert got == want, f"render {i} differs from -k dynamic"
