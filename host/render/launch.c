@@ -97,7 +97,8 @@ static int check_pixel_counter(const struct render_settings *s, const struct ren
 		 "work-items), more than %lu; choose fewer groups or a smaller --batch",
 		 s->kernel->uses_groups && s->groups[0] > 0 ? "--groups" : "work-groups",
 		 res->groups[0], res->groups[1], (unsigned long long)batch, (unsigned long long)end,
-		 s->fetch == FETCH_GROUP ? "two fetches" : "one fetch", (unsigned long long)batch, (unsigned long long)items, (unsigned long)UINT32_MAX);
+		 s->fetch == FETCH_GROUP ? "two fetches" : "one fetch", (unsigned long long)batch,
+		 (unsigned long long)items, (unsigned long)UINT32_MAX);
 	return -1;
 }
 
@@ -253,6 +254,6 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 	res->times.build = timing_lap_ms(&lap);
 	res->fetch_lanes = s->fetch == FETCH_GROUP ? s->workgroup[0] * s->workgroup[1]
 			   : s->fetch == FETCH_SUBGROUP && dev->simd_measurable ? 32
-										 : 1;
+										: 1;
 	return 0;
 }

@@ -84,8 +84,7 @@ static size_t pixel_counts_bytes(const struct render_settings *s)
 /* Bytes of the kernels' __local argument: the scene when it lives there,
  * rounded up to whole uint4, then with --fetch group the persistent kernel's
  * block (cl/persistent.cl, group_block). */
-static size_t local_argument_bytes(const struct render_settings *s,
-				   const struct render_result *res)
+static size_t local_argument_bytes(const struct render_settings *s, const struct render_result *res)
 {
 	size_t bytes = res->scene_in_local ? (res->scene_bytes + 15) / 16 * 16 : 0;
 
@@ -96,9 +95,9 @@ static size_t local_argument_bytes(const struct render_settings *s,
 
 /* Sets every argument of kernel but the piece, with counter as its work
  * counter. */
-static int set_args(const struct launch_state *st, cl_kernel kernel, const struct work_counter *counter,
-		    const struct render_settings *s, const struct render_result *res, char *err,
-		    size_t err_size)
+static int set_args(const struct launch_state *st, cl_kernel kernel,
+		    const struct work_counter *counter, const struct render_settings *s,
+		    const struct render_result *res, char *err, size_t err_size)
 {
 	const cl_mem *buffers[RENDER_ARGS] = {
 		[ARG_SCENE] = &st->b.scene,
@@ -161,7 +160,8 @@ static int open_lanes(struct renderer *r, int queues, char *err, size_t err_size
 		l->kernel = program_create_kernel(st->b.program, "render", err, err_size);
 		if (!l->kernel ||
 		    watch_create_counter(dev, l->queue, 0, &l->work_counter, err, err_size) ||
-		    set_args(st, l->kernel, &l->work_counter, r->settings, r->result, err, err_size))
+		    set_args(st, l->kernel, &l->work_counter, r->settings, r->result, err,
+			     err_size))
 			return -1;
 	}
 	return 0;
