@@ -19,7 +19,10 @@
 # libraries in .gpu/lib. Run from the repository root (scenes/ and its
 # models are read from there):
 #   bash docs/results/h100-regen/run.sh            # carry .gpu/regen41 and .gpu/lib
-# About 5-7 minutes on an H100 (most of it the first round's program builds).
+# About 5-6 minutes on an H100 (estimated from batch 98: a program build 3.6 s,
+# 28 of them in the first round and 16 more after; a cornell frame 110 ms).
+# SCENES="cornell" halves it; EXTRA=0 leaves out the registers and the
+# counting runs (about 70 s).
 # On PoCL, to check the script: SIZE=32x32 SPP=4 SIMD_SIZE=16x16 bash docs/results/h100-regen/run.sh
 set -u
 ROOT=$PWD
@@ -30,6 +33,7 @@ export RTCL_MESHREAD=$G/rtcl-meshread
 export XDG_CACHE_HOME=$(mktemp -d) # programs built from this commit, none cached from before
 OUT=${OUT:-$(mktemp -d)}
 SIZE=${SIZE:-1024x1024}; SPP=${SPP:-64}; SIMD_SIZE=${SIMD_SIZE:-512x512}
+SCENES=${SCENES:-cornell studio_path}; EXTRA=${EXTRA:-1}
 T=$(mktemp -d); S=$OUT/stats; mkdir -p $S
 exec > >(tee $OUT/regen.txt) 2>&1
 echo "commit: $(cat $G/COMMIT 2>/dev/null || echo unknown)"; nvidia-smi -L 2>/dev/null; nproc; date -u
@@ -53,7 +57,7 @@ for regen in 0 1; do
   done
 done
 
-for sc in cornell studio_path; do
+for sc in $SCENES; do
   $RT scenes/$sc.json --size $SIZE --spp 4 -q -o $T/prime.ppm 2>&1 | tail -3
   for round in 1 2; do
     for tag in $TAGS; do
@@ -73,10 +77,10 @@ done
 date -u
 
 echo "== the table: median of -r 5 per round, M paths/s of the faster round"
-python3 - "$S" "$PIX" $TAGS <<'EOF'
+python3 - "$S" "$PIX" "$SCENES" $TAGS <<'EOF'
 import json, os, sys
-stats, pix, tags = sys.argv[1], int(sys.argv[2]), sys.argv[3:]
-for sc in ["cornell", "studio_path"]:
+stats, pix, scenes, tags = sys.argv[1], int(sys.argv[2]), sys.argv[3].split(), sys.argv[4:]
+for sc in scenes:
     def ms(tag, r):
         p = os.path.join(stats, f"{sc}-{tag}-{r}.json")
         return json.load(open(p))["kernel_ms"] if os.path.exists(p) else None
@@ -95,8 +99,9 @@ for sc in ["cornell", "studio_path"]:
               f"{rel('persistent-item-b1')}× |")
 EOF
 
+if [ "$EXTRA" = 1 ]; then
 echo "== registers and spills (ptxas via -cl-nv-verbose, uncached builds, 64x64)"
-for sc in cornell studio_path; do
+for sc in $SCENES; do
   for tag in dynamic persistent-item-b1 regen-item-b1 regen-subgroup-b1; do
     echo "-- $sc $tag"
     RTCL_CACHE=0 RTCL_BUILD_OPTIONS=-cl-nv-verbose timeout 120 $RT ${OPTS[$tag]} scenes/$sc.json \
@@ -107,7 +112,7 @@ done
 date -u
 
 echo "== counting runs (--flops): $SIMD_SIZE, 16 spp; flops must agree; SIMD efficiency measured"
-for sc in cornell studio_path; do
+for sc in $SCENES; do
   for tag in dynamic persistent-item-b1 regen-item-b1 regen-subgroup-b1; do
     timeout 200 $RT ${OPTS[$tag]} scenes/$sc.json --size $SIMD_SIZE --spp 16 -q -o $T/c.pfm \
       --flops $T/c.npy --stats $S/$sc-$tag-count.json > $T/log 2>&1 ||
@@ -124,5 +129,6 @@ print('$sc $tag: flops %d, rays %d, par. eff. %.3f, model %s; SIMD measured: %s'
   done
 done
 date -u
+fi
 # Everything under $OUT as one archive (at most 8 files come back)
 (cd $OUT && tar czf /tmp/regen41.tgz . && rm -rf ./* && mv /tmp/regen41.tgz .)
