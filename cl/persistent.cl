@@ -40,9 +40,10 @@
 
 /* The block lives in the kernels' __local argument, after the scene when
  * the scene is there (the host makes room: singlepass.c,
- * local_argument_bytes). Not a kernel-scope __local variable: PoCL 3.1 gave
- * one to every work-group running at once when a function took its address
- * (two groups drew from one block and a block went untraced). */
+ * local_argument_bytes). Not a kernel-scope __local variable: PoCL 3.1's
+ * optimised build gave one to every work-group running at once when its
+ * address went to a function it did not inline (two groups drew from one
+ * block, and a block went untraced). */
 static volatile __local ulong *group_block(__global const uint4 *scene_global,
 					  __local uint4 *scene_local)
 {

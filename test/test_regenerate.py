@@ -32,21 +32,14 @@ def render(tmp_path, name, scene, *args, env=None, size="16x16", spp=3):
 
 
 def test_regenerated_image_is_the_dynamic_kernels(tmp_path):
-    """Regenerated paths, each fetch scheme, batches of 3 pixels and the
-    samples in passes of one: the dynamic kernel's image, byte for byte."""
+    """Regenerated paths fetched by work-group blocks, the samples in passes
+    of one: the dynamic kernel's image, byte for byte (the other schemes and
+    batches: test_every_scheme_gives_the_same_image, slow)."""
     want = render(tmp_path, "dynamic", BOX, "-k", "dynamic")
     assert len(set(want)) > 10  # an image, not a blank
-    runs = {
-        "regenerate group, passes of 1": (["--regenerate", "--fetch", "group"],
-                                          {"RTCL_TEST_PASS_SAMPLES": "1"}),
-        "regenerate subgroup, batch 3": (["--regenerate", "--fetch", "subgroup", "--batch",
-                                          "3"], None),
-        "group without regeneration": (["--fetch", "group"], None),
-    }
-    for name, (args, env) in runs.items():
-        got = render(tmp_path, name.replace(" ", "_").replace(",", ""), BOX, "-k",
-                     "persistent", *args, env=env)
-        assert got == want, f"{name} differs from -k dynamic"
+    got = render(tmp_path, "regenerated", BOX, "-k", "persistent", "--regenerate", "--fetch",
+                 "group", env={"RTCL_TEST_PASS_SAMPLES": "1"})
+    assert got == want, "regenerated differs from -k dynamic"
 
 
 def counts(tmp_path, name, scene, *args):
@@ -58,6 +51,7 @@ def counts(tmp_path, name, scene, *args):
     return doc, np.load(work), (tmp_path / f"{name}.pfm").read_bytes()
 
 
+@pytest.mark.slow
 def test_regenerated_counts_are_the_dynamic_kernels(tmp_path):
     """--flops' total, the rays and the work map (the flops per pixel) of a
     regenerated render are the dynamic kernel's: a work-item's flops between
