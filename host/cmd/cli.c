@@ -17,6 +17,8 @@
 enum long_only_option {
 	OPT_GROUPS = 256,
 	OPT_BATCH,
+	OPT_FETCH,
+	OPT_REGENERATE,
 	OPT_QUEUES,
 	OPT_SIZE,
 	OPT_DEPTH,
@@ -56,6 +58,8 @@ static const struct option long_options[] = {
 	{"workgroup", required_argument, NULL, 'w'},
 	{"groups", required_argument, NULL, OPT_GROUPS},
 	{"batch", required_argument, NULL, OPT_BATCH},
+	{"fetch", required_argument, NULL, OPT_FETCH},
+	{"regenerate", no_argument, NULL, OPT_REGENERATE},
 	{"queues", required_argument, NULL, OPT_QUEUES},
 	{"scene", required_argument, NULL, 's'},
 	{"output", required_argument, NULL, 'o'},
@@ -114,6 +118,15 @@ static void print_help_after_kernels(FILE *out)
 		"      --batch N          pixels a work-item of the persistent kernel fetches\n"
 		"                         at a time (default 1); the image's pixels plus N per\n"
 		"                         work-item must stay below 2^32\n"
+		"      --fetch item|group|subgroup  how a work-item of the persistent kernel\n"
+		"                         takes its pixels: an atomic of its own (item, the\n"
+		"                         default), from its work-group's block in local\n"
+		"                         memory (group), or with one atomic for its warp's\n"
+		"                         active lanes (subgroup; NVIDIA compute capability\n"
+		"                         7.0 or more, elsewhere each work-item fetches alone)\n"
+		"      --regenerate       path regeneration in the persistent kernel (the path\n"
+		"                         integrator): a work-item whose path ended starts the\n"
+		"                         next at once, so a warp's lanes step together\n"
 		"      --queues N         in-order queues a device renders with, 1 to 4: the\n"
 		"                         image's columns in N parts whose launches alternate,\n"
 		"                         so that one fills the device while another ends\n"
@@ -287,7 +300,8 @@ static void print_help_after_kernels(FILE *out)
 		"  POCL_CACHE_DIR=DIR       PoCL's kernel cache; PoCL finds no device unless it\n"
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"An option that sets something the run does not have is refused, naming what\n"
-		"it needs: --groups with -k naive, --batch without -k persistent, --queues\n"
+		"it needs: --groups with -k naive, --batch, --fetch or --regenerate without\n"
+		"-k persistent (--regenerate also without the path integrator), --queues\n"
 		"with serial, wavefront or reference, --work-map-scale without a --work-map\n"
 		"picture, --split without --devices or --mpi.\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
@@ -564,6 +578,21 @@ static int parse_choice(const char *option, const char *text, const char *first,
 	return 0;
 }
 
+/* --fetch item|group|subgroup into *fetch (enum fetch). */
+static int parse_fetch(const char *text, int *fetch, char *err, size_t err_size)
+{
+	static const enum fetch choices[] = {FETCH_ITEM, FETCH_GROUP, FETCH_SUBGROUP};
+
+	for (size_t i = 0; i < sizeof(choices) / sizeof(choices[0]); i++)
+		if (strcmp(text, fetch_name(choices[i])) == 0) {
+			*fetch = choices[i];
+			return 0;
+		}
+	snprintf(err, err_size, "--fetch: expected item, group or subgroup, got \"%s\"",
+		 quote_text(text));
+	return -1;
+}
+
 /* --split dynamic|static|samples into *split (enum split). */
 static int parse_split(const char *text, int *split, char *err, size_t err_size)
 {
@@ -680,6 +709,12 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_BATCH:
 		o->batch_given = 1;
 		return parse_bounded("--batch", arg, 1, 4096, &o->batch, err, err_size);
+	case OPT_FETCH:
+		o->fetch_given = 1;
+		return parse_fetch(arg, &o->fetch, err, err_size);
+	case OPT_REGENERATE:
+		o->regenerate = 1;
+		return 0;
 	case OPT_QUEUES:
 		return parse_bounded("--queues", arg, 1, RENDER_MAX_QUEUES, &o->queues, err,
 				     err_size);
@@ -1000,6 +1035,13 @@ static int check_kernel_options(const struct options *o, char *err, size_t err_s
 			 "--batch sets the pixels a work-item of -k persistent fetches at a "
 			 "time; it does not apply to -k %s",
 			 o->kernel);
+		return -1;
+	}
+	if ((o->fetch_given || o->regenerate) && !(k && k->pixel_counter)) {
+		snprintf(err, err_size,
+			 "%s sets how the work-items of -k persistent take their work; it does "
+			 "not apply to -k %s",
+			 o->regenerate ? "--regenerate" : "--fetch", o->kernel);
 		return -1;
 	}
 	if (o->queues > 0 && !(k && !k->single_item && !k->multi_pass)) {

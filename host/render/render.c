@@ -22,6 +22,11 @@ const char *accel_name(int accel)
 	return accel == ACCEL_BVH ? "bvh" : accel == ACCEL_BVH_COMPACT ? "bvh-compact" : "none";
 }
 
+const char *fetch_name(int fetch)
+{
+	return fetch == FETCH_GROUP ? "group" : fetch == FETCH_SUBGROUP ? "subgroup" : "item";
+}
+
 const struct kernel_info render_kernels[] = {
 	{"serial", "one work-item renders every pixel in row-major order", 0, 1, 0, 0, 0,
 	 &singlepass_ops},
@@ -50,8 +55,16 @@ const struct kernel_info *render_find_kernel(const char *name)
 int render_check_integrator(const struct scene *scene, const struct render_settings *s,
 			    char *err, size_t err_size)
 {
-	/* Every kernel and the reference render both integrators. */
-	(void)scene, (void)s, (void)err, (void)err_size;
+	/* Every kernel and the reference render both integrators; path
+	 * regeneration is the path integrator's (docs/wavefront.md: a ray tree
+	 * regenerated per pixel lost to coherence, performance.md step 4). */
+	if (s->regenerate && scene->integrator != SCENE_INTEGRATOR_PATH) {
+		snprintf(err, err_size,
+			 "--regenerate restarts paths of the path integrator; this render is "
+			 "Whitted's (give --integrator path or a scene with \"integrator\": "
+			 "\"path\")");
+		return -1;
+	}
 	return 0;
 }
 

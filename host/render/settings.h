@@ -39,6 +39,17 @@ enum accel {
 /* The --accel word of an enum accel: "none", "bvh", "bvh-compact". */
 const char *accel_name(int accel);
 
+/* --fetch: how a work-item of the persistent kernel takes its pixels from
+ * the global counter (cl/persistent.cl). */
+enum fetch {
+	FETCH_ITEM,	/* an atomic of its own */
+	FETCH_GROUP,	/* from its work-group's block in __local memory */
+	FETCH_SUBGROUP, /* one atomic for the active lanes of its warp */
+};
+
+/* The --fetch word of an enum fetch: "item", "group", "subgroup". */
+const char *fetch_name(int fetch);
+
 /* --checkpoint: every `seconds` of a render's passes, the image of the
  * samples done so far (the mean of every pixel's first `samples`) goes to
  * write(context, ...), which returns 0, or -1 with one message in err (the
@@ -61,6 +72,8 @@ struct render_settings {
 	int repeat;		/* timed frames */
 	int warm_up;		/* one untimed launch first (-r given) */
 	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
+	int fetch;		/* enum fetch: how its work-items fetch (--fetch) */
+	int regenerate;		/* its paths regenerated (--regenerate, RTCL_REGENERATE) */
 	int queues;		/* in-order queues per device (--queues; 0: the
 				   default, renderer_queues()) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
@@ -136,6 +149,10 @@ struct render_result {
 	int vertex_count; /* the triangles' distinct vertices (host/layout/mesh_block.h) */
 	char build_options[BUILD_OPTIONS_SIZE];
 	int build_cached; /* the program came from rtcl's cache (progcache.h) */
+	int fetch_lanes;  /* the persistent kernel's work-items one fetch from the
+			     global counter serves at most (settings.fetch): 1 for
+			     item, the work-group's for group, the warp's (32) for
+			     subgroup where the device has warp primitives, else 1 */
 	int queues;	  /* the most in-order queues a piece rendered with
 			     (renderer_all_samples) */
 

@@ -258,6 +258,12 @@ json_t *report_document(const struct job *job, const struct record *record)
 	if (!doc)
 		return NULL;
 	json_object_set_new(doc, "time_breakdown_ms", times_document(record));
+	if (job->settings.kernel && job->settings.kernel->pixel_counter) {
+		/* How the persistent kernel's work-items took their work. */
+		json_object_set_new(doc, "regenerate", json_boolean(job->settings.regenerate));
+		json_object_set_new(doc, "fetch", json_string(fetch_name(job->settings.fetch)));
+		json_object_set_new(doc, "fetch_lanes", json_integer(record->result.fetch_lanes));
+	}
 	json_object_set_new(doc, "build_cached", json_boolean(record->result.build_cached));
 	if (record->device.on_device)
 		json_object_set_new(doc, "queues", json_integer(record->result.queues));
