@@ -15,6 +15,7 @@
 #include "render/renderer.h"
 #include "render/singlepass.h"
 #include "base/timing.h"
+#include "render/stages.h"
 #include "render/wavefront.h"
 
 const char *accel_name(int accel)
@@ -50,8 +51,15 @@ const struct kernel_info *render_find_kernel(const char *name)
 int render_check_integrator(const struct scene *scene, const struct render_settings *s,
 			    char *err, size_t err_size)
 {
-	/* Every kernel and the reference render both integrators. */
-	(void)scene, (void)s, (void)err, (void)err_size;
+	/* Every kernel and the reference render both integrators; the
+	 * wavefront's stages form only paths. */
+	if (s->wavefront_stages && scene->integrator != SCENE_INTEGRATOR_PATH) {
+		snprintf(err, err_size,
+			 "--wavefront-form stages splits the paths of the path integrator in "
+			 "stages; this render uses the Whitted integrator (give --integrator path, "
+			 "or leave --wavefront-form out)");
+		return -1;
+	}
 	return 0;
 }
 
@@ -223,6 +231,8 @@ void render_result_free(struct render_result *res)
 	free(res->write_counts);
 	free(res->schedule);
 	free(res->pieces);
+	stages_stats_free(res->stages);
+	res->stages = NULL;
 	res->pieces = NULL;
 	res->piece_count = 0;
 	res->pixel_flops = NULL;
