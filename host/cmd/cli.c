@@ -1033,9 +1033,10 @@ static int check_kernel_options(const struct options *o, char *err, size_t err_s
 	if (o->paths_in_flight > 0 && !o->wavefront_stages) {
 		snprintf(err, err_size,
 			 "--paths-in-flight sets the pool of paths of -k wavefront "
-			 "--wavefront-form stages; it does not apply to %s",
+			 "--wavefront-form stages; it does not apply to %s%s",
+			 k && k->multi_pass ? "" : "-k ",
 			 k && k->multi_pass ? "the bounce form (give --wavefront-form stages)"
-					    : "this kernel");
+					    : o->kernel);
 		return -1;
 	}
 	if (o->queues > 0 && !(k && !k->single_item && !k->multi_pass)) {

@@ -53,11 +53,12 @@ int render_check_integrator(const struct scene *scene, const struct render_setti
 {
 	/* Every kernel and the reference render both integrators; the
 	 * wavefront's stages form only paths. */
-	if (s->wavefront_stages && scene->integrator != SCENE_INTEGRATOR_PATH) {
+	if ((s->wavefront_stages || s->wavefront_form_given) &&
+	    scene->integrator != SCENE_INTEGRATOR_PATH) {
 		snprintf(err, err_size,
-			 "--wavefront-form stages splits the paths of the path integrator in "
-			 "stages; this render uses the Whitted integrator (give --integrator path, "
-			 "or leave --wavefront-form out)");
+			 "--wavefront-form chooses how -k wavefront splits the paths of the path "
+			 "integrator; this render uses the Whitted integrator (give --integrator "
+			 "path, or leave --wavefront-form out)");
 		return -1;
 	}
 	return 0;

@@ -64,6 +64,7 @@ struct render_settings {
 	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
 	int wavefront_stages;	/* --wavefront-form stages: the wavefront under the
 				   path integrator in stages (host/render/stages.c) */
+	int wavefront_form_given; /* --wavefront-form given: the path integrator only */
 	int paths_in_flight;	/* its pool of path slots (0: STAGES_DEFAULT_PATHS) */
 	int queues;		/* in-order queues per device (--queues; 0: the
 				   default, renderer_queues()) */

@@ -274,7 +274,7 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 		status = set_args(w->kernels[STAGE_BEGIN], args, sizes, 5);
 	}
 	if (status == CL_SUCCESS)
-		status = enqueue(r, w, STAGE_BEGIN, 0, global2, 0, ms);
+		status = enqueue(r, w, STAGE_BEGIN, 0, global2, per_sample, ms);
 	if (status == CL_SUCCESS)
 		status = zero_counts(dev, w, 0, RT_STAGE_QUEUES);
 	while (status == CL_SUCCESS) {
@@ -378,7 +378,7 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 		status = set_args(w->kernels[STAGE_FINISH], args, sizes, 8);
 	}
 	if (status == CL_SUCCESS)
-		status = enqueue(r, w, STAGE_FINISH, 0, global2, 0, ms);
+		status = enqueue(r, w, STAGE_FINISH, 0, global2, per_sample, ms);
 	if (status == CL_SUCCESS)
 		status = clFinish(dev->queue);
 	if (status == CL_SUCCESS)
