@@ -438,22 +438,43 @@ __kernel void stages_logic(__global const uint4 *scene_global, __local uint4 *sc
 	store_counts(&tr, global_item());
 }
 
-/* stages_new_path: one work-item per free slot taken, `count` of them:
- * the j-th takes path `first` + j of the piece's, numbered sample by
+/* The queue kernels below take the items of their queue j = get_global_id(0),
+ * j + get_global_size(0), ... below their count: the host launches either
+ * exactly the count it read (one item each) or a grid that fills the device
+ * (RTCL_STAGES_LAUNCH=device, docs/wavefront.md), whose work-items read the
+ * count on the device. Each item's flops go to its path's pixel. `limit`
+ * caps the count (the host's, or UINT_MAX). */
+static inline uint stage_count(__global const uint *counts, int q, uint limit)
+{
+	return min(counts[q], limit);
+}
+
+/* The paths of the piece handed out so far: a 64-bit word after the
+ * queue counters. */
+static inline __global ulong *stage_handed_out(__global uint *counts)
+{
+	return (__global ulong *)(counts + RT_STAGE_QUEUES);
+}
+
+/* stages_new_path: over the free queue, as many as paths remain of the
+ * piece's `total`: the j-th takes path handed_out + j, numbered sample by
  * sample and, within a sample, pixel by pixel in the piece's order. */
 __kernel void stages_new_path(__global const uint4 *scene_global, __local uint4 *scene_local,
 			      __global float4 *state, uint slots, __global uint *queues,
-			      __global uint *counts, uint count, ulong first,
+			      __global uint *counts, uint limit, ulong total,
 			      struct rt_piece piece, __global ulong *item_counts,
 			      __global ulong *pixel_flops)
 {
 	struct tracer tr;
-	uint j = get_global_id(0);
+	ulong first = *stage_handed_out(counts);
+	ulong left = total - first;
+	uint count = (uint)min((ulong)stage_count(counts, RT_STAGE_QUEUE_NEW, limit), left);
+	ulong per_sample = (ulong)piece.width * (ulong)piece.height;
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
-	if (j < count) {
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
 		uint slot = stage_queued(queues, slots, RT_STAGE_QUEUE_NEW, j);
-		ulong per_sample = (ulong)piece.width * (ulong)piece.height;
 		ulong n = first + j;
 		int k = piece.sample_begin + (int)(n / per_sample);
 		int r = (int)(n % per_sample);
@@ -469,22 +490,33 @@ __kernel void stages_new_path(__global const uint4 *scene_global, __local uint4 
 			       (int4)(pixel, k, w.vertex,
 				      RT_PATH_LIVE | (w.specular ? RT_PATH_SPECULAR : 0)));
 		stage_push(queues, counts, slots, RT_STAGE_QUEUE_EXTEND, slot);
-		add_pixel_flops(pixel_flops, pixel, tracer_flops(&tr));
+		add_pixel_flops(pixel_flops, pixel, tracer_flops(&tr) - before);
 	}
 	store_counts(&tr, global_item());
 }
 
-/* A shade kernel: one work-item per slot of kind's queue, `count` of them. */
+/* One work-item, after stages_new_path: the paths it took counted as
+ * handed out. */
+__kernel void stages_advance(__global uint *counts, ulong total)
+{
+	__global ulong *handed_out = stage_handed_out(counts);
+
+	if (get_global_id(0) == 0)
+		*handed_out += min((ulong)counts[RT_STAGE_QUEUE_NEW], total - *handed_out);
+}
+
+/* A shade kernel: over the queue of kind's hits. */
 static void stages_shade(__global const uint4 *scene_global, __local uint4 *scene_local,
 			 __global float4 *state, uint slots, __global uint *queues,
-			 __global uint *counts, uint count, uint samples,
+			 __global uint *counts, uint limit, uint samples,
 			 __global ulong *item_counts, __global ulong *pixel_flops, int kind)
 {
 	struct tracer tr;
-	uint j = get_global_id(0);
+	uint count = stage_count(counts, RT_STAGE_QUEUE_SHADE(kind), limit);
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
-	if (j < count) {
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
 		uint i = stage_queued(queues, slots, RT_STAGE_QUEUE_SHADE(kind), j);
 		int4 path = stage_path(state, slots, i);
 		struct walk w = stage_load_walk(state, slots, i, path);
@@ -513,7 +545,7 @@ static void stages_shade(__global const uint4 *scene_global, __local uint4 *scen
 		path.w = (int)(RT_PATH_LIVE | (w.specular ? RT_PATH_SPECULAR : 0) |
 			       (w.shadow ? RT_PATH_SHADOW : 0) | (done ? RT_PATH_DONE : 0));
 		stage_set_path(state, slots, i, path);
-		add_pixel_flops(pixel_flops, path.x, tracer_flops(&tr));
+		add_pixel_flops(pixel_flops, path.x, tracer_flops(&tr) - before);
 	}
 	store_counts(&tr, global_item());
 }
@@ -521,10 +553,10 @@ static void stages_shade(__global const uint4 *scene_global, __local uint4 *scen
 #define STAGES_SHADE_KERNEL(name, kind)                                                            \
 	__kernel void name(__global const uint4 *scene_global, __local uint4 *scene_local,         \
 			   __global float4 *state, uint slots, __global uint *queues,              \
-			   __global uint *counts, uint count, uint samples,                        \
+			   __global uint *counts, uint limit, uint samples,                        \
 			   __global ulong *item_counts, __global ulong *pixel_flops)               \
 	{                                                                                          \
-		stages_shade(scene_global, scene_local, state, slots, queues, counts, count,       \
+		stages_shade(scene_global, scene_local, state, slots, queues, counts, limit,       \
 			     samples, item_counts, pixel_flops, kind);                             \
 	}
 
@@ -534,20 +566,20 @@ STAGES_SHADE_KERNEL(stages_shade_conductor, RT_BSDF_CONDUCTOR)
 STAGES_SHADE_KERNEL(stages_shade_dielectric, RT_BSDF_DIELECTRIC)
 STAGES_SHADE_KERNEL(stages_shade_principled, RT_BSDF_PRINCIPLED)
 
-/* stages_extend: one work-item per queued segment, as many as the queue's
- * counter says (the launch covers at most that many: the host knows only
- * a bound). Its hit goes to RT_STAGE_HIT and the first two ints of
- * RT_STAGE_HIT_PRIM. */
+/* stages_extend: over the extension queue (the host knows only a bound on
+ * its length: the work-items read it on the device). Its hit goes to
+ * RT_STAGE_HIT and the first two ints of RT_STAGE_HIT_PRIM. */
 __kernel void stages_extend(__global const uint4 *scene_global, __local uint4 *scene_local,
 			    __global float4 *state, uint slots, __global const uint *queues,
 			    __global const uint *counts, __global ulong *item_counts,
 			    __global ulong *pixel_flops)
 {
 	struct tracer tr;
-	uint j = get_global_id(0);
+	uint count = counts[RT_STAGE_QUEUE_EXTEND];
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
-	if (j < counts[RT_STAGE_QUEUE_EXTEND]) {
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
 		uint i = stage_queued(queues, slots, RT_STAGE_QUEUE_EXTEND, j);
 		struct walk w;
 
@@ -559,24 +591,29 @@ __kernel void stages_extend(__global const uint4 *scene_global, __local uint4 *s
 		vstore2((int2)(hit.sphere, hit.plane), 0,
 			(__global int *)(stage_field(state, slots, RT_STAGE_HIT_PRIM) + i));
 #ifdef RTCL_COUNT_FLOPS
-		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x, tracer_flops(&tr));
+		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x,
+				tracer_flops(&tr) - before);
+#else
+		(void)before;
 #endif
 	}
 	store_counts(&tr, global_item());
 }
 
-/* stages_shadow: one work-item per queued shadow ray, as stages_extend;
- * whether it is clear goes to RT_STAGE_HIT_PRIM's third int. */
+/* stages_shadow: over the shadow queue, as stages_extend; whether the ray
+ * is clear goes to RT_STAGE_HIT_PRIM's third int (after stages_extend
+ * wrote the first two for the same slot: the launches are in order). */
 __kernel void stages_shadow(__global const uint4 *scene_global, __local uint4 *scene_local,
 			    __global float4 *state, uint slots, __global const uint *queues,
 			    __global const uint *counts, __global ulong *item_counts,
 			    __global ulong *pixel_flops)
 {
 	struct tracer tr;
-	uint j = get_global_id(0);
+	uint count = counts[RT_STAGE_QUEUE_SHADOW];
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
-	if (j < counts[RT_STAGE_QUEUE_SHADOW]) {
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
 		uint i = stage_queued(queues, slots, RT_STAGE_QUEUE_SHADOW, j);
 		float4 origin = stage_field(state, slots, RT_STAGE_SHADOW_O)[i];
 		float4 dir = stage_field(state, slots, RT_STAGE_SHADOW_D)[i];
@@ -590,7 +627,10 @@ __kernel void stages_shadow(__global const uint4 *scene_global, __local uint4 *s
 		((__global int *)(stage_field(state, slots, RT_STAGE_HIT_PRIM) + i))[2] =
 			path_shadow_clear(&tr, &w);
 #ifdef RTCL_COUNT_FLOPS
-		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x, tracer_flops(&tr));
+		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x,
+				tracer_flops(&tr) - before);
+#else
+		(void)before;
 #endif
 	}
 	store_counts(&tr, global_item());

@@ -33,12 +33,12 @@ def render(tmp_path, name, scene, *args, env=None):
     return out.read_bytes()
 
 
-def same_as_dynamic(tmp_path, scene, size, spp, pools):
+def same_as_dynamic(tmp_path, scene, size, spp, pools, env=None):
     dynamic = render(tmp_path, "dynamic", scene, "-k", "dynamic", "--size", size, "--spp", spp)
     for pool in pools:
         pool_args = ["--paths-in-flight", pool] if pool else []
         stages = render(tmp_path, f"stages{pool}", scene, *STAGES, *pool_args, "--size", size,
-                        "--spp", spp)
+                        "--spp", spp, env=env)
         assert stages == dynamic, f"{scene.name} {size} {spp} spp, {pool} paths in flight"
 
 
@@ -49,9 +49,10 @@ def test_the_box_is_the_dynamic_kernels_image(tmp_path, spp):
     same_as_dynamic(tmp_path, BOX, "20x20", spp, [17, None])
 
 
-def test_the_studio_is_the_dynamic_kernels_image(tmp_path):
-    # Every BSDF kind's shade kernel but the conductor's, textures, a sky.
-    same_as_dynamic(tmp_path, STUDIO, "24x16", 3, [61])
+@pytest.mark.parametrize("launch", ["sync", "device"])
+def test_the_studio_is_the_dynamic_kernels_image(tmp_path, launch):
+    # Every BSDF kind's shade kernel, textures, a sky.
+    same_as_dynamic(tmp_path, STUDIO, "24x16", 3, [61], env={"RTCL_STAGES_LAUNCH": launch})
 
 
 @pytest.mark.slow
@@ -73,19 +74,23 @@ def test_shares_of_the_samples_over_two_devices_give_the_same_image(tmp_path):
         assert stages == dynamic, split
 
 
-def counted(tmp_path, name, scene, *args):
+def counted(tmp_path, name, scene, *args, env=None):
     stats = tmp_path / f"{name}.json"
     render(tmp_path, name, scene, *args, "--stats", stats, "--work-map",
-           tmp_path / f"{name}.npy", "--flops", tmp_path / f"{name}_items.npy")
+           tmp_path / f"{name}.npy", "--flops", tmp_path / f"{name}_items.npy", env=env)
     return (json.loads(stats.read_text()), np.load(tmp_path / f"{name}.npy"),
             np.load(tmp_path / f"{name}_items.npy"))
 
 
-def test_flops_rays_and_work_map_are_the_dynamic_kernels(tmp_path):
+@pytest.mark.parametrize("launch", ["sync", "device"])
+def test_flops_rays_and_work_map_are_the_dynamic_kernels(tmp_path, launch):
+    # RTCL_STAGES_LAUNCH=device: every queue launch fills the device and its
+    # work-items read their queue's length there (docs/wavefront.md).
     size = ["--size", "12x10", "--spp", 3]
     d_stats, d_map, d_items = counted(tmp_path, "dynamic", STUDIO, "-k", "dynamic", *size)
     s_stats, s_map, s_items = counted(tmp_path, "stages", STUDIO, *STAGES,
-                                      "--paths-in-flight", 29, *size)
+                                      "--paths-in-flight", 29, *size,
+                                      env={"RTCL_STAGES_LAUNCH": launch})
     assert d_stats["total_flops"] > 0
     assert s_stats["total_flops"] == d_stats["total_flops"]
     assert s_stats["rays"] == d_stats["rays"]
@@ -95,10 +100,11 @@ def test_flops_rays_and_work_map_are_the_dynamic_kernels(tmp_path):
     assert s_items.shape[1] > d_items.shape[1]
 
 
-def test_stats_report_the_kernels_and_the_live_paths(tmp_path):
+@pytest.mark.parametrize("launch", ["sync", "device"])
+def test_stats_report_the_kernels_and_the_live_paths(tmp_path, launch):
     stats_file = tmp_path / "s.json"
     render(tmp_path, "s", BOX, *STAGES, "--paths-in-flight", 50, "--size", "10x8", "--spp", 2,
-           "--stats", stats_file)
+           "--stats", stats_file, env={"RTCL_STAGES_LAUNCH": launch})
     doc = json.loads(stats_file.read_text())
     st = doc["wavefront_stages"]
     k = st["kernels"]
@@ -117,6 +123,7 @@ def test_stats_report_the_kernels_and_the_live_paths(tmp_path):
     assert k["extend"]["items"] == sum(st["extension_rays"])
     assert k["logic"]["items"] == 50 * k["logic"]["launches"]
     assert k["begin"]["launches"] == k["finish"]["launches"] == 1
+    assert k["advance"]["launches"] == k["new_path"]["launches"]
     assert st["state_bytes"] == sum(v["state_bytes"] for v in k.values())
     for name, kernel in k.items():
         assert kernel["kernel_ms"] >= 0, name

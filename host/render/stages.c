@@ -29,13 +29,13 @@
 #include "render/stages.h"
 
 static const char *const kernel_names[STAGE_COUNT] = {
-	"stages_begin",		   "stages_logic",	     "stages_new_path",
+	"stages_begin",		   "stages_logic",	     "stages_new_path",	 "stages_advance",
 	"stages_shade_mapped",	   "stages_shade_diffuse",   "stages_shade_conductor",
 	"stages_shade_dielectric", "stages_shade_principled", "stages_extend",
 	"stages_shadow",	   "stages_finish"};
 
-/* The launches of one iteration whose times are read at its counter read. */
-#define STAGES_PENDING (STAGE_COUNT + 2)
+/* Launches whose times are not read yet: two iterations' and more. */
+#define STAGES_PENDING 64
 
 struct stages {
 	struct render_buffers b; /* b.item_flops: every launch's work-items, appended */
@@ -46,6 +46,11 @@ struct stages {
 	size_t item_capacity; /* work-items whose counts item_counts holds */
 	size_t item_alloc;    /* b.item_flops' room */
 	size_t local_bytes;   /* the scene's __local argument */
+	int device_sizes;     /* RTCL_STAGES_LAUNCH=device: the queue launches
+				 each over `fill` work-items that read their
+				 counts on the device; the host reads the counters
+				 without waiting, to know when the piece is done */
+	size_t fill;	      /* work-items that fill the device */
 	cl_event pending[STAGES_PENDING];
 	enum stage pending_stage[STAGES_PENDING];
 	int pending_count;
@@ -55,7 +60,7 @@ struct stages {
 const char *stages_name(enum stage stage)
 {
 	static const char *const names[STAGE_COUNT] = {
-		"begin",	    "logic",	      "new_path",	  "shade_mapped",
+		"begin",	    "logic",	      "new_path",	  "advance", "shade_mapped",
 		"shade_diffuse",    "shade_conductor", "shade_dielectric", "shade_principled",
 		"extend",	    "shadow",	      "finish"};
 
@@ -74,6 +79,7 @@ int stages_item_bytes(enum stage stage)
 	case STAGE_SHADOW: /* its slot; 3 words; the answer */
 		return 4 + 3 * 16 + 4;
 	case STAGE_BEGIN:
+	case STAGE_ADVANCE:
 	case STAGE_FINISH:
 	case STAGE_COUNT:
 		return 0;
@@ -129,13 +135,14 @@ static cl_int append_counts(struct device *dev, struct stages *w, size_t items)
 	return status;
 }
 
-/* Reads the profiled times of the launches enqueued since the last read
- * (done: the queue is in order and the caller waited on a later command). */
-static cl_int collect_times(struct stages *w, double *ms)
+/* Reads the profiled times of the first `upto` launches pending, which
+ * are done (the queue is in order and the caller waited on a later
+ * command), and drops them from the list. */
+static cl_int collect_times(struct stages *w, double *ms, int upto)
 {
 	cl_int status = CL_SUCCESS;
 
-	for (int i = 0; i < w->pending_count; i++) {
+	for (int i = 0; i < upto; i++) {
 		struct launch_span span = {0, 0};
 		if (status == CL_SUCCESS)
 			status = launch_event_span(w->pending[i], &span);
@@ -144,7 +151,10 @@ static cl_int collect_times(struct stages *w, double *ms)
 		w->stats->ms[w->pending_stage[i]] += t;
 		clReleaseEvent(w->pending[i]);
 	}
-	w->pending_count = 0;
+	memmove(w->pending, w->pending + upto, (size_t)(w->pending_count - upto) * sizeof(cl_event));
+	memmove(w->pending_stage, w->pending_stage + upto,
+		(size_t)(w->pending_count - upto) * sizeof(enum stage));
+	w->pending_count -= upto;
 	return status;
 }
 
@@ -162,7 +172,7 @@ static cl_int enqueue(struct renderer *r, struct stages *w, enum stage stage, si
 	if (w->pending_count == STAGES_PENDING) {
 		status = clFinish(dev->queue);
 		if (status == CL_SUCCESS)
-			status = collect_times(w, ms);
+			status = collect_times(w, ms, w->pending_count);
 		if (status != CL_SUCCESS)
 			return status;
 	}
@@ -178,8 +188,9 @@ static cl_int enqueue(struct renderer *r, struct stages *w, enum stage stage, si
 	w->pending_stage[w->pending_count++] = stage;
 	w->stats->launches[stage]++;
 	w->stats->items[stage] += busy;
-	w->stats->state_bytes[stage] += busy * (uint64_t)stages_item_bytes(stage);
-	if (r->settings->count_flops) {
+	/* The advance kernel counts nothing: its one work-item is not in the
+	   --flops array. */
+	if (r->settings->count_flops && stage != STAGE_ADVANCE) {
 		status = clFinish(dev->queue);
 		if (status == CL_SUCCESS)
 			status = append_counts(dev, w, global2 ? global2[0] * global2[1] : global);
@@ -243,6 +254,116 @@ static int record_iteration(struct stages_stats *st, uint32_t live, uint32_t sta
 	return st->iterations++;
 }
 
+/* What the host learns at the read after an iteration's logic kernel:
+ * the counters, and the paths of the piece handed out before it. */
+struct stage_read {
+	cl_uint counts[RT_STAGE_QUEUES];
+	cl_ulong handed_out;
+};
+
+/* Takes in an iteration's read: its figures, and the paths its new-path
+ * launch starts (*started); returns whether the piece is done (every path
+ * handed out, none left to shade). */
+static int take_read(struct stages *w, const struct stage_read *read, uint64_t total,
+		     int *recorded, cl_uint *started)
+{
+	struct stages_stats *st = w->stats;
+	uint64_t live = 0;
+
+	for (int k = 0; k < RT_STAGE_KINDS; k++) {
+		live += read->counts[RT_STAGE_QUEUE_SHADE(k)];
+		st->items[STAGE_SHADE_MAPPED + k] += read->counts[RT_STAGE_QUEUE_SHADE(k)];
+	}
+	/* the segments and shadow rays of the iteration before */
+	st->items[STAGE_EXTEND] += read->counts[RT_STAGE_QUEUE_EXTEND];
+	st->items[STAGE_SHADOW] += read->counts[RT_STAGE_QUEUE_SHADOW];
+	if (*recorded >= 0) {
+		st->extended[*recorded] = read->counts[RT_STAGE_QUEUE_EXTEND];
+		st->shadowed[*recorded] = read->counts[RT_STAGE_QUEUE_SHADOW];
+	}
+	uint64_t left = total - read->handed_out;
+	*started = read->counts[RT_STAGE_QUEUE_NEW] < left ? read->counts[RT_STAGE_QUEUE_NEW]
+							    : (cl_uint)left;
+	st->items[STAGE_NEW_PATH] += *started;
+	if (left == 0 && live == 0)
+		return 1;
+	*recorded = record_iteration(st, (uint32_t)live, *started);
+	return 0;
+}
+
+/* Sets a queue kernel's arguments after the common ones. */
+static cl_int set_rest(cl_kernel kernel, const void *const *values, const size_t *sizes,
+		       cl_uint count)
+{
+	cl_int status = CL_SUCCESS;
+
+	for (cl_uint i = 0; status == CL_SUCCESS && i < count; i++)
+		status = clSetKernelArg(kernel, 6 + i, sizes[i], values[i]);
+	return status;
+}
+
+/* Enqueues the launches of an iteration after its read: with the read's
+ * counts (read != NULL: exact sizes, or bounds for the rays), or each over
+ * the grid that fills the device, its work-items reading the counts. */
+static cl_int enqueue_queues(struct renderer *r, struct stages *w, const struct stage_read *read,
+			     cl_uint started, const struct rt_piece *launched, cl_ulong total,
+			     double *ms)
+{
+	cl_uint samples = (cl_uint)launched->samples, unlimited = 0xffffffffu;
+	uint64_t live = 0;
+	cl_int status = zero_counts(r->dev, w, RT_STAGE_QUEUE_EXTEND, 2);
+
+	if (read)
+		for (int k = 0; k < RT_STAGE_KINDS; k++)
+			live += read->counts[RT_STAGE_QUEUE_SHADE(k)];
+	if (status == CL_SUCCESS && (!read || started > 0)) {
+		cl_uint limit = read ? started : unlimited;
+		const void *args[] = {&limit, &total, launched, &w->item_counts, &w->b.flops};
+		const size_t sizes[] = {sizeof(cl_uint), sizeof(cl_ulong), sizeof(*launched),
+					sizeof(cl_mem), sizeof(cl_mem)};
+		status = set_common(w, w->kernels[STAGE_NEW_PATH]);
+		if (status == CL_SUCCESS)
+			status = set_rest(w->kernels[STAGE_NEW_PATH], args, sizes, 5);
+		if (status == CL_SUCCESS)
+			status = enqueue(r, w, STAGE_NEW_PATH, read ? started : w->fill, NULL, 0, ms);
+		if (status == CL_SUCCESS)
+			status = clSetKernelArg(w->kernels[STAGE_ADVANCE], 1, sizeof(total), &total);
+		if (status == CL_SUCCESS)
+			status = enqueue(r, w, STAGE_ADVANCE, 1, NULL, 0, ms);
+	}
+	for (int k = 0; status == CL_SUCCESS && k < RT_STAGE_KINDS; k++) {
+		cl_uint count = read ? read->counts[RT_STAGE_QUEUE_SHADE(k)] : unlimited;
+		cl_kernel kernel = w->kernels[STAGE_SHADE_MAPPED + k];
+		const void *args[] = {&count, &samples, &w->item_counts, &w->b.flops};
+		const size_t sizes[] = {sizeof(cl_uint), sizeof(cl_uint), sizeof(cl_mem),
+					sizeof(cl_mem)};
+		if (count == 0)
+			continue;
+		status = set_common(w, kernel);
+		if (status == CL_SUCCESS)
+			status = set_rest(kernel, args, sizes, 4);
+		if (status == CL_SUCCESS)
+			status = enqueue(r, w, (enum stage)(STAGE_SHADE_MAPPED + k),
+					 read ? count : w->fill, NULL, 0, ms);
+	}
+	/* At most one segment per path started or shaded, one shadow ray per
+	 * path shaded. */
+	size_t bounds[2] = {read ? started + live : w->fill, read ? live : w->fill};
+	for (int s = 0; status == CL_SUCCESS && s < 2; s++) {
+		enum stage stage = s ? STAGE_SHADOW : STAGE_EXTEND;
+		const void *args[] = {&w->item_counts, &w->b.flops};
+		const size_t sizes[] = {sizeof(cl_mem), sizeof(cl_mem)};
+		if (bounds[s] == 0)
+			continue;
+		status = set_common(w, w->kernels[stage]);
+		if (status == CL_SUCCESS)
+			status = set_rest(w->kernels[stage], args, sizes, 2);
+		if (status == CL_SUCCESS)
+			status = enqueue(r, w, stage, bounds[s], NULL, 0, ms);
+	}
+	return status;
+}
+
 /* The loop over one piece's paths. */
 static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_piece *piece,
 			  double *ms, int *launches)
@@ -251,8 +372,7 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 	struct rt_piece launched = renderer_launch_piece(piece);
 	cl_uint samples = (cl_uint)piece->samples;
 	uint64_t per_sample = (uint64_t)piece->width * (uint64_t)piece->height;
-	uint64_t total = per_sample * (uint64_t)(piece->sample_end - piece->sample_begin);
-	uint64_t issued = 0, done = 0;
+	cl_ulong total = per_sample * (uint64_t)(piece->sample_end - piece->sample_begin);
 	size_t global2[2];
 	int recorded = -1; /* the index of the last iteration's figures */
 	int before = 0;
@@ -275,10 +395,13 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 	}
 	if (status == CL_SUCCESS)
 		status = enqueue(r, w, STAGE_BEGIN, 0, global2, per_sample, ms);
-	if (status == CL_SUCCESS)
-		status = zero_counts(dev, w, 0, RT_STAGE_QUEUES);
+	if (status == CL_SUCCESS) /* the counters and the paths handed out */
+		status = zero_counts(dev, w, 0, RT_STAGE_QUEUES + 2);
 	while (status == CL_SUCCESS) {
-		cl_uint counts[RT_STAGE_QUEUES];
+		struct stage_read read;
+		cl_event read_done = NULL;
+		cl_uint started = 0;
+		int done = 0;
 
 		status = zero_counts(dev, w, 0, RT_STAGE_QUEUE_EXTEND);
 		if (status == CL_SUCCESS)
@@ -288,86 +411,38 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 					      &w->b.flops, &samples};
 			const size_t sizes[] = {sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),
 						sizeof(cl_mem), sizeof(cl_uint)};
-			for (cl_uint i = 0; status == CL_SUCCESS && i < 5; i++)
-				status = clSetKernelArg(w->kernels[STAGE_LOGIC], 6 + i, sizes[i],
-							args[i]);
+			status = set_rest(w->kernels[STAGE_LOGIC], args, sizes, 5);
 		}
 		if (status == CL_SUCCESS)
 			status = enqueue(r, w, STAGE_LOGIC, w->slots, NULL, w->slots, ms);
+		/* The read: waited for now, or (device sizes) after the
+		 * iteration's other launches are enqueued. */
+		int mark = w->pending_count;
 		if (status == CL_SUCCESS)
-			status = clEnqueueReadBuffer(dev->queue, w->counts, CL_TRUE, 0,
-						     sizeof(counts), counts, 0, NULL, NULL);
+			status = clEnqueueReadBuffer(dev->queue, w->counts, !w->device_sizes, 0,
+						     sizeof(read), &read, 0, NULL,
+						     w->device_sizes ? &read_done : NULL);
+		if (status == CL_SUCCESS && !w->device_sizes) {
+			done = take_read(w, &read, total, &recorded, &started);
+			if (!done)
+				status = enqueue_queues(r, w, &read, started, &launched, total, ms);
+		} else if (status == CL_SUCCESS) {
+			status = enqueue_queues(r, w, NULL, 0, &launched, total, ms);
+			if (status == CL_SUCCESS)
+				status = clFlush(dev->queue);
+			if (status == CL_SUCCESS)
+				status = clWaitForEvents(1, &read_done);
+			if (status == CL_SUCCESS)
+				done = take_read(w, &read, total, &recorded, &started);
+		}
+		if (read_done)
+			clReleaseEvent(read_done);
 		if (status == CL_SUCCESS)
-			status = collect_times(w, ms);
-		if (status != CL_SUCCESS)
+			status = collect_times(w, ms, mark);
+		if (status == CL_SUCCESS)
+			progress_partial(dev, (double)(read.handed_out + started));
+		if (done)
 			break;
-		uint64_t live = 0;
-		for (int k = 0; k < RT_STAGE_KINDS; k++)
-			live += counts[RT_STAGE_QUEUE_SHADE(k)];
-		/* the segments and shadow rays of the iteration before */
-		w->stats->items[STAGE_EXTEND] += counts[RT_STAGE_QUEUE_EXTEND];
-		w->stats->items[STAGE_SHADOW] += counts[RT_STAGE_QUEUE_SHADOW];
-		w->stats->state_bytes[STAGE_EXTEND] +=
-			counts[RT_STAGE_QUEUE_EXTEND] * (uint64_t)stages_item_bytes(STAGE_EXTEND);
-		w->stats->state_bytes[STAGE_SHADOW] +=
-			counts[RT_STAGE_QUEUE_SHADOW] * (uint64_t)stages_item_bytes(STAGE_SHADOW);
-		done = issued - live;
-		progress_partial(dev, (double)done);
-		if (recorded >= 0) {
-			w->stats->extended[recorded] = counts[RT_STAGE_QUEUE_EXTEND];
-			w->stats->shadowed[recorded] = counts[RT_STAGE_QUEUE_SHADOW];
-		}
-		if (issued == total && live == 0)
-			break;
-		uint64_t left = total - issued;
-		cl_uint started = counts[RT_STAGE_QUEUE_NEW] < left ? counts[RT_STAGE_QUEUE_NEW]
-								    : (cl_uint)left;
-		recorded = record_iteration(w->stats, (uint32_t)live, started);
-		status = zero_counts(dev, w, RT_STAGE_QUEUE_EXTEND, 2);
-		if (status == CL_SUCCESS && started > 0) {
-			cl_ulong first = issued;
-			status = set_common(w, w->kernels[STAGE_NEW_PATH]);
-			const void *args[] = {&started, &first, &launched, &w->item_counts,
-					      &w->b.flops};
-			const size_t sizes[] = {sizeof(cl_uint), sizeof(cl_ulong), sizeof(launched),
-						sizeof(cl_mem), sizeof(cl_mem)};
-			for (cl_uint i = 0; status == CL_SUCCESS && i < 5; i++)
-				status = clSetKernelArg(w->kernels[STAGE_NEW_PATH], 6 + i, sizes[i],
-							args[i]);
-			if (status == CL_SUCCESS)
-				status = enqueue(r, w, STAGE_NEW_PATH, started, NULL, started, ms);
-			issued += started;
-		}
-		for (int k = 0; status == CL_SUCCESS && k < RT_STAGE_KINDS; k++) {
-			cl_uint count = counts[RT_STAGE_QUEUE_SHADE(k)];
-			cl_kernel kernel = w->kernels[STAGE_SHADE_MAPPED + k];
-			if (count == 0)
-				continue;
-			status = set_common(w, kernel);
-			const void *args[] = {&count, &samples, &w->item_counts, &w->b.flops};
-			const size_t sizes[] = {sizeof(cl_uint), sizeof(cl_uint), sizeof(cl_mem),
-						sizeof(cl_mem)};
-			for (cl_uint i = 0; status == CL_SUCCESS && i < 4; i++)
-				status = clSetKernelArg(kernel, 6 + i, sizes[i], args[i]);
-			if (status == CL_SUCCESS)
-				status = enqueue(r, w, (enum stage)(STAGE_SHADE_MAPPED + k), count, NULL,
-						 count, ms);
-		}
-		/* At most one segment per path started or shaded, one shadow ray
-		 * per path shaded: the launches' bounds. */
-		size_t bounds[2] = {started + live, live};
-		for (int s = 0; status == CL_SUCCESS && s < 2; s++) {
-			enum stage stage = s ? STAGE_SHADOW : STAGE_EXTEND;
-			if (bounds[s] == 0)
-				continue;
-			status = set_common(w, w->kernels[stage]);
-			const void *args[] = {&w->item_counts, &w->b.flops};
-			for (cl_uint i = 0; status == CL_SUCCESS && i < 2; i++)
-				status = clSetKernelArg(w->kernels[stage], 6 + i, sizeof(cl_mem),
-							args[i]);
-			if (status == CL_SUCCESS)
-				status = enqueue(r, w, stage, bounds[s], NULL, 0, ms);
-		}
 	}
 	if (status == CL_SUCCESS) {
 		const void *args[] = {&w->b.scene,  NULL,	     &w->b.image.image, &w->b.sums,
@@ -382,9 +457,12 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 	if (status == CL_SUCCESS)
 		status = clFinish(dev->queue);
 	if (status == CL_SUCCESS)
-		status = collect_times(w, ms);
-	for (int s = 0; s < STAGE_COUNT; s++)
+		status = collect_times(w, ms, w->pending_count);
+	for (int s = 0; s < STAGE_COUNT; s++) {
 		*launches += w->stats->launches[s];
+		w->stats->state_bytes[s] =
+			w->stats->items[s] * (uint64_t)stages_item_bytes((enum stage)s);
+	}
 	*launches -= before;
 	return status;
 }
@@ -468,7 +546,8 @@ static int create_buffers(struct device *dev, const struct scene *scene,
 					 "the path queues", err, err_size);
 	if (!w->queues)
 		return -1;
-	w->counts = device_create_buffer(dev, CL_MEM_READ_WRITE, RT_STAGE_QUEUES * sizeof(cl_uint),
+	w->counts = device_create_buffer(dev, CL_MEM_READ_WRITE,
+					 (RT_STAGE_QUEUES + 2) * sizeof(cl_uint),
 					 NULL, "the queue counters", err, err_size);
 	if (!w->counts)
 		return -1;
@@ -528,6 +607,14 @@ static int stages_open(struct renderer *r, const struct scene *scene, char *err,
 	if (launch_setup(r->dev, scene, s, res, &w->b.scene_block, &w->b.program, err, err_size))
 		return -1;
 	w->local = res->local_size[0] * res->local_size[1];
+	const char *sizes = getenv("RTCL_STAGES_LAUNCH");
+	w->device_sizes = sizes && strcmp(sizes, "device") == 0;
+	/* 2048 work-items a compute unit fill an NVIDIA SM; a CPU's take a few
+	   work-groups each. */
+	size_t fill = r->dev->is_gpu ? (size_t)r->dev->compute_units * 2048
+				     : (size_t)r->dev->compute_units * w->local * 4;
+	size_t rounded = ((size_t)w->slots + w->local - 1) / w->local * w->local;
+	w->fill = fill < rounded ? (fill + w->local - 1) / w->local * w->local : rounded;
 	w->local_bytes = res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES;
 	for (int i = 0; i < STAGE_COUNT; i++) {
 		w->kernels[i] = program_create_kernel(w->b.program, kernel_names[i], err, err_size);
@@ -538,6 +625,12 @@ static int stages_open(struct renderer *r, const struct scene *scene, char *err,
 	if (create_buffers(r->dev, scene, s, res, w, err, err_size) ||
 	    buffers_clear(r->dev, s, &w->b, err, err_size))
 		return -1;
+	cl_int status = clSetKernelArg(w->kernels[STAGE_ADVANCE], 0, sizeof(cl_mem), &w->counts);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "clSetKernelArg on %s failed: %s", r->dev->name,
+			 cl_error_name(status));
+		return -1;
+	}
 	res->times.scene += timing_lap_ms(&lap);
 	return 0;
 }

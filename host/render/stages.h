@@ -17,6 +17,7 @@ enum stage {
 	STAGE_BEGIN,
 	STAGE_LOGIC,
 	STAGE_NEW_PATH,
+	STAGE_ADVANCE, /* one work-item: the paths handed out */
 	STAGE_SHADE_MAPPED, /* + RT_BSDF_*: one per BSDF kind */
 	STAGE_SHADE_DIFFUSE,
 	STAGE_SHADE_CONDUCTOR,
