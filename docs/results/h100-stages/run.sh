@@ -4,14 +4,16 @@
 # dynamic, on scenes/cornell.json and scenes/studio_path.json, 1024x1024, 64
 # spp, -r 5 (median kernel time of 5 after a warm-up), two interleaved rounds:
 # dynamic, wavefront bounce, wavefront stages with --paths-in-flight 256k, 1M
-# (the default) and 4M. Every image is compared byte for byte with dynamic's;
+# (the default) and 4M, each sized from one counter read per iteration (the
+# default) and with RTCL_STAGES_LAUNCH=device (launches that fill the GPU,
+# counts read on the device, no wait). Every image is compared byte for byte with dynamic's;
 # every --stats file is kept (wavefront_stages: per-kernel launches and
 # times, path state moved, live paths per iteration), and a summary of the
 # phases is printed for each stages run.
 # Binaries: .gpu/wave41/ (rtcl, rtcl-meshread: make OIIO=0 MPI=0
 # BUILD=build-gpu, branch wave41 at COMMIT); libraries in .gpu/lib.
 #   COMMIT=<commit> bash docs/results/h100-stages/run.sh
-# About 3-5 minutes: 20 renders of 6 frames each, and two program builds.
+# About 4-7 minutes: 32 renders of 6 frames each, and two program builds.
 # Checked on PoCL at a tiny size:
 #   LOCAL=1 BIN=$PWD SIZE=32x32 SPP=2 POOLS="64 256" OUT=/tmp/o bash docs/results/h100-stages/run.sh
 set -u
@@ -46,19 +48,21 @@ for sc in cornell studio_path; do
   $B/rtcl -p $P -d 0 -k dynamic scenes/$sc.json --size 64x64 --spp $SPP -q -o $T/prime.pfm
   $B/rtcl -p $P -d 0 -k wavefront scenes/$sc.json --size 64x64 --spp $SPP -q -o $T/prime.pfm
   for round in 1 2; do
-    runs="dynamic bounce"; for n in $POOLS; do runs="$runs stages-$n"; done
+    runs="dynamic bounce"; for n in $POOLS; do runs="$runs stages-$n device-$n"; done
     for run in $runs; do
       case $run in
         dynamic) args="-k dynamic" ;;
         bounce) args="-k wavefront" ;;
         stages-*) args="-k wavefront --wavefront-form stages --paths-in-flight ${run#stages-}" ;;
+        device-*) args="-k wavefront --wavefront-form stages --paths-in-flight ${run#device-}" ;;
       esac
+      launch=sync; case $run in device-*) launch=device ;; esac
       s=$OUT/$sc-$run-$round.json
-      $B/rtcl -p $P -d 0 $args scenes/$sc.json --size $SIZE --spp $SPP -r 5 -q \
+      RTCL_STAGES_LAUNCH=$launch $B/rtcl -p $P -d 0 $args scenes/$sc.json --size $SIZE --spp $SPP -r 5 -q \
         -o $T/$sc-$run.pfm --stats $s > $T/log 2>&1 || { echo "$sc $run FAILED"; cat $T/log; continue; }
       t=$(ms $s)
       echo "$sc $run round $round: $t ms, $(python3 -c "print('%.1f' % ($(echo $SIZE | tr x '*')*$SPP/$t/1e3))") M paths/s"
-      case $run in stages-*) phases $s ;; esac
+      case $run in stages-*|device-*) phases $s ;; esac
     done
   done
   for run in $runs; do
