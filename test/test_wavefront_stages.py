@@ -33,8 +33,8 @@ def render(tmp_path, name, scene, *args, env=None):
     return out.read_bytes()
 
 
-def same_as_dynamic(tmp_path, scene, size, spp, pools, env=None):
-    dynamic = render(tmp_path, "dynamic", scene, "-k", "dynamic", "--size", size, "--spp", spp)
+def same_as_dynamic(tmp_path, scene, size, spp, pools, env=None, kernel=("-k", "dynamic")):
+    dynamic = render(tmp_path, "dynamic", scene, *kernel, "--size", size, "--spp", spp)
     for pool in pools:
         pool_args = ["--paths-in-flight", pool] if pool else []
         stages = render(tmp_path, f"stages{pool}", scene, *STAGES, *pool_args, "--size", size,
@@ -42,17 +42,21 @@ def same_as_dynamic(tmp_path, scene, size, spp, pools, env=None):
         assert stages == dynamic, f"{scene.name} {size} {spp} spp, {pool} paths in flight"
 
 
-@pytest.mark.parametrize("spp", [1, 4])
+@pytest.mark.parametrize("spp", [pytest.param(1, marks=pytest.mark.slow), 4])
 def test_the_box_is_the_dynamic_kernels_image(tmp_path, spp):
     # 17 slots for 400 pixels: each slot takes many paths, and with 4 spp
     # the samples of a pixel overlap in flight; the default pool holds all.
     same_as_dynamic(tmp_path, BOX, "20x20", spp, [17, None])
 
 
-@pytest.mark.parametrize("launch", ["sync", "device"])
-def test_the_studio_is_the_dynamic_kernels_image(tmp_path, launch):
-    # Every BSDF kind's shade kernel, textures, a sky.
-    same_as_dynamic(tmp_path, STUDIO, "24x16", 3, [61], env={"RTCL_STAGES_LAUNCH": launch})
+@pytest.mark.parametrize("launch", ["sync", pytest.param("device", marks=pytest.mark.slow)])
+def test_the_studio_is_the_bounce_forms_image(tmp_path, launch):
+    # Every BSDF kind's shade kernel, textures, a sky. Against the bounce
+    # form, whose image is the dynamic kernel's (test_path.py), from the same
+    # program: one build for make test; the slow test below compares with
+    # -k dynamic itself.
+    same_as_dynamic(tmp_path, STUDIO, "24x16", 3, [61], env={"RTCL_STAGES_LAUNCH": launch},
+                    kernel=("-k", "wavefront"))
 
 
 @pytest.mark.slow
@@ -82,6 +86,7 @@ def counted(tmp_path, name, scene, *args, env=None):
             np.load(tmp_path / f"{name}_items.npy"))
 
 
+@pytest.mark.slow
 @pytest.mark.parametrize("launch", ["sync", "device"])
 def test_flops_rays_and_work_map_are_the_dynamic_kernels(tmp_path, launch):
     # RTCL_STAGES_LAUNCH=device: every queue launch fills the device and its
@@ -100,7 +105,7 @@ def test_flops_rays_and_work_map_are_the_dynamic_kernels(tmp_path, launch):
     assert s_items.shape[1] > d_items.shape[1]
 
 
-@pytest.mark.parametrize("launch", ["sync", "device"])
+@pytest.mark.parametrize("launch", ["sync", pytest.param("device", marks=pytest.mark.slow)])
 def test_stats_report_the_kernels_and_the_live_paths(tmp_path, launch):
     stats_file = tmp_path / "s.json"
     render(tmp_path, "s", BOX, *STAGES, "--paths-in-flight", 50, "--size", "10x8", "--spp", 2,
