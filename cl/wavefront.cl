@@ -293,7 +293,8 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
  *                      sample added to its pixel; queues the slot by the
  *                      BSDF kind of its hit, or as free
  *   stages_new_path    each free slot: the next (pixel, sample), its
- *                      primary ray queued for extension
+ *                      primary ray queued for extension (stages_advance,
+ *                      one work-item, then counts the paths handed out)
  *   stages_shade_KIND  path_vertex at a hit of that kind: emission, the
  *                      light sample (its shadow ray queued), the BSDF
  *                      sample and the roulette (the next segment queued)

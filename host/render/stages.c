@@ -8,12 +8,14 @@
  * takes the next at once (path regeneration), and the host loops until
  * every path of the piece is done.
  *
- * The host reads the queue counters once an iteration, after the logic
- * kernel: they give the new-path and shade launches their exact sizes, and
- * the segment and shadow launches a bound (each of their work-items reads
- * the exact count on the device). The other launches of an iteration are
- * enqueued without waiting; their profiled times are read at that one
- * read. */
+ * The queue kernels read their queue's length on the device and loop over
+ * it, so a launch's size need not be the length. By default the host reads
+ * the counters once an iteration, after the logic kernel, and gives the
+ * new-path and shade launches their exact sizes and the segment and shadow
+ * launches a bound; with RTCL_STAGES_LAUNCH=device every queue launch fills
+ * the device and the host reads the counters without waiting, only to know
+ * when the piece is done. Launches are enqueued without waiting; their
+ * profiled times are read once a later read has waited for them. */
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
