@@ -116,7 +116,7 @@ HOST_MODULES := \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
 	render/checks render/probe render/buffers render/program render/block render/watch render/repeats \
-	render/launch render/singlepass render/wavefront render/renderer render/render render/aov \
+	render/launch render/singlepass render/wavefront render/stages render/renderer render/render render/aov \
 	render/reference render/reference_scene render/reference_path \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \

@@ -134,8 +134,11 @@ static void path_model_textures(struct tracer *tr, RTCL_SCENE_SPACE const struct
 #endif
 
 /* Fills h for the hit of ray (RENDERING.md trace step 2 for the normals;
- * "The BSDFs" for the colours at the hit). */
-static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hit hit,
+ * "The BSDFs" for the colours at the hit). kind is the material's BSDF
+ * kind (RT_BSDF_*) when the caller knows it, a constant that lets the
+ * compiler keep only that kind's code (the wavefront's shade kernels), or
+ * -1: read from the material. */
+static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hit hit, int kind,
 			 struct path_hit *h)
 {
 	struct shading sh;
@@ -156,7 +159,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 
 	RTCL_SCENE_SPACE const struct rt_bsdf *b = &tr->bsdfs[h->material];
 	struct bsdf *out = &h->bsdf;
-	out->type = b->type;
+	out->type = kind >= 0 ? kind : b->type;
 	out->alpha = b->color.w;
 	out->eta = h->inside ? 1.0f / b->emission.w : b->emission.w;
 	out->mirror = b->mirror;
@@ -164,7 +167,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 	out->transmission = b->transmission;
 	out->tint = b->mirror_tint ? sh.base : (float3)(1.0f);
 	COUNT_FLOPS(tr, 1);
-	if (b->type == RT_BSDF_MAPPED) {
+	if (out->type == RT_BSDF_MAPPED) {
 		out->color = fmin(b->diffuse * sh.base, (float3)(1.0f));
 		COUNT_FLOPS(tr, FLOPS_MUL3 + 3);
 	} else if (hit.plane >= 0) {
@@ -176,7 +179,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 	}
 	h->emission = b->emission.xyz;
 #ifdef RTCL_TEXTURES
-	if (hit.triangle >= 0 && b->type != RT_BSDF_MAPPED)
+	if (hit.triangle >= 0 && out->type != RT_BSDF_MAPPED)
 		path_model_textures(tr, b, tr->triangles[hit.triangle].index, hit, h);
 #endif
 }
@@ -227,13 +230,13 @@ static void path_next_event(struct tracer *tr, struct walk *w, const struct path
 /* The hit of the path's segment (RENDERING.md, "The path", one turn of the
  * loop): its emission, the light sample, the BSDF sample that continues
  * the path. Returns whether the path ends here (after the shadow ray, if
- * one was made). */
-static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit)
+ * one was made). kind: as path_surface's. */
+static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit, int kind)
 {
 	struct path_hit h;
 	int i = w->vertex;
 
-	path_surface(tr, &w->ray, hit, &h);
+	path_surface(tr, &w->ray, hit, kind, &h);
 	RTCL_SCENE_SPACE const struct rt_bsdf *b = &tr->bsdfs[h.material];
 	if (!h.inside && b->emits) {
 		float3 le = h.emission;
@@ -300,32 +303,70 @@ static void path_missed(struct tracer *tr, struct walk *w)
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_ADD3);
 }
 
+/* The BSDF kind (RT_BSDF_*) of the material hit: no flops, only the
+ * lookups hit_surface makes to find the material (the wavefront's logic
+ * kernel sorts the paths by it, docs/wavefront.md). */
+static int path_hit_kind(struct tracer *tr, struct hit hit)
+{
+	int material;
+
+	if (hit.sphere >= 0)
+		material = tr->spheres[hit.sphere].material;
+	else if (SCENE_HAS_TRIANGLES && hit.triangle >= 0)
+		material = (int)triangle_material(tr->triangles[hit.triangle].index);
+	else
+		material = tr->planes[hit.plane].material;
+	return tr->bsdfs[material].type;
+}
+
+/* The path's next segment traced: its nearest hit (t 0: none). */
+static struct hit path_extend(struct tracer *tr, const struct walk *w)
+{
+	struct hit hit = intersect_scene(tr, w->ray.origin, w->ray.dir, INFINITY, false);
+
+	COUNT_RAY(tr);
+	return hit;
+}
+
+/* The shadow ray of the last vertex's light sample traced: whether nothing
+ * blocks it (its own emitter does not). */
+static bool path_shadow_clear(struct tracer *tr, const struct walk *w)
+{
+	tr->skip_sphere = w->shadow_sphere;
+	tr->skip_triangle = w->shadow_triangle;
+	struct hit blocker =
+		intersect_scene(tr, w->shadow_origin, w->shadow_dir, w->shadow_max, true);
+	tr->skip_sphere = tr->skip_triangle = -1;
+	return blocker.t == 0.0f;
+}
+
+/* What the light sample adds once its shadow ray is traced. */
+static void path_light_arrives(struct tracer *tr, struct walk *w, bool clear)
+{
+	if (clear) {
+		w->color += w->shadow_color;
+		COUNT_FLOPS(tr, FLOPS_ADD3);
+	}
+	w->shadow = false;
+}
+
 /* Takes the path's next step, one intersection; returns whether the path
  * is done: w->color is then the sample's colour. (waiting: the Whitted
- * walk's stack, which a path does not need.) */
+ * walk's stack, which a path does not need.) The wavefront's stages form
+ * calls the same pieces from separate kernels (cl/wavefront.cl). */
 static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting)
 {
 	(void)waiting;
 	if (w->shadow) {
-		tr->skip_sphere = w->shadow_sphere;
-		tr->skip_triangle = w->shadow_triangle;
-		struct hit blocker =
-			intersect_scene(tr, w->shadow_origin, w->shadow_dir, w->shadow_max, true);
-		tr->skip_sphere = tr->skip_triangle = -1;
-		if (blocker.t == 0.0f) {
-			w->color += w->shadow_color;
-			COUNT_FLOPS(tr, FLOPS_ADD3);
-		}
-		w->shadow = false;
+		path_light_arrives(tr, w, path_shadow_clear(tr, w));
 		return w->done;
 	}
-	struct hit hit = intersect_scene(tr, w->ray.origin, w->ray.dir, INFINITY, false);
-	COUNT_RAY(tr);
+	struct hit hit = path_extend(tr, w);
 	if (hit.t == 0.0f) {
 		path_missed(tr, w);
 		return true;
 	}
-	w->done = path_vertex(tr, w, hit);
+	w->done = path_vertex(tr, w, hit, -1);
 	return w->done && !w->shadow;
 }
 

@@ -10,6 +10,7 @@
 #include "scene/mesh.h"
 #include "base/quote.h"
 #include "render/render.h"
+#include "render/stages.h"
 #include "scene/scene.h"
 #include "base/suggest.h"
 #include "output/workmap.h"
@@ -51,6 +52,8 @@ enum long_only_option {
 	OPT_CHECKPOINT,
 	OPT_NO_PARTIAL,
 	OPT_INTEGRATOR,
+	OPT_WAVEFRONT_FORM,
+	OPT_PATHS_IN_FLIGHT,
 };
 
 static const struct option long_options[] = {
@@ -61,6 +64,8 @@ static const struct option long_options[] = {
 	{"fetch", required_argument, NULL, OPT_FETCH},
 	{"regenerate", no_argument, NULL, OPT_REGENERATE},
 	{"queues", required_argument, NULL, OPT_QUEUES},
+	{"wavefront-form", required_argument, NULL, OPT_WAVEFRONT_FORM},
+	{"paths-in-flight", required_argument, NULL, OPT_PATHS_IN_FLIGHT},
 	{"scene", required_argument, NULL, 's'},
 	{"output", required_argument, NULL, 'o'},
 	{"size", required_argument, NULL, OPT_SIZE},
@@ -135,6 +140,15 @@ static void print_help_after_kernels(FILE *out)
 		"                         it; else 1. The image is the same; the counting\n"
 		"                         run of --flops uses 1). Not for serial, wavefront\n"
 		"                         or reference, which render on one queue\n"
+		"      --wavefront-form bounce|stages  how -k wavefront splits the paths of the\n"
+		"                         path integrator: one launch per bounce over the\n"
+		"                         live paths (default), or in stages (Laine, Karras\n"
+		"                         and Aila 2013): a logic kernel, new paths, a shade\n"
+		"                         kernel per BSDF kind, extension and shadow rays,\n"
+		"                         each over its own queue; the same image\n"
+		"      --paths-in-flight N  the stages form's pool of paths, 1 to %d\n"
+		"                         (default %d, or the render's paths when fewer);\n"
+		"                         %d bytes of state each\n"
 		"      --accel bvh|bvh-compact|none  how a ray finds the spheres and\n"
 		"                         triangles it hits: through a BVH built on the host\n"
 		"                         (default); bvh-compact, one with larger leaves of\n"
@@ -306,7 +320,7 @@ static void print_help_after_kernels(FILE *out)
 		"picture, --split without --devices or --mpi.\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
+		"reference", STAGES_MAX_PATHS, STAGES_DEFAULT_PATHS, RT_STAGE_FIELDS * 16 + 4 * RT_STAGE_QUEUES, SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
 		CHECKPOINT_MAX_SECONDS);
 }
 
@@ -715,6 +729,13 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_REGENERATE:
 		o->regenerate = 1;
 		return 0;
+	case OPT_WAVEFRONT_FORM:
+		o->wavefront_form_given = 1;
+		return parse_choice("--wavefront-form", arg, "bounce", "stages", &o->wavefront_stages,
+				    err, err_size);
+	case OPT_PATHS_IN_FLIGHT:
+		return parse_bounded("--paths-in-flight", arg, 1, STAGES_MAX_PATHS,
+				     &o->paths_in_flight, err, err_size);
 	case OPT_QUEUES:
 		return parse_bounded("--queues", arg, 1, RENDER_MAX_QUEUES, &o->queues, err,
 				     err_size);
@@ -1042,6 +1063,22 @@ static int check_kernel_options(const struct options *o, char *err, size_t err_s
 			 "%s sets how the work-items of -k persistent take their work; it does "
 			 "not apply to -k %s",
 			 o->regenerate ? "--regenerate" : "--fetch", o->kernel);
+		return -1;
+	}
+	if (o->wavefront_form_given && !(k && k->multi_pass)) {
+		snprintf(err, err_size,
+			 "--wavefront-form chooses how -k wavefront splits paths; it does not "
+			 "apply to -k %s",
+			 o->kernel);
+		return -1;
+	}
+	if (o->paths_in_flight > 0 && !o->wavefront_stages) {
+		snprintf(err, err_size,
+			 "--paths-in-flight sets the pool of paths of -k wavefront "
+			 "--wavefront-form stages; it does not apply to %s%s",
+			 k && k->multi_pass ? "" : "-k ",
+			 k && k->multi_pass ? "the bounce form (give --wavefront-form stages)"
+					    : o->kernel);
 		return -1;
 	}
 	if (o->queues > 0 && !(k && !k->single_item && !k->multi_pass)) {

@@ -159,6 +159,9 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	s->batch = opt->batch;
 	s->fetch = opt->fetch;
 	s->regenerate = opt->regenerate;
+	s->wavefront_stages = opt->wavefront_stages;
+	s->wavefront_form_given = opt->wavefront_form_given;
+	s->paths_in_flight = opt->paths_in_flight;
 	s->queues = opt->queues;
 	s->source_dir = getenv("RTCL_CL_DIR");
 	s->progress = 1; /* one image on one device: render() runs the line */

@@ -14,6 +14,7 @@
 struct render_settings;
 struct render_result;
 struct renderer_ops; /* renderer.h */
+struct stages_stats;  /* render/stages.h */
 
 /* The scheduling kernels, one cl/NAME.cl each. */
 struct kernel_info {
@@ -74,6 +75,10 @@ struct render_settings {
 	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
 	int fetch;		/* enum fetch: how its work-items fetch (--fetch) */
 	int regenerate;		/* its paths regenerated (--regenerate, RTCL_REGENERATE) */
+	int wavefront_stages;	/* --wavefront-form stages: the wavefront under the
+				   path integrator in stages (host/render/stages.c) */
+	int wavefront_form_given; /* --wavefront-form given: the path integrator only */
+	int paths_in_flight;	/* its pool of path slots (0: STAGES_DEFAULT_PATHS) */
 	int queues;		/* in-order queues per device (--queues; 0: the
 				   default, renderer_queues()) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
@@ -183,6 +188,10 @@ struct render_result {
 	/* With check_writes. */
 	uint32_t *write_counts; /* per pixel */
 	int guards_intact;	/* no byte outside the image was written */
+
+	/* The stages form's launches and queues (--wavefront-form stages), over
+	 * every frame; NULL otherwise. */
+	struct stages_stats *stages;
 
 	/* One image over several devices in this process: the last frame's
 	 * pieces, in the order they were handed out. */
