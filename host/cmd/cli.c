@@ -315,9 +315,11 @@ static void print_help_after_kernels(FILE *out)
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"An option that sets something the run does not have is refused, naming what\n"
 		"it needs: --groups with -k naive, --batch, --fetch or --regenerate without\n"
-		"-k persistent (--regenerate also without the path integrator), --queues\n"
-		"with serial, wavefront or reference, --work-map-scale without a --work-map\n"
-		"picture, --split without --devices or --mpi.\n"
+		"-k persistent (--regenerate also without the path integrator),\n"
+		"--wavefront-form without -k wavefront and the path integrator,\n"
+		"--paths-in-flight without --wavefront-form stages, --queues with serial,\n"
+		"wavefront or reference, --work-map-scale without a --work-map picture,\n"
+		"--split without --devices or --mpi.\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
 		"reference", STAGES_MAX_PATHS, STAGES_DEFAULT_PATHS, RT_STAGE_FIELDS * 16 + 4 * RT_STAGE_QUEUES, SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
