@@ -162,6 +162,22 @@ static void brute_force(struct job *j)
 {
 	j->settings.accel = ACCEL_NONE;
 }
+static void fetched_by_warps(struct job *j)
+{
+	j->settings.fetch = FETCH_SUBGROUP;
+}
+static void regenerated(struct job *j)
+{
+	j->settings.regenerate = 1;
+}
+static void in_stages(struct job *j)
+{
+	j->settings.wavefront_stages = 1;
+}
+static void few_paths(struct job *j)
+{
+	j->settings.paths_in_flight = 4096;
+}
 
 Test(job_digest, each_setting_is_named_as_the_option)
 {
@@ -183,6 +199,11 @@ Test(job_digest, each_setting_is_named_as_the_option)
 		{some_groups, "--groups 4x4 against rank 0's --groups 0x0"},
 		{batched, "--batch 2 against rank 0's --batch 1"},
 		{brute_force, "--accel none against rank 0's --accel bvh"},
+		{fetched_by_warps, "--fetch subgroup against rank 0's --fetch item"},
+		{regenerated, "--regenerate against rank 0's no --regenerate"},
+		{in_stages, "--wavefront-form stages against rank 0's --wavefront-form bounce"},
+		{few_paths,
+		 "--paths-in-flight 4096 against rank 0's no --paths-in-flight"},
 	};
 
 	for (size_t i = 0; i < sizeof(cases) / sizeof(cases[0]); i++) {

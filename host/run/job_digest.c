@@ -34,6 +34,10 @@ void job_digest_fill(const struct job *job, struct job_digest *d)
 	v[JOB_GROUPS_Y] = s->groups[1];
 	v[JOB_BATCH] = s->batch;
 	v[JOB_ACCEL] = s->accel;
+	v[JOB_FETCH] = s->fetch;
+	v[JOB_REGENERATE] = s->regenerate;
+	v[JOB_WAVEFRONT_STAGES] = s->wavefront_stages;
+	v[JOB_PATHS_IN_FLIGHT] = s->paths_in_flight;
 }
 
 /* The settings as the options name them, in the order a mismatch is
@@ -45,6 +49,8 @@ static const struct {
 	{JOB_WIDTH, 2},	     {JOB_SAMPLES, 1},	    {JOB_DEPTH, 1},  {JOB_FRAMES_GIVEN, 3},
 	{JOB_PIECE_ROWS, 1}, {JOB_SPLIT_STATIC, 1}, {JOB_ROW_ORDER, 2}, {JOB_KERNEL, 1}, {JOB_WORKGROUP_X, 2},
 	{JOB_GROUPS_X, 2},   {JOB_BATCH, 1},	    {JOB_ACCEL, 1},
+	{JOB_FETCH, 1},	     {JOB_REGENERATE, 1},   {JOB_WAVEFRONT_STAGES, 1},
+	{JOB_PATHS_IN_FLIGHT, 1},
 };
 
 /* One setting of a digest as an option would give it ("--spp 4"). */
@@ -101,6 +107,22 @@ static void show_setting(const long long *v, enum job_setting first, char *out, 
 		break;
 	case JOB_ACCEL:
 		snprintf(out, size, "--accel %s", accel_name((int)v[JOB_ACCEL]));
+		break;
+	case JOB_FETCH:
+		snprintf(out, size, "--fetch %s", fetch_name((int)v[JOB_FETCH]));
+		break;
+	case JOB_REGENERATE:
+		snprintf(out, size, "%s", v[JOB_REGENERATE] ? "--regenerate" : "no --regenerate");
+		break;
+	case JOB_WAVEFRONT_STAGES:
+		snprintf(out, size, "--wavefront-form %s",
+			 v[JOB_WAVEFRONT_STAGES] ? "stages" : "bounce");
+		break;
+	case JOB_PATHS_IN_FLIGHT:
+		if (v[JOB_PATHS_IN_FLIGHT])
+			snprintf(out, size, "--paths-in-flight %lld", v[JOB_PATHS_IN_FLIGHT]);
+		else
+			snprintf(out, size, "no --paths-in-flight");
 		break;
 	default:
 		snprintf(out, size, "setting %d", (int)first);
