@@ -91,7 +91,10 @@ struct mpi_job {
 					 clock (open_before_clock) */
 	int initialized; /* MPI_Init_thread succeeded */
 	int threads;	 /* with MPI_THREAD_MULTIPLE */
-	double reduce_ms; /* by_samples: reduce_sums on this rank */
+	double reduce_ms; /* by_samples: reduce_sums on this rank; shared: its
+			     add, from sums_in */
+	double sums_in;	  /* shared: timing_now() once every rank's sums were
+			     in its slot (reduce_sums' first barrier) */
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -129,6 +132,8 @@ static int central_take(struct mpi_job *j, int g)
  * a millisecond, against pieces of tens of milliseconds or more. */
 #define MPI_NAP_MIN_NS 20000L
 #define MPI_NAP_MAX_NS 1000000L
+/* Rank 0's server, for one image: its longest nap (serve). */
+#define MPI_SERVE_IMAGE_NS 50000L
 
 static void nap(long *ns)
 {
@@ -138,8 +143,8 @@ static void nap(long *ns)
 	*ns = *ns * 2 < MPI_NAP_MAX_NS ? *ns * 2 : MPI_NAP_MAX_NS;
 }
 
-/* MPI_Probe for any message, in naps. */
-static int wait_probe(MPI_Status *status)
+/* MPI_Probe for any message, in naps of at most max_ns. */
+static int wait_probe(MPI_Status *status, long max_ns)
 {
 	long ns = MPI_NAP_MIN_NS;
 
@@ -151,6 +156,7 @@ static int wait_probe(MPI_Status *status)
 		if (arrived)
 			return 0;
 		nap(&ns);
+		ns = ns < max_ns ? ns : max_ns;
 	}
 }
 
@@ -569,10 +575,14 @@ static void *serve(void *context)
 {
 	struct mpi_job *j = context;
 	int remaining = j->total - j->count;
+	/* One image: the other ranks' devices ask for their next piece as they
+	 * end, inside the image's clock; a nap of 1 ms here held each up to
+	 * 1 ms (frames, of hundreds of ms each, keep the longer naps). */
+	long max_ns = j->image ? MPI_SERVE_IMAGE_NS : MPI_NAP_MAX_NS;
 
 	while (remaining > 0) {
 		MPI_Status status;
-		if (wait_probe(&status)) {
+		if (wait_probe(&status, max_ns)) {
 			record_failure(j, ROOT, "waiting for the other ranks failed");
 			MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 		}
@@ -816,6 +826,10 @@ static int reduce_sums(struct mpi_job *j)
 	 * a nonblocking collective moves only inside MPI calls. */
 	if (wait_barrier())
 		return -1;
+	/* Every rank's sums are in the node's memory: the image's clock ends
+	 * here, as one process's ends when its last device's sums are on the
+	 * host (tiles_render); the add is the image's assembly, timed apart. */
+	j->sums_in = timing_now();
 	if (j->shared) {
 		const cl_long **parts = calloc((size_t)j->size, sizeof(*parts));
 		size_t begin = pixels * j->rank / j->size, end = pixels * (j->rank + 1) / j->size;
@@ -835,7 +849,7 @@ static int reduce_sums(struct mpi_job *j)
 	}
 	failed = failed || MPI_Reduce(root ? MPI_IN_PLACE : j->arrived, j->arrived, j->pieces,
 				      MPI_INT, MPI_SUM, ROOT, MPI_COMM_WORLD) != MPI_SUCCESS;
-	j->reduce_ms = (timing_now() - start) * 1e3;
+	j->reduce_ms = (timing_now() - (j->shared ? j->sums_in : start)) * 1e3;
 	return failed ? -1 : 0;
 }
 
@@ -1178,7 +1192,13 @@ static void open_before_clock(struct mpi_job *j)
 			j->rank);
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
-	if (MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS || wait_request(&request))
+	/* The ranks set up for seconds, at different speeds: a barrier in
+	 * naps of up to 1 ms, then one in short naps, so that the ranks leave
+	 * within tens of microseconds of each other. (With the first alone, a
+	 * rank left up to a nap after rank 0 had started the clock: four H100
+	 * ranks' devices ended 0.7-1.0 ms after rank 0's, batch 98c.) */
+	if (MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS || wait_request(&request) ||
+	    wait_barrier())
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 }
 
@@ -1223,7 +1243,12 @@ static int render_all(struct mpi_job *j)
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
 		progress_end();
-		j->wall_ms = (timing_now() - start) * 1e3;
+		/* Split by samples in the node's shared memory: the image time
+		 * ends once every rank's sums are there (reduce_sums), as one
+		 * process's frame ends with its devices' sums on the host; the
+		 * ranks' add follows, as one process's (multidevice.rank_sums). */
+		j->wall_ms = ((j->by_samples && j->shared ? j->sums_in : timing_now()) - start) *
+			     1e3;
 		status = finish_root(j);
 	}
 	/* The other ranks wait here while rank 0's own devices finish. */

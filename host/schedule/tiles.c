@@ -597,6 +597,14 @@ static void *combine_range(void *arg)
 {
 	const struct sums_range *r = arg;
 
+	/* One part's sums into `to`: a copy (--mpi's first device's sums into
+	 * its rank's slot), which memcpy makes with streaming stores where the
+	 * range is large, not reading `to` first as the loop's stores do. */
+	if (r->count == 1 && r->to && !r->rgb) {
+		memcpy(r->to + 4 * r->begin, r->parts[0] + 4 * r->begin,
+		       4 * sizeof(cl_long) * (r->end - r->begin));
+		return NULL;
+	}
 	for (size_t i = r->begin; i < r->end; i++) {
 		cl_long sum[4] = {0, 0, 0, 0};
 		for (int k = 0; k < r->count; k++) {
