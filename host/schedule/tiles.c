@@ -283,7 +283,8 @@ static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
 	if (renderer_all_samples(&d->renderer, &pass, &out, err, err_size))
 		return -1;
 	d->probe_ms = timing_lap_ms(&lap);
-	d->probe_launches = out.launches;
+	/* Each pass writes a pixel once: a wavefront pass is several launches. */
+	d->probe_passes = tiles_piece_launches(s, &pass, t->devs[k].is_gpu);
 	pthread_mutex_lock(&t->lock); /* the devices' threads probe at once */
 	expect_writes(t, k, &pass, 1);
 	pthread_mutex_unlock(&t->lock);
@@ -448,7 +449,7 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	const struct render_settings *s = t->settings;
 	const uint32_t *counts = t->dev[k].result.write_counts;
 	/* Set-up's probe (probe_device) wrote every pixel too. */
-	uint32_t probed = (uint32_t)t->dev[k].probe_launches;
+	uint32_t probed = (uint32_t)t->dev[k].probe_passes;
 
 	if (counts && t->by_samples) { /* every pixel, once a pass of its pieces */
 		uint32_t expected = probed;

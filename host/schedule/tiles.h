@@ -112,7 +112,8 @@ struct tiles_device {
 	cl_mem pinned; /* the sums' pinned host memory (device_pinned_alloc) */
 	double probe_ms; /* tiles_open's probe: one pass of the whole image */
 	double sums_ms;	 /* tiles_open's probe: reading all the sums back */
-	int probe_launches; /* the probe's launches (check_writes) */
+	int probe_passes; /* the probe's passes, a write of each pixel each
+			     (check_writes) */
 };
 
 /* The pieces of one image on devs[count] of this process: the bands of
