@@ -33,6 +33,30 @@ int render_pass_samples(const struct render_settings *settings);
 int render(struct device *dev, const struct scene *scene, const struct render_settings *settings,
 	   struct render_result *result, char *err, size_t err_size);
 
+/* A renderer kept open from frame to frame of an animation (render_kept);
+ * zeroed: none open. */
+struct render_keeper {
+	struct renderer r;
+	struct render_result facts; /* the renderer's: plan, build, scene */
+	int open;
+	int opened; /* renderers opened so far (render() a frame included) */
+};
+
+/* render() of a frame whose scene differs from the keeper's last only in
+ * its camera (an animation's orbit, run/frames.c), on the renderer k keeps
+ * open on dev: the scene packed for the frame's eye and written into its
+ * buffer, the program and buffers kept; opened first when none is open on
+ * dev or the packed scene's size changed. The same image as render(); an
+ * instrumented render (counts, schedule, write checks, AOVs, checkpoints)
+ * is render()'s. Returns 0, or -1 with one message in err, nothing held in
+ * result and k closed. */
+int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
+		const struct render_settings *settings, struct render_result *result, char *err,
+		size_t err_size);
+
+/* Closes k's renderer, if open. */
+void render_keeper_close(struct render_keeper *k);
+
 /* Renders with the CPU reference, settings->repeat times, each timed by the
  * host clock like a single launch. Returns 0, or -1 with one message in err. */
 int render_reference(const struct scene *scene, const struct render_settings *settings,

@@ -96,6 +96,8 @@ struct frames_state {
 	int count;
 	int done; /* frames rendered, for the progress line */
 	struct stager stagers[DEVICES_MAX]; /* each device's frame being staged */
+	struct render_keeper keepers[DEVICES_MAX]; /* each device's renderer, kept
+						      open from frame to frame */
 	int keeps; /* an interrupt keeps the frames finished (not --no-partial) */
 	int kept;  /* frames staged */
 };
@@ -146,6 +148,20 @@ static int finish_staging(struct stager *st, char *err, size_t err_size)
 	return -1;
 }
 
+/* Frame first + piece, whole, on the renderer kept open on device: the
+ * frames differ only in their camera (frames_orbit). */
+static int render_kept_frame(struct frames_state *f, int device, int piece,
+			     struct render_result *result, char *err, size_t err_size)
+{
+	const struct job *job = f->job;
+	struct scene scene = *job->scene;
+
+	frames_orbit(&job->scene->camera, job->first_frame + piece, job->first_frame,
+		     job->last_frame, &scene.camera);
+	return render_kept(&f->keepers[device], &f->devs[device], &scene, &f->settings, result,
+			   err, err_size);
+}
+
 /* A multidev render_piece: frame first + piece, rendered whole; staged in
  * the device's stager thread once its previous frame is staged (at most one
  * frame a device waits to be staged), or here when no thread starts. */
@@ -162,8 +178,7 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	if (f->keeps && interrupt_stop_signal())
 		return 0;
 	show_frame(f, piece, 0);
-	if (frames_render_frame(f->job, &f->settings, &f->devs[device], piece, &result, err,
-				err_size))
+	if (render_kept_frame(f, device, piece, &result, err, err_size))
 		return -1;
 	show_frame(f, piece, 1);
 	/* A frame stopped by an interrupt is not written (an animation's
@@ -295,8 +310,8 @@ static void *render_shared_frame(void *arg)
 		     job->last_frame, &scene.camera);
 	if (sf->count == 1) {
 		double lap = timing_now();
-		failed = render(&f->devs[sf->first], &scene, &f->settings, &result, sf->err,
-				sizeof(sf->err));
+		failed = render_kept_frame(f, sf->first, sf->piece, &result, sf->err,
+					   sizeof(sf->err));
 		struct piece_work done = failed ? (struct piece_work){0}
 						: frames_piece_work(&f->settings, &result);
 		sf->work[0] = (struct device_work){.pixels = (long long)done.pixels,
@@ -449,6 +464,8 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	}
 	interrupt_allow_stop(0);
 	progress_end();
+	for (int k = 0; k < f->count; k++)
+		f->work[k].renderers_opened = f->keepers[k].opened;
 	run->record->shares = (struct device_shares){
 		.devs = f->devs,
 		.work = f->work,
@@ -475,6 +492,8 @@ static void frames_release(struct mode_run *run)
 {
 	struct frames_state *f = run->state;
 
+	for (int k = 0; f && k < f->count; k++)
+		render_keeper_close(&f->keepers[k]); /* before its device */
 	if (f)
 		devices_close(f->devs, f->count);
 	free(f);
