@@ -210,7 +210,7 @@ static int pack_again(struct render_keeper *k, const struct scene *scene,
 }
 
 int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
-		const struct render_settings *s, struct render_result *res, char *err,
+		const struct render_settings *s, float *rgb, struct render_result *res, char *err,
 		size_t err_size)
 {
 	int packed = 1;
@@ -239,6 +239,10 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		res->rgb = k->facts.rgb;     /* the image's memory, the frame's */
 		k->facts.rgb = NULL;
 	}
+	if (rgb) { /* the caller's memory instead (never touched: no cost) */
+		free(res->rgb);
+		res->rgb = rgb;
+	}
 	k->r.result = res;
 	int failed = render_open(&k->r, s, res, err, err_size);
 	k->r.result = &k->facts;
@@ -246,6 +250,8 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		if (s->progress)
 			progress_end();
 		render_keeper_close(k);
+		if (rgb)
+			res->rgb = NULL; /* the caller's */
 		render_result_free(res);
 		return -1;
 	}

@@ -48,11 +48,13 @@ struct render_keeper {
  * buffer, the program and buffers kept; opened first when none is open on
  * dev or the packed scene's size changed. The same image as render(); an
  * instrumented render (counts, schedule, write checks, AOVs, checkpoints)
- * is render()'s. Returns 0, or -1 with one message in err, nothing held in
- * result and k closed. */
+ * is render()'s. The image goes into rgb (width * height * 3 floats, the
+ * caller's: result->rgb is rgb, not to be freed) when rgb is not NULL and
+ * the renderer is kept, else into memory of result's own. Returns 0, or -1
+ * with one message in err, nothing held in result and k closed. */
 int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
-		const struct render_settings *settings, struct render_result *result, char *err,
-		size_t err_size);
+		const struct render_settings *settings, float *rgb, struct render_result *result,
+		char *err, size_t err_size);
 
 /* Closes k's renderer, if open. */
 void render_keeper_close(struct render_keeper *k);

@@ -80,10 +80,21 @@ struct stager {
 	pthread_t thread;
 	int running; /* thread started and not yet joined */
 	int piece;
-	float *rgb; /* the frame's image, freed once staged */
+	float *rgb; /* the frame's image, freed once staged (unless pinned) */
+	int pinned; /* rgb is one of the device's pinned images (frame_memory) */
 	int samples; /* its samples per pixel */
 	int failed;
 	char err[1024];
+};
+
+/* Host memory a device reads a frame back into: pinned (device.h), where
+ * NVIDIA's OpenCL reads at the speed of the link. A 2000x2000 image read
+ * into memory of malloc took one H100 27.6-33.8 ms (docs/results/h100x4,
+ * batch 96; the sums of four, 128 MB each, 2.3-2.6 ms pinned). Two a
+ * device: one frame renders into one while the other is staged. */
+struct frame_memory {
+	cl_mem mem;
+	float *rgb;
 };
 
 /* The devices of an animation, and what the devices' threads share. */
@@ -98,6 +109,8 @@ struct frames_state {
 	struct stager stagers[DEVICES_MAX]; /* each device's frame being staged */
 	struct render_keeper keepers[DEVICES_MAX]; /* each device's renderer, kept
 						      open from frame to frame */
+	struct frame_memory pinned[DEVICES_MAX][2]; /* each device's images */
+	int next[DEVICES_MAX]; /* the one its next frame reads back into */
 	int keeps; /* an interrupt keeps the frames finished (not --no-partial) */
 	int kept;  /* frames staged */
 };
@@ -128,7 +141,8 @@ static void *stage_frame(void *arg)
 					     st->err, sizeof(st->err)) != 0;
 	if (!st->failed)
 		__atomic_add_fetch(&st->f->kept, 1, __ATOMIC_RELAXED);
-	free(st->rgb);
+	if (!st->pinned)
+		free(st->rgb);
 	st->rgb = NULL;
 	return NULL;
 }
@@ -149,8 +163,10 @@ static int finish_staging(struct stager *st, char *err, size_t err_size)
 }
 
 /* Frame first + piece, whole, on the renderer kept open on device: the
- * frames differ only in their camera (frames_orbit). */
-static int render_kept_frame(struct frames_state *f, int device, int piece,
+ * frames differ only in their camera (frames_orbit). Its image is read back
+ * into rgb when not NULL (then result->rgb == rgb), else into memory of its
+ * own. */
+static int render_kept_frame(struct frames_state *f, int device, int piece, float *rgb,
 			     struct render_result *result, char *err, size_t err_size)
 {
 	const struct job *job = f->job;
@@ -158,8 +174,32 @@ static int render_kept_frame(struct frames_state *f, int device, int piece,
 
 	frames_orbit(&job->scene->camera, job->first_frame + piece, job->first_frame,
 		     job->last_frame, &scene.camera);
-	return render_kept(&f->keepers[device], &f->devs[device], &scene, &f->settings, result,
-			   err, err_size);
+	return render_kept(&f->keepers[device], &f->devs[device], &scene, &f->settings, rgb,
+			   result, err, err_size);
+}
+
+/* The device's pinned image for its next frame (allocated at its first
+ * use), or NULL where none can be had (the frame's own memory then). */
+static float *next_image(struct frames_state *f, int device)
+{
+	struct frame_memory *m = &f->pinned[device][f->next[device]];
+	size_t bytes = image_float_bytes(f->settings.width, f->settings.height);
+
+	if (!m->rgb) {
+		m->rgb = device_pinned_alloc(&f->devs[device], bytes, &m->mem);
+		if (m->rgb)
+			memset(m->rgb, 0, bytes); /* mapped now */
+	}
+	return m->rgb;
+}
+
+/* Frees a frame's result, but not its image when that is the device's
+ * pinned one (rgb). */
+static void free_frame(struct render_result *result, const float *rgb)
+{
+	if (rgb && result->rgb == rgb)
+		result->rgb = NULL;
+	render_result_free(result);
 }
 
 /* A multidev render_piece: frame first + piece, rendered whole; staged in
@@ -178,13 +218,14 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	if (f->keeps && interrupt_stop_signal())
 		return 0;
 	show_frame(f, piece, 0);
-	if (render_kept_frame(f, device, piece, &result, err, err_size))
+	float *rgb = next_image(f, device);
+	if (render_kept_frame(f, device, piece, rgb, &result, err, err_size))
 		return -1;
 	show_frame(f, piece, 1);
 	/* A frame stopped by an interrupt is not written (an animation's
 	 * frames hold all their samples). */
 	if (result.samples_done < settings_samples(&f->settings)) {
-		render_result_free(&result);
+		free_frame(&result, rgb);
 		return 0;
 	}
 	/* A frame is done: an interrupt from now on keeps the finished ones
@@ -193,12 +234,18 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 		interrupt_allow_stop(1);
 	*done = frames_piece_work(&f->settings, &result);
 	if (finish_staging(st, err, err_size)) {
-		render_result_free(&result);
+		free_frame(&result, rgb);
 		return -1;
 	}
-	*st = (struct stager){
-		.f = f, .piece = piece, .rgb = result.rgb, .samples = result.samples_done};
+	int pinned = rgb && result.rgb == rgb;
+	*st = (struct stager){.f = f,
+			      .piece = piece,
+			      .rgb = result.rgb,
+			      .pinned = pinned,
+			      .samples = result.samples_done};
 	result.rgb = NULL; /* the stager's now */
+	if (pinned) /* the other for the next frame, while this one is staged */
+		f->next[device] ^= 1;
 	render_result_free(&result);
 	if (pthread_create(&st->thread, NULL, stage_frame, st) == 0) {
 		st->running = 1;
@@ -310,7 +357,7 @@ static void *render_shared_frame(void *arg)
 		     job->last_frame, &scene.camera);
 	if (sf->count == 1) {
 		double lap = timing_now();
-		failed = render_kept_frame(f, sf->first, sf->piece, &result, sf->err,
+		failed = render_kept_frame(f, sf->first, sf->piece, NULL, &result, sf->err,
 					   sizeof(sf->err));
 		struct piece_work done = failed ? (struct piece_work){0}
 						: frames_piece_work(&f->settings, &result);
@@ -492,8 +539,11 @@ static void frames_release(struct mode_run *run)
 {
 	struct frames_state *f = run->state;
 
-	for (int k = 0; f && k < f->count; k++)
-		render_keeper_close(&f->keepers[k]); /* before its device */
+	for (int k = 0; f && k < f->count; k++) { /* before its device */
+		render_keeper_close(&f->keepers[k]);
+		for (int i = 0; i < 2; i++)
+			device_pinned_free(&f->devs[k], f->pinned[k][i].mem, f->pinned[k][i].rgb);
+	}
 	if (f)
 		devices_close(f->devs, f->count);
 	free(f);

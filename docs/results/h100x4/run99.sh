@@ -83,7 +83,7 @@ fr() { # tag, devices, last frame
   mkdir -p $T/$1
   $B/rtcl ${!2} $F --frames 0:$3 -q -o $T/$1/f.ppm --stats $O/$1.json 2>&1 | head -3
   python3 -c "import json; d=json.load(open('$O/$1.json')); md=d.get('multidevice') or {}
-print('$1: wall %.1f ms;' % d['wall_ms'], '; '.join('%d frames busy %.1f kern %.1f fin %.1f' % (x['pieces'], x['busy_ms'], x['kernel_ms'], x['finish_ms']) for x in md.get('devices', [])), '; eff %.3f' % md.get('device_efficiency', 1))" 2>&1; }
+print('$1: wall %.1f ms;' % d['wall_ms'], '; '.join('%d frames busy %.1f kern %.1f fin %.1f, %d renderer(s)' % (x['pieces'], x['busy_ms'], x['kernel_ms'], x['finish_ms'], x.get('renderers_opened', 0)) for x in md.get('devices', [])), '; eff %.3f' % md.get('device_efficiency', 1))" 2>&1; }
 $B/rtcl $ONE $D --spp 4 -q -o $T/prime.ppm
 for round in 1 2; do
   for sc in D L C W; do
