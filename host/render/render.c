@@ -209,16 +209,20 @@ static int pack_again(struct render_keeper *k, const struct scene *scene,
 	return 0;
 }
 
-int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
-		const struct render_settings *s, float *rgb, struct render_result *res, char *err,
-		size_t err_size)
+int render_keeps(const struct render_settings *s)
+{
+	return keeps_renderer(s);
+}
+
+/* k's renderer open on dev for scene's eye: packed again, or opened; res
+ * (zeroed first) then holds the frame's facts and memory for its image.
+ * Returns 0, or -1 with one message in err, res freed and k closed. */
+static int keep_open(struct render_keeper *k, struct device *dev, const struct scene *scene,
+		     const struct render_settings *s, struct render_result *res, char *err,
+		     size_t err_size)
 {
 	int packed = 1;
 
-	if (!keeps_renderer(s)) {
-		k->opened++;
-		return render(dev, scene, s, res, err, err_size);
-	}
 	memset(res, 0, sizeof(*res));
 	if (k->open && k->r.dev == dev)
 		packed = pack_again(k, scene, s, res, err, err_size);
@@ -239,6 +243,19 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		res->rgb = k->facts.rgb;     /* the image's memory, the frame's */
 		k->facts.rgb = NULL;
 	}
+	return 0;
+}
+
+int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
+		const struct render_settings *s, float *rgb, struct render_result *res, char *err,
+		size_t err_size)
+{
+	if (!keeps_renderer(s)) {
+		k->opened++;
+		return render(dev, scene, s, res, err, err_size);
+	}
+	if (keep_open(k, dev, scene, s, res, err, err_size))
+		return -1;
 	if (rgb) { /* the caller's memory instead (never touched: no cost) */
 		free(res->rgb);
 		res->rgb = rgb;
@@ -253,6 +270,32 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		if (rgb)
 			res->rgb = NULL; /* the caller's */
 		render_result_free(res);
+		return -1;
+	}
+	return 0;
+}
+
+int render_kept_samples(struct render_keeper *k, struct device *dev, const struct scene *scene,
+			const struct render_settings *s, int begin, int end, cl_long *sums,
+			struct piece_result *out, char *err, size_t err_size)
+{
+	struct render_result res;
+	struct rt_piece piece = renderer_whole_image(s, begin, end);
+
+	if (!keeps_renderer(s)) {
+		snprintf(err, err_size, "internal error: an instrumented frame's samples shared");
+		return -1;
+	}
+	if (keep_open(k, dev, scene, s, &res, err, err_size))
+		return -1;
+	piece.sum_begin = begin; /* the sums hold this range alone */
+	k->r.result = &res;
+	int failed = renderer_all_samples(&k->r, &piece, out, err, err_size) ||
+		     (out->samples == end - begin && renderer_read_sums(&k->r, sums, err, err_size));
+	k->r.result = &k->facts;
+	render_result_free(&res);
+	if (failed) {
+		render_keeper_close(k);
 		return -1;
 	}
 	return 0;

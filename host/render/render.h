@@ -56,6 +56,21 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		const struct render_settings *settings, float *rgb, struct render_result *result,
 		char *err, size_t err_size);
 
+/* Whether render_kept keeps a renderer open for these settings (not for an
+ * instrumented render). */
+int render_keeps(const struct render_settings *settings);
+
+/* Samples [begin, end) of every pixel of the frame (scene, as render_kept's)
+ * on k's renderer, their fixed-point sums (4 cl_long a pixel, cl/sample.cl)
+ * read into sums: a share of a frame whose samples are split between
+ * devices, which the caller adds (run/frames.c). render_keeps(settings)
+ * must hold. Sets *out; out->samples < end - begin when an interrupt
+ * stopped it (sums then not read). Returns 0, or -1 with one message in err
+ * and k closed. */
+int render_kept_samples(struct render_keeper *k, struct device *dev, const struct scene *scene,
+			const struct render_settings *settings, int begin, int end, cl_long *sums,
+			struct piece_result *out, char *err, size_t err_size);
+
 /* Closes k's renderer, if open. */
 void render_keeper_close(struct render_keeper *k);
 

@@ -672,6 +672,13 @@ void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels)
 	combine_sums(parts, 2, to, NULL, 0, pixels);
 }
 
+void tiles_mean_of_parts(const struct render_settings *s, const cl_long *const *parts, int count,
+			 float *rgb)
+{
+	combine_sums(parts, count, NULL, rgb, settings_mean_scale(settings_samples(s)),
+		     (size_t)s->width * s->height);
+}
+
 void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb)
 {
 	combine_sums(&sums, 1, NULL, rgb, settings_mean_scale(settings_samples(s)),

@@ -328,6 +328,12 @@ void tiles_sum_parts(const cl_long *const *parts, int count, cl_long *to, size_t
  * scale, as a kernel's last pass takes it; +inf where a channel saturated. */
 void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb);
 
+/* tiles_mean_of_sums of the sum of count parts' sums (each a range of every
+ * pixel's samples, together all of them), in one pass over up to
+ * TILES_SUM_THREADS threads. */
+void tiles_mean_of_parts(const struct render_settings *s, const cl_long *const *parts, int count,
+			 float *rgb);
+
 /* Whether the pieces come from the adaptive dispenser (multidev.h): unless
  * --split static or --piece-rows (a fixed band height) asks for bands. */
 int tiles_adaptive(enum split split, int piece_rows);
