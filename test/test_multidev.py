@@ -272,8 +272,9 @@ def test_mpi_frames_match_one_process_and_every_frame_is_written_once(tmp_path):
 
 
 @needs_mpi
-@pytest.mark.parametrize("scene, kernel", [(None, "dynamic"), ("random300.json", "persistent"),
-                                           ("path_box.json", "wavefront")])
+@pytest.mark.parametrize("scene, kernel", [
+    (None, "dynamic"), pytest.param("random300.json", "persistent", marks=pytest.mark.slow),
+    pytest.param("path_box.json", "wavefront", marks=pytest.mark.slow)])
 def test_frames_on_kept_renderers_match_a_renderer_a_frame(tmp_path, scene, kernel):
     # --frames keeps each device's renderer open from frame to frame (issue
     # 43: opening one took 45-100 ms of a 2000x2000 frame's 190-240 on an
@@ -878,7 +879,7 @@ def measured_split(md):
     return md["split"]
 
 
-@pytest.mark.parametrize("kernel", ["wavefront", "dynamic"])
+@pytest.mark.parametrize("kernel", ["wavefront", pytest.param("dynamic", marks=pytest.mark.slow)])
 def test_path_traced_default_split_is_measured_and_gives_one_devices_image(tmp_path, kernel):
     # A path-traced scene over two devices taken as GPUs (issue 43): the
     # split is chosen by the devices' probes as for Whitted scenes, and the
