@@ -94,7 +94,7 @@ struct stager {
  * device: one frame renders into one while the other is staged. */
 struct frame_memory {
 	cl_mem mem;
-	float *rgb;
+	void *host; /* mapped; malloc's with mem NULL */
 };
 
 /* The devices of an animation, and what the devices' threads share. */
@@ -111,7 +111,7 @@ struct frames_state {
 						      open from frame to frame */
 	struct frame_memory pinned[DEVICES_MAX][2]; /* each device's images */
 	struct frame_memory sums[DEVICES_MAX]; /* each device's sums of a shared
-						  frame (rgb: cl_long) */
+						  frame (share_samples) */
 	int next[DEVICES_MAX]; /* the one its next frame reads back into */
 	int keeps; /* an interrupt keeps the frames finished (not --no-partial) */
 	int kept;  /* frames staged */
@@ -187,12 +187,12 @@ static float *next_image(struct frames_state *f, int device)
 	struct frame_memory *m = &f->pinned[device][f->next[device]];
 	size_t bytes = image_float_bytes(f->settings.width, f->settings.height);
 
-	if (!m->rgb) {
-		m->rgb = device_pinned_alloc(&f->devs[device], bytes, &m->mem);
-		if (m->rgb)
-			memset(m->rgb, 0, bytes); /* mapped now */
+	if (!m->host) {
+		m->host = device_pinned_alloc(&f->devs[device], bytes, &m->mem);
+		if (m->host)
+			memset(m->host, 0, bytes); /* mapped now */
 	}
-	return m->rgb;
+	return m->host;
 }
 
 /* Frees a frame's result, but not its image when that is the device's
@@ -356,8 +356,8 @@ static int sharing_pays(const struct frames_state *f, int shared)
 	if (pieces == 0 || group < 2)
 		return 0;
 	double frame_ms = busy / pieces;
-	double setup_ms = (render_keeps(&f->settings) ? FRAMES_SHARE_SUMS_NS : FRAMES_SHARE_SETUP_NS) *
-			  1e-6 * f->settings.width * f->settings.height;
+	double ns = render_keeps(&f->settings) ? FRAMES_SHARE_SUMS_NS : FRAMES_SHARE_SETUP_NS;
+	double setup_ms = ns * 1e-6 * f->settings.width * f->settings.height;
 	return frame_ms * (1 - 1.0 / group) > setup_ms;
 }
 
@@ -368,19 +368,19 @@ static cl_long *share_sums(struct frames_state *f, int k, char *err, size_t err_
 	struct frame_memory *m = &f->sums[k];
 	size_t bytes = image_sum_bytes(f->settings.width, f->settings.height);
 
-	if (!m->rgb) {
-		m->rgb = device_pinned_alloc(&f->devs[k], bytes, &m->mem);
-		if (!m->rgb) {
-			m->rgb = malloc(bytes); /* not pinned, but memory */
+	if (!m->host) {
+		m->host = device_pinned_alloc(&f->devs[k], bytes, &m->mem);
+		if (!m->host) {
+			m->host = malloc(bytes); /* not pinned, but memory */
 			m->mem = NULL;
 		}
-		if (!m->rgb) {
+		if (!m->host) {
 			snprintf(err, err_size, "out of host memory for a frame's sample sums");
 			return NULL;
 		}
-		memset(m->rgb, 0, bytes); /* mapped now */
+		memset(m->host, 0, bytes); /* mapped now */
 	}
-	return (cl_long *)m->rgb;
+	return m->host;
 }
 
 /* A multidev render_piece of share_samples: device k of the group renders
@@ -449,7 +449,7 @@ static int share_samples(struct shared_frame *sf, struct scene *scene,
 		return -1;
 	}
 	for (int k = 0; k < sf->count; k++)
-		parts[k] = (const cl_long *)f->sums[sf->first + k].rgb;
+		parts[k] = f->sums[sf->first + k].host;
 	tiles_mean_of_parts(s, parts, sf->count, result->rgb);
 	return 0;
 }
@@ -657,11 +657,11 @@ static void frames_release(struct mode_run *run)
 	for (int k = 0; f && k < f->count; k++) { /* before its device */
 		render_keeper_close(&f->keepers[k]);
 		for (int i = 0; i < 2; i++)
-			device_pinned_free(&f->devs[k], f->pinned[k][i].mem, f->pinned[k][i].rgb);
+			device_pinned_free(&f->devs[k], f->pinned[k][i].mem, f->pinned[k][i].host);
 		if (f->sums[k].mem)
-			device_pinned_free(&f->devs[k], f->sums[k].mem, f->sums[k].rgb);
+			device_pinned_free(&f->devs[k], f->sums[k].mem, f->sums[k].host);
 		else
-			free(f->sums[k].rgb);
+			free(f->sums[k].host);
 	}
 	if (f)
 		devices_close(f->devs, f->count);
