@@ -354,7 +354,7 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	 * sums stay in its buffer. */
 	if (renderer_all_samples(&t->dev[k].renderer, &whole, &out, err, err_size))
 		return -1;
-	if (t->by_samples && read_sums(t, k, err, err_size))
+	if (t->by_samples && !t->sums_later && read_sums(t, k, err, err_size))
 		return -1;
 	t->piece_ms[3 * band] = (start - t->frame_start) * 1e3;
 	t->piece_ms[3 * band + 1] = (timing_now() - t->frame_start) * 1e3;

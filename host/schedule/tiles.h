@@ -142,6 +142,8 @@ struct tiles_job {
 	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
 	int probe;		 /* tiles_open measures each device for the
 				    default split (tiles_prefer_samples) */
+	int sums_later;		 /* by_samples: a piece leaves its sums on the
+				    device, for the caller to read (--mpi) */
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
 	double *piece_ms;	 /* each piece's start, end (from frame_start) and
