@@ -371,37 +371,78 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
  * H100) came before the copy, inside the image's time (batch 98c). */
 #define SUMS_PARTS 8
 
+/* One of read_sums_into_slot's threads: its slice of each part, copied once
+ * the part is read. */
+struct slot_copy {
+	const cl_long *from;
+	cl_long *to;
+	cl_event *events;
+	int parts;
+	size_t pixels;
+	int index, threads;
+	int failed;
+};
+
+static void *copy_slices(void *arg)
+{
+	struct slot_copy *c = arg;
+
+	for (int p = 0; p < c->parts; p++) {
+		size_t first = c->pixels * p / SUMS_PARTS, end = c->pixels * (p + 1) / SUMS_PARTS;
+		size_t begin = first + (end - first) * c->index / c->threads,
+		       stop = first + (end - first) * (c->index + 1) / c->threads;
+		if (clWaitForEvents(1, &c->events[p]) != CL_SUCCESS) {
+			c->failed = 1;
+			return NULL;
+		}
+		memcpy(c->to + 4 * begin, c->from + 4 * begin, (stop - begin) * 4 * sizeof(cl_long));
+	}
+	return NULL;
+}
+
 static int read_sums_into_slot(struct mpi_job *j, int device, char *err, size_t err_size)
 {
 	const struct render_settings *s = &j->settings;
 	struct tiles_device *d = &j->tiles.dev[device];
 	size_t pixels = (size_t)s->width * s->height;
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	int threads = (int)(cores / j->node_ranks);
 	cl_event events[SUMS_PARTS];
-	int made = 0, failed = 0;
+	struct slot_copy copies[TILES_SUM_THREADS];
+	pthread_t ids[TILES_SUM_THREADS];
+	int started[TILES_SUM_THREADS] = {0};
+	int made = 0, failed = 0, said = 0;
 
+	threads = threads < 1 ? 1 : threads > TILES_SUM_THREADS ? TILES_SUM_THREADS : threads;
 	for (; made < SUMS_PARTS; made++) {
 		size_t first = pixels * made / SUMS_PARTS, end = pixels * (made + 1) / SUMS_PARTS;
 		if (renderer_read_sums_part(&d->renderer, d->sums, first, end - first,
 					    &events[made], err, err_size)) {
-			failed = 1;
+			failed = said = 1;
 			break;
 		}
 	}
 	pthread_mutex_lock(&j->sums_lock);
-	for (int p = 0; p < made; p++) {
-		size_t first = pixels * p / SUMS_PARTS, end = pixels * (p + 1) / SUMS_PARTS;
-		if (clWaitForEvents(1, &events[p]) != CL_SUCCESS && !failed) {
-			snprintf(err, err_size, "reading the sample sums back from %s failed",
-				 j->devs[device].name);
-			failed = 1;
-		}
-		clReleaseEvent(events[p]);
-		const cl_long *part = d->sums + 4 * first;
-		if (!failed)
-			tiles_sum_parts(&part, 1, j->sums + 4 * first, end - first,
-					(int)(cores / j->node_ranks));
+	/* The threads copy what was read, each its slice of every part. */
+	for (int i = 0; i < threads && made == SUMS_PARTS; i++) {
+		copies[i] = (struct slot_copy){d->sums, j->sums, events, made, pixels, i, threads, 0};
+		started[i] = i > 0 && pthread_create(&ids[i], NULL, copy_slices, &copies[i]) == 0;
 	}
+	for (int i = 0; i < threads && made == SUMS_PARTS; i++)
+		if (!started[i]) /* the first, and any the system would not start */
+			copy_slices(&copies[i]);
+	for (int i = 0; i < threads && made == SUMS_PARTS; i++) {
+		if (started[i])
+			pthread_join(ids[i], NULL);
+		failed |= copies[i].failed;
+	}
+	if (clWaitForEvents(made, events) != CL_SUCCESS && made > 0)
+		failed = 1;
+	for (int p = 0; p < made; p++)
+		clReleaseEvent(events[p]);
+	if (failed && !said)
+		snprintf(err, err_size, "reading the sample sums back from %s failed",
+			 j->devs[device].name);
 	if (!failed) {
 		j->sums_added++;
 		for (int g = 0; g < j->tiles.piece_count; g++)
