@@ -43,7 +43,9 @@ struct device_shares {
 	const char *rank_sums; /* --mpi's sample split: how the ranks' sums were
 				  added ("shared memory", "MPI_Reduce"), or
 				  NULL */
-	double rank_sums_ms;   /* on rank 0, from its devices' end to the sum */
+	double rank_sums_ms;   /* on rank 0: in shared memory, the add after the
+				  image time; by MPI_Reduce, from its devices'
+				  end to the sum */
 	enum split split;
 	const char *piece; /* what a piece is: "band", "rectangle", "frame" */
 	int band_rows, bands; /* bands of fixed rows; 0 for other pieces */

@@ -11,6 +11,10 @@
 #include "base/interrupt.h"
 #include "render/repeats.h"
 #include "base/progress.h"
+#include "device/clerror.h"
+#include "layout/scene_block.h"
+#include "render/block.h"
+#include "render/buffers.h"
 #include "render/reference.h"
 #include "render/renderer.h"
 #include "render/singlepass.h"
@@ -83,18 +87,18 @@ int render_pass_samples(const struct render_settings *s)
 	return renderer_pass_samples(s, (long long)s->width * s->height, 0);
 }
 
-int render(struct device *dev, const struct scene *scene, const struct render_settings *s,
-	   struct render_result *res, char *err, size_t err_size)
+/* render()'s frames on the open renderer r, into r->result (res): the
+ * passes of each, the auxiliary images, the read-back. Returns 0, or -1 with
+ * one message in err (res then still holds what it held). */
+static int render_open(struct renderer *r, const struct render_settings *s,
+		       struct render_result *res, char *err, size_t err_size)
 {
-	struct renderer r;
+	struct device *dev = r->dev;
 	struct rt_piece whole = renderer_whole_image(s, 0, settings_samples(s));
-
-	if (renderer_open(&r, dev, scene, s, res, err, err_size))
-		goto out_free;
 	double lap = timing_now();
 	int frames = repeats_begin(s, res, err, err_size);
 	if (frames < 0)
-		goto out_close;
+		return -1;
 	res->passes = renderer_pass_count(s, &whole, dev->is_gpu);
 	if (s->progress)
 		repeats_progress_begin(s, frames, NULL);
@@ -103,8 +107,8 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 		if (s->progress)
 			repeats_progress_step(s, res, frame, frames);
 		double start = timing_now();
-		if (renderer_all_samples(&r, &whole, &out, err, err_size))
-			goto out_close;
+		if (renderer_all_samples(r, &whole, &out, err, err_size))
+			return -1;
 		repeats_record(res, frame, frames, out.kernel_ms, (timing_now() - start) * 1e3);
 		res->samples_done = out.samples;
 		res->passes_done = out.passes;
@@ -112,29 +116,221 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 	if (s->progress)
 		progress_end();
 	if (repeats_end(res, err, err_size))
-		goto out_close;
+		return -1;
 	res->times.kernels = timing_lap_ms(&lap);
-	if (s->aov && renderer_aov(&r, err, err_size))
-		goto out_close;
+	if (s->aov && renderer_aov(r, err, err_size))
+		return -1;
 	res->times.aov = timing_lap_ms(&lap);
-	if (renderer_read_back(&r, err, err_size))
-		goto out_close;
+	if (renderer_read_back(r, err, err_size))
+		return -1;
 	/* Stopped: the image buffer holds no means yet, the sums hold the
 	 * samples done. */
 	if (res->samples_done < settings_samples(s) &&
-	    renderer_read_mean(&r, res->samples_done, res->rgb, err, err_size))
-		goto out_close;
+	    renderer_read_mean(r, res->samples_done, res->rgb, err, err_size))
+		return -1;
 	res->times.read_back = timing_lap_ms(&lap);
+	return 0;
+}
+
+int render(struct device *dev, const struct scene *scene, const struct render_settings *s,
+	   struct render_result *res, char *err, size_t err_size)
+{
+	struct renderer r;
+
+	if (renderer_open(&r, dev, scene, s, res, err, err_size))
+		goto out_free;
+	if (render_open(&r, s, res, err, err_size)) {
+		renderer_close(&r);
+		goto out_free;
+	}
 	renderer_close(&r);
 	return 0;
 
-out_close:
-	renderer_close(&r);
 out_free:
 	if (s->progress)
 		progress_end();
 	render_result_free(res);
 	return -1;
+}
+
+/* ---- a renderer kept from frame to frame (--frames) ----------------------
+ *
+ * Each frame of an animation opened its renderer (the scene packed and
+ * uploaded, the program built or loaded, the image and sums buffers made)
+ * and closed it: on four H100s a 2000x2000 frame of the default scene took
+ * its device 240 ms for 141 ms of kernels (docs/results/h100x4, batch 98c).
+ * Only the camera moves from frame to frame, but the scene is packed
+ * relative to the eye (scene_from_eye), so each frame packs it again and
+ * writes it into the open renderer's scene buffer: the same bytes render()
+ * uploads, the same program, so the same image. When the packed scene
+ * changes size (a BVH built otherwise from another eye) the renderer is
+ * opened again. Instrumented renders (counts, schedule, write checks, AOVs,
+ * checkpoints) open a renderer a frame, as render() does. */
+
+static int keeps_renderer(const struct render_settings *s)
+{
+	return !s->count_flops && !s->record_schedule && !s->check_writes && !s->aov &&
+	       !s->checkpoint;
+}
+
+/* The open renderer's facts (plan, build, scene) into a frame's result,
+ * which holds no memory of theirs. */
+static void copy_facts(const struct render_result *facts, struct render_result *res)
+{
+	*res = *facts;
+	res->rgb = NULL;
+	res->aov = NULL;
+	res->kernel_ms = res->frame_ms = NULL;
+	res->item_flops = res->pixel_flops = NULL;
+	res->schedule = NULL;
+	res->write_counts = NULL;
+	res->pieces = NULL;
+	res->piece_count = 0;
+	memset(&res->times, 0, sizeof(res->times));
+}
+
+/* The scene packed for this frame's eye into the kept renderer's scene
+ * buffer; res the frame's result with its image's memory. Returns 0, 1
+ * when the packed scene differs in size (the renderer must be opened
+ * again), or -1 with one message in err. */
+static int pack_again(struct render_keeper *k, const struct scene *scene,
+		      const struct render_settings *s, struct render_result *res, char *err,
+		      size_t err_size)
+{
+	struct render_result packed;
+	void *block = NULL;
+	double lap = timing_now();
+
+	memset(&packed, 0, sizeof(packed));
+	if (block_prepare_scene(k->r.dev, scene, s, &packed, &block, err, err_size)) {
+		free(block);
+		render_result_free(&packed);
+		return -1;
+	}
+	const struct render_result *f = &k->facts;
+	if (packed.scene_bytes != f->scene_bytes || packed.scene_in_local != f->scene_in_local ||
+	    packed.bvh_nodes != f->bvh_nodes || packed.bvh_width != f->bvh_width) {
+		free(block);
+		render_result_free(&packed);
+		return 1;
+	}
+	cl_int status = clEnqueueWriteBuffer(k->r.dev->queue, k->r.buffers->scene, CL_TRUE, 0,
+					     scene_block_head_bytes(block), block, 0, NULL, NULL);
+	free(block);
+	if (status != CL_SUCCESS) {
+		snprintf(err, err_size, "writing the scene's %zu bytes to %s failed: %s",
+			 f->scene_bytes, k->r.dev->name, cl_error_name(status));
+		render_result_free(&packed);
+		return -1;
+	}
+	copy_facts(f, res);
+	res->rgb = packed.rgb;
+	res->bvh_depth = packed.bvh_depth;
+	res->bvh_sah_cost = packed.bvh_sah_cost;
+	res->bvh_build_ms = packed.bvh_build_ms;
+	res->times.scene = timing_lap_ms(&lap);
+	return 0;
+}
+
+int render_keeps(const struct render_settings *s)
+{
+	return keeps_renderer(s);
+}
+
+/* k's renderer open on dev for scene's eye: packed again, or opened; res
+ * (zeroed first) then holds the frame's facts and memory for its image.
+ * Returns 0, or -1 with one message in err, res freed and k closed. */
+static int keep_open(struct render_keeper *k, struct device *dev, const struct scene *scene,
+		     const struct render_settings *s, struct render_result *res, char *err,
+		     size_t err_size)
+{
+	int packed = 1;
+
+	memset(res, 0, sizeof(*res));
+	if (k->open && k->r.dev == dev)
+		packed = pack_again(k, scene, s, res, err, err_size);
+	if (packed < 0) {
+		render_keeper_close(k);
+		return -1;
+	}
+	if (packed) {
+		render_keeper_close(k);
+		if (renderer_open(&k->r, dev, scene, s, &k->facts, err, err_size)) {
+			render_result_free(&k->facts); /* the renderer holds nothing */
+			return -1;
+		}
+		k->open = 1;
+		k->opened++;
+		copy_facts(&k->facts, res);
+		res->times = k->facts.times; /* the opening's */
+		res->rgb = k->facts.rgb;     /* the image's memory, the frame's */
+		k->facts.rgb = NULL;
+	}
+	return 0;
+}
+
+int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
+		const struct render_settings *s, float *rgb, struct render_result *res, char *err,
+		size_t err_size)
+{
+	if (!keeps_renderer(s)) {
+		k->opened++;
+		return render(dev, scene, s, res, err, err_size);
+	}
+	if (keep_open(k, dev, scene, s, res, err, err_size))
+		return -1;
+	if (rgb) { /* the caller's memory instead (never touched: no cost) */
+		free(res->rgb);
+		res->rgb = rgb;
+	}
+	k->r.result = res;
+	int failed = render_open(&k->r, s, res, err, err_size);
+	k->r.result = &k->facts;
+	if (failed) {
+		if (s->progress)
+			progress_end();
+		render_keeper_close(k);
+		if (rgb)
+			res->rgb = NULL; /* the caller's */
+		render_result_free(res);
+		return -1;
+	}
+	return 0;
+}
+
+int render_kept_samples(struct render_keeper *k, struct device *dev, const struct scene *scene,
+			const struct render_settings *s, int begin, int end, cl_long *sums,
+			struct piece_result *out, char *err, size_t err_size)
+{
+	struct render_result res;
+	struct rt_piece piece = renderer_whole_image(s, begin, end);
+
+	if (!keeps_renderer(s)) {
+		snprintf(err, err_size, "internal error: an instrumented frame's samples shared");
+		return -1;
+	}
+	if (keep_open(k, dev, scene, s, &res, err, err_size))
+		return -1;
+	piece.sum_begin = begin; /* the sums hold this range alone */
+	k->r.result = &res;
+	int failed = renderer_all_samples(&k->r, &piece, out, err, err_size) ||
+		     (out->samples == end - begin && renderer_read_sums(&k->r, sums, err, err_size));
+	k->r.result = &k->facts;
+	render_result_free(&res);
+	if (failed) {
+		render_keeper_close(k);
+		return -1;
+	}
+	return 0;
+}
+
+void render_keeper_close(struct render_keeper *k)
+{
+	if (!k->open)
+		return;
+	renderer_close(&k->r);
+	render_result_free(&k->facts);
+	k->open = 0;
 }
 
 /* The CPU reference's checkpoint: the mean of every pixel's first

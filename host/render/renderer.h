@@ -38,6 +38,8 @@ struct piece_result {
 /* The most in-order queues one device renders with (--queues). */
 #define RENDER_MAX_QUEUES 4
 
+struct render_buffers;
+
 struct renderer {
 	const struct renderer_ops *ops; /* the kernel's: singlepass or wavefront */
 	struct device *dev;
@@ -47,6 +49,7 @@ struct renderer {
 	struct render_result *result; /* the plan, scene and build facts; read_back
 					 fills the image and counts */
 	void *state;		      /* the renderer's own, behind ops */
+	struct render_buffers *buffers; /* the whole image's, in state (buffers.h) */
 	double next_checkpoint;	      /* when the next is due (settings->checkpoint),
 					 on timing_now()'s clock; 0: not started */
 };

@@ -435,6 +435,7 @@ static int singlepass_open(struct renderer *r, const struct scene *scene, char *
 		return -1;
 	}
 	r->state = st;
+	r->buffers = &st->b;
 	if (launch_setup(dev, scene, s, res, &st->b.scene_block, &st->b.program, err, err_size) ||
 	    (s->count_flops &&
 	     device_check_fits(dev, "the flop count buffer", counts_bytes(s, res), err, err_size)))

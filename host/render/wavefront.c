@@ -343,6 +343,7 @@ static int wavefront_open(struct renderer *r, const struct scene *scene, char *e
 		return -1;
 	}
 	r->state = w;
+	r->buffers = &w->b;
 	w->entry_bytes = scene->integrator == SCENE_INTEGRATOR_PATH ? sizeof(struct rt_path_ray)
 								    : sizeof(struct rt_ray);
 	/* The per-pixel launches cover the image as the naive kernel does. */

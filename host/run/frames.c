@@ -80,10 +80,21 @@ struct stager {
 	pthread_t thread;
 	int running; /* thread started and not yet joined */
 	int piece;
-	float *rgb; /* the frame's image, freed once staged */
+	float *rgb; /* the frame's image, freed once staged (unless pinned) */
+	int pinned; /* rgb is one of the device's pinned images (frame_memory) */
 	int samples; /* its samples per pixel */
 	int failed;
 	char err[1024];
+};
+
+/* Host memory a device reads a frame back into: pinned (device.h), where
+ * NVIDIA's OpenCL reads at the speed of the link. A 2000x2000 image read
+ * into memory of malloc took one H100 27.6-33.8 ms (docs/results/h100x4,
+ * batch 96; the sums of four, 128 MB each, 2.3-2.6 ms pinned). Two a
+ * device: one frame renders into one while the other is staged. */
+struct frame_memory {
+	cl_mem mem;
+	void *host; /* mapped; malloc's with mem NULL */
 };
 
 /* The devices of an animation, and what the devices' threads share. */
@@ -96,6 +107,12 @@ struct frames_state {
 	int count;
 	int done; /* frames rendered, for the progress line */
 	struct stager stagers[DEVICES_MAX]; /* each device's frame being staged */
+	struct render_keeper keepers[DEVICES_MAX]; /* each device's renderer, kept
+						      open from frame to frame */
+	struct frame_memory pinned[DEVICES_MAX][2]; /* each device's images */
+	struct frame_memory sums[DEVICES_MAX]; /* each device's sums of a shared
+						  frame (share_samples) */
+	int next[DEVICES_MAX]; /* the one its next frame reads back into */
 	int keeps; /* an interrupt keeps the frames finished (not --no-partial) */
 	int kept;  /* frames staged */
 };
@@ -126,7 +143,8 @@ static void *stage_frame(void *arg)
 					     st->err, sizeof(st->err)) != 0;
 	if (!st->failed)
 		__atomic_add_fetch(&st->f->kept, 1, __ATOMIC_RELAXED);
-	free(st->rgb);
+	if (!st->pinned)
+		free(st->rgb);
 	st->rgb = NULL;
 	return NULL;
 }
@@ -146,6 +164,46 @@ static int finish_staging(struct stager *st, char *err, size_t err_size)
 	return -1;
 }
 
+/* Frame first + piece, whole, on the renderer kept open on device: the
+ * frames differ only in their camera (frames_orbit). Its image is read back
+ * into rgb when not NULL (then result->rgb == rgb), else into memory of its
+ * own. */
+static int render_kept_frame(struct frames_state *f, int device, int piece, float *rgb,
+			     struct render_result *result, char *err, size_t err_size)
+{
+	const struct job *job = f->job;
+	struct scene scene = *job->scene;
+
+	frames_orbit(&job->scene->camera, job->first_frame + piece, job->first_frame,
+		     job->last_frame, &scene.camera);
+	return render_kept(&f->keepers[device], &f->devs[device], &scene, &f->settings, rgb,
+			   result, err, err_size);
+}
+
+/* The device's pinned image for its next frame (allocated at its first
+ * use), or NULL where none can be had (the frame's own memory then). */
+static float *next_image(struct frames_state *f, int device)
+{
+	struct frame_memory *m = &f->pinned[device][f->next[device]];
+	size_t bytes = image_float_bytes(f->settings.width, f->settings.height);
+
+	if (!m->host) {
+		m->host = device_pinned_alloc(&f->devs[device], bytes, &m->mem);
+		if (m->host)
+			memset(m->host, 0, bytes); /* mapped now */
+	}
+	return m->host;
+}
+
+/* Frees a frame's result, but not its image when that is the device's
+ * pinned one (rgb). */
+static void free_frame(struct render_result *result, const float *rgb)
+{
+	if (rgb && result->rgb == rgb)
+		result->rgb = NULL;
+	render_result_free(result);
+}
+
 /* A multidev render_piece: frame first + piece, rendered whole; staged in
  * the device's stager thread once its previous frame is staged (at most one
  * frame a device waits to be staged), or here when no thread starts. */
@@ -162,14 +220,14 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	if (f->keeps && interrupt_stop_signal())
 		return 0;
 	show_frame(f, piece, 0);
-	if (frames_render_frame(f->job, &f->settings, &f->devs[device], piece, &result, err,
-				err_size))
+	float *rgb = next_image(f, device);
+	if (render_kept_frame(f, device, piece, rgb, &result, err, err_size))
 		return -1;
 	show_frame(f, piece, 1);
 	/* A frame stopped by an interrupt is not written (an animation's
 	 * frames hold all their samples). */
 	if (result.samples_done < settings_samples(&f->settings)) {
-		render_result_free(&result);
+		free_frame(&result, rgb);
 		return 0;
 	}
 	/* A frame is done: an interrupt from now on keeps the finished ones
@@ -178,12 +236,18 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 		interrupt_allow_stop(1);
 	*done = frames_piece_work(&f->settings, &result);
 	if (finish_staging(st, err, err_size)) {
-		render_result_free(&result);
+		free_frame(&result, rgb);
 		return -1;
 	}
-	*st = (struct stager){
-		.f = f, .piece = piece, .rgb = result.rgb, .samples = result.samples_done};
+	int pinned = rgb && result.rgb == rgb;
+	*st = (struct stager){.f = f,
+			      .piece = piece,
+			      .rgb = result.rgb,
+			      .pinned = pinned,
+			      .samples = result.samples_done};
 	result.rgb = NULL; /* the stager's now */
+	if (pinned) /* the other for the next frame, while this one is staged */
+		f->next[device] ^= 1;
 	render_result_free(&result);
 	if (pthread_create(&st->thread, NULL, stage_frame, st) == 0) {
 		st->running = 1;
@@ -235,14 +299,29 @@ static void end_frames(void *context, int device)
  * whole frames), against 95-100 ms of kernels saved. So a frame is shared
  * only when the frames so far took each device longer, per frame, than
  * FRAMES_SHARE_SETUP_NS a pixel beyond what a group's share of it would
- * take; with no frame rendered yet (fewer frames than GPUs) none is. */
+ * take; with no frame rendered yet (fewer frames than GPUs) none is.
+ *
+ * With the devices' renderers kept open (render_keeps), a shared frame is
+ * instead split by samples on them (share_samples): each device of the
+ * group renders a range of every pixel's samples on its open renderer and
+ * reads its sums back into pinned memory, and the host adds them, as
+ * tiles_render's sample split does (the same image). That costs no
+ * renderer's set-up: the sums' pinned memory (allocated at a device's first
+ * share), their read-back (2.3-2.6 ms for 2000x2000 on an H100, batch 96)
+ * and the add (5.4-6.2 ms for four devices' there): FRAMES_SHARE_SUMS_NS a
+ * pixel, with a margin for the allocation (not measured on GPUs yet). */
 #define FRAMES_SHARE_SETUP_NS 70.0 /* 280 ms / 4 M pixels, batch 98 */
+#define FRAMES_SHARE_SUMS_NS 10.0  /* about 2 ns a pixel read back and added */
 
 /* One of the last frames, over devices [first, first + count). */
 struct shared_frame {
 	struct frames_state *f;
 	int piece, first, count;
 	struct device_work work[DEVICES_MAX];
+	int begin[DEVICES_MAX], end[DEVICES_MAX]; /* share_samples: device k's */
+	struct scene *scene; /* share_samples: the frame's */
+	int stopped;	     /* share_samples: an interrupt stopped a share */
+	int opened;	     /* tiles_render opened a renderer on each device */
 	double start;
 	pthread_t thread;
 	int running;
@@ -277,8 +356,102 @@ static int sharing_pays(const struct frames_state *f, int shared)
 	if (pieces == 0 || group < 2)
 		return 0;
 	double frame_ms = busy / pieces;
-	double setup_ms = FRAMES_SHARE_SETUP_NS * 1e-6 * f->settings.width * f->settings.height;
+	double ns = render_keeps(&f->settings) ? FRAMES_SHARE_SUMS_NS : FRAMES_SHARE_SETUP_NS;
+	double setup_ms = ns * 1e-6 * f->settings.width * f->settings.height;
 	return frame_ms * (1 - 1.0 / group) > setup_ms;
+}
+
+/* Device k of sf's group: its pinned memory for a frame's sums (allocated
+ * at its first share), or NULL with err set. */
+static cl_long *share_sums(struct frames_state *f, int k, char *err, size_t err_size)
+{
+	struct frame_memory *m = &f->sums[k];
+	size_t bytes = image_sum_bytes(f->settings.width, f->settings.height);
+
+	if (!m->host) {
+		m->host = device_pinned_alloc(&f->devs[k], bytes, &m->mem);
+		if (!m->host) {
+			m->host = malloc(bytes); /* not pinned, but memory */
+			m->mem = NULL;
+		}
+		if (!m->host) {
+			snprintf(err, err_size, "out of host memory for a frame's sample sums");
+			return NULL;
+		}
+		memset(m->host, 0, bytes); /* mapped now */
+	}
+	return m->host;
+}
+
+/* A multidev render_piece of share_samples: device k of the group renders
+ * its range of the frame's samples on its kept renderer. */
+static int render_sample_share(void *context, int k, int piece, struct piece_work *done,
+			       char *err, size_t err_size)
+{
+	struct shared_frame *sf = context;
+	struct frames_state *f = sf->f;
+	int device = sf->first + k;
+	struct piece_result out;
+	cl_long *sums = share_sums(f, device, err, err_size);
+
+	(void)piece; /* device k's is piece k (SPLIT_STATIC) */
+	if (!sums || render_kept_samples(&f->keepers[device], &f->devs[device], sf->scene,
+					 &f->settings, sf->begin[k], sf->end[k], sums, &out, err,
+					 err_size))
+		return -1;
+	int n = settings_samples(&f->settings);
+	*done = (struct piece_work){(long long)((double)f->settings.width * f->settings.height *
+							(sf->end[k] - sf->begin[k]) / n +
+						0.5),
+				    out.kernel_ms, out.launches};
+	/* Stopped by an interrupt: the frame is not written. */
+	if (out.samples < sf->end[k] - sf->begin[k])
+		__atomic_store_n(&sf->stopped, 1, __ATOMIC_RELAXED);
+	return 0;
+}
+
+/* sf's frame split by samples over its group's kept renderers, added into
+ * result (its image; samples_done less than all when stopped). Returns 0,
+ * or -1 with one message in sf->err. */
+static int share_samples(struct shared_frame *sf, struct scene *scene,
+			 struct render_result *result)
+{
+	struct frames_state *f = sf->f;
+	const struct render_settings *s = &f->settings;
+	int n = settings_samples(s), unit = tiles_sample_unit(s, f->devs + sf->first, sf->count);
+	struct multidev_job job = {.piece_count = sf->count,
+				   .split = SPLIT_STATIC,
+				   .render_piece = render_sample_share,
+				   .context = sf};
+	const cl_long *parts[DEVICES_MAX];
+
+	/* In whole passes, as tiles_split_samples deals them. */
+	if ((n + unit - 1) / unit < sf->count)
+		unit = 1;
+	int units = (n + unit - 1) / unit;
+	for (int k = 0; k < sf->count; k++) {
+		int first = units * k / sf->count, last = units * (k + 1) / sf->count;
+		sf->begin[k] = first * unit;
+		sf->end[k] = last * unit < n ? last * unit : n;
+	}
+	sf->scene = scene;
+	sf->stopped = 0;
+	if (multidev_run(&job, f->devs + sf->first, sf->count, sf->work, sf->err,
+			 sizeof(sf->err)))
+		return -1;
+	result->samples_done = sf->stopped ? 0 : n;
+	if (result->samples_done < n)
+		return 0;
+	result->rgb = malloc(image_float_bytes(s->width, s->height));
+	if (!result->rgb) {
+		snprintf(sf->err, sizeof(sf->err), "out of host memory for a %dx%d image",
+			 s->width, s->height);
+		return -1;
+	}
+	for (int k = 0; k < sf->count; k++)
+		parts[k] = f->sums[sf->first + k].host;
+	tiles_mean_of_parts(s, parts, sf->count, result->rgb);
+	return 0;
 }
 
 static void *render_shared_frame(void *arg)
@@ -295,19 +468,22 @@ static void *render_shared_frame(void *arg)
 		     job->last_frame, &scene.camera);
 	if (sf->count == 1) {
 		double lap = timing_now();
-		failed = render(&f->devs[sf->first], &scene, &f->settings, &result, sf->err,
-				sizeof(sf->err));
+		failed = render_kept_frame(f, sf->first, sf->piece, NULL, &result, sf->err,
+					   sizeof(sf->err));
 		struct piece_work done = failed ? (struct piece_work){0}
 						: frames_piece_work(&f->settings, &result);
 		sf->work[0] = (struct device_work){.pixels = (long long)done.pixels,
 						   .busy_ms = timing_lap_ms(&lap),
 						   .kernel_ms = done.kernel_ms,
 						   .launches = (int)done.launches};
+	} else if (render_keeps(&f->settings) && settings_samples(&f->settings) >= sf->count) {
+		failed = share_samples(sf, &scene, &result);
 	} else {
 		struct tiles_request r = {.scene = &scene,
 					  .devs = f->devs + sf->first,
 					  .count = sf->count,
 					  .split = SPLIT_DYNAMIC};
+		sf->opened = 1;
 		failed = tiles_choose_split(&r, &f->settings, 0, &r.split, &r.measure, sf->err,
 					    sizeof(sf->err)) ||
 			 tiles_render(&r, &f->settings, sf->work, &result, sf->err, sizeof(sf->err));
@@ -366,6 +542,7 @@ static int render_shared_frames(struct frames_state *f, int n, int shared, doubl
 			to->setup_ms += w->setup_ms;
 			to->last_piece_ms = w->busy_ms;
 			to->finish_ms = done_ms;
+			to->renderers_opened += sf->opened;
 		}
 	}
 	return failed ? -1 : 0;
@@ -449,6 +626,8 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	}
 	interrupt_allow_stop(0);
 	progress_end();
+	for (int k = 0; k < f->count; k++)
+		f->work[k].renderers_opened += f->keepers[k].opened;
 	run->record->shares = (struct device_shares){
 		.devs = f->devs,
 		.work = f->work,
@@ -475,6 +654,15 @@ static void frames_release(struct mode_run *run)
 {
 	struct frames_state *f = run->state;
 
+	for (int k = 0; f && k < f->count; k++) { /* before its device */
+		render_keeper_close(&f->keepers[k]);
+		for (int i = 0; i < 2; i++)
+			device_pinned_free(&f->devs[k], f->pinned[k][i].mem, f->pinned[k][i].host);
+		if (f->sums[k].mem)
+			device_pinned_free(&f->devs[k], f->sums[k].mem, f->sums[k].host);
+		else
+			free(f->sums[k].host);
+	}
 	if (f)
 		devices_close(f->devs, f->count);
 	free(f);

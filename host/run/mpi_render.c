@@ -91,7 +91,10 @@ struct mpi_job {
 					 clock (open_before_clock) */
 	int initialized; /* MPI_Init_thread succeeded */
 	int threads;	 /* with MPI_THREAD_MULTIPLE */
-	double reduce_ms; /* by_samples: reduce_sums on this rank */
+	double reduce_ms; /* by_samples: reduce_sums on this rank; shared: its
+			     add, from sums_in */
+	double sums_in;	  /* shared: timing_now() once every rank's sums were
+			     in its slot (reduce_sums' first barrier) */
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -129,6 +132,8 @@ static int central_take(struct mpi_job *j, int g)
  * a millisecond, against pieces of tens of milliseconds or more. */
 #define MPI_NAP_MIN_NS 20000L
 #define MPI_NAP_MAX_NS 1000000L
+/* Rank 0's server, for one image: its longest nap (serve). */
+#define MPI_SERVE_IMAGE_NS 50000L
 
 static void nap(long *ns)
 {
@@ -138,8 +143,8 @@ static void nap(long *ns)
 	*ns = *ns * 2 < MPI_NAP_MAX_NS ? *ns * 2 : MPI_NAP_MAX_NS;
 }
 
-/* MPI_Probe for any message, in naps. */
-static int wait_probe(MPI_Status *status)
+/* MPI_Probe for any message, in naps of at most max_ns. */
+static int wait_probe(MPI_Status *status, long max_ns)
 {
 	long ns = MPI_NAP_MIN_NS;
 
@@ -151,6 +156,7 @@ static int wait_probe(MPI_Status *status)
 		if (arrived)
 			return 0;
 		nap(&ns);
+		ns = ns < max_ns ? ns : max_ns;
 	}
 }
 
@@ -358,6 +364,95 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 	pthread_mutex_unlock(&j->sums_lock);
 }
 
+/* A rank of one device, its sums into its slot of the node's shared memory
+ * (sums_later): read back in SUMS_PARTS parts into the device's pinned
+ * memory, each part copied into the slot once read while the next are read.
+ * Read whole and then copied, the read-back (2.4 ms for 2000x2000 on an
+ * H100) came before the copy, inside the image's time (batch 98c). */
+#define SUMS_PARTS 8
+
+/* One of read_sums_into_slot's threads: its slice of each part, copied once
+ * the part is read. */
+struct slot_copy {
+	const cl_long *from;
+	cl_long *to;
+	cl_event *events;
+	int parts;
+	size_t pixels;
+	int index, threads;
+	int failed;
+};
+
+static void *copy_slices(void *arg)
+{
+	struct slot_copy *c = arg;
+
+	for (int p = 0; p < c->parts; p++) {
+		size_t first = c->pixels * p / SUMS_PARTS, end = c->pixels * (p + 1) / SUMS_PARTS;
+		size_t begin = first + (end - first) * c->index / c->threads,
+		       stop = first + (end - first) * (c->index + 1) / c->threads;
+		if (clWaitForEvents(1, &c->events[p]) != CL_SUCCESS) {
+			c->failed = 1;
+			return NULL;
+		}
+		memcpy(c->to + 4 * begin, c->from + 4 * begin, (stop - begin) * 4 * sizeof(cl_long));
+	}
+	return NULL;
+}
+
+static int read_sums_into_slot(struct mpi_job *j, int device, char *err, size_t err_size)
+{
+	const struct render_settings *s = &j->settings;
+	struct tiles_device *d = &j->tiles.dev[device];
+	size_t pixels = (size_t)s->width * s->height;
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	int threads = (int)(cores / j->node_ranks);
+	cl_event events[SUMS_PARTS];
+	struct slot_copy copies[TILES_SUM_THREADS];
+	pthread_t ids[TILES_SUM_THREADS];
+	int started[TILES_SUM_THREADS] = {0};
+	int made = 0, failed = 0, said = 0;
+
+	threads = threads < 1 ? 1 : threads > TILES_SUM_THREADS ? TILES_SUM_THREADS : threads;
+	for (; made < SUMS_PARTS; made++) {
+		size_t first = pixels * made / SUMS_PARTS, end = pixels * (made + 1) / SUMS_PARTS;
+		if (renderer_read_sums_part(&d->renderer, d->sums, first, end - first,
+					    &events[made], err, err_size)) {
+			failed = said = 1;
+			break;
+		}
+	}
+	pthread_mutex_lock(&j->sums_lock);
+	/* The threads copy what was read, each its slice of every part. */
+	for (int i = 0; i < threads && made == SUMS_PARTS; i++) {
+		copies[i] = (struct slot_copy){d->sums, j->sums, events, made, pixels, i, threads, 0};
+		started[i] = i > 0 && pthread_create(&ids[i], NULL, copy_slices, &copies[i]) == 0;
+	}
+	for (int i = 0; i < threads && made == SUMS_PARTS; i++)
+		if (!started[i]) /* the first, and any the system would not start */
+			copy_slices(&copies[i]);
+	for (int i = 0; i < threads && made == SUMS_PARTS; i++) {
+		if (started[i])
+			pthread_join(ids[i], NULL);
+		failed |= copies[i].failed;
+	}
+	if (clWaitForEvents(made, events) != CL_SUCCESS && made > 0)
+		failed = 1;
+	for (int p = 0; p < made; p++)
+		clReleaseEvent(events[p]);
+	if (failed && !said)
+		snprintf(err, err_size, "reading the sample sums back from %s failed",
+			 j->devs[device].name);
+	if (!failed) {
+		j->sums_added++;
+		for (int g = 0; g < j->tiles.piece_count; g++)
+			if (j->tiles.owner[g] == device)
+				j->arrived[g]++;
+	}
+	pthread_mutex_unlock(&j->sums_lock);
+	return failed ? -1 : 0;
+}
+
 /* Under check_writes: reads device's image and write counts; nonzero, with
  * one message in err, when a pixel was not written as its pieces say. */
 static int writes_wrong(struct tiles_job *t, int device, char *err, size_t err_size)
@@ -375,6 +470,8 @@ static int add_device_sums(struct mpi_job *j, int device, char *err, size_t err_
 
 	if (writes_wrong(t, device, err, err_size))
 		return -1;
+	if (t->sums_later)
+		return read_sums_into_slot(j, device, err, err_size);
 	for (int g = 0; g < t->piece_count; g++)
 		if (t->owner[g] == device)
 			add_piece_sums(j, g, t->dev[device].sums);
@@ -569,10 +666,14 @@ static void *serve(void *context)
 {
 	struct mpi_job *j = context;
 	int remaining = j->total - j->count;
+	/* One image: the other ranks' devices ask for their next piece as they
+	 * end, inside the image's clock; a nap of 1 ms here held each up to
+	 * 1 ms (frames, of hundreds of ms each, keep the longer naps). */
+	long max_ns = j->image ? MPI_SERVE_IMAGE_NS : MPI_NAP_MAX_NS;
 
 	while (remaining > 0) {
 		MPI_Status status;
-		if (wait_probe(&status)) {
+		if (wait_probe(&status, max_ns)) {
 			record_failure(j, ROOT, "waiting for the other ranks failed");
 			MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 		}
@@ -816,6 +917,10 @@ static int reduce_sums(struct mpi_job *j)
 	 * a nonblocking collective moves only inside MPI calls. */
 	if (wait_barrier())
 		return -1;
+	/* Every rank's sums are in the node's memory: the image's clock ends
+	 * here, as one process's ends when its last device's sums are on the
+	 * host (tiles_render); the add is the image's assembly, timed apart. */
+	j->sums_in = timing_now();
 	if (j->shared) {
 		const cl_long **parts = calloc((size_t)j->size, sizeof(*parts));
 		size_t begin = pixels * j->rank / j->size, end = pixels * (j->rank + 1) / j->size;
@@ -835,7 +940,7 @@ static int reduce_sums(struct mpi_job *j)
 	}
 	failed = failed || MPI_Reduce(root ? MPI_IN_PLACE : j->arrived, j->arrived, j->pieces,
 				      MPI_INT, MPI_SUM, ROOT, MPI_COMM_WORLD) != MPI_SUCCESS;
-	j->reduce_ms = (timing_now() - start) * 1e3;
+	j->reduce_ms = (timing_now() - (j->shared ? j->sums_in : start)) * 1e3;
 	return failed ? -1 : 0;
 }
 
@@ -1009,6 +1114,9 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 		 * now. */
 		if (setup_reduction(j))
 			return -1;
+		/* One device: its sums read in parts, each copied into the
+		 * slot as it arrives (read_sums_into_slot). */
+		j->tiles.sums_later = j->shared && j->count == 1;
 	}
 	if (j->rank != ROOT && !j->by_samples)
 		return 0;
@@ -1178,7 +1286,13 @@ static void open_before_clock(struct mpi_job *j)
 			j->rank);
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
-	if (MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS || wait_request(&request))
+	/* The ranks set up for seconds, at different speeds: a barrier in
+	 * naps of up to 1 ms, then one in short naps, so that the ranks leave
+	 * within tens of microseconds of each other. (With the first alone, a
+	 * rank left up to a nap after rank 0 had started the clock: four H100
+	 * ranks' devices ended 0.7-1.0 ms after rank 0's, batch 98c.) */
+	if (MPI_Ibarrier(MPI_COMM_WORLD, &request) != MPI_SUCCESS || wait_request(&request) ||
+	    wait_barrier())
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 }
 
@@ -1223,7 +1337,12 @@ static int render_all(struct mpi_job *j)
 	if (j->rank == ROOT) {
 		pthread_join(server, NULL);
 		progress_end();
-		j->wall_ms = (timing_now() - start) * 1e3;
+		/* Split by samples in the node's shared memory: the image time
+		 * ends once every rank's sums are there (reduce_sums), as one
+		 * process's frame ends with its devices' sums on the host; the
+		 * ranks' add follows, as one process's (multidevice.rank_sums). */
+		j->wall_ms = ((j->by_samples && j->shared ? j->sums_in : timing_now()) - start) *
+			     1e3;
 		status = finish_root(j);
 	}
 	/* The other ranks wait here while rank 0's own devices finish. */

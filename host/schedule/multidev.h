@@ -35,6 +35,8 @@ struct device_work {
 	double setup_ms;      /* in the begin function */
 	double finish_ms;     /* from the job's start to its last piece done */
 	double last_piece_ms; /* its last piece, from taking it to done */
+	int renderers_opened; /* --frames: renderers opened on it (kept open
+				 from frame to frame, render_kept) */
 };
 
 /* The job's callbacks, each called in the device's own thread; `device` is

@@ -283,7 +283,8 @@ static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
 	if (renderer_all_samples(&d->renderer, &pass, &out, err, err_size))
 		return -1;
 	d->probe_ms = timing_lap_ms(&lap);
-	d->probe_launches = out.launches;
+	/* Each pass writes a pixel once: a wavefront pass is several launches. */
+	d->probe_passes = tiles_piece_launches(s, &pass, t->devs[k].is_gpu);
 	pthread_mutex_lock(&t->lock); /* the devices' threads probe at once */
 	expect_writes(t, k, &pass, 1);
 	pthread_mutex_unlock(&t->lock);
@@ -353,7 +354,7 @@ int tiles_render_band(struct tiles_job *t, int k, int band, struct piece_work *d
 	 * sums stay in its buffer. */
 	if (renderer_all_samples(&t->dev[k].renderer, &whole, &out, err, err_size))
 		return -1;
-	if (t->by_samples && read_sums(t, k, err, err_size))
+	if (t->by_samples && !t->sums_later && read_sums(t, k, err, err_size))
 		return -1;
 	t->piece_ms[3 * band] = (start - t->frame_start) * 1e3;
 	t->piece_ms[3 * band + 1] = (timing_now() - t->frame_start) * 1e3;
@@ -448,7 +449,7 @@ int tiles_check_device(const struct tiles_job *t, int k, char *err, size_t err_s
 	const struct render_settings *s = t->settings;
 	const uint32_t *counts = t->dev[k].result.write_counts;
 	/* Set-up's probe (probe_device) wrote every pixel too. */
-	uint32_t probed = (uint32_t)t->dev[k].probe_launches;
+	uint32_t probed = (uint32_t)t->dev[k].probe_passes;
 
 	if (counts && t->by_samples) { /* every pixel, once a pass of its pieces */
 		uint32_t expected = probed;
@@ -597,6 +598,14 @@ static void *combine_range(void *arg)
 {
 	const struct sums_range *r = arg;
 
+	/* One part's sums into `to`: a copy (--mpi's first device's sums into
+	 * its rank's slot), which memcpy makes with streaming stores where the
+	 * range is large, not reading `to` first as the loop's stores do. */
+	if (r->count == 1 && r->to && !r->rgb) {
+		memcpy(r->to + 4 * r->begin, r->parts[0] + 4 * r->begin,
+		       4 * sizeof(cl_long) * (r->end - r->begin));
+		return NULL;
+	}
 	for (size_t i = r->begin; i < r->end; i++) {
 		cl_long sum[4] = {0, 0, 0, 0};
 		for (int k = 0; k < r->count; k++) {
@@ -661,6 +670,13 @@ void tiles_add_sums(cl_long *to, const cl_long *from, size_t pixels)
 	const cl_long *parts[2] = {to, from};
 
 	combine_sums(parts, 2, to, NULL, 0, pixels);
+}
+
+void tiles_mean_of_parts(const struct render_settings *s, const cl_long *const *parts, int count,
+			 float *rgb)
+{
+	combine_sums(parts, count, NULL, rgb, settings_mean_scale(settings_samples(s)),
+		     (size_t)s->width * s->height);
 }
 
 void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb)

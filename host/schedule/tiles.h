@@ -112,7 +112,8 @@ struct tiles_device {
 	cl_mem pinned; /* the sums' pinned host memory (device_pinned_alloc) */
 	double probe_ms; /* tiles_open's probe: one pass of the whole image */
 	double sums_ms;	 /* tiles_open's probe: reading all the sums back */
-	int probe_launches; /* the probe's launches (check_writes) */
+	int probe_passes; /* the probe's passes, a write of each pixel each
+			     (check_writes) */
 };
 
 /* The pieces of one image on devs[count] of this process: the bands of
@@ -141,6 +142,8 @@ struct tiles_job {
 	struct rt_piece row_map; /* the row map every piece gets (tiles_row_map) */
 	int probe;		 /* tiles_open measures each device for the
 				    default split (tiles_prefer_samples) */
+	int sums_later;		 /* by_samples: a piece leaves its sums on the
+				    device, for the caller to read (--mpi) */
 	struct rt_piece *pieces; /* the last frame's pieces (the bands, in order) */
 	int *owner;		 /* each piece's device (index into devs) */
 	double *piece_ms;	 /* each piece's start, end (from frame_start) and
@@ -326,6 +329,12 @@ void tiles_sum_parts(const cl_long *const *parts, int count, cl_long *to, size_t
  * (docs/RENDERING.md, "Samples per pixel"): float(S) times the mean's
  * scale, as a kernel's last pass takes it; +inf where a channel saturated. */
 void tiles_mean_of_sums(const struct render_settings *s, const cl_long *sums, float *rgb);
+
+/* tiles_mean_of_sums of the sum of count parts' sums (each a range of every
+ * pixel's samples, together all of them), in one pass over up to
+ * TILES_SUM_THREADS threads. */
+void tiles_mean_of_parts(const struct render_settings *s, const cl_long *const *parts, int count,
+			 float *rgb);
 
 /* Whether the pieces come from the adaptive dispenser (multidev.h): unless
  * --split static or --piece-rows (a fixed band height) asks for bands. */
