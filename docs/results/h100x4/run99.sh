@@ -3,8 +3,8 @@
 # of one host (nvidia-h100-x4), in one process and over MPI ranks of one GPU
 # each, for the default scene (2000x2000, 2048 spp), the lake (2000x2000, 256
 # spp, 2.1 M triangles) and the path-traced Cornell box (scenes/cornell.json,
-# -k dynamic 1024x1024 64 spp, about 615 ms on one H100; and -k wavefront
-# 2048x2048 64 spp, about 300 ms), two interleaved rounds; then --frames 0:15
+# -k dynamic 2048x2048 64 spp, about 440 ms on one H100 (batch 98: 109 ms at
+# 1024x1024); and -k wavefront 2048x2048 64 spp, about 300 ms), two interleaved rounds; then --frames 0:15
 # and 0:5 of the default scene's orbit (2000x2000, 256 spp) on 1 and 4 GPUs.
 # Every image is compared with cmp against one GPU's (round 1, one process).
 # Under --mpi the image time now ends once every rank's sums are in the
@@ -12,7 +12,7 @@
 # process's frame ends with its devices' sums on the host and its add comes
 # after; the lines print both and their total. About 280 s of commands.
 #
-# Binaries (built on the VM, carried in .gpu/gpu43/):
+# Binaries (built on the VM, carried in .gpu/gpu43/, or the folder B names):
 #   make OIIO=0 MPI=0 BUILD=build-gpu BIN=.gpu/gpu43/rtcl
 #   cp build-gpu/rtcl-meshread .gpu/gpu43/
 #   make OIIO=0 BUILD=build-gpu-mpi BIN=.gpu/gpu43/rtcl-mpi
@@ -23,7 +23,7 @@
 # Without an NVIDIA platform (a dry run on PoCL: OUT=/tmp/x bash run99.sh) it
 # renders tiny images on four PoCL CPU devices taken as GPUs instead.
 set -u
-G=$PWD/.gpu; B=$G/gpu43; T=$(mktemp -d); O=$T/b99; mkdir -p $O
+G=$PWD/.gpu; B=${B:-$G/gpu43}; T=$(mktemp -d); O=$T/b99; mkdir -p $O
 OUT=${OUT:-$(mktemp -d)}; mkdir -p $OUT
 if command -v nvidia-smi > /dev/null; then
   echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
@@ -37,7 +37,7 @@ if [ -n "$P" ]; then
   DRY=0; LAKE_SIZE=10
   D="-k dynamic --size 2000x2000 --spp 2048"
   LS="-k dynamic --size 2000x2000 --spp 256"
-  C="-k dynamic -s scenes/cornell.json --size 1024x1024 --spp 64"
+  C="-k dynamic -s scenes/cornell.json --size 2048x2048 --spp 64"
   W="-k wavefront -s scenes/cornell.json --size 2048x2048 --spp 64"
   F="-k dynamic --size 2000x2000 --spp 256"
 else
