@@ -300,6 +300,23 @@ static void path_missed(struct tracer *tr, struct walk *w)
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_ADD3);
 }
 
+/* Counts, when counting, the path that ends: its length in segments, the
+ * rays it traced through the scene (RENDERING.md, "Paths per bounce"): the
+ * vertex of its next hit is the one its last segment was looking for. */
+static inline void path_count_end(struct tracer *tr, const struct walk *w)
+{
+#ifdef RTCL_COUNT_FLOPS
+	ulong segments = (ulong)w->vertex + 1;
+
+	tr->path_lengths[min(segments, (ulong)RT_PATH_LENGTH_BINS) - 1]++;
+	tr->path_max = max(tr->path_max, segments);
+	tr->path_segments += segments;
+#else
+	(void)tr;
+	(void)w;
+#endif
+}
+
 /* Takes the path's next step, one intersection; returns whether the path
  * is done: w->color is then the sample's colour. (waiting: the Whitted
  * walk's stack, which a path does not need.) */
@@ -317,16 +334,23 @@ static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting
 			COUNT_FLOPS(tr, FLOPS_ADD3);
 		}
 		w->shadow = false;
+		if (w->done)
+			path_count_end(tr, w);
 		return w->done;
 	}
 	struct hit hit = intersect_scene(tr, w->ray.origin, w->ray.dir, INFINITY, false);
 	COUNT_RAY(tr);
 	if (hit.t == 0.0f) {
 		path_missed(tr, w);
+		path_count_end(tr, w);
 		return true;
 	}
 	w->done = path_vertex(tr, w, hit);
-	return w->done && !w->shadow;
+	if (w->done && !w->shadow) {
+		path_count_end(tr, w);
+		return true;
+	}
+	return false;
 }
 
 #endif
