@@ -102,3 +102,14 @@ def test_whitted_renders_count_no_paths(tmp_path):
     stats, summary = counted(tmp_path, BOX, "dynamic", "12x12", 1, "--integrator", "whitted")
     assert "paths" not in stats
     assert "paths:" not in summary
+
+
+def test_pieces_count_the_paths_of_one_launch(tmp_path):
+    """Row bands and samples split over pieces (the multi-device path, here
+    one device) add up to the one launch's paths."""
+    one, _ = counted(tmp_path, BOX, "dynamic")
+    bands, _ = counted(tmp_path, BOX, "dynamic", "12x12", 3, "--devices", "0:0",
+                       "--piece-rows", "4")
+    samples, _ = counted(tmp_path, BOX, "dynamic", "12x12", 3, "--devices", "0:0",
+                         "--split", "samples")
+    assert bands["paths"] == one["paths"] and samples["paths"] == one["paths"]
