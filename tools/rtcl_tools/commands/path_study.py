@@ -34,7 +34,6 @@ stderr, exit status 1, nothing written.
 
 import argparse
 import json
-import math
 import os
 import re
 import statistics
@@ -44,7 +43,7 @@ from .. import files
 from ..interrupts import interruptible
 from ..peak import find_peak, is_cpu_device, read_cpuinfo
 from ..report import format_number, format_percent, markdown_table, one_line
-from ..usage import program_name, report_error
+from ..usage import add_update_committed, program_name, report_error
 
 NAME = re.compile(r"^(?P<scene>[A-Za-z0-9_.-]+?)__(?P<schedule>[A-Za-z0-9_.-]+)__r(?P<round>\d+)"
                   r"\.json$")
@@ -71,6 +70,7 @@ def parse_arguments(argv):
                         help="the device's FP32 peak (default: tools/rtcl_tools/peak.py's)")
     parser.add_argument("--fma-units", type=int, metavar="N",
                         help="FMA units per CPU core, for a CPU's peak")
+    add_update_committed(parser)
     return parser.parse_args(argv)
 
 
@@ -340,25 +340,31 @@ def main(argv=None):
         any_stats = next(iter(next(iter(runs.values())).values()))[0]
         peak = find_peak(any_stats, args, read_cpuinfo())
         study, text = study_document(runs, mitsuba, peak)
-        os.makedirs(out, exist_ok=True)
-        files.write_text(os.path.join(out, "paths.md"), text + "\n")
-        numbers = {scene: [{k: v for k, v in r.items()} for r in rows]
-                   for scene, rows in study.items()}
-        files.write_text(os.path.join(out, "paths.json"),
-                         json.dumps({"peak_gflops": peak.gflops, "peak": peak.formula,
-                                     "scenes": numbers, "mitsuba": mitsuba}, indent=1) + "\n")
-        try:
-            import matplotlib  # noqa: F401
-        except ImportError:
-            print(f"{program_name()}: matplotlib is missing: path_lengths.png not drawn",
-                  file=sys.stderr)
-        else:
-            if plot_lengths(study, os.path.join(out, "path_lengths.png")):
-                print(os.path.join(out, "path_lengths.png"))
-        print(os.path.join(out, "paths.md"))
-    except (StudyError, OSError) as error:
+        with files.committed_files_allowed(args.update_committed):
+            write_outputs(out, study, text, mitsuba, peak)
+    except (StudyError, OSError, files.TrackedFileError) as error:
         return report_error(program_name(), one_line(error))
     return 0
+
+
+def write_outputs(out, study, text, mitsuba, peak):
+    """Writes paths.md, paths.json and the figure into out."""
+    os.makedirs(out, exist_ok=True)
+    files.write_text(os.path.join(out, "paths.md"), text + "\n")
+    numbers = {scene: [{k: v for k, v in r.items()} for r in rows]
+               for scene, rows in study.items()}
+    files.write_text(os.path.join(out, "paths.json"),
+                     json.dumps({"peak_gflops": peak.gflops, "peak": peak.formula,
+                                 "scenes": numbers, "mitsuba": mitsuba}, indent=1) + "\n")
+    try:
+        import matplotlib  # noqa: F401
+    except ImportError:
+        print(f"{program_name()}: matplotlib is missing: path_lengths.png not drawn",
+              file=sys.stderr)
+    else:
+        if plot_lengths(study, os.path.join(out, "path_lengths.png")):
+            print(os.path.join(out, "path_lengths.png"))
+    print(os.path.join(out, "paths.md"))
 
 
 if __name__ == "__main__":
