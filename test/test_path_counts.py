@@ -47,14 +47,25 @@ def check_paths(paths, count, max_depth):
 
 def test_every_path_is_counted_once_by_its_length(tmp_path):
     stats, summary = counted(tmp_path, BOX, "dynamic")
-    check_paths(stats["paths"], 12 * 12 * 3, 6)
+    paths = stats["paths"]
+    check_paths(paths, 12 * 12 * 3, 6)
     # The box is closed but for its front: paths bounce, so some are long.
-    assert stats["paths"]["max_length"] > 3
+    assert paths["max_length"] > 3
     # A segment is a ray; so is a shadow ray, which is not a segment.
-    assert stats["rays"] > stats["paths"]["segments"]
+    assert stats["rays"] > paths["segments"]
     assert stats["simd_efficiency_measured"] == "not measurable on this device"
+    # The summary says what --stats says.
+    line = re.search(r"^paths: +(\d+), ([\d.]+) segments each on average, at most (\d+); "
+                     r"live at bounce 0, 1, \.\.\.: (.*)$", summary, re.MULTILINE)
+    assert line, summary
+    assert int(line.group(1)) == paths["count"]
+    assert line.group(2) == f"{paths['mean_length']:.2f}"
+    assert int(line.group(3)) == paths["max_length"]
+    shares = [float(s.rstrip("%")) for s in line.group(4).split(", ")]
+    assert shares == [round(100 * n / paths["count"], 1) for n in paths["live_per_bounce"]]
 
 
+@pytest.mark.slow  # make test's 3 minutes: test_path.py's counts test is slow too
 def test_dynamic_and_wavefront_count_the_same_paths(tmp_path):
     dynamic, _ = counted(tmp_path, BOX, "dynamic")
     wavefront, _ = counted(tmp_path, BOX, "wavefront")
@@ -73,6 +84,7 @@ def test_every_kernel_counts_the_same_paths(tmp_path):
         first = figures
 
 
+@pytest.mark.slow
 def test_max_depth_bounds_the_lengths(tmp_path):
     doc = json.loads(BOX.read_text())
     doc["max_depth"] = 1
@@ -85,19 +97,7 @@ def test_max_depth_bounds_the_lengths(tmp_path):
     assert stats["paths"]["max_length"] == 3
 
 
-def test_the_summary_says_what_the_stats_say(tmp_path):
-    stats, summary = counted(tmp_path, BOX, "naive")
-    paths = stats["paths"]
-    line = re.search(r"^paths: +(\d+), ([\d.]+) segments each on average, at most (\d+); "
-                     r"live at bounce 0, 1, \.\.\.: (.*)$", summary, re.MULTILINE)
-    assert line, summary
-    assert int(line.group(1)) == paths["count"]
-    assert line.group(2) == f"{paths['mean_length']:.2f}"
-    assert int(line.group(3)) == paths["max_length"]
-    shares = [float(s.rstrip("%")) for s in line.group(4).split(", ")]
-    assert shares == [round(100 * n / paths["count"], 1) for n in paths["live_per_bounce"]]
-
-
+@pytest.mark.slow
 def test_whitted_renders_count_no_paths(tmp_path):
     stats, summary = counted(tmp_path, BOX, "dynamic", "12x12", 1, "--integrator", "whitted")
     assert "paths" not in stats

@@ -28,6 +28,7 @@ def table_rows(text, first_cell):
             for line in text.splitlines() if line.startswith(f"| {first_cell} |")]
 
 
+@pytest.mark.slow  # make test's 3 minutes
 def test_a_pocl_batch_gives_the_tables_and_the_figure(tmp_path):
     batch = tmp_path / "batch"
     batch.mkdir()

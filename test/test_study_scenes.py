@@ -55,6 +55,7 @@ def test_the_lake_path_traced_has_glass_a_mirror_lake_and_the_sun(lake_path):
     assert "direction" in doc["lights"][0]
 
 
+@pytest.mark.slow  # make test's 3 minutes
 def test_the_lake_path_traced_renders_and_maps_to_mitsuba(lake_path, tmp_path):
     out = tmp_path / "lake.pfm"
     render(lake_path, out, "--size", "24x24", "--spp", "2")
@@ -88,6 +89,7 @@ def test_the_materials_scene_renders_nine_kinds_of_material():
     assert len(kinds) >= 9, kinds
 
 
+@pytest.mark.slow
 def test_the_materials_scene_renders_its_textures(tmp_path):
     out = tmp_path / "m.pfm"
     done = render(MATERIALS, out, "--size", "32x20", "--spp", "2", "-v")
