@@ -73,14 +73,31 @@ def test_dynamic_and_wavefront_count_the_same_paths(tmp_path):
     assert dynamic["total_flops"] == wavefront["total_flops"]
 
 
+# Schedules of other branches (issue 41: path regeneration, the wavefront in
+# stages), counted too where this rtcl takes their options.
+OPTIONAL_SCHEDULES = [["-k", "persistent", "--regenerate", "--fetch", "item"],
+                      ["-k", "persistent", "--regenerate", "--fetch", "subgroup"],
+                      ["-k", "wavefront", "--wavefront-form", "stages"]]
+
+
+def accepted(tmp_path, options):
+    """Whether this rtcl renders with options (a tiny probe)."""
+    return subprocess.run([RTCL, str(BOX), *options, "--size", "4x4", "--spp", "1", "-q", "-o",
+                           str(tmp_path / "probe.pfm")], capture_output=True,
+                          timeout=300).returncode == 0
+
+
 @pytest.mark.slow
 def test_every_kernel_counts_the_same_paths(tmp_path):
     first = None
-    for kernel in ["serial", "naive", "cyclic", "dynamic", "persistent", "wavefront"]:
-        stats, _ = counted(tmp_path, BOX, kernel, "10x8", 2)
+    schedules = [["-k", k] for k in ["serial", "naive", "cyclic", "dynamic", "persistent",
+                                     "wavefront"]]
+    schedules += [o for o in OPTIONAL_SCHEDULES if accepted(tmp_path, o)]
+    for options in schedules:
+        stats, _ = counted(tmp_path, BOX, options[1], "10x8", 2, *options[2:])
         check_paths(stats["paths"], 10 * 8 * 2, 6)
         figures = (stats["paths"], stats["total_flops"], stats["rays"])
-        assert first is None or figures == first, kernel
+        assert first is None or figures == first, options
         first = figures
 
 

@@ -29,7 +29,8 @@
 #   OUT=/tmp/o B=. PLATFORM=0 SIZE=32x32 SPP=2 LAKE_SPP=1 LAKE_SIZE=3 REPEAT=1 \
 #     MITSUBA=0 COUNTED=all bash docs/results/h100-paths-study/run.sh
 # Everything lands under $OUT: log.txt, paths.md, path_lengths.png and
-# paths-study.tgz (the --stats files, the study, the images' checks).
+# paths-study.tgz (the --stats files, the study, the images' checks, the work
+# maps of dynamic's counting runs).
 # Expected on one H100: about 400-480 s (builds, the lake's load and BVH in
 # each of its 14 runs, Mitsuba's compilations); BUDGET (480 s) skips what is
 # left of the timed runs and Mitsuba once spent, the study always runs.
@@ -86,6 +87,9 @@ run_round() {
       label=${c%%=*}; opts=${c#*=}; opts=${opts//,/ }
       if [ $SECONDS -ge $BUDGET ]; then echo "budget spent ($SECONDS s): $name $label round $round not run"; continue; fi
       count=""; [ $round = 1 ] && counted $label && count="--flops $T/flops.npy"
+      # dynamic's counting run also draws the flops per pixel (log scale).
+      [ -n "$count" ] && [ $label = dynamic ] &&
+        count="$count --work-map $S/${name}-work.png --work-map-scale log --work-map-bar $S/${name}-work-bar.png"
       st=$S/${name}__${label}__r$round.json
       if ! timeout 120 $RTCL $DEV $opts $file --size $SIZE --spp $spp -r $REPEAT -q $count \
           -o $T/img/$name-$label.pfm --stats $st > $T/log 2>&1; then
