@@ -16,9 +16,11 @@
 # MITSUBA_S (170) seconds; the registers and spills of each schedule's kernel
 # on the materials scene; then tools/path_study.py over the results.
 # An option this rtcl does not take (--regenerate, --fetch, --wavefront-form
-# come from other branches) is probed with a tiny render first and its
-# schedule skipped with a line saying so; without --wavefront-form the
-# wavefront runs as plain "-k wavefront" (the bounce form).
+# come from other branches) is probed first (rtcl given the options and a
+# scene that does not exist answers exit status 2 for an option it does not
+# take) and its schedule skipped with a line saying so; without
+# --wavefront-form the wavefront runs as plain "-k wavefront" (the bounce
+# form).
 #
 # From the repository root on the device:
 #   COMMIT=<commit> bash docs/results/h100-paths-study/run.sh
@@ -31,9 +33,10 @@
 # Everything lands under $OUT: log.txt, paths.md, path_lengths.png and
 # paths-study.tgz (the --stats files, the study, the images' checks, the work
 # maps of dynamic's counting runs).
-# Expected on one H100: about 400-480 s (builds, the lake's load and BVH in
-# each of its 14 runs, Mitsuba's compilations); BUDGET (480 s) skips what is
-# left of the timed runs and Mitsuba once spent, the study always runs.
+# Expected on one H100: about 300-450 s (README.md: builds, the lake's load
+# and BVH in each of its 14 runs, Mitsuba's compilations); BUDGET (480 s)
+# skips what is left of the timed runs and Mitsuba once spent, the study
+# always runs.
 set -u
 ROOT=$PWD
 B=${B:-$ROOT/.gpu/study41}; MI=${MI:-$ROOT/.gpu-pt/mi/mitsuba-cp312.tar.xz}
@@ -66,7 +69,11 @@ wavefront-stages=-k,wavefront,--wavefront-form,stages"
 SCHEDULES=""
 for c in $CANDIDATES; do
   label=${c%%=*}; opts=${c#*=}; opts=${opts//,/ }
-  if $RTCL $DEV $opts scenes/cornell.json --size 8x8 --spp 1 -q -o $T/probe.pfm > $T/probe.log 2>&1; then
+  # A scene that does not exist: rtcl reads its options (exit status 2 for
+  # one it does not take or a combination it refuses) before the scene, so
+  # the probe costs no program build.
+  $RTCL $DEV $opts --size 8x8 --spp 1 -q -o $T/probe.pfm $T/no-such-scene.json > $T/probe.log 2>&1
+  if [ $? != 2 ]; then
     SCHEDULES="$SCHEDULES $c"
   elif [ $label = wavefront-bounce ]; then
     echo "schedule $label skipped: $(head -1 $T/probe.log); plain -k wavefront (the bounce form) instead"
