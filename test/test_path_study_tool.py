@@ -106,6 +106,18 @@ def test_the_gpu_bounds_are_the_whitted_studys_with_all_three_phases(tmp_path):
     assert phases[1:] == ["80.00%", "60.00%", "40.00%", "50.00%"]
 
 
+def test_an_approximate_mitsuba_row_says_so(tmp_path):
+    made_up(tmp_path, "s", "naive", 1, 10.0)
+    (tmp_path / "mitsuba.jsonl").write_text(json.dumps(
+        {"scene": "s", "form": "megakernel", "ms": 20.0, "width": 64, "height": 32, "spp": 4,
+         "approximate": "Mitsuba's principled (metallic 0) for the gltf plastic lobe"}) + "\n")
+    done = study(tmp_path)
+    assert done.returncode == 0, done.stderr
+    text = (tmp_path / "paths.md").read_text()
+    assert table_rows(text, "Mitsuba 3 megakernel (approximate BSDF)")
+    assert "Mitsuba's exact mapping failed on this GPU: Mitsuba's principled" in text
+
+
 @pytest.mark.parametrize("make, message", [
     (lambda folder: None, "no --stats files named SCENE__SCHEDULE__rN.json"),
     (lambda folder: (folder / "s__naive__r1.json").write_text("{"), "not a --stats file"),
