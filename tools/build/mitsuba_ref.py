@@ -686,11 +686,22 @@ def render(scene_path, spp, batches, size=None, threads=1, aov=None, seed=0):
 
 
 def input_digests(scene_path, folder):
-    """The SHA-256 of every file the render read: the scene, its mesh files
-    and its environment map, by their paths relative to folder."""
+    """The SHA-256 of every file the render read: the scene, its mesh files,
+    their MTL files and textures, and its environment map, by their paths
+    relative to folder."""
     scene_path = pathlib.Path(scene_path)
     doc = json.loads(scene_path.read_text())
     files = [scene_path] + [scene_path.parent / m["file"] for m in doc.get("meshes", [])]
+    for mesh in doc.get("meshes", []):                 # an OBJ's MTL files and textures
+        obj = scene_path.parent / mesh["file"]
+        if obj.suffix.lower() != ".obj":
+            continue
+        for line in obj.read_text().splitlines():
+            if line.split()[:1] == ["mtllib"]:
+                files += [obj.parent / name for name in line.split()[1:]]
+        files += [m["mtl_diffuse"]["texture"] for m in
+                  (mtl_material(obj, name, fields, str(obj))
+                   for name, fields in read_mtl(obj).items() if "map_Kd" in fields)]
     if "environment" in doc:
         files.append(scene_path.parent / doc["environment"]["file"])
     return {os.path.relpath(f, folder): hashlib.sha256(f.read_bytes()).hexdigest()
