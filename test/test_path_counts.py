@@ -130,3 +130,24 @@ def test_pieces_count_the_paths_of_one_launch(tmp_path):
     samples, _ = counted(tmp_path, BOX, "dynamic", "12x12", 3, "--devices", "0:0",
                          "--split", "samples")
     assert bands["paths"] == one["paths"] and samples["paths"] == one["paths"]
+
+
+def test_paths_longer_than_the_bins_go_to_the_last(tmp_path):
+    """Beyond RT_PATH_LENGTH_BINS segments the histogram's last bin takes
+    the paths; the count, the longest and the segments stay exact."""
+    doc = json.loads(BOX.read_text())
+    doc["max_depth"] = 40
+    for material in doc["materials"].values():     # bright walls: long paths
+        if "reflectance" in material.get("bsdf", {}):
+            material["bsdf"]["reflectance"] = [0.95, 0.95, 0.95]
+    scene = tmp_path / "deep.json"
+    scene.write_text(json.dumps(doc))
+    stats, _ = counted(tmp_path, scene, "dynamic", "16x16", 4)
+    paths = stats["paths"]
+    hist, live = paths["length_histogram"], paths["live_per_bounce"]
+    assert paths["max_length"] > BINS and hist[-1] > 0
+    assert paths["count"] == sum(hist) == 16 * 16 * 4
+    assert len(live) == BINS and live[-1] == hist[-1]
+    # The paths of 16 or more segments have at least 16 each.
+    assert paths["segments"] >= sum((b + 1) * n for b, n in enumerate(hist))
+    assert paths["segments"] > sum((b + 1) * n for b, n in enumerate(hist[:-1])) + BINS * hist[-1] - 1
