@@ -58,6 +58,7 @@ map_Kd tiles.png
 
 def main(argv):
     folder = pathlib.Path(argv[1] if len(argv) > 1 else "scenes/models")
+    folder.mkdir(parents=True, exist_ok=True)
     (folder / "tiles.png").write_bytes(png(tiles()))
     (folder / "tiles.obj").write_text(OBJ)
     (folder / "tiles.mtl").write_text(MTL)
