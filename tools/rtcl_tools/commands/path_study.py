@@ -19,7 +19,8 @@ it; a record with "approximate" says how its BSDFs differ from rtcl's). Writes i
                     rtcl's schedules
   paths.json        the same numbers
   path_lengths.png  the share of paths by length in segments, one panel per
-                    scene: the paper's per-thread histogram for paths (needs
+                    scene: the paper's per-thread histogram for paths, and
+                    below it the share of paths live at each bounce (needs
                     matplotlib; left out, with a line, without it)
 
 A schedule's time is the median over its rounds of each run's kernel_ms (itself
@@ -280,7 +281,8 @@ def scene_lines(scene, rows, mitsuba):
 
 
 def plot_lengths(study, path):
-    """The share of paths by length, a panel per scene."""
+    """The share of paths by length (top row) and the share of paths live at
+    each bounce (bottom row), a column per scene."""
     import matplotlib
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
@@ -288,19 +290,27 @@ def plot_lengths(study, path):
               if any(r["paths"] for r in rows)]
     if not scenes:
         return False
-    fig, axes = plt.subplots(1, len(scenes), figsize=(3.6 * len(scenes), 3.2), squeeze=False)
-    for ax, (scene, rows) in zip(axes[0], scenes):
+    fig, axes = plt.subplots(2, len(scenes), figsize=(3.6 * len(scenes), 5.8), squeeze=False)
+    for column, (scene, rows) in enumerate(scenes):
         paths = next(r["paths"] for r in rows if r["paths"])
         hist = paths["length_histogram"][:max(paths["max_length"], 1)]
         total = paths["count"] or 1
         lengths = list(range(1, len(hist) + 1))
-        ax.bar(lengths, [100 * n / total for n in hist], color="#4878a8")
-        ax.set_title(f"{scene}\nmean {paths['mean_length']:.2f}, max {paths['max_length']}",
-                     fontsize=9)
-        ax.set_xlabel("path length (segments)")
-        ax.set_xticks(lengths)
-        ax.grid(axis="y", alpha=0.3)
+        top, bottom = axes[0][column], axes[1][column]
+        top.bar(lengths, [100 * n / total for n in hist], color="#4878a8")
+        top.set_title(f"{scene}\nmean {paths['mean_length']:.2f}, max {paths['max_length']}",
+                      fontsize=9)
+        top.set_xlabel("path length (segments)")
+        top.set_xticks(lengths)
+        top.grid(axis="y", alpha=0.3)
+        live = paths["live_per_bounce"]
+        bottom.plot(range(len(live)), [100 * n / total for n in live], "o-", color="#c8642a")
+        bottom.set_xlabel("bounce b (segment b traced)")
+        bottom.set_xticks(range(len(live)))
+        bottom.set_ylim(0, 105)
+        bottom.grid(alpha=0.3)
     axes[0][0].set_ylabel("% of paths")
+    axes[1][0].set_ylabel("% of paths live")
     fig.tight_layout()
     files.save_figure(fig, path, "png", dpi=110)
     plt.close(fig)
