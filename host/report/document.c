@@ -297,7 +297,8 @@ json_t *report_document(const struct job *job, const struct record *record)
 						       simd_measured_all(c))
 					   : json_string("not measurable on this device");
 		if (c->simd_measured && job->scene->integrator == SCENE_INTEGRATOR_PATH) {
-			json_object_set_new(measured, "shade", json_real(simd_measured(c, RT_SIMD_SHADE)));
+			json_object_set_new(measured, "shade",
+					    json_real(simd_measured(c, RT_SIMD_SHADE)));
 			json_object_set_new(measured, "all",
 					    json_real(simd_measured_first(c, RT_SIMD_PHASES)));
 		}

@@ -12,8 +12,8 @@
 static void print_simd(FILE *out, const struct record *record)
 {
 	const struct render_result *c = &record->counted;
-	static const char *const phase[RT_SIMD_PHASES] = {
-		"intersection steps", "traversal steps", "shading steps"};
+	static const char *const phase[RT_SIMD_PHASES] = {"intersection steps", "traversal steps",
+							  "shading steps"};
 
 	fprintf(out, "simd:    %s", c->simd_measured ? "measured " : "not measurable on this device");
 	for (int p = 0, shown = 0; c->simd_measured && p < RT_SIMD_PHASES; p++) {
@@ -49,11 +49,14 @@ static void print_paths(FILE *out, const struct path_counts *p)
 
 	for (int b = 0; b < RT_PATH_LENGTH_BINS; b++)
 		count += p->lengths[b];
-	fprintf(out, "paths:   %llu, %.2f segments each on average, at most %llu; live at bounce 0, 1, ...:",
+	fprintf(out,
+		"paths:   %llu, %.2f segments each on average, at most %llu; live at bounce 0, 1, "
+		"...:",
 		(unsigned long long)count, count ? (double)p->segments / (double)count : 0.0,
 		(unsigned long long)p->max);
 	for (int b = 0; b < bounces; b++) {
-		fprintf(out, "%s %.1f%%", b ? "," : "", count ? 100.0 * (double)(count - live) / (double)count : 0.0);
+		fprintf(out, "%s %.1f%%", b ? "," : "",
+			count ? 100.0 * (double)(count - live) / (double)count : 0.0);
 		live += p->lengths[b];
 	}
 	fprintf(out, "\n");
