@@ -106,6 +106,25 @@ def test_the_gpu_bounds_are_the_whitted_studys_with_all_three_phases(tmp_path):
     assert phases[1:] == ["80.00%", "60.00%", "40.00%", "50.00%"]
 
 
+def test_a_counting_run_made_apart_gives_counts_not_times(tmp_path):
+    """SCENE__SCHEDULE__counted.json (run.sh's COUNT_ONLY=1): its SIMD
+    efficiency and flops make the schedule's bounds, its time is not used,
+    and a schedule counted but never timed has no row."""
+    simd = {"intersect": 0.8, "traversal": 0.6, "both": 0.65, "shade": 0.4, "all": 0.25}
+    made_up(tmp_path, "s", "naive", 1, 1.0, simd, 66.90816)
+    (tmp_path / "s__naive__r1.json").rename(tmp_path / "s__naive__counted.json")
+    made_up(tmp_path, "s", "naive", 1, 100.0)
+    made_up(tmp_path, "s", "dynamic", 1, 5.0, simd, 66.90816)
+    (tmp_path / "s__dynamic__r1.json").rename(tmp_path / "s__dynamic__counted.json")
+    done = study(tmp_path)
+    assert done.returncode == 0, done.stderr
+    text = (tmp_path / "paths.md").read_text()
+    naive = table_rows(text, "naive")[0]
+    assert naive[1] == "100.00" and naive[5] == "25.00% (measured, all three phases)"
+    assert naive[6] == "25.00" and naive[8] == "4.00×"
+    assert not table_rows(text, "dynamic")
+
+
 def test_an_approximate_mitsuba_row_says_so(tmp_path):
     made_up(tmp_path, "s", "naive", 1, 10.0)
     (tmp_path / "mitsuba.jsonl").write_text(json.dumps(

@@ -30,6 +30,9 @@
 # (a check of the script, not a measurement):
 #   OUT=/tmp/o B=. PLATFORM=0 SIZE=32x32 SPP=2 LAKE_SPP=1 LAKE_SIZE=3 REPEAT=1 \
 #     MITSUBA=0 COUNTED=all bash docs/results/h100-paths-study/run.sh
+# COUNT_ONLY=1 makes the counting runs alone (every schedule's unless COUNTED
+# says), for a second call: copy its stats/*__counted.json beside the first
+# call's and run tools/path_study.py on them together.
 # Everything lands under $OUT: log.txt, paths.md, path_lengths.png and
 # paths-study.tgz (the --stats files, the study, the images' checks, the work
 # maps of dynamic's counting runs).
@@ -41,7 +44,8 @@ set -u
 ROOT=$PWD
 B=${B:-$ROOT/.gpu/study41}; MI=${MI:-$ROOT/.gpu-pt/mi/mitsuba-cp312.tar.xz}
 SIZE=${SIZE:-1024x1024}; SPP=${SPP:-64}; LAKE_SPP=${LAKE_SPP:-16}; LAKE_SIZE=${LAKE_SIZE:-10}
-REPEAT=${REPEAT:-5}; ROUNDS=${ROUNDS:-2}; COUNTED=${COUNTED:-dynamic}; BUDGET=${BUDGET:-480}
+REPEAT=${REPEAT:-5}; ROUNDS=${ROUNDS:-2}; BUDGET=${BUDGET:-480}
+COUNTED_GIVEN=${COUNTED:-}; COUNTED=${COUNTED:-dynamic}
 MITSUBA=${MITSUBA:-1}; OUT=${OUT:?OUT must name the folder for the results}
 [ -e /etc/OpenCL/vendors ] && [ -w /etc/OpenCL/vendors ] && [ -n "$(command -v nvidia-smi)" ] &&
   echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
@@ -107,6 +111,27 @@ run_round() {
     done
   done
 }
+
+# COUNT_ONLY=1: a second call for the counting runs the first could not
+# afford (COUNTED, default all): -r 1 and --flops, SCENE__LABEL__counted.json,
+# whose times rtcl-path-study does not use; nothing else.
+if [ "${COUNT_ONLY:-0}" = 1 ]; then
+  [ "$COUNTED" = dynamic ] && [ -z "${COUNTED_GIVEN:-}" ] && COUNTED=all
+  for sc in $SCENES; do
+    name=${sc%%=*}; file=${sc#*=}; spp=${file##*:}; file=${file%:*}
+    for c in $SCHEDULES; do
+      label=${c%%=*}; opts=${c#*=}; opts=${opts//,/ }
+      counted $label || continue
+      if [ $SECONDS -ge $BUDGET ]; then echo "budget spent ($SECONDS s): $name $label not counted"; continue; fi
+      st=$S/${name}__${label}__counted.json
+      timeout 120 $RTCL $DEV $opts $file --size $SIZE --spp $spp -r 1 -q --flops $T/flops.npy \
+        -o $T/img/$name-$label.pfm --stats $st > $T/log 2>&1 || { echo "$name $label counting FAILED"; cat $T/log; rm -f $st; continue; }
+      echo "counted $name $label [${SECONDS} s]"
+    done
+  done
+  (cd $OUT && tar czf $T/paths-counted.tgz stats && rm -rf stats && mv $T/paths-counted.tgz .)
+  echo "done in $SECONDS s"; exit 0
+fi
 
 # Round 1 (with the counting runs), Mitsuba (at most MITSUBA_S seconds), then
 # the other rounds: Mitsuba's comparison is not left to what the budget spares.

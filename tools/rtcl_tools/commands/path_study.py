@@ -3,7 +3,9 @@ from a batch's --stats files.
 
 Reads a folder of rtcl --stats files named SCENE__SCHEDULE__rROUND.json (one
 timed run, `-r N`, of a schedule on a scene in a round; the runs of one round
-may carry a counting run too: --flops, so its figures are in the same file),
+may carry a counting run too: --flops, so its figures are in the same file)
+and SCENE__SCHEDULE__counted.json (a counting run made apart, whose time is
+not used: run.sh's COUNT_ONLY=1),
 and, when present, mitsuba.jsonl: one JSON object a line, {"scene", "form"
 ("megakernel" or "wavefront"), "ms", "width", "height", "spp"}, Mitsuba 3's
 times on the same scenes (docs/results/h100-paths-study/pt_mitsuba.py writes
@@ -46,8 +48,8 @@ from ..peak import find_peak, is_cpu_device, read_cpuinfo
 from ..report import format_number, format_percent, markdown_table, one_line
 from ..usage import add_update_committed, program_name, report_error
 
-NAME = re.compile(r"^(?P<scene>[A-Za-z0-9_.-]+?)__(?P<schedule>[A-Za-z0-9_.-]+)__r(?P<round>\d+)"
-                  r"\.json$")
+NAME = re.compile(r"^(?P<scene>[A-Za-z0-9_.-]+?)__(?P<schedule>[A-Za-z0-9_.-]+)"
+                  r"__(?:r(?P<round>\d+)|(?P<counted>counted))\.json$")
 # Schedules in the order the tables list them; others follow by name.
 ORDER = ("serial", "naive", "cyclic", "dynamic", "persistent", "persistent-regen-item",
          "persistent-regen-group", "persistent-regen-subgroup", "wavefront",
@@ -99,7 +101,9 @@ def read_runs(folder):
         if not isinstance(stats, dict) or "kernel_ms" not in stats:
             raise StudyError(f"{path}: not a --stats file (no kernel_ms)")
         stats["_file"] = name
-        stats["_round"] = int(match["round"])
+        # A "counted" file (run.sh's COUNT_ONLY=1: a counting run of another
+        # call) gives counts, never a time.
+        stats["_round"] = int(match["round"]) if match["round"] else None
         runs.setdefault(match["scene"], {}).setdefault(match["schedule"], []).append(stats)
     if not runs:
         raise StudyError(f"{folder}: no --stats files named SCENE__SCHEDULE__rN.json")
@@ -130,8 +134,9 @@ def paths_of(stats):
 
 
 def counted(stats_list):
-    """Returns the first run of a schedule that carries a counting run, or None."""
-    for stats in sorted(stats_list, key=lambda s: s["_round"]):
+    """Returns the first run of a schedule that carries a counting run (a timed
+    round's before a "counted" file's), or None."""
+    for stats in sorted(stats_list, key=lambda s: (s["_round"] is None, s["_round"] or 0)):
         if "total_flops" in stats:
             return stats
     return None
@@ -164,7 +169,10 @@ def schedule_rows(scene_runs, peak_gflops, cpu):
         raise StudyError(f"the runs disagree on the image size or samples: {sorted(sizes)}")
     for schedule in sorted(scene_runs, key=schedule_key):
         runs = scene_runs[schedule]
-        times = [s["kernel_ms"] for s in sorted(runs, key=lambda s: s["_round"])]
+        timed = sorted((s for s in runs if s["_round"] is not None), key=lambda s: s["_round"])
+        if not timed:
+            continue                            # counted, never timed: no row
+        times = [s["kernel_ms"] for s in timed]
         ms = statistics.median(times)
         count = counted(runs)
         row = {"schedule": schedule, "kernel": runs[0].get("kernel"), "ms": ms,
@@ -341,7 +349,10 @@ def study_document(runs, mitsuba, peak):
                   "lock-step): lost elsewhere is time / flop-peak bound."]
     lines.append("")
     for scene, rows in study.items():
-        lines += scene_lines(scene, rows, mitsuba.get(scene, {}))
+        if rows:
+            lines += scene_lines(scene, rows, mitsuba.get(scene, {}))
+        else:
+            lines += [f"## {scene}", "", "Counting runs only, no timed run.", ""]
     return study, "\n".join(lines)
 
 
