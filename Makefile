@@ -116,7 +116,7 @@ HOST_MODULES := \
 	device/device device/devices device/clerror device/progcache \
 	layout/bvh layout/mesh_block layout/scene_block \
 	render/checks render/probe render/buffers render/program render/block render/watch render/repeats \
-	render/launch render/singlepass render/wavefront render/renderer render/render render/aov \
+	render/launch render/singlepass render/wavefront render/stages render/renderer render/render render/aov \
 	render/reference render/reference_scene render/reference_path \
 	schedule/dispenser schedule/multidev schedule/adapt schedule/tiles \
 	job/job job/record \
@@ -335,6 +335,9 @@ LIBDIR := $(DESTDIR)$(PREFIX)/lib/rtcl
 DATADIR := $(DESTDIR)$(PREFIX)/share/rtcl
 TOOL_SCRIPTS := $(wildcard tools/*.py)
 TOOL_MODULES := $(wildcard tools/rtcl_tools/*.py)
+# The peer comparison's sources, built on the user's machine against the peer
+# (rtcl-peer-compare --counts and --rays).
+TOOL_SOURCES := $(wildcard tools/rtcl_tools/*.cpp tools/rtcl_tools/*.cl)
 TOOL_COMMAND_MODULES := $(wildcard tools/rtcl_tools/commands/*.py)
 TOOL_COMMANDS := $(addprefix rtcl-,$(subst _,-,$(basename $(notdir $(TOOL_SCRIPTS)))))
 SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
@@ -343,11 +346,11 @@ SCENE_FILES := $(wildcard scenes/*.json) scenes/README.md
 SCENE_MODELS := $(sort $(shell find scenes/models -type f))
 SCENE_MODEL_DIRS := $(sort $(shell find scenes/models -mindepth 1 -type d))
 
-install: $(BIN)
+install: $(BIN) $(RAYS)
 	$(INSTALL) -d $(BINDIR) $(MAN1DIR) $(LIBDIR) $(DATADIR)/scenes \
 		$(DATADIR)/tools/rtcl_tools/commands
 	$(INSTALL) -m 755 $(BIN) $(BINDIR)/rtcl
-	$(INSTALL) -m 755 $(MESHREAD) $(LIBDIR)
+	$(INSTALL) -m 755 $(MESHREAD) $(RAYS) $(LIBDIR)
 	$(if $(OIIO_MODULE),$(INSTALL) -m 644 $(OIIO_MODULE) $(LIBDIR))
 	sed -e 's|/usr/local/|$(PREFIX)/|g' docs/rtcl.1 > $(MAN1DIR)/rtcl.1
 	chmod 644 $(MAN1DIR)/rtcl.1
@@ -356,7 +359,7 @@ install: $(BIN)
 	for file in $(SCENE_MODELS); do \
 		$(INSTALL) -m 644 "$$file" "$(DATADIR)/$$file" || exit 1; \
 	done
-	$(INSTALL) -m 644 $(TOOL_MODULES) $(DATADIR)/tools/rtcl_tools
+	$(INSTALL) -m 644 $(TOOL_MODULES) $(TOOL_SOURCES) $(DATADIR)/tools/rtcl_tools
 	$(INSTALL) -m 644 $(TOOL_COMMAND_MODULES) $(DATADIR)/tools/rtcl_tools/commands
 	for script in $(TOOL_SCRIPTS); do \
 		command=rtcl-$$(basename $$script .py | tr _ -); \
@@ -372,10 +375,10 @@ install: $(BIN)
 # if nothing else is left in it; bin, share/man and PREFIX stay.
 uninstall:
 	rm -f $(BINDIR)/rtcl $(addprefix $(BINDIR)/,$(TOOL_COMMANDS)) $(MAN1DIR)/rtcl.1
-	rm -f $(LIBDIR)/rtcl-oiio.so $(LIBDIR)/rtcl-meshread
+	rm -f $(LIBDIR)/rtcl-oiio.so $(LIBDIR)/rtcl-meshread $(LIBDIR)/rtcl-rays
 	rm -f $(addprefix $(DATADIR)/scenes/,$(notdir $(SCENE_FILES)))
 	rm -f $(addprefix $(DATADIR)/,$(SCENE_MODELS))
-	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES)))
+	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/,$(notdir $(TOOL_MODULES) $(TOOL_SOURCES)))
 	rm -f $(addprefix $(DATADIR)/tools/rtcl_tools/commands/,$(notdir $(TOOL_COMMAND_MODULES)))
 	rm -rf $(DATADIR)/tools/__pycache__ $(DATADIR)/tools/rtcl_tools/__pycache__ \
 		$(DATADIR)/tools/rtcl_tools/commands/__pycache__

@@ -73,7 +73,7 @@ __kernel void aov(__global const uint4 *scene_global, __local uint4 *scene_local
 		/* The path integrator's BSDF at the hit: its colour with the
 		 * model's textures, and the normal its normal map gives. */
 		struct path_hit h;
-		path_surface(&tr, &ray, hit, &h);
+		path_surface(&tr, &ray, hit, -1, &h);
 		albedo += clamp(h.bsdf.type == RT_BSDF_MAPPED ? sh.base : h.bsdf.color, 0.0f, 1.0f);
 		normal += h.n;
 #else

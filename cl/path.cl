@@ -134,8 +134,11 @@ static void path_model_textures(struct tracer *tr, RTCL_SCENE_SPACE const struct
 #endif
 
 /* Fills h for the hit of ray (RENDERING.md trace step 2 for the normals;
- * "The BSDFs" for the colours at the hit). */
-static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hit hit,
+ * "The BSDFs" for the colours at the hit). kind is the material's BSDF
+ * kind (RT_BSDF_*) when the caller knows it, a constant that lets the
+ * compiler keep only that kind's code (the wavefront's shade kernels), or
+ * -1: read from the material. */
+static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hit hit, int kind,
 			 struct path_hit *h)
 {
 	struct shading sh;
@@ -156,7 +159,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 
 	RTCL_SCENE_SPACE const struct rt_bsdf *b = &tr->bsdfs[h->material];
 	struct bsdf *out = &h->bsdf;
-	out->type = b->type;
+	out->type = kind >= 0 ? kind : b->type;
 	out->alpha = b->color.w;
 	out->eta = h->inside ? 1.0f / b->emission.w : b->emission.w;
 	out->mirror = b->mirror;
@@ -164,7 +167,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 	out->transmission = b->transmission;
 	out->tint = b->mirror_tint ? sh.base : (float3)(1.0f);
 	COUNT_FLOPS(tr, 1);
-	if (b->type == RT_BSDF_MAPPED) {
+	if (out->type == RT_BSDF_MAPPED) {
 		out->color = fmin(b->diffuse * sh.base, (float3)(1.0f));
 		COUNT_FLOPS(tr, FLOPS_MUL3 + 3);
 	} else if (hit.plane >= 0) {
@@ -176,7 +179,7 @@ static void path_surface(struct tracer *tr, const struct ray_job *ray, struct hi
 	}
 	h->emission = b->emission.xyz;
 #ifdef RTCL_TEXTURES
-	if (hit.triangle >= 0 && b->type != RT_BSDF_MAPPED)
+	if (hit.triangle >= 0 && out->type != RT_BSDF_MAPPED)
 		path_model_textures(tr, b, tr->triangles[hit.triangle].index, hit, h);
 #endif
 }
@@ -224,16 +227,35 @@ static void path_next_event(struct tracer *tr, struct walk *w, const struct path
 	COUNT_RAY(tr);
 }
 
+/* Counts, when counting, the path that ends: its length in segments, the
+ * rays it traced through the scene (RENDERING.md, "Paths per bounce"): the
+ * vertex of its next hit is the one its last segment looked for. Called
+ * where every form of every kernel learns that a path ends, path_vertex
+ * and path_missed (a shadow ray still to trace is no segment). */
+static inline void path_count_end(struct tracer *tr, const struct walk *w)
+{
+#ifdef RTCL_COUNT_FLOPS
+	ulong segments = (ulong)w->vertex + 1;
+
+	tr->path_lengths[min(segments, (ulong)RT_PATH_LENGTH_BINS) - 1]++;
+	tr->path_max = max(tr->path_max, segments);
+	tr->path_segments += segments;
+#else
+	(void)tr;
+	(void)w;
+#endif
+}
+
 /* The hit of the path's segment (RENDERING.md, "The path", one turn of the
  * loop): its emission, the light sample, the BSDF sample that continues
  * the path. Returns whether the path ends here (after the shadow ray, if
- * one was made). */
-static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit)
+ * one was made). kind: as path_surface's. */
+static bool path_scatter(struct tracer *tr, struct walk *w, struct hit hit, int kind)
 {
 	struct path_hit h;
 	int i = w->vertex;
 
-	path_surface(tr, &w->ray, hit, &h);
+	path_surface(tr, &w->ray, hit, kind, &h);
 	RTCL_SCENE_SPACE const struct rt_bsdf *b = &tr->bsdfs[h.material];
 	if (!h.inside && b->emits) {
 		float3 le = h.emission;
@@ -286,8 +308,18 @@ static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit)
 	return false;
 }
 
+/* path_scatter, and the path counted when it ends there. */
+static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit, int kind)
+{
+	bool done = path_scatter(tr, w, hit, kind);
+
+	if (done)
+		path_count_end(tr, w);
+	return done;
+}
+
 /* A ray that leaves the scene: the environment's light, weighted by MIS
- * where next_event could have sampled it. */
+ * where next_event could have sampled it; the path ends. */
 static void path_missed(struct tracer *tr, struct walk *w)
 {
 	float p_light;
@@ -298,59 +330,74 @@ static void path_missed(struct tracer *tr, struct walk *w)
 		weight = mis_weight(tr, w->pdf_prev, p_light);
 	w->color += w->beta * le * weight;
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_ADD3);
+	path_count_end(tr, w);
 }
 
-/* Counts, when counting, the path that ends: its length in segments, the
- * rays it traced through the scene (RENDERING.md, "Paths per bounce"): the
- * vertex of its next hit is the one its last segment was looking for. */
-static inline void path_count_end(struct tracer *tr, const struct walk *w)
+/* The BSDF kind (RT_BSDF_*) of the material hit: no flops, only the
+ * lookups hit_surface makes to find the material (the wavefront's logic
+ * kernel sorts the paths by it, docs/wavefront.md). */
+static int path_hit_kind(struct tracer *tr, struct hit hit)
 {
-#ifdef RTCL_COUNT_FLOPS
-	ulong segments = (ulong)w->vertex + 1;
+	int material;
 
-	tr->path_lengths[min(segments, (ulong)RT_PATH_LENGTH_BINS) - 1]++;
-	tr->path_max = max(tr->path_max, segments);
-	tr->path_segments += segments;
-#else
-	(void)tr;
-	(void)w;
-#endif
+	if (hit.sphere >= 0)
+		material = tr->spheres[hit.sphere].material;
+	else if (SCENE_HAS_TRIANGLES && hit.triangle >= 0)
+		material = (int)triangle_material(tr->triangles[hit.triangle].index);
+	else
+		material = tr->planes[hit.plane].material;
+	return tr->bsdfs[material].type;
+}
+
+/* The path's next segment traced: its nearest hit (t 0: none). */
+static struct hit path_extend(struct tracer *tr, const struct walk *w)
+{
+	struct hit hit = intersect_scene(tr, w->ray.origin, w->ray.dir, INFINITY, false);
+
+	COUNT_RAY(tr);
+	return hit;
+}
+
+/* The shadow ray of the last vertex's light sample traced: whether nothing
+ * blocks it (its own emitter does not). */
+static bool path_shadow_clear(struct tracer *tr, const struct walk *w)
+{
+	tr->skip_sphere = w->shadow_sphere;
+	tr->skip_triangle = w->shadow_triangle;
+	struct hit blocker =
+		intersect_scene(tr, w->shadow_origin, w->shadow_dir, w->shadow_max, true);
+	tr->skip_sphere = tr->skip_triangle = -1;
+	return blocker.t == 0.0f;
+}
+
+/* What the light sample adds once its shadow ray is traced. */
+static void path_light_arrives(struct tracer *tr, struct walk *w, bool clear)
+{
+	if (clear) {
+		w->color += w->shadow_color;
+		COUNT_FLOPS(tr, FLOPS_ADD3);
+	}
+	w->shadow = false;
 }
 
 /* Takes the path's next step, one intersection; returns whether the path
  * is done: w->color is then the sample's colour. (waiting: the Whitted
- * walk's stack, which a path does not need.) */
+ * walk's stack, which a path does not need.) The wavefront's stages form
+ * calls the same pieces from separate kernels (cl/wavefront.cl). */
 static bool walk_step(struct tracer *tr, struct walk *w, struct ray_job *waiting)
 {
 	(void)waiting;
 	if (w->shadow) {
-		tr->skip_sphere = w->shadow_sphere;
-		tr->skip_triangle = w->shadow_triangle;
-		struct hit blocker =
-			intersect_scene(tr, w->shadow_origin, w->shadow_dir, w->shadow_max, true);
-		tr->skip_sphere = tr->skip_triangle = -1;
-		if (blocker.t == 0.0f) {
-			w->color += w->shadow_color;
-			COUNT_FLOPS(tr, FLOPS_ADD3);
-		}
-		w->shadow = false;
-		if (w->done)
-			path_count_end(tr, w);
+		path_light_arrives(tr, w, path_shadow_clear(tr, w));
 		return w->done;
 	}
-	struct hit hit = intersect_scene(tr, w->ray.origin, w->ray.dir, INFINITY, false);
-	COUNT_RAY(tr);
+	struct hit hit = path_extend(tr, w);
 	if (hit.t == 0.0f) {
 		path_missed(tr, w);
-		path_count_end(tr, w);
 		return true;
 	}
-	w->done = path_vertex(tr, w, hit);
-	if (w->done && !w->shadow) {
-		path_count_end(tr, w);
-		return true;
-	}
-	return false;
+	w->done = path_vertex(tr, w, hit, -1);
+	return w->done && !w->shadow;
 }
 
 #endif

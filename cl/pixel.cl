@@ -49,58 +49,116 @@ static inline void count_pixel_flops(__global ulong *pixel_flops, int pixel, ulo
 #endif
 }
 
-/* Traces samples [sample_begin, sample_end) of pixel (x, y), which must lie
- * inside the image, and stores the sum of its sample colours in sums, or
- * after the last sample their mean in image (sample.cl); one sample's colour
- * goes to image as it is. */
-static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __global float *image,
-			 __global long *sums, __global uint *probe, int x, int y)
-{
-	struct walk w;
-	struct ray_job waiting[RAY_STACK_SIZE];
-	int pixel = y * tr->scene->width + x;
-	ulong flops_before = tracer_flops(tr);
+/* A pixel being traced by a work-item: where, the sample it is at, and
+ * what its samples add up to so far. render_pixel keeps it across the
+ * pixel's samples; a regenerating work-item (persistent.cl) keeps it while
+ * it steps the pixel's paths one intersection at a time. Both go through
+ * the functions below, so that a pixel is summed and stored one way. */
+struct pixel_trace {
+	int x, y, pixel;
+	int k;		    /* the sample being traced */
+	ulong flops_before; /* the work-item's flops when the pixel began */
+#ifndef RTCL_ONE_SAMPLE
+	bool held; /* the sums buffer holds the pixel's sum before this pass */
+	long4 sum; /* the pass's samples, when summed in registers */
+#endif
+};
 
-	record_schedule(probe, pixel, tr->scene->width * tr->scene->height, piece);
+/* Begins pixel (x, y), which must lie inside the image: its first sample
+ * of the piece is the next. */
+static void pixel_begin(struct tracer *tr, const struct rt_piece *piece, __global uint *probe,
+			int x, int y, struct pixel_trace *p)
+{
+	p->x = x;
+	p->y = y;
+	p->pixel = y * tr->scene->width + x;
+	p->flops_before = tracer_flops(tr);
+	record_schedule(probe, p->pixel, tr->scene->width * tr->scene->height, piece);
+#ifdef RTCL_ONE_SAMPLE
+	p->k = 0;
+#else
+	p->k = piece->sample_begin;
+	p->held = sample_sum_held(piece, piece->sample_begin);
+	p->sum = (long4)(0);
+#endif
+}
+
+/* Whether the pixel has a sample of the piece left to trace. */
+static inline bool pixel_samples_left(const struct rt_piece *piece, const struct pixel_trace *p)
+{
+#ifdef RTCL_ONE_SAMPLE
+	(void)piece;
+	return p->k < 1;
+#else
+	return p->k < piece->sample_end;
+#endif
+}
+
+/* Starts the walk of the pixel's next sample. */
+static inline void pixel_sample_start(struct tracer *tr, const struct rt_piece *piece,
+				      const struct pixel_trace *p, struct walk *w)
+{
 #ifdef RTCL_ONE_SAMPLE
 	/* One sample per pixel (the host builds --spp 1 with RTCL_ONE_SAMPLE):
-	 * what the loop below does for it, the centre stored as it is, with no
-	 * sum or sample index live across the trace (fewer registers). */
-	walk_start(tr, &w, x, y, (float2)(0.5f), 0, 1);
-	while (!walk_step(tr, &w, waiting))
-		;
-	vstore3(w.color, pixel, image);
+	 * the centre, with no sum or sample index live across the trace
+	 * (fewer registers). */
+	(void)piece;
+	walk_start(tr, w, p->x, p->y, (float2)(0.5f), 0, 1);
 #else
-	/* Each sample's colour goes to the pixel's sum in the sums buffer (in
-	 * place, or summed over the pass in registers and added after it:
-	 * sample.cl); the pass that ends the pixel stores its mean, and one
-	 * sample its colour as it is. */
-	bool held = sample_sum_held(piece, piece->sample_begin);
-	long4 sum = (long4)(0);
+	walk_start(tr, w, p->x, p->y, sample_offset(tr, p->x, p->y, p->k, piece->samples), p->k,
+		   piece->samples);
+#endif
+}
 
-	for (int k = piece->sample_begin; k < piece->sample_end; k++) {
-		walk_start(tr, &w, x, y, sample_offset(tr, x, y, k, piece->samples), k,
-			   piece->samples);
-		while (!walk_step(tr, &w, waiting))
-			;
-		if (piece->samples == 1)
-			continue;
+/* Adds the colour of the sample whose walk w ended to the pixel's sum (in
+ * the sums buffer in place, or in registers over the pass: sample.cl), and
+ * moves on to the next sample. One sample's colour is stored as it is, by
+ * pixel_end. */
+static inline void pixel_sample_add(struct tracer *tr, const struct rt_piece *piece,
+				    __global long *sums, struct pixel_trace *p, const struct walk *w)
+{
+#ifndef RTCL_ONE_SAMPLE
+	if (piece->samples > 1) {
 #ifdef RTCL_SUM_IN_PLACE
-		sample_add_in_place(sums, pixel, sample_term(tr, w.color),
-				    held || k > piece->sample_begin);
+		sample_add_in_place(sums, p->pixel, sample_term(tr, w->color),
+				    p->held || p->k > piece->sample_begin);
 #else
-		sum = sample_sums(sum, sample_term(tr, w.color));
+		p->sum = sample_sums(p->sum, sample_term(tr, w->color));
 #endif
 	}
+#else
+	(void)tr;
+	(void)piece;
+	(void)sums;
+	(void)w;
+#endif
+	p->k++;
+}
+
+/* Ends the pixel after its last sample of the piece (w: that sample's
+ * walk): stores the sum of its samples in sums, or after the render's last
+ * sample their mean in image; one sample's colour goes to image as it is. */
+static void pixel_end(struct tracer *tr, const struct rt_piece *piece, __global float *image,
+		      __global long *sums, __global uint *probe, const struct pixel_trace *p,
+		      const struct walk *w)
+{
+	int pixel = p->pixel;
+
+#ifdef RTCL_ONE_SAMPLE
+	(void)piece;
+	(void)sums;
+	vstore3(w->color, pixel, image);
+#else
 	if (piece->samples == 1) {
-		vstore3(w.color, pixel, image);
+		vstore3(w->color, pixel, image);
 	} else {
 #ifdef RTCL_SUM_IN_PLACE
 		if (sample_ends_pixel(piece, piece->sample_end))
 			vstore3(sample_mean(tr, sample_read_in_place(sums, pixel), piece), pixel,
 				image);
 #else
-		if (held)
+		long4 sum = p->sum;
+		if (p->held)
 			sum = sample_sums(sum, vload4(pixel, sums));
 		if (sample_ends_pixel(piece, piece->sample_end))
 			vstore3(sample_mean(tr, sum, piece), pixel, image);
@@ -109,6 +167,25 @@ static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __glob
 #endif
 	}
 #endif
-	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - flops_before);
+	count_pixel_flops(tr->pixel_flops, pixel, tracer_flops(tr) - p->flops_before);
 	count_write(probe, pixel);
+}
+
+/* Traces samples [sample_begin, sample_end) of pixel (x, y), which must lie
+ * inside the image, each walked to its end before the next begins, and
+ * stores the pixel (pixel_end). */
+static void render_pixel(struct tracer *tr, const struct rt_piece *piece, __global float *image,
+			 __global long *sums, __global uint *probe, int x, int y)
+{
+	struct walk w;
+	struct ray_job waiting[RAY_STACK_SIZE];
+	struct pixel_trace p;
+
+	pixel_begin(tr, piece, probe, x, y, &p);
+	for (; pixel_samples_left(piece, &p); pixel_sample_add(tr, piece, sums, &p, &w)) {
+		pixel_sample_start(tr, piece, &p, &w);
+		while (!walk_step(tr, &w, waiting))
+			;
+	}
+	pixel_end(tr, piece, image, sums, probe, &p, &w);
 }

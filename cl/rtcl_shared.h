@@ -399,6 +399,34 @@ struct rt_path_ray {
 	rt_int specular;
 };
 
+/* The stages form of the wavefront under the path integrator
+ * (docs/wavefront.md, "The stages form"): a pool of `slots` paths whose
+ * state lies in structure-of-arrays, RT_STAGE_FIELDS arrays of `slots`
+ * 16-byte words one after another (cl/wavefront.cl says what each holds),
+ * and RT_STAGE_QUEUES queues of `slots` slot indices, each with its length
+ * in the counter word of the same number. */
+#define RT_STAGE_RAY_O 0    /* the next segment's origin; w: the throughput's red */
+#define RT_STAGE_RAY_D 1    /* its direction; w: green */
+#define RT_STAGE_PREV 2	    /* where the last BSDF sample was taken; w: blue */
+#define RT_STAGE_COLOR 3    /* the radiance gathered; w: the last BSDF pdf */
+#define RT_STAGE_PATH 4	    /* ints: pixel, sample, vertex, RT_PATH_* flags */
+#define RT_STAGE_HIT 5	    /* the segment's hit: t, u, v, triangle (int) */
+#define RT_STAGE_HIT_PRIM 6 /* ints: its sphere, plane; the shadow ray clear */
+#define RT_STAGE_SHADOW_O 7 /* the shadow ray's origin; w: its length */
+#define RT_STAGE_SHADOW_D 8 /* its direction; w: the emitter sphere (int) */
+#define RT_STAGE_SHADOW_C 9 /* what it brings; w: the emitter triangle (int) */
+#define RT_STAGE_FIELDS 10
+#define RT_PATH_LIVE 1u	    /* the slot holds a path */
+#define RT_PATH_SPECULAR 2u /* its last scattering was a delta lobe (or none) */
+#define RT_PATH_SHADOW 4u   /* a shadow ray was queued for it */
+#define RT_PATH_DONE 8u	    /* it ends once that shadow ray is traced */
+#define RT_STAGE_QUEUE_NEW 0			 /* free slots, for new paths */
+#define RT_STAGE_QUEUE_SHADE(kind) (1 + (kind)) /* paths at a hit of kind RT_BSDF_* */
+#define RT_STAGE_KINDS 5
+#define RT_STAGE_QUEUE_EXTEND 6 /* segments to trace (nearest hit) */
+#define RT_STAGE_QUEUE_SHADOW 7 /* shadow rays to trace (any hit) */
+#define RT_STAGE_QUEUES 8
+
 /* What one launch (or one wavefront pass) renders: a rectangle of the image
  * and a range of each of its pixels' samples. A plain render is one or more
  * pieces covering the whole image; a multi-device render hands pieces to

@@ -120,6 +120,26 @@ static inline long4 sample_sums(long4 a, long4 b)
 	return (long4)(a.x + b.x, a.y + b.y, a.z + b.z, a.w | b.w);
 }
 
+#ifdef cl_khr_int64_base_atomics
+#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
+/* Adds term to pixel's sum in sums with 64-bit atomics: integers, so the
+ * sum is the same whatever order the terms come in (the wavefront's stages
+ * form adds the samples of one pixel from several work-items). */
+static inline void sample_add_atomic(__global long *sums, int pixel, long4 term)
+{
+	volatile __global long *sum = (volatile __global long *)sums + 4 * (size_t)pixel;
+
+	if (term.x)
+		atom_add(sum, term.x);
+	if (term.y)
+		atom_add(sum + 1, term.y);
+	if (term.z)
+		atom_add(sum + 2, term.z);
+	if (term.w)
+		atom_or(sum + 3, term.w);
+}
+#endif
+
 #if defined(cl_khr_int64_base_atomics) && !defined(RTCL_SUM_IN_REGISTERS)
 /* A pass adds each sample's term to the pixel's sum where it lies, with
  * 64-bit atomics whose results it does not wait for, so that no sum is live
@@ -129,7 +149,6 @@ static inline long4 sample_sums(long4 a, long4 b)
  * the pixel writes it; the atomics only spare it the read. Devices without
  * 64-bit atomics (and RTCL_SUM_IN_REGISTERS) keep the pass's sum in
  * registers instead: the same integers, so the same image. */
-#pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 #define RTCL_SUM_IN_PLACE
 #endif
 
@@ -138,20 +157,11 @@ static inline long4 sample_sums(long4 a, long4 b)
  * buffer does not hold the pixel's sum yet (held false). */
 static inline void sample_add_in_place(__global long *sums, int pixel, long4 term, bool held)
 {
-	volatile __global long *sum = (volatile __global long *)sums + 4 * (size_t)pixel;
-
 	if (!held) {
 		vstore4(term, pixel, sums);
 		return;
 	}
-	if (term.x)
-		atom_add(sum, term.x);
-	if (term.y)
-		atom_add(sum + 1, term.y);
-	if (term.z)
-		atom_add(sum + 2, term.z);
-	if (term.w)
-		atom_or(sum + 3, term.w);
+	sample_add_atomic(sums, pixel, term);
 }
 
 /* Returns pixel's sum after this work-item's atomics on it: read by atomics

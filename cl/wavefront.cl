@@ -280,3 +280,402 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
 #endif
 	store_counts(&tr, global_item());
 }
+
+#if defined(RTCL_PATH) && defined(cl_khr_int64_base_atomics)
+/* The stages form (docs/wavefront.md, "The stages form"), after Laine,
+ * Karras and Aila (2013): a fixed pool of `slots` paths in
+ * structure-of-arrays (rtcl_shared.h, RT_STAGE_*), and one kernel per stage
+ * over a compacted queue of slots, each calling the piece of path.cl's walk
+ * that the single-pass kernels' walk_step calls at that point:
+ *
+ *   stages_logic       every slot: the light of the last shadow ray, the
+ *                      segment's miss (the environment), a finished path's
+ *                      sample added to its pixel; queues the slot by the
+ *                      BSDF kind of its hit, or as free
+ *   stages_new_path    each free slot: the next (pixel, sample), its
+ *                      primary ray queued for extension (stages_advance,
+ *                      one work-item, then counts the paths handed out)
+ *   stages_shade_KIND  path_vertex at a hit of that kind: emission, the
+ *                      light sample (its shadow ray queued), the BSDF
+ *                      sample and the roulette (the next segment queued)
+ *   stages_extend      each queued segment: its nearest hit
+ *   stages_shadow      each queued shadow ray: any hit
+ *
+ * A path's colour gathers the same terms in the same order as walk_step's
+ * (the emission and light sample of vertex i, its shadow ray's light, then
+ * vertex i + 1's), and its sample's fixed-point term goes to the pixel's
+ * sum with 64-bit atomic adds, which do not depend on the order: the image
+ * is the single-pass kernels', byte for byte, and so are the flops and
+ * rays each pixel gets. */
+
+static inline __global float4 *stage_field(__global float4 *state, uint slots, int field)
+{
+	return state + (size_t)field * slots;
+}
+
+/* Appends slot to queue q. */
+static inline void stage_push(__global uint *queues, __global uint *counts, uint slots, int q,
+			      uint slot)
+{
+	queues[(size_t)q * slots + atomic_inc(&counts[q])] = slot;
+}
+
+static inline uint stage_queued(__global const uint *queues, uint slots, int q, uint j)
+{
+	return queues[(size_t)q * slots + j];
+}
+
+/* The walk of slot i as path.cl keeps it between two steps, with
+ * path = its RT_STAGE_PATH word. */
+static struct walk stage_load_walk(__global float4 *state, uint slots, uint i, int4 path)
+{
+	struct walk w;
+	float4 origin = stage_field(state, slots, RT_STAGE_RAY_O)[i];
+	float4 dir = stage_field(state, slots, RT_STAGE_RAY_D)[i];
+	float4 prev = stage_field(state, slots, RT_STAGE_PREV)[i];
+	float4 color = stage_field(state, slots, RT_STAGE_COLOR)[i];
+
+	w.ray = (struct ray_job){origin.xyz, dir.xyz, (ray_weight_t)(1.0f), 0};
+	w.beta = (float3)(origin.w, dir.w, prev.w);
+	w.x_prev = prev.xyz;
+	w.color = color.xyz;
+	w.pdf_prev = color.w;
+	w.vertex = path.z;
+	w.specular = (path.w & RT_PATH_SPECULAR) != 0;
+	w.shadow = false;
+	w.done = false;
+	return w;
+}
+
+static void stage_store_walk(__global float4 *state, uint slots, uint i, const struct walk *w)
+{
+	stage_field(state, slots, RT_STAGE_RAY_O)[i] = (float4)(w->ray.origin, w->beta.x);
+	stage_field(state, slots, RT_STAGE_RAY_D)[i] = (float4)(w->ray.dir, w->beta.y);
+	stage_field(state, slots, RT_STAGE_PREV)[i] = (float4)(w->x_prev, w->beta.z);
+	stage_field(state, slots, RT_STAGE_COLOR)[i] = (float4)(w->color, w->pdf_prev);
+}
+
+static inline int4 stage_path(__global float4 *state, uint slots, uint i)
+{
+	return as_int4(stage_field(state, slots, RT_STAGE_PATH)[i]);
+}
+
+static inline void stage_set_path(__global float4 *state, uint slots, uint i, int4 path)
+{
+	stage_field(state, slots, RT_STAGE_PATH)[i] = as_float4(path);
+}
+
+/* Sets the sample of path (its RT_STAGE_PATH word) as the one traced. */
+static inline void stage_set_sample(struct tracer *tr, int4 path, uint samples)
+{
+	tracer_set_sample(tr, path.x % tr->scene->width, path.x / tr->scene->width, (uint)path.y,
+			  samples);
+}
+
+/* stages_logic: one work-item per slot. image and sums are the render's:
+ * a finished path's colour goes to image as it is when the render has one
+ * sample, else its fixed-point term to the pixel's sum. */
+__kernel void stages_logic(__global const uint4 *scene_global, __local uint4 *scene_local,
+			   __global float4 *state, uint slots, __global uint *queues,
+			   __global uint *counts, __global float *image, __global long *sums,
+			   __global ulong *item_counts, __global ulong *pixel_flops, uint samples)
+{
+	struct tracer tr;
+	uint i = get_global_id(0);
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	if (i < slots) {
+		int4 path = stage_path(state, slots, i);
+		uint flags = (uint)path.w;
+
+		if (!(flags & RT_PATH_LIVE)) {
+			stage_push(queues, counts, slots, RT_STAGE_QUEUE_NEW, i);
+		} else {
+			struct walk w;
+			float4 color = stage_field(state, slots, RT_STAGE_COLOR)[i];
+			bool ended = (flags & RT_PATH_DONE) != 0;
+
+			stage_set_sample(&tr, path, samples);
+			w.color = color.xyz;
+			if (flags & RT_PATH_SHADOW) {
+				w.shadow_color =
+					stage_field(state, slots, RT_STAGE_SHADOW_C)[i].xyz;
+				path_light_arrives(
+					&tr, &w,
+					as_int4(stage_field(state, slots, RT_STAGE_HIT_PRIM)[i]).z);
+			}
+			if (!ended) {
+				float4 h = stage_field(state, slots, RT_STAGE_HIT)[i];
+				int4 prim = as_int4(stage_field(state, slots, RT_STAGE_HIT_PRIM)[i]);
+				struct hit hit = {h.x, prim.x, prim.y, as_int(h.w), h.y, h.z};
+
+				if (hit.t == 0.0f) {
+					float3 gathered = w.color;
+					w = stage_load_walk(state, slots, i, path);
+					w.color = gathered;
+					path_missed(&tr, &w);
+					ended = true;
+				} else {
+					stage_push(queues, counts, slots,
+						   RT_STAGE_QUEUE_SHADE(path_hit_kind(&tr, hit)), i);
+				}
+			}
+			if (ended) {
+				if (samples == 1)
+					vstore3(w.color, path.x, image);
+				else
+					sample_add_atomic(sums, path.x, sample_term(&tr, w.color));
+				stage_push(queues, counts, slots, RT_STAGE_QUEUE_NEW, i);
+				path.w = 0;
+			} else {
+				path.w = (int)(flags & ~RT_PATH_SHADOW);
+				stage_field(state, slots, RT_STAGE_COLOR)[i] =
+					(float4)(w.color, color.w);
+			}
+			stage_set_path(state, slots, i, path);
+			add_pixel_flops(pixel_flops, path.x, tracer_flops(&tr));
+		}
+	}
+	store_counts(&tr, global_item());
+}
+
+/* The queue kernels below take the items of their queue j = get_global_id(0),
+ * j + get_global_size(0), ... below their count: the host launches either
+ * exactly the count it read (one item each) or a grid that fills the device
+ * (RTCL_STAGES_LAUNCH=device, docs/wavefront.md), whose work-items read the
+ * count on the device. Each item's flops go to its path's pixel. `limit`
+ * caps the count (the host's, or UINT_MAX). */
+static inline uint stage_count(__global const uint *counts, int q, uint limit)
+{
+	return min(counts[q], limit);
+}
+
+/* The paths of the piece handed out so far: a 64-bit word after the
+ * queue counters. */
+static inline __global ulong *stage_handed_out(__global uint *counts)
+{
+	return (__global ulong *)(counts + RT_STAGE_QUEUES);
+}
+
+/* stages_new_path: over the free queue, as many as paths remain of the
+ * piece's `total`: the j-th takes path handed_out + j, numbered sample by
+ * sample and, within a sample, pixel by pixel in the piece's order. */
+__kernel void stages_new_path(__global const uint4 *scene_global, __local uint4 *scene_local,
+			      __global float4 *state, uint slots, __global uint *queues,
+			      __global uint *counts, uint limit, ulong total,
+			      struct rt_piece piece, __global ulong *item_counts,
+			      __global ulong *pixel_flops)
+{
+	struct tracer tr;
+	ulong first = *stage_handed_out(counts);
+	ulong left = total - first;
+	uint count = (uint)min((ulong)stage_count(counts, RT_STAGE_QUEUE_NEW, limit), left);
+	ulong per_sample = (ulong)piece.width * (ulong)piece.height;
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
+		uint slot = stage_queued(queues, slots, RT_STAGE_QUEUE_NEW, j);
+		ulong n = first + j;
+		int k = piece.sample_begin + (int)(n / per_sample);
+		int r = (int)(n % per_sample);
+		int x = piece.x0 + r % piece.width;
+		int y = rt_piece_row(&piece, piece.y0 + r / piece.width);
+		int pixel = y * tr.scene->width + x;
+		struct walk w;
+
+		walk_start(&tr, &w, x, y, sample_offset(&tr, x, y, k, piece.samples), k,
+			   piece.samples);
+		stage_store_walk(state, slots, slot, &w);
+		stage_set_path(state, slots, slot,
+			       (int4)(pixel, k, w.vertex,
+				      RT_PATH_LIVE | (w.specular ? RT_PATH_SPECULAR : 0)));
+		stage_push(queues, counts, slots, RT_STAGE_QUEUE_EXTEND, slot);
+		add_pixel_flops(pixel_flops, pixel, tracer_flops(&tr) - before);
+	}
+	store_counts(&tr, global_item());
+}
+
+/* One work-item, after stages_new_path: the paths it took counted as
+ * handed out. */
+__kernel void stages_advance(__global uint *counts, ulong total)
+{
+	__global ulong *handed_out = stage_handed_out(counts);
+
+	if (get_global_id(0) == 0)
+		*handed_out += min((ulong)counts[RT_STAGE_QUEUE_NEW], total - *handed_out);
+}
+
+/* A shade kernel: over the queue of kind's hits. */
+static void stages_shade(__global const uint4 *scene_global, __local uint4 *scene_local,
+			 __global float4 *state, uint slots, __global uint *queues,
+			 __global uint *counts, uint limit, uint samples,
+			 __global ulong *item_counts, __global ulong *pixel_flops, int kind)
+{
+	struct tracer tr;
+	uint count = stage_count(counts, RT_STAGE_QUEUE_SHADE(kind), limit);
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
+		uint i = stage_queued(queues, slots, RT_STAGE_QUEUE_SHADE(kind), j);
+		int4 path = stage_path(state, slots, i);
+		struct walk w = stage_load_walk(state, slots, i, path);
+		float4 h = stage_field(state, slots, RT_STAGE_HIT)[i];
+		int4 prim = as_int4(stage_field(state, slots, RT_STAGE_HIT_PRIM)[i]);
+		struct hit hit = {h.x, prim.x, prim.y, as_int(h.w), h.y, h.z};
+
+		stage_set_sample(&tr, path, samples);
+		bool done = path_vertex(&tr, &w, hit, kind);
+		if (done) {
+			stage_field(state, slots, RT_STAGE_COLOR)[i] = (float4)(w.color, w.pdf_prev);
+		} else {
+			stage_store_walk(state, slots, i, &w);
+			stage_push(queues, counts, slots, RT_STAGE_QUEUE_EXTEND, i);
+		}
+		if (w.shadow) {
+			stage_field(state, slots, RT_STAGE_SHADOW_O)[i] =
+				(float4)(w.shadow_origin, w.shadow_max);
+			stage_field(state, slots, RT_STAGE_SHADOW_D)[i] =
+				(float4)(w.shadow_dir, as_float(w.shadow_sphere));
+			stage_field(state, slots, RT_STAGE_SHADOW_C)[i] =
+				(float4)(w.shadow_color, as_float(w.shadow_triangle));
+			stage_push(queues, counts, slots, RT_STAGE_QUEUE_SHADOW, i);
+		}
+		path.z = w.vertex;
+		path.w = (int)(RT_PATH_LIVE | (w.specular ? RT_PATH_SPECULAR : 0) |
+			       (w.shadow ? RT_PATH_SHADOW : 0) | (done ? RT_PATH_DONE : 0));
+		stage_set_path(state, slots, i, path);
+		add_pixel_flops(pixel_flops, path.x, tracer_flops(&tr) - before);
+	}
+	store_counts(&tr, global_item());
+}
+
+#define STAGES_SHADE_KERNEL(name, kind)                                                            \
+	__kernel void name(__global const uint4 *scene_global, __local uint4 *scene_local,         \
+			   __global float4 *state, uint slots, __global uint *queues,              \
+			   __global uint *counts, uint limit, uint samples,                        \
+			   __global ulong *item_counts, __global ulong *pixel_flops)               \
+	{                                                                                          \
+		stages_shade(scene_global, scene_local, state, slots, queues, counts, limit,       \
+			     samples, item_counts, pixel_flops, kind);                             \
+	}
+
+STAGES_SHADE_KERNEL(stages_shade_mapped, RT_BSDF_MAPPED)
+STAGES_SHADE_KERNEL(stages_shade_diffuse, RT_BSDF_DIFFUSE)
+STAGES_SHADE_KERNEL(stages_shade_conductor, RT_BSDF_CONDUCTOR)
+STAGES_SHADE_KERNEL(stages_shade_dielectric, RT_BSDF_DIELECTRIC)
+STAGES_SHADE_KERNEL(stages_shade_principled, RT_BSDF_PRINCIPLED)
+
+/* stages_extend: over the extension queue (the host knows only a bound on
+ * its length: the work-items read it on the device). Its hit goes to
+ * RT_STAGE_HIT and the first two ints of RT_STAGE_HIT_PRIM. */
+__kernel void stages_extend(__global const uint4 *scene_global, __local uint4 *scene_local,
+			    __global float4 *state, uint slots, __global const uint *queues,
+			    __global const uint *counts, __global ulong *item_counts,
+			    __global ulong *pixel_flops)
+{
+	struct tracer tr;
+	uint count = counts[RT_STAGE_QUEUE_EXTEND];
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
+		uint i = stage_queued(queues, slots, RT_STAGE_QUEUE_EXTEND, j);
+		struct walk w;
+
+		w.ray.origin = stage_field(state, slots, RT_STAGE_RAY_O)[i].xyz;
+		w.ray.dir = stage_field(state, slots, RT_STAGE_RAY_D)[i].xyz;
+		struct hit hit = path_extend(&tr, &w);
+		stage_field(state, slots, RT_STAGE_HIT)[i] =
+			(float4)(hit.t, hit.u, hit.v, as_float(hit.triangle));
+		vstore2((int2)(hit.sphere, hit.plane), 0,
+			(__global int *)(stage_field(state, slots, RT_STAGE_HIT_PRIM) + i));
+#ifdef RTCL_COUNT_FLOPS
+		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x,
+				tracer_flops(&tr) - before);
+#else
+		(void)before;
+#endif
+	}
+	store_counts(&tr, global_item());
+}
+
+/* stages_shadow: over the shadow queue, as stages_extend; whether the ray
+ * is clear goes to RT_STAGE_HIT_PRIM's third int (after stages_extend
+ * wrote the first two for the same slot: the launches are in order). */
+__kernel void stages_shadow(__global const uint4 *scene_global, __local uint4 *scene_local,
+			    __global float4 *state, uint slots, __global const uint *queues,
+			    __global const uint *counts, __global ulong *item_counts,
+			    __global ulong *pixel_flops)
+{
+	struct tracer tr;
+	uint count = counts[RT_STAGE_QUEUE_SHADOW];
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
+		uint i = stage_queued(queues, slots, RT_STAGE_QUEUE_SHADOW, j);
+		float4 origin = stage_field(state, slots, RT_STAGE_SHADOW_O)[i];
+		float4 dir = stage_field(state, slots, RT_STAGE_SHADOW_D)[i];
+		struct walk w;
+
+		w.shadow_origin = origin.xyz;
+		w.shadow_max = origin.w;
+		w.shadow_dir = dir.xyz;
+		w.shadow_sphere = as_int(dir.w);
+		w.shadow_triangle = as_int(stage_field(state, slots, RT_STAGE_SHADOW_C)[i].w);
+		((__global int *)(stage_field(state, slots, RT_STAGE_HIT_PRIM) + i))[2] =
+			path_shadow_clear(&tr, &w);
+#ifdef RTCL_COUNT_FLOPS
+		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x,
+				tracer_flops(&tr) - before);
+#else
+		(void)before;
+#endif
+	}
+	store_counts(&tr, global_item());
+}
+
+/* One work-item per pixel of the piece (as wavefront_start), before its
+ * paths: the pixel's sum zeroed when the piece starts it (the sums buffer
+ * does not hold it yet). */
+__kernel void stages_begin(__global const uint4 *scene_global, __local uint4 *scene_local,
+			   __global long *sums, __global ulong *item_counts,
+			   struct rt_piece piece)
+{
+	struct tracer tr;
+	int dx = get_global_id(0), dy = get_global_id(1);
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, NULL);
+	if (dx < piece.width && dy < piece.height && piece.samples > 1 &&
+	    !sample_sum_held(&piece, piece.sample_begin)) {
+		int pixel = rt_piece_row(&piece, piece.y0 + dy) * tr.scene->width + piece.x0 + dx;
+		vstore4((long4)(0), pixel, sums);
+	}
+	store_counts(&tr, global_item());
+}
+
+/* One work-item per pixel of the piece, after its paths: the mean stored
+ * when the piece ends the pixel (as wavefront_accumulate does), and the
+ * piece's write of the pixel counted. */
+__kernel void stages_finish(__global const uint4 *scene_global, __local uint4 *scene_local,
+			    __global float *image, __global const long *sums,
+			    __global ulong *item_counts, __global ulong *pixel_flops,
+			    __global uint *write_counts, struct rt_piece piece)
+{
+	struct tracer tr;
+	int dx = get_global_id(0), dy = get_global_id(1);
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	if (dx < piece.width && dy < piece.height) {
+		int pixel = rt_piece_row(&piece, piece.y0 + dy) * tr.scene->width + piece.x0 + dx;
+
+		if (piece.samples > 1 && sample_ends_pixel(&piece, piece.sample_end))
+			vstore3(sample_mean(&tr, vload4(pixel, sums), &piece), pixel, image);
+		count_write(write_counts, pixel);
+		count_pixel_flops(pixel_flops, pixel, tracer_flops(&tr));
+	}
+	store_counts(&tr, global_item());
+}
+#endif

@@ -13,6 +13,7 @@ import pathlib
 import re
 import shutil
 import subprocess
+import sys
 
 import pytest
 
@@ -78,7 +79,10 @@ def expected_files():
                for path in (ROOT / "tools" / "rtcl_tools").glob("*.py")}
             | {f"{share}/tools/rtcl_tools/commands/{path.name}"
                for path in (ROOT / "tools" / "rtcl_tools" / "commands").glob("*.py")}
-            | {f"{PREFIX}/lib/rtcl/rtcl-meshread"}
+            | {f"{share}/tools/rtcl_tools/{path.name}"
+               for pattern in ("*.cpp", "*.cl")
+               for path in (ROOT / "tools" / "rtcl_tools").glob(pattern)}
+            | {f"{PREFIX}/lib/rtcl/rtcl-meshread", f"{PREFIX}/lib/rtcl/rtcl-rays"}
             | ({f"{PREFIX}/lib/rtcl/rtcl-oiio.so"} if has_oiio() else set()))
 
 
@@ -153,6 +157,26 @@ def test_installed_rtcl_reads_meshes_through_the_installed_helper(tmp_path):
     assert render.returncode == 1
     assert "the mesh importer failed (exit status 3)" in render.stderr
     assert not (tmp_path / "broken.ppm").exists()
+
+
+def test_installed_peer_compare_finds_the_installed_rtcl_rays(installed):
+    """rtcl-peer-compare --rays runs rtcl-rays, installed in PREFIX/lib/rtcl
+    beside the helper, and builds the peer side from its installed sources
+    (neither was installed, and the installed tool failed)."""
+    tools = installed / PREFIX / "share/rtcl/tools"
+    probe = subprocess.run(
+        [sys.executable, "-c",
+         "import sys; sys.path.insert(0, sys.argv[1]);"
+         "from rtcl_tools.commands import peer_compare as p;"
+         "print(p.find_rtcl_rays(sys.argv[2]));"
+         "[print(s) for s in (p.COUNTER_SOURCE, p.RAYS_SOURCE, p.RAYS_KERNELS)]",
+         str(tools), str(installed / PREFIX / "bin/rtcl")],
+        capture_output=True, text=True, timeout=60, cwd="/")
+    assert probe.returncode == 0, probe.stderr
+    found, *sources = probe.stdout.split("\n")[:4]
+    assert found == str((installed / PREFIX / "lib/rtcl/rtcl-rays").resolve())
+    for source in sources:
+        assert source.startswith(str(tools)) and pathlib.Path(source).is_file(), source
 
 
 def test_one_command_per_tool_script():
@@ -392,7 +416,7 @@ def test_man_page_files_names_every_installed_tool_command(installed):
     text = roff_text((installed / PREFIX / "share/man/man1/rtcl.1").read_text())
     files = text.split("\n.SH FILES\n", 1)[1].split("\n.SH ", 1)[0]
     in_files = set(re.findall(r"\brtcl-[a-z][a-z-]*[a-z]\b(?![./])", files))
-    assert in_files - {"rtcl-meshread"} == commands
+    assert in_files - {"rtcl-meshread", "rtcl-rays"} == commands
 
 
 # The 8-bit encoding: what rtcl does, and what the docs a newcomer reads say.

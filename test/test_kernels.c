@@ -916,6 +916,64 @@ Test(kernels, passes_give_the_image_of_one_pass, .timeout = 600)
 	device_close(&dev);
 }
 
+/* Path regeneration and the fetch schemes of the persistent kernel
+ * (cl/persistent.cl) on a path-traced box with glass and a conductor, its
+ * samples in passes of 2: every pixel written once a pass, nothing outside
+ * the image, the dynamic kernel's image. The sweep: every scheme, batches of
+ * 1 and 7, work-groups of one item (a block of one fetch), a row of 32 and
+ * 8x8, persistent groups fewer than the chunks and more. */
+static void check_regenerated(int sweep)
+{
+	static const char *const fetches[] = {"item", "group", "subgroup"};
+	static const int shapes[][2] = {{8, 8}, {1, 1}, {32, 1}};
+	struct device dev;
+	struct scene scene;
+	int w = 29, h = 19;
+
+	open_device(&dev);
+	load(&scene, "test/scenes/path_box.json");
+	struct render_settings s = settings_for("dynamic", w, h, 8, 8, scene.max_depth);
+	s.samples = 3;
+	unsigned char *want = render_checked(&dev, &scene, &s, "dynamic");
+	for (int f = 0; f < 3; f++) {
+		if (!sweep && f != 1)
+			continue;
+		for (int c = 0; c < (sweep ? 7 : 1); c++) {
+			char what[128];
+			int shape = c < 3 ? c : 0;
+			s = settings_for("persistent", w, h, shapes[shape][0], shapes[shape][1],
+					 scene.max_depth);
+			s.samples = 3;
+			s.samples_per_pass = 2;
+			s.fetch = f == 0 ? FETCH_ITEM : f == 1 ? FETCH_GROUP : FETCH_SUBGROUP;
+			s.regenerate = c != 6;
+			s.batch = c == 3 ? 7 : 1;
+			s.groups[0] = c == 4 ? 3 : c == 5 ? 40 : 0;
+			s.groups[1] = c == 4 ? 2 : c == 5 ? 30 : 0;
+			snprintf(what, sizeof(what),
+				 "persistent%s --fetch %s -w %dx%d --batch %d --groups %dx%d",
+				 s.regenerate ? " --regenerate" : "", fetches[f], s.workgroup[0],
+				 s.workgroup[1], s.batch, s.groups[0], s.groups[1]);
+			unsigned char *got = render_checked(&dev, &scene, &s, what);
+			expect_same_image(want, got, w, h, what);
+			free(got);
+		}
+	}
+	free(want);
+	scene_free(&scene);
+	device_close(&dev);
+}
+
+Test(kernels, regenerated_paths_write_every_pixel_once, .timeout = 600)
+{
+	check_regenerated(0);
+}
+
+Test(kernels_slow, regenerated_paths_every_fetch_scheme, .timeout = 900)
+{
+	check_regenerated(1);
+}
+
 /* The pass's sum in registers (devices without 64-bit atomics;
  * cl/sample.cl) gives the sums added in place their image, over passes. */
 Test(kernels_slow, sums_in_registers_give_the_image_of_sums_in_place, .timeout = 600)

@@ -350,6 +350,16 @@ def test_a_helper_that_answers_nonsense_is_reported(tmp_path):
         "the mesh importer failed: its answer makes no sense")
 
 
+def test_a_helper_of_another_rtcl_is_named_as_such(tmp_path):
+    """An answer that starts as a helper's but in another form (an old
+    rtcl-meshread left in RTCL_MESHREAD: it was read as "out of memory for
+    2097152 triangles") says whose it is and what to do."""
+    helper = write_helper(tmp_path, "printf mesh; head -c 4096 /dev/zero")
+    assert render_with_helper(tmp_path, helper) == (
+        f"the mesh importer {helper} is another rtcl's (its answer has another form): "
+        "name the rtcl-meshread built with this rtcl in RTCL_MESHREAD, or reinstall rtcl")
+
+
 def test_a_helper_killed_by_a_signal_blames_the_file(tmp_path):
     """A crash inside the importer (Assimp's abort() on a malformed file) is the
     file's fault; what the helper printed first says where."""

@@ -10,6 +10,7 @@
 #include "scene/mesh.h"
 #include "base/quote.h"
 #include "render/render.h"
+#include "render/stages.h"
 #include "scene/scene.h"
 #include "base/suggest.h"
 #include "output/workmap.h"
@@ -17,6 +18,8 @@
 enum long_only_option {
 	OPT_GROUPS = 256,
 	OPT_BATCH,
+	OPT_FETCH,
+	OPT_REGENERATE,
 	OPT_QUEUES,
 	OPT_SIZE,
 	OPT_DEPTH,
@@ -49,6 +52,8 @@ enum long_only_option {
 	OPT_CHECKPOINT,
 	OPT_NO_PARTIAL,
 	OPT_INTEGRATOR,
+	OPT_WAVEFRONT_FORM,
+	OPT_PATHS_IN_FLIGHT,
 };
 
 static const struct option long_options[] = {
@@ -56,7 +61,11 @@ static const struct option long_options[] = {
 	{"workgroup", required_argument, NULL, 'w'},
 	{"groups", required_argument, NULL, OPT_GROUPS},
 	{"batch", required_argument, NULL, OPT_BATCH},
+	{"fetch", required_argument, NULL, OPT_FETCH},
+	{"regenerate", no_argument, NULL, OPT_REGENERATE},
 	{"queues", required_argument, NULL, OPT_QUEUES},
+	{"wavefront-form", required_argument, NULL, OPT_WAVEFRONT_FORM},
+	{"paths-in-flight", required_argument, NULL, OPT_PATHS_IN_FLIGHT},
 	{"scene", required_argument, NULL, 's'},
 	{"output", required_argument, NULL, 'o'},
 	{"size", required_argument, NULL, OPT_SIZE},
@@ -114,6 +123,15 @@ static void print_help_after_kernels(FILE *out)
 		"      --batch N          pixels a work-item of the persistent kernel fetches\n"
 		"                         at a time (default 1); the image's pixels plus N per\n"
 		"                         work-item must stay below 2^32\n"
+		"      --fetch item|group|subgroup  how a work-item of the persistent kernel\n"
+		"                         takes its pixels: an atomic of its own (item, the\n"
+		"                         default), from its work-group's block in local\n"
+		"                         memory (group), or with one atomic for its warp's\n"
+		"                         active lanes (subgroup; NVIDIA compute capability\n"
+		"                         7.0 or more, elsewhere each work-item fetches alone)\n"
+		"      --regenerate       path regeneration in the persistent kernel (the path\n"
+		"                         integrator): a work-item whose path ended starts the\n"
+		"                         next at once, so a warp's lanes step together\n"
 		"      --queues N         in-order queues a device renders with, 1 to 4: the\n"
 		"                         image's columns in N parts whose launches alternate,\n"
 		"                         so that one fills the device while another ends\n"
@@ -122,6 +140,15 @@ static void print_help_after_kernels(FILE *out)
 		"                         it; else 1. The image is the same; the counting\n"
 		"                         run of --flops uses 1). Not for serial, wavefront\n"
 		"                         or reference, which render on one queue\n"
+		"      --wavefront-form bounce|stages  how -k wavefront splits the paths of the\n"
+		"                         path integrator: one launch per bounce over the\n"
+		"                         live paths (default), or in stages (Laine, Karras\n"
+		"                         and Aila 2013): a logic kernel, new paths, a shade\n"
+		"                         kernel per BSDF kind, extension and shadow rays,\n"
+		"                         each over its own queue; the same image\n"
+		"      --paths-in-flight N  the stages form's pool of paths, 1 to %d\n"
+		"                         (default %d, or the render's paths when fewer);\n"
+		"                         %d bytes of state each\n"
 		"      --accel bvh|bvh-compact|none  how a ray finds the spheres and\n"
 		"                         triangles it hits: through a BVH built on the host\n"
 		"                         (default); bvh-compact, one with larger leaves of\n"
@@ -287,12 +314,15 @@ static void print_help_after_kernels(FILE *out)
 		"  POCL_CACHE_DIR=DIR       PoCL's kernel cache; PoCL finds no device unless it\n"
 		"                           can write there (default: ~/.cache/pocl)\n"
 		"An option that sets something the run does not have is refused, naming what\n"
-		"it needs: --groups with -k naive, --batch without -k persistent, --queues\n"
-		"with serial, wavefront or reference, --work-map-scale without a --work-map\n"
-		"picture, --split without --devices or --mpi.\n"
+		"it needs: --groups with -k naive, --batch, --fetch or --regenerate without\n"
+		"-k persistent (--regenerate also without the path integrator),\n"
+		"--wavefront-form without -k wavefront and the path integrator,\n"
+		"--paths-in-flight without --wavefront-form stages, --queues with serial,\n"
+		"wavefront or reference, --work-map-scale without a --work-map picture,\n"
+		"--split without --devices or --mpi.\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
+		"reference", STAGES_MAX_PATHS, STAGES_DEFAULT_PATHS, RT_STAGE_FIELDS * 16 + 4 * RT_STAGE_QUEUES, SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
 		CHECKPOINT_MAX_SECONDS);
 }
 
@@ -564,6 +594,21 @@ static int parse_choice(const char *option, const char *text, const char *first,
 	return 0;
 }
 
+/* --fetch item|group|subgroup into *fetch (enum fetch). */
+static int parse_fetch(const char *text, int *fetch, char *err, size_t err_size)
+{
+	static const enum fetch choices[] = {FETCH_ITEM, FETCH_GROUP, FETCH_SUBGROUP};
+
+	for (size_t i = 0; i < sizeof(choices) / sizeof(choices[0]); i++)
+		if (strcmp(text, fetch_name(choices[i])) == 0) {
+			*fetch = choices[i];
+			return 0;
+		}
+	snprintf(err, err_size, "--fetch: expected item, group or subgroup, got \"%s\"",
+		 quote_text(text));
+	return -1;
+}
+
 /* --split dynamic|static|samples into *split (enum split). */
 static int parse_split(const char *text, int *split, char *err, size_t err_size)
 {
@@ -680,6 +725,19 @@ static int apply_option(int c, const char *arg, struct options *o, char *err, si
 	case OPT_BATCH:
 		o->batch_given = 1;
 		return parse_bounded("--batch", arg, 1, 4096, &o->batch, err, err_size);
+	case OPT_FETCH:
+		o->fetch_given = 1;
+		return parse_fetch(arg, &o->fetch, err, err_size);
+	case OPT_REGENERATE:
+		o->regenerate = 1;
+		return 0;
+	case OPT_WAVEFRONT_FORM:
+		o->wavefront_form_given = 1;
+		return parse_choice("--wavefront-form", arg, "bounce", "stages", &o->wavefront_stages,
+				    err, err_size);
+	case OPT_PATHS_IN_FLIGHT:
+		return parse_bounded("--paths-in-flight", arg, 1, STAGES_MAX_PATHS,
+				     &o->paths_in_flight, err, err_size);
 	case OPT_QUEUES:
 		return parse_bounded("--queues", arg, 1, RENDER_MAX_QUEUES, &o->queues, err,
 				     err_size);
@@ -1000,6 +1058,29 @@ static int check_kernel_options(const struct options *o, char *err, size_t err_s
 			 "--batch sets the pixels a work-item of -k persistent fetches at a "
 			 "time; it does not apply to -k %s",
 			 o->kernel);
+		return -1;
+	}
+	if ((o->fetch_given || o->regenerate) && !(k && k->pixel_counter)) {
+		snprintf(err, err_size,
+			 "%s sets how the work-items of -k persistent take their work; it does "
+			 "not apply to -k %s",
+			 o->regenerate ? "--regenerate" : "--fetch", o->kernel);
+		return -1;
+	}
+	if (o->wavefront_form_given && !(k && k->multi_pass)) {
+		snprintf(err, err_size,
+			 "--wavefront-form chooses how -k wavefront splits paths; it does not "
+			 "apply to -k %s",
+			 o->kernel);
+		return -1;
+	}
+	if (o->paths_in_flight > 0 && !o->wavefront_stages) {
+		snprintf(err, err_size,
+			 "--paths-in-flight sets the pool of paths of -k wavefront "
+			 "--wavefront-form stages; it does not apply to %s%s",
+			 k && k->multi_pass ? "" : "-k ",
+			 k && k->multi_pass ? "the bounce form (give --wavefront-form stages)"
+					    : o->kernel);
 		return -1;
 	}
 	if (o->queues > 0 && !(k && !k->single_item && !k->multi_pass)) {

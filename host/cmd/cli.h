@@ -21,6 +21,12 @@ struct options {
 	int groups[2];		/* --groups GXxGY; 0x0 when not given */
 	int batch;		/* --batch N for the persistent kernel */
 	int batch_given;
+	int fetch;		/* --fetch: enum fetch (render/settings.h) */
+	int fetch_given;
+	int regenerate;		/* --regenerate */
+	int wavefront_stages; /* --wavefront-form stages */
+	int wavefront_form_given;
+	int paths_in_flight; /* --paths-in-flight N (0: the default) */
 	int queues;		/* --queues N (0: the default) */
 	const char *scene_path; /* -s or the argument; NULL: the built-in paper60 scene */
 	int scene_is_argument;	/* the argument gave it: a scene or a model file */

@@ -157,6 +157,11 @@ static void make_job(struct job *job, const struct options *opt, const struct sc
 	s->repeat = opt->repeat ? opt->repeat : 1;
 	s->warm_up = opt->repeat > 0;
 	s->batch = opt->batch;
+	s->fetch = opt->fetch;
+	s->regenerate = opt->regenerate;
+	s->wavefront_stages = opt->wavefront_stages;
+	s->wavefront_form_given = opt->wavefront_form_given;
+	s->paths_in_flight = opt->paths_in_flight;
 	s->queues = opt->queues;
 	s->source_dir = getenv("RTCL_CL_DIR");
 	s->progress = 1; /* one image on one device: render() runs the line */

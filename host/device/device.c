@@ -266,6 +266,7 @@ static void query_info(struct device *dev)
 	    clGetDeviceInfo(dev->id, CL_DEVICE_EXTENSIONS, size, extensions, NULL) == CL_SUCCESS) {
 		extensions[size] = '\0';
 		dev->nv_compiler_options = strstr(extensions, "cl_nv_compiler_options") != NULL;
+		dev->int64_atomics = strstr(extensions, "cl_khr_int64_base_atomics") != NULL;
 		/* CL_DEVICE_COMPUTE_CAPABILITY_MAJOR_NV (cl_nv_device_attribute_query). */
 		cl_uint major = 0;
 		if (strstr(extensions, "cl_nv_device_attribute_query") &&

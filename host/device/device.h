@@ -31,6 +31,7 @@ struct device {
 	int simd_measurable;	     /* NVIDIA, compute capability 7.0 or more: inline PTX
 					with activemask (RTCL_SIMD_MEASURE) */
 	int host_unified;	     /* CL_DEVICE_HOST_UNIFIED_MEMORY: a CPU device */
+	int int64_atomics;	     /* cl_khr_int64_base_atomics (--fetch group) */
 };
 
 /* Opens a device. platform_index < 0 and device_index < 0 mean "the first

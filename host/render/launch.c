@@ -76,7 +76,8 @@ static int check_work_items(const struct render_settings *s, const struct render
 /* Checks the persistent kernel's uint pixel counter (cl/persistent.cl): it
  * hands out every pixel of the whole chunks, then each work-item's last fetch
  * of --batch pixels overshoots, so the counter must count that far without
- * wrapping to 0 (which would hand out pixels again). */
+ * wrapping to 0 (which would hand out pixels again). With --fetch group each
+ * work-group's last block (a fetch per work-item) overshoots too. */
 static int check_pixel_counter(const struct render_settings *s, const struct render_result *res,
 			       char *err, size_t err_size)
 {
@@ -85,17 +86,19 @@ static int check_pixel_counter(const struct render_settings *s, const struct ren
 		((s->width + chunk_w - 1) / chunk_w) * ((s->height + chunk_h - 1) / chunk_h);
 	uint64_t items = (uint64_t)res->global_size[0] * res->global_size[1];
 	uint64_t batch = s->batch > 0 ? (uint64_t)s->batch : 1;
-	uint64_t end = chunks * chunk_w * chunk_h + (items + 1) * batch;
+	uint64_t fetches = s->fetch == FETCH_GROUP ? 2 * items + 1 : items + 1;
+	uint64_t end = chunks * chunk_w * chunk_h + fetches * batch;
 
 	if (!s->kernel->pixel_counter || end <= UINT32_MAX)
 		return 0;
 	snprintf(err, err_size,
 		 "%s %dx%d with --batch %llu: the persistent kernel's 32-bit pixel counter "
-		 "would count to %llu (the pixels, then one fetch of %llu by each of %llu "
+		 "would count to %llu (the pixels, then %s of %llu by each of %llu "
 		 "work-items), more than %lu; choose fewer groups or a smaller --batch",
 		 s->kernel->uses_groups && s->groups[0] > 0 ? "--groups" : "work-groups",
 		 res->groups[0], res->groups[1], (unsigned long long)batch, (unsigned long long)end,
-		 (unsigned long long)batch, (unsigned long long)items, (unsigned long)UINT32_MAX);
+		 s->fetch == FETCH_GROUP ? "two fetches" : "one fetch", (unsigned long long)batch,
+		 (unsigned long long)items, (unsigned long)UINT32_MAX);
 	return -1;
 }
 
@@ -249,5 +252,8 @@ int launch_setup(struct device *dev, const struct scene *scene, const struct ren
 			  err_size))
 		return -1;
 	res->times.build = timing_lap_ms(&lap);
+	res->fetch_lanes = s->fetch == FETCH_GROUP ? s->workgroup[0] * s->workgroup[1]
+			   : s->fetch == FETCH_SUBGROUP && dev->simd_measurable ? 32
+										: 1;
 	return 0;
 }

@@ -186,16 +186,31 @@ static int format_options(const struct device *dev, const struct render_settings
 {
 	const char *extra = getenv("RTCL_BUILD_OPTIONS");
 
+	if (s->fetch == FETCH_GROUP && !dev->int64_atomics) {
+		snprintf(err, err_size,
+			 "--fetch group keeps its work-group's block in one 64-bit __local word, "
+			 "and %s has no 64-bit atomics (cl_khr_int64_base_atomics); choose --fetch "
+			 "item or subgroup",
+			 dev->name);
+		return -1;
+	}
 	if (extra && strlen(extra) > BUILD_OPTIONS_EXTRA_MAX) {
 		snprintf(err, err_size, "RTCL_BUILD_OPTIONS is too long (at most %d characters)",
 			 BUILD_OPTIONS_EXTRA_MAX);
 		return -1;
 	}
 	snprintf(options, BUILD_OPTIONS_SIZE,
-		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
+		 "-cl-std=CL1.2 -DRTCL_MAX_DEPTH=%d -DRTCL_BATCH=%d%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s%s",
 		 /* The path integrator reads max_depth from the scene block and
 		  * needs no ray stack: one program for every depth. */
 		 f->path ? 0 : s->max_depth, s->batch > 0 ? s->batch : 1,
+		 /* The persistent kernel's fetch and regeneration (cl/persistent.cl;
+		  * the other kernels do not read them). */
+		 s->fetch == FETCH_GROUP ? " -DRTCL_FETCH_GROUP"
+		 : s->fetch == FETCH_SUBGROUP ? " -DRTCL_FETCH_SUBGROUP"
+					      : "",
+		 s->fetch == FETCH_SUBGROUP && dev->simd_measurable ? " -DRTCL_WARP_PTX" : "",
+		 s->regenerate ? " -DRTCL_REGENERATE" : "",
 		 /* A CPU device: the box test in its vector unit's way
 		  * (cl/traverse.cl, box_pair_hit); the same numbers. */
 		 dev->is_gpu ? "" : " -DRTCL_CPU",

@@ -15,11 +15,17 @@
 #include "render/renderer.h"
 #include "render/singlepass.h"
 #include "base/timing.h"
+#include "render/stages.h"
 #include "render/wavefront.h"
 
 const char *accel_name(int accel)
 {
 	return accel == ACCEL_BVH ? "bvh" : accel == ACCEL_BVH_COMPACT ? "bvh-compact" : "none";
+}
+
+const char *fetch_name(int fetch)
+{
+	return fetch == FETCH_GROUP ? "group" : fetch == FETCH_SUBGROUP ? "subgroup" : "item";
 }
 
 const struct kernel_info render_kernels[] = {
@@ -50,8 +56,25 @@ const struct kernel_info *render_find_kernel(const char *name)
 int render_check_integrator(const struct scene *scene, const struct render_settings *s,
 			    char *err, size_t err_size)
 {
-	/* Every kernel and the reference render both integrators. */
-	(void)scene, (void)s, (void)err, (void)err_size;
+	/* Every kernel and the reference render both integrators; path
+	 * regeneration (docs/wavefront.md: a ray tree regenerated per pixel lost
+	 * to coherence, performance.md step 4) and the wavefront's stages form
+	 * are the path integrator's. */
+	if (s->regenerate && scene->integrator != SCENE_INTEGRATOR_PATH) {
+		snprintf(err, err_size,
+			 "--regenerate restarts paths of the path integrator; this render is "
+			 "Whitted's (give --integrator path or a scene with \"integrator\": "
+			 "\"path\")");
+		return -1;
+	}
+	if ((s->wavefront_stages || s->wavefront_form_given) &&
+	    scene->integrator != SCENE_INTEGRATOR_PATH) {
+		snprintf(err, err_size,
+			 "--wavefront-form chooses how -k wavefront splits the paths of the path "
+			 "integrator; this render uses the Whitted integrator (give --integrator "
+			 "path, or leave --wavefront-form out)");
+		return -1;
+	}
 	return 0;
 }
 
@@ -223,6 +246,8 @@ void render_result_free(struct render_result *res)
 	free(res->write_counts);
 	free(res->schedule);
 	free(res->pieces);
+	stages_stats_free(res->stages);
+	res->stages = NULL;
 	res->pieces = NULL;
 	res->piece_count = 0;
 	res->pixel_flops = NULL;

@@ -12,6 +12,7 @@
 #include "base/interrupt.h"
 #include "base/progress.h"
 #include "base/timing.h"
+#include "render/stages.h"
 
 int renderer_open(struct renderer *r, struct device *dev, const struct scene *scene,
 		  const struct render_settings *s, struct render_result *res, char *err,
@@ -19,7 +20,7 @@ int renderer_open(struct renderer *r, struct device *dev, const struct scene *sc
 {
 	memset(r, 0, sizeof(*r));
 	memset(res, 0, sizeof(*res));
-	r->ops = s->kernel->ops;
+	r->ops = s->wavefront_stages ? &stages_ops : s->kernel->ops;
 	r->dev = dev;
 	r->settings = s;
 	r->result = res;

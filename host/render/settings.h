@@ -14,6 +14,7 @@
 struct render_settings;
 struct render_result;
 struct renderer_ops; /* renderer.h */
+struct stages_stats;  /* render/stages.h */
 
 /* The counting build's paths (docs/RENDERING.md, "Paths per bounce"), summed
  * over work-items: by length in segments (bin b: b + 1 segments, the last
@@ -68,6 +69,17 @@ enum accel {
 /* The --accel word of an enum accel: "none", "bvh", "bvh-compact". */
 const char *accel_name(int accel);
 
+/* --fetch: how a work-item of the persistent kernel takes its pixels from
+ * the global counter (cl/persistent.cl). */
+enum fetch {
+	FETCH_ITEM,	/* an atomic of its own */
+	FETCH_GROUP,	/* from its work-group's block in __local memory */
+	FETCH_SUBGROUP, /* one atomic for the active lanes of its warp */
+};
+
+/* The --fetch word of an enum fetch: "item", "group", "subgroup". */
+const char *fetch_name(int fetch);
+
 /* --checkpoint: every `seconds` of a render's passes, the image of the
  * samples done so far (the mean of every pixel's first `samples`) goes to
  * write(context, ...), which returns 0, or -1 with one message in err (the
@@ -90,6 +102,12 @@ struct render_settings {
 	int repeat;		/* timed frames */
 	int warm_up;		/* one untimed launch first (-r given) */
 	int batch;		/* pixels per fetch of the persistent kernel (0: 1) */
+	int fetch;		/* enum fetch: how its work-items fetch (--fetch) */
+	int regenerate;		/* its paths regenerated (--regenerate, RTCL_REGENERATE) */
+	int wavefront_stages;	/* --wavefront-form stages: the wavefront under the
+				   path integrator in stages (host/render/stages.c) */
+	int wavefront_form_given; /* --wavefront-form given: the path integrator only */
+	int paths_in_flight;	/* its pool of path slots (0: STAGES_DEFAULT_PATHS) */
 	int queues;		/* in-order queues per device (--queues; 0: the
 				   default, renderer_queues()) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */
@@ -165,6 +183,10 @@ struct render_result {
 	int vertex_count; /* the triangles' distinct vertices (host/layout/mesh_block.h) */
 	char build_options[BUILD_OPTIONS_SIZE];
 	int build_cached; /* the program came from rtcl's cache (progcache.h) */
+	int fetch_lanes;  /* the persistent kernel's work-items one fetch from the
+			     global counter serves at most (settings.fetch): 1 for
+			     item, the work-group's for group, the warp's (32) for
+			     subgroup where the device has warp primitives, else 1 */
 	int queues;	  /* the most in-order queues a piece rendered with
 			     (renderer_all_samples) */
 
@@ -196,6 +218,10 @@ struct render_result {
 	/* With check_writes. */
 	uint32_t *write_counts; /* per pixel */
 	int guards_intact;	/* no byte outside the image was written */
+
+	/* The stages form's launches and queues (--wavefront-form stages), over
+	 * every frame; NULL otherwise. */
+	struct stages_stats *stages;
 
 	/* One image over several devices in this process: the last frame's
 	 * pieces, in the order they were handed out. */

@@ -81,9 +81,22 @@ static size_t pixel_counts_bytes(const struct render_settings *s)
 	return (size_t)s->width * s->height * sizeof(cl_ulong);
 }
 
+/* Bytes of the kernels' __local argument: the scene when it lives there,
+ * rounded up to whole uint4, then with --fetch group the persistent kernel's
+ * block (cl/persistent.cl, group_block). */
+static size_t local_argument_bytes(const struct render_settings *s, const struct render_result *res)
+{
+	size_t bytes = res->scene_in_local ? (res->scene_bytes + 15) / 16 * 16 : 0;
+
+	if (s->fetch == FETCH_GROUP)
+		bytes += 16;
+	return bytes > UNUSED_BUFFER_BYTES ? bytes : UNUSED_BUFFER_BYTES;
+}
+
 /* Sets every argument of kernel but the piece, with counter as its work
  * counter. */
-static int set_args(const struct launch_state *st, cl_kernel kernel, const struct work_counter *counter,
+static int set_args(const struct launch_state *st, cl_kernel kernel,
+		    const struct work_counter *counter, const struct render_settings *s,
 		    const struct render_result *res, char *err, size_t err_size)
 {
 	const cl_mem *buffers[RENDER_ARGS] = {
@@ -100,9 +113,7 @@ static int set_args(const struct launch_state *st, cl_kernel kernel, const struc
 		if (i == ARG_PIECE)
 			continue; /* set per piece */
 		if (i == ARG_SCENE_LOCAL)
-			status = clSetKernelArg(
-				kernel, i, res->scene_in_local ? res->scene_bytes : UNUSED_BUFFER_BYTES,
-				NULL);
+			status = clSetKernelArg(kernel, i, local_argument_bytes(s, res), NULL);
 		else
 			status = clSetKernelArg(kernel, i, sizeof(cl_mem), buffers[i]);
 		if (status != CL_SUCCESS) {
@@ -125,7 +136,7 @@ static int create_buffers(struct device *dev, const struct scene *scene,
 		return -1;
 	res->item_count = res->global_size[0] * res->global_size[1];
 	st->b.item_count = res->item_count;
-	return set_args(st, st->kernel, &st->work_counter, res, err, err_size);
+	return set_args(st, st->kernel, &st->work_counter, s, res, err, err_size);
 }
 
 /* Opens lanes 1 .. queues - 1: a queue each, with profiling, a kernel object
@@ -149,7 +160,8 @@ static int open_lanes(struct renderer *r, int queues, char *err, size_t err_size
 		l->kernel = program_create_kernel(st->b.program, "render", err, err_size);
 		if (!l->kernel ||
 		    watch_create_counter(dev, l->queue, 0, &l->work_counter, err, err_size) ||
-		    set_args(st, l->kernel, &l->work_counter, r->result, err, err_size))
+		    set_args(st, l->kernel, &l->work_counter, r->settings, r->result, err,
+			     err_size))
 			return -1;
 	}
 	return 0;

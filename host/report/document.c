@@ -7,6 +7,7 @@
 #include "base/version.h"
 #include "report/devstats.h"
 #include "report/simd.h"
+#include "render/stages.h"
 
 int report_fill_json(FILE *file, const void *document)
 {
@@ -245,6 +246,43 @@ static json_t *pieces_document(const struct render_result *r)
 	return list;
 }
 
+static json_t *uint_list(const uint32_t *values, int count)
+{
+	json_t *list = json_array();
+
+	for (int i = 0; i < count && list; i++)
+		json_array_append_new(list, json_integer(values[i]));
+	return list;
+}
+
+/* The wavefront's stages form (docs/wavefront.md, "The stages form"): per
+ * kernel its launches, profiled time, work-items with work and the path
+ * state they moved (at most), over every frame run (a warm-up included);
+ * per iteration of the last frame the paths live, started, extended and
+ * shadow rays traced. */
+static json_t *stages_document(const struct stages_stats *st)
+{
+	json_t *kernels = json_object();
+	uint64_t bytes = 0;
+
+	for (int s = 0; s < STAGE_COUNT && kernels; s++) {
+		json_object_set_new(kernels, stages_name((enum stage)s),
+				    json_pack("{s:i, s:f, s:I, s:I, s:i}", "launches",
+					      st->launches[s], "kernel_ms", st->ms[s], "items",
+					      (json_int_t)st->items[s], "state_bytes",
+					      (json_int_t)st->state_bytes[s], "bytes_per_item",
+					      stages_item_bytes((enum stage)s)));
+		bytes += st->state_bytes[s];
+	}
+	return json_pack("{s:i, s:i, s:o, s:I, s:i, s:o, s:o, s:o, s:o}", "paths_in_flight",
+			 st->slots, "bytes_per_path", RT_STAGE_FIELDS * 16 + 4 * RT_STAGE_QUEUES,
+			 "kernels", kernels, "state_bytes", (json_int_t)bytes, "iterations",
+			 st->iterations, "live_paths", uint_list(st->live, st->iterations),
+			 "new_paths", uint_list(st->started, st->iterations), "extension_rays",
+			 uint_list(st->extended, st->iterations), "shadow_rays",
+			 uint_list(st->shadowed, st->iterations));
+}
+
 /* The --stats document of an animation. */
 static json_t *frames_document(const struct job *job, const struct record *record)
 {
@@ -281,6 +319,12 @@ json_t *report_document(const struct job *job, const struct record *record)
 	if (!doc)
 		return NULL;
 	json_object_set_new(doc, "time_breakdown_ms", times_document(record));
+	if (job->settings.kernel && job->settings.kernel->pixel_counter) {
+		/* How the persistent kernel's work-items took their work. */
+		json_object_set_new(doc, "regenerate", json_boolean(job->settings.regenerate));
+		json_object_set_new(doc, "fetch", json_string(fetch_name(job->settings.fetch)));
+		json_object_set_new(doc, "fetch_lanes", json_integer(record->result.fetch_lanes));
+	}
 	json_object_set_new(doc, "build_cached", json_boolean(record->result.build_cached));
 	if (record->device.on_device)
 		json_object_set_new(doc, "queues", json_integer(record->result.queues));
@@ -320,6 +364,8 @@ json_t *report_document(const struct job *job, const struct record *record)
 	}
 	add_device_figures(doc, record);
 	add_accel_figures(doc, job, record);
+	if (record->result.stages)
+		json_object_set_new(doc, "wavefront_stages", stages_document(record->result.stages));
 	/* Fewer than "samples" when an interrupt stopped the render. */
 	json_object_set_new(doc, "samples_done",
 			    json_integer(record_samples_done(&job->settings, record)));

@@ -6,6 +6,7 @@
 #include "base/timing.h"
 #include "report/devstats.h"
 #include "report/simd.h"
+#include "render/stages.h"
 
 /* The counting run's SIMD efficiency: measured where the device lets
  * software see it, modelled where the schedule was recorded too. */
@@ -91,6 +92,9 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 		fprintf(out, "kernel:  %s, work-group %dx%d, %dx%d groups (global %zux%zu)\n",
 		       s->kernel->name, s->workgroup[0], s->workgroup[1], r->groups[0],
 		       r->groups[1], r->global_size[0], r->global_size[1]);
+	if (r->stages)
+		fprintf(out, "stages:  %d paths in flight, %d iterations a frame (docs/wavefront.md)\n",
+			r->stages->slots, r->stages->iterations);
 	fprintf(out, "image:   %dx%d, max depth %d, scene %s\n", s->width, s->height, s->max_depth,
 	       quote_text(job->scene->source));
 	if (record_samples_done(&job->settings, record) < settings_samples(s))

@@ -16,6 +16,7 @@
 #include <signal.h>
 #include <spawn.h>
 #include <limits.h>
+#include <stddef.h>
 #include <stdint.h>
 #include <stdio.h>
 #include <stdlib.h>
@@ -40,13 +41,31 @@ extern char **environ;
 struct reply {
 	uint32_t magic, ok, has_normals, reason_length;
 	uint64_t vertex_count, triangle_count, material_count;
-	uint32_t has_uvs, pad;
+	uint32_t has_uvs, layout; /* reply_layout() of the helper's build */
 	uint64_t texture_count, texel_bytes; /* then the uvs, textures and texels */
 	uint64_t camera_count;		     /* then the cameras */
 	uint64_t light_count;		     /* then the lights */
 	uint64_t file_count;		     /* then the textures' names, then the files read */
 };
 #define REPLY_MAGIC 0x6873656du /* "mesh" */
+/* The form of the answer: raise it whenever what crosses the pipe changes in a
+ * way the sizes below do not show, so that a helper of another rtcl (an old
+ * rtcl-meshread named in RTCL_MESHREAD, say) is told apart from a broken one. */
+#define REPLY_FORM 3u
+
+/* The form of the answer and the sizes of what crosses the pipe, which an
+ * answer carries so that rtcl reads only a helper built beside it. */
+static uint32_t reply_layout(void)
+{
+	return REPLY_FORM << 24 ^
+	       (uint32_t)(sizeof(struct reply) + 7u * sizeof(struct mesh_material) +
+			  31u * sizeof(struct mesh_texture) + 127u * sizeof(struct mesh_camera) +
+			  1023u * sizeof(struct mesh_light));
+}
+
+/* The part of the header read before the rest: through the layout, where
+ * every form of the answer has had it. */
+#define REPLY_HEAD offsetof(struct reply, texture_count)
 #define REASON_MAX 1024
 /* The longest name or path that crosses the pipe: a path of PATH_MAX, or a
  * name Assimp keeps (1023 bytes), with room to spare. */
@@ -140,7 +159,7 @@ static int write_names(int fd, const struct mesh_data *mesh)
 
 int mesh_send(int fd, const struct mesh_data *mesh, const char *reason)
 {
-	struct reply r = {.magic = REPLY_MAGIC};
+	struct reply r = {.magic = REPLY_MAGIC, .layout = reply_layout()};
 
 	if (!mesh) {
 		size_t n = strlen(reason);
@@ -201,6 +220,7 @@ void mesh_data_free(struct mesh_data *mesh)
 #define NONSENSE (-11)	    /* an answer no helper of this rtcl sends */
 #define OUT_OF_MEMORY (-12) /* reason says for what */
 #define TIMED_OUT (-13)	    /* no answer within the time limit */
+#define OTHER_FORM (-14)    /* an answer of another rtcl's helper */
 
 /* An array of count items of item_size bytes: NULL for an impossible size
  * (counts from the pipe are not trusted). */
@@ -252,12 +272,17 @@ static int receive(int fd, struct mesh_data *out, char *reason, size_t reason_si
 {
 	struct reply r;
 
-	int got = read_all(fd, &r, sizeof(r));
+	int got = read_all(fd, &r, REPLY_HEAD);
 
 	if (got)
 		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	if (r.magic != REPLY_MAGIC)
 		return NONSENSE;
+	if (r.layout != reply_layout())
+		return OTHER_FORM;
+	got = read_all(fd, (char *)&r + REPLY_HEAD, sizeof(r) - REPLY_HEAD);
+	if (got)
+		return got == TOO_LATE ? TIMED_OUT : BROKE_OFF;
 	if (!r.ok) {
 		char text[REASON_MAX + 1];
 		if (r.reason_length > REASON_MAX)
@@ -443,7 +468,8 @@ static int sanitizer_out_of_memory(FILE *f)
 
 /* Waits for the helper, then turns what happened into the outcome: the
  * answer received, or why there is none. */
-static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t reason_size)
+static int reap(const char *helper, pid_t pid, int received, FILE *said_file, char *reason,
+		size_t reason_size)
 {
 	char said[400], paren[420] = "";
 	int status, code;
@@ -478,6 +504,14 @@ static int reap(pid_t pid, int received, FILE *said_file, char *reason, size_t r
 	if (received == NONSENSE) {
 		snprintf(reason, reason_size,
 			 "the mesh importer failed: its answer makes no sense");
+		return MESH_IMPORTER_FAILED;
+	}
+	if (received == OTHER_FORM) {
+		snprintf(reason, reason_size,
+			 "the mesh importer %s is another rtcl's (its answer has another "
+			 "form): name the rtcl-meshread built with this rtcl in " MESH_HELPER_ENV
+			 ", or reinstall rtcl",
+			 helper);
 		return MESH_IMPORTER_FAILED;
 	}
 	/* A sanitized helper (test builds) ends with exit status 1, or a
@@ -724,7 +758,7 @@ static int import(const char *path, struct mesh_data *out, char *reason, size_t 
 	if (received == TIMED_OUT)
 		kill(pid, SIGKILL);
 	close(fds[0]); /* a helper still writing gets EPIPE and ends */
-	ret = reap(pid, received, said, reason, reason_size);
+	ret = reap(helper, pid, received, said, reason, reason_size);
 	if (said)
 		fclose(said);
 	if (ret)

@@ -484,9 +484,11 @@ def compare(args, rtcl, out):
 
 
 def find_rtcl_rays(rtcl):
-    """rtcl-rays beside rtcl (an installed rtcl, or build/ of the source tree)."""
+    """rtcl-rays beside rtcl: PREFIX/lib/rtcl of an installed rtcl
+    (PREFIX/bin/rtcl), or build/ of the source tree."""
     here = pathlib.Path(rtcl).resolve().parent
-    for candidate in (here / "rtcl-rays", here / "build" / "rtcl-rays",
+    for candidate in (here.parent / "lib" / "rtcl" / "rtcl-rays", here / "rtcl-rays",
+                      here / "build" / "rtcl-rays",
                       locations.SOURCE_ROOT / "build" / "rtcl-rays"):
         if locations.is_program(candidate):
             return candidate
