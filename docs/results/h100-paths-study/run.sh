@@ -15,8 +15,8 @@
 # studio_path's thin lens, plane and glTF model), after round 1, at most
 # MITSUBA_S (170) seconds; the registers and spills of each schedule's kernel
 # on the materials scene; then tools/path_study.py over the results.
-# An option this rtcl does not take (--regenerate, --fetch, --wavefront-form
-# come from other branches) is probed first (rtcl given the options and a
+# An option this rtcl does not take (--regenerate, --fetch, --wavefront-form:
+# in main since 96b81cd; an older binary lacks them) is probed first (rtcl given the options and a
 # scene that does not exist answers exit status 2 for an option it does not
 # take) and its schedule skipped with a line saying so; without
 # --wavefront-form the wavefront runs as plain "-k wavefront" (the bounce
