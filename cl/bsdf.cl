@@ -310,13 +310,16 @@ static float3 cosine_direction(struct tracer *tr, float2 u)
 }
 
 /* Samples the BSDF for wo (local, wo.z > 0) with u (pair C) and the lobe
- * coordinate u_lobe (pair D's first): false when the sample is none. */
+ * coordinate u_lobe (pair D's first): false when the sample is none. Each
+ * kind's branch takes the shading phase's SIMD step (RENDERING.md, "SIMD
+ * efficiency, measured"), so that lanes on different kinds count apart. */
 static bool bsdf_sample(struct tracer *tr, const struct bsdf *b, float3 wo, float2 u,
 			float u_lobe, struct bsdf_sample *out)
 {
 	out->delta = false;
 	switch (b->type) {
 	case RT_BSDF_CONDUCTOR:
+		SIMD_STEP(tr, RT_SIMD_SHADE);
 		if (b->alpha < BSDF_SMOOTH_ALPHA) {
 			out->wi = (float3)(-wo.x, -wo.y, wo.z);
 			out->weight = schlick3(tr, b->color, wo.z);
@@ -335,6 +338,7 @@ static bool bsdf_sample(struct tracer *tr, const struct bsdf *b, float3 wo, floa
 			return true;
 		}
 	case RT_BSDF_DIELECTRIC: {
+		SIMD_STEP(tr, RT_SIMD_SHADE);
 		float eta = b->eta;
 		if (b->alpha < BSDF_SMOOTH_ALPHA) {
 			float3 n = (float3)(0.0f, 0.0f, 1.0f);
@@ -378,6 +382,7 @@ static bool bsdf_sample(struct tracer *tr, const struct bsdf *b, float3 wo, floa
 	case RT_BSDF_PRINCIPLED: {
 		/* The lobe by u_lobe (metal, glass, plastic), u rescaled to its
 		 * interval; then the mixture's pdf and weight at wi. */
+		SIMD_STEP(tr, RT_SIMD_SHADE);
 		float m = b->metallic, glass = (1.0f - m) * b->transmission;
 		COUNT_FLOPS(tr, 2);
 		bool reflected = true; /* the lobe's side: a sample on the other is none */
@@ -414,6 +419,7 @@ static bool bsdf_sample(struct tracer *tr, const struct bsdf *b, float3 wo, floa
 		return true;
 	}
 	case RT_BSDF_MAPPED:
+		SIMD_STEP(tr, RT_SIMD_SHADE);
 		if (u_lobe < b->mirror) {
 			out->wi = (float3)(-wo.x, -wo.y, wo.z);
 			out->weight = schlick3(tr, b->tint, wo.z);
@@ -423,6 +429,8 @@ static bool bsdf_sample(struct tracer *tr, const struct bsdf *b, float3 wo, floa
 		}
 		/* fall through: the diffuse lobe */
 	default:
+		if (b->type != RT_BSDF_MAPPED) /* its step was taken above */
+			SIMD_STEP(tr, RT_SIMD_SHADE);
 		out->wi = cosine_direction(tr, u);
 		if (out->wi.z <= 0.0f)
 			return false;

@@ -227,11 +227,30 @@ static void path_next_event(struct tracer *tr, struct walk *w, const struct path
 	COUNT_RAY(tr);
 }
 
+/* Counts, when counting, the path that ends: its length in segments, the
+ * rays it traced through the scene (RENDERING.md, "Paths per bounce"): the
+ * vertex of its next hit is the one its last segment looked for. Called
+ * where every form of every kernel learns that a path ends, path_vertex
+ * and path_missed (a shadow ray still to trace is no segment). */
+static inline void path_count_end(struct tracer *tr, const struct walk *w)
+{
+#ifdef RTCL_COUNT_FLOPS
+	ulong segments = (ulong)w->vertex + 1;
+
+	tr->path_lengths[min(segments, (ulong)RT_PATH_LENGTH_BINS) - 1]++;
+	tr->path_max = max(tr->path_max, segments);
+	tr->path_segments += segments;
+#else
+	(void)tr;
+	(void)w;
+#endif
+}
+
 /* The hit of the path's segment (RENDERING.md, "The path", one turn of the
  * loop): its emission, the light sample, the BSDF sample that continues
  * the path. Returns whether the path ends here (after the shadow ray, if
  * one was made). kind: as path_surface's. */
-static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit, int kind)
+static bool path_scatter(struct tracer *tr, struct walk *w, struct hit hit, int kind)
 {
 	struct path_hit h;
 	int i = w->vertex;
@@ -289,8 +308,18 @@ static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit, int k
 	return false;
 }
 
+/* path_scatter, and the path counted when it ends there. */
+static bool path_vertex(struct tracer *tr, struct walk *w, struct hit hit, int kind)
+{
+	bool done = path_scatter(tr, w, hit, kind);
+
+	if (done)
+		path_count_end(tr, w);
+	return done;
+}
+
 /* A ray that leaves the scene: the environment's light, weighted by MIS
- * where next_event could have sampled it. */
+ * where next_event could have sampled it; the path ends. */
 static void path_missed(struct tracer *tr, struct walk *w)
 {
 	float p_light;
@@ -301,6 +330,7 @@ static void path_missed(struct tracer *tr, struct walk *w)
 		weight = mis_weight(tr, w->pdf_prev, p_light);
 	w->color += w->beta * le * weight;
 	COUNT_FLOPS(tr, 2 * FLOPS_MUL3 + FLOPS_ADD3);
+	path_count_end(tr, w);
 }
 
 /* The BSDF kind (RT_BSDF_*) of the material hit: no flops, only the

@@ -332,18 +332,27 @@ struct rt_bvh4_node {
  * node visits, leaf visits and primitive tests in those leaves, then,
  * measured on NVIDIA devices (RTCL_SIMD_MEASURE, docs/RENDERING.md "SIMD
  * efficiency, measured"; 0 elsewhere), for each phase the steps this
- * work-item took and the warp-steps it led. */
+ * work-item took and the warp-steps it led; then, under the path
+ * integrator (0 under Whitted), its paths by length (RENDERING.md, "Paths
+ * per bounce"): RT_PATH_LENGTH_BINS counts, bin b the paths of b + 1
+ * segments and the last bin those of RT_PATH_LENGTH_BINS or more, the
+ * longest path's segments and the sum of every path's. */
 #define RT_ITEM_FLOPS 0
 #define RT_ITEM_RAYS 1
 #define RT_ITEM_NODE_VISITS 2
 #define RT_ITEM_LEAF_VISITS 3
 #define RT_ITEM_PRIM_TESTS 4
-#define RT_SIMD_PHASES 2 /* RT_SIMD_INTERSECT, RT_SIMD_TRAVERSAL */
+#define RT_SIMD_PHASES 3 /* RT_SIMD_INTERSECT, RT_SIMD_TRAVERSAL, RT_SIMD_SHADE */
 #define RT_SIMD_INTERSECT 0 /* a ray or shadow ray's intersection and shading step */
 #define RT_SIMD_TRAVERSAL 1 /* an iteration of the BVH traversal loop */
+#define RT_SIMD_SHADE 2	    /* a path vertex's BSDF sample, in its BSDF kind's branch */
 #define RT_ITEM_LANE_STEPS(phase) (5 + 2 * (phase))
 #define RT_ITEM_WARP_STEPS(phase) (6 + 2 * (phase))
-#define RT_ITEM_COUNTS (5 + 2 * RT_SIMD_PHASES)
+#define RT_PATH_LENGTH_BINS 16
+#define RT_ITEM_PATH_LENGTHS (5 + 2 * RT_SIMD_PHASES) /* the first bin */
+#define RT_ITEM_PATH_MAX (RT_ITEM_PATH_LENGTHS + RT_PATH_LENGTH_BINS)
+#define RT_ITEM_PATH_SEGMENTS (RT_ITEM_PATH_MAX + 1)
+#define RT_ITEM_COUNTS (RT_ITEM_PATH_SEGMENTS + 1)
 
 /* The probe buffer of the single-pass kernels: with RTCL_COUNT_WRITES (the
  * tests), one write count per pixel; with RTCL_SCHEDULE_MAP (--schedule-map,

@@ -52,6 +52,19 @@ static void store_counts(struct tracer *tr, uint item)
 		counts[RT_ITEM_LANE_STEPS(p)] = counts[RT_ITEM_WARP_STEPS(p)] = 0;
 #endif
 	}
+	for (int b = 0; b < RT_PATH_LENGTH_BINS; b++) {
+#ifdef RTCL_PATH
+		counts[RT_ITEM_PATH_LENGTHS + b] = tr->path_lengths[b];
+#else
+		counts[RT_ITEM_PATH_LENGTHS + b] = 0;
+#endif
+	}
+#ifdef RTCL_PATH
+	counts[RT_ITEM_PATH_MAX] = tr->path_max;
+	counts[RT_ITEM_PATH_SEGMENTS] = tr->path_segments;
+#else
+	counts[RT_ITEM_PATH_MAX] = counts[RT_ITEM_PATH_SEGMENTS] = 0;
+#endif
 #else
 	(void)tr;
 	(void)item;

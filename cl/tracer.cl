@@ -206,6 +206,10 @@ struct tracer {
 	ulong lane_steps[RT_SIMD_PHASES]; /* steps this work-item took */
 	ulong warp_steps[RT_SIMD_PHASES]; /* of them, those it led for its warp */
 #endif
+#if defined(RTCL_COUNT_FLOPS) && defined(RTCL_PATH)
+	ulong path_lengths[RT_PATH_LENGTH_BINS]; /* paths ended, by segments (RT_ITEM_PATH_*) */
+	ulong path_max, path_segments;		 /* the longest's segments; their sum */
+#endif
 #if defined(RTCL_AREA_LIGHTS) || defined(RTCL_PATH)
 	/* The sample being traced, whose further pairs place the light samples
 	   and the path's bounces (tracer_set_sample). */
@@ -328,6 +332,11 @@ static void tracer_init(struct tracer *tr, scene_ptr scene, __global ulong *item
 #ifdef RTCL_SIMD_MEASURE
 	for (int p = 0; p < RT_SIMD_PHASES; p++)
 		tr->lane_steps[p] = tr->warp_steps[p] = 0;
+#endif
+#if defined(RTCL_COUNT_FLOPS) && defined(RTCL_PATH)
+	for (int b = 0; b < RT_PATH_LENGTH_BINS; b++)
+		tr->path_lengths[b] = 0;
+	tr->path_max = tr->path_segments = 0;
 #endif
 }
 

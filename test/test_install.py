@@ -24,7 +24,8 @@ PREFIX = "usr"
 # The commands the README and the man page name; one per tools/*.py.
 TOOL_COMMANDS = {"rtcl-bench", "rtcl-bench-spp", "rtcl-experiments", "rtcl-flops-hist",
                  "rtcl-genbench", "rtcl-genscene", "rtcl-imgdiff", "rtcl-maps", "rtcl-multidevice-bench",
-                 "rtcl-peer-compare", "rtcl-povray", "rtcl-ppmdiff", "rtcl-schedule-replay",
+                 "rtcl-path-study", "rtcl-peer-compare", "rtcl-povray", "rtcl-ppmdiff",
+                 "rtcl-schedule-replay",
                  "rtcl-time-to-image"}
 MAN_SECTIONS = ["NAME", "SYNOPSIS", "DESCRIPTION", "OPTIONS", "ENVIRONMENT", "FILES",
                 "EXIT STATUS", "EXAMPLES", "SEE ALSO"]

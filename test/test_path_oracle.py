@@ -280,3 +280,12 @@ def test_environment_map_matches_mitsuba(tmp_path):
     """test/oracle/sky.hdr (tools/build/oracle_sky.py) turned by 30 degrees:
     its orientation, importance sampling by luminance and lookup."""
     compare(render(tmp_path, ORACLE / "env.json", 64, 64, 256), "env", 256)
+
+
+@pytest.mark.slow
+def test_textured_mtl_materials_match_mitsuba(tmp_path):
+    """OBJ files' own MTL materials with a base colour texture (the floor of
+    scenes/materials_path.json, its tiles.png repeated, and the crate): the
+    texture coordinates, v's direction, the sRGB decoding, bilinear filtering
+    and the repeat, against Mitsuba's bitmap of the same texels (issue 41)."""
+    compare(render(tmp_path, ORACLE / "textured.json", 64, 64, 256), "textured", 256)

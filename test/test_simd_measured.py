@@ -20,6 +20,7 @@ import tempfile
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 EMPTY = str(ROOT / "scenes" / "empty.json")
+BOX = str(ROOT / "test" / "scenes" / "path_box.json")
 
 
 def nvidia_platform():
@@ -69,8 +70,21 @@ def check_the_model_reports_its_error(platform):
     assert f"; {100 * error:+.1f} points from the measured)" in summary, summary
 
 
+def check_paths_measure_the_shading_phase(platform):
+    """Under the path integrator a third phase, the BSDF samples: one lane of
+    32 in the serial kernel; in a single-pass kernel a share in (0, 1], and
+    all three phases together reported beside both."""
+    value = measured(platform, "-k", "serial", BOX, "--size", "16x8", "--spp", "2")
+    assert value["shade"] == 1 / 32 and value["all"] == 1 / 32, value
+    stats, summary = counted(platform, "-k", "dynamic", BOX, "--size", "64x32", "--spp", "4")
+    value = stats["simd_efficiency_measured"]
+    assert 0 < value["shade"] <= 1 and 0 < value["all"] <= 1, value
+    assert f"{100 * value['shade']:.1f}% in shading steps" in summary, summary
+    assert f"{100 * value['all']:.1f}% in all three" in summary, summary
+
+
 CHECKS = (check_serial_is_one_lane_of_32, check_a_scene_of_misses_keeps_every_lane_busy,
-          check_the_model_reports_its_error)
+          check_the_model_reports_its_error, check_paths_measure_the_shading_phase)
 
 try:
     import pytest
@@ -94,6 +108,9 @@ if pytest is not None:
 
     def test_the_model_reports_its_error(platform):
         check_the_model_reports_its_error(platform)
+
+    def test_paths_measure_the_shading_phase(platform):
+        check_paths_measure_the_shading_phase(platform)
 
 
 if __name__ == "__main__":

@@ -148,6 +148,7 @@ cl_int buffers_add_item_counts(struct device *dev, struct render_buffers *b, cl_
 			b->counts.lane_steps[p] += c[RT_ITEM_LANE_STEPS(p)];
 			b->counts.warp_steps[p] += c[RT_ITEM_WARP_STEPS(p)];
 		}
+		path_counts_add_item(&b->counts.paths, c);
 	}
 	free(counts);
 	return status;
@@ -175,6 +176,7 @@ static cl_int read_counts(struct device *dev, const struct render_settings *s,
 		res->lane_steps[p] = b->counts.lane_steps[p];
 		res->warp_steps[p] = b->counts.warp_steps[p];
 	}
+	res->paths = b->counts.paths;
 	return clEnqueueReadBuffer(dev->queue, b->flops, CL_TRUE, 0, pixel_flops_bytes(s),
 				   res->pixel_flops, 0, NULL, NULL);
 }

@@ -14,6 +14,7 @@
 struct trace_counts {
 	uint64_t rays, node_visits, leaf_visits, prim_tests;
 	uint64_t lane_steps[RT_SIMD_PHASES], warp_steps[RT_SIMD_PHASES]; /* simd_measured */
+	struct path_counts paths; /* under the path integrator */
 };
 
 struct render_buffers {

@@ -16,6 +16,35 @@ struct render_result;
 struct renderer_ops; /* renderer.h */
 struct stages_stats;  /* render/stages.h */
 
+/* The counting build's paths (docs/RENDERING.md, "Paths per bounce"), summed
+ * over work-items: by length in segments (bin b: b + 1 segments, the last
+ * bin RT_PATH_LENGTH_BINS or more), the longest, and every path's segments.
+ * All 0 under Whitted. */
+struct path_counts {
+	uint64_t lengths[RT_PATH_LENGTH_BINS];
+	uint64_t max, segments;
+};
+
+/* Adds one work-item's counts (RT_ITEM_COUNTS words) to paths. */
+static inline void path_counts_add_item(struct path_counts *paths, const uint64_t *item)
+{
+	for (int b = 0; b < RT_PATH_LENGTH_BINS; b++)
+		paths->lengths[b] += item[RT_ITEM_PATH_LENGTHS + b];
+	if (item[RT_ITEM_PATH_MAX] > paths->max)
+		paths->max = item[RT_ITEM_PATH_MAX];
+	paths->segments += item[RT_ITEM_PATH_SEGMENTS];
+}
+
+/* Adds the paths `from` counted (another device's, a piece's) to `to`. */
+static inline void path_counts_merge(struct path_counts *to, const struct path_counts *from)
+{
+	for (int b = 0; b < RT_PATH_LENGTH_BINS; b++)
+		to->lengths[b] += from->lengths[b];
+	if (from->max > to->max)
+		to->max = from->max;
+	to->segments += from->segments;
+}
+
 /* The scheduling kernels, one cl/NAME.cl each. */
 struct kernel_info {
 	const char *name;
@@ -174,6 +203,7 @@ struct render_result {
 	 * work-item took, and the warp-steps (docs/RENDERING.md). */
 	int simd_measured;
 	uint64_t lane_steps[RT_SIMD_PHASES], warp_steps[RT_SIMD_PHASES];
+	struct path_counts paths; /* the paths by length, under the path integrator */
 
 	/* The BVH, with ACCEL_BVH and a sphere or triangle (else bvh_nodes 0). */
 	int bvh_nodes, bvh_depth;

@@ -42,6 +42,29 @@ static void add_flop_figures(json_t *doc, const struct record *record)
 			    json_real(f->rays ? (double)f->prim_tests / f->rays : 0.0));
 }
 
+/* The counting run's paths (RENDERING.md, "Paths per bounce"): how many,
+ * their lengths in segments, and the paths live at each bounce. */
+static json_t *paths_document(const struct path_counts *p)
+{
+	uint64_t live[RT_PATH_LENGTH_BINS], count = 0;
+	int bounces = p->max < RT_PATH_LENGTH_BINS ? (int)p->max : RT_PATH_LENGTH_BINS;
+	json_t *histogram = json_array(), *per_bounce = json_array();
+
+	for (int b = RT_PATH_LENGTH_BINS - 1; b >= 0; b--) {
+		count += p->lengths[b];
+		live[b] = count;
+	}
+	for (int b = 0; b < RT_PATH_LENGTH_BINS; b++)
+		json_array_append_new(histogram, json_integer((json_int_t)p->lengths[b]));
+	for (int b = 0; b < bounces; b++)
+		json_array_append_new(per_bounce, json_integer((json_int_t)live[b]));
+	return json_pack("{s:I, s:I, s:f, s:I, s:o, s:i, s:o}", "count", (json_int_t)count,
+			 "segments", (json_int_t)p->segments, "mean_length",
+			 count ? (double)p->segments / (double)count : 0.0, "max_length",
+			 (json_int_t)p->max, "length_histogram", histogram, "length_bins",
+			 RT_PATH_LENGTH_BINS, "live_per_bounce", per_bounce);
+}
+
 /* The textures that go to the device and the memory each takes there
  * (SCENE.md, "Textures"); nothing in a scene without. */
 static void add_textures(json_t *doc, const struct scene *scene)
@@ -317,7 +340,15 @@ json_t *report_document(const struct job *job, const struct record *record)
 						       simd_measured(c, RT_SIMD_TRAVERSAL), "both",
 						       simd_measured_all(c))
 					   : json_string("not measurable on this device");
+		if (c->simd_measured && job->scene->integrator == SCENE_INTEGRATOR_PATH) {
+			json_object_set_new(measured, "shade",
+					    json_real(simd_measured(c, RT_SIMD_SHADE)));
+			json_object_set_new(measured, "all",
+					    json_real(simd_measured_first(c, RT_SIMD_PHASES)));
+		}
 		json_object_set_new(doc, "simd_efficiency_measured", measured);
+		if (job->scene->integrator == SCENE_INTEGRATOR_PATH)
+			json_object_set_new(doc, "paths", paths_document(&c->paths));
 	}
 	if (record->simd.modelled) {
 		json_object_set_new(doc, "simd_efficiency_model", json_real(record->simd.efficiency));

@@ -49,9 +49,14 @@ double simd_measured(const struct render_result *c, int phase)
 
 double simd_measured_all(const struct render_result *c)
 {
+	return simd_measured_first(c, RT_SIMD_TRAVERSAL + 1);
+}
+
+double simd_measured_first(const struct render_result *c, int phases)
+{
 	double steps = 0, warp_steps = 0;
 
-	for (int phase = 0; phase < RT_SIMD_PHASES; phase++) {
+	for (int phase = 0; phase < phases; phase++) {
 		steps += (double)c->lane_steps[phase];
 		warp_steps += (double)c->warp_steps[phase];
 	}

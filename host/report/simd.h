@@ -27,9 +27,14 @@ struct simd_model {
  * SIMD_WARP_WIDTH times its warp-steps; 1 with none. */
 double simd_measured(const struct render_result *counted, int phase);
 
-/* The measured SIMD efficiency of both phases together: their steps over
+/* The measured SIMD efficiency of both phases together, intersection and
+ * traversal (RT_SIMD_INTERSECT, RT_SIMD_TRAVERSAL): their steps over
  * SIMD_WARP_WIDTH times their warp-steps; 1 with none. */
 double simd_measured_all(const struct render_result *counted);
+
+/* The same over the first `phases` phases (RT_SIMD_PHASES: every phase,
+ * the path integrator's shading included). */
+double simd_measured_first(const struct render_result *counted, int phases);
 
 /* Models `pixels` pixels: schedule holds RT_SCHEDULE_WORDS per pixel (group,
  * item, ticket), pixel_flops one count each; width lanes a warp. Pixels no

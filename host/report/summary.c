@@ -13,8 +13,8 @@
 static void print_simd(FILE *out, const struct record *record)
 {
 	const struct render_result *c = &record->counted;
-	static const char *const phase[RT_SIMD_PHASES] = {"intersection steps",
-							  "traversal steps"};
+	static const char *const phase[RT_SIMD_PHASES] = {"intersection steps", "traversal steps",
+							  "shading steps"};
 
 	fprintf(out, "simd:    %s", c->simd_measured ? "measured " : "not measurable on this device");
 	for (int p = 0, shown = 0; c->simd_measured && p < RT_SIMD_PHASES; p++) {
@@ -25,6 +25,8 @@ static void print_simd(FILE *out, const struct record *record)
 	}
 	if (c->simd_measured)
 		fprintf(out, ", %.1f%% in both", 100 * simd_measured_all(c));
+	if (c->simd_measured && c->warp_steps[RT_SIMD_SHADE])
+		fprintf(out, ", %.1f%% in all three", 100 * simd_measured_first(c, RT_SIMD_PHASES));
 	if (record->simd.modelled) {
 		fprintf(out, "; modelled %.1f%% (warps of %d in lock-step, %llu warp-steps",
 			100 * record->simd.efficiency, record->simd.warp_width,
@@ -37,6 +39,28 @@ static void print_simd(FILE *out, const struct record *record)
 			c->global_size[0] * c->global_size[1]);
 	} else
 		fprintf(out, "; modelled with --schedule-map\n");
+}
+
+/* The counting run's paths (RENDERING.md, "Paths per bounce"): their
+ * number and lengths, and the share of them still live at each bounce. */
+static void print_paths(FILE *out, const struct path_counts *p)
+{
+	uint64_t count = 0, live = 0;
+	int bounces = p->max < RT_PATH_LENGTH_BINS ? (int)p->max : RT_PATH_LENGTH_BINS;
+
+	for (int b = 0; b < RT_PATH_LENGTH_BINS; b++)
+		count += p->lengths[b];
+	fprintf(out,
+		"paths:   %llu, %.2f segments each on average, at most %llu; live at bounce 0, 1, "
+		"...:",
+		(unsigned long long)count, count ? (double)p->segments / (double)count : 0.0,
+		(unsigned long long)p->max);
+	for (int b = 0; b < bounces; b++) {
+		fprintf(out, "%s %.1f%%", b ? "," : "",
+			count ? 100.0 * (double)(count - live) / (double)count : 0.0);
+		live += p->lengths[b];
+	}
+	fprintf(out, "\n");
 }
 
 /* The end of the summary's time line: the whole run's time, from the start
@@ -110,6 +134,8 @@ void report_print_image(FILE *out, const struct job *job, const struct record *r
 				f->rays ? (double)f->leaf_visits / f->rays : 0.0,
 				f->rays ? (double)f->prim_tests / f->rays : 0.0);
 	}
+	if (job->counting && job->scene->integrator == SCENE_INTEGRATOR_PATH)
+		print_paths(out, &record->counted.paths);
 	if (job->counting)
 		print_simd(out, record);
 }

@@ -544,6 +544,7 @@ static int join_item_counts(const struct tiles_job *t, struct render_result *out
 			out->lane_steps[p] += r->lane_steps[p];
 			out->warp_steps[p] += r->warp_steps[p];
 		}
+		path_counts_merge(&out->paths, &r->paths);
 	}
 	return 0;
 }

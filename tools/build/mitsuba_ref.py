@@ -35,7 +35,6 @@ import json
 import math
 import os
 import pathlib
-import struct
 import sys
 import tempfile
 import time
@@ -67,33 +66,123 @@ def rotation(degrees):
     return rz @ ry @ rx
 
 
-def read_obj(path):
+def read_obj(path, uvs=None):
     """The triangles of an OBJ file by material name: {name: [[v0, v1, v2], ...]}.
     Polygons are fanned from their first vertex, as Assimp triangulates a convex
-    polygon; faces before the first `usemtl` have the material None."""
-    vertices, groups, material = [], {}, None
+    polygon; faces before the first `usemtl` have the material None. With a
+    dict `uvs`, each material's texture coordinates go there too ({name:
+    [[uv0, uv1, uv2], ...]}, (0, 0) where a face vertex has none, as rtcl
+    reads them); without, a file with texture coordinates is refused."""
+    vertices, texcoords, groups, material = [], [], {}, None
     for number, line in enumerate(path.read_text().splitlines(), 1):
         fields = line.split()
         if not fields or fields[0].startswith("#"):
             continue
         if fields[0] == "v":
             vertices.append([float(c) for c in fields[1:4]])
+        elif fields[0] == "vt":
+            if uvs is None:
+                raise SceneError(f"{path}:{number}: texture coordinates are not mapped "
+                                 "(give untextured meshes)")
+            texcoords.append([float(c) for c in fields[1:3]])
         elif fields[0] == "usemtl":
             material = fields[1]
         elif fields[0] == "f":
-            index = []
+            index, uv = [], []
             for field in fields[1:]:
-                i = int(field.split("/")[0])
+                parts = field.split("/")
+                i = int(parts[0])
                 index.append(i - 1 if i > 0 else len(vertices) + i)
+                if len(parts) > 1 and parts[1]:
+                    t = int(parts[1])
+                    uv.append(texcoords[t - 1 if t > 0 else len(texcoords) + t])
+                else:
+                    uv.append([0.0, 0.0])
             for k in range(1, len(index) - 1):
                 groups.setdefault(material, []).append(
                     [vertices[index[0]], vertices[index[k]], vertices[index[k + 1]]])
-        elif fields[0] in ("vn", "vt"):
-            raise SceneError(f"{path}:{number}: vertex normals and texture coordinates are "
-                             "not mapped (give flat, untextured meshes)")
+                if uvs is not None:
+                    uvs.setdefault(material, []).append([uv[0], uv[k], uv[k + 1]])
+        elif fields[0] == "vn":
+            raise SceneError(f"{path}:{number}: vertex normals are not mapped "
+                             "(give flat meshes)")
         elif fields[0] not in ("o", "g", "s", "mtllib"):
             raise SceneError(f"{path}:{number}: unknown OBJ statement {fields[0]!r}")
     return groups
+
+
+def read_mtl(obj_path):
+    """The materials of an OBJ's `mtllib` files: {name: {statement: fields}}."""
+    materials, current = {}, None
+    for line in obj_path.read_text().splitlines():
+        fields = line.split()
+        if not fields or fields[0] != "mtllib":
+            continue
+        for library in fields[1:]:
+            for row in (obj_path.parent / library).read_text().splitlines():
+                words = row.split()
+                if not words or words[0].startswith("#"):
+                    continue
+                if words[0] == "newmtl":
+                    current = materials.setdefault(words[1], {})
+                elif current is not None:
+                    current[words[0]] = words[1:]
+    return materials
+
+
+def mtl_material(obj_path, name, fields, where):
+    """An OBJ material that the file gives (not replaced by the scene) as an
+    rtcl material of the oracle's own kind "mtl_diffuse": RENDERING.md's
+    mapped BSDF for an opaque material without reflection (d 1, illum 0, 1
+    or 2) is the diffuse lobe rho = min(1, Kd (x) map_Kd's texture); anything
+    else (dissolve, reflection, emission, options of map_Kd) is refused."""
+    known = {"Kd", "Ka", "Ks", "Ns", "map_Kd", "illum", "d", "Tr", "Ni"}
+    extra = set(fields) - known
+    if extra:
+        raise SceneError(f"{where}: MTL statements the oracle does not map: {sorted(extra)}")
+    d = float(fields.get("d", ["1"])[0])
+    if "Tr" in fields:
+        d = 1 - float(fields["Tr"][0])
+    illum = int(fields.get("illum", ["2"])[0])
+    if d != 1 or illum > 2:
+        raise SceneError(f"{where}: only opaque MTL materials without reflection (d 1, "
+                         "illum 0 ... 2) are mapped")
+    kd = [float(c) for c in fields.get("Kd", ["0.6", "0.6", "0.6"])]
+    texture = None
+    if "map_Kd" in fields:
+        if len(fields["map_Kd"]) != 1:
+            raise SceneError(f"{where}: map_Kd options are not mapped")
+        texture = obj_path.parent / fields["map_Kd"][0]
+    return {"mtl_diffuse": {"kd": kd, "texture": texture}}
+
+
+def read_ply(path):
+    """The triangles of a binary little-endian PLY file of float x, y, z vertices
+    and uchar-counted int faces (tools/rtcl_tools/ply.py's layout, which
+    rtcl-genbench and blob.py write) as an N x 3 x 3 array; other PLY files
+    are refused."""
+    data = path.read_bytes()
+    end = data.find(b"end_header\n")
+    if not data.startswith(b"ply\n") or end < 0:
+        raise SceneError(f"{path}: not a PLY file")
+    lines = [line for line in data[:end].decode("ascii").splitlines()
+             if not line.startswith("comment")]
+    expected_props = ["property float x", "property float y", "property float z"]
+    if (lines[1] != "format binary_little_endian 1.0" or not lines[2].startswith("element vertex")
+            or lines[3:6] != expected_props or not lines[6].startswith("element face")
+            or lines[7] not in ("property list uchar int vertex_indices",
+                                "property list uchar int vertex_index")
+            or len(lines) != 8):
+        raise SceneError(f"{path}: the oracle reads binary little-endian PLY files of float "
+                         "x, y, z vertices and triangles only")
+    vertex_count, face_count = int(lines[2].split()[2]), int(lines[6].split()[2])
+    start = end + len(b"end_header\n")
+    vertices = np.frombuffer(data, "<f4", 3 * vertex_count, start).reshape(-1, 3)
+    faces = np.frombuffer(data, np.dtype([("n", "u1"), ("i", "<i4", 3)]), face_count,
+                          start + 12 * vertex_count)
+    if face_count and (faces["n"] != 3).any():
+        raise SceneError(f"{path}: the oracle reads triangles only")
+    return vertices.astype(np.float64)[faces["i"]]
 
 
 class Scene:
@@ -149,27 +238,44 @@ class Scene:
         if mesh.get("smooth", True):
             raise SceneError(f'{where}: give "smooth": false (the oracle maps flat meshes)')
         file = self.path.parent / mesh["file"]
-        if file.suffix.lower() != ".obj":
-            raise SceneError(f"{where}.file: the oracle reads OBJ files only")
+        if file.suffix.lower() not in (".obj", ".ply"):
+            raise SceneError(f"{where}.file: the oracle reads OBJ and PLY files only")
         scale = mesh.get("scale", 1)
         scale = np.array([float(scale)] * 3 if isinstance(scale, (int, float))
                          else vec(scale, where + ".scale"))
         turn = rotation(vec(mesh.get("rotate", [0, 0, 0]), where + ".rotate"))
         shift = np.array(vec(mesh.get("translate", [0, 0, 0]), where + ".translate"))
         mirror = np.prod(np.sign(scale)) < 0
-        for name, triangles in read_obj(file).items():
+        uvs, file_materials = {}, {}
+        if file.suffix.lower() == ".ply":
+            if "material" not in mesh:
+                raise SceneError(f"{where}: a PLY file has no materials: give \"material\"")
+            groups = {None: read_ply(file)}
+        else:
+            groups = read_obj(file, uvs)
+            file_materials = read_mtl(file)
+        for name, triangles in groups.items():
             if "material" in mesh:
-                ref = mesh["material"]
+                ref = self.material(mesh["material"], f"{where}.material")
             elif name in mesh.get("materials", {}):
-                ref = mesh["materials"][name]
+                ref = self.material(mesh["materials"][name], f"{where}.materials.{name}")
+            elif name in file_materials:
+                # The file's own material: its texture coordinates are used.
+                ref = (f"{file}#{name}", mtl_material(file, name, file_materials[name],
+                                                      f"{file}: material {name!r}"))
             else:
                 raise SceneError(f"{where}: the file's material {name!r} needs a scene "
                                  "material with a bsdf (meshes[i].materials)")
             tri = np.array(triangles, dtype=np.float64) * scale
             tri = tri @ turn.T + shift
+            uv = np.array(uvs[name], dtype=np.float64) if name in uvs else None
             if mirror:
                 tri = tri[:, ::-1]
-            yield "triangles", tri, self.material(ref, f"{where}.materials.{name}"), where
+                uv = uv[:, ::-1] if uv is not None else None
+            if "mtl_diffuse" in ref[1]:
+                yield "triangles", (tri, uv), ref, where
+            else:
+                yield "triangles", tri, ref, where
 
 
 # ---------------------------------------------------------------- the mapping
@@ -187,6 +293,8 @@ def number_in(material, key, default, where, low=0.0, high=1.0):
 
 def mitsuba_bsdf(material, where):
     """The Mitsuba BSDF of an rtcl material's "bsdf" (docs/oracle.md, "Mappings")."""
+    if "mtl_diffuse" in material:
+        return {"type": "twosided", "bsdf": mtl_diffuse(material["mtl_diffuse"])}
     if "bsdf" not in material:
         raise SceneError(f"{where}: the oracle maps materials with a \"bsdf\" only")
     bsdf = material["bsdf"]
@@ -217,6 +325,27 @@ def mitsuba_bsdf(material, where):
     # rtcl's opaque BSDFs reflect on both sides of a surface; Mitsuba's on the
     # front only unless wrapped.
     return {"type": "twosided", "bsdf": inner}
+
+
+def mtl_diffuse(mtl):
+    """The diffuse lobe of an MTL material (mtl_material): rho = min(1, Kd (x) T).
+    The texture is decoded here as rtcl decodes it (RENDERING.md, "Textures":
+    8-bit sRGB through the inverse sRGB curve, rows from the top) and scaled
+    by Kd, then given to Mitsuba as a linear float bitmap filtered bilinearly
+    with texel centres at half-integers and repeated, as rtcl filters it; its
+    v = 0 is the top row, so the meshes' v is written as 1 - v (write_ply)."""
+    import mitsuba as mi
+    kd = np.array(mtl["kd"], dtype=np.float64)
+    if mtl["texture"] is None:
+        return {"type": "diffuse", "reflectance": rgb(list(np.minimum(kd, 1.0)), "Kd")}
+    bitmap = mi.Bitmap(str(mtl["texture"])).convert(
+        mi.Bitmap.PixelFormat.RGB, mi.Struct.Type.UInt8, srgb_gamma=True)
+    code = np.array(bitmap, dtype=np.float64) / 255.0
+    linear = np.where(code <= 0.04045, code / 12.92, ((code + 0.055) / 1.055) ** 2.4)
+    texels = np.minimum(linear.astype(np.float32) * kd, 1.0).astype(np.float32)
+    return {"type": "diffuse",
+            "reflectance": {"type": "bitmap", "bitmap": mi.Bitmap(texels), "raw": True,
+                            "filter_type": "bilinear", "wrap_mode": "repeat"}}
 
 
 def principled(bsdf, where):
@@ -327,7 +456,10 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
             shape.update(type="sphere", center=geometry[0], radius=geometry[1])
         else:
             ply = pathlib.Path(tmp) / f"shape{k}.ply"
-            write_ply(ply, geometry)
+            if isinstance(geometry, tuple):         # an MTL material's, with its uv
+                write_ply(ply, *geometry)
+            else:
+                write_ply(ply, geometry)
             shape.update(type="ply", filename=str(ply), face_normals=True)
         out[f"shape{k}"] = shape
     return out
@@ -407,18 +539,25 @@ def read_hdr(path):
     return rgbe[..., :3] * scale[..., None]
 
 
-def write_ply(path, triangles):
-    """N triangles (N x 3 x 3) as a binary PLY, float32 vertices, unshared."""
-    tri = np.asarray(triangles, dtype="<f4").reshape(-1, 3)
+def write_ply(path, triangles, uv=None):
+    """N triangles (N x 3 x 3) as a binary PLY, float32 vertices, unshared;
+    with uv (N x 3 x 2, rtcl's: v up), Mitsuba's texture coordinates (u, 1 - v:
+    its bitmaps' v = 0 is the top row, rtcl's the bottom)."""
     count = len(triangles)
+    tri = np.asarray(triangles, dtype="<f4").reshape(-1, 3)
+    props = "property float x\nproperty float y\nproperty float z\n"
+    if uv is not None:
+        uv = np.asarray(uv, dtype=np.float64).reshape(-1, 2)
+        uv = np.stack([uv[:, 0], 1.0 - uv[:, 1]], axis=1)
+        tri = np.concatenate([tri, uv.astype("<f4")], axis=1)
+        props += "property float u\nproperty float v\n"
     header = ("ply\nformat binary_little_endian 1.0\n"
-              f"element vertex {3 * count}\nproperty float x\nproperty float y\n"
-              f"property float z\nelement face {count}\n"
+              f"element vertex {3 * count}\n{props}element face {count}\n"
               "property list uchar int vertex_indices\nend_header\n").encode()
-    faces = bytearray()
-    for i in range(count):
-        faces += struct.pack("<Biii", 3, 3 * i, 3 * i + 1, 3 * i + 2)
-    path.write_bytes(header + tri.tobytes() + bytes(faces))
+    faces = np.empty(count, dtype=np.dtype([("n", "u1"), ("i", "<i4", 3)]))
+    faces["n"] = 3
+    faces["i"] = np.arange(3 * count, dtype=np.int64).reshape(-1, 3)
+    path.write_bytes(header + np.ascontiguousarray(tri).tobytes() + faces.tobytes())
 
 
 # ---------------------------------------------------------------- glTF's BSDF
@@ -547,11 +686,22 @@ def render(scene_path, spp, batches, size=None, threads=1, aov=None, seed=0):
 
 
 def input_digests(scene_path, folder):
-    """The SHA-256 of every file the render read: the scene, its mesh files
-    and its environment map, by their paths relative to folder."""
+    """The SHA-256 of every file the render read: the scene, its mesh files,
+    their MTL files and textures, and its environment map, by their paths
+    relative to folder."""
     scene_path = pathlib.Path(scene_path)
     doc = json.loads(scene_path.read_text())
     files = [scene_path] + [scene_path.parent / m["file"] for m in doc.get("meshes", [])]
+    for mesh in doc.get("meshes", []):                 # an OBJ's MTL files and textures
+        obj = scene_path.parent / mesh["file"]
+        if obj.suffix.lower() != ".obj":
+            continue
+        for line in obj.read_text().splitlines():
+            if line.split()[:1] == ["mtllib"]:
+                files += [obj.parent / name for name in line.split()[1:]]
+        files += [m["mtl_diffuse"]["texture"] for m in
+                  (mtl_material(obj, name, fields, str(obj))
+                   for name, fields in read_mtl(obj).items() if "map_Kd" in fields)]
     if "environment" in doc:
         files.append(scene_path.parent / doc["environment"]["file"])
     return {os.path.relpath(f, folder): hashlib.sha256(f.read_bytes()).hexdigest()

@@ -364,3 +364,39 @@ def lake(size=10, image=SPD_IMAGE, depth=5):
     name = "lake-%d" % size
     vertices, faces = mountain_mesh(size)
     return Bench(name, scene, place_triangles(scene, name, vertices, faces, "mountain", "ply"))
+
+
+# The lake path-traced (issue 41): each material's BSDF, the sun and the sky.
+LAKE_PATH_MATERIALS = {
+    "glass": {"bsdf": {"type": "dielectric", "ior": 1.5}},
+    "mountain": {"bsdf": {"type": "diffuse", "reflectance": [0.5, 0.45, 0.35]}},
+    "lake": {"bsdf": {"type": "conductor", "reflectance": [0.55, 0.7, 0.8]}},
+}
+LAKE_EXTENT = 20.0                    # the lake's square reaches x, y = +-20
+SUN_IRRADIANCE = [2.6, 2.5, 2.3]
+LAKE_PATH_SAMPLES = 16
+
+
+def lake_path(size=10, image=SPD_IMAGE, depth=8):
+    """The lake under the path integrator: the same mountain (2 * 4^size
+    triangles) and crystal spheres, now smooth glass (dielectric, ior 1.5); the
+    mountain diffuse in its SPD colour; the lake a tinted mirror (a smooth
+    conductor of F0 the lake's colour) as a square of two triangles at z =
+    LAKE_LEVEL reaching +-LAKE_EXTENT, beyond what the camera sees (a plane is
+    infinite, which Mitsuba cannot take); lit by the sun, a directional light
+    along the SPD light's direction, and the SPD's sky blue as a uniform sky."""
+    scene = mount_scene(size, image, depth)
+    scene.pop("ambient")
+    scene["integrator"] = "path"
+    scene["image"]["samples"] = LAKE_PATH_SAMPLES
+    scene["materials"] = {name: dict(m) for name, m in LAKE_PATH_MATERIALS.items()}
+    light = np.array(scene["lights"][0]["position"], dtype=np.float64)
+    scene["lights"] = [{"direction": rounded(-light / np.linalg.norm(light)),
+                        "color": list(SUN_IRRADIANCE)}]
+    e, z = LAKE_EXTENT, LAKE_LEVEL
+    corners = [[-e, -e, z], [e, -e, z], [e, e, z], [-e, e, z]]
+    scene["triangles"] = [{"vertices": [corners[0], corners[1], corners[2]], "material": "lake"},
+                          {"vertices": [corners[0], corners[2], corners[3]], "material": "lake"}]
+    name = "lake-path-%d" % size
+    vertices, faces = mountain_mesh(size)
+    return Bench(name, scene, place_triangles(scene, name, vertices, faces, "mountain", "ply"))

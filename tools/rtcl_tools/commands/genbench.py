@@ -11,6 +11,9 @@ options give the same bytes), in seconds.  Scenes:
                 its pyramid of 4 glass spheres.
   lake          mount at size 10 (2,097,152 triangles) plus a mirror lake: the
                 million-triangle scene with glass and mirror.
+  lake-path     the lake path-traced (issue 41): glass, a diffuse mountain, a
+                tinted mirror lake (two triangles), the sun and the sky; 16
+                samples, depth 8.
   random-balls  the 2009 paper's balls on a table (tools/genscene.py) at 60, 200,
                 400, 2000 and 20,000 balls (or --balls N,...).  Version 1.
   assimp        models of Debian's assimp-testmodels (Wuson as PLY, OBJ and STL, a
@@ -46,7 +49,8 @@ from ..usage import parse_size, program_name, report_error  # noqa: E402
 SIZES = {"balls": (4, 6, "levels: sum of 9^k spheres, k = 0 ... size"),
          "tetra": (6, 11, "4^size triangles"),
          "mount": (6, 11, "2 * 4^size triangles"),
-         "lake": (10, 11, "2 * 4^size triangles")}
+         "lake": (10, 11, "2 * 4^size triangles"),
+         "lake-path": (10, 11, "2 * 4^size triangles")}
 
 
 def size_type(name):
@@ -84,15 +88,15 @@ def depth_type(text):
     return value
 
 
-def add_common(sub, image_default):
+def add_common(sub, image_default, depth_default=5):
     sub.add_argument("-o", "--out", "--output-dir", dest="output_dir", required=True,
                      metavar="DIR",
                      help="folder to write into (made if missing)")
     if image_default is not None:
         sub.add_argument("--image", type=parse_size, default=image_default, metavar="WxH",
                          help="image size (default %dx%d)" % image_default)
-        sub.add_argument("--depth", type=depth_type, default=5, metavar="N",
-                         help="max_depth, 0 ... 64 (default 5)")
+        sub.add_argument("--depth", type=depth_type, default=depth_default, metavar="N",
+                         help="max_depth, 0 ... 64 (default %d)" % depth_default)
 
 
 def parse_arguments(argv):
@@ -102,15 +106,16 @@ def parse_arguments(argv):
     subs = parser.add_subparsers(dest="database", required=True, metavar="SCENE")
     for name, (default, high, counts) in SIZES.items():
         sub = subs.add_parser(name, help="SPD %s (--size 1 ... %d, default %d: %s)"
-                              % (name, high, default, counts) if name != "lake" else
-                              "mount at --size (default 10) with a mirror lake")
+                              % (name, high, default, counts) if not name.startswith("lake")
+                              else "mount at --size (default 10) with a mirror lake"
+                              + (", path-traced" if name == "lake-path" else ""))
         sub.add_argument("--size", type=size_type(name), default=default, metavar="N",
                          help="size factor 1 ... %d (default %d): %s" % (high, default, counts))
         if name in ("tetra", "mount"):
             sub.add_argument("--triangles", choices=("auto", "inline", "ply"), default="auto",
                              help="inline in the JSON, or a PLY file beside it (default "
                                   "auto: inline up to %d triangles)" % spd.INLINE_LIMIT)
-        add_common(sub, spd.SPD_IMAGE)
+        add_common(sub, spd.SPD_IMAGE, 8 if name == "lake-path" else 5)
     sub = subs.add_parser("random-balls", help="the 2009 paper's balls on a table")
     sub.add_argument("--balls", type=ball_counts, default=benchscenes.RANDOM_BALL_SERIES,
                      metavar="N,...", help="ball counts (default 60,200,400,2000,20000)")
@@ -135,6 +140,8 @@ def benches(args):
         yield getattr(spd, db)(args.size, args.image, args.depth, args.triangles)
     elif db == "lake":
         yield spd.lake(args.size, args.image, args.depth)
+    elif db == "lake-path":
+        yield spd.lake_path(args.size, args.image, args.depth)
     elif db == "random-balls":
         for n in args.balls:
             yield benchscenes.random_balls(n, args.seed, args.image, args.depth)
