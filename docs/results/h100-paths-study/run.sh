@@ -63,6 +63,11 @@ echo "platform $P: $($RTCL --list-devices | grep -A1 "^Platform #$P" | tail -1)"
 python3 tools/genbench.py lake-path --size $LAKE_SIZE -o $T/lake > /dev/null || echo "lake-path: genbench FAILED"
 SCENES="cornell=scenes/cornell.json:$SPP studio_path=scenes/studio_path.json:$SPP"
 SCENES="$SCENES lake_path=$T/lake/lake-path-$LAKE_SIZE.json:$LAKE_SPP materials_path=scenes/materials_path.json:$SPP"
+# ONLY="cornell materials_path": those scenes alone (a short second call).
+if [ -n "${ONLY:-}" ]; then
+  kept=""; for sc in $SCENES; do [[ " $ONLY " == *" ${sc%%=*} "* ]] && kept="$kept $sc"; done
+  SCENES=$kept
+fi
 
 # The schedules, LABEL=options (spaces as commas), those this rtcl takes.
 CANDIDATES="naive=-k,naive dynamic=-k,dynamic persistent=-k,persistent
