@@ -170,7 +170,10 @@ if 'paths' in d:
 # Registers and spills of each schedule's kernel (the materials scene: every BSDF, textures).
 for c in $SCHEDULES; do
   label=${c%%=*}; opts=${c#*=}; opts=${opts//,/ }
-  echo "$label: $($RTCL $DEV $opts scenes/materials_path.json --size 64x64 --spp 1 -v -o $T/v.pfm 2>&1 | grep -iE "register|spill" | head -3 | tr '\n' ' ')"
+  # A fresh build (no cache) with NVIDIA's report: ptxas's "Compiling entry",
+  # "spill stores/loads" and "Used N registers" lines, one kernel to a line.
+  echo "$label: $(RTCL_CACHE=0 RTCL_BUILD_OPTIONS=-cl-nv-verbose $RTCL $DEV $opts scenes/materials_path.json --size 64x64 --spp 1 -v -o $T/v.pfm 2>&1 |
+    grep -oE "entry function '[a-z_0-9]+'|[0-9]+ bytes spill stores, [0-9]+ bytes spill loads|Used [0-9]+ registers" | tr '\n' ' ' | sed "s/entry function/\n    /g")"
 done
 date -u
 python3 tools/path_study.py $S -o $OUT/study
