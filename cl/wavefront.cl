@@ -451,8 +451,8 @@ __kernel void stages_logic(__global const uint4 *scene_global, __local uint4 *sc
 				vstore3(w.color, path.x, image);
 			else
 				sample_add_atomic(sums, path.x, sample_term(&tr, w.color));
-			path.w = 0;
-			stage_set_path(state, slots, i, path);
+			/* the slot free: its flags alone written */
+			((__global int *)(stage_field(state, slots, RT_STAGE_PATH) + i))[3] = 0;
 			add_pixel_flops(pixel_flops, path.x, tracer_flops(&tr) - before);
 		}
 		stage_push(queues, counts, slots, RT_STAGE_QUEUE_NEW, i);

@@ -76,8 +76,9 @@ int stages_item_bytes(enum stage stage)
 {
 	switch (stage) {
 	case STAGE_LOGIC: /* its entry; reads 6 words (a miss: the ray's 4, a clear
-			     shadow ray's light) and an int, writes 1; a free entry */
-		return 4 + 6 * 16 + 4 + 16 + 4;
+			     shadow ray's light) and an int, writes the flags; a
+			     free entry */
+		return 4 + 6 * 16 + 4 + 4 + 4;
 	case STAGE_NEW_PATH: /* its slot; writes 5 words and an extension entry */
 		return 4 + 5 * 16 + 4;
 	case STAGE_EXTEND: /* its slot; the ray's 2 words; the hit's 1.5; a shade entry */
