@@ -419,8 +419,12 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 		int done = 0;
 		/* The logic kernel: over every slot in the piece's first iteration
 		   (all are free: the piece before ended its paths), then over the
-		   paths that ended, at most those in flight. */
+		   paths that ended, at most those in flight; never over more
+		   work-items than fill the device (each loads the scene), which
+		   loop over the rest. */
 		size_t logic_items = every ? w->slots : w->device_sizes ? w->fill : in_flight;
+		if (logic_items > w->fill)
+			logic_items = w->fill;
 
 		status = set_common(w, w->kernels[STAGE_LOGIC]);
 		if (status == CL_SUCCESS) {
