@@ -404,7 +404,8 @@ struct rt_path_ray {
  * state lies in structure-of-arrays, RT_STAGE_FIELDS arrays of `slots`
  * 16-byte words one after another (cl/wavefront.cl says what each holds),
  * and RT_STAGE_QUEUES queues of `slots` slot indices, each with its length
- * in the counter word of the same number. */
+ * in the counter word of the same number (RT_STAGE_COUNTERS words, padded
+ * so that the 64-bit count of the paths handed out follows aligned). */
 #define RT_STAGE_RAY_O 0    /* the next segment's origin; w: the throughput's red */
 #define RT_STAGE_RAY_D 1    /* its direction; w: green */
 #define RT_STAGE_PREV 2	    /* where the last BSDF sample was taken; w: blue */
@@ -418,14 +419,16 @@ struct rt_path_ray {
 #define RT_STAGE_FIELDS 10
 #define RT_PATH_LIVE 1u	    /* the slot holds a path */
 #define RT_PATH_SPECULAR 2u /* its last scattering was a delta lobe (or none) */
-#define RT_PATH_SHADOW 4u   /* a shadow ray was queued for it */
+#define RT_PATH_SHADOW 4u   /* a shadow ray was queued for it, its light not added */
 #define RT_PATH_DONE 8u	    /* it ends once that shadow ray is traced */
-#define RT_STAGE_QUEUE_NEW 0			 /* free slots, for new paths */
+#define RT_STAGE_QUEUE_NEW 0			 /* free slots, for new paths (a stack) */
 #define RT_STAGE_QUEUE_SHADE(kind) (1 + (kind)) /* paths at a hit of kind RT_BSDF_* */
 #define RT_STAGE_KINDS 5
 #define RT_STAGE_QUEUE_EXTEND 6 /* segments to trace (nearest hit) */
 #define RT_STAGE_QUEUE_SHADOW 7 /* shadow rays to trace (any hit) */
-#define RT_STAGE_QUEUES 8
+#define RT_STAGE_QUEUE_DECIDE 8 /* paths that ended: done at a hit, or missed */
+#define RT_STAGE_QUEUES 9
+#define RT_STAGE_COUNTERS 10
 
 /* What one launch (or one wavefront pass) renders: a rectangle of the image
  * and a range of each of its pixels' samples. A plain render is one or more

@@ -288,17 +288,21 @@ __kernel void wavefront_bounce(__global const uint4 *scene_global, __local uint4
  * over a compacted queue of slots, each calling the piece of path.cl's walk
  * that the single-pass kernels' walk_step calls at that point:
  *
- *   stages_logic       every slot: the light of the last shadow ray, the
- *                      segment's miss (the environment), a finished path's
- *                      sample added to its pixel; queues the slot by the
- *                      BSDF kind of its hit, or as free
- *   stages_new_path    each free slot: the next (pixel, sample), its
- *                      primary ray queued for extension (stages_advance,
+ *   stages_logic       each path that ended (done at a hit, or its
+ *                      segment missed): the light of its last shadow ray,
+ *                      the environment, its sample added to its pixel; the
+ *                      slot pushed on the free stack (in a piece's first
+ *                      iteration: every slot, all free)
+ *   stages_new_path    free slots off the stack: the next (pixel, sample),
+ *                      its primary ray queued for extension (stages_advance,
  *                      one work-item, then counts the paths handed out)
- *   stages_shade_KIND  path_vertex at a hit of that kind: emission, the
- *                      light sample (its shadow ray queued), the BSDF
- *                      sample and the roulette (the next segment queued)
- *   stages_extend      each queued segment: its nearest hit
+ *   stages_shade_KIND  at a hit of that kind: the light of the last shadow
+ *                      ray, then path_vertex: emission, the light sample
+ *                      (its shadow ray queued), the BSDF sample and the
+ *                      roulette (the next segment queued, or the path to
+ *                      the logic)
+ *   stages_extend      each queued segment: its nearest hit; the path
+ *                      queued by the BSDF kind hit, or to the logic
  *   stages_shadow      each queued shadow ray: any hit
  *
  * A path's colour gathers the same terms in the same order as walk_step's
@@ -372,71 +376,20 @@ static inline void stage_set_sample(struct tracer *tr, int4 path, uint samples)
 			  samples);
 }
 
-/* stages_logic: one work-item per slot. image and sums are the render's:
- * a finished path's colour goes to image as it is when the render has one
- * sample, else its fixed-point term to the pixel's sum. */
-__kernel void stages_logic(__global const uint4 *scene_global, __local uint4 *scene_local,
-			   __global float4 *state, uint slots, __global uint *queues,
-			   __global uint *counts, __global float *image, __global long *sums,
-			   __global ulong *item_counts, __global ulong *pixel_flops, uint samples)
+/* The light of the shadow ray queued at the path's last vertex (flags:
+ * its RT_PATH_* flags), whether it was clear (RT_STAGE_HIT_PRIM's third
+ * int, read only when there was one), added to w->color as walk_step adds
+ * it: the first thing the kernel that next takes the path does. What it
+ * brings is read only when it arrives. */
+static void stage_light_arrives(struct tracer *tr, struct walk *w, __global float4 *state,
+				uint slots, uint i, uint flags)
 {
-	struct tracer tr;
-	uint i = get_global_id(0);
-
-	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
-	if (i < slots) {
-		int4 path = stage_path(state, slots, i);
-		uint flags = (uint)path.w;
-
-		if (!(flags & RT_PATH_LIVE)) {
-			stage_push(queues, counts, slots, RT_STAGE_QUEUE_NEW, i);
-		} else {
-			struct walk w;
-			float4 color = stage_field(state, slots, RT_STAGE_COLOR)[i];
-			bool ended = (flags & RT_PATH_DONE) != 0;
-
-			stage_set_sample(&tr, path, samples);
-			w.color = color.xyz;
-			if (flags & RT_PATH_SHADOW) {
-				w.shadow_color =
-					stage_field(state, slots, RT_STAGE_SHADOW_C)[i].xyz;
-				path_light_arrives(
-					&tr, &w,
-					as_int4(stage_field(state, slots, RT_STAGE_HIT_PRIM)[i]).z);
-			}
-			if (!ended) {
-				float4 h = stage_field(state, slots, RT_STAGE_HIT)[i];
-				int4 prim = as_int4(stage_field(state, slots, RT_STAGE_HIT_PRIM)[i]);
-				struct hit hit = {h.x, prim.x, prim.y, as_int(h.w), h.y, h.z};
-
-				if (hit.t == 0.0f) {
-					float3 gathered = w.color;
-					w = stage_load_walk(state, slots, i, path);
-					w.color = gathered;
-					path_missed(&tr, &w);
-					ended = true;
-				} else {
-					stage_push(queues, counts, slots,
-						   RT_STAGE_QUEUE_SHADE(path_hit_kind(&tr, hit)), i);
-				}
-			}
-			if (ended) {
-				if (samples == 1)
-					vstore3(w.color, path.x, image);
-				else
-					sample_add_atomic(sums, path.x, sample_term(&tr, w.color));
-				stage_push(queues, counts, slots, RT_STAGE_QUEUE_NEW, i);
-				path.w = 0;
-			} else {
-				path.w = (int)(flags & ~RT_PATH_SHADOW);
-				stage_field(state, slots, RT_STAGE_COLOR)[i] =
-					(float4)(w.color, color.w);
-			}
-			stage_set_path(state, slots, i, path);
-			add_pixel_flops(pixel_flops, path.x, tracer_flops(&tr));
-		}
-	}
-	store_counts(&tr, global_item());
+	if (!(flags & RT_PATH_SHADOW))
+		return;
+	bool clear = ((__global const int *)(stage_field(state, slots, RT_STAGE_HIT_PRIM) + i))[2];
+	if (clear)
+		w->shadow_color = stage_field(state, slots, RT_STAGE_SHADOW_C)[i].xyz;
+	path_light_arrives(tr, w, clear);
 }
 
 /* The queue kernels below take the items of their queue j = get_global_id(0),
@@ -454,12 +407,63 @@ static inline uint stage_count(__global const uint *counts, int q, uint limit)
  * queue counters. */
 static inline __global ulong *stage_handed_out(__global uint *counts)
 {
-	return (__global ulong *)(counts + RT_STAGE_QUEUES);
+	return (__global ulong *)(counts + RT_STAGE_COUNTERS);
 }
 
-/* stages_new_path: over the free queue, as many as paths remain of the
- * piece's `total`: the j-th takes path handed_out + j, numbered sample by
- * sample and, within a sample, pixel by pixel in the piece's order. */
+/* stages_logic: over the paths that ended last iteration (the decide
+ * queue: the shade kernels queue a path done at its hit, stages_extend one
+ * whose segment missed), or, when `every` (a piece's first iteration), over
+ * every slot, all of them free then since the piece before ended all its
+ * paths. A path that ended gets the light of its last shadow ray and, when
+ * it missed, the environment (path_missed); its colour goes to image as it
+ * is when the render has one sample, else its fixed-point term to the
+ * pixel's sum (image and sums are the render's). Its slot, and every free
+ * one, is pushed on the free stack. */
+__kernel void stages_logic(__global const uint4 *scene_global, __local uint4 *scene_local,
+			   __global float4 *state, uint slots, __global uint *queues,
+			   __global uint *counts, __global float *image, __global long *sums,
+			   __global ulong *item_counts, __global ulong *pixel_flops, uint samples,
+			   uint every)
+{
+	struct tracer tr;
+	uint count = every ? slots : counts[RT_STAGE_QUEUE_DECIDE];
+
+	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
+	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
+		ulong before = tracer_flops(&tr);
+		uint i = every ? j : stage_queued(queues, slots, RT_STAGE_QUEUE_DECIDE, j);
+
+		if (!every) {
+			int4 path = stage_path(state, slots, i);
+			uint flags = (uint)path.w;
+			struct walk w;
+
+			stage_set_sample(&tr, path, samples);
+			if (flags & RT_PATH_DONE) {
+				w.color = stage_field(state, slots, RT_STAGE_COLOR)[i].xyz;
+				stage_light_arrives(&tr, &w, state, slots, i, flags);
+			} else {
+				w = stage_load_walk(state, slots, i, path);
+				stage_light_arrives(&tr, &w, state, slots, i, flags);
+				path_missed(&tr, &w);
+			}
+			if (samples == 1)
+				vstore3(w.color, path.x, image);
+			else
+				sample_add_atomic(sums, path.x, sample_term(&tr, w.color));
+			/* the slot free: its flags alone written */
+			((__global int *)(stage_field(state, slots, RT_STAGE_PATH) + i))[3] = 0;
+			add_pixel_flops(pixel_flops, path.x, tracer_flops(&tr) - before);
+		}
+		stage_push(queues, counts, slots, RT_STAGE_QUEUE_NEW, i);
+	}
+	store_counts(&tr, global_item());
+}
+
+/* stages_new_path: off the top of the free stack, as many slots as paths
+ * remain of the piece's `total`: the j-th takes path handed_out + j,
+ * numbered sample by sample and, within a sample, pixel by pixel in the
+ * piece's order. */
 __kernel void stages_new_path(__global const uint4 *scene_global, __local uint4 *scene_local,
 			      __global float4 *state, uint slots, __global uint *queues,
 			      __global uint *counts, uint limit, ulong total,
@@ -469,13 +473,14 @@ __kernel void stages_new_path(__global const uint4 *scene_global, __local uint4 
 	struct tracer tr;
 	ulong first = *stage_handed_out(counts);
 	ulong left = total - first;
-	uint count = (uint)min((ulong)stage_count(counts, RT_STAGE_QUEUE_NEW, limit), left);
+	uint stacked = counts[RT_STAGE_QUEUE_NEW];
+	uint count = (uint)min((ulong)min(stacked, limit), left);
 	ulong per_sample = (ulong)piece.width * (ulong)piece.height;
 
 	tracer_init(&tr, load_scene(scene_global, scene_local), item_counts, pixel_flops);
 	for (uint j = get_global_id(0); j < count; j += get_global_size(0)) {
 		ulong before = tracer_flops(&tr);
-		uint slot = stage_queued(queues, slots, RT_STAGE_QUEUE_NEW, j);
+		uint slot = stage_queued(queues, slots, RT_STAGE_QUEUE_NEW, stacked - count + j);
 		ulong n = first + j;
 		int k = piece.sample_begin + (int)(n / per_sample);
 		int r = (int)(n % per_sample);
@@ -497,16 +502,21 @@ __kernel void stages_new_path(__global const uint4 *scene_global, __local uint4 
 }
 
 /* One work-item, after stages_new_path: the paths it took counted as
- * handed out. */
+ * handed out, their slots taken off the free stack. */
 __kernel void stages_advance(__global uint *counts, ulong total)
 {
 	__global ulong *handed_out = stage_handed_out(counts);
 
-	if (get_global_id(0) == 0)
-		*handed_out += min((ulong)counts[RT_STAGE_QUEUE_NEW], total - *handed_out);
+	if (get_global_id(0) == 0) {
+		uint taken = (uint)min((ulong)counts[RT_STAGE_QUEUE_NEW], total - *handed_out);
+		*handed_out += taken;
+		counts[RT_STAGE_QUEUE_NEW] -= taken;
+	}
 }
 
-/* A shade kernel: over the queue of kind's hits. */
+/* A shade kernel: over the queue of kind's hits. A path that ends here
+ * goes to the logic (the decide queue), once its shadow ray, if it made
+ * one, is traced. */
 static void stages_shade(__global const uint4 *scene_global, __local uint4 *scene_local,
 			 __global float4 *state, uint slots, __global uint *queues,
 			 __global uint *counts, uint limit, uint samples,
@@ -526,9 +536,11 @@ static void stages_shade(__global const uint4 *scene_global, __local uint4 *scen
 		struct hit hit = {h.x, prim.x, prim.y, as_int(h.w), h.y, h.z};
 
 		stage_set_sample(&tr, path, samples);
+		stage_light_arrives(&tr, &w, state, slots, i, (uint)path.w);
 		bool done = path_vertex(&tr, &w, hit, kind);
 		if (done) {
 			stage_field(state, slots, RT_STAGE_COLOR)[i] = (float4)(w.color, w.pdf_prev);
+			stage_push(queues, counts, slots, RT_STAGE_QUEUE_DECIDE, i);
 		} else {
 			stage_store_walk(state, slots, i, &w);
 			stage_push(queues, counts, slots, RT_STAGE_QUEUE_EXTEND, i);
@@ -569,10 +581,12 @@ STAGES_SHADE_KERNEL(stages_shade_principled, RT_BSDF_PRINCIPLED)
 
 /* stages_extend: over the extension queue (the host knows only a bound on
  * its length: the work-items read it on the device). Its hit goes to
- * RT_STAGE_HIT and the first two ints of RT_STAGE_HIT_PRIM. */
+ * RT_STAGE_HIT and the first two ints of RT_STAGE_HIT_PRIM, and the path
+ * to the queue of the BSDF kind hit (path_hit_kind: the material's, no
+ * arithmetic), or to the logic when the segment missed. */
 __kernel void stages_extend(__global const uint4 *scene_global, __local uint4 *scene_local,
-			    __global float4 *state, uint slots, __global const uint *queues,
-			    __global const uint *counts, __global ulong *item_counts,
+			    __global float4 *state, uint slots, __global uint *queues,
+			    __global uint *counts, __global ulong *item_counts,
 			    __global ulong *pixel_flops)
 {
 	struct tracer tr;
@@ -591,6 +605,10 @@ __kernel void stages_extend(__global const uint4 *scene_global, __local uint4 *s
 			(float4)(hit.t, hit.u, hit.v, as_float(hit.triangle));
 		vstore2((int2)(hit.sphere, hit.plane), 0,
 			(__global int *)(stage_field(state, slots, RT_STAGE_HIT_PRIM) + i));
+		stage_push(queues, counts, slots,
+			   hit.t == 0.0f ? RT_STAGE_QUEUE_DECIDE
+					 : RT_STAGE_QUEUE_SHADE(path_hit_kind(&tr, hit)),
+			   i);
 #ifdef RTCL_COUNT_FLOPS
 		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x,
 				tracer_flops(&tr) - before);

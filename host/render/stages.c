@@ -2,8 +2,11 @@
  * (cl/wavefront.cl's stages_* kernels; docs/wavefront.md, "The stages
  * form"): a pool of path slots whose state lies in structure-of-arrays on
  * the device, and per iteration one launch of each stage over its compacted
- * queue: the logic kernel over every slot, the new paths, a shade kernel
+ * queue: the logic kernel, the new paths, a shade kernel
  * per BSDF kind, the segments (nearest hit) and the shadow rays (any hit).
+ * The logic kernel looks only at the paths that ended (but in a piece's
+ * first iteration, when it pushes every slot on the free stack), and the
+ * extension kernel sorts the paths it traced by the BSDF kind they hit.
  * A piece's paths are numbered sample by sample; a slot whose path ends
  * takes the next at once (path regeneration), and the host loops until
  * every path of the piece is done.
@@ -72,12 +75,14 @@ const char *stages_name(enum stage stage)
 int stages_item_bytes(enum stage stage)
 {
 	switch (stage) {
-	case STAGE_LOGIC: /* reads 8 words (miss: the ray), writes 2, one queue entry */
-		return 10 * 16 + 4;
+	case STAGE_LOGIC: /* its entry; reads 6 words (a miss: the ray's 4, a clear
+			     shadow ray's light) and an int, writes the flags; a
+			     free entry */
+		return 4 + 6 * 16 + 4 + 4 + 4;
 	case STAGE_NEW_PATH: /* its slot; writes 5 words and an extension entry */
 		return 4 + 5 * 16 + 4;
-	case STAGE_EXTEND: /* its slot; the ray's 2 words; the hit's 1.5 */
-		return 4 + 2 * 16 + 16 + 8;
+	case STAGE_EXTEND: /* its slot; the ray's 2 words; the hit's 1.5; a shade entry */
+		return 4 + 2 * 16 + 16 + 8 + 4;
 	case STAGE_SHADOW: /* its slot; 3 words; the answer */
 		return 4 + 3 * 16 + 4;
 	case STAGE_BEGIN:
@@ -85,8 +90,9 @@ int stages_item_bytes(enum stage stage)
 	case STAGE_FINISH:
 	case STAGE_COUNT:
 		return 0;
-	default: /* a shade kernel: its slot; reads 7 words, writes 8; 2 entries */
-		return 4 + 7 * 16 + 8 * 16 + 8;
+	default: /* a shade kernel: its slot; reads 8 words (the last shadow ray's
+		    light), writes 8; 2 entries */
+		return 4 + 8 * 16 + 8 * 16 + 8;
 	}
 }
 
@@ -259,7 +265,7 @@ static int record_iteration(struct stages_stats *st, uint32_t live, uint32_t sta
 /* What the host learns at the read after an iteration's logic kernel:
  * the counters, and the paths of the piece handed out before it. */
 struct stage_read {
-	cl_uint counts[RT_STAGE_QUEUES];
+	cl_uint counts[RT_STAGE_COUNTERS];
 	cl_ulong handed_out;
 };
 
@@ -276,6 +282,8 @@ static int take_read(struct stages *w, const struct stage_read *read, uint64_t t
 		live += read->counts[RT_STAGE_QUEUE_SHADE(k)];
 		st->items[STAGE_SHADE_MAPPED + k] += read->counts[RT_STAGE_QUEUE_SHADE(k)];
 	}
+	/* the paths that ended, which the logic kernel just took */
+	st->items[STAGE_LOGIC] += read->counts[RT_STAGE_QUEUE_DECIDE];
 	/* the segments and shadow rays of the iteration before */
 	st->items[STAGE_EXTEND] += read->counts[RT_STAGE_QUEUE_EXTEND];
 	st->items[STAGE_SHADOW] += read->counts[RT_STAGE_QUEUE_SHADOW];
@@ -313,7 +321,8 @@ static cl_int enqueue_queues(struct renderer *r, struct stages *w, const struct 
 {
 	cl_uint samples = (cl_uint)launched->samples, unlimited = 0xffffffffu;
 	uint64_t live = 0;
-	cl_int status = zero_counts(r->dev, w, RT_STAGE_QUEUE_EXTEND, 2);
+	/* the queues the last iteration's rays and the logic kernel took */
+	cl_int status = zero_counts(r->dev, w, RT_STAGE_QUEUE_EXTEND, 3);
 
 	if (read)
 		for (int k = 0; k < RT_STAGE_KINDS; k++)
@@ -348,6 +357,9 @@ static cl_int enqueue_queues(struct renderer *r, struct stages *w, const struct 
 			status = enqueue(r, w, (enum stage)(STAGE_SHADE_MAPPED + k),
 					 read ? count : w->fill, NULL, 0, ms);
 	}
+	/* the shade queues taken, for the extension kernel to fill */
+	if (status == CL_SUCCESS)
+		status = zero_counts(r->dev, w, RT_STAGE_QUEUE_SHADE(0), RT_STAGE_KINDS);
 	/* At most one segment per path started or shaded, one shadow ray per
 	 * path shaded. */
 	size_t bounds[2] = {read ? started + live : w->fill, read ? live : w->fill};
@@ -377,6 +389,7 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 	cl_ulong total = per_sample * (uint64_t)(piece->sample_end - piece->sample_begin);
 	size_t global2[2];
 	int recorded = -1; /* the index of the last iteration's figures */
+	cl_uint in_flight = 0; /* paths started or shaded last iteration */
 	int before = 0;
 	cl_int status;
 
@@ -398,25 +411,32 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 	if (status == CL_SUCCESS)
 		status = enqueue(r, w, STAGE_BEGIN, 0, global2, per_sample, ms);
 	if (status == CL_SUCCESS) /* the counters and the paths handed out */
-		status = zero_counts(dev, w, 0, RT_STAGE_QUEUES + 2);
-	while (status == CL_SUCCESS) {
+		status = zero_counts(dev, w, 0, RT_STAGE_COUNTERS + 2);
+	for (cl_uint every = 1; status == CL_SUCCESS; every = 0) {
 		struct stage_read read;
 		cl_event read_done = NULL;
 		cl_uint started = 0;
 		int done = 0;
+		/* The logic kernel: over every slot in the piece's first iteration
+		   (all are free: the piece before ended its paths), then over the
+		   paths that ended, at most those in flight; never over more
+		   work-items than fill the device (each loads the scene), which
+		   loop over the rest. */
+		size_t logic_items = every ? w->slots : w->device_sizes ? w->fill : in_flight;
+		if (logic_items > w->fill)
+			logic_items = w->fill;
 
-		status = zero_counts(dev, w, 0, RT_STAGE_QUEUE_EXTEND);
-		if (status == CL_SUCCESS)
-			status = set_common(w, w->kernels[STAGE_LOGIC]);
+		status = set_common(w, w->kernels[STAGE_LOGIC]);
 		if (status == CL_SUCCESS) {
 			const void *args[] = {&w->b.image.image, &w->b.sums, &w->item_counts,
-					      &w->b.flops, &samples};
+					      &w->b.flops, &samples, &every};
 			const size_t sizes[] = {sizeof(cl_mem), sizeof(cl_mem), sizeof(cl_mem),
-						sizeof(cl_mem), sizeof(cl_uint)};
-			status = set_rest(w->kernels[STAGE_LOGIC], args, sizes, 5);
+						sizeof(cl_mem), sizeof(cl_uint), sizeof(cl_uint)};
+			status = set_rest(w->kernels[STAGE_LOGIC], args, sizes, 6);
 		}
-		if (status == CL_SUCCESS)
-			status = enqueue(r, w, STAGE_LOGIC, w->slots, NULL, w->slots, ms);
+		if (status == CL_SUCCESS && logic_items > 0)
+			status = enqueue(r, w, STAGE_LOGIC, logic_items, NULL, every ? w->slots : 0,
+					 ms);
 		/* The read: waited for now, or (device sizes) after the
 		 * iteration's other launches are enqueued. */
 		int mark = w->pending_count;
@@ -426,6 +446,9 @@ static cl_int trace_piece(struct renderer *r, struct stages *w, const struct rt_
 						     w->device_sizes ? &read_done : NULL);
 		if (status == CL_SUCCESS && !w->device_sizes) {
 			done = take_read(w, &read, total, &recorded, &started);
+			in_flight = started;
+			for (int k = 0; k < RT_STAGE_KINDS; k++)
+				in_flight += read.counts[RT_STAGE_QUEUE_SHADE(k)];
 			if (!done)
 				status = enqueue_queues(r, w, &read, started, &launched, total, ms);
 		} else if (status == CL_SUCCESS) {
@@ -549,7 +572,7 @@ static int create_buffers(struct device *dev, const struct scene *scene,
 	if (!w->queues)
 		return -1;
 	w->counts = device_create_buffer(dev, CL_MEM_READ_WRITE,
-					 (RT_STAGE_QUEUES + 2) * sizeof(cl_uint),
+					 (RT_STAGE_COUNTERS + 2) * sizeof(cl_uint),
 					 NULL, "the queue counters", err, err_size);
 	if (!w->counts)
 		return -1;
