@@ -788,26 +788,69 @@ Test(multidev, sample_ranges_cover_the_samples_once_by_rate)
 Test(multidev, the_default_split_weighs_the_sums_against_a_share_of_the_pixels)
 {
 	double pass_ms[4] = {10, 10, 10, 20}, sums_ms[4] = {1, 4, 2, 3};
+	double kernel_ms[4] = {0}; /* not profiled: nothing beyond the kernels */
 	struct split_choice c;
 
 	/* 4 samples a pass: 0.4 + 0.4 + 0.4 + 0.2 = 1.4 samples a ms. */
-	cr_assert(tiles_prefer_samples(pass_ms, sums_ms, 4, 4, 256, 2, &c));
+	cr_assert(tiles_prefer_samples(pass_ms, kernel_ms, sums_ms, 4, 4, 256, 2, 0, &c));
 	cr_assert(c.measured && c.pass_samples == 4);
 	cr_assert_float_eq(c.render_ms, 256 / 1.4, 1e-9);
 	cr_assert_float_eq(c.pass_ms, 20, 1e-12);
 	cr_assert_float_eq(c.sums_ms, 4, 1e-12);
 	cr_assert_float_eq(c.add_ms, 2, 1e-12);
+	cr_assert_float_eq(c.overhead_ms, 0, 1e-12);
+	cr_assert_float_eq(c.move_ms, 0, 1e-12);
 	cr_assert_float_eq(c.penalty_ms, TILES_SHARE_PENALTY * 256 / 1.4, 1e-9);
 	/* 16 samples: 11.4 ms of work, 0.55 ms of penalty, less than the
 	 * slowest read-back (4 ms). */
-	cr_assert_not(tiles_prefer_samples(pass_ms, sums_ms, 4, 4, 16, 0, &c));
+	cr_assert_not(tiles_prefer_samples(pass_ms, kernel_ms, sums_ms, 4, 4, 16, 0, 0, &c));
 	cr_assert_float_eq(c.render_ms, 16 / 1.4, 1e-9);
 	/* The boundary: a read-back and an add that make up the penalty take
 	 * the samples; the add counts as much as the read-back. */
 	double one[2] = {TILES_SHARE_PENALTY * 50, TILES_SHARE_PENALTY * 50}, pass[2] = {2, 2};
+	double none[2] = {0, 0};
 	double add = TILES_SHARE_PENALTY * 50;
-	cr_assert(tiles_prefer_samples(pass, one, 2, 1, 100, add, &c)); /* 100 samples, 100 ms */
-	cr_assert_not(tiles_prefer_samples(pass, one, 2, 1, 100, add * 1.001, &c));
+	cr_assert(tiles_prefer_samples(pass, none, one, 2, 1, 100, add, 0, &c)); /* 100 ms */
+	cr_assert_not(tiles_prefer_samples(pass, none, one, 2, 1, 100, add * 1.001, 0, &c));
 	one[1] *= 1.001;
-	cr_assert_not(tiles_prefer_samples(pass, one, 2, 1, 100, add, &c));
+	cr_assert_not(tiles_prefer_samples(pass, none, one, 2, 1, 100, add, 0, &c));
+}
+
+/* What the pixel split costs beyond a share of the image's time (issue 43,
+ * batch 99): a pass's host time beyond its kernels (a wavefront's round
+ * trips per bounce), which each device of a pixel split pays for every pass
+ * and of the sample split only its share; and under --mpi the pixels' way to
+ * rank 0. Four H100s, the path-traced box by -k wavefront at 64 spp: one
+ * pass of 4 samples 19.4 ms, 16.8 of kernels; the pixels took 110-121 ms a
+ * device (75 of kernels) where the samples would take about 80. */
+Test(multidev, the_pixel_split_pays_its_passes_host_time_and_the_way_to_rank_0)
+{
+	double pass_ms[4] = {19.4, 19.0, 19.2, 19.4}, kernel_ms[4] = {16.8, 16.8, 16.8, 16.9};
+	double sums_ms[4] = {2.5, 2.5, 2.5, 2.5};
+	struct split_choice c;
+
+	/* 2.6 ms beyond the kernels a pass (the slowest), 16 passes, 3/4 of
+	 * them paid beyond the sample split's: 31.2 ms. */
+	cr_assert(tiles_prefer_samples(pass_ms, kernel_ms, sums_ms, 4, 4, 64, 5.5, 0, &c));
+	cr_assert_float_eq(c.overhead_ms, 2.6 * 16 * 0.75, 1e-9);
+	cr_assert_float_eq(c.penalty_ms, TILES_SHARE_PENALTY * c.render_ms + c.overhead_ms, 1e-9);
+	/* Without it (kernels not profiled) the 4.8 % alone chose the pixels. */
+	double none[4] = {0};
+	cr_assert_not(tiles_prefer_samples(pass_ms, none, sums_ms, 4, 4, 64, 5.5, 0, &c));
+	/* Kernels longer than the pass (several queues at once) count as no
+	 * host time, not a negative one. */
+	double longer[4] = {25, 25, 25, 25};
+	cr_assert_not(tiles_prefer_samples(pass_ms, longer, sums_ms, 4, 4, 64, 5.5, 0, &c));
+	cr_assert_float_eq(c.overhead_ms, 0, 1e-12);
+	/* One device's pass at the same rate: nothing beyond the sample split. */
+	cr_assert_float_eq(
+		(tiles_prefer_samples(pass_ms, kernel_ms, sums_ms, 1, 4, 64, 0, 0, &c), c.overhead_ms),
+		0, 1e-12);
+	/* --mpi: the others' pixels to rank 0 (35 ms) count against the pixels
+	 * too, so a box of -k dynamic (no host time) takes the samples. */
+	double box[4] = {27.4, 27.4, 27.4, 27.4};
+	cr_assert_not(tiles_prefer_samples(box, none, sums_ms, 4, 4, 64, 6.5, 0, &c));
+	cr_assert(tiles_prefer_samples(box, none, sums_ms, 4, 4, 64, 6.5, 35, &c));
+	cr_assert_float_eq(c.move_ms, 35, 1e-12);
+	cr_assert_float_eq(c.penalty_ms, TILES_SHARE_PENALTY * c.render_ms + 35, 1e-9);
 }

@@ -854,6 +854,13 @@ def test_mpi_default_split_is_measured_over_the_ranks(tmp_path, slow_sums, split
         split = "dynamic"  # this busy 2-core host's timings chose the bands after all
     assert md["split"] == split, md
     assert choice["pass_ms"] > 0 and choice["sums_ms"] > 0 and choice["add_ms"] > 0
+    # The pixel split's pieces travel to rank 0 by messages, timed at set-up
+    # and counted against it (issue 43, batch 99: four H100 ranks' bands of
+    # the box took 33-40 ms to reach rank 0), beside 4.8 % of the image's
+    # time and its passes' host time.
+    assert choice["move_ms"] > 0 and choice["overhead_ms"] >= 0, choice
+    assert abs(choice["penalty_ms"] - 0.048 * choice["render_ms"] - choice["overhead_ms"] -
+               choice["move_ms"]) < 1e-6 * max(choice["penalty_ms"], 1), choice
     if split == "samples":
         assert choice["sums_ms"] + choice["add_ms"] <= choice["penalty_ms"], choice
         assert md["rank_sums"]["added_by"] == "shared memory"
@@ -1058,7 +1065,12 @@ def test_default_split_over_four_devices_is_measured_and_matches_one_device(tmp_
     assert choice["sums_ms"] + choice["add_ms"] <= choice["penalty_ms"], choice
     assert choice["pass_samples"] >= 1 and choice["pass_ms"] > 0
     assert choice["render_ms"] > 0
-    assert abs(choice["penalty_ms"] - 0.048 * choice["render_ms"]) < 1e-6 * choice["render_ms"]
+    # The pixel split's cost: 4.8 % of the image's time, plus its passes'
+    # host time beyond their kernels that each device pays whole (issue 43,
+    # batch 99: a wavefront's round trips); nothing to move to a rank 0.
+    assert choice["overhead_ms"] >= 0 and choice["move_ms"] == 0, choice
+    assert abs(choice["penalty_ms"] - 0.048 * choice["render_ms"] - choice["overhead_ms"]) < \
+        1e-6 * choice["render_ms"], choice
     assert sorted(p["samples"] for p in md["pieces"]) == [[0, 64], [64, 128], [128, 192],
                                                            [192, 256]]
     assert "split:   samples, measured:" in result.stdout

@@ -389,6 +389,38 @@ void device_pinned_free(struct device *dev, cl_mem mem, void *p)
 	clReleaseMemObject(mem);
 }
 
+void *device_pinned_alloc_aside(struct device *dev, size_t bytes, cl_mem *mem,
+				cl_command_queue *queue)
+{
+	struct device side = *dev;
+	cl_int status;
+
+	*mem = NULL;
+	*queue = clCreateCommandQueue(dev->context, dev->id, 0, &status);
+	if (status != CL_SUCCESS) {
+		*queue = NULL;
+		return NULL;
+	}
+	side.queue = *queue;
+	void *p = device_pinned_alloc(&side, bytes, mem);
+	if (!p) {
+		clReleaseCommandQueue(*queue);
+		*queue = NULL;
+	}
+	return p;
+}
+
+void device_pinned_free_aside(struct device *dev, cl_command_queue queue, cl_mem mem, void *p)
+{
+	struct device side = *dev;
+
+	if (queue)
+		side.queue = queue;
+	device_pinned_free(&side, mem, p);
+	if (queue)
+		clReleaseCommandQueue(queue);
+}
+
 int device_find_all(int *platform_indices, int *device_indices, int max, char *err, size_t err_size)
 {
 	cl_platform_id platforms[MAX_PLATFORMS];

@@ -77,6 +77,17 @@ void *device_pinned_alloc(struct device *dev, size_t bytes, cl_mem *mem);
 /* Unmaps and releases what device_pinned_alloc gave (nothing for NULL). */
 void device_pinned_free(struct device *dev, cl_mem mem, void *p);
 
+/* device_pinned_alloc mapped on a queue of its own (*queue, made here), so
+ * that a thread may pin memory while dev->queue renders: the map waits for
+ * nothing queued there. NULL (and *queue NULL) where it cannot. Free with
+ * device_pinned_free_aside. */
+void *device_pinned_alloc_aside(struct device *dev, size_t bytes, cl_mem *mem,
+				cl_command_queue *queue);
+
+/* Unmaps on `queue` (dev->queue when NULL) and releases what
+ * device_pinned_alloc_aside gave, then the queue. */
+void device_pinned_free_aside(struct device *dev, cl_command_queue queue, cl_mem mem, void *p);
+
 /* Finds every GPU and CPU device of every platform, platform by platform
  * in index order, and writes up to max of their indices to platforms[] and
  * devices[]. Returns how many, or -1 with a message in err. */

@@ -207,10 +207,11 @@ static json_t *shares_document(const struct device_shares *d)
 	if (doc && d->choice.measured)
 		json_object_set_new(
 			doc, "split_choice",
-			json_pack("{s:f, s:i, s:f, s:f, s:f, s:f}", "pass_ms", d->choice.pass_ms,
-				  "pass_samples", d->choice.pass_samples, "render_ms",
-				  d->choice.render_ms, "sums_ms", d->choice.sums_ms, "add_ms",
-				  d->choice.add_ms, "penalty_ms", d->choice.penalty_ms));
+			json_pack("{s:f, s:i, s:f, s:f, s:f, s:f, s:f, s:f}", "pass_ms",
+				  d->choice.pass_ms, "pass_samples", d->choice.pass_samples,
+				  "render_ms", d->choice.render_ms, "sums_ms", d->choice.sums_ms,
+				  "add_ms", d->choice.add_ms, "overhead_ms", d->choice.overhead_ms,
+				  "move_ms", d->choice.move_ms, "penalty_ms", d->choice.penalty_ms));
 	if (doc && d->ranks_count)
 		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
 	if (doc && d->rank_sums)

@@ -167,9 +167,10 @@ void report_print_shares(FILE *out, const struct record *record)
 		fprintf(out,
 			"split:   %s, measured: the samples %.1f ms over the devices (one pass of "
 			"%d took %.1f ms), the sums' read-back %.1f ms and add %.1f ms against "
-			"%.1f ms for a share of the pixels\n",
+			"%.1f ms for a share of the pixels (its passes' host time %.1f ms, "
+			"to rank 0 %.1f ms)\n",
 			split_name(d->split), c->render_ms, c->pass_samples, c->pass_ms, c->sums_ms,
-			c->add_ms, c->penalty_ms);
+			c->add_ms, c->penalty_ms, c->overhead_ms, c->move_ms);
 }
 
 void report_print_times(const struct record *record)

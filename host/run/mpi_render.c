@@ -30,7 +30,7 @@
 #define MESSAGE_SIZE 8192
 
 /* Messages to rank 0, and its answers (TAG_GIVE + the asking device). */
-enum tag { TAG_TAKE = 1, TAG_RESULT, TAG_FAIL, TAG_DONE, TAG_GIVE = 100 };
+enum tag { TAG_TAKE = 1, TAG_RESULT, TAG_FAIL, TAG_DONE, TAG_MOVE, TAG_GIVE = 100 };
 
 /* What a rank tells rank 0 of one of its devices once it is done. */
 struct device_report {
@@ -979,20 +979,84 @@ static int plan_pieces_again(struct mpi_job *j)
 	       dispenser_init(&j->dispenser, piece_count(j), j->total, j->job->split);
 }
 
+/* For choose_measured, every rank, before the clock (no server yet): what
+ * the pixel split's pieces cost to reach rank 0, as the server takes them
+ * (serve_result): every other rank sends rank 0 a message of 1/size of the
+ * image's pixels (a band of one rank's share, a fresh message filled as
+ * send_result does) at once, and rank 0 receives each into fresh memory
+ * and copies it into an image. The time from the ranks' barrier to the
+ * last copy on rank 0 is *ms on every rank. (Four H100 ranks' bands of a
+ * 2048x2048 box reached rank 0 33-40 ms after the devices' end, batch 99:
+ * 30 % of the frame, where the sample split's sums go through the node's
+ * shared memory.) Returns 0, or -1 when MPI or memory failed. */
+static int time_move(struct mpi_job *j, double *ms)
+{
+	const struct render_settings *s = &j->settings;
+	int rows = (s->height + j->size - 1) / j->size;
+	size_t bytes = image_float_bytes(s->width, rows);
+	double mine = 0;
+
+	*ms = 0;
+	if (j->size < 2 || bytes > INT_MAX)
+		return 0;
+	/* A failure returns at once: the caller ends every rank (MPI_Abort),
+	 * which a rank waiting here for another would not see otherwise. */
+	char *image = j->rank == ROOT ? malloc(bytes) : NULL;
+	if (j->rank == ROOT && !image)
+		return -1;
+	if (image) /* rank 0's image is touched before the clock */
+		pages_touch(image, bytes);
+	if (wait_barrier()) {
+		free(image);
+		return -1;
+	}
+	double start = timing_now();
+	if (j->rank != ROOT) {
+		char *message = pages_alloc(0, bytes);
+		if (!message)
+			return -1;
+		memset(message, 0, bytes);
+		int status = MPI_Send(message, (int)bytes, MPI_BYTE, ROOT, TAG_MOVE, MPI_COMM_WORLD);
+		pages_free(message, 0);
+		if (status != MPI_SUCCESS)
+			return -1;
+	} else {
+		for (int r = 1; r < j->size; r++) {
+			char *message = malloc(bytes);
+			if (!message || MPI_Recv(message, (int)bytes, MPI_BYTE, MPI_ANY_SOURCE,
+						 TAG_MOVE, MPI_COMM_WORLD,
+						 MPI_STATUS_IGNORE) != MPI_SUCCESS) {
+				free(message);
+				free(image);
+				return -1;
+			}
+			memcpy(image, message, bytes);
+			free(message);
+		}
+		mine = (timing_now() - start) * 1e3;
+		free(image);
+	}
+	if (MPI_Allreduce(&mine, ms, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD) != MPI_SUCCESS)
+		return -1;
+	return 0;
+}
+
 /* j->measure, every rank, before the clock, once its devices are open and
  * probed (tiles_open): the ranks exchange their devices' probes, and each
  * times the ranks' add of the sums (reduce_sums, of the zeroed sums: they
- * stay zero); every rank then decides the same from the same figures, as
- * one process does (tiles_prefer_samples): the samples, or bands. Returns
- * 0, or -1 when MPI or memory failed. */
+ * stay zero) and the pixels' way to rank 0 (time_move); every rank then
+ * decides the same from the same figures, as one process does
+ * (tiles_prefer_samples): the samples, or bands. Returns 0, or -1 when MPI
+ * or memory failed. */
 static int choose_measured(struct mpi_job *j)
 {
 	const struct render_settings *s = &j->settings;
 	/* Per rank: its device count, its pass's samples, then each device's
-	 * pass and read-back. */
-	enum { ROW = 2 + 2 * DEVICES_MAX };
+	 * pass, its kernels and its read-back. */
+	enum { ROW = 2 + 3 * DEVICES_MAX };
 	double mine[ROW] = {0}, *all = calloc((size_t)j->size * ROW, sizeof(double));
-	double pass_ms[DEVICES_MAX], sums_ms[DEVICES_MAX], add_ms = 0;
+	double pass_ms[DEVICES_MAX], kernel_ms[DEVICES_MAX], sums_ms[DEVICES_MAX], add_ms = 0;
+	double move_ms = 0;
 	int unit = tiles_sample_unit(s, j->devs, j->count), n = 0;
 
 	if (!all)
@@ -1000,8 +1064,9 @@ static int choose_measured(struct mpi_job *j)
 	mine[0] = j->count;
 	mine[1] = unit < settings_samples(s) ? unit : 1;
 	for (int k = 0; k < j->count; k++) {
-		mine[2 + 2 * k] = j->tiles.dev[k].probe_ms;
-		mine[3 + 2 * k] = j->tiles.dev[k].sums_ms;
+		mine[2 + 3 * k] = j->tiles.dev[k].probe_ms;
+		mine[3 + 3 * k] = j->tiles.dev[k].probe_kernel_ms;
+		mine[4 + 3 * k] = j->tiles.dev[k].sums_ms;
 	}
 	/* Timed from when all are here: the ranks open their devices at
 	 * different speeds. */
@@ -1014,16 +1079,18 @@ static int choose_measured(struct mpi_job *j)
 	if (MPI_Allreduce(&mine_ms, &add_ms, 1, MPI_DOUBLE, MPI_MAX, MPI_COMM_WORLD) !=
 		    MPI_SUCCESS ||
 	    MPI_Allgather(mine, ROW, MPI_DOUBLE, all, ROW, MPI_DOUBLE, MPI_COMM_WORLD) !=
-		    MPI_SUCCESS)
+		    MPI_SUCCESS ||
+	    time_move(j, &move_ms))
 		goto fail;
 	for (int r = 0; r < j->size; r++)
 		for (int k = 0; k < (int)all[r * ROW] && n < DEVICES_MAX; k++, n++) {
-			pass_ms[n] = all[r * ROW + 2 + 2 * k];
-			sums_ms[n] = all[r * ROW + 3 + 2 * k];
+			pass_ms[n] = all[r * ROW + 2 + 3 * k];
+			kernel_ms[n] = all[r * ROW + 3 + 3 * k];
+			sums_ms[n] = all[r * ROW + 4 + 3 * k];
 		}
 	/* Rank 0's pass, so that every rank decides alike. */
-	int samples = tiles_prefer_samples(pass_ms, sums_ms, n, (int)all[1], settings_samples(s),
-					   add_ms, &j->choice);
+	int samples = tiles_prefer_samples(pass_ms, kernel_ms, sums_ms, n, (int)all[1],
+					   settings_samples(s), add_ms, move_ms, &j->choice);
 	free(all);
 	memset(j->arrived, 0, (size_t)j->pieces * sizeof(int)); /* the trial's */
 	j->measure = 0;

@@ -266,11 +266,12 @@ int tiles_alloc_sums(struct tiles_job *t, int k, char *err, size_t err_size)
 static void expect_writes(struct tiles_job *t, int k, const struct rt_piece *p, int sign);
 
 /* For the default split (tiles_prefer_samples), before the clock: one pass
- * of the whole image, its first tiles_sample_unit samples, and a read-back
- * of all the sums, each timed (the read-back twice, the faster kept). The
- * pass leaves sums that the render's first pass over each pixel replaces
- * (it starts the buffer's samples) and no image; with check_writes its
- * launches are expected in the counts. */
+ * of the whole image, its first tiles_sample_unit samples, twice, the
+ * faster counting with its profiled kernels (a first pass may pay once for
+ * what the frames' do not), and a read-back of all the sums, each timed (the
+ * read-back twice, the faster kept). The passes leave sums that the render's
+ * first pass over each pixel replaces (it starts the buffer's samples) and
+ * no image; with check_writes their launches are expected in the counts. */
 static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
 {
 	const struct render_settings *s = t->settings;
@@ -280,14 +281,20 @@ static int probe_device(struct tiles_job *t, int k, char *err, size_t err_size)
 	struct piece_result out;
 	double lap = timing_now();
 
-	if (renderer_all_samples(&d->renderer, &pass, &out, err, err_size))
-		return -1;
-	d->probe_ms = timing_lap_ms(&lap);
+	for (int i = 0; i < 2; i++) {
+		if (renderer_all_samples(&d->renderer, &pass, &out, err, err_size))
+			return -1;
+		double ms = timing_lap_ms(&lap);
+		if (i == 0 || ms < d->probe_ms) {
+			d->probe_ms = ms;
+			d->probe_kernel_ms = out.kernel_ms;
+		}
+		pthread_mutex_lock(&t->lock); /* the devices' threads probe at once */
+		expect_writes(t, k, &pass, 1);
+		pthread_mutex_unlock(&t->lock);
+	}
 	/* Each pass writes a pixel once: a wavefront pass is several launches. */
-	d->probe_passes = tiles_piece_launches(s, &pass, t->devs[k].is_gpu);
-	pthread_mutex_lock(&t->lock); /* the devices' threads probe at once */
-	expect_writes(t, k, &pass, 1);
-	pthread_mutex_unlock(&t->lock);
+	d->probe_passes = 2 * tiles_piece_launches(s, &pass, t->devs[k].is_gpu);
 	/* Twice, the faster counting: a first transfer may pay once for what
 	 * a frame's does not (the pinned memory's first use). */
 	for (int i = 0; i < 2; i++) {
@@ -913,10 +920,12 @@ int tiles_choose_split(const struct tiles_request *r, const struct render_settin
 	return 0;
 }
 
-int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
-			 int samples, double add_ms, struct split_choice *c)
+int tiles_prefer_samples(const double *pass_ms, const double *kernel_ms, const double *sums_ms,
+			 int count, int pass_samples, int samples, double add_ms, double move_ms,
+			 struct split_choice *c)
 {
 	double rate = 0; /* samples of the whole image per ms, all devices */
+	double host = 0; /* the slowest device's pass beyond its kernels */
 
 	memset(c, 0, sizeof(*c));
 	c->measured = 1;
@@ -925,10 +934,17 @@ int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count
 		c->pass_ms = pass_ms[k] > c->pass_ms ? pass_ms[k] : c->pass_ms;
 		c->sums_ms = sums_ms[k] > c->sums_ms ? sums_ms[k] : c->sums_ms;
 		rate += pass_ms[k] > 0 ? pass_samples / pass_ms[k] : 0;
+		/* No profiled kernels (0): nothing known beyond them. */
+		double beyond = kernel_ms[k] > 0 ? pass_ms[k] - kernel_ms[k] : 0;
+		host = beyond > host ? beyond : host;
 	}
 	c->add_ms = add_ms;
 	c->render_ms = rate > 0 ? samples / rate : 0;
-	c->penalty_ms = TILES_SHARE_PENALTY * c->render_ms;
+	c->overhead_ms = count > 0 && pass_samples > 0
+				 ? host * ((double)samples / pass_samples) * (1 - 1.0 / count)
+				 : 0;
+	c->move_ms = move_ms;
+	c->penalty_ms = TILES_SHARE_PENALTY * c->render_ms + c->overhead_ms + c->move_ms;
 	return c->sums_ms + c->add_ms <= c->penalty_ms;
 }
 
@@ -960,16 +976,18 @@ static int time_add(struct tiles_job *t, char *err, size_t err_size)
  * job, as tiles_job_init would have made it. */
 static void choose_by_probes(struct tiles_request *r, struct tiles_job *t)
 {
-	double pass_ms[DEVICES_MAX], sums_ms[DEVICES_MAX];
+	double pass_ms[DEVICES_MAX], kernel_ms[DEVICES_MAX], sums_ms[DEVICES_MAX];
 	const struct render_settings *s = t->settings;
 	int unit = tiles_sample_unit(s, t->devs, t->count);
 
 	for (int k = 0; k < t->count; k++) {
 		pass_ms[k] = t->dev[k].probe_ms;
+		kernel_ms[k] = t->dev[k].probe_kernel_ms;
 		sums_ms[k] = t->dev[k].sums_ms;
 	}
-	if (tiles_prefer_samples(pass_ms, sums_ms, t->count, unit < settings_samples(s) ? unit : 1,
-				 settings_samples(s), t->add_ms, &r->choice)) {
+	if (tiles_prefer_samples(pass_ms, kernel_ms, sums_ms, t->count,
+				 unit < settings_samples(s) ? unit : 1, settings_samples(s), t->add_ms,
+				 0, &r->choice)) {
 		t->adaptive = 0;
 		return;
 	}

@@ -110,7 +110,10 @@ struct tiles_device {
 			  (base/pages.h), or in `pinned` (one process) */
 	char *block;
 	cl_mem pinned; /* the sums' pinned host memory (device_pinned_alloc) */
-	double probe_ms; /* tiles_open's probe: one pass of the whole image */
+	double probe_ms; /* tiles_open's probe: one pass of the whole image (the
+			    faster of two) */
+	double probe_kernel_ms; /* that pass's profiled kernels: probe_ms less
+				   them is its host time (round trips) */
 	double sums_ms;	 /* tiles_open's probe: reading all the sums back */
 	int probe_passes; /* the probe's passes, a write of each pixel each
 			     (check_writes) */
@@ -234,8 +237,18 @@ struct split_choice {
 	double add_ms;	   /* the host's add of the devices' sums, once after
 			      the frames: with sums_ms the sample split's
 			      cost beyond render_ms */
-	double penalty_ms; /* TILES_SHARE_PENALTY of render_ms: the pixel
-			      split's cost beyond it, at the least */
+	double overhead_ms; /* a pass's time beyond its kernels (the slowest
+			       device's probe: host round trips, e.g. a
+			       wavefront's per bounce) times the image's
+			       passes: each device of a pixel split pays all
+			       of it, of the sample split a 1/count share; so
+			       the pixel split's extra is (1 - 1/count) of it */
+	double move_ms;	   /* --mpi: the pixels of the other ranks' shares
+			      sent to rank 0, timed before the clock; 0 in one
+			      process */
+	double penalty_ms; /* TILES_SHARE_PENALTY of render_ms plus
+			      overhead_ms and move_ms: the pixel split's cost
+			      beyond render_ms, at the least */
 };
 
 /* One image over devices of this process: which, and how it is cut. */
@@ -267,14 +280,18 @@ int tiles_choose_split(const struct tiles_request *r, const struct render_settin
 
 /* Whether the default split takes the samples, from set-up's probes: every
  * device's sums read back (sums_ms[k]), one pass of pass_samples samples of
- * the whole image rendered (pass_ms[k]), and the host's add of all the sums
- * (add_ms). The sample split costs the image's time on all devices
- * (render_ms: the samples over the sum of the devices' rates) plus the
- * slowest read-back and the add; a split of the pixels costs
- * TILES_SHARE_PENALTY more than render_ms at the least. Fills c; returns 1
- * for the samples when sums_ms + add_ms <= penalty_ms. */
-int tiles_prefer_samples(const double *pass_ms, const double *sums_ms, int count, int pass_samples,
-			 int samples, double add_ms, struct split_choice *c);
+ * the whole image rendered (pass_ms[k], of which its kernels took
+ * kernel_ms[k]), and the host's add of all the sums (add_ms); under --mpi
+ * the time the other ranks' shares of the pixels take to reach rank 0
+ * (move_ms, else 0). The sample split costs the image's time on all
+ * devices (render_ms: the samples over the sum of the devices' rates) plus
+ * the slowest read-back and the add; a split of the pixels costs
+ * TILES_SHARE_PENALTY more than render_ms at the least, plus the passes'
+ * host time that each of its devices pays whole (overhead_ms) and move_ms.
+ * Fills c; returns 1 for the samples when sums_ms + add_ms <= penalty_ms. */
+int tiles_prefer_samples(const double *pass_ms, const double *kernel_ms, const double *sums_ms,
+			 int count, int pass_samples, int samples, double add_ms, double move_ms,
+			 struct split_choice *c);
 
 /* --split samples asked of `count` devices: 0 when the render has a sample
  * for each (and 2 or more), else -1 with one message in err (which may be
