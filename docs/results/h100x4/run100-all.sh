@@ -22,20 +22,21 @@ export RTCL_MESHREAD=$B/rtcl-meshread
 mkdir -p $OUT/p43 $OUT/p41s $OUT/p41c
 echo "== 1. run100.sh ($(date -u +%T))"
 OUT=$OUT/p43 B=$B COMMIT=$COMMIT timeout 200 bash docs/results/h100x4/run100.sh > /dev/null 2>&1
-echo "exit $? ($(date -u +%T))"
+echo "exit $? ($(date -u +%T))"; (cd $OUT && tar czf p43.tgz p43 && rm -rf p43)
 echo "== 2. run101.sh ($(date -u +%T))"
 OUT=$OUT/p41s B=$B COMMIT=$COMMIT timeout 100 bash docs/results/h100-stages/run101.sh > /dev/null 2>&1
 echo "exit $? ($(date -u +%T))"; tail -40 $OUT/p41s/log.txt
 echo "== 3. counting runs and registers ($(date -u +%T))"
 OUT=$OUT/p41c B=$B COMMIT=$COMMIT COUNT_ONLY=1 ONLY="cornell materials_path" \
   COUNTED="naive persistent persistent-regen-item persistent-regen-subgroup wavefront-bounce wavefront-stages" \
-  BUDGET=110 MITSUBA=0 timeout 130 bash docs/results/h100-paths-study/run.sh > /dev/null 2>&1
+  BUDGET=80 MITSUBA=0 timeout 100 bash docs/results/h100-paths-study/run.sh > /dev/null 2>&1
 echo "exit $? ($(date -u +%T))"; tail -15 $OUT/p41c/log.txt
 for o in "-k naive" "-k persistent" "-k persistent --regenerate --fetch item" "-k persistent --regenerate --fetch subgroup" "-k wavefront" "-k wavefront --wavefront-form stages"; do
-  echo "$o: $(RTCL_CACHE=0 RTCL_BUILD_OPTIONS=-cl-nv-verbose timeout 30 $B/rtcl -p 0 -d 0 $o scenes/materials_path.json --size 64x64 --spp 2 -v -o /tmp/v.pfm 2>&1 |
+  echo "$o: $(RTCL_CACHE=0 RTCL_BUILD_OPTIONS=-cl-nv-verbose timeout 20 $B/rtcl -p 0 -d 0 $o scenes/materials_path.json --size 64x64 --spp 2 -v -o /tmp/v.pfm 2>&1 |
     grep -oE "entry function '[a-z_0-9]+'|[0-9]+ bytes spill stores, [0-9]+ bytes spill loads|Used [0-9]+ registers" | tr '\n' ' ' | sed "s/entry function/\n    /g")"
 done | tee $OUT/p41c/registers.txt
+(cd $OUT && tar czf p41.tgz p41s p41c && rm -rf p41s p41c)
 echo "== 4. incoherent rays on the CPU ($(date -u +%T))"
-OUT=$OUT/p42 CPU_CAP=45 CPU_ROUNDS=2 timeout 160 bash .gpu/inc99/run.sh cpu 2>&1 | grep -E "x \(rounds|exit|^\| (mount|tetra|lake)"
+OUT=$OUT/p42 CPU_CAP=35 CPU_ROUNDS=2 timeout 120 bash .gpu/inc99/run.sh cpu 2>&1 | grep -E "x \(rounds|exit|^\| (mount|tetra|lake)"
 echo "== end ($(date -u +%T))"
-cd $OUT && tar czf p43.tgz p43 && tar czf p41.tgz p41s p41c && rm -rf p43 p41s p41c; ls -la $OUT
+ls -la $OUT $OUT/p42
