@@ -19,6 +19,9 @@ RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 RTCL_RAYS = ROOT / "build" / "rtcl-rays"
 PEER_PLACES = [os.environ.get("RTCL_PEER", ""), ROOT.parent / "shared/bench/tinybvh",
                ROOT.parent.parent / "shared/bench/tinybvh"]
+sys.path.insert(0, str(ROOT / "tools"))
+from rtcl_tools.commands import peer_compare  # noqa: E402
+
 PEER = next((pathlib.Path(p) for p in PEER_PLACES if p and (pathlib.Path(p) / "tiny_bvh.h").is_file()),
             None)
 # The eye away from the world's origin: rtcl-rays takes the origins relative to
@@ -184,3 +187,62 @@ def test_both_sides_trace_the_documented_rays_and_agree_on_every_hit(tmp_path):
         agreeing = row.strip("|").split("|")[-1].strip()
         same, count = re.fullmatch(r"([\d,]+) of ([\d,]+)", agreeing).groups()
         assert same == count, row
+
+
+# rtcl --list-devices on the project's H100 machine: NVIDIA's platform first,
+# PoCL's second; rtcl's default device there is the GPU.
+GPU_PLATFORM = """Platform #0: NVIDIA CUDA
+ `-- Device #0: NVIDIA H100 80GB HBM3 (GPU, 132 compute units, 48 KiB local, 81008 MiB global)
+"""
+GPU_THEN_POCL = GPU_PLATFORM + """Platform #1: Portable Computing Language
+ `-- Device #0: cpu-sapphirerapids-Intel(R) Xeon(R) Platinum 8480+ (CPU, 16 compute units, 512 KiB local, 126000 MiB global)
+"""
+
+
+def test_cpu_runs_on_the_first_cpu_not_rtcls_default_gpu():
+    """--cpu without -p: the first platform with a CPU, not rtcl's default
+    device (the GPU, wherever there is one); with -p, that platform's CPU."""
+    assert peer_compare.cpu_device(GPU_THEN_POCL) == (
+        "1", "0", "cpu-sapphirerapids-Intel(R) Xeon(R) Platinum 8480+")
+    assert peer_compare.cpu_device(GPU_THEN_POCL, "1")[:2] == ("1", "0")
+    mixed = ("Platform #0: Some vendor\n |-- Device #0: gpu (GPU, 8 compute units, 1 KiB local, "
+             "1 MiB global)\n `-- Device #1: cpu (CPU, 4 compute units, 1 KiB local, "
+             "1 MiB global)\n")
+    assert peer_compare.cpu_device(mixed) == ("0", "1", "cpu")
+
+
+@pytest.mark.parametrize("listing, platform, message", [
+    (GPU_PLATFORM, None, "--cpu: no CPU OpenCL device in rtcl --list-devices (install PoCL, "
+                         "or leave out --cpu to time the GPU)"),
+    (GPU_THEN_POCL, "0", "--cpu: platform 0 (NVIDIA CUDA) has no CPU device (GPU): "
+                         "pass -p 1 (Portable Computing Language)"),
+    (GPU_THEN_POCL, "2", "--cpu: -p 2: no such platform in rtcl --list-devices"),
+], ids=["gpu-only", "p-names-the-gpu", "p-names-no-platform"])
+def test_cpu_refuses_a_platform_without_a_cpu(listing, platform, message):
+    with pytest.raises(peer_compare.Failure) as error:
+        peer_compare.cpu_device(listing, platform)
+    assert str(error.value) == message
+
+
+@pytest.mark.parametrize("mode", [["--cpu"], ["--rays", "--cpu"], ["--cpu", "-p", "0"]])
+def test_peer_compare_cpu_refuses_a_gpu_only_machine(tmp_path, capsys, mode):
+    """On a machine whose only OpenCL device is a GPU (a fake rtcl that lists
+    it), --cpu stops with one message before timing anything or writing a
+    table; -p naming the GPU's platform likewise."""
+    rtcl = tmp_path / "rtcl"
+    rtcl.write_text("#!/bin/sh\ncat <<'EOF'\n" + GPU_PLATFORM + "EOF\n")
+    rtcl.chmod(0o755)
+    peer = tmp_path / "peer"
+    peer.mkdir()
+    for name in ("cside.cpp", "tiny_bvh.h", "ply2bin.py"):
+        (peer / name).write_text("")
+    (tmp_path / "rtcl-rays").write_text("#!/bin/sh\nexit 1\n")
+    (tmp_path / "rtcl-rays").chmod(0o755)
+    out = tmp_path / "out"
+    assert peer_compare.main([str(peer), *mode, "--rtcl", str(rtcl), "--meshes", "tetra:1",
+                              "-o", str(out)]) != 0
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1, err
+    assert ("platform 0 (NVIDIA CUDA) has no CPU device (GPU): install PoCL" in err
+            if "-p" in mode else "no CPU OpenCL device in rtcl --list-devices" in err), err
+    assert not list(out.glob("*.md"))

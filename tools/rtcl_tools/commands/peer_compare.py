@@ -31,8 +31,10 @@ traversals differ in work, before any difference in speed.
 
 --cpu times the peer's CPU traversals instead (its `cside`: TinyBVH's BVH,
 BVH4_CPU and BVH8_CPU over the same rays on every hardware thread, built here
-with -march=native) against rtcl on a CPU OpenCL device (PoCL; -p, else
-rtcl's default device), into cpu.md: where rtcl stands on a CPU. It writes to
+with -march=native) against rtcl on a CPU OpenCL device (PoCL): the first CPU of platform -p,
+else of the first platform that has one (rtcl's default device is a GPU
+wherever there is one); a platform with no CPU is refused. Into cpu.md:
+where rtcl stands on a CPU, the device named in its header. It writes to
 -o/--out DIR, by default a new folder rtcl-results/peer-<YYYYmmdd-HHMMSS>; a
 file tracked by git is replaced only with --update-committed.
 
@@ -47,7 +49,8 @@ both sides trace the very same rays from those files: rtcl with rtcl-rays
 built beside rtcl by make) and the peer with its GPU kernels
 (peer_rays_gpu.cpp, the --variants; needs g++ and the OpenCL headers), or,
 with --cpu, with its CPU traversals (BVH, BVH4_CPU, BVH8_CPU on every
-hardware thread) against rtcl on a CPU OpenCL device (PoCL). rays.md and
+hardware thread) against rtcl on a CPU OpenCL device (PoCL, chosen as
+for --cpu). rays.md and
 rays.csv give, per mesh and kind of ray, each side's median time and rays
 per second, the ratio, the hits of each and how many rays the two sides
 agree on (the same hit or miss; for closest hits the same triangle or the
@@ -123,7 +126,8 @@ def parse_arguments(argv):
                              "BVH_GPU built HQ and SAH)")
     add_rtcl_option(parser)
     parser.add_argument("-p", "--platform", help="rtcl's OpenCL platform (default: NVIDIA's; "
-                                                 "with --counts, rtcl's default device)")
+                                                 "with --counts, rtcl's default device; with "
+                                                 "--cpu, the first with a CPU, its first CPU)")
     parser.add_argument("--rays", action="store_true",
                         help="trace primary rays, one diffuse bounce from each primary hit "
                              "and shadow rays to a point light, the same rays on both "
@@ -176,6 +180,48 @@ def nvidia_platform(rtcl, out):
         if match:
             return match.group(1)
     raise Failure("no NVIDIA platform in rtcl --list-devices: give -p N")
+
+
+LISTED_PLATFORM = re.compile(r"^Platform #(\d+): (.*)$")
+LISTED_DEVICE = re.compile(r"^ [|`]-- Device #(\d+): (.*) \((\w+), \d+ compute units")
+
+
+def cpu_device(listing, platform=None):
+    """--cpu's device from rtcl --list-devices' text: the first CPU of the
+    platform -p gave, else of the first platform that has one, as
+    (platform, device, its name); Failure, saying what to pass, when there
+    is none. rtcl's default device is a GPU wherever there is one."""
+    platforms, current = {}, None
+    for line in listing.splitlines():
+        listed, device = LISTED_PLATFORM.match(line), LISTED_DEVICE.match(line)
+        if listed:
+            current = listed.group(1)
+            platforms[current] = (listed.group(2), [])
+        elif device and current is not None:
+            platforms[current][1].append(device.groups())
+    cpus = [(number, index, name) for number, (_, devices) in platforms.items()
+            for index, name, kind in devices if kind == "CPU"]
+    if platform is None:
+        if not cpus:
+            raise Failure("--cpu: no CPU OpenCL device in rtcl --list-devices (install PoCL, "
+                          "or leave out --cpu to time the GPU)")
+        return cpus[0]
+    if platform not in platforms:
+        raise Failure(f"--cpu: -p {platform}: no such platform in rtcl --list-devices")
+    mine = [cpu for cpu in cpus if cpu[0] == platform]
+    if mine:
+        return mine[0]
+    name, devices = platforms[platform]
+    kinds = ", ".join(kind for _, _, kind in devices) or "no device"
+    hint = f"pass -p {cpus[0][0]} ({platforms[cpus[0][0]][0]})" if cpus else "install PoCL"
+    raise Failure(f"--cpu: platform {platform} ({name}) has no CPU device ({kinds}): {hint}")
+
+
+def rtcl_cpu_device(rtcl, platform, out):
+    """cpu_device over rtcl --list-devices: -p and -d for rtcl and rtcl-rays."""
+    chosen = cpu_device(run([rtcl, "--list-devices"], out / "raw" / "devices.txt"), platform)
+    print(f"--cpu: rtcl on platform {chosen[0]}, device {chosen[1]} ({chosen[2]})", flush=True)
+    return ["-p", chosen[0], "-d", chosen[1]]
 
 
 def genbench_mesh(spec, out):
@@ -231,10 +277,16 @@ def count_hits(image):
     return sum(data[i:i + 3] != background for i in range(0, len(data), 3))
 
 
+def device_options(platform):
+    """rtcl's -p (and -d) for platform: a platform's number, rtcl_cpu_device's
+    options, or None for rtcl's default device."""
+    return list(platform) if isinstance(platform, list) else ["-p", platform] if platform else []
+
+
 def time_rtcl(rtcl, platform, scene_path, kernel, repeat, out, name):
     stats = out / "raw" / f"rtcl-{name}-{kernel}.json"
     image = out / "meshes" / f"rtcl-{name}-{kernel}.ppm"
-    device = ["-p", platform] if platform else []
+    device = device_options(platform)
     run([rtcl, "-q", *device, "-k", kernel, "-r", repeat, scene_path,
          "-o", image, "--stats", stats], out / "raw" / f"rtcl-{name}-{kernel}.txt")
     figures = json.loads(stats.read_text())
@@ -298,7 +350,7 @@ def mesh_scenes(args, out, width, height):
 def count_rtcl(rtcl, platform, scene_path, out, name):
     """rtcl's counting run of the persistent kernel: its --stats."""
     stats = out / "raw" / f"rtcl-counts-{name}.json"
-    device = ["-p", platform] if platform else []
+    device = device_options(platform)
     run([rtcl, "-q", *device, "-k", "persistent", scene_path, "-o",
          out / "meshes" / f"rtcl-counts-{name}.ppm", "--flops", out / "meshes" / "f.npy",
          "--stats", stats], out / "raw" / f"rtcl-counts-{name}.txt")
@@ -336,6 +388,7 @@ def cpu(args, rtcl, out):
     repeat = str(check_positive_int("-r/--repeat", args.repeat))
     if not (args.peer / "cside.cpp").is_file() or not (args.peer / "tiny_bvh.h").is_file():
         raise Failure(f"{args.peer} is not the peer's folder: no cside.cpp or tiny_bvh.h")
+    device_chosen = rtcl_cpu_device(rtcl, args.platform, out)
     program = out / "peer" / "cside"
     program.parent.mkdir(parents=True, exist_ok=True)
     run(["g++", "-O3", "-march=native", "-std=c++20", "-I", args.peer, args.peer / "cside.cpp",
@@ -353,7 +406,7 @@ def cpu(args, rtcl, out):
         best_peer = min(peer, key=lambda row: float(row[2]))
         timed = []
         for kernel in args.kernels.split(","):
-            median, _, figures, hits = time_rtcl(rtcl, args.platform, scene_path, kernel,
+            median, _, figures, hits = time_rtcl(rtcl, device_chosen, scene_path, kernel,
                                                  repeat, out, name)
             timed.append((median, kernel, hits))
             device = figures["device"]
@@ -365,7 +418,7 @@ def cpu(args, rtcl, out):
         nothing = json.loads(scene_path.read_text())
         del nothing["meshes"]
         files.write_text(empty_path, json.dumps(nothing, indent=1))
-        outside = time_rtcl(rtcl, args.platform, empty_path, best[1], repeat, out,
+        outside = time_rtcl(rtcl, device_chosen, empty_path, best[1], repeat, out,
                             f"{name}-nothing")[0]
         traversal = best[0] - outside
         peer_ms = float(best_peer[2])
@@ -538,7 +591,7 @@ def time_rtcl_rays(args, rtcl_rays, platform, name, scene_path, rays_file, out, 
     """rtcl-rays over one ray file: (count, any hit, median ms, min ms)."""
     kind = rays_file.stem
     log = out / "raw" / f"rtcl-rays-{name}-{kind}{tag}.txt"
-    device = ["-p", platform] if platform else []
+    device = device_options(platform)
     line = run([rtcl_rays, *device, "-r", args.repeat, scene_path, rays_file,
                 rays_file.with_suffix(".rtcl-hits")], log)
     match = RAYS_LINE.search(line)
@@ -584,8 +637,9 @@ def rays(args, rtcl, out):
     if missing:
         raise Failure(f"{args.peer} is not the peer's folder: no {', '.join(missing)}")
     rtcl_rays = find_rtcl_rays(rtcl)
+    platform = (rtcl_cpu_device(rtcl, args.platform, out) if args.cpu
+                else args.platform or nvidia_platform(rtcl, out))
     programs = build_ray_programs(args, out)
-    platform = args.platform if args.cpu else args.platform or nvidia_platform(rtcl, out)
     table, csv_rows, device = [], [], None
     for name, bin_path, scene, scene_path in mesh_scenes(args, out, width, height):
         camera = scene["camera"]
