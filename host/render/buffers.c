@@ -2,6 +2,7 @@
 
 #include <stdio.h>
 #include <stdlib.h>
+#include <string.h>
 
 #include "rtcl_shared.h"
 #include "layout/scene_block.h"
@@ -269,4 +270,23 @@ void buffers_release(struct render_buffers *b)
 			clReleaseMemObject(buffers[i]);
 	if (b->program)
 		clReleaseProgram(b->program);
+}
+
+cl_int buffers_append_item_counts(struct device *dev, struct render_buffers *b, cl_mem from,
+				  size_t items, size_t *alloc)
+{
+	if (b->item_count + items > *alloc) {
+		size_t grown_alloc = (b->item_count + items) * 2;
+		uint64_t *grown = realloc(b->item_flops, grown_alloc * sizeof(uint64_t));
+		if (!grown)
+			return CL_OUT_OF_HOST_MEMORY;
+		b->item_flops = grown;
+		*alloc = grown_alloc;
+	}
+	memset(b->item_flops + b->item_count, 0, items * sizeof(uint64_t));
+	cl_int status =
+		buffers_add_item_counts(dev, b, from, 0, items, b->item_flops + b->item_count);
+	if (status == CL_SUCCESS)
+		b->item_count += items;
+	return status;
 }

@@ -52,6 +52,14 @@ int buffers_clear(struct device *dev, const struct render_settings *s, struct re
 cl_int buffers_add_item_counts(struct device *dev, struct render_buffers *b, cl_mem from,
 			       size_t offset, size_t items, uint64_t *flops);
 
+/* Appends the counts of a launch's `items` work-items, read from `from`, to
+ * b's per-work-item flops (b->item_flops, grown as needed: *alloc is its
+ * room), as the wavefront's launches do one after the other. The new
+ * entries are zeroed first, since buffers_add_item_counts adds (a retried
+ * sample appends over the attempt it drops). */
+cl_int buffers_append_item_counts(struct device *dev, struct render_buffers *b, cl_mem from,
+				  size_t items, size_t *alloc);
+
 /* Reads the image into res->rgb and, when counting, the per-pixel flops and
  * the per-work-item sums (handed over to res), when checking, the write
  * counts and guard zones. Returns 0, or -1 with one message in err. */

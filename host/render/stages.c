@@ -122,25 +122,10 @@ static void release_all(struct stages *w)
 	buffers_release(&w->b);
 }
 
-/* Appends the counts of a launch's `items` work-items (as wavefront.c). */
+/* Appends the counts of a launch's `items` work-items. */
 static cl_int append_counts(struct device *dev, struct stages *w, size_t items)
 {
-	struct render_buffers *b = &w->b;
-
-	if (b->item_count + items > w->item_alloc) {
-		size_t alloc = (b->item_count + items) * 2;
-		uint64_t *grown = realloc(b->item_flops, alloc * sizeof(uint64_t));
-		if (!grown)
-			return CL_OUT_OF_HOST_MEMORY;
-		b->item_flops = grown;
-		w->item_alloc = alloc;
-	}
-	memset(b->item_flops + b->item_count, 0, items * sizeof(uint64_t));
-	cl_int status = buffers_add_item_counts(dev, b, w->item_counts, 0, items,
-						b->item_flops + b->item_count);
-	if (status == CL_SUCCESS)
-		b->item_count += items;
-	return status;
+	return buffers_append_item_counts(dev, &w->b, w->item_counts, items, &w->item_alloc);
 }
 
 /* Reads the profiled times of the first `upto` launches pending, which

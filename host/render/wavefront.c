@@ -120,24 +120,7 @@ static int create_wavefront_buffers(struct device *dev, const struct scene *scen
 /* Appends the counts of a launch's `items` work-items. */
 static cl_int append_counts(struct device *dev, struct wavefront *w, size_t items)
 {
-	struct render_buffers *b = &w->b;
-
-	if (b->item_count + items > w->item_alloc) {
-		size_t alloc = (b->item_count + items) * 2;
-		uint64_t *grown = realloc(b->item_flops, alloc * sizeof(uint64_t));
-		if (!grown)
-			return CL_OUT_OF_HOST_MEMORY;
-		b->item_flops = grown;
-		w->item_alloc = alloc;
-	}
-	/* Zeroed, as buffers_add_item_counts adds: a retried sample appends
-	 * over the attempt it drops. */
-	memset(b->item_flops + b->item_count, 0, items * sizeof(uint64_t));
-	cl_int status = buffers_add_item_counts(dev, b, w->item_counts, 0, items,
-						b->item_flops + b->item_count);
-	if (status == CL_SUCCESS)
-		b->item_count += items;
-	return status;
+	return buffers_append_item_counts(dev, &w->b, w->item_counts, items, &w->item_alloc);
 }
 
 static cl_int set_kernel_args(cl_kernel kernel, const void *const *values, const size_t *sizes,
