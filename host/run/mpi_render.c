@@ -569,7 +569,8 @@ static int read_sums_into_slot(struct mpi_job *j, int device, char *err, size_t 
 	if (j->slot_way == SLOT_READ) {
 		failed = renderer_read_sums(&j->tiles.dev[device].renderer, j->sums, err, err_size);
 	} else if (sums_through_slot_buffer(j, device)) {
-		snprintf(err, err_size, "copying the sample sums from %s into the shared memory failed",
+		snprintf(err, err_size,
+			 "copying the sample sums from %s into the shared memory failed",
 			 j->devs[device].name);
 		failed = 1;
 	}
@@ -1460,9 +1461,8 @@ static int finish_root(struct mpi_job *j)
 		.count = j->total,
 		.ranks_count = j->image ? j->size : 0,
 		.rank_sums = !j->by_samples ? NULL : j->shared ? "shared memory" : "MPI_Reduce",
-		.rank_sums_into_slot = j->by_samples && j->tiles.sums_later
-					       ? slot_way_names[j->slot_way]
-					       : NULL,
+		.rank_sums_into_slot =
+			j->by_samples && j->tiles.sums_later ? slot_way_names[j->slot_way] : NULL,
 		.rank_sums_ms = j->reduce_ms,
 		.split = j->by_samples ? SPLIT_SAMPLES : j->job->split,
 		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
@@ -1505,8 +1505,11 @@ static void open_before_clock(struct mpi_job *j)
 			j->rank);
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
 	}
-	if (j->by_samples && j->tiles.sums_later && j->slot_way == SLOT_HOST_PTR)
+	if (j->by_samples && j->tiles.sums_later && j->slot_way == SLOT_HOST_PTR) {
+		double lap = timing_now();
 		open_slot_buffer(j);
+		j->setup_ms[0] += timing_lap_ms(&lap); /* device 0's set-up */
+	}
 	/* The ranks set up for seconds, at different speeds: a barrier in
 	 * naps of up to 1 ms, then one in short naps, so that the ranks leave
 	 * within tens of microseconds of each other. (With the first alone, a

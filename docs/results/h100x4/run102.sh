@@ -15,8 +15,10 @@
 # Every image compared with cmp against one rank's (round 1). The lines
 # give frame_ms (rank 0's clock to every rank's sums in its slot), the
 # ranks' add after it, the way that ran (rank_sums.into_slot; a way that
-# could not be set up falls back to copy) and each device's busy and finish
-# times. Issue 43 wants 4 ranks >= 3.7x one rank (batch 100: 3.65-3.68x).
+# could not be set up falls back to copy) and each device's busy, finish
+# and set-up times (set-up: before the clock, host-ptr's buffer on the slot
+# included). Issue 43 wants 4 ranks >= 3.7x one rank (batch 100:
+# 3.65-3.68x).
 # About 40-60 s of commands (batch 100's MPI rows of C took 2-5 s each).
 #
 # Binary (built on the VM, carried in .gpu/mpiwin/, or the folder B names):
@@ -58,7 +60,7 @@ if md:
     if c: line += ' (measured: sums %.2f + add %.2f vs penalty %.2f)' % (c['sums_ms'], c['add_ms'], c['penalty_ms'])
     rs = md.get('rank_sums')
     if rs: line += '; sums into the slot by %s, add after the frame %.1f ms (frame + add %.1f)' % (rs.get('into_slot', '?'), rs['ms'], fr + rs['ms'])
-    line += '; eff %.3f; ' % md['device_efficiency'] + ', '.join('busy %.1f fin %.1f' % (x['busy_ms'], x['finish_ms']) for x in md['devices'])
+    line += '; eff %.3f; ' % md['device_efficiency'] + ', '.join('busy %.1f fin %.1f setup %.1f' % (x['busy_ms'], x['finish_ms'], x['setup_ms']) for x in md['devices'])
 print(line)" $1 2>&1; }
 same() { cmp -s $1 $2 && echo "  same bytes as $(basename $1)" || echo "  IMAGE DIFFERS from $(basename $1)"; }
 if [ -f $G/ompi/env.sh ]; then . $G/ompi/env.sh; fi
