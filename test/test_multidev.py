@@ -919,6 +919,47 @@ def test_mpi_path_traced_default_split_is_measured_and_gives_one_devices_image(t
 
 
 @needs_mpi
+@pytest.mark.parametrize("way, split", [
+    ("host-ptr", "samples"), ("read", "samples"),
+    pytest.param("host-ptr", None, marks=pytest.mark.slow),
+    pytest.param("copy", "samples", marks=pytest.mark.slow)])
+def test_mpi_ranks_sums_reach_the_shared_memory_each_way(tmp_path, way, split):
+    # RTCL_MPI_SUMS: how a rank of one device puts its device's sums into
+    # its slot of the node's shared memory (issue 43, batch 100: four H100
+    # ranks' copies from pinned memory ended the frame 10-12 ms after the
+    # devices): copied from a pinned read-back (the default), read straight
+    # into the slot, or through a buffer made on the slot
+    # (CL_MEM_USE_HOST_PTR). Each way gives one device's image, --split
+    # samples or the measured default (split None: the probe's sums pass
+    # through the slot's buffer before the clock, and the frame's replace
+    # them), and --stats says which way ran.
+    common = ["-s", PATH_BOX, "--size", "24x16", "--spp", "8", "-k", "dynamic"]
+    one = run(*common, "-d", "0", "-o", str(tmp_path / "one.ppm"))
+    assert one.returncode == 0, one.stderr
+    given = ["--split", split] if split else []
+    result = mpi_run(*common, *given, "-o", str(tmp_path / "ranks.ppm"), "--stats",
+                     str(tmp_path / "s.json"),
+                     env={**CHECK, "RTCL_TEST_AS_GPUS": "1", "RTCL_MPI_SUMS": way})
+    assert result.returncode == 0, result.stderr
+    assert (tmp_path / "one.ppm").read_bytes() == (tmp_path / "ranks.ppm").read_bytes()
+    md = json.loads((tmp_path / "s.json").read_text())["multidevice"]
+    if split or measured_split(md) == "samples":
+        assert md["rank_sums"] == {"added_by": "shared memory", "ms": md["rank_sums"]["ms"],
+                                   "into_slot": way}, md
+
+
+@needs_mpi
+def test_mpi_sums_way_must_be_known(tmp_path):
+    result = mpi_run(*SMALL, "--split", "samples", "-o", str(tmp_path / "x.ppm"),
+                     env={"RTCL_MPI_SUMS": "pinned"})
+    assert result.returncode == 2, result.stderr
+    assert own_messages(result.stderr) == [
+        "rtcl: RTCL_MPI_SUMS=pinned: expected copy, read or host-ptr (how --mpi's ranks put "
+        "their sample sums into the node's shared memory), or leave it unset"]
+    assert os.listdir(tmp_path) == []
+
+
+@needs_mpi
 @pytest.mark.slow  # the message itself: test_sample_split_needs_a_sample_per_device
 def test_mpi_sample_split_needs_a_sample_per_device(tmp_path):
     result = mpi_run(*SMALL, "--split", "samples", "--spp", "2", "-o", str(tmp_path / "x.ppm"))

@@ -43,6 +43,9 @@ struct device_shares {
 	const char *rank_sums; /* --mpi's sample split: how the ranks' sums were
 				  added ("shared memory", "MPI_Reduce"), or
 				  NULL */
+	/* In shared memory, one device a rank: how its sums reached the rank's
+	 * slot (RTCL_MPI_SUMS: "copy", "read", "host-ptr"), or NULL. */
+	const char *rank_sums_into_slot;
 	double rank_sums_ms;   /* on rank 0: in shared memory, the add after the
 				  image time; by MPI_Reduce, from its devices'
 				  end to the sum */

@@ -214,10 +214,13 @@ static json_t *shares_document(const struct device_shares *d)
 				  "move_ms", d->choice.move_ms, "penalty_ms", d->choice.penalty_ms));
 	if (doc && d->ranks_count)
 		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
-	if (doc && d->rank_sums)
-		json_object_set_new(doc, "rank_sums",
-				    json_pack("{s:s, s:f}", "added_by", d->rank_sums, "ms",
-					      d->rank_sums_ms));
+	if (doc && d->rank_sums) {
+		json_t *sums =
+			json_pack("{s:s, s:f}", "added_by", d->rank_sums, "ms", d->rank_sums_ms);
+		if (sums && d->rank_sums_into_slot)
+			json_object_set_new(sums, "into_slot", json_string(d->rank_sums_into_slot));
+		json_object_set_new(doc, "rank_sums", sums);
+	}
 	if (doc && d->row_order_given) {
 		json_object_set_new(doc, "row_order",
 				    json_string(d->rows.row_band ? "interleave" : "scan"));

@@ -22,6 +22,7 @@
 #include "base/interrupt.h"
 #include "render/repeats.h"
 #include "base/progress.h"
+#include "render/buffers.h"
 #include "render/render.h"
 #include "schedule/tiles.h"
 #include "base/timing.h"
@@ -95,6 +96,9 @@ struct mpi_job {
 			     add, from sums_in */
 	double sums_in;	  /* shared: timing_now() once every rank's sums were
 			     in its slot (reduce_sums' first barrier) */
+	int slot_way;	  /* sums_later: how the device's sums reach the slot
+			     (enum slot_way, RTCL_MPI_SUMS) */
+	cl_mem slot_mem;  /* SLOT_HOST_PTR: a buffer on this rank's slot */
 };
 
 static int piece_count(const struct mpi_job *j)
@@ -365,11 +369,46 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 }
 
 /* A rank of one device, its sums into its slot of the node's shared memory
- * (sums_later): read back in SUMS_PARTS parts into the device's pinned
- * memory, each part copied into the slot once read while the next are read.
- * Read whole and then copied, the read-back (2.4 ms for 2000x2000 on an
- * H100) came before the copy, inside the image's time (batch 98c). */
+ * (sums_later), one of three ways (RTCL_MPI_SUMS, docs/GUIDE.md):
+ *
+ *   SLOT_COPY      (default) read back in SUMS_PARTS parts into the
+ *                  device's pinned memory, each part copied into the slot
+ *                  once read while the next are read. Read whole and then
+ *                  copied, the read-back (2.4 ms for 2000x2000 on an H100)
+ *                  came before the copy, inside the image's time (batch
+ *                  98c). Four H100 ranks' copies of the box's 134 MB each
+ *                  (2048x2048), at once, ended the frame 10-12 ms after the
+ *                  devices (batch 100).
+ *   SLOT_READ      read straight into the slot, ordinary memory: no copy,
+ *                  but NVIDIA's OpenCL reads into unpinned memory through
+ *                  a staging copy of its own (an image of 2000x2000 took
+ *                  28-34 ms against 2.4 pinned).
+ *   SLOT_HOST_PTR  a buffer made on the slot (CL_MEM_USE_HOST_PTR) before
+ *                  the clock; the device's sums copied into it on the
+ *                  device and mapped for reading, which leaves them in the
+ *                  slot: one transfer, at the link's speed where the driver
+ *                  pins such memory (untested on NVIDIA: batch 102).
+ *
+ * A way that cannot be set up falls back to SLOT_COPY before the clock,
+ * and --stats says which way ran (multidevice.rank_sums.into_slot). */
 #define SUMS_PARTS 8
+
+enum slot_way { SLOT_COPY, SLOT_READ, SLOT_HOST_PTR, SLOT_WAYS };
+
+static const char *const slot_way_names[SLOT_WAYS] = {"copy", "read", "host-ptr"};
+
+/* The way RTCL_MPI_SUMS names (SLOT_COPY when unset or empty), or -1. */
+static int slot_way_from_env(void)
+{
+	const char *value = getenv("RTCL_MPI_SUMS");
+
+	if (!value || !*value)
+		return SLOT_COPY;
+	for (int w = 0; w < SLOT_WAYS; w++)
+		if (strcmp(value, slot_way_names[w]) == 0)
+			return w;
+	return -1;
+}
 
 /* One of read_sums_into_slot's threads: its slice of each part, copied once
  * the part is read. */
@@ -400,7 +439,73 @@ static void *copy_slices(void *arg)
 	return NULL;
 }
 
-static int read_sums_into_slot(struct mpi_job *j, int device, char *err, size_t err_size)
+/* SLOT_HOST_PTR: the device's sums copied into j->slot_mem on the device's
+ * queue and mapped for reading, which leaves them in the slot (the map of a
+ * CL_MEM_USE_HOST_PTR buffer is its host memory; copied there should a
+ * driver give other memory); unmapped without waiting (a read map writes
+ * nothing back: the unmap is waited for when the buffer is released). */
+static int sums_through_slot_buffer(struct mpi_job *j, int device)
+{
+	struct device *dev = &j->devs[device];
+	size_t bytes = image_sum_bytes(j->settings.width, j->settings.height);
+	cl_int status = clEnqueueCopyBuffer(dev->queue, j->tiles.dev[device].renderer.buffers->sums,
+					    j->slot_mem, 0, 0, bytes, 0, NULL, NULL);
+	void *p = NULL;
+
+	if (status == CL_SUCCESS)
+		p = clEnqueueMapBuffer(dev->queue, j->slot_mem, CL_TRUE, CL_MAP_READ, 0, bytes, 0,
+				       NULL, NULL, &status);
+	if (status != CL_SUCCESS)
+		return -1;
+	if (p != (void *)j->sums)
+		memcpy(j->sums, p, bytes);
+	status = clEnqueueUnmapMemObject(dev->queue, j->slot_mem, p, 0, NULL, NULL);
+	if (status == CL_SUCCESS)
+		status = clFlush(dev->queue);
+	return status == CL_SUCCESS ? 0 : -1;
+}
+
+/* Before the clock, with the device's renderer open: the buffer that
+ * SLOT_HOST_PTR copies through, made on this rank's slot and used once
+ * (a driver may pin the memory, or pay other costs, at its first use; the
+ * slot's contents then are the probe's, which the frame's sums replace).
+ * Falls back to SLOT_COPY where it cannot be made or used. */
+static void open_slot_buffer(struct mpi_job *j)
+{
+	struct tiles_device *d = &j->tiles.dev[0];
+	size_t bytes = image_sum_bytes(j->settings.width, j->settings.height);
+	cl_int status;
+
+	if (!d->open || !d->renderer.buffers || !d->renderer.buffers->sums) {
+		j->slot_way = SLOT_COPY;
+		return;
+	}
+	j->slot_mem = clCreateBuffer(j->devs[0].context, CL_MEM_READ_WRITE | CL_MEM_USE_HOST_PTR,
+				     bytes, j->sums, &status);
+	if (status != CL_SUCCESS)
+		j->slot_mem = NULL;
+	if (!j->slot_mem || sums_through_slot_buffer(j, 0) ||
+	    clFinish(j->devs[0].queue) != CL_SUCCESS) {
+		if (j->slot_mem)
+			clReleaseMemObject(j->slot_mem);
+		j->slot_mem = NULL;
+		j->slot_way = SLOT_COPY;
+	}
+}
+
+/* The buffer on the slot, before the window goes (its queue done first). */
+static void close_slot_buffer(struct mpi_job *j)
+{
+	if (!j->slot_mem)
+		return;
+	clFinish(j->devs[0].queue);
+	clReleaseMemObject(j->slot_mem);
+	j->slot_mem = NULL;
+}
+
+/* SLOT_COPY: read back in parts, each copied into the slot by this rank's
+ * share of the node's cores as it arrives. */
+static int copy_sums_into_slot(struct mpi_job *j, int device, char *err, size_t err_size)
 {
 	const struct render_settings *s = &j->settings;
 	struct tiles_device *d = &j->tiles.dev[device];
@@ -451,6 +556,33 @@ static int read_sums_into_slot(struct mpi_job *j, int device, char *err, size_t 
 	}
 	pthread_mutex_unlock(&j->sums_lock);
 	return failed ? -1 : 0;
+}
+
+/* Device's sums into the slot, the way j->slot_way says; then this rank's
+ * sums and the device's pieces counted. */
+static int read_sums_into_slot(struct mpi_job *j, int device, char *err, size_t err_size)
+{
+	int failed = 0;
+
+	if (j->slot_way == SLOT_COPY)
+		return copy_sums_into_slot(j, device, err, err_size);
+	if (j->slot_way == SLOT_READ) {
+		failed = renderer_read_sums(&j->tiles.dev[device].renderer, j->sums, err, err_size);
+	} else if (sums_through_slot_buffer(j, device)) {
+		snprintf(err, err_size,
+			 "copying the sample sums from %s into the shared memory failed",
+			 j->devs[device].name);
+		failed = 1;
+	}
+	if (failed)
+		return -1;
+	pthread_mutex_lock(&j->sums_lock);
+	j->sums_added++;
+	for (int g = 0; g < j->tiles.piece_count; g++)
+		if (j->tiles.owner[g] == device)
+			j->arrived[g]++;
+	pthread_mutex_unlock(&j->sums_lock);
+	return 0;
 }
 
 /* Under check_writes: reads device's image and write counts; nonzero, with
@@ -845,8 +977,14 @@ static int setup_reduction(struct mpi_job *j)
 	void *base = NULL;
 	int made = 0, all = 0;
 
+	/* Each rank's slot a whole number of pages, so that every slot starts
+	 * on a page where the window does (RTCL_MPI_SUMS=host-ptr makes a
+	 * buffer on it, which a driver pins by pages). */
+	long page = sysconf(_SC_PAGESIZE);
+	size_t slot = page > 0 ? (bytes + (size_t)page - 1) / (size_t)page * (size_t)page : bytes;
+
 	if (one_node(j, &node))
-		made = MPI_Win_allocate_shared((MPI_Aint)bytes, 1, MPI_INFO_NULL, node, &base,
+		made = MPI_Win_allocate_shared((MPI_Aint)slot, 1, MPI_INFO_NULL, node, &base,
 					       &j->win) == MPI_SUCCESS;
 	/* A window made on some ranks only is left to MPI_Finalize. */
 	if (MPI_Allreduce(&made, &all, 1, MPI_INT, MPI_MIN, MPI_COMM_WORLD) != MPI_SUCCESS)
@@ -947,6 +1085,7 @@ static int reduce_sums(struct mpi_job *j)
 /* By_samples, every rank, before MPI_Finalize: the window, type and op. */
 static void end_reduction(struct mpi_job *j)
 {
+	close_slot_buffer(j);
 	if (j->shared) {
 		MPI_Win_free(&j->win);
 		j->shared = 0;
@@ -1141,6 +1280,17 @@ static int choose_pieces(struct mpi_job *j, int total, int gpus)
 	const struct render_settings *s = &j->settings;
 	char err[MESSAGE_SIZE];
 
+	/* Every rank reads the same environment: rank 0 says why. */
+	j->slot_way = slot_way_from_env();
+	if (j->slot_way < 0) {
+		if (j->rank == ROOT)
+			fprintf(stderr,
+				"rtcl: RTCL_MPI_SUMS=%s: expected copy, read or host-ptr (how "
+				"--mpi's ranks put their sample sums into the node's shared "
+				"memory), or leave it unset\n",
+				getenv("RTCL_MPI_SUMS"));
+		return CHOSEN_BADLY;
+	}
 	if (!j->image) {
 		j->pieces = job_frame_count(job);
 		return 0;
@@ -1311,6 +1461,8 @@ static int finish_root(struct mpi_job *j)
 		.count = j->total,
 		.ranks_count = j->image ? j->size : 0,
 		.rank_sums = !j->by_samples ? NULL : j->shared ? "shared memory" : "MPI_Reduce",
+		.rank_sums_into_slot =
+			j->by_samples && j->tiles.sums_later ? slot_way_names[j->slot_way] : NULL,
 		.rank_sums_ms = j->reduce_ms,
 		.split = j->by_samples ? SPLIT_SAMPLES : j->job->split,
 		.piece = j->by_samples ? "sample range" : j->image ? "band" : "frame",
@@ -1352,6 +1504,11 @@ static void open_before_clock(struct mpi_job *j)
 				"probes failed\n",
 			j->rank);
 		MPI_Abort(MPI_COMM_WORLD, EXIT_FAILED);
+	}
+	if (j->by_samples && j->tiles.sums_later && j->slot_way == SLOT_HOST_PTR) {
+		double lap = timing_now();
+		open_slot_buffer(j);
+		j->setup_ms[0] += timing_lap_ms(&lap); /* device 0's set-up */
 	}
 	/* The ranks set up for seconds, at different speeds: a barrier in
 	 * naps of up to 1 ms, then one in short naps, so that the ranks leave
