@@ -185,6 +185,71 @@ def read_ply(path):
     return vertices.astype(np.float64)[faces["i"]]
 
 
+PLANE_SIZE = 1000.0   # the side of an approximate plane's square, world units
+
+
+def read_gltf(path, uvs, materials):
+    """The triangles of a glTF 2.0 .gltf file by material name, as read_obj
+    gives them: every primitive (mode 4, triangles) of every mesh of the
+    default scene's nodes, which must carry no transform; POSITION, indices
+    and TEXCOORD_0 read from the buffers (data: URIs or files beside it); v
+    given as rtcl reads it, 1 - v (Assimp turns glTF's downward v). The
+    materials go into `materials` ({name: the glTF material, with the folder
+    and the document for its textures}); a primitive without one is refused."""
+    import base64
+    doc = json.loads(path.read_text())
+    if not doc.get("asset", {}).get("version", "").startswith("2."):
+        raise SceneError(f"{path}: the oracle reads glTF 2.0 files only")
+
+    def load(uri):
+        if uri.startswith("data:"):
+            return base64.b64decode(uri.split(",", 1)[1])
+        return (path.parent / uri).read_bytes()
+    buffers = [load(b["uri"]) for b in doc["buffers"]]
+
+    def accessor(index):
+        acc = doc["accessors"][index]
+        view = doc["bufferViews"][acc["bufferView"]]
+        kinds = {5126: "<f4", 5125: "<u4", 5123: "<u2", 5121: "u1"}
+        if acc["componentType"] not in kinds or acc.get("sparse") or acc.get("normalized"):
+            raise SceneError(f"{path}: accessor {index}: not read by the oracle")
+        width = {"SCALAR": 1, "VEC2": 2, "VEC3": 3}[acc["type"]]
+        dtype = np.dtype(kinds[acc["componentType"]])
+        stride = view.get("byteStride", 0) or width * dtype.itemsize
+        if stride != width * dtype.itemsize:
+            raise SceneError(f"{path}: accessor {index}: interleaved buffers are not read")
+        start = view.get("byteOffset", 0) + acc.get("byteOffset", 0)
+        data = np.frombuffer(buffers[view["buffer"]], dtype, width * acc["count"], start)
+        return data.reshape(acc["count"], width).astype(np.float64 if width > 1 else np.int64)
+
+    groups = {}
+    scene = doc["scenes"][doc.get("scene", 0)]
+    for n in scene["nodes"]:
+        node = doc["nodes"][n]
+        if set(node) & {"matrix", "translation", "rotation", "scale", "children"}:
+            raise SceneError(f"{path}: node {n}: transforms and children are not mapped")
+        for prim in doc["meshes"][node["mesh"]]["primitives"]:
+            if prim.get("mode", 4) != 4 or "material" not in prim:
+                raise SceneError(f"{path}: the oracle reads triangle primitives with a "
+                                 "material only")
+            positions = accessor(prim["attributes"]["POSITION"])
+            index = (accessor(prim["indices"])[:, 0] if "indices" in prim
+                     else np.arange(len(positions)))
+            index = index.reshape(-1, 3)
+            material = doc["materials"][prim["material"]]
+            name = material.get("name", "#")
+            materials[name] = dict(material, folder=path.parent, document=doc, file=path,
+                                   load=load)
+            groups.setdefault(name, []).extend(positions[index].tolist())
+            if "TEXCOORD_0" in prim.get("attributes", {}):
+                uv = accessor(prim["attributes"]["TEXCOORD_0"])
+                uv[:, 1] = 1.0 - uv[:, 1]
+                uvs.setdefault(name, []).extend(uv[index].tolist())
+            else:
+                uvs.setdefault(name, []).extend(np.zeros((len(index), 3, 2)).tolist())
+    return groups
+
+
 class Scene:
     """An rtcl scene (docs/SCENE.md) as far as the oracle maps it."""
 
@@ -192,13 +257,20 @@ class Scene:
              "spheres", "meshes", "triangles", "integrator", "environment", "epsilon",
              "lights", "planes", "ambient"}
 
-    def __init__(self, path):
+    def __init__(self, path, approximate=False, plane_size=PLANE_SIZE):
+        """approximate: False refuses what has no exact mapping (the oracle);
+        True maps it approximately (pt_mitsuba.py's speed comparison only):
+        each plane as a plane_size x plane_size square about its point, which
+        differs from rtcl's infinite plane near the horizon, and a glTF
+        material's base colour texture and cut-out as gltf_material says."""
         self.path = pathlib.Path(path)
         self.doc = json.loads(self.path.read_text())
+        self.approximate = approximate
+        self.approximate_planes = plane_size if approximate else None
         unknown = set(self.doc) - self.KNOWN
         if unknown:
             raise SceneError(f"{path}: keys the oracle does not map: {sorted(unknown)}")
-        if self.doc.get("planes"):
+        if self.doc.get("planes") and not approximate:
             raise SceneError(f"{path}: planes: not mapped (infinite; give triangles)")
         if self.doc.get("integrator", "whitted") != "path":
             raise SceneError(f'{path}: integrator: the oracle renders "path" scenes only')
@@ -228,6 +300,48 @@ class Scene:
             yield "triangles", geometry, self.material(tri["material"], where), where
         for i, mesh in enumerate(self.doc.get("meshes", [])):
             yield from self.mesh_shapes(i, mesh)
+        for i, plane in enumerate(self.doc.get("planes", [])):
+            yield self.plane_square(i, plane)
+
+    def plane_square(self, i, plane):
+        """An approximation: plane i as a square of side approximate_planes about
+        its point, two triangles facing its normal, with texture coordinates
+        laid for Mitsuba's checkerboard (mitsuba_checker): RENDERING.md's (s,
+        t), the world coordinates without the axis of the normal's largest
+        |component|, over twice the checker's size, so that Mitsuba's squares
+        (u mod 1 < 0.5 against v mod 1 < 0.5) are rtcl's floor(s/size) +
+        floor(t/size) parity."""
+        where = f"planes[{i}]"
+        extra = set(plane) - {"point", "normal", "material", "checker"}
+        if extra:
+            raise SceneError(f"{where}: keys the oracle does not map: {sorted(extra)}")
+        if "material" not in plane:
+            raise SceneError(f"{where}: give a material with a bsdf")
+        point = np.array(vec(plane["point"], where + ".point"))
+        normal = np.array(vec(plane["normal"], where + ".normal"))
+        normal /= np.linalg.norm(normal)
+        helper = np.array([1.0, 0, 0]) if abs(normal[0]) < 0.9 else np.array([0, 1.0, 0])
+        a = np.cross(normal, helper)
+        a /= np.linalg.norm(a)
+        b = np.cross(normal, a)           # (a, b, normal) right-handed
+        h = 0.5 * float(self.approximate_planes)
+        corners = [point + h * (x * a + y * b) for x, y in ((-1, -1), (1, -1), (1, 1), (-1, 1))]
+        tri = np.array([[corners[0], corners[1], corners[2]],
+                        [corners[0], corners[2], corners[3]]])
+        name, material = self.material(plane["material"], where + ".material")
+        material = dict(material)
+        if "checker" in plane:
+            checker = plane["checker"]
+            size = float(checker["size"])
+            if size <= 0:
+                raise SceneError(f"{where}.checker.size: must be > 0")
+            drop = int(np.argmax(np.abs(normal)))   # ties: x before y before z
+            keep = [k for k in range(3) if k != drop]
+            uv = tri[..., keep] / (2 * size)
+            uv[..., 1] = 1.0 - uv[..., 1]           # write_ply writes 1 - v
+            material["checker"] = vec(checker["color"], where + ".checker.color")
+            return "triangles", (tri, uv), (None, material), where
+        return "triangles", tri, (name, material), where
 
     def mesh_shapes(self, i, mesh):
         where = f"meshes[{i}]"
@@ -238,8 +352,8 @@ class Scene:
         if mesh.get("smooth", True):
             raise SceneError(f'{where}: give "smooth": false (the oracle maps flat meshes)')
         file = self.path.parent / mesh["file"]
-        if file.suffix.lower() not in (".obj", ".ply"):
-            raise SceneError(f"{where}.file: the oracle reads OBJ and PLY files only")
+        if file.suffix.lower() not in (".obj", ".ply", ".gltf"):
+            raise SceneError(f"{where}.file: the oracle reads OBJ, PLY and .gltf files only")
         scale = mesh.get("scale", 1)
         scale = np.array([float(scale)] * 3 if isinstance(scale, (int, float))
                          else vec(scale, where + ".scale"))
@@ -251,6 +365,10 @@ class Scene:
             if "material" not in mesh:
                 raise SceneError(f"{where}: a PLY file has no materials: give \"material\"")
             groups = {None: read_ply(file)}
+        elif file.suffix.lower() == ".gltf":
+            groups = read_gltf(file, uvs, file_materials)
+            file_materials = {name: {"gltf_material": m, "approximate": self.approximate}
+                              for name, m in file_materials.items()}
         else:
             groups = read_obj(file, uvs)
             file_materials = read_mtl(file)
@@ -259,6 +377,8 @@ class Scene:
                 ref = self.material(mesh["material"], f"{where}.material")
             elif name in mesh.get("materials", {}):
                 ref = self.material(mesh["materials"][name], f"{where}.materials.{name}")
+            elif name in file_materials and "gltf_material" in file_materials[name]:
+                ref = (f"{file}#{name}", file_materials[name])
             elif name in file_materials:
                 # The file's own material: its texture coordinates are used.
                 ref = (f"{file}#{name}", mtl_material(file, name, file_materials[name],
@@ -272,7 +392,7 @@ class Scene:
             if mirror:
                 tri = tri[:, ::-1]
                 uv = uv[:, ::-1] if uv is not None else None
-            if "mtl_diffuse" in ref[1]:
+            if "mtl_diffuse" in ref[1] or "gltf_material" in ref[1]:
                 yield "triangles", (tri, uv), ref, where
             else:
                 yield "triangles", tri, ref, where
@@ -291,8 +411,102 @@ def number_in(material, key, default, where, low=0.0, high=1.0):
     return value
 
 
+def mitsuba_checker(material, where):
+    """A plane's checker on its diffuse material (RENDERING.md, trace step 3:
+    odd squares take min(1, checker.color) for the reflectance) as Mitsuba's
+    checkerboard over the square's texture coordinates (Scene.plane_square)."""
+    bsdf = material.get("bsdf", {})
+    if bsdf.get("type") != "diffuse":
+        raise SceneError(f"{where}: the oracle maps checkers on diffuse materials only")
+    return {"type": "twosided", "bsdf": {"type": "diffuse", "reflectance": {
+        "type": "checkerboard",
+        "color0": rgb(bsdf.get("reflectance", [0.5] * 3), where + ".bsdf.reflectance"),
+        "color1": rgb(list(np.minimum(material["checker"], 1.0)), where + ".checker.color")}}}
+
+
+def gltf_image(material, texture_info):
+    """The RGBA texels of a glTF texture as floats 0 ... 1 (rows from the top)."""
+    import base64
+    import io
+    import mitsuba as mi
+    doc = material["document"]
+    texture = doc["textures"][texture_info["index"]]
+    sampler = doc.get("samplers", [{}])[texture.get("sampler", 0)] if "sampler" in texture else {}
+    if sampler.get("wrapS", 10497) != 10497 or sampler.get("wrapT", 10497) != 10497 \
+            or texture_info.get("texCoord", 0) or texture_info.get("extensions"):
+        raise SceneError(f"{material['file']}: textures other than repeated TEXCOORD_0 "
+                         "ones are not mapped")
+    image = doc["images"][texture["source"]]
+    data = material["load"](image["uri"])
+    path = pathlib.Path(tempfile.mkdtemp(prefix="mitsuba_ref.")) / "texture.png"
+    path.write_bytes(data)
+    bitmap = mi.Bitmap(str(path)).convert(mi.Bitmap.PixelFormat.RGBA, mi.Struct.Type.UInt8,
+                                          srgb_gamma=True)
+    return np.array(bitmap, dtype=np.float64) / 255.0
+
+
+def gltf_material(material, where):
+    """A glTF metallic-roughness material (RENDERING.md, "Metallic-roughness
+    materials") as rtcl's principled BSDF. Exact without textures; with a base
+    colour texture or a MASK cut-out only when approximations are allowed
+    (Scene(approximate=True)): the texture as its mean linear colour over the
+    texels not cut out (a constant base colour), and the cut-out as Mitsuba's
+    `mask` of a binary opacity: the texture's alpha filtered bilinearly
+    (repeated, texel centres at half-integers) at 8 times its resolution and
+    compared with the cutoff, looked up without filtering (rtcl filters the
+    alpha at the hit itself: the edges differ within 1/16 of a texel)."""
+    import mitsuba as mi
+    pbr = material.get("pbrMetallicRoughness")
+    if pbr is None or set(material) & {"normalTexture", "emissiveTexture", "occlusionTexture",
+                                       "extensions", "emissiveFactor"}:
+        raise SceneError(f"{where}: the oracle maps plain glTF metallic-roughness materials")
+    factor = np.array(pbr.get("baseColorFactor", [1, 1, 1, 1]), dtype=np.float64)
+    mode = material.get("alphaMode", "OPAQUE")
+    if mode == "BLEND" or "metallicRoughnessTexture" in pbr:
+        raise SceneError(f"{where}: alphaMode BLEND and metallic-roughness textures "
+                         "are not mapped")
+    cutoff = float(material.get("alphaCutoff", 0.5)) if mode == "MASK" else 0.0
+    texels = None
+    if "baseColorTexture" in pbr or cutoff > 0:
+        if not material["approximate"]:
+            raise SceneError(f"{where}: glTF base colour textures and cut-outs are mapped "
+                             "approximately only (docs/oracle.md)")
+    if "baseColorTexture" in pbr:
+        texels = gltf_image(material, pbr["baseColorTexture"])
+    base = factor[:3]
+    if texels is not None:
+        code = texels[..., :3]
+        linear = np.where(code <= 0.04045, code / 12.92, ((code + 0.055) / 1.055) ** 2.4)
+        kept = texels[..., 3] * factor[3] >= cutoff if cutoff > 0 else np.ones(code.shape[:2], bool)
+        base = base * linear[kept].mean(axis=0)
+    bsdf = principled({"base_color": list(np.minimum(base, 1.0)),
+                       "metallic": float(pbr.get("metallicFactor", 1.0)),
+                       "roughness": float(pbr.get("roughnessFactor", 1.0))}, where)
+    if cutoff <= 0:
+        return bsdf
+    alpha = (texels[..., 3] if texels is not None else np.ones((1, 1))) * factor[3]
+    h, w = alpha.shape
+    up = 8
+    y = (np.arange(up * h) + 0.5) / up - 0.5          # fine sample in texel units
+    x = (np.arange(up * w) + 0.5) / up - 0.5
+    y0, x0 = np.floor(y).astype(int), np.floor(x).astype(int)
+    fy, fx = (y - y0)[:, None], (x - x0)[None, :]
+    a = lambda j, i: alpha[np.ix_(j % h, i % w)]
+    filtered = ((1 - fy) * ((1 - fx) * a(y0, x0) + fx * a(y0, x0 + 1))
+                + fy * ((1 - fx) * a(y0 + 1, x0) + fx * a(y0 + 1, x0 + 1)))
+    opacity = (filtered >= cutoff).astype(np.float32)[..., None]
+    return {"type": "mask", "bsdf": bsdf,
+            "opacity": {"type": "bitmap", "bitmap": mi.Bitmap(opacity), "raw": True,
+                        "filter_type": "nearest", "wrap_mode": "repeat"}}
+
+
 def mitsuba_bsdf(material, where):
     """The Mitsuba BSDF of an rtcl material's "bsdf" (docs/oracle.md, "Mappings")."""
+    if "checker" in material:
+        return mitsuba_checker(material, where)
+    if "gltf_material" in material:
+        return gltf_material(dict(material["gltf_material"],
+                                  approximate=material["approximate"]), where)
     if "mtl_diffuse" in material:
         return {"type": "twosided", "bsdf": mtl_diffuse(material["mtl_diffuse"])}
     if "bsdf" not in material:
@@ -408,11 +622,12 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
     width = width or image.get("width", 640)
     height = height or image.get("height", 480)
     camera = doc["camera"]
-    if camera.get("aperture", 0) != 0:
-        raise SceneError("camera.aperture: the oracle maps the pinhole camera only")
     eye = vec(camera["eye"], "camera.eye")
     look_at = vec(camera["look_at"], "camera.look_at")
     up = vec(camera.get("up", [0, 1, 0]), "camera.up")
+    aperture = float(camera.get("aperture", 0))
+    if aperture < 0:
+        raise SceneError(f"camera.aperture: must be >= 0, got {aperture}")
     # rtcl's max_depth counts the bounces after the first hit (0: direct light);
     # Mitsuba's counts path segments (1: emitters seen, 2: direct light).
     max_depth = int(doc.get("max_depth", 5)) + 2
@@ -433,6 +648,15 @@ def mitsuba_scene(scene, spp, width=None, height=None, aov=None):
                      "component_format": "float32"},
         },
     }
+    if aperture > 0:
+        # RENDERING.md's thin lens: rays from a disk of radius A about the eye,
+        # through the pinhole ray's point on the plane at F along the view
+        # direction; Mitsuba's thinlens (concentric disk sampling too) is that.
+        focus = float(camera.get("focus_distance",
+                                 np.linalg.norm(np.subtract(look_at, eye))))
+        if focus <= 0:
+            raise SceneError(f"camera.focus_distance: must be > 0, got {focus}")
+        out["sensor"].update(type="thinlens", aperture_radius=aperture, focus_distance=focus)
     background = vec(doc.get("background", [0, 0, 0]), "background")
     if "environment" in doc:
         out["background"] = environment(doc["environment"], scene.path.parent)
@@ -655,12 +879,13 @@ def block_means(image):
     return image.reshape(h // BLOCK, BLOCK, w // BLOCK, BLOCK, c).mean(axis=(1, 3))
 
 
-def render(scene_path, spp, batches, size=None, threads=1, aov=None, seed=0):
+def render(scene_path, spp, batches, size=None, threads=1, aov=None, seed=0,
+           approximate=False):
     import drjit as dr
     import mitsuba as mi
     mi.set_variant("scalar_rgb")
     dr.set_thread_count(threads)
-    scene = Scene(scene_path)
+    scene = Scene(scene_path, approximate)
     width, height = size or (None, None)
     if spp % batches:
         raise SceneError(f"--spp {spp} is not a multiple of --batches {batches}")
@@ -721,6 +946,9 @@ def main(argv=None):
                         help="the first batch's seed (batch k: seed + k)")
     parser.add_argument("--aov", choices=["albedo"],
                         help="render the surfaces' albedo instead (the camera and geometry check)")
+    parser.add_argument("--approximate", action="store_true",
+                        help=f"map planes as {PLANE_SIZE:g}-unit squares and glTF textures "
+                        "approximately (docs/oracle.md; never for the oracle's references)")
     args = parser.parse_args(argv)
     size = None
     if args.size:
@@ -728,7 +956,8 @@ def main(argv=None):
         size = (int(width), int(height))
     try:
         mean, sample_std, seconds, version = render(args.scene, args.spp, args.batches, size,
-                                                    args.threads, args.aov, args.seed)
+                                                    args.threads, args.aov, args.seed,
+                                                    args.approximate)
     except SceneError as error:
         sys.exit(f"mitsuba_ref.py: {error}")
     scene_bytes = pathlib.Path(args.scene).read_bytes()
@@ -739,7 +968,7 @@ def main(argv=None):
         "spp": args.spp, "batches": args.batches, "seed": args.seed, "aov": args.aov,
         "width": int(mean.shape[1]), "height": int(mean.shape[0]),
         "mitsuba": version, "variant": "scalar_rgb", "threads": args.threads,
-        "seconds": round(seconds, 1),
+        "seconds": round(seconds, 1), "approximate": args.approximate,
         "command": "python3 tools/build/mitsuba_ref.py " + " ".join(argv or sys.argv[1:]),
     }
     tmp = pathlib.Path(args.output).with_suffix(".tmp.npz")
