@@ -9,7 +9,8 @@ not used: run.sh's COUNT_ONLY=1),
 and, when present, mitsuba.jsonl: one JSON object a line, {"scene", "form"
 ("megakernel" or "wavefront"), "ms", "width", "height", "spp"}, Mitsuba 3's
 times on the same scenes (docs/results/h100-paths-study/pt_mitsuba.py writes
-it; a record with "approximate" says how its BSDFs differ from rtcl's). Writes into the output folder (the input folder by default):
+it; a record with "approximate" says how its scene differs from rtcl's, and
+its "approximate_label", where given, labels its row; else "approximate BSDF"). Writes into the output folder (the input folder by default):
 
   paths.md          per scene: M paths/s per schedule; its time at 100 % SIMD,
                     lost to idle lanes and lost elsewhere (the Whitted study's
@@ -222,7 +223,9 @@ def speed_table(rows, mitsuba, naive_ms):
     for form in ("megakernel", "wavefront"):
         if form in mitsuba:
             m = mitsuba[form]
-            label = f"Mitsuba 3 {form}" + (" (approximate BSDF)" if m.get("approximate") else "")
+            label = f"Mitsuba 3 {form}" + (
+                f" ({m.get('approximate_label', 'approximate BSDF')})" if m.get("approximate")
+                else "")
             cells.append((label, format_number(m["ms"], 2), "–",
                           format_number(m["width"] * m["height"] * m["spp"] / m["ms"] / 1e3, 1),
                           format_number(ratio(naive_ms, m["ms"]), 2, "×"), "–", "–", "–", "–",
@@ -273,9 +276,13 @@ def scene_lines(scene, rows, mitsuba):
              + (f", {format_number(ratio(naive, best['ms']), 2, '×')} naive's" if naive else "")]
     if mitsuba:
         form, m = min(mitsuba.items(), key=lambda item: item[1]["ms"])
-        if any(record.get("approximate") for record in mitsuba.values()):
+        approximate = next((r for r in mitsuba.values() if r.get("approximate")), None)
+        if approximate and "approximate_label" in approximate:
+            notes.append("Mitsuba renders a scene like this one, not the same: "
+                         + approximate["approximate"])
+        elif approximate:
             notes.append("Mitsuba's exact mapping failed on this GPU: "
-                         + next(r["approximate"] for r in mitsuba.values() if r.get("approximate"))
+                         + approximate["approximate"]
                          + " (a BSDF of like cost, not the same)")
         notes.append(f"Mitsuba 3's fastest form: {form}, {format_number(m['ms'], 2)} ms; "
                      f"rtcl's fastest / Mitsuba's fastest: "
