@@ -137,3 +137,61 @@ def test_the_converter_refuses_a_ply_mesh_without_a_material(lake_path, tmp_path
     scene.write_text(json.dumps(doc))
     with pytest.raises(mitsuba_ref.SceneError, match="a PLY file has no materials"):
         list(mitsuba_ref.Scene(scene).shapes())
+
+
+STUDIO = ROOT / "scenes" / "studio_path.json"
+
+
+def test_the_converter_refuses_the_studio_plane_unless_asked_to_approximate():
+    with pytest.raises(mitsuba_ref.SceneError,
+                       match=r"planes: not mapped \(infinite; give triangles\)"):
+        mitsuba_ref.Scene(STUDIO)
+    shapes = list(mitsuba_ref.Scene(STUDIO, approximate=True).shapes())
+    assert [kind for kind, *_ in shapes].count("sphere") == 5
+    # The glTF trellis: its quad (x -0.5 ... 0.5, y 0 ... 1) scaled by [6, 2.4, 1],
+    # turned 90 degrees about y (x becomes -z) and moved to [-3.3, 0, 1.5].
+    (trellis,) = [g for kind, g, (name, _), where in shapes if where == "meshes[1]"]
+    tri, uv = trellis
+    assert tri.shape == (2, 3, 3)
+    np.testing.assert_allclose(tri.reshape(-1, 3).min(axis=0), [-3.3, 0, -1.5], atol=1e-12)
+    np.testing.assert_allclose(tri.reshape(-1, 3).max(axis=0), [-3.3, 2.4, 4.5], atol=1e-12)
+    # The lattice texture repeated twice, v as rtcl reads it: 1 - glTF's v.
+    assert sorted(set(uv[..., 0].ravel())) == [0, 2] and sorted(set(uv[..., 1].ravel())) == [-1, 1]
+    # The floor: a 1000-unit square on y = 0 whose texture coordinates put
+    # Mitsuba's checkerboard squares (u mod 1 > 0.5 against v mod 1 > 0.5, v
+    # written as 1 - v) where rtcl's odd squares are: floor(x) + floor(z) odd.
+    (floor,) = [(g, m) for kind, g, (_, m), where in shapes if where == "planes[0]"]
+    (tri, uv), material = floor
+    assert material["checker"] == [0.25, 0.25, 0.28]
+    corners = tri.reshape(-1, 3)
+    np.testing.assert_allclose(np.ptp(corners, axis=0), [1000, 0, 1000])
+    rng = np.random.default_rng(1)
+    for t, tuv in zip(tri, uv):
+        w = rng.dirichlet([1, 1, 1], size=2000)
+        points, coords = w @ t, w @ tuv
+        coords[:, 1] = 1 - coords[:, 1]
+        mitsuba_odd = (coords[:, 0] % 1 > 0.5) != (coords[:, 1] % 1 > 0.5)
+        rtcl_odd = (np.floor(points[:, 0]) + np.floor(points[:, 2])) % 2 == 1
+        assert (mitsuba_odd == rtcl_odd).mean() > 0.999    # all but float ties
+
+
+def test_the_thin_lens_maps_to_mitsubas_thinlens(tmp_path):
+    mi = pytest.importorskip("mitsuba")
+    mi.set_variant("scalar_rgb")
+    scene = tmp_path / "s.json"
+    camera = {"eye": [0, 1, -4], "look_at": [0, 1, 0], "fov": 35, "aperture": 0.2,
+              "focus_distance": 3.5}
+    scene.write_text(json.dumps({"integrator": "path", "camera": camera,
+                                 "spheres": [{"center": [0, 1, 0], "radius": 1,
+                                              "material": {"bsdf": {"type": "diffuse"}}}]}))
+    sensor = mitsuba_ref.mitsuba_scene(mitsuba_ref.Scene(scene), 4, 32, 32)["sensor"]
+    assert (sensor["type"], sensor["fov_axis"], sensor["fov"]) == ("thinlens", "y", 35.0)
+    assert (sensor["aperture_radius"], sensor["focus_distance"]) == (0.2, 3.5)
+    del camera["focus_distance"]                 # SCENE.md: |look_at - eye| by default
+    scene.write_text(json.dumps({"integrator": "path", "camera": camera}))
+    sensor = mitsuba_ref.mitsuba_scene(mitsuba_ref.Scene(scene), 4, 32, 32)["sensor"]
+    assert sensor["focus_distance"] == 4.0
+    camera["aperture"] = 0                       # the pinhole
+    scene.write_text(json.dumps({"integrator": "path", "camera": camera}))
+    sensor = mitsuba_ref.mitsuba_scene(mitsuba_ref.Scene(scene), 4, 32, 32)["sensor"]
+    assert sensor["type"] == "perspective" and "aperture_radius" not in sensor
