@@ -137,6 +137,20 @@ def test_an_approximate_mitsuba_row_says_so(tmp_path):
     assert "Mitsuba's exact mapping failed on this GPU: Mitsuba's principled" in text
 
 
+def test_a_mitsuba_row_of_an_approximated_scene_says_what_was_approximated(tmp_path):
+    made_up(tmp_path, "s", "naive", 1, 10.0)
+    (tmp_path / "mitsuba.jsonl").write_text(json.dumps(
+        {"scene": "s", "form": "wavefront", "ms": 20.0, "width": 64, "height": 32, "spp": 4,
+         "approximate": "the mapping's approximations: plane as a 1000-unit square",
+         "approximate_label": "approximate: plane as a 1000-unit square"}) + "\n")
+    done = study(tmp_path)
+    assert done.returncode == 0, done.stderr
+    text = (tmp_path / "paths.md").read_text()
+    assert table_rows(text, "Mitsuba 3 wavefront (approximate: plane as a 1000-unit square)")
+    assert "Mitsuba renders a scene like this one, not the same: the mapping's" in text
+    assert "exact mapping failed" not in text
+
+
 @pytest.mark.parametrize("make, message", [
     (lambda folder: None, "no --stats files named SCENE__SCHEDULE__rN.json"),
     (lambda folder: (folder / "s__naive__r1.json").write_text("{"), "not a --stats file"),
