@@ -11,8 +11,8 @@
 # efficiency per phase, flops) for each schedule in COUNTED (default dynamic;
 # "all" for every one, a counting build and render more a run); Mitsuba
 # 3.9.1 cuda_ad_rgb, megakernel and wavefront, on the same scenes, samples and
-# size (through tools/build/mitsuba_ref.py's mapping, which refuses
-# studio_path's thin lens, plane and glTF model), after round 1, at most
+# size (through tools/build/mitsuba_ref.py's mapping; studio_path through its
+# approximations: the plane as a 1000-unit square), after round 1, at most
 # MITSUBA_S (170) seconds; the registers and spills of each schedule's kernel
 # on the materials scene; then tools/path_study.py over the results.
 # An option this rtcl does not take (--regenerate, --fetch, --wavefront-form:
