@@ -3,7 +3,7 @@
 issue 40, and writes the reference image as data (docs/oracle.md).
 
     python3 tools/build/mitsuba_ref.py SCENE.json -o test/oracle/refs/NAME.npz \\
-        [--spp N] [--batches K] [--size WxH] [--threads T] [--aov albedo]
+        [--spp N] [--batches K] [--size WxH] [--threads T] [--aov albedo] [--approximate]
 
 The scene is read by this script's own reading of docs/SCENE.md, not by rtcl,
 and turned into a Mitsuba scene by the rules of docs/oracle.md ("Mappings"):
@@ -13,8 +13,12 @@ same BSDFs (GGX alpha = roughness^2; the Schlick conductor as Mitsuba's
 `principled` with metallic 1; rtcl's principled as Mitsuba blendbsdf
 mixtures of that, `roughdielectric` and the BSDF `gltf` below), emission on
 the front side, `background` as a uniform environment, the environment map
-sampled finely enough to keep its integral. What it cannot map exactly is
-refused with a message, never approximated silently.
+sampled finely enough to keep its integral, the thin lens as Mitsuba's
+thinlens, glTF 2.0 triangles read here. What it cannot map exactly is
+refused with a message, never approximated silently; --approximate
+(Scene(approximate=True), for issue 41's speed comparison only, never for a
+reference) maps planes as 1000-unit squares and glTF textures and cut-outs
+approximately (docs/oracle.md, "Approximations").
 
 The N samples a pixel are rendered as K batches of N/K, each with its own seed
 of Mitsuba's independent sampler. The output (.npz) holds
@@ -426,12 +430,10 @@ def mitsuba_checker(material, where):
 
 def gltf_image(material, texture_info):
     """The RGBA texels of a glTF texture as floats 0 ... 1 (rows from the top)."""
-    import base64
-    import io
     import mitsuba as mi
     doc = material["document"]
     texture = doc["textures"][texture_info["index"]]
-    sampler = doc.get("samplers", [{}])[texture.get("sampler", 0)] if "sampler" in texture else {}
+    sampler = doc["samplers"][texture["sampler"]] if "sampler" in texture else {}
     if sampler.get("wrapS", 10497) != 10497 or sampler.get("wrapT", 10497) != 10497 \
             or texture_info.get("texCoord", 0) or texture_info.get("extensions"):
         raise SceneError(f"{material['file']}: textures other than repeated TEXCOORD_0 "
