@@ -305,8 +305,8 @@ static void layout_path(struct layout *l, const struct scene *scene)
 	/* The map's texels and column CDFs last, after its row CDF: a renderer
 	 * writes them from the scene (scene_block_env_rows). */
 	l->env_row_cdf = l->emitter + (size_t)emitter_count(scene) * sizeof(struct rt_emitter);
-	l->env_texel = round16(l->env_row_cdf + (env->rgb ? (size_t)env->height : 0) *
-							sizeof(float));
+	l->env_texel =
+		round16(l->env_row_cdf + (env->rgb ? (size_t)env->height : 0) * sizeof(float));
 	l->env_column_cdf = l->env_texel + texels * sizeof(rt_vec4);
 	l->total = round16(l->env_column_cdf + texels * sizeof(float));
 }

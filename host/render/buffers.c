@@ -24,6 +24,7 @@ static cl_int write_environment(struct device *dev, cl_mem buffer, const struct 
 				const struct scene_environment *env)
 {
 	static const unsigned char zeros[16];
+	/* About 1 MiB at a time: 20 bytes a texel. */
 	size_t w = (size_t)env->width, rows = (1u << 20) / (w * 20) + 1;
 	size_t end = path->env_column_cdf_offset + w * env->height * sizeof(float);
 	unsigned char *texels = malloc(rows * w * sizeof(rt_vec4));
@@ -38,10 +39,10 @@ static cl_int write_environment(struct device *dev, cl_mem buffer, const struct 
 					      path->env_texel_offset + k * w * sizeof(rt_vec4),
 					      n * sizeof(rt_vec4), texels, 0, NULL, NULL);
 		if (status == CL_SUCCESS)
-			status = clEnqueueWriteBuffer(
-				dev->queue, buffer, CL_TRUE,
-				path->env_column_cdf_offset + k * w * sizeof(float),
-				n * sizeof(float), columns, 0, NULL, NULL);
+			status = clEnqueueWriteBuffer(dev->queue, buffer, CL_TRUE,
+						      path->env_column_cdf_offset +
+							      k * w * sizeof(float),
+						      n * sizeof(float), columns, 0, NULL, NULL);
 	}
 	if (status == CL_SUCCESS && end % 16)
 		status = clEnqueueWriteBuffer(dev->queue, buffer, CL_TRUE, end, 16 - end % 16,
@@ -51,11 +52,12 @@ static cl_int write_environment(struct device *dev, cl_mem buffer, const struct 
 	return status;
 }
 
-/* The scene buffer: the packed block, the environment map's arrays, then each texture's texels written
- * from the scene's own (scene_block_pack_head), so that the host holds no
- * second copy of them: a 256 MiB texture took rtcl 869 MB with the texels
- * packed into the block, the scene's, the block's and the device buffer's
- * (issue 39, finding 14). The block is freed once written. */
+/* The scene buffer: the packed block, then the environment map's arrays
+ * and each texture's texels written from the scene's own
+ * (scene_block_pack_head), so that the host holds no second copy of them: a
+ * 256 MiB texture took rtcl 869 MB with the texels packed into the block,
+ * the scene's, the block's and the device buffer's (issue 39, finding 14).
+ * The block is freed once written. */
 static int create_scene_buffer(struct device *dev, const struct scene *scene,
 			       const struct render_result *res, struct render_buffers *b, char *err,
 			       size_t err_size)
