@@ -49,6 +49,39 @@ static char *read_all(const char *path)
 	return buf;
 }
 
+/* The environment map's arrays in the whole block are those
+ * scene_block_env_rows makes from the scene, here in two pieces as a
+ * renderer writes them, padded with zeros to 16 bytes, and the head ends
+ * where they begin. */
+static void expect_environment_rows(const char *path, const struct scene *s,
+				    const unsigned char *whole, size_t head)
+{
+	const struct rt_scene *h = (const struct rt_scene *)whole;
+	const struct rt_path *p = (const struct rt_path *)(whole + h->path_offset);
+	const struct scene_environment *env = &s->environment;
+	size_t w = (size_t)env->width, n = w * env->height, half = w * (env->height / 2);
+	size_t end = p->env_column_cdf_offset + n * sizeof(float);
+	rt_vec4 *texels = malloc(n * sizeof(rt_vec4));
+	float *columns = malloc(n * sizeof(float));
+
+	cr_assert(texels && columns, "out of memory");
+	cr_assert_eq(p->environment, RT_ENVIRONMENT_MAP, "%s", path);
+	cr_expect_eq(head, p->env_texel_offset, "%s: the head does not end at the map's texels",
+		     path);
+	cr_expect_eq(p->env_column_cdf_offset, p->env_texel_offset + n * sizeof(rt_vec4), "%s",
+		     path);
+	scene_block_env_rows(env, 0, env->height / 2, texels, columns);
+	scene_block_env_rows(env, env->height / 2, env->height, texels + half, columns + half);
+	cr_expect(memcmp(whole + p->env_texel_offset, texels, n * sizeof(rt_vec4)) == 0,
+		  "%s: the map's texels are not scene_block_env_rows'", path);
+	cr_expect(memcmp(whole + p->env_column_cdf_offset, columns, n * sizeof(float)) == 0,
+		  "%s: the map's column CDFs are not scene_block_env_rows'", path);
+	for (size_t i = end; i % 16; i++)
+		cr_expect_eq(whole[i], 0, "%s: padding byte %zu after the map is not 0", path, i);
+	free(texels);
+	free(columns);
+}
+
 /* The block a renderer packs (scene_block_pack_head) is the whole block up
  * to its texels, and the whole block holds each texture's texels, from the
  * scene, where its struct rt_texture says: the renderer writes them there. */
@@ -69,6 +102,8 @@ static void expect_head_and_texels(const char *path, const struct scene *s,
 	cr_expect(head <= whole_bytes && memcmp(packed, whole, head) == 0,
 		  "%s: the head differs from the block's first %zu bytes", path, head);
 	cr_expect_eq(h->texture_count, scene_has_textures(s) ? s->texture_count : 0, "%s", path);
+	if (s->integrator == SCENE_INTEGRATOR_PATH && s->environment.rgb)
+		expect_environment_rows(path, s, whole, head);
 	for (rt_int i = 0; i < h->texture_count; i++) {
 		cr_expect_geq(t[i].offset, head, "%s: texture %d inside the head", path, i);
 		cr_expect(memcmp(whole + t[i].offset, s->textures[i].texels,
@@ -164,6 +199,45 @@ static int load_folder(const char *dir_name, void (*load)(const char *path))
 	}
 	closedir(dir);
 	return loaded;
+}
+
+/* An environment map (37x5: its column CDFs end off a 16-byte boundary) is
+ * left out of the head, and its arrays are scene_block_env_rows'. */
+Test(fuzz, an_environment_maps_arrays_follow_the_head)
+{
+	static const char json[] =
+		"{\"format\": \"rtcl-scene\", \"version\": 1, \"integrator\": \"path\","
+		" \"camera\": {\"eye\": [0, 1, -3], \"look_at\": [0, 0, 0]},"
+		" \"spheres\": [{\"center\": [0, 0, 0], \"radius\": 1}]}";
+	enum { W = 37, H = 5 };
+	char err[512] = "";
+	struct scene s;
+	struct bvh bvh;
+	struct mesh_block mesh;
+	size_t bytes = 0;
+
+	cr_assert_eq(scene_load_string(&s, json, "env", err, sizeof(err)), 0, "%s", err);
+	cr_assert_eq(s.integrator, SCENE_INTEGRATOR_PATH);
+	s.environment = (struct scene_environment){.file = strdup("map (hand-built)"),
+						   .scale = 1.5,
+						   .rotate = 70,
+						   .width = W,
+						   .height = H,
+						   .rgb = malloc(3 * W * H * sizeof(float))};
+	cr_assert(s.environment.file && s.environment.rgb, "out of memory");
+	for (int i = 0; i < 3 * W * H; i++)
+		s.environment.rgb[i] = (float)((i * 7) % 11) / 4;
+	cr_assert_eq(bvh_build_scene(&s, BVH_TRIANGLE_COST, &bvh), 0, "out of memory");
+	cr_assert_eq(mesh_block_build(&s, &mesh), 0, "out of memory");
+	unsigned char *packed =
+		scene_block_pack(&s, &mesh, &bvh, s.width, s.height, s.max_depth, &bytes);
+	cr_assert_not_null(packed, "scene_block_pack failed");
+	cr_expect_null(scene_block_problem(packed), "%s", scene_block_problem(packed));
+	expect_head_and_texels("env", &s, &mesh, &bvh, packed, bytes);
+	free(packed);
+	bvh_free(&bvh);
+	mesh_block_free(&mesh);
+	scene_free(&s);
 }
 
 Test(fuzz, regressions_load_cleanly)

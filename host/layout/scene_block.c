@@ -271,6 +271,7 @@ struct layout {
 	size_t material, sphere, plane, light, triangle, vertex, normal, node, ref, leaf_triangle,
 		uv, material_map, texture, texture_table, texel, path, bsdf, emitter, env_texel,
 		env_row_cdf, env_column_cdf, total;
+	size_t head; /* what scene_block_pack_head packs: all before the texels */
 	int sphere_slots;
 };
 
@@ -301,10 +302,12 @@ static void layout_path(struct layout *l, const struct scene *scene)
 	l->path = round16(l->total);
 	l->bsdf = l->path + sizeof(struct rt_path);
 	l->emitter = l->bsdf + (size_t)scene->material_count * sizeof(struct rt_bsdf);
-	l->env_texel = l->emitter + (size_t)emitter_count(scene) * sizeof(struct rt_emitter);
-	l->env_row_cdf = l->env_texel + texels * sizeof(rt_vec4);
-	l->env_column_cdf = round16(l->env_row_cdf + (env->rgb ? (size_t)env->height : 0) *
-							   sizeof(float));
+	/* The map's texels and column CDFs last, after its row CDF: a renderer
+	 * writes them from the scene (scene_block_env_rows). */
+	l->env_row_cdf = l->emitter + (size_t)emitter_count(scene) * sizeof(struct rt_emitter);
+	l->env_texel =
+		round16(l->env_row_cdf + (env->rgb ? (size_t)env->height : 0) * sizeof(float));
+	l->env_column_cdf = l->env_texel + texels * sizeof(rt_vec4);
 	l->total = round16(l->env_column_cdf + texels * sizeof(float));
 }
 
@@ -332,6 +335,7 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	if (!scene_has_textures(scene)) {
 		layout_path(&l, scene);
 		l.texel = l.total; /* none: scene_block_pack_head packs the whole block */
+		l.head = scene->environment.rgb ? l.env_texel : l.texel;
 		return l;
 	}
 	l.material_map = round16(l.uv + (size_t)mesh->vertex_count * sizeof(struct rt_vertex_uv));
@@ -343,6 +347,7 @@ static struct layout layout_of(const struct scene *scene, const struct mesh_bloc
 	 * renderer packs without them (scene_block_pack_head). */
 	l.texel = round16(l.total);
 	l.total = l.texel + scene_texture_bytes(scene);
+	l.head = scene->environment.rgb ? l.env_texel : l.texel;
 	return l;
 }
 
@@ -461,12 +466,31 @@ static double env_row_weight(const struct scene_environment *env, int k)
 	return row;
 }
 
-static void pack_environment(unsigned char *block, struct rt_path *path, const struct layout *l,
-			     const struct scene_environment *env)
+void scene_block_env_rows(const struct scene_environment *env, int k0, int k1, void *texels,
+			  float *column_cdf)
 {
-	rt_vec4 *texels = (rt_vec4 *)(block + l->env_texel);
+	rt_vec4 *out = texels;
+	int w = env->width;
+
+	for (int k = k0; k < k1; k++) {
+		double row = env_row_weight(env, k), sum = 0, rgb[3];
+		for (int j = 0; j < w; j++) {
+			size_t t = (size_t)(k - k0) * w + j;
+			sum += env_texel(env, j, k, rgb);
+			out[t] = vec4(rgb, 0.0);
+			column_cdf[t] = j == w - 1 ? 1.0f
+				       : row > 0   ? (float)(sum / row)
+						   : (float)((j + 1.0) / w);
+		}
+	}
+}
+
+/* The map's header fields and row CDF; with texels, its texels and column
+ * CDFs too. */
+static void pack_environment(unsigned char *block, struct rt_path *path, const struct layout *l,
+			     const struct scene_environment *env, int texels)
+{
 	float *row_cdf = (float *)(block + l->env_row_cdf);
-	float *column_cdf = (float *)(block + l->env_column_cdf);
 	int w = env->width, h = env->height;
 	double total = 0, rows = 0;
 
@@ -481,18 +505,12 @@ static void pack_environment(unsigned char *block, struct rt_path *path, const s
 	for (int k = 0; k < h; k++)
 		total += env_row_weight(env, k);
 	for (int k = 0; k < h; k++) {
-		double row = env_row_weight(env, k), sum = 0, rgb[3];
-		for (int j = 0; j < w; j++) {
-			size_t t = (size_t)k * w + j;
-			sum += env_texel(env, j, k, rgb);
-			texels[t] = vec4(rgb, 0.0);
-			column_cdf[t] = j == w - 1 ? 1.0f
-				       : row > 0   ? (float)(sum / row)
-						   : (float)((j + 1.0) / w);
-		}
-		rows += row;
+		rows += env_row_weight(env, k);
 		row_cdf[k] = k == h - 1 ? 1.0f : total > 0 ? (float)(rows / total) : 0.0f;
 	}
+	if (texels)
+		scene_block_env_rows(env, 0, h, block + l->env_texel,
+				     (float *)(block + l->env_column_cdf));
 	path->env_inv_weight = total > 0 ? (float)(1.0 / total) : 0.0f;
 	path->env_is_light = total > 0;
 }
@@ -500,7 +518,7 @@ static void pack_environment(unsigned char *block, struct rt_path *path, const s
 /* The path integrator's header, BSDFs and emitters. device_sphere[i]:
  * scene sphere i's index on the device. */
 static void pack_path(unsigned char *block, struct rt_scene *header, const struct layout *l,
-		      const struct scene *scene, const int *device_sphere)
+		      const struct scene *scene, const int *device_sphere, int texels)
 {
 	struct rt_path *path = (struct rt_path *)(block + l->path);
 	struct rt_bsdf *bsdfs = (struct rt_bsdf *)(block + l->bsdf);
@@ -526,7 +544,7 @@ static void pack_path(unsigned char *block, struct rt_scene *header, const struc
 				    : RT_ENVIRONMENT_NONE;
 	path->env_is_light = path->environment != RT_ENVIRONMENT_NONE;
 	if (scene->environment.rgb)
-		pack_environment(block, path, l, &scene->environment);
+		pack_environment(block, path, l, &scene->environment, texels);
 	path->group_count = scene->light_count + (count > 0) + path->env_is_light;
 }
 
@@ -583,7 +601,11 @@ size_t scene_block_head_bytes(const void *block)
 	const struct rt_scene *header = block;
 	const struct rt_texture *textures =
 		(const struct rt_texture *)((const unsigned char *)block + header->texture_offset);
+	const struct rt_path *path =
+		(const struct rt_path *)((const unsigned char *)block + header->path_offset);
 
+	if (header->path_offset && path->environment == RT_ENVIRONMENT_MAP)
+		return path->env_texel_offset;
 	return header->texture_count ? textures[0].offset : header->total_bytes;
 }
 
@@ -600,7 +622,7 @@ static void *pack(const struct scene *scene, const struct mesh_block *mesh, cons
 	/* The header's offsets are 32-bit (block_prepare_scene refuses more). */
 	if (total > DEVSCENE_MAX_BYTES)
 		return NULL;
-	block = calloc(1, texels ? total : l.texel);
+	block = calloc(1, texels ? total : l.head);
 	if (!block)
 		return NULL;
 
@@ -656,7 +678,7 @@ static void *pack(const struct scene *scene, const struct mesh_block *mesh, cons
 		}
 		for (int i = 0; i < scene->sphere_count; i++)
 			device_sphere[order[i]] = i;
-		pack_path(block, header, &l, scene, device_sphere);
+		pack_path(block, header, &l, scene, device_sphere, texels);
 		free(device_sphere);
 	}
 	free(order);

@@ -35,17 +35,26 @@ void *scene_block_pack(const struct scene *scene, const struct mesh_block *mesh,
 		    int width, int height, int max_depth, size_t *bytes);
 
 /* scene_block_pack without the texels: the malloc'd block ends where they
- * begin, at scene_block_head_bytes of its *bytes; texture i's texels
- * (scene->textures[i].texels) go at the offset of its struct rt_texture, each
- * padded with zeros to 16 bytes. A renderer writes them into the device's
- * buffer from the scene, so that no second copy of them is made on the host
- * (issue 39, finding 14). */
+ * begin, at scene_block_head_bytes of its *bytes. The environment map's
+ * texels and column CDFs come first (its struct rt_path's env_texel_offset
+ * and env_column_cdf_offset, from scene_block_env_rows, padded with zeros
+ * to 16 bytes), then texture i's texels (scene->textures[i].texels) at the
+ * offset of its struct rt_texture, each padded with zeros to 16 bytes. A
+ * renderer writes them into the device's buffer from the scene, so that no
+ * second copy of them is made on the host (issue 39, finding 14). */
 void *scene_block_pack_head(const struct scene *scene, const struct mesh_block *mesh,
 			    const struct bvh *bvh, int width, int height, int max_depth,
 			    size_t *bytes);
 
 /* The bytes of a block (whole or from scene_block_pack_head) before its
- * texels: its whole size where it has no texture. */
+ * texels (the environment map's, else the textures'): its whole size where
+ * it has neither. */
 size_t scene_block_head_bytes(const void *block);
+
+/* Rows [k0, k1) of the environment map as the block holds them: their
+ * texels with the scale (struct rt_path's env_texel_offset + k0 * width
+ * rt_vec4s), their column CDFs (env_column_cdf_offset + k0 * width floats). */
+void scene_block_env_rows(const struct scene_environment *env, int k0, int k1, void *texels,
+			  float *column_cdf);
 
 #endif

@@ -17,11 +17,47 @@ static size_t pixel_flops_bytes(const struct render_settings *s)
 static int buffers_place(struct device *dev, struct render_buffers *b, char *err,
 			 size_t err_size);
 
-/* The scene buffer: the packed block, then each texture's texels written
- * from the scene's own (scene_block_pack_head), so that the host holds no
- * second copy of them: a 256 MiB texture took rtcl 869 MB with the texels
- * packed into the block, the scene's, the block's and the device buffer's
- * (issue 39, finding 14). The block is freed once written. */
+/* The environment map's texels and column CDFs, a few rows at a time
+ * (scene_block_env_rows), then zeros to 16 bytes: the host holds no second
+ * copy of them either. */
+static cl_int write_environment(struct device *dev, cl_mem buffer, const struct rt_path *path,
+				const struct scene_environment *env)
+{
+	static const unsigned char zeros[16];
+	/* About 1 MiB at a time: 20 bytes a texel. */
+	size_t w = (size_t)env->width, rows = (1u << 20) / (w * 20) + 1;
+	size_t end = path->env_column_cdf_offset + w * env->height * sizeof(float);
+	unsigned char *texels = malloc(rows * w * sizeof(rt_vec4));
+	float *columns = malloc(rows * w * sizeof(float));
+	cl_int status = texels && columns ? CL_SUCCESS : CL_OUT_OF_HOST_MEMORY;
+
+	for (int k = 0; status == CL_SUCCESS && k < env->height; k += (int)rows) {
+		int k1 = k + (int)rows < env->height ? k + (int)rows : env->height;
+		size_t n = (size_t)(k1 - k) * w;
+		scene_block_env_rows(env, k, k1, texels, columns);
+		status = clEnqueueWriteBuffer(dev->queue, buffer, CL_TRUE,
+					      path->env_texel_offset + k * w * sizeof(rt_vec4),
+					      n * sizeof(rt_vec4), texels, 0, NULL, NULL);
+		if (status == CL_SUCCESS)
+			status = clEnqueueWriteBuffer(dev->queue, buffer, CL_TRUE,
+						      path->env_column_cdf_offset +
+							      k * w * sizeof(float),
+						      n * sizeof(float), columns, 0, NULL, NULL);
+	}
+	if (status == CL_SUCCESS && end % 16)
+		status = clEnqueueWriteBuffer(dev->queue, buffer, CL_TRUE, end, 16 - end % 16,
+					      zeros, 0, NULL, NULL);
+	free(texels);
+	free(columns);
+	return status;
+}
+
+/* The scene buffer: the packed block, then the environment map's arrays
+ * and each texture's texels written from the scene's own
+ * (scene_block_pack_head), so that the host holds no second copy of them: a
+ * 256 MiB texture took rtcl 869 MB with the texels packed into the block,
+ * the scene's, the block's and the device buffer's (issue 39, finding 14).
+ * The block is freed once written. */
 static int create_scene_buffer(struct device *dev, const struct scene *scene,
 			       const struct render_result *res, struct render_buffers *b, char *err,
 			       size_t err_size)
@@ -31,6 +67,8 @@ static int create_scene_buffer(struct device *dev, const struct scene *scene,
 	const struct rt_texture *textures =
 		(const struct rt_texture *)((const unsigned char *)b->scene_block +
 					    header->texture_offset);
+	const struct rt_path *path =
+		(const struct rt_path *)((const unsigned char *)b->scene_block + header->path_offset);
 	cl_int status;
 
 	b->scene = device_create_buffer(dev, CL_MEM_READ_ONLY, res->scene_bytes, NULL, "scene", err,
@@ -40,6 +78,8 @@ static int create_scene_buffer(struct device *dev, const struct scene *scene,
 	status = clEnqueueWriteBuffer(dev->queue, b->scene, CL_TRUE, 0,
 				      scene_block_head_bytes(b->scene_block), b->scene_block, 0,
 				      NULL, NULL);
+	if (status == CL_SUCCESS && header->path_offset && path->environment == RT_ENVIRONMENT_MAP)
+		status = write_environment(dev, b->scene, path, &scene->environment);
 	for (int i = 0; status == CL_SUCCESS && i < header->texture_count; i++) {
 		const struct scene_texture *t = &scene->textures[i];
 		size_t pad = (16 - t->bytes % 16) % 16;
