@@ -15,6 +15,8 @@ import time
 
 import pytest
 
+import builds
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 sys.path.insert(0, str(ROOT / "tools"))
@@ -219,7 +221,8 @@ def test_stats_naming_a_frame_is_refused(tmp_path):
 
 MPIRUN = ["mpirun", "--oversubscribe", "-np", "3"]
 MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp"}
+           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp",
+           "OMPI_MCA_orte_tmpdir_base": builds.ompi_session_base()}
 # Under make test SAN=1, LeakSanitizer reports what Open MPI's components keep
 # until exit from code it has unloaded at MPI_Finalize ("<unknown module>"), so
 # no suppression can name it: under mpirun, ASan checks memory errors and not

@@ -15,11 +15,14 @@ import time
 
 import pytest
 
+import builds
+
 ROOT = pathlib.Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 SMALL = ["--size", "24x16", "-q"]
 MPI_ENV = {"OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp"}
+           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp",
+           "OMPI_MCA_orte_tmpdir_base": builds.ompi_session_base()}
 if "ASAN_OPTIONS" in os.environ:  # as in test_multidev.py
     MPI_ENV["ASAN_OPTIONS"] = os.environ["ASAN_OPTIONS"] + ":detect_leaks=0"
 PREVIOUS = b"the user's previous file"

@@ -11,6 +11,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+import builds
+
 ROOT = Path(__file__).resolve().parent.parent
 RTCL = os.environ.get("RTCL", str(ROOT / "rtcl"))
 BOX = ROOT / "test" / "scenes" / "path_box.json"
@@ -501,7 +503,8 @@ def test_pieces_devices_and_mpi_ranks_give_the_one_device_image(tmp_path):
     if subprocess.run(["sh", "-c", "command -v mpirun"], capture_output=True).returncode:
         pytest.skip("no mpirun")
     env = {**os.environ, "OMPI_ALLOW_RUN_AS_ROOT": "1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM": "1",
-           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp"}
+           "POCL_DEVICES": "pthread", "OMPI_MCA_btl": "self,vader,tcp",
+           "OMPI_MCA_orte_tmpdir_base": builds.ompi_session_base()}
     out = tmp_path / "mpi.pfm"
     result = subprocess.run(["mpirun", "--oversubscribe", "-np", "3", RTCL, "--mpi", str(BOX),
                              "-o", str(out), "-q", *args], capture_output=True, text=True,
