@@ -57,6 +57,7 @@ def address_space_needed(path, out, low, high, step=16):
     return high
 
 
+@pytest.mark.slow  # about 7 s of renders (a bisection): make test-long
 @pytest.mark.skipif(ASAN, reason="AddressSanitizer reserves terabytes of address space")
 def test_a_large_environment_map_is_held_twice_at_most_while_rendering(tmp_path):
     """A 4096x2048 map (32 MiB as RGBE; 96 MiB of float texels in the scene,
