@@ -364,6 +364,22 @@ static inline int4 stage_path(__global float4 *state, uint slots, uint i)
 	return as_int4(stage_field(state, slots, RT_STAGE_PATH)[i]);
 }
 
+/* Adds flops to the cost of slot i's pixel, when counting (the ray kernels,
+ * which otherwise never read the path's word). */
+static inline void add_slot_flops(__global ulong *pixel_flops, __global float4 *state,
+				  uint slots, uint i, ulong flops)
+{
+#ifdef RTCL_COUNT_FLOPS
+	add_pixel_flops(pixel_flops, stage_path(state, slots, i).x, flops);
+#else
+	(void)pixel_flops;
+	(void)state;
+	(void)slots;
+	(void)i;
+	(void)flops;
+#endif
+}
+
 static inline void stage_set_path(__global float4 *state, uint slots, uint i, int4 path)
 {
 	stage_field(state, slots, RT_STAGE_PATH)[i] = as_float4(path);
@@ -609,12 +625,7 @@ __kernel void stages_extend(__global const uint4 *scene_global, __local uint4 *s
 			   hit.t == 0.0f ? RT_STAGE_QUEUE_DECIDE
 					 : RT_STAGE_QUEUE_SHADE(path_hit_kind(&tr, hit)),
 			   i);
-#ifdef RTCL_COUNT_FLOPS
-		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x,
-				tracer_flops(&tr) - before);
-#else
-		(void)before;
-#endif
+		add_slot_flops(pixel_flops, state, slots, i, tracer_flops(&tr) - before);
 	}
 	store_counts(&tr, global_item());
 }
@@ -645,12 +656,7 @@ __kernel void stages_shadow(__global const uint4 *scene_global, __local uint4 *s
 		w.shadow_triangle = as_int(stage_field(state, slots, RT_STAGE_SHADOW_C)[i].w);
 		((__global int *)(stage_field(state, slots, RT_STAGE_HIT_PRIM) + i))[2] =
 			path_shadow_clear(&tr, &w);
-#ifdef RTCL_COUNT_FLOPS
-		add_pixel_flops(pixel_flops, stage_path(state, slots, i).x,
-				tracer_flops(&tr) - before);
-#else
-		(void)before;
-#endif
+		add_slot_flops(pixel_flops, state, slots, i, tracer_flops(&tr) - before);
 	}
 	store_counts(&tr, global_item());
 }
