@@ -140,7 +140,9 @@ def test_static_split_gives_equal_shares_whatever_the_speed(tmp_path):
 def test_a_device_failing_mid_render_writes_nothing(tmp_path):
     result = run(*SMALL, "--frames", "0:5", "--devices", "0:0,0:1", "-o",
                  str(tmp_path / "f.png"), "--stats", str(tmp_path / "s.json"),
-                 env={"RTCL_TEST_FAIL_DEVICE": "1:2"})
+                 # device 0 slowed, so that device 1 surely takes a second frame
+                 # (under the sanitizers' build device 0 once took five of six)
+                 env={"RTCL_TEST_FAIL_DEVICE": "1:2", "RTCL_TEST_SLOW_DEVICE": "0:300"})
     expect_failure(result, 1, "device 0:1 (", tmp_path)
     assert "failed on its piece 2" in result.stderr
 
