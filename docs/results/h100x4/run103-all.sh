@@ -42,8 +42,8 @@ echo "exit $? ($(date -u +%T))"; grep -E "^==|kernel_ms|image" $OUT/p41s/log.txt
 
 part 3 && {
 echo "== 3. the stages form's counting runs ($(date -u +%T))"
-mkdir -p $OUT/p41c; OUT=$OUT/p41c B=$B COMMIT=$COMMIT COUNT_ONLY=1 ONLY="cornell materials_path" COUNTED="wavefront-stages" \
-  BUDGET=80 MITSUBA=0 timeout 100 bash docs/results/h100-paths-study/run.sh > /dev/null 2>&1
+mkdir -p $OUT/p41c; OUT=$OUT/p41c B=$B COMMIT=$COMMIT SIZE=${C_SIZE:-1024x1024} SPP=${C_SPP:-64} COUNT_ONLY=1 ONLY="cornell materials_path" COUNTED="wavefront-stages" \
+  BUDGET=${C_BUDGET:-80} MITSUBA=0 timeout ${C_CAP:-100} bash docs/results/h100-paths-study/run.sh > /dev/null 2>&1
 echo "exit $? ($(date -u +%T))"; tail -4 $OUT/p41c/log.txt
 (cd $OUT && tar czf p41c.tgz p41c && rm -rf p41c)
 }
