@@ -371,23 +371,24 @@ static void add_piece_sums(struct mpi_job *j, int piece, const cl_long *sums)
 /* A rank of one device, its sums into its slot of the node's shared memory
  * (sums_later), one of three ways (RTCL_MPI_SUMS, docs/GUIDE.md):
  *
- *   SLOT_COPY      (default) read back in SUMS_PARTS parts into the
- *                  device's pinned memory, each part copied into the slot
- *                  once read while the next are read. Read whole and then
- *                  copied, the read-back (2.4 ms for 2000x2000 on an H100)
- *                  came before the copy, inside the image's time (batch
- *                  98c). Four H100 ranks' copies of the box's 134 MB each
- *                  (2048x2048), at once, ended the frame 10-12 ms after the
- *                  devices (batch 100).
+ *   SLOT_HOST_PTR  (default) a buffer made on the slot
+ *                  (CL_MEM_USE_HOST_PTR) before the clock; the device's
+ *                  sums copied into it on the device and mapped for
+ *                  reading, which leaves them in the slot: one transfer.
+ *                  Four ranks of the path-traced box (2048x2048, 64 spp)
+ *                  on four H200s: 113.3-113.5 ms, 3.86 times one rank
+ *                  (batch 103: copy 119.0-120.4, read 120.5-122.8).
+ *   SLOT_COPY      read back in SUMS_PARTS parts into the device's pinned
+ *                  memory, each part copied into the slot once read while
+ *                  the next are read. Read whole and then copied, the
+ *                  read-back (2.4 ms for 2000x2000 on an H100) came before
+ *                  the copy, inside the image's time (batch 98c). Four
+ *                  H100 ranks' copies of the box's 134 MB each, at once,
+ *                  ended the frame 10-12 ms after the devices (batch 100).
  *   SLOT_READ      read straight into the slot, ordinary memory: no copy,
  *                  but NVIDIA's OpenCL reads into unpinned memory through
  *                  a staging copy of its own (an image of 2000x2000 took
  *                  28-34 ms against 2.4 pinned).
- *   SLOT_HOST_PTR  a buffer made on the slot (CL_MEM_USE_HOST_PTR) before
- *                  the clock; the device's sums copied into it on the
- *                  device and mapped for reading, which leaves them in the
- *                  slot: one transfer, at the link's speed where the driver
- *                  pins such memory (untested on NVIDIA: batch 102).
  *
  * A way that cannot be set up falls back to SLOT_COPY before the clock,
  * and --stats says which way ran (multidevice.rank_sums.into_slot). */
@@ -397,13 +398,13 @@ enum slot_way { SLOT_COPY, SLOT_READ, SLOT_HOST_PTR, SLOT_WAYS };
 
 static const char *const slot_way_names[SLOT_WAYS] = {"copy", "read", "host-ptr"};
 
-/* The way RTCL_MPI_SUMS names (SLOT_COPY when unset or empty), or -1. */
+/* The way RTCL_MPI_SUMS names (SLOT_HOST_PTR when unset or empty), or -1. */
 static int slot_way_from_env(void)
 {
 	const char *value = getenv("RTCL_MPI_SUMS");
 
 	if (!value || !*value)
-		return SLOT_COPY;
+		return SLOT_HOST_PTR;
 	for (int w = 0; w < SLOT_WAYS; w++)
 		if (strcmp(value, slot_way_names[w]) == 0)
 			return w;
