@@ -147,8 +147,9 @@ static void print_help_after_kernels(FILE *out)
 		"                         kernel per BSDF kind, extension and shadow rays,\n"
 		"                         each over its own queue; the same image\n"
 		"      --paths-in-flight N  the stages form's pool of paths, 1 to %d\n"
-		"                         (default %d, or the render's paths when fewer);\n"
-		"                         %d bytes of state each\n"
+		"                         (default %d on a GPU, %d a compute unit on a\n"
+		"                         CPU, within an eighth of the device's memory, or\n"
+		"                         the render's paths when fewer); %d bytes each\n"
 		"      --accel bvh|bvh-compact|none  how a ray finds the spheres and\n"
 		"                         triangles it hits: through a BVH built on the host\n"
 		"                         (default); bvh-compact, one with larger leaves of\n"
@@ -325,7 +326,7 @@ static void print_help_after_kernels(FILE *out)
 		"--split without --devices or --mpi.\n"
 		"Exit status: 0 on success, 1 on a failure (scene, device, build, file), 2 on a\n"
 		"bad option.\n",
-		"reference", STAGES_MAX_PATHS, STAGES_DEFAULT_PATHS, RT_STAGE_FIELDS * 16 + 4 * RT_STAGE_QUEUES, SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
+		"reference", STAGES_MAX_PATHS, STAGES_GPU_PATHS, STAGES_CPU_PATHS_PER_UNIT, STAGES_PATH_BYTES, SCENE_MAX_IMAGE_SIDE, SCENE_MAX_DEPTH, SCENE_MAX_SAMPLES, FRAMES_MAX,
 		CHECKPOINT_MAX_SECONDS);
 }
 

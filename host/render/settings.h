@@ -107,7 +107,7 @@ struct render_settings {
 	int wavefront_stages;	/* --wavefront-form stages: the wavefront under the
 				   path integrator in stages (host/render/stages.c) */
 	int wavefront_form_given; /* --wavefront-form given: the path integrator only */
-	int paths_in_flight;	/* its pool of path slots (0: STAGES_DEFAULT_PATHS) */
+	int paths_in_flight;	/* its pool of path slots (0: stages_default_paths) */
 	int queues;		/* in-order queues per device (--queues; 0: the
 				   default, renderer_queues()) */
 	int count_flops;	/* build with RTCL_COUNT_FLOPS and return the counts */

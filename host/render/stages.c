@@ -533,6 +533,20 @@ static int has_int64_atomics(const struct device *dev)
 	return strstr(extensions, "cl_khr_int64_base_atomics") != NULL;
 }
 
+unsigned stages_default_paths(const struct device *dev, unsigned long long paths)
+{
+	unsigned long long n = STAGES_GPU_PATHS;
+
+	if (!dev->is_gpu && (unsigned long long)dev->compute_units * STAGES_CPU_PATHS_PER_UNIT < n)
+		n = (unsigned long long)dev->compute_units * STAGES_CPU_PATHS_PER_UNIT;
+	while (n > STAGES_LEAST_DEFAULT && (n * STAGES_PATH_BYTES > dev->global_mem_size / 8 ||
+					    n * RT_STAGE_FIELDS * 16 > dev->max_alloc_size))
+		n /= 2;
+	if (n < 1)
+		n = 1;
+	return (unsigned)(paths < n ? paths : n);
+}
+
 static int create_buffers(struct device *dev, const struct scene *scene,
 			  const struct render_settings *s, struct render_result *res,
 			  struct stages *w, char *err, size_t err_size)
@@ -610,9 +624,8 @@ static int stages_open(struct renderer *r, const struct scene *scene, char *err,
 		return -1;
 	}
 	res->stages = w->stats;
-	w->slots = (cl_uint)(s->paths_in_flight > 0 ? (uint64_t)s->paths_in_flight
-			     : paths < STAGES_DEFAULT_PATHS ? paths
-							    : STAGES_DEFAULT_PATHS);
+	w->slots = s->paths_in_flight > 0 ? (cl_uint)s->paths_in_flight
+					  : (cl_uint)stages_default_paths(r->dev, paths);
 	w->stats->slots = (int)w->slots;
 	if (launch_setup(r->dev, scene, s, res, &w->b.scene_block, &w->b.program, err, err_size))
 		return -1;

@@ -6,11 +6,27 @@
 
 #include "render/renderer.h"
 
-/* The pool of path slots when --paths-in-flight is not given (or the
- * paths of the whole render, when fewer). */
-#define STAGES_DEFAULT_PATHS (1 << 20)
+/* The pool of path slots when --paths-in-flight is not given
+ * (docs/wavefront.md, "Path state"): on a GPU 2^22 (four H200s' GPU 0,
+ * batch 103: the fastest of 2^18-2^23 on the Cornell box and the
+ * materials scene, 16 % and 18 % faster than 2^20); on a CPU 2^15 a
+ * compute unit, which keep the state in its caches (PoCL on 2 cores: 2^14
+ * and 2^16 a pool 1.9 times faster than 2^20). Halved while the pool would
+ * take more than an eighth of the device's memory or its state buffer more
+ * than the device allocates at once, down to STAGES_LEAST_DEFAULT; never
+ * more than the paths of the whole render. */
+#define STAGES_GPU_PATHS (1 << 22)
+#define STAGES_CPU_PATHS_PER_UNIT (1 << 15)
+#define STAGES_LEAST_DEFAULT (1 << 14)
 /* The most --paths-in-flight takes: 2^26 slots are 10 GiB of path state. */
 #define STAGES_MAX_PATHS (1 << 26)
+
+/* Device memory a path slot takes: its state and its queue entries. */
+#define STAGES_PATH_BYTES (RT_STAGE_FIELDS * 16 + RT_STAGE_QUEUES * 4)
+
+/* The pool of path slots for a render of `paths` paths on dev when
+ * --paths-in-flight is not given (the rule above). */
+unsigned stages_default_paths(const struct device *dev, unsigned long long paths);
 
 /* The launches of the stages form, in the order of an iteration. */
 enum stage {
