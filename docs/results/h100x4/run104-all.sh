@@ -23,7 +23,7 @@ PARTS=" ${*:-1 2} "; part() { [[ $PARTS == *" $1 "* ]]; }
 part 1 && {
 echo "== 1. run99.sh ($(date -u +%T))"
 mkdir -p $OUT/p43; OUT=$OUT/p43 B=$B COMMIT=$COMMIT timeout 420 bash docs/results/h100x4/run99.sh > /dev/null 2>&1
-echo "exit $? ($(date -u +%T))"; grep -E "^[A-Za-z]+[0-9]-[0-9]:|^m[A-Z][0-9]-[0-9]:|^fr|DIFFERS|frames the same" $OUT/p43/run99.txt |
+echo "exit $? ($(date -u +%T))"; grep -E "^[A-Z]-[0-9]-[0-9]:|^m[A-Z][0-9]-[0-9]:|^fr|DIFFERS|frames the same" $OUT/p43/run99.txt |
   sed -E 's/; (busy|[0-9]+ frames busy).*//' | cut -c1-230
 (cd $OUT && tar czf p43.tgz p43 && rm -rf p43)
 }
