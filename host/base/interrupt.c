@@ -4,6 +4,7 @@
 #include <signal.h>
 #include <stdio.h>
 #include <string.h>
+#include <sys/resource.h>
 #include <unistd.h>
 
 /* Recursive, so that a caller may hold it around calls that hold it too
@@ -233,4 +234,117 @@ void interrupt_settle(void)
 			leave(signal_number);
 	}
 	/* Held until the process exits: a later signal finds the run over. */
+}
+
+/* The crash guard (interrupt_guard_crashes). The message is made before the
+ * crash: the handler only writes it. */
+static const int crash_signals[] = {SIGSEGV, SIGBUS, SIGILL, SIGFPE, SIGABRT};
+#define CRASH_SIGNALS (int)(sizeof(crash_signals) / sizeof(crash_signals[0]))
+static pthread_mutex_t guard_lock = PTHREAD_MUTEX_INITIALIZER;
+static int guards; /* guards in force, in every thread */
+static struct sigaction crash_before[CRASH_SIGNALS];
+static char crash_note[1024];
+static __thread int thread_guards;    /* this thread's guards in force */
+static __thread sigset_t thread_mask; /* its signal mask before them */
+
+unsigned long long interrupt_memory_limit_mib(void)
+{
+	struct rlimit limit;
+
+	if (getrlimit(RLIMIT_AS, &limit) != 0 || limit.rlim_cur == RLIM_INFINITY)
+		return 0;
+	return (unsigned long long)limit.rlim_cur >> 20;
+}
+
+static const char *crash_name(int signal_number)
+{
+	switch (signal_number) {
+	case SIGSEGV:
+		return "SIGSEGV";
+	case SIGBUS:
+		return "SIGBUS";
+	case SIGILL:
+		return "SIGILL";
+	case SIGFPE:
+		return "SIGFPE";
+	}
+	return "SIGABRT";
+}
+
+static volatile sig_atomic_t sent_in_guard; /* a signal sent while guarded */
+
+static void on_crash(int signal_number, siginfo_t *info, void *context)
+{
+	(void)context;
+	if (info && info->si_code <= 0 && info->si_pid != getpid()) {
+		/* Sent by another process (kill), not a fault: an interrupt,
+		 * passed on to the signal thread once the guard ends. */
+		sent_in_guard = signal_number;
+		return;
+	}
+	/* Racy reads of tracked[]: the lock may be held by this very thread. */
+	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
+		if (tracked[i])
+			unlink(tracked[i]);
+	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
+		if (tracked[i])
+			rmdir(tracked[i]);
+	dprintf(STDERR_FILENO, "%srtcl: crashed (%s) while %s\n", progress_on_stderr ? "\n" : "",
+		crash_name(signal_number), crash_note);
+	signal(signal_number, SIG_DFL);
+	raise(signal_number);
+}
+
+void interrupt_guard_crashes(const char *doing)
+{
+	unsigned long long mib = interrupt_memory_limit_mib();
+	sigset_t faults;
+
+	pthread_mutex_lock(&guard_lock);
+	if (mib)
+		snprintf(crash_note, sizeof(crash_note),
+			 "%s; no output written. rtcl runs with an address-space limit of %llu "
+			 "MiB (`ulimit -v`), which the OpenCL runtime may have run out of: raise "
+			 "or lift it",
+			 doing, mib);
+	else
+		snprintf(crash_note, sizeof(crash_note), "%s; no output written", doing);
+	if (guards++ == 0) {
+		struct sigaction action = {.sa_sigaction = on_crash,
+					   .sa_flags = SA_ONSTACK | SA_SIGINFO};
+
+		sigemptyset(&action.sa_mask);
+		for (int i = 0; i < CRASH_SIGNALS; i++)
+			sigaction(crash_signals[i], &action, &crash_before[i]);
+	}
+	pthread_mutex_unlock(&guard_lock);
+	/* A fault in a thread that blocks its signal kills the process without
+	 * a handler (interrupt_setup blocks SIGSEGV and SIGABRT): unblocked here
+	 * for the step. */
+	if (thread_guards++ == 0) {
+		sigemptyset(&faults);
+		for (int i = 0; i < CRASH_SIGNALS; i++)
+			sigaddset(&faults, crash_signals[i]);
+		pthread_sigmask(SIG_UNBLOCK, &faults, &thread_mask);
+	}
+}
+
+void interrupt_unguard_crashes(void)
+{
+	/* The mask as it was (interrupt_setup blocks SIGSEGV and SIGABRT, so
+	 * that one sent by another process goes to the signal thread). */
+	if (thread_guards > 0 && --thread_guards == 0)
+		pthread_sigmask(SIG_SETMASK, &thread_mask, NULL);
+	pthread_mutex_lock(&guard_lock);
+	if (guards > 0 && --guards == 0)
+		for (int i = 0; i < CRASH_SIGNALS; i++)
+			sigaction(crash_signals[i], &crash_before[i], NULL);
+	pthread_mutex_unlock(&guard_lock);
+	/* A SIGABRT or SIGSEGV a user sent meanwhile, to the signal thread now
+	 * (blocked here again: the process's, not this thread's). */
+	if (!guards && sent_in_guard) {
+		int signal_number = sent_in_guard;
+		sent_in_guard = 0;
+		kill(getpid(), signal_number);
+	}
 }

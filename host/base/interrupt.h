@@ -59,6 +59,20 @@ int interrupt_stop_signal(void);
  * and the process exits normally. */
 void interrupt_settle(void);
 
+/* A step that may crash in a library (the OpenCL compiler): between
+ * interrupt_guard_crashes(doing) and interrupt_unguard_crashes(), a fault
+ * (SIGSEGV, SIGBUS, SIGILL, SIGFPE) or abort() in the calling thread removes
+ * the tracked files, prints "rtcl: crashed (SIGNAL) while DOING; no output
+ * written" (and, under an address-space limit, `ulimit -v`, that limit and
+ * what to do) and ends the process by the signal. Without it such a crash
+ * ended rtcl with nothing on stderr (PoCL's compiler under a small limit).
+ * doing is copied; guards may nest and come from several threads. */
+void interrupt_guard_crashes(const char *doing);
+void interrupt_unguard_crashes(void);
+
+/* The address-space limit (RLIMIT_AS) in MiB, or 0 when there is none. */
+unsigned long long interrupt_memory_limit_mib(void);
+
 /* Under mpirun, rank 0 from the end of the ranks' work to the end of its
  * writing: mpirun's SIGCONT from now on announces its SIGTERM, which
  * interrupt_settle() then waits for. */

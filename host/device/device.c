@@ -7,6 +7,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
+#include "base/interrupt.h"
+
 #define MAX_PLATFORMS 16
 #define MAX_DEVICES 64
 
@@ -91,9 +93,19 @@ static int get_platforms(cl_platform_id *platforms, cl_uint *count, char *err, s
 	cl_int status = clGetPlatformIDs(MAX_PLATFORMS, platforms, count);
 
 	if (status == CL_PLATFORM_NOT_FOUND_KHR || (status == CL_SUCCESS && *count == 0)) {
-		snprintf(err, err_size,
-			 "no OpenCL platform found: install an OpenCL driver "
-			 "(e.g. `apt-get install pocl-opencl-icd`) and check /etc/OpenCL/vendors");
+		unsigned long long mib = interrupt_memory_limit_mib();
+		if (mib)
+			snprintf(err, err_size,
+				 "no OpenCL platform found: rtcl runs with an address-space limit "
+				 "of %llu MiB (`ulimit -v`), which may be too little for the OpenCL "
+				 "runtime to start: raise or lift it (else install an OpenCL "
+				 "driver, e.g. `apt-get install pocl-opencl-icd`, and check "
+				 "/etc/OpenCL/vendors)",
+				 mib);
+		else
+			snprintf(err, err_size,
+				 "no OpenCL platform found: install an OpenCL driver (e.g. "
+				 "`apt-get install pocl-opencl-icd`) and check /etc/OpenCL/vendors");
 		return -1;
 	}
 	if (status != CL_SUCCESS) {

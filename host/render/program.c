@@ -10,6 +10,7 @@
 
 #include "base/embedded.h"
 #include "base/files.h"
+#include "base/interrupt.h"
 #include "device/progcache.h"
 #include "base/progress.h"
 
@@ -290,16 +291,25 @@ int program_build(struct device *dev, const struct render_settings *s,
 	if (load_sources(s->source_dir, s->kernel->name, &src, err, err_size) ||
 	    format_options(dev, s, features, options, err, err_size))
 		goto out_free_sources;
+	/* The OpenCL compiler crashed under a small `ulimit -v` (PoCL: in the
+	   build, or asked for the binary to cache): a message, not silence. */
+	char doing[384];
+	snprintf(doing, sizeof(doing), "building the kernels for %s (in its OpenCL compiler)",
+		 dev->name);
+	interrupt_guard_crashes(doing);
 	progcache_init(&cache, dev, src.texts, src.count, options, s->verbose);
 	*program = progcache_load(&cache, dev);
 	if (*program) {
 		*cached = 1;
 	} else {
-		if (build_from_source(dev, s, &src, options, program, err, err_size))
+		if (build_from_source(dev, s, &src, options, program, err, err_size)) {
+			interrupt_unguard_crashes();
 			goto out_free_sources;
+		}
 		progcache_save(&cache, *program);
 	}
 	ret = keep_binary(*program, err, err_size);
+	interrupt_unguard_crashes();
 
 out_free_sources:
 	free_sources(&src);
