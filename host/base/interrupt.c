@@ -52,16 +52,22 @@ static const char *signal_name(int signal_number)
 	return "";
 }
 
-/* Runs with the lock held, so no rename or new temporary file can start. */
-static void leave(int signal_number)
+/* The tracked temporary files, then the staging folders they were in
+ * (files.h), empty now. */
+static void remove_tracked(void)
 {
 	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
 		if (tracked[i])
 			unlink(tracked[i]);
-	/* Then the staging folders they were in (files.h), empty now. */
 	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
 		if (tracked[i])
 			rmdir(tracked[i]);
+}
+
+/* Runs with the lock held, so no rename or new temporary file can start. */
+static void leave(int signal_number)
+{
+	remove_tracked();
 	/* dprintf, not stdio: the main thread may hold stderr's lock. */
 	if (outcome)
 		dprintf(STDERR_FILENO, "%srtcl: interrupted%s; %s\n", progress_on_stderr ? "\n" : "",
@@ -256,19 +262,14 @@ unsigned long long interrupt_memory_limit_mib(void)
 	return (unsigned long long)limit.rlim_cur >> 20;
 }
 
+/* The fault's name (the crash signals only: SIGABRT last). */
 static const char *crash_name(int signal_number)
 {
-	switch (signal_number) {
-	case SIGSEGV:
-		return "SIGSEGV";
-	case SIGBUS:
-		return "SIGBUS";
-	case SIGILL:
-		return "SIGILL";
-	case SIGFPE:
-		return "SIGFPE";
-	}
-	return "SIGABRT";
+	return signal_number == SIGSEGV ? "SIGSEGV"
+	       : signal_number == SIGBUS ? "SIGBUS"
+	       : signal_number == SIGILL ? "SIGILL"
+	       : signal_number == SIGFPE ? "SIGFPE"
+					 : "SIGABRT";
 }
 
 static volatile sig_atomic_t sent_in_guard; /* a signal sent while guarded */
@@ -282,13 +283,8 @@ static void on_crash(int signal_number, siginfo_t *info, void *context)
 		sent_in_guard = signal_number;
 		return;
 	}
-	/* Racy reads of tracked[]: the lock may be held by this very thread. */
-	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
-		if (tracked[i])
-			unlink(tracked[i]);
-	for (int i = 0; i < INTERRUPT_MAX_TRACKED; i++)
-		if (tracked[i])
-			rmdir(tracked[i]);
+	/* Without the lock, which this very thread may hold. */
+	remove_tracked();
 	dprintf(STDERR_FILENO, "%srtcl: crashed (%s) while %s\n", progress_on_stderr ? "\n" : "",
 		crash_name(signal_number), crash_note);
 	signal(signal_number, SIG_DFL);
