@@ -4,7 +4,7 @@
 # rtcl-genbench lake-path at size 10, 2.1 M triangles; scenes/materials_path.json,
 # nine BSDF kinds with textures) at SIZE 1024x1024, SPP 64 (the lake LAKE_SPP
 # 16); every schedule: -k naive, dynamic, persistent, persistent with
-# --regenerate --fetch item and --fetch subgroup, wavefront --wavefront-form
+# --regenerate --fetch item, group and subgroup, wavefront --wavefront-form
 # bounce and stages; -r REPEAT (5: the median kernel time of 5 after a
 # warm-up), ROUNDS (2) interleaved rounds; every image compared byte for byte
 # with dynamic's; in round 1 a counting run (--flops: paths per bounce, SIMD
@@ -72,6 +72,7 @@ fi
 # The schedules, LABEL=options (spaces as commas), those this rtcl takes.
 CANDIDATES="naive=-k,naive dynamic=-k,dynamic persistent=-k,persistent
 persistent-regen-item=-k,persistent,--regenerate,--fetch,item
+persistent-regen-group=-k,persistent,--regenerate,--fetch,group
 persistent-regen-subgroup=-k,persistent,--regenerate,--fetch,subgroup
 wavefront-bounce=-k,wavefront,--wavefront-form,bounce
 wavefront-stages=-k,wavefront,--wavefront-form,stages"
