@@ -38,22 +38,20 @@
  * one per work-item of the group. */
 #pragma OPENCL EXTENSION cl_khr_int64_base_atomics : enable
 
-/* The block lives in the kernels' __local argument, after the scene when
- * the scene is there (the host makes room: singlepass.c,
- * local_argument_bytes). Not a kernel-scope __local variable: PoCL 3.1's
- * optimised build gave one to every work-group running at once when its
- * address went to a function it did not inline (two groups drew from one
- * block, and a block went untraced). */
-static volatile __local ulong *group_block(__global const uint4 *scene_global,
-					  __local uint4 *scene_local)
+/* The block lives in global memory, a word per work-group after the work
+ * counter's words (the host makes room: singlepass.c,
+ * counter_group_bytes), zeroed by nobody: block_init writes it. Not in
+ * __local memory: there the 64-bit atomics of work-items that fetch at
+ * different moments (--regenerate) lost or repeated a few fetches on an
+ * H100 (2-21 pixels of 262,144 untraced or traced twice, batch 105,
+ * docs/results/h100-regen/diag-group.sh), as global memory's never did;
+ * and a kernel-scope __local variable was shared between work-groups by
+ * PoCL 3.1's optimised build. */
+static volatile __global ulong *group_block(__global uint *counter)
 {
-#ifdef RTCL_SCENE_IN_LOCAL
-	uint words = (((__global const struct rt_scene *)scene_global)->total_bytes + 15) / 16;
-#else
-	uint words = 0;
-	(void)scene_global;
-#endif
-	return (volatile __local ulong *)(scene_local + words);
+	__global ulong *blocks = (__global ulong *)(counter + RT_COUNTER_WORDS);
+
+	return blocks + get_group_id(1) * get_num_groups(0) + get_group_id(0);
 }
 
 static inline ulong block_word(uint first_pixel, uint drawn)
@@ -63,11 +61,11 @@ static inline ulong block_word(uint first_pixel, uint drawn)
 
 /* Takes the group's first block; every work-item must call it (a barrier),
  * before the loop. */
-static void block_init(volatile __local ulong *block, __global uint *counter, uint slots)
+static void block_init(volatile __global ulong *block, __global uint *counter, uint slots)
 {
 	if (get_local_id(0) == 0 && get_local_id(1) == 0)
-		*block = block_word(atomic_add(counter, slots * RTCL_BATCH), 0);
-	barrier(CLK_LOCAL_MEM_FENCE);
+		atom_xchg(block, block_word(atomic_add(counter, slots * RTCL_BATCH), 0));
+	barrier(CLK_GLOBAL_MEM_FENCE);
 }
 
 /* Returns the first pixel number of the work-item's next fetch from the
@@ -81,7 +79,7 @@ static void block_init(volatile __local ulong *block, __global uint *counter, ui
  * of it was drawn; a work-item leaves the loop only when the block it drew
  * from, or the global counter, is past the image, so every fetch drawn from
  * a block is traced. */
-static uint fetch_pixels(__global uint *counter, volatile __local ulong *block, uint slots,
+static uint fetch_pixels(__global uint *counter, volatile __global ulong *block, uint slots,
 			 uint pixels)
 {
 	ulong word = atom_add(block, 1UL);
@@ -153,7 +151,7 @@ static inline uint warp_broadcast(uint value, uint from, uint mask)
  * lowest of the warp's lanes fetching now takes the fetches of all of them
  * with one atomic and hands each its own, in lane order; else an atomic of
  * the work-item's own. */
-static inline uint fetch_pixels(__global uint *counter, volatile __local ulong *block,
+static inline uint fetch_pixels(__global uint *counter, volatile __global ulong *block,
 				uint slots, uint pixels)
 {
 	(void)block;
@@ -184,7 +182,7 @@ struct pixel_range {
  * split row), fetching when its range is used up; returns false when the
  * image is done. */
 static bool take_pixel(struct pixel_range *r, __global uint *counter,
-		       volatile __local ulong *block, uint slots, const struct chunk_grid *grid,
+		       volatile __global ulong *block, uint slots, const struct chunk_grid *grid,
 		       const struct rt_piece *piece, int2 *p)
 {
 	uint chunk_pixels = grid->chunk_w * grid->chunk_h;
@@ -220,10 +218,10 @@ __kernel void render(__global const uint4 *scene_global, __local uint4 *scene_lo
 	tracer_init_counts(&tr, load_scene(scene_global, scene_local), counts);
 	struct chunk_grid grid = chunk_grid(&piece);
 #ifdef RTCL_FETCH_GROUP
-	volatile __local ulong *block = group_block(scene_global, scene_local);
+	volatile __global ulong *block = group_block(next_pixel_counter);
 	block_init(block, next_pixel_counter, slots);
 #else
-	volatile __local ulong *block = 0; /* no block */
+	volatile __global ulong *block = 0; /* no block */
 #endif
 #ifdef RTCL_REGENERATE
 	struct walk w;

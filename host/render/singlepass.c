@@ -82,22 +82,31 @@ static size_t pixel_counts_bytes(const struct render_settings *s)
 }
 
 /* Bytes of the kernels' __local argument: the scene when it lives there,
- * rounded up to whole uint4, then with --fetch group the persistent kernel's
- * block (cl/persistent.cl, group_block). */
-static size_t local_argument_bytes(const struct render_settings *s, const struct render_result *res)
+ * rounded up to whole uint4. */
+static size_t local_argument_bytes(const struct render_result *res)
 {
 	size_t bytes = res->scene_in_local ? (res->scene_bytes + 15) / 16 * 16 : 0;
 
-	if (s->fetch == FETCH_GROUP)
-		bytes += 16;
 	return bytes > UNUSED_BUFFER_BYTES ? bytes : UNUSED_BUFFER_BYTES;
+}
+
+/* Bytes after the work counter's words: with --fetch group the persistent
+ * kernel's block, a 64-bit word per work-group (cl/persistent.cl,
+ * group_block; RT_COUNTER_WORDS is even, so the words are aligned). */
+static size_t counter_group_bytes(const struct render_settings *s, const struct render_result *res)
+{
+	if (s->fetch != FETCH_GROUP)
+		return 0;
+	size_t groups = (res->global_size[0] / res->local_size[0]) *
+			(res->global_size[1] / res->local_size[1]);
+	return groups * sizeof(cl_ulong);
 }
 
 /* Sets every argument of kernel but the piece, with counter as its work
  * counter. */
 static int set_args(const struct launch_state *st, cl_kernel kernel,
-		    const struct work_counter *counter, const struct render_settings *s,
-		    const struct render_result *res, char *err, size_t err_size)
+		    const struct work_counter *counter, const struct render_result *res, char *err,
+		    size_t err_size)
 {
 	const cl_mem *buffers[RENDER_ARGS] = {
 		[ARG_SCENE] = &st->b.scene,
@@ -113,7 +122,7 @@ static int set_args(const struct launch_state *st, cl_kernel kernel,
 		if (i == ARG_PIECE)
 			continue; /* set per piece */
 		if (i == ARG_SCENE_LOCAL)
-			status = clSetKernelArg(kernel, i, local_argument_bytes(s, res), NULL);
+			status = clSetKernelArg(kernel, i, local_argument_bytes(res), NULL);
 		else
 			status = clSetKernelArg(kernel, i, sizeof(cl_mem), buffers[i]);
 		if (status != CL_SUCCESS) {
@@ -131,12 +140,12 @@ static int create_buffers(struct device *dev, const struct scene *scene,
 {
 	if (buffers_create(dev, scene, s, res, &st->b, (size_t)counts_bytes(s, res), "flop counts",
 			   err, err_size) ||
-	    watch_create_counter(dev, dev->queue, progress_enabled(), &st->work_counter, err,
-				 err_size))
+	    watch_create_counter(dev, dev->queue, progress_enabled(), counter_group_bytes(s, res),
+				 &st->work_counter, err, err_size))
 		return -1;
 	res->item_count = res->global_size[0] * res->global_size[1];
 	st->b.item_count = res->item_count;
-	return set_args(st, st->kernel, &st->work_counter, s, res, err, err_size);
+	return set_args(st, st->kernel, &st->work_counter, res, err, err_size);
 }
 
 /* Opens lanes 1 .. queues - 1: a queue each, with profiling, a kernel object
@@ -159,9 +168,10 @@ static int open_lanes(struct renderer *r, int queues, char *err, size_t err_size
 		}
 		l->kernel = program_create_kernel(st->b.program, "render", err, err_size);
 		if (!l->kernel ||
-		    watch_create_counter(dev, l->queue, 0, &l->work_counter, err, err_size) ||
-		    set_args(st, l->kernel, &l->work_counter, r->settings, r->result, err,
-			     err_size))
+		    watch_create_counter(dev, l->queue, 0,
+					 counter_group_bytes(r->settings, r->result),
+					 &l->work_counter, err, err_size) ||
+		    set_args(st, l->kernel, &l->work_counter, r->result, err, err_size))
 			return -1;
 	}
 	return 0;

@@ -8,7 +8,8 @@
 #include "base/progress.h"
 
 int watch_create_counter(struct device *dev, cl_command_queue queue, int watched,
-			 struct work_counter *c, char *err, size_t err_size)
+			 size_t extra_bytes, struct work_counter *c, char *err,
+			 size_t err_size)
 {
 	size_t bytes = RT_COUNTER_WORDS * sizeof(cl_uint);
 	int in_place = watched && dev->host_unified;
@@ -19,7 +20,7 @@ int watch_create_counter(struct device *dev, cl_command_queue queue, int watched
 	c->watched = watched;
 	c->buffer = device_create_buffer(dev,
 					 CL_MEM_READ_WRITE | (in_place ? CL_MEM_ALLOC_HOST_PTR : 0),
-					 bytes, NULL, "work counter", err, err_size);
+					 bytes + extra_bytes, NULL, "work counter", err, err_size);
 	if (!c->buffer)
 		return -1;
 	if (in_place)

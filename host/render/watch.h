@@ -27,9 +27,12 @@ struct work_counter {
 };
 
 /* Creates c's buffer on dev for the launches of queue, watched (readable
- * during launches) or not. Returns 0, or -1 with one message in err. */
+ * during launches) or not, with extra_bytes after the counter's words for
+ * the kernel's own use (the persistent kernel's group blocks). Returns 0,
+ * or -1 with one message in err. */
 int watch_create_counter(struct device *dev, cl_command_queue queue, int watched,
-			 struct work_counter *c, char *err, size_t err_size);
+			 size_t extra_bytes, struct work_counter *c, char *err,
+			 size_t err_size);
 
 /* Zeroes the counter before a launch. */
 cl_int watch_reset_counter(struct work_counter *c);
