@@ -34,6 +34,8 @@ json_t *devstats_json(const struct device *devs, const int *ranks, const struct 
 				  work[k].busy_ms, "setup_ms", work[k].setup_ms);
 		if (entry) {
 			json_object_set_new(entry, "finish_ms", json_real(work[k].finish_ms));
+			json_object_set_new(entry, "first_piece_ms",
+					    json_real(work[k].first_piece_ms));
 			json_object_set_new(entry, "last_piece_ms",
 					    json_real(work[k].last_piece_ms));
 			json_object_set_new(entry, "kernel_ms", json_real(work[k].kernel_ms));

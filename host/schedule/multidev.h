@@ -34,6 +34,7 @@ struct device_work {
 	int launches;
 	double setup_ms;      /* in the begin function */
 	double finish_ms;     /* from the job's start to its last piece done */
+	double first_piece_ms; /* its first piece, from taking it to done */
 	double last_piece_ms; /* its last piece, from taking it to done */
 	int renderers_opened; /* --frames: renderers opened on it (kept open
 				 from frame to frame, render_kept) */
