@@ -869,6 +869,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 		.count = f->count,
 		.split = job->split,
 		.piece = "frame",
+		.frames_read = frames_read_names[f->read],
 		.wall_ms = (timing_now() - start) * 1e3,
 	};
 	if (!failed && f->kept == 0 && interrupt_stop_signal()) {
