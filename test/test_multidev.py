@@ -130,8 +130,8 @@ def test_frames_read_back_any_way_are_one_devices_frames(tmp_path, way):
     # four H100s 155-182 ms a device beyond the kernels, in the first frames:
     # docs/results/h100x4, batch 100). Four devices taken as GPUs, 10 frames:
     # 8 dealt whole, the last 2 shared over two groups. Every frame one
-    # device's, byte for byte, a renderer opened once a device, the way and
-    # each device's first frame reported.
+    # device's, byte for byte, a renderer opened once a device, the way,
+    # each device's first frame and its renderer's opening in it reported.
     one, four = tmp_path / "one", tmp_path / "four"
     one.mkdir()
     four.mkdir()
@@ -153,7 +153,7 @@ def test_frames_read_back_any_way_are_one_devices_frames(tmp_path, way):
     assert all(d["renderers_opened"] == 1 for d in devices if d["pieces"]), devices
     for d in devices:
         if d["pieces"]:
-            assert 0 < d["first_piece_ms"] <= d["busy_ms"], d
+            assert 0 < d["open_ms"] < d["first_piece_ms"] <= d["busy_ms"], d
 
 
 def test_an_unknown_way_to_read_frames_back_is_refused(tmp_path):

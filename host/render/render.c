@@ -258,10 +258,12 @@ static int keep_open(struct render_keeper *k, struct device *dev, const struct s
 	}
 	if (packed) {
 		render_keeper_close(k);
+		double lap = timing_now();
 		if (renderer_open(&k->r, dev, scene, s, &k->facts, err, err_size)) {
 			render_result_free(&k->facts); /* the renderer holds nothing */
 			return -1;
 		}
+		k->open_ms += timing_lap_ms(&lap);
 		k->open = 1;
 		k->opened++;
 		copy_facts(&k->facts, res);

@@ -40,6 +40,7 @@ struct render_keeper {
 	struct render_result facts; /* the renderer's: plan, build, scene */
 	int open;
 	int opened; /* renderers opened so far (render() a frame included) */
+	double open_ms; /* the time those kept open took to open */
 };
 
 /* render() of a frame whose scene differs from the keeper's last only in

@@ -41,9 +41,11 @@ json_t *devstats_json(const struct device *devs, const int *ranks, const struct 
 			json_object_set_new(entry, "kernel_ms", json_real(work[k].kernel_ms));
 			json_object_set_new(entry, "launches", json_integer(work[k].launches));
 		}
-		if (entry && work[k].renderers_opened)
+		if (entry && work[k].renderers_opened) {
 			json_object_set_new(entry, "renderers_opened",
 					    json_integer(work[k].renderers_opened));
+			json_object_set_new(entry, "open_ms", json_real(work[k].open_ms));
+		}
 		if (entry && ranks)
 			json_object_set_new(entry, "rank", json_integer(ranks[k]));
 		json_array_append_new(list, entry);

@@ -858,6 +858,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	progress_end();
 	for (int k = 0; k < f->count; k++) {
 		f->work[k].renderers_opened += f->keepers[k].opened;
+		f->work[k].open_ms += f->keepers[k].open_ms;
 		/* The shares' sums pinned beside the frames: the device's
 		 * set-up (--stats setup_ms), not its frames' busy time. */
 		end_pinning(f, k);

@@ -38,6 +38,7 @@ struct device_work {
 	double last_piece_ms; /* its last piece, from taking it to done */
 	int renderers_opened; /* --frames: renderers opened on it (kept open
 				 from frame to frame, render_kept) */
+	double open_ms; /* --frames: of busy_ms, opening those kept open */
 };
 
 /* The job's callbacks, each called in the device's own thread; `device` is

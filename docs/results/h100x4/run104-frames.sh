@@ -12,10 +12,11 @@
 # back in the frame's stager thread into one pinned image a device (pinned
 # there); "pageable" reads it there into memory of malloc, nothing pinned;
 # "inline" is batch 100's way. Each line gives a device's first frame
-# (first_piece_ms) and last: expected with aside or pageable, every frame
-# about its kernels, 16 frames on 4 GPUs about 690 ms (the kernels of the
-# costliest device, 637 ms in batch 100, + the last frame's staging, ~45 ms)
-# against 836, one GPU about 2330 against 2388. About 100 s of commands.
+# (first_piece_ms), its renderer's opening in it (open_ms) and its last.
+# Expected with aside or pageable: every frame about its kernels, the first
+# its kernels + the opening, 16 frames on 4 GPUs about 690 ms (the kernels
+# of the costliest device, 637 ms in batch 100, + the last frame's staging,
+# ~45 ms) against 836, one GPU about 2330 against 2388. About 100 s of commands.
 #
 # Binary (built on the VM, carried in .gpu/frames43/, or the folder B names):
 #   make OIIO=0 MPI=0 BUILD=build-gpu BIN=.gpu/frames43/rtcl
@@ -48,7 +49,7 @@ fr() { # tag, devices, last frame, way
   mkdir -p $T/$1
   RTCL_FRAMES_READ=$4 $B/rtcl ${!2} $F --frames 0:$3 -q -o $T/$1/f.ppm --stats $O/$1.json 2>&1 | head -3
   python3 -c "import json; d=json.load(open('$O/$1.json')); md=d.get('multidevice') or {}
-print('$1: wall %.1f ms, read %s;' % (d['wall_ms'], md.get('frames_read')), '; '.join('%d frames busy %.1f kern %.1f (beyond %.1f) first %.1f last %.1f fin %.1f setup %.1f, %d renderer(s)' % (x['pieces'], x['busy_ms'], x['kernel_ms'], x['busy_ms'] - x['kernel_ms'], x.get('first_piece_ms', -1), x['last_piece_ms'], x['finish_ms'], x['setup_ms'], x.get('renderers_opened', 0)) for x in md.get('devices', [])), '; eff %.3f' % md.get('device_efficiency', 1))" 2>&1
+print('$1: wall %.1f ms, read %s;' % (d['wall_ms'], md.get('frames_read')), '; '.join('%d frames busy %.1f kern %.1f (beyond %.1f) first %.1f (open %.1f) last %.1f fin %.1f setup %.1f, %d renderer(s)' % (x['pieces'], x['busy_ms'], x['kernel_ms'], x['busy_ms'] - x['kernel_ms'], x.get('first_piece_ms', -1), x.get('open_ms', -1), x['last_piece_ms'], x['finish_ms'], x['setup_ms'], x.get('renderers_opened', 0)) for x in md.get('devices', [])), '; eff %.3f' % md.get('device_efficiency', 1))" 2>&1
   local n=$(($3 + 1)) same=0 k
   for k in $(seq -f %04g 0 $3); do cmp -s $T/fr$n-ONE-inline-1/f_$k.ppm $T/$1/f_$k.ppm && same=$((same + 1)); done
   echo "  $same of $n frames the same bytes as fr$n-ONE-inline-1's"; }
