@@ -331,17 +331,20 @@ static void free_frame(struct render_result *result, const float *rgb)
 }
 
 /* READ_ASIDE: the device's buffer for its next frame's image on it (made
- * at its first use), or NULL where none can be made (the frame is read
- * inline then). */
+ * at its first use), or NULL where none can be made or the two would take
+ * more than an eighth of the device's memory (the frame is read inline
+ * then). */
 static cl_mem next_copy(struct frames_state *f, int device)
 {
 	cl_mem *m = &f->copies[device][f->next_copy[device]];
+	const struct device *dev = &f->devs[device];
+	size_t bytes = image_float_bytes(f->settings.width, f->settings.height);
 	cl_int status;
 
+	if (bytes > dev->max_alloc_size || 2.0 * bytes > dev->global_mem_size / 8.0)
+		return NULL;
 	if (!*m) {
-		*m = clCreateBuffer(f->devs[device].context, CL_MEM_READ_WRITE,
-				    image_float_bytes(f->settings.width, f->settings.height), NULL,
-				    &status);
+		*m = clCreateBuffer(dev->context, CL_MEM_READ_WRITE, bytes, NULL, &status);
 		if (status != CL_SUCCESS)
 			*m = NULL;
 	}
