@@ -222,6 +222,8 @@ static float *read_memory(struct frames_state *f, int device, char *err, size_t 
 		}
 		m->host = malloc(bytes);
 		if (!m->host) {
+			clReleaseCommandQueue(m->queue);
+			m->queue = NULL;
 			snprintf(err, err_size, "out of host memory for a %dx%d frame",
 				 f->settings.width, f->settings.height);
 			return NULL;
