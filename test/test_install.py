@@ -332,7 +332,7 @@ def test_man_page_environment_covers_help_and_output_dates():
               for match in re.findall(r"^\.BI ([A-Z_]+)= ", line)}
     assert in_help == {"RTCL_CL_DIR", "RTCL_BUILD_OPTIONS", "RTCL_DUMP_BINARY", "RTCL_CACHE",
                        "POCL_CACHE_DIR", "RTCL_MESH_TIME_LIMIT", "RTCL_MESH_MEMORY_LIMIT",
-                       "RTCL_OIDN_LIBRARY", "RTCL_MPI_SUMS"}
+                       "RTCL_OIDN_LIBRARY", "RTCL_MPI_SUMS", "RTCL_FRAMES_READ"}
     assert in_man == in_help | {"SOURCE_DATE_EPOCH", "XDG_CACHE_HOME", "RTCL_MESHREAD"}
 
 

@@ -120,6 +120,49 @@ def test_gpus_share_the_last_frames_when_fewer_remain_than_gpus(tmp_path, frames
     assert all(p > (pieces[0] - 1) * 32 * 24 for p in done) or sorted(done) == [0, 32 * 24], done
 
 
+@pytest.mark.parametrize("way", [None, "aside", "pageable", "inline"])
+def test_frames_read_back_any_way_are_one_devices_frames(tmp_path, way):
+    # RTCL_FRAMES_READ (run/frames.c): "aside", the default, copies a frame's
+    # image on its device and has the device's stager thread read it back,
+    # into one pinned image a device, beside the device's next frame;
+    # "pageable" the same into memory of malloc; "inline" reads it in the
+    # device's thread into one of two pinned images a device, as before (on
+    # four H100s 155-182 ms a device beyond the kernels, in the first frames:
+    # docs/results/h100x4, batch 100). Four devices taken as GPUs, 10 frames:
+    # 8 dealt whole, the last 2 shared over two groups. Every frame one
+    # device's, byte for byte, a renderer opened once a device, the way,
+    # each device's first frame and its renderer's opening in it reported.
+    one, four = tmp_path / "one", tmp_path / "four"
+    one.mkdir()
+    four.mkdir()
+    common = ["--frames", "0:9", "--spp", "4"]
+    frames_run(one, *common, "-d", "0")
+    env = {**FOUR, "RTCL_TEST_AS_GPUS": "1"}
+    if way:
+        env["RTCL_FRAMES_READ"] = way
+    _, stats = frames_run(four, *common, "--devices", "0:0,0:1,0:2,0:3", env=env)
+    names = sorted(p.name for p in one.iterdir() if p.suffix == ".ppm")
+    assert len(names) == 10
+    assert sorted(p.name for p in four.iterdir() if p.suffix == ".ppm") == names
+    for name in names:
+        assert (one / name).read_bytes() == (four / name).read_bytes(), name
+    md = stats["multidevice"]
+    assert md["frames_read"] == (way or "aside")
+    devices = md["devices"]
+    assert sum(d["pixels"] for d in devices) == 10 * 32 * 24
+    assert all(d["renderers_opened"] == 1 for d in devices if d["pieces"]), devices
+    for d in devices:
+        if d["pieces"]:
+            assert 0 < d["open_ms"] < d["first_piece_ms"] <= d["busy_ms"], d
+
+
+def test_an_unknown_way_to_read_frames_back_is_refused(tmp_path):
+    result = run(*SMALL, "--frames", "0:3", "--devices", "0:0,0:1", "-o",
+                 str(tmp_path / "f.ppm"), env={"RTCL_FRAMES_READ": "pinned"})
+    expect_failure(result, 2, "RTCL_FRAMES_READ=pinned: expected aside, pageable or inline",
+                   tmp_path)
+
+
 def test_dynamic_split_gives_a_slow_device_fewer_pieces(tmp_path):
     _, stats = frames_run(tmp_path, "--frames", "0:9", "--devices", "0:0,0:1",
                           env={"RTCL_TEST_SLOW_DEVICE": "1:400"})

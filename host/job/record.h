@@ -49,6 +49,9 @@ struct device_shares {
 	double rank_sums_ms;   /* on rank 0: in shared memory, the add after the
 				  image time; by MPI_Reduce, from its devices'
 				  end to the sum */
+	/* An animation: how its frames came back to the host
+	 * (RTCL_FRAMES_READ: "aside", "pageable", "inline"), or NULL. */
+	const char *frames_read;
 	enum split split;
 	const char *piece; /* what a piece is: "band", "rectangle", "frame" */
 	int band_rows, bands; /* bands of fixed rows; 0 for other pieces */

@@ -88,10 +88,11 @@ int render_pass_samples(const struct render_settings *s)
 }
 
 /* render()'s frames on the open renderer r, into r->result (res): the
- * passes of each, the auxiliary images, the read-back. Returns 0, or -1 with
- * one message in err (res then still holds what it held). */
-static int render_open(struct renderer *r, const struct render_settings *s,
-		       struct render_result *res, char *err, size_t err_size)
+ * passes of each, the auxiliary images, the read-back (not with read_back
+ * 0: the image stays in the renderer's buffer). Returns 0, or -1 with one
+ * message in err (res then still holds what it held). */
+static int render_passes(struct renderer *r, const struct render_settings *s,
+			 struct render_result *res, int read_back, char *err, size_t err_size)
 {
 	struct device *dev = r->dev;
 	struct rt_piece whole = renderer_whole_image(s, 0, settings_samples(s));
@@ -121,6 +122,8 @@ static int render_open(struct renderer *r, const struct render_settings *s,
 	if (s->aov && renderer_aov(r, err, err_size))
 		return -1;
 	res->times.aov = timing_lap_ms(&lap);
+	if (!read_back)
+		return 0;
 	if (renderer_read_back(r, err, err_size))
 		return -1;
 	/* Stopped: the image buffer holds no means yet, the sums hold the
@@ -139,7 +142,7 @@ int render(struct device *dev, const struct scene *scene, const struct render_se
 
 	if (renderer_open(&r, dev, scene, s, res, err, err_size))
 		goto out_free;
-	if (render_open(&r, s, res, err, err_size)) {
+	if (render_passes(&r, s, res, 1, err, err_size)) {
 		renderer_close(&r);
 		goto out_free;
 	}
@@ -255,10 +258,12 @@ static int keep_open(struct render_keeper *k, struct device *dev, const struct s
 	}
 	if (packed) {
 		render_keeper_close(k);
+		double lap = timing_now();
 		if (renderer_open(&k->r, dev, scene, s, &k->facts, err, err_size)) {
 			render_result_free(&k->facts); /* the renderer holds nothing */
 			return -1;
 		}
+		k->open_ms += timing_lap_ms(&lap);
 		k->open = 1;
 		k->opened++;
 		copy_facts(&k->facts, res);
@@ -284,7 +289,7 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		res->rgb = rgb;
 	}
 	k->r.result = res;
-	int failed = render_open(&k->r, s, res, err, err_size);
+	int failed = render_passes(&k->r, s, res, 1, err, err_size);
 	k->r.result = &k->facts;
 	if (failed) {
 		if (s->progress)
@@ -292,6 +297,49 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		render_keeper_close(k);
 		if (rgb)
 			res->rgb = NULL; /* the caller's */
+		render_result_free(res);
+		return -1;
+	}
+	return 0;
+}
+
+int render_kept_on_device(struct render_keeper *k, struct device *dev, const struct scene *scene,
+			  const struct render_settings *s, cl_mem to, cl_event *copied,
+			  struct render_result *res, char *err, size_t err_size)
+{
+	*copied = NULL;
+	if (!keeps_renderer(s)) {
+		snprintf(err, err_size, "internal error: an instrumented frame kept on its device");
+		return -1;
+	}
+	if (keep_open(k, dev, scene, s, res, err, err_size))
+		return -1;
+	free(res->rgb); /* never touched: the image stays on the device */
+	res->rgb = NULL;
+	k->r.result = res;
+	int failed = render_passes(&k->r, s, res, 0, err, err_size);
+	k->r.result = &k->facts;
+	if (!failed && res->samples_done >= settings_samples(s)) {
+		double lap = timing_now();
+		cl_int status = clEnqueueCopyBuffer(dev->queue, k->r.buffers->image.image, to, 0, 0,
+						    image_float_bytes(s->width, s->height), 0, NULL,
+						    copied);
+		if (status == CL_SUCCESS)
+			status = clFlush(dev->queue);
+		if (status != CL_SUCCESS) {
+			snprintf(err, err_size, "copying the frame's image on %s failed: %s",
+				 dev->name, cl_error_name(status));
+			if (*copied)
+				clReleaseEvent(*copied);
+			*copied = NULL;
+			failed = 1;
+		}
+		res->times.read_back = timing_lap_ms(&lap);
+	}
+	if (failed) {
+		if (s->progress)
+			progress_end();
+		render_keeper_close(k);
 		render_result_free(res);
 		return -1;
 	}

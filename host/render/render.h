@@ -40,6 +40,7 @@ struct render_keeper {
 	struct render_result facts; /* the renderer's: plan, build, scene */
 	int open;
 	int opened; /* renderers opened so far (render() a frame included) */
+	double open_ms; /* the time those kept open took to open */
 };
 
 /* render() of a frame whose scene differs from the keeper's last only in
@@ -55,6 +56,20 @@ struct render_keeper {
 int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
 		const struct render_settings *settings, float *rgb, struct render_result *result,
 		char *err, size_t err_size);
+
+/* render_kept whose image stays on the device: the frame's passes on k's
+ * renderer, then its image copied on dev's queue into `to` (a buffer of
+ * width * height * 3 floats of dev's context) and flushed, *copied that
+ * copy's event (the caller's to wait for and release); nothing is read
+ * back, result->rgb is NULL. A frame an interrupt stopped
+ * (result->samples_done less than all) is not copied (*copied NULL).
+ * render_keeps(settings) must hold. The caller reads the image from `to`
+ * when it will, e.g. on a queue of its own while the next frame renders
+ * (run/frames.c). Returns 0, or -1 with one message in err, nothing held in
+ * result and k closed. */
+int render_kept_on_device(struct render_keeper *k, struct device *dev, const struct scene *scene,
+			  const struct render_settings *settings, cl_mem to, cl_event *copied,
+			  struct render_result *result, char *err, size_t err_size);
 
 /* Whether render_kept keeps a renderer open for these settings (not for an
  * instrumented render). */

@@ -34,14 +34,18 @@ json_t *devstats_json(const struct device *devs, const int *ranks, const struct 
 				  work[k].busy_ms, "setup_ms", work[k].setup_ms);
 		if (entry) {
 			json_object_set_new(entry, "finish_ms", json_real(work[k].finish_ms));
+			json_object_set_new(entry, "first_piece_ms",
+					    json_real(work[k].first_piece_ms));
 			json_object_set_new(entry, "last_piece_ms",
 					    json_real(work[k].last_piece_ms));
 			json_object_set_new(entry, "kernel_ms", json_real(work[k].kernel_ms));
 			json_object_set_new(entry, "launches", json_integer(work[k].launches));
 		}
-		if (entry && work[k].renderers_opened)
+		if (entry && work[k].renderers_opened) {
 			json_object_set_new(entry, "renderers_opened",
 					    json_integer(work[k].renderers_opened));
+			json_object_set_new(entry, "open_ms", json_real(work[k].open_ms));
+		}
 		if (entry && ranks)
 			json_object_set_new(entry, "rank", json_integer(ranks[k]));
 		json_array_append_new(list, entry);

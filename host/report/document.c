@@ -212,6 +212,8 @@ static json_t *shares_document(const struct device_shares *d)
 				  "render_ms", d->choice.render_ms, "sums_ms", d->choice.sums_ms,
 				  "add_ms", d->choice.add_ms, "overhead_ms", d->choice.overhead_ms,
 				  "move_ms", d->choice.move_ms, "penalty_ms", d->choice.penalty_ms));
+	if (doc && d->frames_read)
+		json_object_set_new(doc, "frames_read", json_string(d->frames_read));
 	if (doc && d->ranks_count)
 		json_object_set_new(doc, "ranks", json_integer(d->ranks_count));
 	if (doc && d->rank_sums) {

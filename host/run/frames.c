@@ -12,6 +12,7 @@
 #include "base/timing.h"
 #include "base/vec3.h"
 #include "base/version.h"
+#include "device/clerror.h"
 #include "render/repeats.h"
 #include "render/render.h"
 #include "report/summary.h"
@@ -83,15 +84,56 @@ struct stager {
 	float *rgb; /* the frame's image, freed once staged (unless pinned) */
 	int pinned; /* rgb is one of the device's pinned images (frame_memory) */
 	int samples; /* its samples per pixel */
+	/* READ_ASIDE: the frame's image in `from` on the device once `copied`
+	 * (rgb NULL), read back here into the device's reads memory. */
+	int device;
+	cl_mem from;
+	cl_event copied;
 	int failed;
 	char err[1024];
 };
+
+/* How a device's whole frames come back to the host (RTCL_FRAMES_READ).
+ * READ_INLINE (before): read by the device's thread after the frame's
+ * passes into one of two pinned images a device, pinned at its first two
+ * frames. On four H100s a device of four paid 155-182 ms beyond its
+ * kernels over its 4 frames, one GPU about 60 over 16, and the last frames
+ * cost their kernels alone (docs/results/h100x4, batch 100): the excess is
+ * in the first frames, and fits pinning that takes the process about 2 GB/s
+ * whatever the devices (2 x 48 MB a device, 384 MB for four; an image
+ * split's set-up, its 128 MB of sums pinned a device, took 138-140 ms a
+ * device on two GPUs and 277-300 on four, batch 99). READ_ASIDE (the
+ * default): the device copies the frame's image into a buffer of its own
+ * (two a device, alternating) and goes on with its next frame; its stager
+ * thread reads the copy back on a queue of its own into one pinned image a
+ * device (pinned there, at the device's first frame) and stages it from
+ * there: half the pinned memory, and neither pinning nor reading in the
+ * device's thread. READ_PAGEABLE: as READ_ASIDE, read into memory of
+ * malloc (NVIDIA: 28-34 ms for 2000x2000, beside the next frame's kernels),
+ * nothing pinned. Every way gives the same bytes. */
+enum frames_read { READ_ASIDE, READ_PAGEABLE, READ_INLINE, FRAMES_READS };
+
+static const char *const frames_read_names[FRAMES_READS] = {"aside", "pageable", "inline"};
+
+/* The way RTCL_FRAMES_READ names (READ_ASIDE when unset or empty), or -1. */
+static int frames_read_from_env(void)
+{
+	const char *value = getenv("RTCL_FRAMES_READ");
+
+	if (!value || !*value)
+		return READ_ASIDE;
+	for (int w = 0; w < FRAMES_READS; w++)
+		if (strcmp(value, frames_read_names[w]) == 0)
+			return w;
+	return -1;
+}
 
 /* Host memory a device reads a frame back into: pinned (device.h), where
  * NVIDIA's OpenCL reads at the speed of the link. A 2000x2000 image read
  * into memory of malloc took one H100 27.6-33.8 ms (docs/results/h100x4,
  * batch 96; the sums of four, 128 MB each, 2.3-2.6 ms pinned). Two a
- * device: one frame renders into one while the other is staged. */
+ * device (READ_INLINE): one frame renders into one while the other is
+ * staged; one a device for READ_ASIDE (the stager's). */
 struct frame_memory {
 	cl_mem mem;
 	void *host; /* mapped; malloc's with mem NULL */
@@ -127,6 +169,12 @@ struct frames_state {
 						  frame (share_samples) */
 	struct sums_pinning pinning[DEVICES_MAX];
 	int next[DEVICES_MAX]; /* the one its next frame reads back into */
+	enum frames_read read; /* RTCL_FRAMES_READ */
+	cl_mem copies[DEVICES_MAX][2]; /* READ_ASIDE: each device's frames'
+					  images on it, alternating */
+	int next_copy[DEVICES_MAX];
+	struct frame_memory reads[DEVICES_MAX]; /* READ_ASIDE: the stager's image
+						   and queue */
 	int keeps; /* an interrupt keeps the frames finished (not --no-partial) */
 	int kept;  /* frames staged */
 };
@@ -149,10 +197,76 @@ static void show_frame(struct frames_state *f, int piece, int finished)
 	}
 }
 
+/* The stager's memory and queue for reading device's frames back (at its
+ * first frame): pinned on a queue of its own, else (READ_PAGEABLE, or
+ * where pinning fails) memory of malloc and a queue of its own. Returns the
+ * memory, or NULL with err set. */
+static float *read_memory(struct frames_state *f, int device, char *err, size_t err_size)
+{
+	struct frame_memory *m = &f->reads[device];
+	struct device *dev = &f->devs[device];
+	size_t bytes = image_float_bytes(f->settings.width, f->settings.height);
+	cl_int status;
+
+	if (m->host)
+		return m->host;
+	if (f->read == READ_ASIDE)
+		m->host = device_pinned_alloc_aside(dev, bytes, &m->mem, &m->queue);
+	if (!m->host) {
+		m->queue = clCreateCommandQueue(dev->context, dev->id, 0, &status);
+		if (status != CL_SUCCESS) {
+			m->queue = NULL;
+			snprintf(err, err_size, "making a queue to read frames back from %s failed: %s",
+				 dev->name, cl_error_name(status));
+			return NULL;
+		}
+		m->host = malloc(bytes);
+		if (!m->host) {
+			clReleaseCommandQueue(m->queue);
+			m->queue = NULL;
+			snprintf(err, err_size, "out of host memory for a %dx%d frame",
+				 f->settings.width, f->settings.height);
+			return NULL;
+		}
+	}
+	memset(m->host, 0, bytes); /* mapped, or touched, now */
+	return m->host;
+}
+
+/* READ_ASIDE: the stager's frame read back from its device's copy, once
+ * the copy is done. Returns 0, or -1 with st->err set. */
+static int read_aside(struct stager *st)
+{
+	struct frames_state *f = st->f;
+	float *rgb = read_memory(f, st->device, st->err, sizeof(st->err));
+	cl_int status;
+
+	if (!rgb)
+		return -1;
+	status = clEnqueueReadBuffer(f->reads[st->device].queue, st->from, CL_TRUE, 0,
+				     image_float_bytes(f->settings.width, f->settings.height), rgb,
+				     1, &st->copied, NULL);
+	if (status != CL_SUCCESS) {
+		snprintf(st->err, sizeof(st->err), "reading a frame back from %s failed: %s",
+			 f->devs[st->device].name, cl_error_name(status));
+		return -1;
+	}
+	st->rgb = rgb;
+	st->pinned = 1; /* the device's: not freed */
+	return 0;
+}
+
 static void *stage_frame(void *arg)
 {
 	struct stager *st = arg;
 
+	if (st->copied) {
+		st->failed = read_aside(st) != 0;
+		clReleaseEvent(st->copied);
+		st->copied = NULL;
+		if (st->failed)
+			return NULL;
+	}
 	st->failed = output_plan_stage_image(st->f->plan, st->piece, st->rgb, st->samples,
 					     st->err, sizeof(st->err)) != 0;
 	if (!st->failed)
@@ -218,15 +332,42 @@ static void free_frame(struct render_result *result, const float *rgb)
 	render_result_free(result);
 }
 
+/* READ_ASIDE: the device's buffer for its next frame's image on it (made
+ * at its first use), or NULL where none can be made or the two would take
+ * more than an eighth of the device's memory (the frame is read inline
+ * then). */
+static cl_mem next_copy(struct frames_state *f, int device)
+{
+	cl_mem *m = &f->copies[device][f->next_copy[device]];
+	const struct device *dev = &f->devs[device];
+	size_t bytes = image_float_bytes(f->settings.width, f->settings.height);
+	cl_int status;
+
+	if (bytes > dev->max_alloc_size || 2.0 * bytes > dev->global_mem_size / 8.0)
+		return NULL;
+	if (!*m) {
+		*m = clCreateBuffer(dev->context, CL_MEM_READ_WRITE, bytes, NULL, &status);
+		if (status != CL_SUCCESS)
+			*m = NULL;
+	}
+	return *m;
+}
+
 /* A multidev render_piece: frame first + piece, rendered whole; staged in
  * the device's stager thread once its previous frame is staged (at most one
- * frame a device waits to be staged), or here when no thread starts. */
+ * frame a device waits to be staged), or here when no thread starts. With
+ * READ_ASIDE the frame's image is copied on the device and the stager reads
+ * it back too. */
 static int render_frame_piece(void *context, int device, int piece, struct piece_work *done,
 			      char *err, size_t err_size)
 {
 	struct frames_state *f = context;
 	struct stager *st = &f->stagers[device];
 	struct render_result result;
+	float *rgb = NULL;
+	cl_mem to = NULL;
+	cl_event copied = NULL;
+	int failed;
 
 	/* Interrupted: no frame starts; one under way stops after its pass and
 	 * is not written (an animation's frames hold all their samples). */
@@ -234,8 +375,19 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	if (f->keeps && interrupt_stop_signal())
 		return 0;
 	show_frame(f, piece, 0);
-	float *rgb = next_image(f, device);
-	if (render_kept_frame(f, device, piece, rgb, &result, err, err_size))
+	if (f->read != READ_INLINE)
+		to = next_copy(f, device);
+	if (to) {
+		struct scene scene = *f->job->scene;
+		frames_orbit(&f->job->scene->camera, f->job->first_frame + piece,
+			     f->job->first_frame, f->job->last_frame, &scene.camera);
+		failed = render_kept_on_device(&f->keepers[device], &f->devs[device], &scene,
+					       &f->settings, to, &copied, &result, err, err_size);
+	} else {
+		rgb = next_image(f, device);
+		failed = render_kept_frame(f, device, piece, rgb, &result, err, err_size);
+	}
+	if (failed)
 		return -1;
 	show_frame(f, piece, 1);
 	/* A frame stopped by an interrupt is not written (an animation's
@@ -250,6 +402,8 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 		interrupt_allow_stop(1);
 	*done = frames_piece_work(&f->settings, &result);
 	if (finish_staging(st, err, err_size)) {
+		if (copied)
+			clReleaseEvent(copied);
 		free_frame(&result, rgb);
 		return -1;
 	}
@@ -258,10 +412,15 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 			      .piece = piece,
 			      .rgb = result.rgb,
 			      .pinned = pinned,
-			      .samples = result.samples_done};
+			      .samples = result.samples_done,
+			      .device = device,
+			      .from = to,
+			      .copied = copied};
 	result.rgb = NULL; /* the stager's now */
 	if (pinned) /* the other for the next frame, while this one is staged */
 		f->next[device] ^= 1;
+	if (to) /* the other for the next frame, while the stager reads this */
+		f->next_copy[device] ^= 1;
 	render_result_free(&result);
 	if (pthread_create(&st->thread, NULL, stage_frame, st) == 0) {
 		st->running = 1;
@@ -596,7 +755,8 @@ static int render_shared_frames(struct frames_state *f, int n, int shared, doubl
 		double done_ms = (timing_now() - start) * 1e3;
 		for (int k = 0; k < sf->count; k++) {
 			struct device_work *to = &f->work[sf->first + k], *w = &sf->work[k];
-			to->pieces++;
+			if (to->pieces++ == 0)
+				to->first_piece_ms = w->busy_ms;
 			to->pixels += w->pixels;
 			to->busy_ms += w->busy_ms;
 			to->kernel_ms += w->kernel_ms;
@@ -624,6 +784,8 @@ static int render_frames_whole(struct frames_state *f, int n, int shared, char *
 	int failed = multidev_run(&pieces, f->devs, f->count, work, err, err_size);
 
 	for (int k = 0; k < f->count; k++) {
+		if (f->work[k].pieces == 0)
+			f->work[k].first_piece_ms = work[k].first_piece_ms;
 		f->work[k].pieces += work[k].pieces;
 		f->work[k].pixels += work[k].pixels;
 		f->work[k].busy_ms += work[k].busy_ms;
@@ -652,6 +814,16 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	f->settings.stoppable = job_stoppable(job);
 	f->keeps = !job->all_or_nothing;
 	f->plan = run->plan;
+	int read = frames_read_from_env();
+	if (read < 0) {
+		snprintf(err, err_size,
+			 "RTCL_FRAMES_READ=%s: expected aside, pageable or inline (how --frames "
+			 "reads each frame back), or leave it unset",
+			 getenv("RTCL_FRAMES_READ"));
+		return EXIT_USAGE;
+	}
+	/* An instrumented frame opens its renderer (render_kept): read inline. */
+	f->read = render_keeps(&f->settings) ? (enum frames_read)read : READ_INLINE;
 	if (job_open_devices(job, f->devs, &f->count, err, err_size)) {
 		f->count = 0;
 		return EXIT_FAILED;
@@ -691,6 +863,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 	progress_end();
 	for (int k = 0; k < f->count; k++) {
 		f->work[k].renderers_opened += f->keepers[k].opened;
+		f->work[k].open_ms += f->keepers[k].open_ms;
 		/* The shares' sums pinned beside the frames: the device's
 		 * set-up (--stats setup_ms), not its frames' busy time. */
 		end_pinning(f, k);
@@ -702,6 +875,7 @@ static int frames_render(struct mode_run *run, int checked, char *err, size_t er
 		.count = f->count,
 		.split = job->split,
 		.piece = "frame",
+		.frames_read = frames_read_names[f->read],
 		.wall_ms = (timing_now() - start) * 1e3,
 	};
 	if (!failed && f->kept == 0 && interrupt_stop_signal()) {
@@ -725,8 +899,19 @@ static void frames_release(struct mode_run *run)
 	for (int k = 0; f && k < f->count; k++) { /* before its device */
 		end_pinning(f, k); /* the frames were dealt whole, or failed */
 		render_keeper_close(&f->keepers[k]);
-		for (int i = 0; i < 2; i++)
+		for (int i = 0; i < 2; i++) {
 			device_pinned_free(&f->devs[k], f->pinned[k][i].mem, f->pinned[k][i].host);
+			if (f->copies[k][i])
+				clReleaseMemObject(f->copies[k][i]);
+		}
+		struct frame_memory *r = &f->reads[k];
+		if (r->mem) {
+			device_pinned_free_aside(&f->devs[k], r->queue, r->mem, r->host);
+		} else {
+			free(r->host);
+			if (r->queue)
+				clReleaseCommandQueue(r->queue);
+		}
 		if (f->sums[k].mem)
 			device_pinned_free_aside(&f->devs[k], f->sums[k].queue, f->sums[k].mem,
 						 f->sums[k].host);

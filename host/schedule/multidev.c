@@ -115,6 +115,8 @@ static void *work_loop(void *arg)
 		w->work->launches += done.launches;
 		piece_ms = timing_lap_ms(&lap);
 		w->work->busy_ms += piece_ms;
+		if (w->work->pieces == 1)
+			w->work->first_piece_ms = piece_ms;
 		w->work->last_piece_ms = piece_ms;
 		w->work->finish_ms = (lap - w->pool->start) * 1e3;
 	}

@@ -34,9 +34,11 @@ struct device_work {
 	int launches;
 	double setup_ms;      /* in the begin function */
 	double finish_ms;     /* from the job's start to its last piece done */
+	double first_piece_ms; /* its first piece, from taking it to done */
 	double last_piece_ms; /* its last piece, from taking it to done */
 	int renderers_opened; /* --frames: renderers opened on it (kept open
 				 from frame to frame, render_kept) */
+	double open_ms; /* --frames: of busy_ms, opening those kept open */
 };
 
 /* The job's callbacks, each called in the device's own thread; `device` is
