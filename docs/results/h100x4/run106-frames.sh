@@ -1,5 +1,5 @@
 #!/bin/bash
-# Issue 43, batch 104 (branch frames43 at COMMIT): --frames 0:15 and 0:5 of
+# Issue 43, batch 106 (branch frames43 at COMMIT): --frames 0:15 and 0:5 of
 # the default scene's orbit (2000x2000, 256 spp, -k dynamic) on 1 and 4 GPUs
 # of one host (nvidia-h100-x4), each of RTCL_FRAMES_READ's three ways, two
 # interleaved rounds. Every frame is compared with cmp against one GPU's
@@ -22,17 +22,17 @@
 #   make OIIO=0 MPI=0 BUILD=build-gpu BIN=.gpu/frames43/rtcl
 # with .gpu/lib (libjansson, ocl-icd) beside it. On the device, from the
 # repository root, carrying .gpu/frames43 and .gpu/lib:
-#   COMMIT=<commit> bash docs/results/h100x4/run104-frames.sh
-# Without an NVIDIA platform (a dry run on PoCL: OUT=/tmp/x bash run104-frames.sh) it
+#   COMMIT=<commit> bash docs/results/h100x4/run106-frames.sh
+# Without an NVIDIA platform (a dry run on PoCL: OUT=/tmp/x bash run106-frames.sh) it
 # renders tiny frames on four PoCL CPU devices taken as GPUs instead.
 set -u
-G=$PWD/.gpu; B=${B:-$G/frames43}; T=$(mktemp -d); O=$T/b104; mkdir -p $O
+G=$PWD/.gpu; B=${B:-$G/frames43}; T=$(mktemp -d); O=$T/b106; mkdir -p $O
 OUT=${OUT:-$(mktemp -d)}; mkdir -p $OUT
 if command -v nvidia-smi > /dev/null; then
   echo libnvidia-opencl.so.1 > /etc/OpenCL/vendors/nvidia.icd
   export LD_LIBRARY_PATH=/usr/local/nvidia/lib64:$G/lib:${LD_LIBRARY_PATH:-}
 fi
-exec > >(tee $OUT/run104-frames.txt) 2>&1
+exec > >(tee $OUT/run106-frames.txt) 2>&1
 echo "commit: ${COMMIT:-unknown}"; nvidia-smi -L 2> /dev/null; nproc; date -u
 P=$($B/rtcl --list-devices | awk '/^Platform/ && /NVIDIA/ {sub("#","",$2); sub(":","",$2); print $2}')
 if [ -n "$P" ]; then
@@ -61,5 +61,5 @@ for round in 1 2; do
     fr fr6-ONE-$way-$round ONE 5 $way; fr fr6-FOUR-$way-$round FOUR 5 $way
   done
 done
-tar czf $OUT/batch104-frames-json.tgz -C $T b104; date -u
+tar czf $OUT/batch106-frames-json.tgz -C $T b106; date -u
 rm -rf $T
