@@ -122,10 +122,10 @@ def test_gpus_share_the_last_frames_when_fewer_remain_than_gpus(tmp_path, frames
 
 @pytest.mark.parametrize("way", [None, "aside", "pageable", "inline"])
 def test_frames_read_back_any_way_are_one_devices_frames(tmp_path, way):
-    # RTCL_FRAMES_READ (run/frames.c): "aside", the default, copies a frame's
-    # image on its device and has the device's stager thread read it back,
-    # into one pinned image a device, beside the device's next frame;
-    # "pageable" the same into memory of malloc; "inline" reads it in the
+    # RTCL_FRAMES_READ (run/frames.c): "aside" copies a frame's image on its
+    # device and has the device's stager thread read it back, into one pinned
+    # image a device, beside the device's next frame; "pageable", the default
+    # (batch 106), the same into memory of malloc; "inline" reads it in the
     # device's thread into one of two pinned images a device, as before (on
     # four H100s 155-182 ms a device beyond the kernels, in the first frames:
     # docs/results/h100x4, batch 100). Four devices taken as GPUs, 10 frames:
@@ -147,7 +147,7 @@ def test_frames_read_back_any_way_are_one_devices_frames(tmp_path, way):
     for name in names:
         assert (one / name).read_bytes() == (four / name).read_bytes(), name
     md = stats["multidevice"]
-    assert md["frames_read"] == (way or "aside")
+    assert md["frames_read"] == (way or "pageable")
     devices = md["devices"]
     assert sum(d["pixels"] for d in devices) == 10 * 32 * 24
     assert all(d["renderers_opened"] == 1 for d in devices if d["pieces"]), devices

@@ -102,26 +102,32 @@ struct stager {
  * in the first frames, and fits pinning that takes the process about 2 GB/s
  * whatever the devices (2 x 48 MB a device, 384 MB for four; an image
  * split's set-up, its 128 MB of sums pinned a device, took 138-140 ms a
- * device on two GPUs and 277-300 on four, batch 99). READ_ASIDE (the
- * default): the device copies the frame's image into a buffer of its own
+ * device on two GPUs and 277-300 on four, batch 99). READ_ASIDE: the device copies the frame's image into a buffer of its own
  * (two a device, alternating) and goes on with its next frame; its stager
  * thread reads the copy back on a queue of its own into one pinned image a
  * device (pinned there, at the device's first frame) and stages it from
  * there: half the pinned memory, and neither pinning nor reading in the
- * device's thread. READ_PAGEABLE: as READ_ASIDE, read into memory of
- * malloc (NVIDIA: 28-34 ms for 2000x2000, beside the next frame's kernels),
- * nothing pinned. Every way gives the same bytes. */
+ * device's thread. READ_PAGEABLE (the default since batch 106): as
+ * READ_ASIDE, read into memory of malloc (NVIDIA: 28-34 ms for 2000x2000,
+ * beside the next frame's kernels), nothing pinned. Batch 106 (four H200s,
+ * the default scene's 16 frames at 256 spp): one GPU 2371-2388 ms pageable,
+ * 2357-2360 aside, 2382-2392 inline; four GPUs 695.5-696.9 pageable
+ * (3.40-3.43x one GPU), 716.7-720.3 aside, 833.7-842.9 inline: pinning
+ * even one image a device in the stager threads still cost the devices
+ * 25-35 ms over their frames, reading into ordinary memory beside the next
+ * frame 13-18. Every way gives the same bytes. */
 enum frames_read { READ_ASIDE, READ_PAGEABLE, READ_INLINE, FRAMES_READS };
 
 static const char *const frames_read_names[FRAMES_READS] = {"aside", "pageable", "inline"};
 
-/* The way RTCL_FRAMES_READ names (READ_ASIDE when unset or empty), or -1. */
+/* The way RTCL_FRAMES_READ names (READ_PAGEABLE when unset or empty), or
+ * -1. */
 static int frames_read_from_env(void)
 {
 	const char *value = getenv("RTCL_FRAMES_READ");
 
 	if (!value || !*value)
-		return READ_ASIDE;
+		return READ_PAGEABLE;
 	for (int w = 0; w < FRAMES_READS; w++)
 		if (strcmp(value, frames_read_names[w]) == 0)
 			return w;
