@@ -6,6 +6,7 @@
 #include <stdlib.h>
 #include <string.h>
 
+#include "base/envchoice.h"
 #include "base/interrupt.h"
 #include "base/progress.h"
 #include "base/test_hooks.h"
@@ -114,7 +115,7 @@ struct stager {
  * 2357-2360 aside, 2382-2392 inline; four GPUs 695.5-696.9 pageable
  * (3.40-3.43x one GPU), 716.7-720.3 aside, 833.7-842.9 inline: pinning
  * even one image a device in the stager threads still cost the devices
- * 25-35 ms over their frames, reading into ordinary memory beside the next
+ * 25-48 ms over their frames, reading into ordinary memory beside the next
  * frame 13-18. Every way gives the same bytes. */
 enum frames_read { READ_ASIDE, READ_PAGEABLE, READ_INLINE, FRAMES_READS };
 
@@ -124,14 +125,7 @@ static const char *const frames_read_names[FRAMES_READS] = {"aside", "pageable",
  * -1. */
 static int frames_read_from_env(void)
 {
-	const char *value = getenv("RTCL_FRAMES_READ");
-
-	if (!value || !*value)
-		return READ_PAGEABLE;
-	for (int w = 0; w < FRAMES_READS; w++)
-		if (strcmp(value, frames_read_names[w]) == 0)
-			return w;
-	return -1;
+	return env_choice("RTCL_FRAMES_READ", frames_read_names, FRAMES_READS, READ_PAGEABLE);
 }
 
 /* Host memory a device reads a frame back into: pinned (device.h), where

@@ -13,6 +13,7 @@
 #include <time.h>
 #include <unistd.h>
 
+#include "base/envchoice.h"
 #include "base/pages.h"
 #include "base/test_hooks.h"
 #include "base/version.h"
@@ -401,14 +402,7 @@ static const char *const slot_way_names[SLOT_WAYS] = {"copy", "read", "host-ptr"
 /* The way RTCL_MPI_SUMS names (SLOT_HOST_PTR when unset or empty), or -1. */
 static int slot_way_from_env(void)
 {
-	const char *value = getenv("RTCL_MPI_SUMS");
-
-	if (!value || !*value)
-		return SLOT_HOST_PTR;
-	for (int w = 0; w < SLOT_WAYS; w++)
-		if (strcmp(value, slot_way_names[w]) == 0)
-			return w;
-	return -1;
+	return env_choice("RTCL_MPI_SUMS", slot_way_names, SLOT_WAYS, SLOT_HOST_PTR);
 }
 
 /* One of read_sums_into_slot's threads: its slice of each part, copied once
