@@ -478,8 +478,9 @@ def test_interrupted_render_leaves_no_file(tmp_path, signal_name):
     import signal
     import time
     out = tmp_path / "out.png"
-    # The serial kernel on a CPU takes seconds at this size: long enough to interrupt.
-    process = subprocess.Popen([RTCL, "-k", "serial", "--size", "1500x1500", "-o", str(out),
+    # The serial kernel on a CPU takes seconds at this size, long enough to
+    # interrupt, even with PoCL's optimised build (1500x1500 took 0.8 s).
+    process = subprocess.Popen([RTCL, "-k", "serial", "--size", "4000x4000", "-o", str(out),
                                 "--stats", str(tmp_path / "s.json")],
                                stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
     time.sleep(1.0)
