@@ -274,6 +274,24 @@ static int keep_open(struct render_keeper *k, struct device *dev, const struct s
 	return 0;
 }
 
+/* A frame's passes on k's open renderer, into res (read back or not). */
+static int kept_passes(struct render_keeper *k, const struct render_settings *s,
+		       struct render_result *res, int read_back, char *err, size_t err_size)
+{
+	k->r.result = res;
+	int failed = render_passes(&k->r, s, res, read_back, err, err_size);
+	k->r.result = &k->facts;
+	return failed;
+}
+
+/* After a kept frame failed: its progress line ended, the renderer closed. */
+static void kept_failed(struct render_keeper *k, const struct render_settings *s)
+{
+	if (s->progress)
+		progress_end();
+	render_keeper_close(k);
+}
+
 int render_kept(struct render_keeper *k, struct device *dev, const struct scene *scene,
 		const struct render_settings *s, float *rgb, struct render_result *res, char *err,
 		size_t err_size)
@@ -288,13 +306,8 @@ int render_kept(struct render_keeper *k, struct device *dev, const struct scene 
 		free(res->rgb);
 		res->rgb = rgb;
 	}
-	k->r.result = res;
-	int failed = render_passes(&k->r, s, res, 1, err, err_size);
-	k->r.result = &k->facts;
-	if (failed) {
-		if (s->progress)
-			progress_end();
-		render_keeper_close(k);
+	if (kept_passes(k, s, res, 1, err, err_size)) {
+		kept_failed(k, s);
 		if (rgb)
 			res->rgb = NULL; /* the caller's */
 		render_result_free(res);
@@ -316,9 +329,7 @@ int render_kept_on_device(struct render_keeper *k, struct device *dev, const str
 		return -1;
 	free(res->rgb); /* never touched: the image stays on the device */
 	res->rgb = NULL;
-	k->r.result = res;
-	int failed = render_passes(&k->r, s, res, 0, err, err_size);
-	k->r.result = &k->facts;
+	int failed = kept_passes(k, s, res, 0, err, err_size);
 	if (!failed && res->samples_done >= settings_samples(s)) {
 		double lap = timing_now();
 		cl_int status = clEnqueueCopyBuffer(dev->queue, k->r.buffers->image.image, to, 0, 0,
@@ -337,9 +348,7 @@ int render_kept_on_device(struct render_keeper *k, struct device *dev, const str
 		res->times.read_back = timing_lap_ms(&lap);
 	}
 	if (failed) {
-		if (s->progress)
-			progress_end();
-		render_keeper_close(k);
+		kept_failed(k, s);
 		render_result_free(res);
 		return -1;
 	}

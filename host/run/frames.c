@@ -103,8 +103,9 @@ struct stager {
  * in the first frames, and fits pinning that takes the process about 2 GB/s
  * whatever the devices (2 x 48 MB a device, 384 MB for four; an image
  * split's set-up, its 128 MB of sums pinned a device, took 138-140 ms a
- * device on two GPUs and 277-300 on four, batch 99). READ_ASIDE: the device copies the frame's image into a buffer of its own
- * (two a device, alternating) and goes on with its next frame; its stager
+ * device on two GPUs and 277-300 on four, batch 99). READ_ASIDE: the
+ * device copies the frame's image into a buffer of its own (two a device,
+ * alternating) and goes on with its next frame; its stager
  * thread reads the copy back on a queue of its own into one pinned image a
  * device (pinned there, at the device's first frame) and stages it from
  * there: half the pinned memory, and neither pinning nor reading in the
@@ -293,17 +294,22 @@ static int finish_staging(struct stager *st, char *err, size_t err_size)
 }
 
 /* Frame first + piece, whole, on the renderer kept open on device: the
- * frames differ only in their camera (frames_orbit). Its image is read back
- * into rgb when not NULL (then result->rgb == rgb), else into memory of its
- * own. */
+ * frames differ only in their camera (frames_orbit). Without `to` its image
+ * is read back into rgb when not NULL (then result->rgb == rgb), else into
+ * memory of its own; with `to` it stays on the device, copied into `to`
+ * (render_kept_on_device: *copied the copy's event). */
 static int render_kept_frame(struct frames_state *f, int device, int piece, float *rgb,
-			     struct render_result *result, char *err, size_t err_size)
+			     cl_mem to, cl_event *copied, struct render_result *result, char *err,
+			     size_t err_size)
 {
 	const struct job *job = f->job;
 	struct scene scene = *job->scene;
 
 	frames_orbit(&job->scene->camera, job->first_frame + piece, job->first_frame,
 		     job->last_frame, &scene.camera);
+	if (to)
+		return render_kept_on_device(&f->keepers[device], &f->devs[device], &scene,
+					     &f->settings, to, copied, result, err, err_size);
 	return render_kept(&f->keepers[device], &f->devs[device], &scene, &f->settings, rgb,
 			   result, err, err_size);
 }
@@ -367,7 +373,6 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	float *rgb = NULL;
 	cl_mem to = NULL;
 	cl_event copied = NULL;
-	int failed;
 
 	/* Interrupted: no frame starts; one under way stops after its pass and
 	 * is not written (an animation's frames hold all their samples). */
@@ -377,17 +382,9 @@ static int render_frame_piece(void *context, int device, int piece, struct piece
 	show_frame(f, piece, 0);
 	if (f->read != READ_INLINE)
 		to = next_copy(f, device);
-	if (to) {
-		struct scene scene = *f->job->scene;
-		frames_orbit(&f->job->scene->camera, f->job->first_frame + piece,
-			     f->job->first_frame, f->job->last_frame, &scene.camera);
-		failed = render_kept_on_device(&f->keepers[device], &f->devs[device], &scene,
-					       &f->settings, to, &copied, &result, err, err_size);
-	} else {
+	if (!to)
 		rgb = next_image(f, device);
-		failed = render_kept_frame(f, device, piece, rgb, &result, err, err_size);
-	}
-	if (failed)
+	if (render_kept_frame(f, device, piece, rgb, to, &copied, &result, err, err_size))
 		return -1;
 	show_frame(f, piece, 1);
 	/* A frame stopped by an interrupt is not written (an animation's
@@ -689,8 +686,8 @@ static void *render_shared_frame(void *arg)
 		     job->last_frame, &scene.camera);
 	if (sf->count == 1) {
 		double lap = timing_now();
-		failed = render_kept_frame(f, sf->first, sf->piece, NULL, &result, sf->err,
-					   sizeof(sf->err));
+		failed = render_kept_frame(f, sf->first, sf->piece, NULL, NULL, NULL, &result,
+					   sf->err, sizeof(sf->err));
 		struct piece_work done = failed ? (struct piece_work){0}
 						: frames_piece_work(&f->settings, &result);
 		sf->work[0] = (struct device_work){.pixels = (long long)done.pixels,
