@@ -542,8 +542,8 @@ unsigned stages_default_paths(const struct device *dev, unsigned long long paths
 	while (n > STAGES_LEAST_DEFAULT && (n * STAGES_PATH_BYTES > dev->global_mem_size / 8 ||
 					    n * RT_STAGE_FIELDS * 16 > dev->max_alloc_size))
 		n /= 2;
-	if (n < 1)
-		n = 1;
+	if (n < STAGES_LEAST_DEFAULT) /* a device that reports no compute units */
+		n = STAGES_LEAST_DEFAULT;
 	return (unsigned)(paths < n ? paths : n);
 }
 
